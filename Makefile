@@ -1,0 +1,51 @@
+# sextant — the two README commands (`make demo`, `make test`) and the developer targets.
+# Every target that builds installs missing Debian packages first (scripts/install-deps.sh).
+
+JOBS  ?= $(shell nproc)
+BUILD ?= build
+CMAKE_FLAGS ?=
+
+.PHONY: all deps build test demo bench asan tsan spy clean
+
+all: build
+
+deps:
+	@scripts/install-deps.sh
+
+build: deps
+	@cmake -S . -B $(BUILD) -DCMAKE_BUILD_TYPE=Release $(CMAKE_FLAGS) >/dev/null
+	@cmake --build $(BUILD) -j $(JOBS)
+
+test: build
+	@ctest --test-dir $(BUILD) --output-on-failure -j $(JOBS) --timeout 600
+
+demo: build
+	@scripts/demo.sh $(BUILD)
+
+bench:
+	@SEXTANT_WITH_BENCH=1 scripts/install-deps.sh
+	@cmake -S . -B $(BUILD) -DCMAKE_BUILD_TYPE=Release -DSEXTANT_BENCH=ON $(CMAKE_FLAGS) >/dev/null
+	@cmake --build $(BUILD) -j $(JOBS)
+	@bench/run_all.sh $(BUILD)
+
+# Tests under AddressSanitizer + UndefinedBehaviorSanitizer, and under ThreadSanitizer.
+asan: deps
+	@cmake -S . -B build-asan -DCMAKE_BUILD_TYPE=RelWithDebInfo -DSEXTANT_SANITIZE=address,undefined >/dev/null
+	@cmake --build build-asan -j $(JOBS)
+	@ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1 \
+	  ctest --test-dir build-asan --output-on-failure -j $(JOBS) --timeout 1200
+
+tsan: deps
+	@cmake -S . -B build-tsan -DCMAKE_BUILD_TYPE=RelWithDebInfo -DSEXTANT_SANITIZE=thread >/dev/null
+	@cmake --build build-tsan -j $(JOBS)
+	@TSAN_OPTIONS=halt_on_error=1:second_deadlock_stack=1 \
+	  ctest --test-dir build-tsan --output-on-failure -j $(JOBS) --timeout 1200
+
+# lcm-spy with sextant's message types on the classpath (Debian's lcm-spy wrapper passes a JVM flag
+# that Java 17 no longer accepts, so the JVM is started directly).
+spy: build
+	@CLASSPATH=/usr/share/java/lcm.jar:/usr/share/java/jchart2d.jar:$(BUILD)/lcmtypes/sextant_types.jar \
+	  java -Djava.net.preferIPv4Stack=true -Xmx256m lcm.spy.Spy $(SPY_ARGS)
+
+clean:
+	rm -rf $(BUILD) build-asan build-tsan

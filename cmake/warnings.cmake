@@ -1,0 +1,22 @@
+# Warnings as errors on sextant's own code (not on generated lcm-gen code).
+function(sextant_warnings target)
+  target_compile_options(${target} PRIVATE -Wall -Wextra -Wpedantic -Werror -Wno-error=deprecated-declarations)
+endfunction()
+
+# A static library from the .cpp files matched by the given globs (relative to the current folder).
+# Usage: sextant_library(name GLOBS lie/*.cpp graph/*.cpp)
+function(sextant_library name)
+  cmake_parse_arguments(ARG "" "" "GLOBS" ${ARGN})
+  set(srcs)
+  foreach(g ${ARG_GLOBS})
+    file(GLOB found CONFIGURE_DEPENDS "${CMAKE_CURRENT_SOURCE_DIR}/${g}")
+    list(APPEND srcs ${found})
+  endforeach()
+  if(NOT srcs)  # a folder whose first source has not landed yet still configures
+    set(srcs ${CMAKE_CURRENT_BINARY_DIR}/${name}_empty.cpp)
+    file(WRITE ${srcs} "")
+  endif()
+  add_library(${name} STATIC ${srcs})
+  target_include_directories(${name} PUBLIC ${CMAKE_SOURCE_DIR})
+  sextant_warnings(${name})
+endfunction()

@@ -1,0 +1,17 @@
+#pragma once
+// Configuration of the engine's stages: plain structs with in-class defaults.  YAML parsing and validation with
+// file:line errors live in daemon/config/; each stage's struct sits next to its stage.
+#include "daemon/engine/dead_reckoning_stage_config.hpp"
+
+#include <string>
+
+namespace sextant::engine {
+
+struct EngineConfig {
+  /// Which estimator's fused pose goes on FUSED_POSE: "auto" picks the most capable enabled stage
+  /// (graph > filter > dead reckoning); the others are published on FUSED_POSE_<ESTIMATOR>.
+  std::string primary_estimator = "auto";
+  DeadReckoningConfig dead_reckoning;
+};
+
+}  // namespace sextant::engine

@@ -1,0 +1,93 @@
+#pragma once
+// Typed input events of the engine: what the bus (or a log) delivers, already decoded and validated.
+// Plain C++ and Eigen only; the daemon's codec turns LCM messages into these (daemon/runtime/codec.hpp).
+//
+// Conventions (DESIGN.md): times are utime, int64 microseconds; poses are a position in metres and a unit
+// quaternion (Eigen stores it as x,y,z,w but its constructor takes w,x,y,z); tangent vectors and covariances are
+// ordered translation first, then rotation, with the perturbation on the right (T = T_hat * exp(xi)).
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <variant>
+#include <vector>
+
+namespace sextant::engine {
+
+using Matrix6 = Eigen::Matrix<double, 6, 6>;
+
+struct Pose {
+  Eigen::Vector3d position = Eigen::Vector3d::Zero();
+  Eigen::Quaterniond orientation = Eigen::Quaterniond::Identity();
+};
+
+/// Body pose in one odometry source's own frame (odometry_t).
+struct Odometry {
+  int64_t utime = 0;
+  std::string source;
+  bool planar = false;
+  Pose pose;
+  Matrix6 covariance = Matrix6::Zero();
+  /// Covariance of the motion since this source's previous message, in the previous body frame.
+  std::optional<Matrix6> increment_covariance;
+  struct Twist {
+    Eigen::Vector3d linear = Eigen::Vector3d::Zero();   // m/s, body frame
+    Eigen::Vector3d angular = Eigen::Vector3d::Zero();  // rad/s, body frame
+    Matrix6 covariance = Matrix6::Zero();
+  };
+  std::optional<Twist> twist;
+};
+
+struct LandmarkObservation {
+  int64_t id = -1;  // -1: unknown, to be associated
+  double range = 0, azimuth = 0, elevation = 0;  // m, rad, rad (sensor frame)
+  Eigen::Matrix3d covariance = Eigen::Matrix3d::Zero();  // over [range, azimuth, elevation]
+};
+
+/// Landmark sightings of one body at one time (landmarks_t).
+struct LandmarkSightings {
+  int64_t utime = 0;
+  std::string source;
+  bool planar = false;
+  Pose sensor_in_body;
+  std::vector<LandmarkObservation> observations;
+};
+
+struct BearingDetection {
+  double azimuth = 0, elevation = 0;              // rad, world frame (source C eq. 1-2)
+  double sigma_azimuth = 0, sigma_elevation = 0;  // rad, > 0
+};
+
+/// One scan of one static passive sensor (bearing_scan_t).
+struct BearingScan {
+  int64_t utime = 0;
+  int32_t sensor_id = 0;
+  Eigen::Vector3d sensor_position = Eigen::Vector3d::Zero();
+  int64_t scan_id = 0;
+  std::vector<BearingDetection> detections;
+};
+
+/// Relative pose between two times of one body (loop_closure_t).
+struct LoopClosure {
+  int64_t utime = 0;
+  std::string source;
+  bool planar = false;
+  int64_t utime_from = 0, utime_to = 0;
+  int64_t keyframe_from = -1, keyframe_to = -1;
+  int64_t request_id = -1;
+  Pose relative;  // T_from^-1 * T_to
+  Matrix6 information = Matrix6::Identity();
+  std::string matcher;
+  double score = 0;
+};
+
+using Event = std::variant<Odometry, LandmarkSightings, BearingScan, LoopClosure>;
+
+/// The utime every event carries.
+inline int64_t event_utime(const Event& e) {
+  return std::visit([](const auto& x) { return x.utime; }, e);
+}
+
+}  // namespace sextant::engine

@@ -1,0 +1,63 @@
+#pragma once
+// What engine stages produce; the daemon publishes these (daemon/runtime/codec.hpp), replay writes them to files.
+#include "daemon/engine/events.hpp"
+
+namespace sextant::engine {
+
+/// Best current pose of a body in the map frame (fused_pose_t).
+struct FusedPose {
+  int64_t utime = 0;
+  std::string source;
+  std::string estimator;  // "dead_reckoning", "ekf", "pf", "graph"
+  bool planar = false;
+  Pose pose;
+  Matrix6 covariance = Matrix6::Zero();
+};
+
+struct Keyframe {
+  int64_t id = 0;
+  int64_t utime = 0;
+  Pose pose;
+};
+
+/// Optimized keyframes after one optimization (trajectory_t).
+struct Trajectory {
+  int64_t utime = 0;
+  std::string source;
+  std::string estimator = "graph";
+  double chi2 = 0;
+  int iterations = 0;
+  double solve_ms = 0;
+  std::vector<Keyframe> keyframes;
+};
+
+/// Ask a front end to match keyframe a (new) against keyframe b (match_request_t).
+struct MatchRequest {
+  int64_t utime = 0;
+  std::string source;
+  int64_t request_id = 0;
+  std::string kind;  // "local" or "random"
+  Keyframe a, b;
+};
+
+struct Target {
+  Eigen::Vector3d position = Eigen::Vector3d::Zero();
+  Eigen::Matrix3d covariance = Eigen::Matrix3d::Zero();
+  std::vector<int32_t> detection_indices;  // per sensor of Targets::sensor_ids; -1 = missed
+  double cost = 0;
+};
+
+/// Association result of one scan across sensors (targets_t).
+struct Targets {
+  int64_t utime = 0;
+  int64_t scan_id = 0;
+  std::string cost_kind;
+  double total_cost = 0;
+  double duality_gap = 0;
+  std::vector<int32_t> sensor_ids;
+  std::vector<Target> targets;
+};
+
+using Output = std::variant<FusedPose, Trajectory, MatchRequest, Targets>;
+
+}  // namespace sextant::engine

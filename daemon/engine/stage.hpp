@@ -1,0 +1,32 @@
+#pragma once
+// A stage of the engine: consumes the events it accepts, emits outputs.  A stage owns its estimator state and is
+// driven from one thread at a time (the daemon gives each stage its own thread and bounded queue; replay calls
+// stages synchronously in utime order).  A stage must not throw for bad data: it counts and drops it.
+#include "daemon/engine/outputs.hpp"
+
+#include <functional>
+#include <string>
+#include <string_view>
+#include <utility>
+#include <vector>
+
+namespace sextant::engine {
+
+using Emit = std::function<void(Output)>;
+
+/// Named counters a stage reports on the status channel (e.g. {"keyframes_rejected", 3}).
+using Counters = std::vector<std::pair<std::string, int64_t>>;
+
+class Stage {
+ public:
+  virtual ~Stage() = default;
+  virtual std::string_view name() const = 0;
+  /// Whether `handle` wants this event (the dispatcher routes only accepted events to the stage's queue).
+  virtual bool accepts(const Event& event) const = 0;
+  virtual void handle(const Event& event, const Emit& emit) = 0;
+  /// End of input (replay end, daemon shutdown): emit what is still pending.
+  virtual void finish(const Emit& /*emit*/) {}
+  virtual Counters counters() const { return {}; }
+};
+
+}  // namespace sextant::engine

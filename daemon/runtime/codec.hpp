@@ -1,0 +1,65 @@
+#pragma once
+// The codec between LCM messages (lcmtypes/sextant/*.lcm) and the engine's typed events and outputs.
+// Decoding validates: every number finite, quaternions of unit norm (within 1e-3; renormalised), covariances
+// symmetric positive definite (information matrices too), array sizes consistent and bounded.  A message that
+// fails is rejected with a reason and a message naming the field — never half-used.
+#include "daemon/engine/outputs.hpp"
+
+#include <sextant/bearing_scan_t.hpp>
+#include <sextant/fused_pose_t.hpp>
+#include <sextant/landmarks_t.hpp>
+#include <sextant/loop_closure_t.hpp>
+#include <sextant/match_request_t.hpp>
+#include <sextant/odometry_t.hpp>
+#include <sextant/targets_t.hpp>
+#include <sextant/trajectory_t.hpp>
+
+#include <cstddef>
+#include <string>
+#include <variant>
+
+namespace sextant::runtime {
+
+/// Why an input message was dropped. `reason` is a short counter key for the status channel
+/// ("decode", "fingerprint", "non_finite", "quaternion", "covariance", "too_large", "invalid"),
+/// `message` names the field, e.g. "odometry_t.covariance: not positive definite (eigenvalue -0.2)".
+struct Rejection {
+  std::string reason;
+  std::string message;
+};
+
+/// Largest arrays accepted in one message (a huge array is rejected, not allocated).
+inline constexpr int kMaxObservationsPerMessage = 4096;
+inline constexpr int kMaxDetectionsPerScan = 4096;
+
+/// The kinds of input channel the daemon subscribes to.
+enum class InputKind { kOdometry, kLandmarks, kBearings, kLoopClosures };
+
+using Decoded = std::variant<engine::Event, Rejection>;
+
+/// Decodes raw bytes received on an input channel of the given kind, then validates (see `to_event`).
+Decoded decode_event(InputKind kind, const void* data, size_t size);
+
+/// Validated conversions message -> event.
+Decoded to_event(const sextant::odometry_t& msg);
+Decoded to_event(const sextant::landmarks_t& msg);
+Decoded to_event(const sextant::bearing_scan_t& msg);
+Decoded to_event(const sextant::loop_closure_t& msg);
+
+/// Conversions event/output -> message, stamped with the sender's name and sequence number.
+sextant::odometry_t to_message(const engine::Odometry& e, const std::string& sender, int64_t seq);
+sextant::landmarks_t to_message(const engine::LandmarkSightings& e, const std::string& sender, int64_t seq);
+sextant::bearing_scan_t to_message(const engine::BearingScan& e, const std::string& sender, int64_t seq);
+sextant::loop_closure_t to_message(const engine::LoopClosure& e, const std::string& sender, int64_t seq);
+sextant::fused_pose_t to_message(const engine::FusedPose& o, const std::string& sender, int64_t seq);
+sextant::trajectory_t to_message(const engine::Trajectory& o, const std::string& sender, int64_t seq);
+sextant::match_request_t to_message(const engine::MatchRequest& o, const std::string& sender, int64_t seq);
+sextant::targets_t to_message(const engine::Targets& o, const std::string& sender, int64_t seq);
+
+/// Message -> output (for replay reports, tests and `sextant listen`); no validation beyond decoding.
+engine::FusedPose to_output(const sextant::fused_pose_t& m);
+engine::Trajectory to_output(const sextant::trajectory_t& m);
+engine::MatchRequest to_output(const sextant::match_request_t& m);
+engine::Targets to_output(const sextant::targets_t& m);
+
+}  // namespace sextant::runtime

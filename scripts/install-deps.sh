@@ -1,0 +1,31 @@
+#!/usr/bin/env bash
+# Installs every Debian package sextant needs to build, test, benchmark and demo.
+# Idempotent and quiet when everything is present; works as root or through sudo.
+set -euo pipefail
+
+packages=(
+  build-essential cmake pkg-config make
+  liblcm-dev liblcm-bin liblcm-java libglib2.0-dev default-jdk-headless
+  libeigen3-dev libsuitesparse-dev
+  libspdlog-dev libyaml-cpp-dev libcli11-dev doctest-dev libbenchmark-dev
+  iproute2 util-linux procps python3
+)
+# Optional extras: installed when asked for (benchmarks against Ceres, report checks in Chromium).
+if [[ "${SEXTANT_WITH_BENCH:-0}" == 1 ]]; then packages+=(libceres-dev libopenblas0 time); fi
+if [[ "${SEXTANT_WITH_BROWSER:-0}" == 1 ]]; then packages+=(chromium); fi
+
+missing=()
+for p in "${packages[@]}"; do
+  if ! dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed"; then
+    missing+=("$p")
+  fi
+done
+[[ ${#missing[@]} -eq 0 ]] && exit 0
+
+if [[ $(id -u) -eq 0 ]]; then sudo=(); elif command -v sudo >/dev/null; then sudo=(sudo); else
+  echo "install-deps: missing packages: ${missing[*]}; run as root or install sudo" >&2; exit 1
+fi
+echo "install-deps: installing ${missing[*]}"
+export DEBIAN_FRONTEND=noninteractive
+"${sudo[@]}" apt-get update -qq
+"${sudo[@]}" apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
