@@ -12,6 +12,18 @@ std::vector<std::unique_ptr<Stage>> make_stages(const EngineConfig& config) {
 
 Engine::Engine(const EngineConfig& config) : config_(config), stages_(make_stages(config)) {}
 
+std::string Engine::primary_estimator() const {
+  if (config_.primary_estimator != "auto") return config_.primary_estimator;
+  std::string best;
+  int best_rank = -1;
+  for (const auto& stage : stages_) {
+    const std::string_view e = stage->estimator();
+    const int rank = e == "graph" ? 3 : (e == "ekf" || e == "pf") ? 2 : e == "dead_reckoning" ? 1 : -1;
+    if (rank > best_rank) best_rank = rank, best = std::string(e);
+  }
+  return best;
+}
+
 void Engine::handle(const Event& event, const Emit& emit) {
   for (auto& stage : stages_)
     if (stage->accepts(event)) stage->handle(event, emit);

@@ -22,6 +22,9 @@ class Engine {
   const std::vector<std::unique_ptr<Stage>>& stages() const { return stages_; }
   std::vector<std::unique_ptr<Stage>>& stages() { return stages_; }
   const EngineConfig& config() const { return config_; }
+  /// The estimator whose FusedPose goes on FUSED_POSE: the configured one, or with "auto" the most capable
+  /// enabled stage (graph > ekf/pf > dead_reckoning).
+  std::string primary_estimator() const;
 
  private:
   EngineConfig config_;

@@ -27,6 +27,9 @@ class Stage {
   /// End of input (replay end, daemon shutdown): emit what is still pending.
   virtual void finish(const Emit& /*emit*/) {}
   virtual Counters counters() const { return {}; }
+  /// The estimator name of the FusedPose outputs this stage emits ("dead_reckoning", "ekf", "pf", "graph"),
+  /// empty when it emits none.
+  virtual std::string_view estimator() const { return {}; }
 };
 
 }  // namespace sextant::engine

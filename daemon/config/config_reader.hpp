@@ -1,0 +1,89 @@
+#pragma once
+// A YAML section reader that validates as it reads and names the place of every error as file:line:column.
+// Unknown keys are errors (a misspelt key must never be silently ignored).
+#include <yaml-cpp/yaml.h>
+
+#include <functional>
+#include <optional>
+#include <set>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace sextant::config {
+
+/// A configuration error; what() is "FILE:LINE:COLUMN: message".
+class ConfigError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+/// Returns an error message when a value is invalid, nullopt when it is fine.
+template <class T>
+using Check = std::function<std::optional<std::string>(const T&)>;
+
+class Section {
+ public:
+  /// `node` may be null/undefined (a missing section: every read keeps its default).
+  Section(YAML::Node node, std::string path, std::string file);
+
+  /// Reads `key` into `out` if present (keeps the default otherwise); throws ConfigError on a value of the wrong
+  /// type or one that `check` refuses.
+  template <class T>
+  void get(const std::string& key, T& out, const Check<T>& check = {}) {
+    known_.insert(key);
+    if (!node_.IsMap()) return;
+    const YAML::Node v = node_[key];
+    if (!v.IsDefined() || v.IsNull()) return;
+    T value;
+    try {
+      value = v.as<T>();
+    } catch (const YAML::Exception&) {
+      throw error_at(v, "'" + qualified(key) + "': expected " + type_name<T>() + ", got '" + scalar_text(v) + "'");
+    }
+    if (check) {
+      if (auto why = check(value)) throw error_at(v, "'" + qualified(key) + "': " + *why);
+    }
+    out = value;
+  }
+
+  /// A nested section (possibly missing).
+  Section child(const std::string& key);
+
+  /// Throws ConfigError naming the line of the first key that no `get`/`child` asked for.
+  void reject_unknown_keys() const;
+
+  /// An error at this section's own position.
+  ConfigError error(const std::string& message) const { return error_at(node_, message); }
+  ConfigError error_at(const YAML::Node& node, const std::string& message) const;
+
+  const YAML::Node& node() const { return node_; }
+  const std::string& path() const { return path_; }
+
+ private:
+  std::string qualified(const std::string& key) const { return path_.empty() ? key : path_ + "." + key; }
+  static std::string scalar_text(const YAML::Node& v);
+  template <class T>
+  static std::string type_name() {
+    if constexpr (std::is_same_v<T, bool>) return "true or false";
+    else if constexpr (std::is_integral_v<T>) return "an integer";
+    else if constexpr (std::is_floating_point_v<T>) return "a number";
+    else if constexpr (std::is_same_v<T, std::string>) return "a string";
+    else return "a list";
+  }
+
+  YAML::Node node_;
+  std::string path_;
+  std::string file_;
+  std::set<std::string> known_;
+};
+
+/// Common checks.
+Check<double> positive();
+Check<double> non_negative();
+Check<double> in_range(double lo, double hi);
+Check<int> positive_int();
+Check<int> int_in_range(int lo, int hi);
+Check<std::string> one_of(std::vector<std::string> allowed);
+
+}  // namespace sextant::config

@@ -1,0 +1,47 @@
+#pragma once
+// sextantd's configuration: the runtime (bus, queues, status, recording), channel names and the engine's stages.
+// `load_daemon_config` parses a YAML file (config/default.yaml documents every key) and validates it; any error
+// is a ConfigError whose message starts with FILE:LINE:COLUMN.
+#include "daemon/config/config_reader.hpp"
+#include "daemon/engine/engine_config.hpp"
+
+#include <string>
+
+namespace sextant::config {
+
+struct Channels {
+  std::string prefix;  // prepended to every channel below (one daemon per robot: "ROBOT1_")
+  std::string odometry = "ODOMETRY";
+  std::string landmarks = "LANDMARKS";
+  std::string bearings = "BEARINGS";
+  std::string loop_closures = "LOOP_CLOSURES";
+  std::string fused_pose = "FUSED_POSE";
+  std::string trajectory = "TRAJECTORY";
+  std::string targets = "TARGETS";
+  std::string match_requests = "MATCH_REQUESTS";
+  std::string status = "SEXTANT_STATUS";
+
+  std::string full(const std::string& name) const { return prefix + name; }
+};
+
+struct DaemonConfig {
+  std::string name = "sextantd";        // sender name in every published message
+  std::string lcm_url;                  // empty: LCM's default (LCM_DEFAULT_URL or udpm://239.255.76.67:7667)
+  double status_period_s = 1.0;         // SEXTANT_STATUS period
+  int queue_capacity = 1024;            // events per stage queue; a full queue drops (and counts) new events
+  int publish_queue_capacity = 4096;    // outputs waiting for the publisher thread
+  std::string record;                   // record every received message to this LCM log ("" = off)
+  double log_rate_limit_s = 1.0;        // at most one warning per channel and reason per this many seconds
+  Channels channels;
+  engine::EngineConfig engine;
+};
+
+/// Parses and validates a YAML config file.
+DaemonConfig load_daemon_config(const std::string& path);
+/// The same from YAML text (`file` names it in errors).
+DaemonConfig parse_daemon_config(const std::string& yaml_text, const std::string& file);
+
+/// Reads the engine section (every stage's block); used by sextantd and `sextant replay`.
+void read_engine_config(Section& section, engine::EngineConfig& config);
+
+}  // namespace sextant::config

@@ -1,0 +1,45 @@
+#pragma once
+// Dead reckoning: per odometry source, the increments Delta_k = T_odom(k-1)^-1 * T_odom(k) composed into a pose in
+// the map frame, M(k) = M(k-1) * Delta_k, with first-order covariance propagation for the right perturbation
+// (Sola et al., "A micro Lie theory", arXiv 1812.01537, eq. 55 and the adjoint of eq. 29):
+//     P(k) = Ad(Delta_k^-1) P(k-1) Ad(Delta_k^-1)^T + Q_k,
+// where Q_k is the message's increment covariance, or, when the sender gives none, the part of its pose covariance
+// that grew since the previous message (Sigma_k - Ad(Delta^-1) Sigma_(k-1) Ad(Delta^-1)^T, projected onto the
+// positive semi-definite cone).  The map frame of a source is its odometry frame at its first message.
+// Planar sources use the same SE(3) algebra with zero z, roll and pitch: their x, y, yaw block is SE(2)'s.
+#include "daemon/engine/dead_reckoning_stage_config.hpp"
+#include "daemon/engine/stage.hpp"
+#include <Eigen/Geometry>
+
+#include <map>
+
+namespace sextant::engine {
+
+class DeadReckoningStage final : public Stage {
+ public:
+  explicit DeadReckoningStage(const DeadReckoningConfig& config) : config_(config) {}
+
+  std::string_view name() const override { return "dead_reckoning"; }
+  std::string_view estimator() const override { return "dead_reckoning"; }
+  bool accepts(const Event& e) const override { return std::holds_alternative<Odometry>(e); }
+  void handle(const Event& e, const Emit& emit) override;
+  Counters counters() const override;
+
+  /// One step of the propagation above, exposed for tests: returns P(k).
+  static Matrix6 propagate(const Matrix6& previous, const Eigen::Isometry3d& increment, const Matrix6& increment_covariance);
+
+ private:
+  struct Track {
+    int64_t utime = 0;
+    Eigen::Isometry3d last_odom = Eigen::Isometry3d::Identity();
+    Matrix6 last_odom_covariance = Matrix6::Zero();
+    Eigen::Isometry3d map_pose = Eigen::Isometry3d::Identity();
+    Matrix6 covariance = Matrix6::Zero();
+  };
+  DeadReckoningConfig config_;
+  std::map<std::string, Track> tracks_;
+  int64_t gaps_ = 0;
+  int64_t processed_ = 0;
+};
+
+}  // namespace sextant::engine

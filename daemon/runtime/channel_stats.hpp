@@ -1,0 +1,33 @@
+#pragma once
+// Per-input-channel counters for the status channel: received, decoded, rejected by reason, dropped.
+// Thread-safe; the LCM thread writes, the status thread reads.
+#include <cstdint>
+#include <map>
+#include <mutex>
+#include <string>
+
+namespace sextant::runtime {
+
+struct ChannelCounts {
+  int64_t received = 0;
+  int64_t decoded = 0;
+  int64_t rejected = 0;
+  int64_t dropped = 0;
+  std::map<std::string, int64_t> reasons;
+  std::string last_error;
+};
+
+class ChannelStats {
+ public:
+  void received(const std::string& channel);
+  void decoded(const std::string& channel);
+  void rejected(const std::string& channel, const std::string& reason, const std::string& message);
+  void dropped(const std::string& channel, int64_t n = 1);
+  std::map<std::string, ChannelCounts> snapshot() const;
+
+ private:
+  mutable std::mutex mutex_;
+  std::map<std::string, ChannelCounts> channels_;
+};
+
+}  // namespace sextant::runtime

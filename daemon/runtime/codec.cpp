@@ -1,0 +1,468 @@
+#include "daemon/runtime/codec.hpp"
+
+#include <Eigen/Eigenvalues>
+
+#include <cmath>
+#include <sstream>
+
+namespace sextant::runtime {
+namespace {
+
+// Validation failures carry the field name up to the caller; thrown only inside this file.
+struct Invalid {
+  std::string reason;
+  std::string message;
+};
+
+[[noreturn]] void fail(const std::string& reason, const std::string& message) { throw Invalid{reason, message}; }
+
+void check_finite(const double* v, int n, const std::string& field) {
+  for (int i = 0; i < n; ++i)
+    if (!std::isfinite(v[i])) {
+      std::ostringstream s;
+      s << field;
+      if (n > 1) s << "[" << i << "]";
+      s << ": not finite (" << v[i] << ")";
+      fail("non_finite", s.str());
+    }
+}
+
+double check_finite(double v, const std::string& field) {
+  check_finite(&v, 1, field);
+  return v;
+}
+
+Eigen::Quaterniond check_quaternion(const double q[4], const std::string& field) {
+  check_finite(q, 4, field);
+  const Eigen::Quaterniond quat(q[0], q[1], q[2], q[3]);
+  const double norm = quat.norm();
+  if (std::abs(norm - 1.0) > 1e-3) {
+    std::ostringstream s;
+    s << field << ": not a unit quaternion [w,x,y,z] (norm " << norm << ")";
+    fail("quaternion", s.str());
+  }
+  return quat.normalized();
+}
+
+engine::Pose check_pose(const double p[3], const double q[4], const std::string& prefix,
+                        const std::string& pos_name = "position", const std::string& quat_name = "orientation") {
+  check_finite(p, 3, prefix + pos_name);
+  engine::Pose pose;
+  pose.position = Eigen::Vector3d(p[0], p[1], p[2]);
+  pose.orientation = check_quaternion(q, prefix + quat_name);
+  return pose;
+}
+
+// Symmetric positive (semi-)definite check over the components that are meaningful. For planar messages only
+// the x, y, yaw block must be positive definite; the other diagonal entries may be zero.
+template <int N>
+Eigen::Matrix<double, N, N> check_covariance(const double* v, const std::string& field, const std::vector<int>& active) {
+  check_finite(v, N * N, field);
+  Eigen::Matrix<double, N, N> m = Eigen::Map<const Eigen::Matrix<double, N, N, Eigen::RowMajor>>(v);
+  const double scale = std::max(1.0, m.cwiseAbs().maxCoeff());
+  if ((m - m.transpose()).cwiseAbs().maxCoeff() > 1e-9 * scale) fail("covariance", field + ": not symmetric");
+  const int k = static_cast<int>(active.size());
+  Eigen::MatrixXd sub(k, k);
+  for (int i = 0; i < k; ++i)
+    for (int j = 0; j < k; ++j) sub(i, j) = m(active[i], active[j]);
+  Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(sub, Eigen::EigenvaluesOnly);
+  const double min_ev = eig.eigenvalues().minCoeff();
+  if (!(min_ev > 0)) {
+    std::ostringstream s;
+    s << field << ": not positive definite (smallest eigenvalue " << min_ev << ")";
+    fail("covariance", s.str());
+  }
+  return m;
+}
+
+const std::vector<int> kAll6{0, 1, 2, 3, 4, 5};
+const std::vector<int> kPlanar6{0, 1, 5};
+const std::vector<int> kAll3{0, 1, 2};
+const std::vector<int> kPlanar3{0, 1};
+
+void check_name(const std::string& s, const std::string& field) {
+  if (s.size() > 256) fail("invalid", field + ": longer than 256 characters");
+}
+
+template <int N>
+void copy_row_major(const Eigen::Matrix<double, N, N>& m, double* out) {
+  Eigen::Map<Eigen::Matrix<double, N, N, Eigen::RowMajor>> dst(out);
+  dst = m;
+}
+
+void copy_pose(const engine::Pose& p, double pos[3], double quat[4]) {
+  for (int i = 0; i < 3; ++i) pos[i] = p.position[i];
+  const Eigen::Quaterniond q = p.orientation.normalized();
+  quat[0] = q.w();
+  quat[1] = q.x();
+  quat[2] = q.y();
+  quat[3] = q.z();
+}
+
+engine::Pose read_pose(const double pos[3], const double quat[4]) {
+  engine::Pose p;
+  p.position = Eigen::Vector3d(pos[0], pos[1], pos[2]);
+  p.orientation = Eigen::Quaterniond(quat[0], quat[1], quat[2], quat[3]);
+  return p;
+}
+
+template <int N>
+Eigen::Matrix<double, N, N> read_matrix(const double* v) {
+  return Eigen::Map<const Eigen::Matrix<double, N, N, Eigen::RowMajor>>(v);
+}
+
+template <class Msg>
+Decoded decode_as(const void* data, size_t size) {
+  Msg msg;
+  // LCM's decode returns -1 both for a fingerprint mismatch and for truncated data; tell them apart by the
+  // leading 8-byte fingerprint.
+  if (size < 8) return Rejection{"decode", "message shorter than an LCM fingerprint (" + std::to_string(size) + " bytes)"};
+  int64_t hash = 0;
+  if (__int64_t_decode_array(data, 0, static_cast<int>(size), &hash, 1) != 8 || hash != Msg::getHash())
+    return Rejection{"fingerprint", std::string("fingerprint does not match ") + Msg::getTypeName()};
+  if (msg.decode(data, 0, static_cast<int>(size)) < 0)
+    return Rejection{"decode", std::string("cannot decode ") + Msg::getTypeName() + " (truncated or corrupt)"};
+  return to_event(msg);
+}
+
+template <class F>
+Decoded guarded(F&& f) {
+  try {
+    return f();
+  } catch (const Invalid& e) {
+    return Rejection{e.reason, e.message};
+  }
+}
+
+}  // namespace
+
+Decoded decode_event(InputKind kind, const void* data, size_t size) {
+  switch (kind) {
+    case InputKind::kOdometry: return decode_as<sextant::odometry_t>(data, size);
+    case InputKind::kLandmarks: return decode_as<sextant::landmarks_t>(data, size);
+    case InputKind::kBearings: return decode_as<sextant::bearing_scan_t>(data, size);
+    case InputKind::kLoopClosures: return decode_as<sextant::loop_closure_t>(data, size);
+  }
+  return Rejection{"invalid", "unknown input kind"};
+}
+
+Decoded to_event(const sextant::odometry_t& m) {
+  return guarded([&]() -> Decoded {
+    check_name(m.source, "odometry_t.source");
+    if (m.utime <= 0) fail("invalid", "odometry_t.utime: not positive (" + std::to_string(m.utime) + ")");
+    engine::Odometry e;
+    e.utime = m.utime;
+    e.source = m.source;
+    e.planar = m.planar;
+    e.pose = check_pose(m.position, m.orientation, "odometry_t.");
+    const auto& active = m.planar ? kPlanar6 : kAll6;
+    e.covariance = check_covariance<6>(m.covariance, "odometry_t.covariance", active);
+    if (m.has_increment_covariance)
+      e.increment_covariance = check_covariance<6>(m.increment_covariance, "odometry_t.increment_covariance", active);
+    if (m.has_twist) {
+      engine::Odometry::Twist t;
+      check_finite(m.linear_velocity, 3, "odometry_t.linear_velocity");
+      check_finite(m.angular_velocity, 3, "odometry_t.angular_velocity");
+      t.linear = Eigen::Vector3d(m.linear_velocity[0], m.linear_velocity[1], m.linear_velocity[2]);
+      t.angular = Eigen::Vector3d(m.angular_velocity[0], m.angular_velocity[1], m.angular_velocity[2]);
+      t.covariance = check_covariance<6>(m.twist_covariance, "odometry_t.twist_covariance", active);
+      e.twist = t;
+    }
+    return engine::Event{std::move(e)};
+  });
+}
+
+Decoded to_event(const sextant::landmarks_t& m) {
+  return guarded([&]() -> Decoded {
+    check_name(m.source, "landmarks_t.source");
+    if (m.utime <= 0) fail("invalid", "landmarks_t.utime: not positive (" + std::to_string(m.utime) + ")");
+    if (m.num_observations < 0 || m.num_observations > kMaxObservationsPerMessage)
+      fail("too_large", "landmarks_t.num_observations: " + std::to_string(m.num_observations) + " outside [0, " +
+                            std::to_string(kMaxObservationsPerMessage) + "]");
+    engine::LandmarkSightings e;
+    e.utime = m.utime;
+    e.source = m.source;
+    e.planar = m.planar;
+    e.sensor_in_body = check_pose(m.sensor_position, m.sensor_orientation, "landmarks_t.", "sensor_position",
+                                  "sensor_orientation");
+    e.observations.reserve(static_cast<size_t>(m.num_observations));
+    for (int i = 0; i < m.num_observations; ++i) {
+      const auto& o = m.observations[static_cast<size_t>(i)];
+      const std::string f = "landmarks_t.observations[" + std::to_string(i) + "].";
+      engine::LandmarkObservation ob;
+      ob.id = o.id;
+      if (o.id < -1) fail("invalid", f + "id: negative (" + std::to_string(o.id) + "); use -1 for unknown");
+      ob.range = check_finite(o.range, f + "range");
+      if (ob.range <= 0) fail("invalid", f + "range: not positive");
+      ob.azimuth = check_finite(o.azimuth, f + "azimuth");
+      ob.elevation = m.planar ? 0.0 : check_finite(o.elevation, f + "elevation");
+      ob.covariance = check_covariance<3>(o.covariance, f + "covariance", m.planar ? kPlanar3 : kAll3);
+      e.observations.push_back(ob);
+    }
+    return engine::Event{std::move(e)};
+  });
+}
+
+Decoded to_event(const sextant::bearing_scan_t& m) {
+  return guarded([&]() -> Decoded {
+    if (m.utime <= 0) fail("invalid", "bearing_scan_t.utime: not positive (" + std::to_string(m.utime) + ")");
+    if (m.num_detections < 0 || m.num_detections > kMaxDetectionsPerScan)
+      fail("too_large", "bearing_scan_t.num_detections: " + std::to_string(m.num_detections) + " outside [0, " +
+                            std::to_string(kMaxDetectionsPerScan) + "]");
+    engine::BearingScan e;
+    e.utime = m.utime;
+    e.sensor_id = m.sensor_id;
+    e.scan_id = m.scan_id;
+    check_finite(m.sensor_position, 3, "bearing_scan_t.sensor_position");
+    e.sensor_position = Eigen::Vector3d(m.sensor_position[0], m.sensor_position[1], m.sensor_position[2]);
+    e.detections.reserve(static_cast<size_t>(m.num_detections));
+    for (int i = 0; i < m.num_detections; ++i) {
+      const auto& d = m.detections[static_cast<size_t>(i)];
+      const std::string f = "bearing_scan_t.detections[" + std::to_string(i) + "].";
+      engine::BearingDetection b;
+      b.azimuth = check_finite(d.azimuth, f + "azimuth");
+      b.elevation = check_finite(d.elevation, f + "elevation");
+      if (std::abs(b.elevation) > M_PI / 2) fail("invalid", f + "elevation: outside [-pi/2, pi/2]");
+      b.sigma_azimuth = check_finite(d.sigma_azimuth, f + "sigma_azimuth");
+      b.sigma_elevation = check_finite(d.sigma_elevation, f + "sigma_elevation");
+      if (!(b.sigma_azimuth > 0)) fail("covariance", f + "sigma_azimuth: not positive");
+      if (!(b.sigma_elevation > 0)) fail("covariance", f + "sigma_elevation: not positive");
+      e.detections.push_back(b);
+    }
+    return engine::Event{std::move(e)};
+  });
+}
+
+Decoded to_event(const sextant::loop_closure_t& m) {
+  return guarded([&]() -> Decoded {
+    check_name(m.source, "loop_closure_t.source");
+    if (m.utime <= 0) fail("invalid", "loop_closure_t.utime: not positive (" + std::to_string(m.utime) + ")");
+    if (m.utime_from <= 0 || m.utime_to <= 0) fail("invalid", "loop_closure_t.utime_from/utime_to: not positive");
+    if (m.utime_from == m.utime_to) fail("invalid", "loop_closure_t.utime_to: equal to utime_from");
+    engine::LoopClosure e;
+    e.utime = m.utime;
+    e.source = m.source;
+    e.planar = m.planar;
+    e.utime_from = m.utime_from;
+    e.utime_to = m.utime_to;
+    e.keyframe_from = m.keyframe_from;
+    e.keyframe_to = m.keyframe_to;
+    e.request_id = m.request_id;
+    e.relative = check_pose(m.position, m.orientation, "loop_closure_t.");
+    e.information = check_covariance<6>(m.information, "loop_closure_t.information", m.planar ? kPlanar6 : kAll6);
+    e.matcher = m.matcher;
+    e.score = check_finite(m.score, "loop_closure_t.score");
+    return engine::Event{std::move(e)};
+  });
+}
+
+sextant::odometry_t to_message(const engine::Odometry& e, const std::string& sender, int64_t seq) {
+  sextant::odometry_t m{};
+  m.utime = e.utime;
+  m.sender = sender;
+  m.seq = seq;
+  m.source = e.source;
+  m.planar = e.planar;
+  copy_pose(e.pose, m.position, m.orientation);
+  copy_row_major<6>(e.covariance, m.covariance);
+  m.has_increment_covariance = e.increment_covariance.has_value();
+  copy_row_major<6>(e.increment_covariance.value_or(engine::Matrix6::Zero()), m.increment_covariance);
+  m.has_twist = e.twist.has_value();
+  const engine::Odometry::Twist twist = e.twist.value_or(engine::Odometry::Twist{});
+  for (int i = 0; i < 3; ++i) {
+    m.linear_velocity[i] = twist.linear[i];
+    m.angular_velocity[i] = twist.angular[i];
+  }
+  copy_row_major<6>(twist.covariance, m.twist_covariance);
+  return m;
+}
+
+sextant::landmarks_t to_message(const engine::LandmarkSightings& e, const std::string& sender, int64_t seq) {
+  sextant::landmarks_t m{};
+  m.utime = e.utime;
+  m.sender = sender;
+  m.seq = seq;
+  m.source = e.source;
+  m.planar = e.planar;
+  copy_pose(e.sensor_in_body, m.sensor_position, m.sensor_orientation);
+  m.num_observations = static_cast<int32_t>(e.observations.size());
+  for (const auto& o : e.observations) {
+    sextant::landmark_observation_t x{};
+    x.id = o.id;
+    x.range = o.range;
+    x.azimuth = o.azimuth;
+    x.elevation = o.elevation;
+    copy_row_major<3>(o.covariance, x.covariance);
+    m.observations.push_back(x);
+  }
+  return m;
+}
+
+sextant::bearing_scan_t to_message(const engine::BearingScan& e, const std::string& sender, int64_t seq) {
+  sextant::bearing_scan_t m{};
+  m.utime = e.utime;
+  m.sender = sender;
+  m.seq = seq;
+  m.sensor_id = e.sensor_id;
+  for (int i = 0; i < 3; ++i) m.sensor_position[i] = e.sensor_position[i];
+  m.scan_id = e.scan_id;
+  m.num_detections = static_cast<int32_t>(e.detections.size());
+  for (const auto& d : e.detections) {
+    sextant::bearing_detection_t x{};
+    x.azimuth = d.azimuth;
+    x.elevation = d.elevation;
+    x.sigma_azimuth = d.sigma_azimuth;
+    x.sigma_elevation = d.sigma_elevation;
+    m.detections.push_back(x);
+  }
+  return m;
+}
+
+sextant::loop_closure_t to_message(const engine::LoopClosure& e, const std::string& sender, int64_t seq) {
+  sextant::loop_closure_t m{};
+  m.utime = e.utime;
+  m.sender = sender;
+  m.seq = seq;
+  m.source = e.source;
+  m.planar = e.planar;
+  m.utime_from = e.utime_from;
+  m.utime_to = e.utime_to;
+  m.keyframe_from = e.keyframe_from;
+  m.keyframe_to = e.keyframe_to;
+  m.request_id = e.request_id;
+  copy_pose(e.relative, m.position, m.orientation);
+  copy_row_major<6>(e.information, m.information);
+  m.matcher = e.matcher;
+  m.score = e.score;
+  return m;
+}
+
+sextant::fused_pose_t to_message(const engine::FusedPose& o, const std::string& sender, int64_t seq) {
+  sextant::fused_pose_t m{};
+  m.utime = o.utime;
+  m.sender = sender;
+  m.seq = seq;
+  m.source = o.source;
+  m.estimator = o.estimator;
+  m.planar = o.planar;
+  copy_pose(o.pose, m.position, m.orientation);
+  copy_row_major<6>(o.covariance, m.covariance);
+  return m;
+}
+
+sextant::trajectory_t to_message(const engine::Trajectory& o, const std::string& sender, int64_t seq) {
+  sextant::trajectory_t m{};
+  m.utime = o.utime;
+  m.sender = sender;
+  m.seq = seq;
+  m.source = o.source;
+  m.estimator = o.estimator;
+  m.chi2 = o.chi2;
+  m.iterations = o.iterations;
+  m.solve_ms = o.solve_ms;
+  m.num_keyframes = static_cast<int32_t>(o.keyframes.size());
+  for (const auto& k : o.keyframes) {
+    sextant::keyframe_t x{};
+    x.id = k.id;
+    x.utime = k.utime;
+    copy_pose(k.pose, x.position, x.orientation);
+    m.keyframes.push_back(x);
+  }
+  return m;
+}
+
+sextant::match_request_t to_message(const engine::MatchRequest& o, const std::string& sender, int64_t seq) {
+  sextant::match_request_t m{};
+  m.utime = o.utime;
+  m.sender = sender;
+  m.seq = seq;
+  m.source = o.source;
+  m.request_id = o.request_id;
+  m.kind = o.kind;
+  m.keyframe_a = o.a.id;
+  m.utime_a = o.a.utime;
+  copy_pose(o.a.pose, m.position_a, m.orientation_a);
+  m.keyframe_b = o.b.id;
+  m.utime_b = o.b.utime;
+  copy_pose(o.b.pose, m.position_b, m.orientation_b);
+  return m;
+}
+
+sextant::targets_t to_message(const engine::Targets& o, const std::string& sender, int64_t seq) {
+  sextant::targets_t m{};
+  m.utime = o.utime;
+  m.sender = sender;
+  m.seq = seq;
+  m.scan_id = o.scan_id;
+  m.cost_kind = o.cost_kind;
+  m.total_cost = o.total_cost;
+  m.duality_gap = o.duality_gap;
+  m.num_sensors = static_cast<int32_t>(o.sensor_ids.size());
+  m.sensor_ids = o.sensor_ids;
+  m.num_targets = static_cast<int32_t>(o.targets.size());
+  for (const auto& t : o.targets) {
+    sextant::target_t x{};
+    for (int i = 0; i < 3; ++i) x.position[i] = t.position[i];
+    copy_row_major<3>(t.covariance, x.covariance);
+    x.num_sensors = static_cast<int32_t>(t.detection_indices.size());
+    x.detection_indices = t.detection_indices;
+    x.cost = t.cost;
+    m.targets.push_back(x);
+  }
+  return m;
+}
+
+engine::FusedPose to_output(const sextant::fused_pose_t& m) {
+  engine::FusedPose o;
+  o.utime = m.utime;
+  o.source = m.source;
+  o.estimator = m.estimator;
+  o.planar = m.planar;
+  o.pose = read_pose(m.position, m.orientation);
+  o.covariance = read_matrix<6>(m.covariance);
+  return o;
+}
+
+engine::Trajectory to_output(const sextant::trajectory_t& m) {
+  engine::Trajectory o;
+  o.utime = m.utime;
+  o.source = m.source;
+  o.estimator = m.estimator;
+  o.chi2 = m.chi2;
+  o.iterations = m.iterations;
+  o.solve_ms = m.solve_ms;
+  for (const auto& k : m.keyframes) o.keyframes.push_back({k.id, k.utime, read_pose(k.position, k.orientation)});
+  return o;
+}
+
+engine::MatchRequest to_output(const sextant::match_request_t& m) {
+  engine::MatchRequest o;
+  o.utime = m.utime;
+  o.source = m.source;
+  o.request_id = m.request_id;
+  o.kind = m.kind;
+  o.a = {m.keyframe_a, m.utime_a, read_pose(m.position_a, m.orientation_a)};
+  o.b = {m.keyframe_b, m.utime_b, read_pose(m.position_b, m.orientation_b)};
+  return o;
+}
+
+engine::Targets to_output(const sextant::targets_t& m) {
+  engine::Targets o;
+  o.utime = m.utime;
+  o.scan_id = m.scan_id;
+  o.cost_kind = m.cost_kind;
+  o.total_cost = m.total_cost;
+  o.duality_gap = m.duality_gap;
+  o.sensor_ids = m.sensor_ids;
+  for (const auto& t : m.targets) {
+    engine::Target x;
+    x.position = Eigen::Vector3d(t.position[0], t.position[1], t.position[2]);
+    x.covariance = read_matrix<3>(t.covariance);
+    x.detection_indices = t.detection_indices;
+    x.cost = t.cost;
+    o.targets.push_back(x);
+  }
+  return o;
+}
+
+}  // namespace sextant::runtime

@@ -1,0 +1,173 @@
+#include "daemon/runtime/daemon.hpp"
+
+#include "daemon/engine/engine.hpp"
+#include "daemon/runtime/intake.hpp"
+#include "daemon/runtime/publisher.hpp"
+#include "daemon/runtime/recorder.hpp"
+#include "daemon/runtime/stage_runner.hpp"
+#include "daemon/runtime/status_report.hpp"
+
+#include <lcm/lcm-cpp.hpp>
+#include <spdlog/spdlog.h>
+
+#include <chrono>
+#include <map>
+#include <memory>
+#include <thread>
+
+namespace sextant::runtime {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+// At most one log line per (channel, reason) per period; the lines in between are counted and mentioned.
+class RateLimitedLog {
+ public:
+  explicit RateLimitedLog(double period_s) : period_(period_s) {}
+  void warn(const std::string& channel, const std::string& reason, const std::string& message) {
+    auto& e = entries_[channel + "/" + reason];
+    const auto now = Clock::now();
+    if (e.last.time_since_epoch().count() != 0 && std::chrono::duration<double>(now - e.last).count() < period_) {
+      ++e.suppressed;
+      return;
+    }
+    if (e.suppressed > 0)
+      spdlog::warn("rejected ({}): {} [+{} similar since the last report]", reason, message, e.suppressed);
+    else
+      spdlog::warn("rejected ({}): {}", reason, message);
+    e.last = now;
+    e.suppressed = 0;
+  }
+
+ private:
+  struct Entry {
+    Clock::time_point last{};
+    int64_t suppressed = 0;
+  };
+  double period_;
+  std::map<std::string, Entry> entries_;
+};
+
+}  // namespace
+
+std::string bus_failure_help(const std::string& url) {
+  return "cannot start LCM on '" + (url.empty() ? std::string("the default URL (udpm://239.255.76.67:7667)") : url) +
+         "'.\n"
+         "  LCM's UDP multicast needs a route for 224.0.0.0/4. On a single machine:\n"
+         "    sudo ip link set lo multicast on && sudo ip route add 224.0.0.0/4 dev lo\n"
+         "  or run everything inside a private network namespace:\n"
+         "    sudo unshare --net sh -c 'ip link set lo up; ip route add 224.0.0.0/4 dev lo; exec sextantd ...'\n"
+         "  or pass another provider with --lcm-url (e.g. 'udpm://239.255.76.67:7667?ttl=0', 'memq://').";
+}
+
+int run_daemon(const config::DaemonConfig& cfg, const std::atomic<bool>& stop) {
+  lcm::LCM lcm(cfg.lcm_url);
+  if (!lcm.good()) {
+    spdlog::error("{}", bus_failure_help(cfg.lcm_url));
+    return kExitBus;
+  }
+
+  engine::Engine engine(cfg.engine);
+  const std::string primary = engine.primary_estimator();
+  Publisher publisher(cfg.channels, cfg.name, primary,
+                      [&lcm](const std::string& channel, const std::vector<uint8_t>& bytes, int64_t) {
+                        lcm.publish(channel, bytes.data(), static_cast<unsigned>(bytes.size()));
+                      });
+  const engine::Emit emit = [&publisher](engine::Output o) { publisher.publish(o); };
+
+  std::vector<std::unique_ptr<StageRunner>> runners;
+  for (auto& stage : engine.stages())
+    runners.push_back(std::make_unique<StageRunner>(*stage, static_cast<size_t>(cfg.queue_capacity), emit));
+
+  ChannelStats stats;
+  RateLimitedLog log(cfg.log_rate_limit_s);
+  Intake intake(stats, [&log](const std::string& c, const std::string& r, const std::string& m) { log.warn(c, r, m); });
+  const auto& ch = cfg.channels;
+  intake.add_channel(ch.full(ch.odometry), InputKind::kOdometry);
+  intake.add_channel(ch.full(ch.landmarks), InputKind::kLandmarks);
+  intake.add_channel(ch.full(ch.bearings), InputKind::kBearings);
+  intake.add_channel(ch.full(ch.loop_closures), InputKind::kLoopClosures);
+
+  std::unique_ptr<Recorder> recorder;
+  if (!cfg.record.empty()) {
+    try {
+      recorder = std::make_unique<Recorder>(cfg.record, 65536);
+    } catch (const std::exception& e) {
+      spdlog::error("--record: {}", e.what());
+      return kExitRuntime;
+    }
+  }
+
+  // The LCM thread: every message on the bus is recorded (when asked) and, on an input channel, decoded and routed.
+  struct Handler {
+    Intake& intake;
+    std::vector<std::unique_ptr<StageRunner>>& runners;
+    ChannelStats& stats;
+    Recorder* recorder;
+    void on_message(const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
+      const auto received = Clock::now();
+      if (recorder != nullptr) {
+        const auto* b = static_cast<const uint8_t*>(rbuf->data);
+        recorder->record(LogRecord{rbuf->recv_utime, channel, std::vector<uint8_t>(b, b + rbuf->data_size)});
+      }
+      auto event = intake.accept(channel, rbuf->data, rbuf->data_size);
+      if (!event) return;
+      const QueuedEvent queued{std::move(*event), received};
+      for (auto& r : runners)
+        if (r->accepts(queued.event) && !r->offer(queued)) stats.dropped(channel);
+    }
+  } handler{intake, runners, stats, recorder.get()};
+  lcm.subscribe(".*", &Handler::on_message, &handler);
+
+  for (auto& r : runners) r->start();
+  spdlog::info("sextantd '{}' running on {}; stages: {}; primary estimator: {}", cfg.name,
+               cfg.lcm_url.empty() ? "the default LCM URL" : cfg.lcm_url, runners.size(),
+               primary.empty() ? "none" : primary);
+
+  const auto started = Clock::now();
+  StatusReport report(cfg.name);
+  auto publish_status = [&] {
+    std::vector<StageStatus> stage_status;
+    for (auto& r : runners) stage_status.push_back(r->status());
+    engine::Counters runtime_counters{{"fused_pose_not_monotonic", publisher.not_monotonic()}};
+    if (recorder) {
+      runtime_counters.push_back({"recorded", recorder->written()});
+      runtime_counters.push_back({"record_dropped", recorder->dropped()});
+    }
+    publisher.publish(report.build(std::chrono::duration<double>(Clock::now() - started).count(), stats.snapshot(),
+                                   stage_status, runtime_counters, publisher.counts()));
+  };
+
+  std::atomic<bool> intake_stopped{false};
+  std::thread status_thread([&] {
+    auto next = Clock::now();
+    const auto period = std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(cfg.status_period_s));
+    while (!intake_stopped.load()) {
+      next += period;
+      while (!intake_stopped.load() && Clock::now() < next) std::this_thread::sleep_for(std::chrono::milliseconds(20));
+      if (!intake_stopped.load()) publish_status();
+    }
+  });
+
+  int rc = kExitOk;
+  while (!stop.load()) {
+    // A signal interrupts the poll (EINTR) and makes handleTimeout return -1: that is a shutdown, not a failure.
+    if (lcm.handleTimeout(100) < 0 && !stop.load()) {
+      spdlog::error("LCM handle failed; stopping. {}", bus_failure_help(cfg.lcm_url));
+      rc = kExitBus;
+      break;
+    }
+  }
+  intake_stopped = true;
+  spdlog::info("shutting down: draining {} stage queue(s)", runners.size());
+  for (auto& r : runners) r->drain_and_stop();
+  status_thread.join();
+  if (recorder) {
+    recorder->close();
+    spdlog::info("recording closed: {} messages in {}", recorder->written(), cfg.record);
+  }
+  publish_status();
+  return rc;
+}
+
+}  // namespace sextant::runtime

@@ -1,0 +1,73 @@
+#include "daemon/runtime/publisher.hpp"
+
+#include "daemon/runtime/codec.hpp"
+
+#include <algorithm>
+#include <cctype>
+
+namespace sextant::runtime {
+
+Publisher::Publisher(config::Channels channels, std::string sender, std::string primary_estimator, RawSink raw)
+    : channels_(std::move(channels)), sender_(std::move(sender)), primary_(std::move(primary_estimator)),
+      raw_(std::move(raw)) {}
+
+std::string Publisher::fused_pose_channel(const std::string& estimator) const {
+  if (estimator == primary_) return channels_.full(channels_.fused_pose);
+  std::string upper = estimator;
+  std::transform(upper.begin(), upper.end(), upper.begin(), [](unsigned char c) { return std::toupper(c); });
+  return channels_.full(channels_.fused_pose + "_" + upper);
+}
+
+template <class Msg>
+void Publisher::send(const std::string& channel, Msg msg) {
+  // Called with mutex_ held: sequence numbers and the order on the wire agree.
+  msg.sender = sender_;
+  msg.seq = seq_[channel]++;
+  std::vector<uint8_t> bytes(static_cast<size_t>(msg.getEncodedSize()));
+  msg.encode(bytes.data(), 0, static_cast<int>(bytes.size()));
+  raw_(channel, bytes, msg.utime);
+}
+
+void Publisher::publish(const engine::Output& output) {
+  std::lock_guard lock(mutex_);
+  std::visit(
+      [&](const auto& o) {
+        using T = std::decay_t<decltype(o)>;
+        if constexpr (std::is_same_v<T, engine::FusedPose>) {
+          const std::string channel = fused_pose_channel(o.estimator);
+          auto [it, inserted] = last_fused_utime_.try_emplace(channel + "/" + o.source, o.utime);
+          if (!inserted) {
+            if (o.utime <= it->second) {
+              ++not_monotonic_;
+              return;
+            }
+            it->second = o.utime;
+          }
+          send(channel, to_message(o, sender_, 0));
+        } else if constexpr (std::is_same_v<T, engine::Trajectory>) {
+          send(channels_.full(channels_.trajectory), to_message(o, sender_, 0));
+        } else if constexpr (std::is_same_v<T, engine::MatchRequest>) {
+          send(channels_.full(channels_.match_requests), to_message(o, sender_, 0));
+        } else if constexpr (std::is_same_v<T, engine::Targets>) {
+          send(channels_.full(channels_.targets), to_message(o, sender_, 0));
+        }
+      },
+      output);
+}
+
+void Publisher::publish(const sextant::status_t& status) {
+  std::lock_guard lock(mutex_);
+  send(channels_.full(channels_.status), status);
+}
+
+std::map<std::string, int64_t> Publisher::counts() const {
+  std::lock_guard lock(mutex_);
+  return seq_;
+}
+
+int64_t Publisher::not_monotonic() const {
+  std::lock_guard lock(mutex_);
+  return not_monotonic_;
+}
+
+}  // namespace sextant::runtime

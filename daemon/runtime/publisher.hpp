@@ -1,0 +1,55 @@
+#pragma once
+// The single way out of sextant: engine outputs -> LCM messages on their channels, stamped with the sender name
+// and a per-channel sequence number.  Used by sextantd (raw sink = the LCM bus) and by replay (raw sink = a log
+// or memory), so both publish exactly the same bytes.
+//
+// Routing: FusedPose of the primary estimator -> FUSED_POSE; of any other estimator -> FUSED_POSE_<ESTIMATOR>
+// (e.g. FUSED_POSE_DEAD_RECKONING), so estimators can be compared live.  A FusedPose whose utime is not after
+// the last one published for its source on that channel is dropped and counted ("fused_pose_not_monotonic").
+// Thread-safe.
+#include "daemon/config/daemon_config.hpp"
+#include "daemon/engine/outputs.hpp"
+
+#include <sextant/status_t.hpp>
+
+#include <cstdint>
+#include <functional>
+#include <map>
+#include <mutex>
+#include <string>
+#include <vector>
+
+namespace sextant::runtime {
+
+class Publisher {
+ public:
+  /// `raw(channel, bytes, utime)` delivers one encoded message.
+  using RawSink = std::function<void(const std::string& channel, const std::vector<uint8_t>& bytes, int64_t utime)>;
+
+  Publisher(config::Channels channels, std::string sender, std::string primary_estimator, RawSink raw);
+
+  void publish(const engine::Output& output);
+  void publish(const sextant::status_t& status);
+
+  /// Messages published per channel.
+  std::map<std::string, int64_t> counts() const;
+  int64_t not_monotonic() const;
+  const std::string& sender() const { return sender_; }
+  /// The channel a FusedPose of `estimator` is published on.
+  std::string fused_pose_channel(const std::string& estimator) const;
+
+ private:
+  template <class Msg>
+  void send(const std::string& channel, Msg msg);
+
+  const config::Channels channels_;
+  const std::string sender_;
+  const std::string primary_;
+  RawSink raw_;
+  mutable std::mutex mutex_;
+  std::map<std::string, int64_t> seq_;
+  std::map<std::string, int64_t> last_fused_utime_;  // by channel + "/" + source
+  int64_t not_monotonic_ = 0;
+};
+
+}  // namespace sextant::runtime

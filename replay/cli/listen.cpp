@@ -1,0 +1,54 @@
+// sextant listen [CHANNEL...]: prints every sextant message on the bus (or on the given channels), one line each.
+#include "replay/cli/command.hpp"
+#include "replay/message_printer.hpp"
+
+#include <lcm/lcm-cpp.hpp>
+
+#include <atomic>
+#include <csignal>
+#include <cstdio>
+
+namespace {
+std::atomic<bool> g_stop{false};
+
+struct Printer {
+  int64_t remaining;  // stop after this many messages (< 0: never)
+  void on_message(const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
+    if (remaining == 0) return;
+    std::printf("%-16s %s\n", channel.c_str(), sextant::replay::describe_message(rbuf->data, rbuf->data_size).c_str());
+    std::fflush(stdout);
+    if (remaining > 0 && --remaining == 0) g_stop = true;
+  }
+};
+
+sextant::cli::RegisterCommand reg{"listen", [](CLI::App& app) {
+  auto* cmd = app.add_subcommand("listen", "print decoded sextant messages live (all channels, or the ones named)");
+  auto channels = std::make_shared<std::vector<std::string>>();
+  auto url = std::make_shared<std::string>();
+  auto count = std::make_shared<int64_t>(-1);
+  auto seconds = std::make_shared<double>(0);
+  cmd->add_option("channels", *channels, "channels (LCM regular expressions); default: all");
+  cmd->add_option("--lcm-url", *url, "LCM URL");
+  cmd->add_option("-n,--count", *count, "exit after this many messages");
+  cmd->add_option("--seconds", *seconds, "exit after this many seconds");
+  cmd->callback([=] {
+    lcm::LCM lcm(*url);
+    if (!lcm.good()) {
+      std::fprintf(stderr, "sextant listen: cannot start LCM on '%s' (is there a multicast route? "
+                           "sudo ip route add 224.0.0.0/4 dev lo)\n", url->c_str());
+      throw CLI::RuntimeError(3);
+    }
+    Printer printer{*count};
+    if (channels->empty()) lcm.subscribe(".*", &Printer::on_message, &printer);
+    for (const auto& c : *channels) lcm.subscribe(c, &Printer::on_message, &printer);
+    std::signal(SIGINT, [](int) { g_stop = true; });
+    std::signal(SIGTERM, [](int) { g_stop = true; });
+    const auto start = std::chrono::steady_clock::now();
+    while (!g_stop) {
+      lcm.handleTimeout(100);
+      if (*seconds > 0 && std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() > *seconds)
+        break;
+    }
+  });
+}};
+}  // namespace
