@@ -117,7 +117,9 @@ int run_daemon(const config::DaemonConfig& cfg, const std::atomic<bool>& stop) {
         if (r->accepts(queued.event) && !r->offer(queued)) stats.dropped(channel);
     }
   } handler{intake, runners, stats, recorder.get()};
-  lcm.subscribe(".*", &Handler::on_message, &handler);
+  // LCM keeps 30 undelivered messages per subscription by default and silently drops beyond that; our own
+  // bounded queues do the counting, so give LCM's queue room for bursts.
+  lcm.subscribe(".*", &Handler::on_message, &handler)->setQueueCapacity(cfg.queue_capacity * 8);
 
   for (auto& r : runners) r->start();
   spdlog::info("sextantd '{}' running on {}; stages: {}; primary estimator: {}", cfg.name,

@@ -9,7 +9,10 @@ require_netns() {
   fi
 }
 
-# in_netns CMD...: runs CMD in a fresh namespace with lo up and 224.0.0.0/4 routed to it.
+# in_netns CMD...: runs CMD in a fresh namespace with lo up and 224.0.0.0/4 routed to it.  Every LCM process in it
+# asks for a 4 MiB receive buffer (the kernel's default of 208 KiB overflows when a large message arrives in a
+# burst, and UDP then loses datagrams that the checks would count as missing).
+export LCM_DEFAULT_URL="udpm://239.255.76.67:7667?ttl=0&recv_buf_size=4194304"
 in_netns() {
   unshare --net bash -c 'ip link set lo up && ip route add 224.0.0.0/4 dev lo && exec "$@"' in_netns "$@"
 }
