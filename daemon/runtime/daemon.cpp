@@ -3,6 +3,7 @@
 #include "daemon/engine/engine.hpp"
 #include "daemon/runtime/intake.hpp"
 #include "daemon/runtime/publisher.hpp"
+#include "daemon/runtime/raw_subscription.hpp"
 #include "daemon/runtime/recorder.hpp"
 #include "daemon/runtime/stage_runner.hpp"
 #include "daemon/runtime/status_report.hpp"
@@ -104,13 +105,13 @@ int run_daemon(const config::DaemonConfig& cfg, const std::atomic<bool>& stop) {
     std::vector<std::unique_ptr<StageRunner>>& runners;
     ChannelStats& stats;
     Recorder* recorder;
-    void on_message(const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
+    void on_message(const lcm_recv_buf_t& rbuf, const std::string& channel) {
       const auto received = Clock::now();
       if (recorder != nullptr) {
-        const auto* b = static_cast<const uint8_t*>(rbuf->data);
-        recorder->record(LogRecord{rbuf->recv_utime, channel, std::vector<uint8_t>(b, b + rbuf->data_size)});
+        const auto* b = static_cast<const uint8_t*>(rbuf.data);
+        recorder->record(LogRecord{rbuf.recv_utime, channel, std::vector<uint8_t>(b, b + rbuf.data_size)});
       }
-      auto event = intake.accept(channel, rbuf->data, rbuf->data_size);
+      auto event = intake.accept(channel, rbuf.data, rbuf.data_size);
       if (!event) return;
       const QueuedEvent queued{std::move(*event), received};
       for (auto& r : runners)
@@ -119,7 +120,9 @@ int run_daemon(const config::DaemonConfig& cfg, const std::atomic<bool>& stop) {
   } handler{intake, runners, stats, recorder.get()};
   // LCM keeps 30 undelivered messages per subscription by default and silently drops beyond that; our own
   // bounded queues do the counting, so give LCM's queue room for bursts.
-  lcm.subscribe(".*", &Handler::on_message, &handler)->setQueueCapacity(cfg.queue_capacity * 8);
+  // LCM keeps 30 undelivered messages per subscription by default and silently drops beyond that; our own
+  // bounded queues do the counting, so give LCM's queue room for bursts.
+  lcm_subscription_set_queue_capacity(subscribe_raw(lcm, ".*", &handler), cfg.queue_capacity * 8);
 
   for (auto& r : runners) r->start();
   spdlog::info("sextantd '{}' running on {}; stages: {}; primary estimator: {}", cfg.name,

@@ -1,6 +1,7 @@
 // sextant listen [CHANNEL...]: prints every sextant message on the bus (or on the given channels), one line each.
 #include "replay/cli/command.hpp"
 #include "replay/message_printer.hpp"
+#include "daemon/runtime/raw_subscription.hpp"
 
 #include <lcm/lcm-cpp.hpp>
 
@@ -13,9 +14,9 @@ std::atomic<bool> g_stop{false};
 
 struct Printer {
   int64_t remaining;  // stop after this many messages (< 0: never)
-  void on_message(const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
+  void on_message(const lcm_recv_buf_t& rbuf, const std::string& channel) {
     if (remaining == 0) return;
-    std::printf("%-16s %s\n", channel.c_str(), sextant::replay::describe_message(rbuf->data, rbuf->data_size).c_str());
+    std::printf("%-16s %s\n", channel.c_str(), sextant::replay::describe_message(rbuf.data, rbuf.data_size).c_str());
     std::fflush(stdout);
     if (remaining > 0 && --remaining == 0) g_stop = true;
   }
@@ -39,8 +40,8 @@ sextant::cli::RegisterCommand reg{"listen", [](CLI::App& app) {
       throw CLI::RuntimeError(3);
     }
     Printer printer{*count};
-    if (channels->empty()) lcm.subscribe(".*", &Printer::on_message, &printer);
-    for (const auto& c : *channels) lcm.subscribe(c, &Printer::on_message, &printer);
+    if (channels->empty()) sextant::runtime::subscribe_raw(lcm, ".*", &printer);
+    for (const auto& c : *channels) sextant::runtime::subscribe_raw(lcm, c, &printer);
     std::signal(SIGINT, [](int) { g_stop = true; });
     std::signal(SIGTERM, [](int) { g_stop = true; });
     const auto start = std::chrono::steady_clock::now();
