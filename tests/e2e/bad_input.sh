@@ -40,7 +40,9 @@ in_netns bash "$work/run.sh"
 python3 "$(dirname "$0")/check_bad_input.py" "$work/expected.json" "$work/bus1.lcm" --exact "$work/rec1.lcm" "$work/bad.lcm"
 python3 "$(dirname "$0")/check_bad_input.py" "$work/expected.json" "$work/bus2.lcm" --overload
 # Memory stays bounded: the peak resident size during the flood is under 64 MiB, and no more than 16 MiB above
-# the size after start-up.
+# the size after start-up.  (Not under AddressSanitizer, whose shadow memory and quarantine of freed blocks
+# dominate the resident size.)
+[ -n "${ASAN_OPTIONS:-}" ] && { echo "bad_input: ok (memory bound not checked under ASan)"; exit 0; }
 for f in "$work/rss1.txt" "$work/rss2.txt"; do
   python3 - "$f" <<'EOP'
 import sys
