@@ -1,0 +1,35 @@
+#pragma once
+// Trajectory files: TUM (the TUM RGB-D benchmark's text format), KITTI (3x4 row-major pose per line) and g2o
+// (VERTEX_SE3:QUAT lines), for evo, g2o_viewer and scripts.
+//
+// TUM: one pose per line, "timestamp tx ty tz qx qy qz qw" (seconds, metres, quaternion x y z w).  Reading follows
+// the TUM tools (see ../shared/data/tum/METRICS.md §0): commas and tabs count as spaces, empty lines and lines
+// starting with '#' are skipped, and a repeated timestamp replaces the earlier row.
+#include "daemon/engine/events.hpp"
+
+#include <map>
+#include <string>
+#include <vector>
+
+namespace sextant::replay {
+
+struct StampedPose {
+  double t = 0;  // seconds
+  engine::Pose pose;
+};
+
+/// Reads a TUM file; the result is sorted by time with unique stamps.  Throws std::runtime_error naming the file
+/// and line of a malformed row (fewer than 8 numbers, or a number that does not parse).
+std::vector<StampedPose> read_tum(const std::string& path);
+
+/// Writes a TUM file (fixed precision: 6 decimals for time, 9 for the rest, so the output is deterministic).
+void write_tum(const std::string& path, const std::vector<StampedPose>& poses);
+
+/// Writes a KITTI pose file: the 3x4 matrix [R | t] of each pose, row-major, one pose per line.
+void write_kitti(const std::string& path, const std::vector<StampedPose>& poses);
+
+/// Writes the poses as a g2o graph of VERTEX_SE3:QUAT lines (ids 0..n-1), consecutive poses joined by
+/// EDGE_SE3:QUAT with identity information, so g2o_viewer shows the path.
+void write_g2o_trajectory(const std::string& path, const std::vector<StampedPose>& poses);
+
+}  // namespace sextant::replay
