@@ -2,6 +2,11 @@
 
 namespace sextant::runtime {
 
+void ChannelStats::add(const std::string& channel) {
+  std::lock_guard lock(mutex_);
+  channels_[channel];
+}
+
 void ChannelStats::received(const std::string& channel) {
   std::lock_guard lock(mutex_);
   ++channels_[channel].received;

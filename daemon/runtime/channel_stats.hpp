@@ -19,6 +19,8 @@ struct ChannelCounts {
 
 class ChannelStats {
  public:
+  /// Lists a channel with zero counts (input channels show up on the status channel before their first message).
+  void add(const std::string& channel);
   void received(const std::string& channel);
   void decoded(const std::string& channel);
   void rejected(const std::string& channel, const std::string& reason, const std::string& message);

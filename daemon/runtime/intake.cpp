@@ -21,7 +21,10 @@ std::pair<std::string, bool> stream_of(const std::string& channel, const engine:
 
 Intake::Intake(ChannelStats& stats, RejectHook on_reject) : stats_(stats), on_reject_(std::move(on_reject)) {}
 
-void Intake::add_channel(const std::string& channel, InputKind kind) { channels_[channel] = kind; }
+void Intake::add_channel(const std::string& channel, InputKind kind) {
+  channels_[channel] = kind;
+  stats_.add(channel);
+}
 
 void Intake::reject(const std::string& channel, const std::string& reason, const std::string& message) {
   stats_.rejected(channel, reason, message);
