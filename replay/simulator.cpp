@@ -56,15 +56,10 @@ engine::Pose to_pose(const Eigen::Isometry3d& x) {
   return p;
 }
 
-// A perturbation (rho, phi): translation rho, then rotation by the rotation vector phi.  Equal to exp(xi) to first
-// order, which is the order of the covariances the messages claim.
-Eigen::Isometry3d perturbation(const Vector6& xi) {
-  Eigen::Isometry3d x = Eigen::Isometry3d::Identity();
-  const Eigen::Vector3d phi = xi.tail<3>();
-  if (phi.norm() > 0) x.linear() = Eigen::AngleAxisd(phi.norm(), phi.normalized()).toRotationMatrix();
-  x.translation() = xi.head<3>();
-  return x;
-}
+// Exp(xi) as an isometry: noise is injected on the right, as the covariances the messages carry assume.
+Eigen::Isometry3d perturbation(const Vector6& xi) { return SE3::exp(xi).isometry(); }
+
+SE3 to_se3(const Eigen::Isometry3d& x) { return SE3(Eigen::Quaterniond(x.linear()), x.translation()); }
 
 class Simulation {
  public:
@@ -195,7 +190,7 @@ class Simulation {
         eta[i] = gauss(sigma);
       }
       const Eigen::Isometry3d delta = delta_true * perturbation(eta);
-      cov_ = engine::DeadReckoningStage::propagate(cov_, delta, q);
+      cov_ = engine::DeadReckoningStage::propagate(cov_, to_se3(delta), q);
       odom_ = odom_ * delta;
       odo.increment_covariance = q;
       consider_loop(t, T);

@@ -5,33 +5,13 @@
 namespace sextant::engine {
 namespace {
 
-// TEMPORARY until estimators/lie lands: switch to SE3 and its adjoint.
-Eigen::Isometry3d to_se3(const Pose& p) {
-  Eigen::Isometry3d x = Eigen::Isometry3d::Identity();
-  x.linear() = p.orientation.normalized().toRotationMatrix();
-  x.translation() = p.position;
-  return x;
-}
+SE3 to_se3(const Pose& p) { return SE3(p.orientation, p.position); }
 
-Pose to_pose(const Eigen::Isometry3d& x) {
+Pose to_pose(const SE3& x) {
   Pose p;
   p.position = x.translation();
-  p.orientation = Eigen::Quaterniond(x.linear()).normalized();
+  p.orientation = x.rotation().quaternion();
   return p;
-}
-
-Eigen::Matrix3d hat(const Eigen::Vector3d& v) {
-  Eigen::Matrix3d m;
-  m << 0, -v.z(), v.y(), v.z(), 0, -v.x(), -v.y(), v.x(), 0;
-  return m;
-}
-
-Matrix6 adjoint(const Eigen::Isometry3d& x) {
-  Matrix6 a = Matrix6::Zero();
-  a.topLeftCorner<3, 3>() = x.linear();
-  a.topRightCorner<3, 3>() = hat(x.translation()) * x.linear();
-  a.bottomRightCorner<3, 3>() = x.linear();
-  return a;
 }
 
 // Nearest positive semi-definite matrix (Higham 1988): symmetrize and clamp negative eigenvalues to zero.
@@ -47,8 +27,8 @@ constexpr int kPlanarActive[] = {0, 1, 5};
 
 }  // namespace
 
-Matrix6 DeadReckoningStage::propagate(const Matrix6& previous, const Eigen::Isometry3d& increment, const Matrix6& q) {
-  const Matrix6 ad = adjoint(increment.inverse());
+Matrix6 DeadReckoningStage::propagate(const Matrix6& previous, const SE3& increment, const Matrix6& q) {
+  const Matrix6 ad = increment.inverse().adjoint();
   const Matrix6 p = ad * previous * ad.transpose() + q;
   return 0.5 * (p + p.transpose());
 }
@@ -56,7 +36,7 @@ Matrix6 DeadReckoningStage::propagate(const Matrix6& previous, const Eigen::Isom
 void DeadReckoningStage::handle(const Event& e, const Emit& emit) {
   const auto& odo = std::get<Odometry>(e);
   ++processed_;
-  const Eigen::Isometry3d odom = to_se3(odo.pose);
+  const SE3 odom = to_se3(odo.pose);
   auto [it, first] = tracks_.try_emplace(odo.source);
   Track& t = it->second;
   if (first) {
@@ -65,7 +45,7 @@ void DeadReckoningStage::handle(const Event& e, const Emit& emit) {
   } else {
     if (odo.utime <= t.utime) return;  // intake guarantees increasing utime per source; keep the invariant local too
     if (static_cast<double>(odo.utime - t.utime) * 1e-6 > config_.max_gap_s) ++gaps_;
-    const Eigen::Isometry3d increment = t.last_odom.inverse() * odom;
+    const SE3 increment = t.last_odom.between(odom);
     Matrix6 q = odo.increment_covariance
                     ? *odo.increment_covariance
                     : nearest_psd(odo.covariance - propagate(t.last_odom_covariance, increment, Matrix6::Zero()));

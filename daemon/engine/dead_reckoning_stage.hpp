@@ -9,7 +9,7 @@
 // Planar sources use the same SE(3) algebra with zero z, roll and pitch: their x, y, yaw block is SE(2)'s.
 #include "daemon/engine/dead_reckoning_stage_config.hpp"
 #include "daemon/engine/stage.hpp"
-#include <Eigen/Geometry>
+#include "estimators/lie/se3.hpp"
 
 #include <map>
 
@@ -26,14 +26,14 @@ class DeadReckoningStage final : public Stage {
   Counters counters() const override;
 
   /// One step of the propagation above, exposed for tests: returns P(k).
-  static Matrix6 propagate(const Matrix6& previous, const Eigen::Isometry3d& increment, const Matrix6& increment_covariance);
+  static Matrix6 propagate(const Matrix6& previous, const SE3& increment, const Matrix6& increment_covariance);
 
  private:
   struct Track {
     int64_t utime = 0;
-    Eigen::Isometry3d last_odom = Eigen::Isometry3d::Identity();
+    SE3 last_odom;
     Matrix6 last_odom_covariance = Matrix6::Zero();
-    Eigen::Isometry3d map_pose = Eigen::Isometry3d::Identity();
+    SE3 map_pose;
     Matrix6 covariance = Matrix6::Zero();
   };
   DeadReckoningConfig config_;
