@@ -1,0 +1,266 @@
+#include "estimators/graph/g2o_io.hpp"
+
+#include "estimators/graph/initialization.hpp"
+
+#include <cerrno>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <fstream>
+#include <map>
+#include <memory>
+#include <sstream>
+#include <stdexcept>
+
+namespace sextant::graph {
+namespace {
+
+struct LineReader {
+  std::string file;
+  int line = 0;
+  std::vector<std::string> tokens;
+  size_t next = 1;
+
+  [[noreturn]] void fail(const std::string& msg) const {
+    throw std::runtime_error(file + ":" + std::to_string(line) + ": " + msg);
+  }
+  double number() {
+    if (next >= tokens.size()) fail(tokens[0] + ": expected more values (got " + std::to_string(tokens.size() - 1) + ")");
+    const std::string& t = tokens[next++];
+    char* end = nullptr;
+    const double v = std::strtod(t.c_str(), &end);
+    if (end == t.c_str() || *end != '\0') fail(tokens[0] + ": not a number: '" + t + "'");
+    return v;
+  }
+  int64_t integer() {
+    const double v = number();
+    if (v != static_cast<double>(static_cast<int64_t>(v))) fail(tokens[0] + ": not an integer id: '" + tokens[next - 1] + "'");
+    return static_cast<int64_t>(v);
+  }
+  void done() const {
+    if (next != tokens.size()) fail(tokens[0] + ": " + std::to_string(tokens.size() - next) + " unexpected extra value(s)");
+  }
+  Eigen::MatrixXd upper_information(int n) {
+    Eigen::MatrixXd I(n, n);
+    for (int r = 0; r < n; ++r)
+      for (int c = r; c < n; ++c) I(r, c) = I(c, r) = number();
+    return I;
+  }
+  // Several values in order (function arguments have no evaluation order, so never read inside a call).
+  Eigen::VectorXd numbers(int n) {
+    Eigen::VectorXd v(n);
+    for (int k = 0; k < n; ++k) v[k] = number();
+    return v;
+  }
+  Eigen::Vector3d vector3() {
+    const Eigen::VectorXd v = numbers(3);
+    return {v[0], v[1], v[2]};
+  }
+  SE2 se2() {
+    const Eigen::VectorXd v = numbers(3);
+    return SE2(v[0], v[1], v[2]);
+  }
+  Eigen::Quaterniond quaternion_xyzw() {
+    const Eigen::VectorXd c = numbers(4);
+    const double x = c[0], y = c[1], z = c[2], w = c[3];
+    const Eigen::Quaterniond q(w, x, y, z);
+    if (!(q.norm() > 1e-9)) fail(tokens[0] + ": zero quaternion");
+    return q.normalized();
+  }
+};
+
+struct PendingEdge {
+  int line;
+  std::string tag;
+  int64_t a, b;
+  std::function<std::unique_ptr<Factor>(int, int)> make;
+};
+
+}  // namespace
+
+G2oGraph read_g2o(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw std::runtime_error(path + ": cannot open: " + std::strerror(errno));
+  G2oGraph out;
+  FactorGraph& g = out.graph;
+  std::map<int64_t, SE3> offsets;
+  std::vector<PendingEdge> edges;
+  std::vector<std::pair<int, int64_t>> fixes;
+  bool saw2 = false, saw3 = false;
+  LineReader r{path, 0, {}, 1};
+  std::string text;
+  while (std::getline(in, text)) {
+    ++r.line;
+    const size_t hash = text.find('#');
+    if (hash != std::string::npos) text.resize(hash);
+    std::istringstream s(text);
+    r.tokens.clear();
+    r.next = 1;
+    for (std::string t; s >> t;) r.tokens.push_back(t);
+    if (r.tokens.empty()) continue;
+    const std::string& tag = r.tokens[0];
+    Variable v;
+    if (tag == "VERTEX_SE2") {
+      v.kind = VariableKind::kPose2;
+      v.id = r.integer();
+      v.pose2 = r.se2();
+      saw2 = true;
+    } else if (tag == "VERTEX_SE3:QUAT") {
+      v.kind = VariableKind::kPose3;
+      v.id = r.integer();
+      const Eigen::Vector3d t = r.vector3();
+      v.pose3 = SE3(r.quaternion_xyzw(), t);
+      saw3 = true;
+    } else if (tag == "VERTEX_XY") {
+      v.kind = VariableKind::kPoint2;
+      v.id = r.integer();
+      v.point << r.numbers(2), 0;
+    } else if (tag == "VERTEX_TRACKXYZ") {
+      v.kind = VariableKind::kPoint3;
+      v.id = r.integer();
+      v.point = r.vector3();
+    } else if (tag == "EDGE_SE2") {
+      const int64_t a = r.integer(), b = r.integer();
+      const SE2 z = r.se2();
+      const Eigen::Matrix3d I = r.upper_information(3);
+      saw2 = true;
+      edges.push_back({r.line, tag, a, b, [z, I](int i, int j) { return std::make_unique<RelativePoseFactor>(i, j, z, I); }});
+    } else if (tag == "EDGE_SE3:QUAT") {
+      const int64_t a = r.integer(), b = r.integer();
+      const Eigen::Vector3d t = r.vector3();
+      const SE3 z(r.quaternion_xyzw(), t);
+      const Matrix6d I = r.upper_information(6);
+      saw3 = true;
+      edges.push_back({r.line, tag, a, b, [z, I](int i, int j) { return std::make_unique<RelativePoseFactor>(i, j, z, I); }});
+    } else if (tag == "EDGE_SE2_XY") {
+      const int64_t a = r.integer(), b = r.integer();
+      const Eigen::VectorXd z = r.numbers(2);
+      const Eigen::MatrixXd I = r.upper_information(2);
+      edges.push_back({r.line, tag, a, b, [z, I](int i, int j) {
+                         return std::make_unique<PointObservationFactor>(i, j, PointObservationFactor::Model::kPosition, z, I);
+                       }});
+    } else if (tag == "EDGE_SE3_TRACKXYZ") {
+      const int64_t a = r.integer(), b = r.integer(), param = r.integer();
+      const Eigen::VectorXd z = r.numbers(3);
+      const Eigen::MatrixXd I = r.upper_information(3);
+      if (!offsets.count(param)) r.fail("EDGE_SE3_TRACKXYZ: unknown parameter id " + std::to_string(param) + " (PARAMS_SE3OFFSET must come first)");
+      const SE3 offset = offsets.at(param);
+      edges.push_back({r.line, tag, a, b, [z, I, offset](int i, int j) {
+                         return std::make_unique<PointObservationFactor>(i, j, PointObservationFactor::Model::kPosition, z, I, offset);
+                       }});
+    } else if (tag == "PARAMS_SE3OFFSET") {
+      const int64_t id = r.integer();
+      const Eigen::Vector3d t = r.vector3();
+      offsets[id] = SE3(r.quaternion_xyzw(), t);
+    } else if (tag == "FIX") {
+      while (r.next < r.tokens.size()) fixes.push_back({r.line, r.integer()});
+    } else {
+      r.fail("unknown tag '" + tag + "'");
+    }
+    r.done();
+    if (tag.rfind("VERTEX_", 0) == 0) {
+      if (g.index_of(v.id) >= 0) r.fail(tag + ": vertex " + std::to_string(v.id) + " defined twice");
+      g.add_variable(v);
+      out.had_vertices = true;
+    }
+  }
+  if (saw2 && saw3) throw std::runtime_error(path + ": mixes 2-D and 3-D poses");
+  out.dimension = saw3 ? 3 : 2;
+  for (const auto& e : edges) {
+    int ia = g.index_of(e.a), ib = g.index_of(e.b);
+    for (auto [id, idx] : {std::pair{e.a, &ia}, std::pair{e.b, &ib}}) {
+      if (*idx >= 0) continue;
+      if (out.had_vertices)
+        throw std::runtime_error(path + ":" + std::to_string(e.line) + ": " + e.tag + " refers to vertex " +
+                                 std::to_string(id) + ", which is not defined");
+      if (e.tag != "EDGE_SE2" && e.tag != "EDGE_SE3:QUAT")
+        throw std::runtime_error(path + ":" + std::to_string(e.line) + ": " + e.tag + " needs its vertices defined");
+      Variable v;
+      v.id = id;
+      v.kind = out.dimension == 3 ? VariableKind::kPose3 : VariableKind::kPose2;
+      *idx = g.add_variable(v);
+    }
+    if (ia == ib) throw std::runtime_error(path + ":" + std::to_string(e.line) + ": " + e.tag + " joins vertex " + std::to_string(e.a) + " to itself");
+    auto f = e.make(ia, ib);
+    // Kinds must fit the edge.
+    const auto ka = g.variables()[static_cast<size_t>(ia)].kind, kb = g.variables()[static_cast<size_t>(ib)].kind;
+    const bool ok = (e.tag == "EDGE_SE2" && ka == VariableKind::kPose2 && kb == VariableKind::kPose2) ||
+                    (e.tag == "EDGE_SE3:QUAT" && ka == VariableKind::kPose3 && kb == VariableKind::kPose3) ||
+                    (e.tag == "EDGE_SE2_XY" && ka == VariableKind::kPose2 && kb == VariableKind::kPoint2) ||
+                    (e.tag == "EDGE_SE3_TRACKXYZ" && ka == VariableKind::kPose3 && kb == VariableKind::kPoint3);
+    if (!ok) throw std::runtime_error(path + ":" + std::to_string(e.line) + ": " + e.tag + " between vertices of the wrong kinds");
+    g.add_factor(std::move(f));
+  }
+  for (const auto& [line, id] : fixes) {
+    const int i = g.index_of(id);
+    if (i < 0) throw std::runtime_error(path + ":" + std::to_string(line) + ": FIX of unknown vertex " + std::to_string(id));
+    g.variables()[static_cast<size_t>(i)].fixed = true;
+  }
+  if (!out.had_vertices) initialize_by_odometry(g);
+  return out;
+}
+
+void write_g2o(const std::string& path, const FactorGraph& g) {
+  std::unique_ptr<std::FILE, int (*)(std::FILE*)> f(std::fopen(path.c_str(), "w"), &std::fclose);
+  if (!f) throw std::runtime_error("cannot write " + path + ": " + std::strerror(errno));
+  const auto& vars = g.variables();
+  for (const auto& v : vars) {
+    switch (v.kind) {
+      case VariableKind::kPose2:
+        std::fprintf(f.get(), "VERTEX_SE2 %lld %.17g %.17g %.17g\n", (long long)v.id, v.pose2.translation().x(),
+                     v.pose2.translation().y(), v.pose2.angle());
+        break;
+      case VariableKind::kPose3: {
+        const auto& t = v.pose3.translation();
+        const auto& q = v.pose3.rotation().quaternion();
+        std::fprintf(f.get(), "VERTEX_SE3:QUAT %lld %.17g %.17g %.17g %.17g %.17g %.17g %.17g\n", (long long)v.id, t.x(),
+                     t.y(), t.z(), q.x(), q.y(), q.z(), q.w());
+        break;
+      }
+      case VariableKind::kPoint2:
+        std::fprintf(f.get(), "VERTEX_XY %lld %.17g %.17g\n", (long long)v.id, v.point.x(), v.point.y());
+        break;
+      case VariableKind::kPoint3:
+        std::fprintf(f.get(), "VERTEX_TRACKXYZ %lld %.17g %.17g %.17g\n", (long long)v.id, v.point.x(), v.point.y(), v.point.z());
+        break;
+    }
+  }
+  auto info = [&](const Eigen::MatrixXd& I) {
+    for (int r = 0; r < I.rows(); ++r)
+      for (int c = r; c < I.cols(); ++c) std::fprintf(f.get(), " %.17g", I(r, c));
+    std::fprintf(f.get(), "\n");
+  };
+  bool wrote_offset = false;
+  for (const auto& fac : g.factors()) {
+    const long long a = vars[static_cast<size_t>(fac->variables()[0])].id;
+    if (const auto* rp = dynamic_cast<const RelativePoseFactor*>(fac.get())) {
+      const long long b = vars[static_cast<size_t>(fac->variables()[1])].id;
+      if (rp->planar()) {
+        const auto& z = rp->measurement2();
+        std::fprintf(f.get(), "EDGE_SE2 %lld %lld %.17g %.17g %.17g", a, b, z.translation().x(), z.translation().y(), z.angle());
+      } else {
+        const auto& z = rp->measurement3();
+        const auto& t = z.translation();
+        const auto& q = z.rotation().quaternion();
+        std::fprintf(f.get(), "EDGE_SE3:QUAT %lld %lld %.17g %.17g %.17g %.17g %.17g %.17g %.17g", a, b, t.x(), t.y(), t.z(),
+                     q.x(), q.y(), q.z(), q.w());
+      }
+      info(fac->information());
+    } else if (const auto* po = dynamic_cast<const PointObservationFactor*>(fac.get());
+               po && po->model() == PointObservationFactor::Model::kPosition) {
+      const long long b = vars[static_cast<size_t>(fac->variables()[1])].id;
+      const auto& z = po->measurement();
+      if (z.size() == 2) {
+        std::fprintf(f.get(), "EDGE_SE2_XY %lld %lld %.17g %.17g", a, b, z[0], z[1]);
+      } else {
+        if (!wrote_offset) std::fprintf(f.get(), "PARAMS_SE3OFFSET 0 0 0 0 0 0 0 1\n"), wrote_offset = true;
+        std::fprintf(f.get(), "EDGE_SE3_TRACKXYZ %lld %lld 0 %.17g %.17g %.17g", a, b, z[0], z[1], z[2]);
+      }
+      info(fac->information());
+    }
+  }
+  for (const auto& v : vars)
+    if (v.fixed) std::fprintf(f.get(), "FIX %lld\n", (long long)v.id);
+}
+
+}  // namespace sextant::graph

@@ -1,0 +1,229 @@
+#include "estimators/graph/initialization.hpp"
+
+#include <Eigen/SVD>
+#include <Eigen/SparseCholesky>
+
+#include <algorithm>
+#include <queue>
+#include <tuple>
+#include <map>
+#include <random>
+
+namespace sextant::graph {
+namespace {
+
+struct PoseEdge {
+  int i, j;
+  const RelativePoseFactor* f;
+};
+
+std::vector<PoseEdge> pose_edges(const FactorGraph& g) {
+  std::vector<PoseEdge> out;
+  for (const auto& f : g.factors())
+    if (const auto* rp = dynamic_cast<const RelativePoseFactor*>(f.get()))
+      out.push_back({rp->variables()[0], rp->variables()[1], rp});
+  return out;
+}
+
+void place_points(FactorGraph& g, const std::vector<bool>& known) {
+  auto& vars = g.variables();
+  std::vector<bool> placed(vars.size(), false);
+  for (const auto& f : g.factors()) {
+    const auto* po = dynamic_cast<const PointObservationFactor*>(f.get());
+    if (!po || po->model() != PointObservationFactor::Model::kPosition) continue;
+    const int pose = po->variables()[0], point = po->variables()[1];
+    if (!known[static_cast<size_t>(pose)] || placed[static_cast<size_t>(point)] || vars[static_cast<size_t>(point)].fixed) continue;
+    const auto& x = vars[static_cast<size_t>(pose)];
+    const auto& z = po->measurement();
+    if (x.kind == VariableKind::kPose2) vars[static_cast<size_t>(point)].point.head<2>() = x.pose2.act(z.head<2>());
+    else vars[static_cast<size_t>(point)].point = x.pose3 * Eigen::Vector3d(z[0], z[1], z[2]);
+    placed[static_cast<size_t>(point)] = true;
+  }
+}
+
+// Projection of a d x d matrix onto SO(d): U diag(1, ..., det(U V')) V'.
+template <int D>
+Eigen::Matrix<double, D, D> project_to_so(const Eigen::Matrix<double, D, D>& M) {
+  Eigen::JacobiSVD<Eigen::Matrix<double, D, D>> svd(M, Eigen::ComputeFullU | Eigen::ComputeFullV);
+  Eigen::Matrix<double, D, D> S = Eigen::Matrix<double, D, D>::Identity();
+  S(D - 1, D - 1) = (svd.matrixU() * svd.matrixV().transpose()).determinant() < 0 ? -1 : 1;
+  return svd.matrixU() * S * svd.matrixV().transpose();
+}
+
+template <int D>
+std::string chordal(FactorGraph& g) {
+  using MatD = Eigen::Matrix<double, D, D>;
+  using VecD = Eigen::Matrix<double, D, 1>;
+  auto& vars = g.variables();
+  const auto edges = pose_edges(g);
+  auto rotation = [&](int v) -> MatD {
+    if constexpr (D == 2) return vars[static_cast<size_t>(v)].pose2.rotation().matrix();
+    else return vars[static_cast<size_t>(v)].pose3.rotation().matrix();
+  };
+  auto translation = [&](int v) -> VecD {
+    if constexpr (D == 2) return vars[static_cast<size_t>(v)].pose2.translation();
+    else return vars[static_cast<size_t>(v)].pose3.translation();
+  };
+  // Unknown poses; the gauge (fixed poses, else the first pose) stays.
+  std::vector<int> index(vars.size(), -1);
+  int n = 0;
+  bool any_fixed = false;
+  for (const auto& v : vars) any_fixed = any_fixed || (v.fixed && v.is_pose());
+  bool gauge_taken = any_fixed;
+  for (size_t v = 0; v < vars.size(); ++v) {
+    if (!vars[v].is_pose() || vars[v].fixed) continue;
+    if (!gauge_taken) {
+      gauge_taken = true;
+      continue;
+    }
+    index[v] = n++;
+  }
+  if (n == 0) return "";
+  // Scalar weights from the information blocks (SE-Sync's isotropic approximation).
+  auto weights = [&](const RelativePoseFactor* f, double& kappa, double& tau) {
+    const Eigen::MatrixXd& I = f->information();
+    const int rdim = D == 2 ? 1 : 3;
+    tau = D / I.topLeftCorner(D, D).inverse().trace();
+    kappa = D == 2 ? I(2, 2) : 3.0 / (2.0 * I.bottomRightCorner(rdim, rdim).inverse().trace());
+  };
+  // Rotations: unknowns vec(R_i) (column-major), D*D per pose.  Residual vec(R_j) - K vec(R_i), K = Z' (x) I.
+  const int nr = D * D;
+  std::vector<Eigen::Triplet<double>> trip;
+  Eigen::VectorXd rhs = Eigen::VectorXd::Zero(n * nr);
+  for (const auto& e : edges) {
+    double kappa, tau;
+    weights(e.f, kappa, tau);
+    MatD Z;
+    if constexpr (D == 2) Z = e.f->measurement2().rotation().matrix();
+    else Z = e.f->measurement3().rotation().matrix();
+    Eigen::Matrix<double, D * D, D * D> K = Eigen::Matrix<double, D * D, D * D>::Zero();
+    for (int a = 0; a < D; ++a)
+      for (int b = 0; b < D; ++b) K.template block<D, D>(a * D, b * D) = Z(b, a) * MatD::Identity();
+    const int ii = index[static_cast<size_t>(e.i)], jj = index[static_cast<size_t>(e.j)];
+    // H += kappa [K'K, -K'; -K, I] over (i, j); known poses move to the right-hand side.
+    Eigen::Map<const Eigen::Matrix<double, D * D, 1>> ri(rotation(e.i).data()), rj(rotation(e.j).data());
+    if (ii >= 0) {
+      for (int a = 0; a < nr; ++a) trip.emplace_back(ii * nr + a, ii * nr + a, kappa);  // K'K = I
+      if (jj < 0) rhs.segment<D * D>(ii * nr) += kappa * K.transpose() * rj;
+    }
+    if (jj >= 0) {
+      for (int a = 0; a < nr; ++a) trip.emplace_back(jj * nr + a, jj * nr + a, kappa);
+      if (ii < 0) rhs.segment<D * D>(jj * nr) += kappa * K * ri;
+    }
+    if (ii >= 0 && jj >= 0)
+      for (int a = 0; a < nr; ++a)
+        for (int b = 0; b < nr; ++b)
+          if (K(a, b) != 0) {
+            trip.emplace_back(jj * nr + a, ii * nr + b, -kappa * K(a, b));
+            trip.emplace_back(ii * nr + b, jj * nr + a, -kappa * K(a, b));
+          }
+  }
+  Eigen::SparseMatrix<double> H(n * nr, n * nr);
+  H.setFromTriplets(trip.begin(), trip.end());
+  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> chol(H);
+  if (chol.info() != Eigen::Success) return "chordal relaxation: the rotation system is singular (disconnected graph?)";
+  const Eigen::VectorXd r = chol.solve(rhs);
+  std::vector<MatD> R(vars.size());
+  for (size_t v = 0; v < vars.size(); ++v) {
+    if (!vars[v].is_pose()) continue;
+    R[v] = index[v] >= 0 ? project_to_so<D>(Eigen::Map<const MatD>(r.data() + index[v] * nr)) : rotation(static_cast<int>(v));
+  }
+  // Translations: t_j - t_i = R_i t_ij.
+  trip.clear();
+  Eigen::VectorXd rt = Eigen::VectorXd::Zero(n * D);
+  for (const auto& e : edges) {
+    double kappa, tau;
+    weights(e.f, kappa, tau);
+    VecD tij;
+    if constexpr (D == 2) tij = e.f->measurement2().translation();
+    else tij = e.f->measurement3().translation();
+    const VecD c = R[static_cast<size_t>(e.i)] * tij;
+    const int ii = index[static_cast<size_t>(e.i)], jj = index[static_cast<size_t>(e.j)];
+    for (int a = 0; a < D; ++a) {
+      if (ii >= 0) trip.emplace_back(ii * D + a, ii * D + a, tau), rt[ii * D + a] -= tau * c[a];
+      if (jj >= 0) trip.emplace_back(jj * D + a, jj * D + a, tau), rt[jj * D + a] += tau * c[a];
+      if (ii >= 0 && jj >= 0) trip.emplace_back(ii * D + a, jj * D + a, -tau), trip.emplace_back(jj * D + a, ii * D + a, -tau);
+      if (ii < 0 && jj >= 0) rt[jj * D + a] += tau * translation(e.i)[a];
+      if (jj < 0 && ii >= 0) rt[ii * D + a] += tau * translation(e.j)[a];
+    }
+  }
+  Eigen::SparseMatrix<double> Ht(n * D, n * D);
+  Ht.setFromTriplets(trip.begin(), trip.end());
+  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> chol_t(Ht);
+  if (chol_t.info() != Eigen::Success) return "chordal relaxation: the translation system is singular (disconnected graph?)";
+  const Eigen::VectorXd t = chol_t.solve(rt);
+  for (size_t v = 0; v < vars.size(); ++v) {
+    if (index[v] < 0) continue;
+    const VecD tv = t.segment<D>(index[v] * D);
+    if constexpr (D == 2) vars[v].pose2 = SE2(SO2(std::atan2(R[v](1, 0), R[v](0, 0))), tv);
+    else vars[v].pose3 = SE3(SO3(Eigen::Matrix3d(R[v])), tv);
+  }
+  std::vector<bool> known(vars.size(), true);
+  place_points(g, known);
+  return "";
+}
+
+}  // namespace
+
+int initialize_by_odometry(FactorGraph& g) {
+  auto& vars = g.variables();
+  std::vector<bool> known(vars.size(), false);
+  // Roots: fixed poses, else the pose with the lowest id at the identity... kept at its current value.
+  int root = -1;
+  for (size_t v = 0; v < vars.size(); ++v) {
+    if (!vars[v].is_pose()) continue;
+    if (vars[v].fixed) known[v] = true;
+    if (root < 0 || vars[v].id < vars[static_cast<size_t>(root)].id) root = static_cast<int>(v);
+  }
+  if (root < 0) return 0;
+  if (std::none_of(known.begin(), known.end(), [](bool b) { return b; })) known[static_cast<size_t>(root)] = true;
+  // Prim's spanning tree with edge weight |id_i - id_j| (ties: file order): the chain of consecutive ids is used
+  // wherever it exists, exactly as "compose the odometry" does, and loop closures only bridge its gaps.
+  const auto edges = pose_edges(g);
+  std::vector<std::vector<size_t>> adj(vars.size());
+  for (size_t k = 0; k < edges.size(); ++k) {
+    adj[static_cast<size_t>(edges[k].i)].push_back(k);
+    adj[static_cast<size_t>(edges[k].j)].push_back(k);
+  }
+  using Item = std::tuple<int64_t, size_t, int>;  // (gap, edge, known endpoint)
+  std::priority_queue<Item, std::vector<Item>, std::greater<Item>> frontier;
+  auto expand = [&](int u) {
+    for (size_t k : adj[static_cast<size_t>(u)]) {
+      const auto& e = edges[k];
+      const int w = e.i == u ? e.j : e.i;
+      if (!known[static_cast<size_t>(w)])
+        frontier.emplace(std::abs(vars[static_cast<size_t>(e.i)].id - vars[static_cast<size_t>(e.j)].id), k, u);
+    }
+  };
+  for (size_t v = 0; v < vars.size(); ++v)
+    if (known[v]) expand(static_cast<int>(v));
+  while (!frontier.empty()) {
+    const auto [gap, k, u] = frontier.top();
+    frontier.pop();
+    const auto& e = edges[k];
+    const int w = e.i == u ? e.j : e.i;
+    if (known[static_cast<size_t>(w)]) continue;
+    auto& x = vars[static_cast<size_t>(w)];
+    const auto& xu = vars[static_cast<size_t>(u)];
+    if (e.f->planar()) x.pose2 = e.i == u ? xu.pose2 * e.f->measurement2() : xu.pose2 * e.f->measurement2().inverse();
+    else x.pose3 = e.i == u ? xu.pose3 * e.f->measurement3() : xu.pose3 * e.f->measurement3().inverse();
+    known[static_cast<size_t>(w)] = true;
+    expand(w);
+  }
+  place_points(g, known);
+  int unreached = 0;
+  for (size_t v = 0; v < vars.size(); ++v) unreached += vars[v].is_pose() && !known[v];
+  return unreached;
+}
+
+std::string initialize_chordal(FactorGraph& g) {
+  bool planar = false, spatial = false;
+  for (const auto& v : g.variables()) planar |= v.kind == VariableKind::kPose2, spatial |= v.kind == VariableKind::kPose3;
+  if (planar && spatial) return "chordal relaxation: the graph mixes 2-D and 3-D poses";
+  const auto backup = g.variables();
+  const std::string why = spatial ? chordal<3>(g) : chordal<2>(g);
+  if (!why.empty()) g.variables() = backup;
+  return why;
+}
+
+}  // namespace sextant::graph

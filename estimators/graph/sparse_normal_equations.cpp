@@ -1,0 +1,202 @@
+#include "estimators/graph/sparse_normal_equations.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <map>
+#include <set>
+#include <stdexcept>
+
+namespace sextant::graph {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double seconds_since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
+
+}  // namespace
+
+SparseNormalEquations::SparseNormalEquations(const FactorGraph& graph, Ordering ordering) : graph_(graph) {
+  const auto& vars = graph.variables();
+  const size_t nv = vars.size();
+  offset_.assign(nv, -1);
+  dim_.resize(nv);
+  var_block_.assign(nv, -1);
+  for (size_t i = 0; i < nv; ++i) {
+    dim_[i] = vars[i].dim();
+    if (vars[i].fixed) continue;
+    var_block_[i] = static_cast<int>(block_var_.size());
+    block_var_.push_back(static_cast<int>(i));
+    offset_[i] = n_;
+    n_ += dim_[i];
+  }
+  const int nb = static_cast<int>(block_var_.size());
+  // Rows (block indices <= column block) present in each block column; every block has its diagonal.
+  std::vector<std::set<int>> rows(static_cast<size_t>(nb));
+  for (int b = 0; b < nb; ++b) rows[static_cast<size_t>(b)].insert(b);
+  for (const auto& f : graph.factors())
+    for (int u : f->variables())
+      for (int v : f->variables()) {
+        const int bu = var_block_[static_cast<size_t>(u)], bv = var_block_[static_cast<size_t>(v)];
+        if (bu >= 0 && bv >= 0 && bu <= bv) rows[static_cast<size_t>(bv)].insert(bu);
+      }
+  // Compressed columns of the upper triangle.
+  std::vector<int> colptr(static_cast<size_t>(n_) + 1, 0), rowind;
+  std::map<std::pair<int, int>, int> pair_index;
+  for (int b = 0; b < nb; ++b) {
+    const int db = dim_[static_cast<size_t>(block_var_[static_cast<size_t>(b)])];
+    const int ob = offset_[static_cast<size_t>(block_var_[static_cast<size_t>(b)])];
+    std::vector<std::pair<int, int>> starts;  // (pair, first position) filled per k below
+    for (int k = 0; k < db; ++k) {
+      const int col = ob + k;
+      colptr[static_cast<size_t>(col)] = static_cast<int>(rowind.size());
+      for (int a : rows[static_cast<size_t>(b)]) {
+        const int va = block_var_[static_cast<size_t>(a)];
+        const int oa = offset_[static_cast<size_t>(va)], da = dim_[static_cast<size_t>(va)];
+        auto [it, inserted] = pair_index.try_emplace({a, b}, static_cast<int>(pair_col_start_.size()));
+        if (inserted) pair_col_start_.emplace_back(static_cast<size_t>(db), 0);
+        pair_col_start_[static_cast<size_t>(it->second)][static_cast<size_t>(k)] = static_cast<int>(rowind.size());
+        const int nrows = a == b ? k + 1 : da;
+        for (int r = 0; r < nrows; ++r) rowind.push_back(oa + r);
+        if (a == b) diag_pos_.push_back(static_cast<int>(rowind.size()) - 1);
+      }
+    }
+  }
+  colptr[static_cast<size_t>(n_)] = static_cast<int>(rowind.size());
+  // diag_pos_ was filled in column order, which is also the order of the unknowns.
+  factor_pairs_.resize(graph.factors().size());
+  for (size_t fi = 0; fi < graph.factors().size(); ++fi) {
+    const auto& fv = graph.factors()[fi]->variables();
+    for (size_t i = 0; i < fv.size(); ++i)
+      for (size_t j = 0; j < fv.size(); ++j) {
+        const int bu = var_block_[static_cast<size_t>(fv[i])], bv = var_block_[static_cast<size_t>(fv[j])];
+        factor_pairs_[fi].push_back(bu >= 0 && bv >= 0 && bu <= bv ? pair_index.at({bu, bv}) : -1);
+      }
+  }
+
+  cholmod_start(&common_);
+  common_.supernodal = CHOLMOD_SUPERNODAL;
+  common_.print = 0;
+  switch (ordering) {
+    case Ordering::kAmd: common_.nmethods = 1, common_.method[0].ordering = CHOLMOD_AMD; break;
+    case Ordering::kColamd: common_.nmethods = 1, common_.method[0].ordering = CHOLMOD_COLAMD; break;
+    case Ordering::kMetis: common_.nmethods = 1, common_.method[0].ordering = CHOLMOD_METIS; break;
+    case Ordering::kAuto: break;
+  }
+  H_ = cholmod_allocate_sparse(static_cast<size_t>(n_), static_cast<size_t>(n_), rowind.size(), 1, 1, 1, CHOLMOD_REAL,
+                               &common_);
+  if (H_ == nullptr) throw std::runtime_error("CHOLMOD could not allocate the normal equations");
+  std::copy(colptr.begin(), colptr.end(), static_cast<int*>(H_->p));
+  std::copy(rowind.begin(), rowind.end(), static_cast<int*>(H_->i));
+  values_.assign(rowind.size(), 0.0);
+  b_ = Eigen::VectorXd::Zero(n_);
+  if (n_ > 0) {
+    L_ = cholmod_analyze(H_, &common_);
+    if (L_ == nullptr) throw std::runtime_error("CHOLMOD symbolic analysis failed");
+  }
+}
+
+SparseNormalEquations::~SparseNormalEquations() {
+  if (L_) cholmod_free_factor(&L_, &common_);
+  if (H_) cholmod_free_sparse(&H_, &common_);
+  cholmod_finish(&common_);
+}
+
+void SparseNormalEquations::clear() {
+  std::fill(values_.begin(), values_.end(), 0.0);
+  b_.setZero();
+}
+
+int SparseNormalEquations::position(int pair, int col, int row) const {
+  return pair_col_start_[static_cast<size_t>(pair)][static_cast<size_t>(col)] + row;
+}
+
+void SparseNormalEquations::add(int factor_index, const Factor& f, const Linearization& lin, double weight) {
+  const auto& fv = f.variables();
+  const Eigen::MatrixXd W = weight * f.information();
+  const size_t nvars = fv.size();
+  // J_u' W for each free variable u.
+  Eigen::MatrixXd JtW[4];
+  for (size_t i = 0; i < nvars; ++i) {
+    const int bu = var_block_[static_cast<size_t>(fv[i])];
+    if (bu < 0) continue;
+    JtW[i] = lin.jacobians[i].transpose() * W;
+    b_.segment(offset_[static_cast<size_t>(fv[i])], dim_[static_cast<size_t>(fv[i])]) += JtW[i] * lin.error;
+  }
+  const auto& pairs = factor_pairs_[static_cast<size_t>(factor_index)];
+  for (size_t i = 0; i < nvars; ++i)
+    for (size_t j = 0; j < nvars; ++j) {
+      const int pair = pairs[i * nvars + j];
+      if (pair < 0) continue;
+      const bool same = fv[i] == fv[j];
+      const Eigen::MatrixXd M = JtW[i] * lin.jacobians[j];  // rows: block of fv[i], columns: block of fv[j]
+      for (int k = 0; k < M.cols(); ++k) {
+        const int rows = same ? k + 1 : static_cast<int>(M.rows());
+        double* col = values_.data() + position(pair, k, 0);
+        for (int r = 0; r < rows; ++r) col[r] += M(r, k);
+      }
+    }
+}
+
+Eigen::VectorXd SparseNormalEquations::diagonal() const {
+  Eigen::VectorXd d(n_);
+  for (int i = 0; i < n_; ++i) d[i] = values_[static_cast<size_t>(diag_pos_[static_cast<size_t>(i)])];
+  return d;
+}
+
+bool SparseNormalEquations::solve(double lambda, Eigen::VectorXd& dx, std::string* why) {
+  dx.setZero(n_);
+  if (n_ == 0) return true;
+  double* x = static_cast<double*>(H_->x);
+  std::copy(values_.begin(), values_.end(), x);
+  if (lambda > 0)
+    for (int i = 0; i < n_; ++i) {
+      const size_t p = static_cast<size_t>(diag_pos_[static_cast<size_t>(i)]);
+      x[p] += lambda * std::max(values_[p], 1e-6);
+    }
+  const auto t0 = Clock::now();
+  common_.quick_return_if_not_posdef = 1;
+  const int ok = cholmod_factorize(H_, L_, &common_);
+  factor_seconds_ += seconds_since(t0);
+  if (!ok || common_.status == CHOLMOD_NOT_POSDEF || L_->minor < L_->n) {
+    if (why) {
+      // The column where the factorization broke down, back through the fill-reducing permutation.
+      const int* perm = static_cast<const int*>(L_->Perm);
+      const size_t minor = L_->minor < L_->n ? L_->minor : 0;
+      const int col = perm ? perm[minor] : static_cast<int>(minor);
+      int var = -1;
+      for (size_t v = 0; v < offset_.size(); ++v)
+        if (offset_[v] >= 0 && col >= offset_[v] && col < offset_[v] + dim_[v]) var = static_cast<int>(v);
+      *why = common_.status == CHOLMOD_NOT_POSDEF || L_->minor < L_->n
+                 ? "the normal equations are not positive definite: variable " +
+                       (var >= 0 ? std::to_string(graph_.variables()[static_cast<size_t>(var)].id) : std::string("?")) +
+                       " (tangent component " + std::to_string(var >= 0 ? col - offset_[static_cast<size_t>(var)] : -1) +
+                       ") is not determined by the factors (under-constrained, or disconnected from the gauge)"
+                 : "CHOLMOD factorization failed (status " + std::to_string(common_.status) + ")";
+    }
+    return false;
+  }
+  const auto t1 = Clock::now();
+  cholmod_dense* rhs = cholmod_allocate_dense(static_cast<size_t>(n_), 1, static_cast<size_t>(n_), CHOLMOD_REAL, &common_);
+  double* r = static_cast<double*>(rhs->x);
+  for (int i = 0; i < n_; ++i) r[i] = -b_[i];
+  cholmod_dense* sol = cholmod_solve(CHOLMOD_A, L_, rhs, &common_);
+  cholmod_free_dense(&rhs, &common_);
+  if (sol == nullptr) {
+    if (why) *why = "CHOLMOD solve failed (status " + std::to_string(common_.status) + ")";
+    return false;
+  }
+  dx = Eigen::Map<const Eigen::VectorXd>(static_cast<const double*>(sol->x), n_);
+  cholmod_free_dense(&sol, &common_);
+  solve_seconds_ += seconds_since(t1);
+  if (!dx.allFinite()) {
+    if (why) *why = "the solution of the normal equations is not finite";
+    return false;
+  }
+  return true;
+}
+
+size_t SparseNormalEquations::nonzeros_in_factor() const {
+  if (L_ == nullptr) return 0;
+  return L_->is_super ? L_->xsize : L_->nzmax;
+}
+
+}  // namespace sextant::graph

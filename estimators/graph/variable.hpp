@@ -1,0 +1,36 @@
+#pragma once
+// The variables of a factor graph: planar and spatial poses and points.  Each is updated on its manifold by
+// X <- X (+) delta (right perturbation for poses, addition for points); `dim` is the size of delta.
+#include "estimators/lie/se2.hpp"
+#include "estimators/lie/se3.hpp"
+
+#include <cstdint>
+
+namespace sextant::graph {
+
+enum class VariableKind { kPose2, kPose3, kPoint2, kPoint3 };
+
+/// Tangent dimension of a kind: 3, 6, 2, 3.
+constexpr int tangent_dim(VariableKind k) {
+  return k == VariableKind::kPose2 ? 3 : k == VariableKind::kPose3 ? 6 : k == VariableKind::kPoint2 ? 2 : 3;
+}
+
+struct Variable {
+  int64_t id = 0;  // the user's id (g2o vertex id)
+  VariableKind kind = VariableKind::kPose2;
+  bool fixed = false;
+  SE2 pose2;
+  SE3 pose3;
+  Eigen::Vector3d point = Eigen::Vector3d::Zero();  // Point2 uses x, y
+
+  int dim() const { return tangent_dim(kind); }
+  /// X <- X (+) delta.
+  void retract(const double* delta);
+  bool is_pose() const { return kind == VariableKind::kPose2 || kind == VariableKind::kPose3; }
+  /// The pose as SE(3) (planar poses embedded with z = 0).
+  SE3 as_se3() const { return kind == VariableKind::kPose3 ? pose3 : pose2.to_se3(); }
+  /// False when any coordinate is NaN or infinite.
+  bool finite() const;
+};
+
+}  // namespace sextant::graph
