@@ -22,7 +22,7 @@ struct OptimizerOptions {
   double initial_lambda = 1e-5;
   RobustKernel kernel = RobustKernel::kNone;
   double kernel_width = 1.0;  // Huber/Cauchy delta, or DCS phi
-  Ordering ordering = Ordering::kAmd;
+  Ordering ordering = Ordering::kBlockAmd;
   /// Fix the first pose when nothing is fixed and no factor is a prior (the gauge).
   bool fix_first_pose_if_no_gauge = true;
 };

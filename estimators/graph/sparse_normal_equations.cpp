@@ -76,6 +76,7 @@ SparseNormalEquations::SparseNormalEquations(const FactorGraph& graph, Ordering 
   common_.supernodal = CHOLMOD_SUPERNODAL;
   common_.print = 0;
   switch (ordering) {
+    case Ordering::kBlockAmd: break;
     case Ordering::kAmd: common_.nmethods = 1, common_.method[0].ordering = CHOLMOD_AMD; break;
     case Ordering::kColamd: common_.nmethods = 1, common_.method[0].ordering = CHOLMOD_COLAMD; break;
     case Ordering::kMetis: common_.nmethods = 1, common_.method[0].ordering = CHOLMOD_METIS; break;
@@ -88,7 +89,33 @@ SparseNormalEquations::SparseNormalEquations(const FactorGraph& graph, Ordering 
   std::copy(rowind.begin(), rowind.end(), static_cast<int*>(H_->i));
   values_.assign(rowind.size(), 0.0);
   b_ = Eigen::VectorXd::Zero(n_);
-  if (n_ > 0) {
+  if (n_ > 0 && ordering == Ordering::kBlockAmd) {
+    // The block pattern (upper triangle, one entry per block pair), ordered by AMD, expanded to components.
+    std::vector<int> bp(static_cast<size_t>(nb) + 1, 0), bi;
+    for (int b = 0; b < nb; ++b) {
+      bp[static_cast<size_t>(b)] = static_cast<int>(bi.size());
+      for (int a : rows[static_cast<size_t>(b)]) bi.push_back(a);
+    }
+    bp[static_cast<size_t>(nb)] = static_cast<int>(bi.size());
+    cholmod_sparse* B = cholmod_allocate_sparse(static_cast<size_t>(nb), static_cast<size_t>(nb), bi.size(), 1, 1, 1,
+                                                CHOLMOD_PATTERN, &common_);
+    std::copy(bp.begin(), bp.end(), static_cast<int*>(B->p));
+    std::copy(bi.begin(), bi.end(), static_cast<int*>(B->i));
+    std::vector<int> block_perm(static_cast<size_t>(nb)), perm;
+    const int ok = cholmod_amd(B, nullptr, 0, block_perm.data(), &common_);
+    cholmod_free_sparse(&B, &common_);
+    if (!ok) throw std::runtime_error("CHOLMOD's AMD ordering failed");
+    perm.reserve(static_cast<size_t>(n_));
+    for (int b : block_perm) {
+      const int v = block_var_[static_cast<size_t>(b)];
+      for (int k = 0; k < dim_[static_cast<size_t>(v)]; ++k) perm.push_back(offset_[static_cast<size_t>(v)] + k);
+    }
+    common_.nmethods = 1;
+    common_.method[0].ordering = CHOLMOD_GIVEN;
+    common_.postorder = 1;
+    L_ = cholmod_analyze_p(H_, perm.data(), nullptr, 0, &common_);
+    if (L_ == nullptr) throw std::runtime_error("CHOLMOD symbolic analysis failed");
+  } else if (n_ > 0) {
     L_ = cholmod_analyze(H_, &common_);
     if (L_ == nullptr) throw std::runtime_error("CHOLMOD symbolic analysis failed");
   }

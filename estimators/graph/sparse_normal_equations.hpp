@@ -13,12 +13,15 @@
 
 namespace sextant::graph {
 
-enum class Ordering { kAmd, kColamd, kMetis, kAuto };
+/// Fill-reducing orderings: kBlockAmd runs AMD on the variable (block) graph and expands it, so every variable's
+/// components stay together and the supernodes align with the blocks (as Ceres does); the others order the
+/// scalar matrix.
+enum class Ordering { kBlockAmd, kAmd, kColamd, kMetis, kAuto };
 
 class SparseNormalEquations {
  public:
   /// Builds the pattern for the graph's current structure and runs the symbolic analysis.
-  SparseNormalEquations(const FactorGraph& graph, Ordering ordering = Ordering::kAmd);
+  SparseNormalEquations(const FactorGraph& graph, Ordering ordering = Ordering::kBlockAmd);
   ~SparseNormalEquations();
   SparseNormalEquations(const SparseNormalEquations&) = delete;
   SparseNormalEquations& operator=(const SparseNormalEquations&) = delete;

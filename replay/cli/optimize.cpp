@@ -14,7 +14,7 @@ namespace {
 using namespace sextant;
 
 struct Options {
-  std::string input, output, solver = "gn", init = "file", robust = "none", ordering = "amd";
+  std::string input, output, solver = "gn", init = "file", robust = "none", ordering = "block-amd";
   int max_iters = 100;
   double kernel_width = 1.0;
   double tolerance = 1e-6;
@@ -33,7 +33,7 @@ sextant::cli::RegisterCommand reg{"optimize", [](CLI::App& app) {
   cmd->add_option("--kernel-width", o->kernel_width, "Huber/Cauchy delta or DCS phi")->check(CLI::PositiveNumber);
   cmd->add_option("--max-iters", o->max_iters, "maximum iterations")->check(CLI::PositiveNumber);
   cmd->add_option("--tolerance", o->tolerance, "stop when chi2 decreases by less than this fraction")->check(CLI::PositiveNumber);
-  cmd->add_option("--ordering", o->ordering, "fill-reducing ordering")->check(CLI::IsMember({"amd", "colamd", "metis", "auto"}));
+  cmd->add_option("--ordering", o->ordering, "fill-reducing ordering")->check(CLI::IsMember({"block-amd", "amd", "colamd", "metis", "auto"}));
   cmd->add_flag("--json", o->json, "print a JSON summary");
   cmd->callback([o] {
     graph::G2oGraph g;
@@ -60,7 +60,8 @@ sextant::cli::RegisterCommand reg{"optimize", [](CLI::App& app) {
                  : o->robust == "cauchy" ? graph::RobustKernel::kCauchy
                  : o->robust == "dcs" ? graph::RobustKernel::kDcs : graph::RobustKernel::kNone;
     opt.kernel_width = o->kernel_width;
-    opt.ordering = o->ordering == "colamd" ? graph::Ordering::kColamd
+    opt.ordering = o->ordering == "block-amd" ? graph::Ordering::kBlockAmd
+                   : o->ordering == "colamd" ? graph::Ordering::kColamd
                    : o->ordering == "metis" ? graph::Ordering::kMetis
                    : o->ordering == "auto" ? graph::Ordering::kAuto : graph::Ordering::kAmd;
     const auto s = graph::optimize(g.graph, opt);
