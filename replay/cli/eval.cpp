@@ -1,0 +1,83 @@
+// sextant eval --gt GT.txt --est EST.txt [--scale] [--delta D] [--delta-unit s|f] [--max-difference S] [--json]
+#include "replay/cli/command.hpp"
+#include "replay/json_writer.hpp"
+#include "replay/trajectory_eval.hpp"
+
+#include <cstdio>
+
+namespace {
+
+using namespace sextant::replay;
+
+struct Options {
+  std::string gt, est, delta_unit = "s";
+  bool scale = false, json = false;
+  double delta = 1.0, max_difference = 0.02;
+};
+
+sextant::cli::RegisterCommand reg{"eval", [](CLI::App& app) {
+  auto* cmd = app.add_subcommand("eval", "ATE and RPE of a TUM trajectory against ground truth (TUM benchmark tools' semantics)");
+  auto o = std::make_shared<Options>();
+  cmd->add_option("--gt", o->gt, "ground truth, TUM format")->required()->check(CLI::ExistingFile);
+  cmd->add_option("--est", o->est, "estimate, TUM format")->required()->check(CLI::ExistingFile);
+  cmd->add_flag("--scale", o->scale, "Sim(3) alignment (monocular runs)");
+  cmd->add_option("--delta", o->delta, "RPE delta")->check(CLI::PositiveNumber);
+  cmd->add_option("--delta-unit", o->delta_unit, "s (seconds) or f (frames)")->check(CLI::IsMember({"s", "f"}));
+  cmd->add_option("--max-difference", o->max_difference, "association window, seconds")->check(CLI::PositiveNumber);
+  cmd->add_flag("--json", o->json, "print JSON");
+  cmd->callback([o] {
+    std::vector<StampedPose> gt, est;
+    try {
+      gt = read_tum(o->gt);
+      est = read_tum(o->est);
+    } catch (const std::exception& e) {
+      std::fprintf(stderr, "sextant eval: %s\n", e.what());
+      throw CLI::RuntimeError(2);
+    }
+    AteResult ate;
+    try {
+      ate = absolute_trajectory_error(gt, est, o->scale, o->max_difference);
+    } catch (const std::exception& e) {
+      std::fprintf(stderr, "sextant eval: %s\n", e.what());
+      throw CLI::RuntimeError(1);
+    }
+    // RPE uses the same scale as the alignment, so a monocular estimate is compared at metric scale.
+    RpeResult rpe;
+    bool have_rpe = true;
+    try {
+      rpe = relative_pose_error(gt, est, o->delta, o->delta_unit == "f" ? DeltaUnit::kFrames : DeltaUnit::kSeconds, ate.scale);
+    } catch (const std::exception&) {
+      have_rpe = false;
+    }
+    if (o->json) {
+      JsonWriter j;
+      j.begin_object();
+      j.field("ate_rmse", ate.error.rmse).field("ate_mean", ate.error.mean).field("ate_median", ate.error.median);
+      j.field("ate_std", ate.error.std).field("ate_min", ate.error.min).field("ate_max", ate.error.max);
+      j.field("matched", ate.matched).field("estimated_poses", est.size()).field("scale", ate.scale);
+      if (have_rpe) {
+        j.field("rpe_trans_rmse", rpe.translation.rmse).field("rpe_trans_mean", rpe.translation.mean);
+        j.field("rpe_rot_rmse_deg", rpe.rotation_deg.rmse).field("rpe_rot_mean_deg", rpe.rotation_deg.mean);
+        j.field("rpe_pairs", rpe.pairs);
+      } else {
+        j.key("rpe_trans_rmse").value(std::nan("")).key("rpe_rot_rmse_deg").value(std::nan("")).field("rpe_pairs", 0);
+      }
+      j.field("rpe_delta", o->delta).field("rpe_delta_unit", o->delta_unit);
+      j.end_object();
+      std::fputs(j.str().c_str(), stdout);
+    } else {
+      std::printf("ATE (%s): rmse %.6f m, mean %.6f, median %.6f, std %.6f, min %.6f, max %.6f over %zu of %zu poses%s\n",
+                  o->scale ? "Sim(3)" : "SE(3)", ate.error.rmse, ate.error.mean, ate.error.median, ate.error.std,
+                  ate.error.min, ate.error.max, ate.matched, est.size(),
+                  o->scale ? (", scale " + std::to_string(ate.scale)).c_str() : "");
+      if (have_rpe)
+        std::printf("RPE (delta %g %s): translation rmse %.6f m, mean %.6f; rotation rmse %.4f deg, mean %.4f; %zu pairs\n",
+                    o->delta, o->delta_unit.c_str(), rpe.translation.rmse, rpe.translation.mean, rpe.rotation_deg.rmse,
+                    rpe.rotation_deg.mean, rpe.pairs);
+      else
+        std::printf("RPE: no pose pair with ground truth at both ends\n");
+    }
+  });
+}};
+
+}  // namespace
