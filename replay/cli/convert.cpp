@@ -1,0 +1,62 @@
+// sextant convert g2o FILE -o OUT.lcm [--gt-out GT.txt] | tum GT.txt -o OUT.lcm [--seed N ...]
+#include "replay/cli/command.hpp"
+#include "replay/g2o_converter.hpp"
+#include "replay/trajectory_io.hpp"
+#include "replay/tum_converter.hpp"
+
+#include <cstdio>
+
+namespace {
+
+using namespace sextant::replay;
+
+template <class F>
+void guarded(const char* what, F&& f) {
+  try {
+    f();
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "sextant convert %s: %s\n", what, e.what());
+    throw CLI::RuntimeError(2);
+  }
+}
+
+sextant::cli::RegisterCommand reg{"convert", [](CLI::App& app) {
+  auto* cmd = app.add_subcommand("convert", "convert real data sets into LCM logs");
+  cmd->require_subcommand(1);
+
+  auto* g2o = cmd->add_subcommand("g2o", "a g2o pose graph -> odometry and loop closures");
+  auto g_in = std::make_shared<std::string>(), g_out = std::make_shared<std::string>(), g_gt = std::make_shared<std::string>();
+  auto g_opt = std::make_shared<G2oConversionOptions>();
+  g2o->add_option("file", *g_in, "g2o file")->required()->check(CLI::ExistingFile);
+  g2o->add_option("-o,--output", *g_out, "output LCM log")->required();
+  g2o->add_option("--gt-out", *g_gt, "write the file's vertex estimates as a TUM trajectory");
+  g2o->add_option("--period", g_opt->period_us, "microseconds between vertices")->check(CLI::PositiveNumber);
+  g2o->callback([=] {
+    guarded("g2o", [&] {
+      const auto r = convert_g2o(*g_in, *g_out, *g_gt, *g_opt);
+      std::printf("%s: %lld odometry, %lld loop closures (%lld edges of other kinds skipped)\n", g_out->c_str(),
+                  (long long)r.odometry, (long long)r.loop_closures, (long long)r.skipped_edges);
+    });
+  });
+
+  auto* tum = cmd->add_subcommand("tum", "TUM ground truth -> noisy, drifting odometry (plus the ground truth)");
+  auto t_in = std::make_shared<std::string>(), t_out = std::make_shared<std::string>(), t_gt = std::make_shared<std::string>();
+  auto t_opt = std::make_shared<TumConversionOptions>();
+  tum->add_option("file", *t_in, "ground truth, TUM format")->required()->check(CLI::ExistingFile);
+  tum->add_option("-o,--output", *t_out, "output LCM log")->required();
+  tum->add_option("--gt-out", *t_gt, "copy the ground truth (TUM) here");
+  tum->add_option("--seed", t_opt->seed, "random seed");
+  tum->add_option("--noise-trans", t_opt->trans_noise, "translation noise, m per m travelled");
+  tum->add_option("--noise-rot", t_opt->rot_noise, "rotation noise, rad per m travelled");
+  tum->add_option("--drift-yaw", t_opt->yaw_drift, "heading bias, rad per m travelled");
+  tum->add_option("--drift-scale", t_opt->scale_drift, "translation scale error");
+  tum->callback([=] {
+    guarded("tum", [&] {
+      const auto r = convert_tum(*t_in, *t_out, *t_opt);
+      if (!t_gt->empty()) sextant::replay::write_tum(*t_gt, sextant::replay::read_tum(*t_in));
+      std::printf("%s: %lld odometry messages with ground truth\n", t_out->c_str(), (long long)r.odometry);
+    });
+  });
+}};
+
+}  // namespace

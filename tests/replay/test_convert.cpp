@@ -1,0 +1,111 @@
+// Converters: a g2o graph through an LCM log reproduces its edges; TUM ground truth without noise gives odometry
+// equal to the truth; bad rows are named by line.
+#include "daemon/runtime/codec.hpp"
+#include "daemon/runtime/lcm_log.hpp"
+#include "estimators/graph/g2o_io.hpp"
+#include "replay/g2o_converter.hpp"
+#include "replay/trajectory_io.hpp"
+#include "replay/tum_converter.hpp"
+
+#include <doctest/doctest.h>
+
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+
+using namespace sextant;
+
+namespace {
+std::string temp(const std::string& n) {
+  return (std::filesystem::temp_directory_path() / ("sextant_conv_" + std::to_string(::getpid()) + "_" + n)).string();
+}
+
+template <class Event>
+std::vector<Event> events_of(const std::string& log, runtime::InputKind kind, const std::string& channel) {
+  std::vector<Event> out;
+  for (const auto& r : runtime::LogReader::read_all(log)) {
+    if (r.channel != channel) continue;
+    auto d = runtime::decode_event(kind, r.data.data(), r.data.size());
+    REQUIRE(std::holds_alternative<engine::Event>(d));
+    out.push_back(std::get<Event>(std::get<engine::Event>(d)));
+  }
+  return out;
+}
+}  // namespace
+
+TEST_CASE("g2o -> LCM log: odometry increments and loop closures reproduce the graph's edges") {
+  for (const char* name : {"intel.g2o", "tinyGrid3D.g2o"}) {
+    CAPTURE(name);
+    const std::string path = std::string(SEXTANT_SHARED_DIR) + "/data/posegraph/" + name;
+    const auto log = temp("g2o.lcm"), gt = temp("g2o_gt.txt");
+    const auto r = replay::convert_g2o(path, log, gt);
+    const auto g = graph::read_g2o(path);
+    const auto odo = events_of<engine::Odometry>(log, runtime::InputKind::kOdometry, "ODOMETRY");
+    const auto loops = events_of<engine::LoopClosure>(log, runtime::InputKind::kLoopClosures, "LOOP_CLOSURES");
+    CHECK(static_cast<int64_t>(odo.size()) == r.odometry);
+    CHECK(odo.size() == g.graph.variables().size());
+    CHECK(odo.size() - 1 + loops.size() == g.graph.factors().size());  // the chain has one edge fewer than vertices
+    // Every consecutive pair of odometry poses is the measurement of the chain edge between those vertices.
+    for (const auto& f : g.graph.factors()) {
+      const auto* rp = dynamic_cast<const graph::RelativePoseFactor*>(f.get());
+      const auto a = g.graph.variables()[rp->variables()[0]].id, b = g.graph.variables()[rp->variables()[1]].id;
+      if (b != a + 1) continue;
+      const SE3 xa(odo[a].pose.orientation, odo[a].pose.position), xb(odo[b].pose.orientation, odo[b].pose.position);
+      const SE3 z = rp->planar() ? rp->measurement2().to_se3() : rp->measurement3();
+      CHECK((z.inverse() * xa.inverse() * xb).log().norm() < 1e-9);
+    }
+    // Loop closures: same relative pose and the utimes of their vertices (vertex k at start + k * 0.1 s).
+    for (const auto& lc : loops) {
+      CHECK(lc.utime_to > 0);
+      CHECK((lc.utime_from - 1'700'000'000'000'000) % 100'000 == 0);
+    }
+    CHECK(replay::read_tum(gt).size() == g.graph.variables().size());
+    std::remove(log.c_str());
+    std::remove(gt.c_str());
+  }
+}
+
+TEST_CASE("g2o information maps onto sextant's tangent") {
+  Eigen::Matrix3d i2;
+  i2 << 4, 1, 2, 1, 5, 3, 2, 3, 6;
+  const auto m2 = replay::g2o_information_to_sextant(i2, true);
+  CHECK(m2(0, 0) == 4);
+  CHECK(m2(0, 5) == 2);
+  CHECK(m2(5, 5) == 6);
+  CHECK(m2(2, 2) == 0);
+  // 3-D: the g2o rotation residual is qvec ~ phi / 2, so a rotation phi costs phi' (Omega_rr / 4) phi.
+  Eigen::Matrix<double, 6, 6> i3 = Eigen::Matrix<double, 6, 6>::Identity() * 100;
+  const auto m3 = replay::g2o_information_to_sextant(i3, false);
+  CHECK(m3(0, 0) == 100);
+  CHECK(m3(3, 3) == 25);
+  const Eigen::Vector3d phi(0.001, -0.002, 0.0015);
+  const SE3 e = SE3::exp((Vector6d() << 0, 0, 0, phi).finished());
+  const Eigen::Vector3d qvec = e.rotation().quaternion().vec();
+  CHECK(qvec.dot(100 * qvec) == doctest::Approx(phi.dot(m3.bottomRightCorner<3, 3>() * phi)).epsilon(1e-5));
+}
+
+TEST_CASE("TUM ground truth -> odometry: exact without noise, drifting with it, bad rows named") {
+  const std::string gt = std::string(SEXTANT_SHARED_DIR) + "/data/tum/fr1_xyz/groundtruth.txt";
+  const auto log = temp("tum.lcm");
+  replay::TumConversionOptions o;
+  o.trans_noise = o.rot_noise = o.yaw_drift = o.scale_drift = 0;
+  o.min_sigma = 1e-9;
+  replay::convert_tum(gt, log, o);
+  const auto truth = replay::read_tum(gt);
+  auto odo = events_of<engine::Odometry>(log, runtime::InputKind::kOdometry, "ODOMETRY");
+  REQUIRE(odo.size() > 1000);
+  double worst = 0;
+  for (size_t k = 0; k < odo.size(); k += 97) worst = std::max(worst, (odo[k].pose.position - truth[k].pose.position).norm());
+  CHECK(worst < 1e-6);
+  o = replay::TumConversionOptions{};
+  replay::convert_tum(gt, log, o);
+  odo = events_of<engine::Odometry>(log, runtime::InputKind::kOdometry, "ODOMETRY");
+  const double final_error = (odo.back().pose.position - truth.back().pose.position).norm();
+  CHECK(final_error > 1e-3);
+  CHECK(final_error < 0.5);
+  const auto bad = temp("bad.txt");
+  std::ofstream(bad) << "1.0 0 0 0 0 0 0 1\n2.0 0 0 zero 0 0 0 1\n";
+  CHECK_THROWS_WITH(replay::convert_tum(bad, log, o), doctest::Contains(":2: not a number"));
+  std::remove(bad.c_str());
+  std::remove(log.c_str());
+}
