@@ -44,11 +44,13 @@ fi
 echo "== 3. the same run replayed offline (deterministic)"
 "$bin/sextant" replay "$out/run.lcm" --config "$root/config/default.yaml" --tum-out "$out/estimate_tum.txt" \
   --kitti-out "$out/estimate_kitti.txt" --g2o-out "$out/estimate.g2o" --out-log "$out/replayed.lcm" \
-  --json > "$out/replay.json"
+  --report "$out/report" --json > "$out/replay.json"
 echo "replay summary: $out/replay.json"
+"$bin/sextant" eval --gt "$out/ground_truth.txt" --est "$out/estimate_tum.txt"
 
 echo "== summary"
 echo "  simulated run:          $out/run.lcm (ground truth $out/ground_truth.txt)"
 echo "  what sextantd received: $out/received.lcm"
 echo "  the whole bus:          $out/bus.lcm (lcm-logger)"
 echo "  offline estimate:       $out/estimate_tum.txt (TUM), estimate_kitti.txt, estimate.g2o"
+echo "  report:                 $out/report/index.html (plots), $out/report/report.json"

@@ -9,10 +9,10 @@ packages=(
   libeigen3-dev libsuitesparse-dev
   libspdlog-dev libyaml-cpp-dev libcli11-dev doctest-dev libbenchmark-dev
   iproute2 util-linux procps python3
+  chromium   # the report test renders the HTML report in headless Chromium
 )
-# Optional extras: installed when asked for (benchmarks against Ceres, report checks in Chromium).
+# Optional extras: installed when asked for (benchmarks against Ceres).
 if [[ "${SEXTANT_WITH_BENCH:-0}" == 1 ]]; then packages+=(libceres-dev libopenblas0 time); fi
-if [[ "${SEXTANT_WITH_BROWSER:-0}" == 1 ]]; then packages+=(chromium); fi
 
 missing=()
 for p in "${packages[@]}"; do

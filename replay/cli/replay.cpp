@@ -5,6 +5,7 @@
 #include "replay/json_writer.hpp"
 #include "replay/replay_driver.hpp"
 #include "replay/realtime_player.hpp"
+#include "replay/report.hpp"
 #include "replay/trajectory_io.hpp"
 
 #include <algorithm>
@@ -16,7 +17,7 @@ namespace {
 using namespace sextant;
 
 struct Options {
-  std::string log, config, tum_out, kitti_out, g2o_out, out_log, estimator;
+  std::string log, config, tum_out, kitti_out, g2o_out, out_log, estimator, report;
   bool json = false;
   bool realtime = false;
   double speed = 1.0;
@@ -116,6 +117,7 @@ sextant::cli::RegisterCommand reg{"replay", [](CLI::App& app) {
   cmd->add_option("--out-log", o->out_log, "write everything the engine published to an LCM log");
   cmd->add_option("--estimator", o->estimator, "which estimator's poses to export (default: the primary)");
   cmd->add_flag("--json", o->json, "print a JSON summary on stdout");
+  cmd->add_option("--report", o->report, "write an HTML report with plots (and report.json) into this folder");
   cmd->add_flag("--realtime", o->realtime, "republish the log to the live bus at the pace of message utimes");
   cmd->add_option("--speed", o->speed, "playback speed for --realtime (2 = twice as fast)")->check(CLI::PositiveNumber);
   cmd->add_option("--lcm-url", o->lcm_url, "LCM URL for --realtime");
@@ -146,6 +148,13 @@ sextant::cli::RegisterCommand reg{"replay", [](CLI::App& app) {
     if (!o->out_log.empty()) {
       runtime::LogWriter w(o->out_log);
       for (const auto& m : result.published) w.write_raw(m.utime, m.channel, m.bytes.data(), m.bytes.size());
+    }
+    if (!o->report.empty()) {
+      const auto n = replay::write_report(o->report, result, o->log, estimator);
+      if (!o->json) {
+        if (n.have_truth) std::printf("ATE %.4f m RMSE (max %.4f m) over %zu poses\n", n.ate_rmse, n.ate_max, n.matched);
+        std::printf("report: %s/index.html\n", o->report.c_str());
+      }
     }
     if (o->json) {
       print_json(*o, result, estimator);
