@@ -1,6 +1,8 @@
-// sextant convert g2o FILE -o OUT.lcm [--gt-out GT.txt] | tum GT.txt -o OUT.lcm [--seed N ...]
+// sextant convert g2o FILE -o OUT.lcm [--gt-out GT.txt] | mrclam DIR --robot N -o OUT.lcm [--gt-out GT.txt]
+//                 | tum GT.txt -o OUT.lcm [--seed N ...]
 #include "replay/cli/command.hpp"
 #include "replay/g2o_converter.hpp"
+#include "replay/mrclam_converter.hpp"
 #include "replay/trajectory_io.hpp"
 #include "replay/tum_converter.hpp"
 
@@ -36,6 +38,23 @@ sextant::cli::RegisterCommand reg{"convert", [](CLI::App& app) {
       const auto r = convert_g2o(*g_in, *g_out, *g_gt, *g_opt);
       std::printf("%s: %lld odometry, %lld loop closures (%lld edges of other kinds skipped)\n", g_out->c_str(),
                   (long long)r.odometry, (long long)r.loop_closures, (long long)r.skipped_edges);
+    });
+  });
+
+  auto* mr = cmd->add_subcommand("mrclam", "a UTIAS MRCLAM data set folder -> one robot's odometry, landmark sightings and truth");
+  auto m_dir = std::make_shared<std::string>(), m_out = std::make_shared<std::string>(), m_gt = std::make_shared<std::string>();
+  auto m_robot = std::make_shared<int>(1);
+  mr->add_option("dir", *m_dir, "folder with Barcodes.dat, Landmark_Groundtruth.dat, RobotN_*.dat")->required()->check(CLI::ExistingDirectory);
+  mr->add_option("--robot", *m_robot, "robot number, 1 to 5")->required()->check(CLI::Range(1, 5));
+  mr->add_option("-o,--output", *m_out, "output LCM log")->required();
+  mr->add_option("--gt-out", *m_gt, "the robot's ground truth as a TUM trajectory");
+  mr->callback([=] {
+    guarded("mrclam", [&] {
+      const auto r = convert_mrclam(*m_dir, *m_robot, *m_out, *m_gt);
+      std::printf("%s: %lld odometry, %lld landmark messages (%lld sightings; %lld robot sightings and %lld unknown "
+                  "barcodes left out), %lld truth\n",
+                  m_out->c_str(), (long long)r.odometry, (long long)r.landmark_messages, (long long)r.landmark_observations,
+                  (long long)r.robot_sightings, (long long)r.unknown_barcodes, (long long)r.truth);
     });
   });
 

@@ -20,7 +20,8 @@ std::string error_of(const std::string& yaml) {
 }
 }  // namespace
 
-TEST_CASE("the shipped default config parses and enables dead reckoning") {
+TEST_CASE("the shipped configs parse: default enables dead reckoning, mrclam fits the data set") {
+  CHECK(sextant::config::load_daemon_config(std::string(SEXTANT_SOURCE_DIR) + "/config/mrclam.yaml").queue_capacity == 4096);
   const auto c = sextant::config::load_daemon_config(std::string(SEXTANT_SOURCE_DIR) + "/config/default.yaml");
   CHECK(c.name == "sextantd");
   CHECK(c.channels.odometry == "ODOMETRY");

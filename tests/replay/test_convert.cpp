@@ -4,6 +4,7 @@
 #include "daemon/runtime/lcm_log.hpp"
 #include "estimators/graph/g2o_io.hpp"
 #include "replay/g2o_converter.hpp"
+#include "replay/mrclam_converter.hpp"
 #include "replay/trajectory_io.hpp"
 #include "replay/tum_converter.hpp"
 
@@ -108,4 +109,31 @@ TEST_CASE("TUM ground truth -> odometry: exact without noise, drifting with it, 
   CHECK_THROWS_WITH(replay::convert_tum(bad, log, o), doctest::Contains(":2: not a number"));
   std::remove(bad.c_str());
   std::remove(log.c_str());
+}
+
+TEST_CASE("MRCLAM: landmark, robot and unknown-barcode sightings as in SOURCES.md; odometry starts on the truth") {
+  const std::string dir = std::string(SEXTANT_SHARED_DIR) + "/data/landmarks/MRCLAM_Dataset7";
+  const auto log = temp("mrclam.lcm"), gt = temp("mrclam_gt.txt");
+  const auto r3 = replay::convert_mrclam(dir, 3, log, gt);
+  CHECK(r3.landmark_observations == 4425);
+  CHECK(r3.robot_sightings == 965);
+  CHECK(r3.unknown_barcodes == 9);
+  const auto truth = replay::read_tum(gt);
+  CHECK(truth.size() == 53545);
+  const auto odo = events_of<engine::Odometry>(log, runtime::InputKind::kOdometry, "ODOMETRY");
+  const auto sightings = events_of<engine::LandmarkSightings>(log, runtime::InputKind::kLandmarks, "LANDMARKS");
+  REQUIRE(odo.size() > 50000);
+  // The first odometry pose is the ground truth nearest its stamp (within the Vicon's ~16 ms step).
+  size_t g = 0;
+  while (g + 1 < truth.size() && truth[g + 1].t <= odo.front().utime * 1e-6) ++g;
+  CHECK((odo.front().pose.position - truth[g].pose.position).norm() < 0.05);
+  for (const auto& s : sightings)
+    for (const auto& o : s.observations) CHECK((o.id >= 6 && o.id <= 20));
+  // Odometry utimes strictly increase (duplicated stamps merged).
+  bool increasing = true;
+  for (size_t k = 1; k < odo.size(); ++k) increasing = increasing && odo[k].utime > odo[k - 1].utime;
+  CHECK(increasing);
+  CHECK_THROWS_WITH(replay::convert_mrclam(dir, 7, log, ""), doctest::Contains("numbered 1 to 5"));
+  std::remove(log.c_str());
+  std::remove(gt.c_str());
 }

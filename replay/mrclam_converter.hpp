@@ -1,0 +1,37 @@
+#pragma once
+// The UTIAS MRCLAM data set (Leung et al., IJRR 2011; format in ../shared/data/landmarks/SOURCES.md) as an LCM log
+// for one robot:
+//  - ODOMETRY: the velocity commands (v, omega) of each row integrated exactly over the time to the next row,
+//    Delta = Exp_SE(2)([v dt, 0, omega dt]), starting from the ground-truth pose at the first odometry stamp (so the
+//    odometry frame is the Vicon world frame); rows sharing a stamp are merged.  Increment covariance from a
+//    distance-proportional model (see MrclamOptions).
+//  - LANDMARKS: the camera's range/bearing readings of one image (rows sharing a stamp) with the barcode mapped
+//    to its subject id through Barcodes.dat; sightings of other robots (subjects 1-5) and unknown barcodes are not
+//    landmarks and are counted, not written.
+//  - GROUND_TRUTH: the robot's Vicon poses (truth_t "robot") and the landmark map (truth_t "landmark", id =
+//    subject id), plus an optional TUM file of the robot's ground truth.
+#include <cstdint>
+#include <string>
+
+namespace sextant::replay {
+
+struct MrclamOptions {
+  double trans_noise = 0.05;   // odometry: sigma per metre travelled
+  double rot_noise = 0.1;      // odometry: sigma per radian turned
+  double rot_per_metre = 0.02; // odometry: heading sigma per metre travelled
+  double min_sigma = 1e-4;
+  double range_sigma = 0.15;   // m
+  double bearing_sigma = 0.05; // rad
+};
+
+struct MrclamConversion {
+  int64_t odometry = 0, landmark_messages = 0, landmark_observations = 0, robot_sightings = 0,
+          unknown_barcodes = 0, truth = 0;
+};
+
+/// `dir` holds Barcodes.dat, Landmark_Groundtruth.dat and RobotN_{Odometry,Measurement,Groundtruth}.dat.
+/// Throws std::runtime_error naming the file and line of a malformed row.
+MrclamConversion convert_mrclam(const std::string& dir, int robot, const std::string& out_lcm, const std::string& gt_tum,
+                                const MrclamOptions& options = {});
+
+}  // namespace sextant::replay
