@@ -8,6 +8,7 @@
 #include <tuple>
 #include <map>
 #include <random>
+#include <cstdint>
 
 namespace sextant::graph {
 namespace {
@@ -163,7 +164,96 @@ std::string chordal(FactorGraph& g) {
   return "";
 }
 
+// Range-add of a linear ramp over pose indices, point query: poses a+1..b get c * (j - a), poses after b get
+// c * (b - a).  Two Fenwick trees over "add c*j + d for j >= k" (Olson's incremental parameterization).
+class RampTree {
+ public:
+  explicit RampTree(size_t n) : slope_(n + 1, Eigen::Vector3d::Zero()), offset_(n + 1, Eigen::Vector3d::Zero()) {}
+  /// Adds c*(j - a) for a < j <= b and c*(b - a) for j > b.
+  void add_ramp(size_t a, size_t b, const Eigen::Vector3d& c) {
+    add(a + 1, c, -c * static_cast<double>(a));
+    add(b + 1, -c, c * static_cast<double>(b));
+  }
+  Eigen::Vector3d at(size_t j) const {
+    Eigen::Vector3d s = Eigen::Vector3d::Zero(), o = Eigen::Vector3d::Zero();
+    for (size_t i = j + 1; i > 0; i -= i & (~i + 1)) s += slope_[i], o += offset_[i];
+    return s * static_cast<double>(j) + o;
+  }
+
+ private:
+  void add(size_t k, const Eigen::Vector3d& s, const Eigen::Vector3d& o) {
+    for (size_t i = k + 1; i < slope_.size(); i += i & (~i + 1)) slope_[i] += s, offset_[i] += o;
+  }
+  std::vector<Eigen::Vector3d> slope_, offset_;
+};
+
 }  // namespace
+
+std::string initialize_sgd(FactorGraph& g, int sweeps, uint64_t seed) {
+  auto& vars = g.variables();
+  std::vector<int> poses;
+  for (size_t v = 0; v < vars.size(); ++v) {
+    if (vars[v].kind == VariableKind::kPose3) return "SGD initialization supports planar graphs; use --init chordal for 3-D";
+    if (vars[v].kind == VariableKind::kPose2) poses.push_back(static_cast<int>(v));
+  }
+  if (poses.size() < 2) return "";
+  // Chain order by id; each pose's index in Olson's parameterization.
+  std::sort(poses.begin(), poses.end(), [&](int a, int b) { return vars[static_cast<size_t>(a)].id < vars[static_cast<size_t>(b)].id; });
+  std::vector<int> rank(vars.size(), -1);
+  for (size_t k = 0; k < poses.size(); ++k) rank[static_cast<size_t>(poses[k])] = static_cast<int>(k);
+  const auto edges = pose_edges(g);
+  if (edges.empty()) return "";
+  // Base poses (x, y, theta with theta unwrapped along the chain) plus the accumulated corrections.
+  std::vector<Eigen::Vector3d> base(poses.size());
+  for (size_t k = 0; k < poses.size(); ++k) {
+    const SE2& x = vars[static_cast<size_t>(poses[k])].pose2;
+    double th = x.angle();
+    if (k > 0) th = base[k - 1].z() + wrap_angle(th - base[k - 1].z());
+    base[k] = {x.translation().x(), x.translation().y(), th};
+  }
+  RampTree tree(poses.size());
+  auto pose_at = [&](size_t k) { return Eigen::Vector3d(base[k] + tree.at(k)); };
+  // The median information per dimension normalizes each constraint's step.
+  Eigen::Vector3d median;
+  for (int d = 0; d < 3; ++d) {
+    std::vector<double> w;
+    for (const auto& e : edges) w.push_back(e.f->information()(d, d));
+    std::nth_element(w.begin(), w.begin() + static_cast<std::ptrdiff_t>(w.size() / 2), w.end());
+    median[d] = std::max(w[w.size() / 2], 1e-12);
+  }
+  std::vector<size_t> order(edges.size());
+  for (size_t k = 0; k < order.size(); ++k) order[k] = k;
+  std::mt19937_64 rng(seed);
+  for (int sweep = 0; sweep < sweeps; ++sweep) {
+    const double alpha = 1.0 / (1.0 + sweep);
+    std::shuffle(order.begin(), order.end(), rng);
+    for (size_t idx : order) {
+      const auto& e = edges[idx];
+      size_t a = static_cast<size_t>(rank[static_cast<size_t>(e.i)]), b = static_cast<size_t>(rank[static_cast<size_t>(e.j)]);
+      SE2 z = e.f->measurement2();
+      if (a > b) std::swap(a, b), z = z.inverse();
+      if (a == b) continue;
+      const Eigen::Vector3d pa = pose_at(a), pb = pose_at(b);
+      const SE2 xa(pa.x(), pa.y(), pa.z());
+      const SE2 pred = xa * z;
+      Eigen::Vector3d r(pred.translation().x() - pb.x(), pred.translation().y() - pb.y(), wrap_angle(pred.angle() - pb.z()));
+      // Information in the global frame (translation block rotated by theta_a).
+      Eigen::Matrix3d R = Eigen::Matrix3d::Identity();
+      R.topLeftCorner<2, 2>() = xa.rotation().matrix();
+      const Eigen::Matrix3d W = R * e.f->information() * R.transpose();
+      Eigen::Vector3d step;
+      for (int d = 0; d < 3; ++d) step[d] = alpha * W(d, d) / (W(d, d) + median[d]) * r[d];
+      tree.add_ramp(a, b, step / static_cast<double>(b - a));
+    }
+  }
+  for (size_t k = 0; k < poses.size(); ++k) {
+    const Eigen::Vector3d p = pose_at(k);
+    vars[static_cast<size_t>(poses[k])].pose2 = SE2(p.x(), p.y(), p.z());
+  }
+  std::vector<bool> known(vars.size(), true);
+  place_points(g, known);
+  return "";
+}
 
 int initialize_by_odometry(FactorGraph& g) {
   auto& vars = g.variables();

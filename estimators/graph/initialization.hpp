@@ -7,9 +7,17 @@
 //    unconstrained matrices, each projected back onto SO(d) by SVD; then translations by linear least squares
 //    min sum tau_ij |t_j - t_i - R_i t_ij|^2 with those rotations.  Gets 3-D graphs into the basin of the global
 //    optimum where Gauss-Newton from odometry stops in a local minimum (torus, sphere, grid).
+//  - SGD (Olson, Leonard, Teller, "Fast iterative optimization of pose graphs with poor initial estimates",
+//    ICRA 2006), planar graphs: poses in Olson's incremental parameterization (pose j = sum of increments 1..j in
+//    global x, y, theta); each constraint (a, b) in turn removes a fraction of its global-frame residual
+//    r = (X_a (+) Z_ab) - X_b, spread evenly over the increments a+1..b (a poses' ramp, kept in two Fenwick trees so
+//    a step costs O(log n)).  The fraction per dimension is alpha_t * w / (w + w_median), w the constraint's
+//    information in the global frame, alpha_t = 1 / (1 + t) over sweeps t.  Deviation from the paper: the
+//    preconditioner spreads the correction by path length instead of by each increment's accumulated information.
 // Points observed by position factors are placed from their first observation.
 #include "estimators/graph/factor_graph.hpp"
 
+#include <cstdint>
 #include <string>
 
 namespace sextant::graph {
@@ -19,5 +27,9 @@ int initialize_by_odometry(FactorGraph& graph);
 
 /// Returns an empty string on success, else why it failed (the graph is then left as it was).
 std::string initialize_chordal(FactorGraph& graph);
+
+/// Olson's SGD from the current estimate (planar graphs; 3-D graphs get an error, use chordal).  Returns an empty
+/// string on success, else why it did not run.
+std::string initialize_sgd(FactorGraph& graph, int sweeps = 100, uint64_t seed = 1);
 
 }  // namespace sextant::graph

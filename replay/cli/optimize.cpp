@@ -27,8 +27,9 @@ sextant::cli::RegisterCommand reg{"optimize", [](CLI::App& app) {
   cmd->add_option("input", o->input, "g2o file")->required()->check(CLI::ExistingFile);
   cmd->add_option("-o,--output", o->output, "write the optimized graph (g2o format)");
   cmd->add_option("--solver", o->solver, "gn or lm")->check(CLI::IsMember({"gn", "lm"}));
-  cmd->add_option("--init", o->init, "initial estimate: file (the file's vertices), odometry (spanning tree), chordal (rotation relaxation)")
-      ->check(CLI::IsMember({"file", "odometry", "chordal"}));
+  cmd->add_option("--init", o->init, "initial estimate: file (the file's vertices), odometry (spanning tree), chordal (rotation relaxation), "
+                  "sgd (Olson's SGD from odometry, planar graphs)")
+      ->check(CLI::IsMember({"file", "odometry", "chordal", "sgd"}));
   cmd->add_option("--robust", o->robust, "robust kernel")->check(CLI::IsMember({"none", "huber", "cauchy", "dcs"}));
   cmd->add_option("--kernel-width", o->kernel_width, "Huber/Cauchy delta or DCS phi")->check(CLI::PositiveNumber);
   cmd->add_option("--max-iters", o->max_iters, "maximum iterations")->check(CLI::PositiveNumber);
@@ -46,8 +47,9 @@ sextant::cli::RegisterCommand reg{"optimize", [](CLI::App& app) {
     const auto t0 = std::chrono::steady_clock::now();
     if (o->init == "odometry") {
       graph::initialize_by_odometry(g.graph);
-    } else if (o->init == "chordal") {
-      if (auto why = graph::initialize_chordal(g.graph); !why.empty()) {
+    } else if (o->init == "chordal" || o->init == "sgd") {
+      if (o->init == "sgd") graph::initialize_by_odometry(g.graph);
+      if (auto why = o->init == "sgd" ? graph::initialize_sgd(g.graph) : graph::initialize_chordal(g.graph); !why.empty()) {
         std::fprintf(stderr, "sextant optimize: %s\n", why.c_str());
         throw CLI::RuntimeError(1);
       }

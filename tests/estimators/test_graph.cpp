@@ -352,3 +352,23 @@ TEST_CASE("chordal initialization: far below the file's guess on smallGrid3D, an
   const auto s2 = optimize(h.graph, o);
   CHECK(s.final_chi2 <= s2.final_chi2 * (1 + 1e-6));
 }
+
+TEST_CASE("Olson's SGD brings intel from odometry close to the optimum; 3-D graphs are refused") {
+  auto g = read_g2o(data("intel.g2o"));
+  initialize_by_odometry(g.graph);
+  const double odometry_chi2 = g.graph.chi2();
+  REQUIRE(initialize_sgd(g.graph).empty());
+  const double sgd_chi2 = g.graph.chi2();
+  CHECK(sgd_chi2 < odometry_chi2 / 100);
+  OptimizerOptions o;
+  o.relative_tolerance = 1e-9;
+  const auto s = optimize(g.graph, o);
+  CHECK(s.final_chi2 == doctest::Approx(45.004696).epsilon(1e-6));
+  auto h = read_g2o(data("tinyGrid3D.g2o"));
+  CHECK(initialize_sgd(h.graph).find("planar") != std::string::npos);
+  // Deterministic for a seed.
+  auto a = read_g2o(data("intel.g2o")), b = read_g2o(data("intel.g2o"));
+  initialize_sgd(a.graph, 20, 7);
+  initialize_sgd(b.graph, 20, 7);
+  CHECK(a.graph.chi2() == b.graph.chi2());
+}
