@@ -141,11 +141,10 @@ MrclamConversion convert_mrclam(const std::string& dir, int robot, const std::st
     if (utime_of(odometry[k + 1].second[0]) == utime_of(row[0])) continue;  // duplicated stamp: nothing elapsed
     const double ds = row[1] * dt, dth = row[2] * dt;
     const SE2 delta = SE2::exp(Eigen::Vector3d(ds, 0, dth));
-    const double st = std::max(o.min_sigma, o.trans_noise * std::abs(ds));
-    const double sr = std::max(o.min_sigma, o.rot_noise * std::abs(dth) + o.rot_per_metre * std::abs(ds));
+    const double floor = o.min_sigma * o.min_sigma;
     engine::Matrix6 q = engine::Matrix6::Zero();
-    q(0, 0) = q(1, 1) = st * st;
-    q(5, 5) = sr * sr;
+    q(0, 0) = q(1, 1) = std::max(floor, o.trans_var_per_metre * std::abs(ds));
+    q(5, 5) = std::max(floor, o.rot_var_per_radian * std::abs(dth) + o.rot_var_per_metre * std::abs(ds));
     const engine::Matrix6 ad = delta.to_se3().inverse().adjoint();
     cov = ad * cov * ad.transpose() + q;
     cov = (0.5 * (cov + cov.transpose())).eval();

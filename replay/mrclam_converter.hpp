@@ -16,9 +16,11 @@
 namespace sextant::replay {
 
 struct MrclamOptions {
-  double trans_noise = 0.05;   // odometry: sigma per metre travelled
-  double rot_noise = 0.1;      // odometry: sigma per radian turned
-  double rot_per_metre = 0.02; // odometry: heading sigma per metre travelled
+  // Odometry increment variances grow with the motion (Thrun et al.'s alpha model): the rows are velocity
+  // commands, not encoder readings, so the robot's real motion departs from them by far more than wheel noise.
+  double trans_var_per_metre = 0.01;   // m^2 per metre travelled
+  double rot_var_per_radian = 0.05;    // rad^2 per radian turned
+  double rot_var_per_metre = 0.05;     // rad^2 per metre travelled
   double min_sigma = 1e-4;
   double range_sigma = 0.15;   // m
   double bearing_sigma = 0.05; // rad

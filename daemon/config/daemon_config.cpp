@@ -36,6 +36,10 @@ void read_engine_config(Section& s, engine::EngineConfig& c) {
     Section dr = s.child("dead_reckoning");
     read_stage_config(dr, c.dead_reckoning);
   }
+  {
+    Section f = s.child("filter");
+    read_stage_config(f, c.filter);
+  }
   s.reject_unknown_keys();
 }
 

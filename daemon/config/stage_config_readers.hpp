@@ -6,5 +6,6 @@
 namespace sextant::config {
 
 void read_stage_config(Section& section, engine::DeadReckoningConfig& config);
+void read_stage_config(Section& section, engine::FilterConfig& config);
 
 }  // namespace sextant::config

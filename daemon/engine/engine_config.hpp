@@ -2,6 +2,7 @@
 // Configuration of the engine's stages: plain structs with in-class defaults.  YAML parsing and validation with
 // file:line errors live in daemon/config/; each stage's struct sits next to its stage.
 #include "daemon/engine/dead_reckoning_stage_config.hpp"
+#include "daemon/engine/filter_stage_config.hpp"
 
 #include <string>
 
@@ -12,6 +13,7 @@ struct EngineConfig {
   /// (graph > filter > dead reckoning); the others are published on FUSED_POSE_<ESTIMATOR>.
   std::string primary_estimator = "auto";
   DeadReckoningConfig dead_reckoning;
+  FilterConfig filter;
 };
 
 }  // namespace sextant::engine

@@ -49,6 +49,11 @@ def main():
     if mismatched:
         errors.append(f"{mismatched} FUSED_POSE messages differ between the live run and the replay")
 
+    # The other estimator (the EKF) is published beside it.
+    ekf = [fused_pose_t.decode(b) for c, b in rec if c == "FUSED_POSE_EKF"]
+    if len(ekf) != len(odometry) or any(f.estimator != "ekf" for f in ekf):
+        errors.append(f"{len(ekf)} FUSED_POSE_EKF messages for {len(odometry)} odometry messages")
+
     # What another process sees on the bus (lcm-logger may lose a few datagrams under load).
     if len(on_bus) < 0.95 * len(live):
         errors.append(f"lcm-logger saw only {len(on_bus)} of {len(live)} FUSED_POSE")

@@ -10,8 +10,8 @@ work=$(mktemp -d)
 trap '[ -n "${KEEP:-}" ] || rm -rf "$work"' EXIT
 
 "$SEXTANT_BIN/sextant" simulate planar -o "$work/sim.lcm" --seed 3 --duration 30 > /dev/null
-"$SEXTANT_BIN/sextant" replay "$work/sim.lcm" --out-log "$work/replayed.lcm" > /dev/null
-printf 'daemon:\n  status_period_s: 0.5\n' > "$work/config.yaml"
+printf 'daemon:\n  status_period_s: 0.5\nengine:\n  primary_estimator: dead_reckoning\n' > "$work/config.yaml"
+"$SEXTANT_BIN/sextant" replay "$work/sim.lcm" --config "$work/config.yaml" --out-log "$work/replayed.lcm" > /dev/null
 
 cat > "$work/run.sh" <<EOS
 set -euo pipefail

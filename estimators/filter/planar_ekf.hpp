@@ -1,0 +1,60 @@
+#pragma once
+// A planar extended Kalman filter for a robot with range-bearing landmark observations: localization against a
+// known map, and EKF-SLAM (state augmentation) for landmarks not in the map (source A, eq. 3-7; Thrun, Burgard &
+// Fox, Probabilistic Robotics, ch. 10).
+// State: [x, y, theta, l1x, l1y, l2x, l2y, ...] in the map frame; P its covariance in that parameterization.
+//  - Motion: x' = x (+) Delta with Delta an SE(2) odometry increment whose noise Q (3x3, [dx dy dtheta]) is given
+//    on the right of Delta (in the body frame after the motion):  F = d x'/d x,  G = d x'/d w = blockdiag(R(theta'), 1).
+//  - Observation of landmark l from the robot origin: h = [|l - p|, atan2(ly - py, lx - px) - theta], the bearing
+//    innovation wrapped to (-pi, pi].
+#include "estimators/filter/kalman_update.hpp"
+#include "estimators/lie/se2.hpp"
+
+#include <map>
+
+namespace sextant::filter {
+
+struct PlanarEkfOptions {
+  double gate = 9.21;   // chi-square (2 dof) threshold on the normalized innovation; 9.21 = 99 %
+  bool slam = true;     // unknown landmark ids are added to the state; false: only the known map is used
+  int max_landmarks = 4096;
+};
+
+class PlanarEkf {
+ public:
+  explicit PlanarEkf(const PlanarEkfOptions& options = {}) : options_(options) {}
+
+  void initialize(const SE2& pose, const Eigen::Matrix3d& covariance);
+  bool initialized() const { return initialized_; }
+  /// A landmark of the known map: fixed, not part of the state.
+  void set_known_landmark(int64_t id, const Eigen::Vector2d& position) { known_[id] = position; }
+
+  void predict(const SE2& delta, const Eigen::Matrix3d& Q);
+  /// One range-bearing sighting of landmark `id` (covariance R over [range, bearing]).  A known landmark updates;
+  /// a landmark in the state updates; a new one is added (SLAM mode).  Refused when gated or degenerate.
+  UpdateResult observe(int64_t id, double range, double bearing, const Eigen::Matrix2d& R);
+
+  SE2 pose() const { return SE2(x_[0], x_[1], x_[2]); }
+  Eigen::Matrix3d pose_covariance() const { return P_.topLeftCorner<3, 3>(); }
+  const Eigen::VectorXd& state() const { return x_; }
+  const Eigen::MatrixXd& covariance() const { return P_; }
+  std::map<int64_t, Eigen::Vector2d> landmarks() const;
+  size_t landmark_count() const { return slot_.size(); }
+
+  /// The models and their Jacobians, exposed for tests.
+  static Eigen::Vector3d motion(const Eigen::Vector3d& x, const SE2& delta, Eigen::Matrix3d* F, Eigen::Matrix3d* G);
+  static Eigen::Vector2d observation(const Eigen::Vector3d& robot, const Eigen::Vector2d& landmark,
+                                     Eigen::Matrix<double, 2, 3>* H_robot, Eigen::Matrix2d* H_landmark);
+
+ private:
+  void augment(int64_t id, double range, double bearing, const Eigen::Matrix2d& R);
+
+  PlanarEkfOptions options_;
+  bool initialized_ = false;
+  Eigen::VectorXd x_ = Eigen::VectorXd::Zero(3);
+  Eigen::MatrixXd P_ = Eigen::MatrixXd::Identity(3, 3);
+  std::map<int64_t, Eigen::Vector2d> known_;
+  std::map<int64_t, int> slot_;  // landmark id -> index of its x in the state
+};
+
+}  // namespace sextant::filter
