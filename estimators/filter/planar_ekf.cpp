@@ -109,7 +109,8 @@ void PlanarEkf::augment(int64_t id, double range, double bearing, const Eigen::M
   const Eigen::MatrixXd cross = Jx * P_.topRows(3);  // 2 x n
   P.bottomLeftCorner(2, n) = cross;
   P.topRightCorner(n, 2) = cross.transpose();
-  P.bottomRightCorner<2, 2>() = Jx * P_.topLeftCorner<3, 3>() * Jx.transpose() + Jz * R * Jz.transpose();
+  const Eigen::Matrix2d Pll = Jx * P_.topLeftCorner<3, 3>() * Jx.transpose() + Jz * R * Jz.transpose();
+  P.bottomRightCorner<2, 2>() = 0.5 * (Pll + Pll.transpose());
   P_ = std::move(P);
   slot_[id] = static_cast<int>(n);
 }
