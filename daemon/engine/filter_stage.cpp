@@ -41,7 +41,7 @@ void FilterStage::on_odometry(const Odometry& o, const Emit& emit) {
     const int idx[3] = {0, 1, 5};
     for (int r = 0; r < 3; ++r)
       for (int c = 0; c < 3; ++c) Q(r, c) = q6(idx[r], idx[c]);
-    Q = 0.5 * (Q + Q.transpose());
+    Q = (0.5 * (Q + Q.transpose())).eval();
     Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(Q);
     Q = eig.eigenvectors() * eig.eigenvalues().cwiseMax(config_.min_increment_variance).asDiagonal() *
         eig.eigenvectors().transpose();

@@ -29,7 +29,7 @@ UpdateResult kalman_update(Eigen::VectorXd& x, Eigen::MatrixXd& P, const Eigen::
   x += K * r;
   const Eigen::MatrixXd IKH = Eigen::MatrixXd::Identity(P.rows(), P.cols()) - K * H;
   P = IKH * P * IKH.transpose() + K * R * K.transpose();
-  P = 0.5 * (P + P.transpose());
+  P = (0.5 * (P + P.transpose())).eval();  // .eval(): an in-place transpose would alias
   out.accepted = true;
   return out;
 }
