@@ -8,13 +8,24 @@ namespace sextant::filter {
 
 UpdateResult kalman_update(Eigen::VectorXd& x, Eigen::MatrixXd& P, const Eigen::VectorXd& r, const Eigen::MatrixXd& H,
                            const Eigen::MatrixXd& R, double gate) {
-  UpdateResult out;
-  if (!r.allFinite() || !H.allFinite() || !R.allFinite()) {
+  if (!H.allFinite()) {
+    UpdateResult out;
     out.reason = "non_finite";
     return out;
   }
   const Eigen::MatrixXd PHt = P * H.transpose();
-  const Eigen::MatrixXd S = H * PHt + R;
+  return kalman_update_from(x, P, r, PHt, H * PHt, R, gate);
+}
+
+UpdateResult kalman_update_from(Eigen::VectorXd& x, Eigen::MatrixXd& P, const Eigen::VectorXd& r,
+                                const Eigen::MatrixXd& PHt, const Eigen::MatrixXd& HPHt, const Eigen::MatrixXd& R,
+                                double gate) {
+  UpdateResult out;
+  if (!r.allFinite() || !PHt.allFinite() || !R.allFinite()) {
+    out.reason = "non_finite";
+    return out;
+  }
+  const Eigen::MatrixXd S = HPHt + R;
   const Eigen::LLT<Eigen::MatrixXd> llt(S);
   if (llt.info() != Eigen::Success) {
     out.reason = "singular";
@@ -27,9 +38,12 @@ UpdateResult kalman_update(Eigen::VectorXd& x, Eigen::MatrixXd& P, const Eigen::
   }
   const Eigen::MatrixXd K = llt.solve(PHt.transpose()).transpose();  // P H' S^-1
   x += K * r;
-  const Eigen::MatrixXd IKH = Eigen::MatrixXd::Identity(P.rows(), P.cols()) - K * H;
-  P = IKH * P * IKH.transpose() + K * R * K.transpose();
-  P = (0.5 * (P + P.transpose())).eval();  // .eval(): an in-place transpose would alias
+  // Joseph form (I - K H) P (I - K H)' + K R K', expanded so it costs O(n^2 m) instead of O(n^3):
+  //   P - K (H P) - (H P)' K' + K S K'    with H P = (P H')' and S = H P H' + R
+  //   = P - K C' - C K'  with C = P H' - K S / 2: a symmetric rank-2m update of the upper triangle, mirrored.
+  const Eigen::MatrixXd C = PHt - 0.5 * K * S;
+  for (Eigen::Index k = 0; k < K.cols(); ++k) P.selfadjointView<Eigen::Upper>().rankUpdate(K.col(k), C.col(k), -1.0);
+  P.triangularView<Eigen::StrictlyLower>() = P.transpose();
   out.accepted = true;
   return out;
 }

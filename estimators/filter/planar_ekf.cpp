@@ -56,19 +56,20 @@ UpdateResult PlanarEkf::observe(int64_t id, double range, double bearing, const 
     out.reason = "non_finite";
     return out;
   }
-  const Eigen::Index n = x_.size();
   Eigen::Vector2d z(range, bearing);
   Eigen::Matrix<double, 2, 3> Hx;
   Eigen::Matrix2d Hl;
-  Eigen::MatrixXd H = Eigen::MatrixXd::Zero(2, n);
   Eigen::Vector2d predicted;
+  // H is zero but for the robot's 3 columns and the landmark's 2: P H' and H P H' in O(n).
+  Eigen::MatrixXd PHt, HPHt;
   if (auto k = known_.find(id); k != known_.end()) {
     predicted = observation(x_.head<3>(), k->second, &Hx, nullptr);
-    H.leftCols<3>() = Hx;
+    PHt = P_.leftCols<3>() * Hx.transpose();
+    HPHt = Hx * PHt.topRows<3>();
   } else if (auto s = slot_.find(id); s != slot_.end()) {
     predicted = observation(x_.head<3>(), x_.segment<2>(s->second), &Hx, &Hl);
-    H.leftCols<3>() = Hx;
-    H.middleCols<2>(s->second) = Hl;
+    PHt = P_.leftCols<3>() * Hx.transpose() + P_.middleCols<2>(s->second) * Hl.transpose();
+    HPHt = Hx * PHt.topRows<3>() + Hl * PHt.middleRows<2>(s->second);
   } else {
     if (!options_.slam || id < 0) {
       out.reason = "unknown_landmark";
@@ -89,7 +90,7 @@ UpdateResult PlanarEkf::observe(int64_t id, double range, double bearing, const 
   }
   Eigen::VectorXd r = z - predicted;
   r[1] = wrap_angle(r[1]);
-  out = kalman_update(x_, P_, r, H, R, options_.gate);
+  out = kalman_update_from(x_, P_, r, PHt, HPHt, R, options_.gate);
   x_[2] = wrap_angle(x_[2]);
   return out;
 }
