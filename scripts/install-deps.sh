@@ -5,7 +5,7 @@ set -euo pipefail
 
 packages=(
   build-essential cmake pkg-config make
-  liblcm-dev liblcm-bin liblcm-java libglib2.0-dev default-jdk-headless
+  liblcm-dev liblcm-bin liblcm-java libjchart2d-java libglib2.0-dev default-jdk-headless
   libeigen3-dev libsuitesparse-dev
   libspdlog-dev libyaml-cpp-dev libcli11-dev doctest-dev libbenchmark-dev
   iproute2 util-linux procps python3
