@@ -81,9 +81,10 @@ void FilterStage::on_landmarks(const LandmarkSightings& s) {
     ++not_planar_;
     return;
   }
+  std::vector<filter::Sighting> unidentified;
   for (const auto& ob : s.observations) {
     if (ob.id < 0) {
-      ++unknown_;  // unknown ids need data association (JCBB), not yet in this stage
+      unidentified.push_back({ob.range, ob.azimuth, ob.covariance.topLeftCorner<2, 2>()});
       continue;
     }
     const auto r = it->second.ekf.observe(ob.id, ob.range, ob.azimuth, ob.covariance.topLeftCorner<2, 2>());
@@ -92,12 +93,20 @@ void FilterStage::on_landmarks(const LandmarkSightings& s) {
     else if (r.reason == "unknown_landmark") ++unknown_;
     else ++rejected_;
   }
+  if (!unidentified.empty()) {
+    const auto a = it->second.ekf.observe_unidentified(unidentified);
+    associated_ += a.paired;
+    gated_ += a.gated;
+    tentative_ += a.tentative;
+    new_landmarks_ += a.confirmed;
+  }
 }
 
 Counters FilterStage::counters() const {
   return {{"predictions", predictions_},        {"updates", updates_},       {"gated", gated_},
           {"new_landmarks", new_landmarks_},    {"unknown_landmarks", unknown_}, {"rejected", rejected_},
-          {"not_planar", not_planar_},          {"landmarks_before_odometry", before_odometry_}};
+          {"not_planar", not_planar_},          {"landmarks_before_odometry", before_odometry_},
+          {"associated", associated_},          {"tentative_landmarks", tentative_}};
 }
 
 std::map<int64_t, Eigen::Vector2d> FilterStage::landmarks(const std::string& source) const {

@@ -39,7 +39,7 @@ class FilterStage final : public Stage {
   FilterConfig config_;
   std::map<std::string, Track> tracks_;
   int64_t predictions_ = 0, updates_ = 0, gated_ = 0, new_landmarks_ = 0, unknown_ = 0, rejected_ = 0,
-          not_planar_ = 0, before_odometry_ = 0;
+          not_planar_ = 0, before_odometry_ = 0, associated_ = 0, tentative_ = 0;
 };
 
 }  // namespace sextant::engine

@@ -1,5 +1,7 @@
 #include "estimators/filter/planar_ekf.hpp"
 
+#include "assoc/landmark/jcbb.hpp"
+
 #include <cmath>
 
 namespace sextant::filter {
@@ -114,6 +116,76 @@ void PlanarEkf::augment(int64_t id, double range, double bearing, const Eigen::M
   P.bottomRightCorner<2, 2>() = 0.5 * (Pll + Pll.transpose());
   P_ = std::move(P);
   slot_[id] = static_cast<int>(n);
+}
+
+AssociationOutcome PlanarEkf::observe_unidentified(const std::vector<Sighting>& sightings) {
+  AssociationOutcome out;
+  if (sightings.empty()) return out;
+  // Every landmark, known or in the state, as an index for the association.
+  std::vector<std::pair<int64_t, bool>> ids;  // (id, in state)
+  for (const auto& [id, p] : known_) ids.push_back({id, false});
+  for (const auto& [id, k] : slot_) ids.push_back({id, true});
+  const Eigen::Index n = x_.size();
+  assoc::AssociationProblem problem;
+  problem.sightings = static_cast<int>(sightings.size());
+  problem.landmarks = static_cast<int>(ids.size());
+  problem.covariance = &P_;
+  problem.individual_gate = options_.gate;
+  for (const auto& s : sightings) problem.noise.push_back(s.covariance);
+  problem.candidate = [&](int i, int j) -> std::optional<assoc::Candidate> {
+    const auto [id, in_state] = ids[static_cast<size_t>(j)];
+    const Eigen::Vector2d l = in_state ? Eigen::Vector2d(x_.segment<2>(slot_.at(id))) : known_.at(id);
+    Eigen::Matrix<double, 2, 3> Hx;
+    Eigen::Matrix2d Hl;
+    const Eigen::Vector2d h = observation(x_.head<3>(), l, &Hx, &Hl);
+    if (h[0] < 1e-6) return std::nullopt;
+    assoc::Candidate c;
+    c.innovation = Eigen::Vector2d(sightings[static_cast<size_t>(i)].range - h[0], wrap_angle(sightings[static_cast<size_t>(i)].bearing - h[1]));
+    c.jacobian = Eigen::MatrixXd::Zero(2, n);
+    c.jacobian.leftCols<3>() = Hx;
+    if (in_state) c.jacobian.middleCols<2>(slot_.at(id)) = Hl;
+    return c;
+  };
+  const assoc::Hypothesis h = problem.landmarks > 0 ? assoc::joint_compatibility_branch_and_bound(problem, 20000)
+                                                    : assoc::Hypothesis(sightings.size(), -1);
+  // The paired sightings update one after the other (equal to the joint update for a linearized model).
+  std::vector<size_t> unpaired;
+  for (size_t i = 0; i < sightings.size(); ++i) {
+    if (h[i] < 0) {
+      unpaired.push_back(i);
+      continue;
+    }
+    const auto r = observe(ids[static_cast<size_t>(h[i])].first, sightings[i].range, sightings[i].bearing, sightings[i].covariance);
+    r.accepted ? ++out.paired : ++out.gated;
+  }
+  if (!options_.slam) return out;
+  // Tentative landmarks: matched by distance in the map frame, confirmed after enough sightings.
+  for (auto& t : tentative_) ++t.idle;
+  for (size_t i : unpaired) {
+    const auto& s = sightings[i];
+    const double a = x_[2] + s.bearing;
+    const Eigen::Vector2d p(x_[0] + s.range * std::cos(a), x_[1] + s.range * std::sin(a));
+    Tentative* match = nullptr;
+    for (auto& t : tentative_)
+      if ((t.position - p).norm() < options_.tentative_radius && (!match || (t.position - p).norm() < (match->position - p).norm()))
+        match = &t;
+    if (match == nullptr) {
+      tentative_.push_back({p, 1, 0, s});
+      ++out.tentative;
+      continue;
+    }
+    match->position = (match->position * match->seen + p) / (match->seen + 1);
+    ++match->seen;
+    match->idle = 0;
+    match->last = s;
+    if (match->seen >= options_.confirmations && static_cast<int>(slot_.size()) < options_.max_landmarks) {
+      augment(next_id_++, s.range, s.bearing, s.covariance);
+      match->seen = -1;  // consumed
+      ++out.confirmed;
+    }
+  }
+  std::erase_if(tentative_, [&](const Tentative& t) { return t.seen < 0 || t.idle > options_.tentative_lifetime; });
+  return out;
 }
 
 std::map<int64_t, Eigen::Vector2d> PlanarEkf::landmarks() const {

@@ -18,6 +18,23 @@ struct PlanarEkfOptions {
   double gate = 9.21;   // chi-square (2 dof) threshold on the normalized innovation; 9.21 = 99 %
   bool slam = true;     // unknown landmark ids are added to the state; false: only the known map is used
   int max_landmarks = 4096;
+  // Sightings without an id: a sighting that JCBB pairs with no landmark becomes a tentative landmark (outside the
+  // state); it joins the map after `confirmations` sightings within `tentative_radius` metres, and is forgotten
+  // after `tentative_lifetime` batches without one, so a spurious sighting never becomes a permanent landmark.
+  int confirmations = 3;
+  double tentative_radius = 0.5;
+  int tentative_lifetime = 50;
+};
+
+/// A range-bearing sighting of a landmark whose id is unknown.
+struct Sighting {
+  double range = 0, bearing = 0;
+  Eigen::Matrix2d covariance = Eigen::Matrix2d::Identity();
+};
+
+/// What happened to a batch of unidentified sightings.
+struct AssociationOutcome {
+  int paired = 0, gated = 0, tentative = 0, confirmed = 0;
 };
 
 class PlanarEkf {
@@ -33,6 +50,10 @@ class PlanarEkf {
   /// One range-bearing sighting of landmark `id` (covariance R over [range, bearing]).  A known landmark updates;
   /// a landmark in the state updates; a new one is added (SLAM mode).  Refused when gated or degenerate.
   UpdateResult observe(int64_t id, double range, double bearing, const Eigen::Matrix2d& R);
+
+  /// Sightings without ids: associated by JCBB (assoc/landmark/jcbb.hpp) against every landmark of the map and
+  /// the state, then updated jointly; the unpaired ones go through the tentative-landmark rule above.
+  AssociationOutcome observe_unidentified(const std::vector<Sighting>& sightings);
 
   SE2 pose() const { return SE2(x_[0], x_[1], x_[2]); }
   Eigen::Matrix3d pose_covariance() const { return P_.topLeftCorner<3, 3>(); }
@@ -55,6 +76,13 @@ class PlanarEkf {
   Eigen::MatrixXd P_ = Eigen::MatrixXd::Identity(3, 3);
   std::map<int64_t, Eigen::Vector2d> known_;
   std::map<int64_t, int> slot_;  // landmark id -> index of its x in the state
+  struct Tentative {
+    Eigen::Vector2d position;
+    int seen = 1, idle = 0;
+    Sighting last;
+  };
+  std::vector<Tentative> tentative_;
+  int64_t next_id_ = int64_t{1} << 40;  // ids given to confirmed landmarks that came without one
 };
 
 }  // namespace sextant::filter

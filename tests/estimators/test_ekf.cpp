@@ -130,3 +130,23 @@ TEST_CASE("planar EKF-SLAM: localization converges, outliers are gated, NaN refu
   CHECK_FALSE(bad.accepted);
   CHECK(bad.reason == "non_finite");
 }
+
+TEST_CASE("a spurious unidentified sighting stays tentative and is forgotten; a repeated one is confirmed") {
+  PlanarEkfOptions o;
+  o.tentative_lifetime = 5;
+  PlanarEkf ekf(o);
+  ekf.initialize(SE2(0, 0, 0), Eigen::Matrix3d::Identity() * 1e-6);
+  const Eigen::Matrix2d R = Eigen::Vector2d(0.01, 0.0001).asDiagonal();
+  auto a = ekf.observe_unidentified({{5.0, 0.3, R}});  // once only
+  CHECK(a.tentative == 1);
+  for (int k = 0; k < 10; ++k) ekf.observe_unidentified({{3.0, -1.0, R}});  // a real one, seen again and again
+  CHECK(ekf.landmark_count() == 1);
+  const auto lm = ekf.landmarks();
+  REQUIRE(lm.size() == 1);
+  const Eigen::Vector2d expected(3 * std::cos(-1.0), 3 * std::sin(-1.0));
+  CHECK((lm.begin()->second - expected).norm() < 0.05);
+  // The spurious one never joined the state, and a later sighting near it starts over as tentative.
+  a = ekf.observe_unidentified({{5.0, 0.3, R}});
+  CHECK(a.tentative == 1);
+  CHECK(a.confirmed == 0);
+}
