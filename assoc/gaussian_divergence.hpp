@@ -1,0 +1,23 @@
+#pragma once
+// Closed-form divergences between Gaussian densities N1 = N(mu1, S1) and N2 = N(mu2, S2) in k dimensions
+// (assoc.md §1.7; Gil, Alajaji & Linder, Information Sciences 2013):
+//   Renyi, order alpha in (0, 1):  S_a = alpha S2 + (1 - alpha) S1,
+//     D_a(N1||N2) = alpha/2 dmu' S_a^-1 dmu - 1/(2 (alpha - 1)) ln( |S_a| / (|S1|^(1-alpha) |S2|^alpha) )
+//   Kullback-Leibler (the alpha -> 1 limit):
+//     KL(N1||N2) = 1/2 [ tr(S2^-1 S1) + dmu' S2^-1 dmu - k + ln(|S2| / |S1|) ]
+//   Symmetric Renyi (source C eq. 19-21):  SD_a = 1/2 (D_a(N1||N2) + D_a(N2||N1)).
+// With equal covariances D_a = alpha/2 dmu' S^-1 dmu, so sextant's association cost scales the divergence by 1/alpha
+// to make it equal 1/2 dmu' S^-1 dmu there (issue 6: "equal to the classic term when the covariances are equal").
+#include <Eigen/Core>
+
+namespace sextant::assoc {
+
+/// +infinity when a covariance is not positive definite or alpha is outside (0, 1).
+double renyi_divergence(const Eigen::VectorXd& mu1, const Eigen::MatrixXd& S1, const Eigen::VectorXd& mu2,
+                        const Eigen::MatrixXd& S2, double alpha);
+double kl_divergence(const Eigen::VectorXd& mu1, const Eigen::MatrixXd& S1, const Eigen::VectorXd& mu2,
+                     const Eigen::MatrixXd& S2);
+double symmetric_renyi_divergence(const Eigen::VectorXd& mu1, const Eigen::MatrixXd& S1, const Eigen::VectorXd& mu2,
+                                  const Eigen::MatrixXd& S2, double alpha);
+
+}  // namespace sextant::assoc

@@ -1,0 +1,123 @@
+// Passive-sensor geometry: the bearing model's Jacobian, triangulation on an exact case, its covariance against
+// Monte Carlo, degenerate geometry, and the Gaussian divergences against numerical integration.
+#include "assoc/bearing_model.hpp"
+#include "assoc/gaussian_divergence.hpp"
+#include "assoc/triangulation.hpp"
+
+#include <doctest/doctest.h>
+
+#include <Eigen/LU>
+
+#include <cmath>
+#include <random>
+
+using namespace sextant::assoc;
+
+namespace {
+// Source C's sensors (issue 6).
+const Eigen::Vector3d kSensors[3] = {{30, 0, 0.1}, {0, 30, 0.1}, {0, 0, 0}};
+
+std::vector<BearingObservation> observe(const Eigen::Vector3d& target, double sigma, std::mt19937* rng) {
+  std::vector<BearingObservation> obs;
+  std::normal_distribution<double> n(0, sigma);
+  for (const auto& s : kSensors) {
+    const auto h = bearing(s, target);
+    BearingObservation o;
+    o.sensor = s;
+    o.azimuth = (*h)[0] + (rng ? n(*rng) : 0.0);
+    o.elevation = (*h)[1] + (rng ? n(*rng) : 0.0);
+    o.covariance = Eigen::Matrix2d::Identity() * sigma * sigma;
+    obs.push_back(o);
+  }
+  return obs;
+}
+}  // namespace
+
+TEST_CASE("bearing Jacobian against central differences") {
+  const Eigen::Vector3d s(1, -2, 0.5), x(7, 3, 4);
+  Eigen::Matrix<double, 2, 3> J;
+  bearing(s, x, &J);
+  for (int c = 0; c < 3; ++c) {
+    Eigen::Vector3d e = Eigen::Vector3d::Zero();
+    e[c] = 1e-6;
+    CHECK(((*bearing(s, x + e) - *bearing(s, x - e)) / 2e-6 - J.col(c)).norm() < 1e-8);
+  }
+  CHECK_FALSE(bearing(s, s + Eigen::Vector3d(0, 0, 5)).has_value());  // on the sensor's vertical
+}
+
+TEST_CASE("noise-free bearings triangulate to the target exactly") {
+  const Eigen::Vector3d target(10, 12, 5);
+  const auto obs = observe(target, 0.005, nullptr);
+  const auto lin = triangulate_linear(obs);
+  REQUIRE(lin.valid);
+  CHECK((lin.position - target).norm() < 1e-9);
+  const auto ml = triangulate(obs);
+  REQUIRE(ml.valid);
+  CHECK((ml.position - target).norm() < 1e-9);
+  CHECK(ml.residual < 1e-15);
+}
+
+TEST_CASE("the triangulation covariance matches Monte Carlo") {
+  std::mt19937 rng(17);
+  const Eigen::Vector3d target(10, 12, 5);
+  const int runs = 4000;
+  std::vector<Eigen::Vector3d> est;
+  Eigen::Matrix3d predicted = Eigen::Matrix3d::Zero();
+  for (int k = 0; k < runs; ++k) {
+    const auto t = triangulate(observe(target, 0.005, &rng));
+    REQUIRE(t.valid);
+    est.push_back(t.position);
+    predicted += t.covariance / runs;
+  }
+  Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+  for (const auto& e : est) mean += e / runs;
+  Eigen::Matrix3d sample = Eigen::Matrix3d::Zero();
+  for (const auto& e : est) sample += (e - mean) * (e - mean).transpose() / (runs - 1);
+  CHECK((mean - target).norm() < 0.05);
+  CHECK((sample - predicted).norm() < 0.1 * predicted.norm());
+}
+
+TEST_CASE("degenerate geometry is flagged, never NaN") {
+  std::vector<BearingObservation> one(1);
+  CHECK_FALSE(triangulate(one).valid);
+  CHECK(triangulate(one).reason == "fewer than 2 sensors");
+  // Two sensors and a target on the line through them: the lines of sight coincide.
+  std::vector<BearingObservation> parallel;
+  for (const Eigen::Vector3d& s : {Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(10, 0, 0)}) {
+    const auto h = bearing(s, Eigen::Vector3d(50, 0, 0));
+    parallel.push_back({s, (*h)[0], (*h)[1], Eigen::Matrix2d::Identity() * 1e-6});
+  }
+  const auto t = triangulate(parallel);
+  CHECK_FALSE(t.valid);
+  CHECK(t.reason.find("ill-conditioned") != std::string::npos);
+  CHECK(t.position.allFinite());
+}
+
+TEST_CASE("Renyi divergence: closed form against numerical integration, its alpha -> 1 limit and equal covariances") {
+  Eigen::Vector2d m1(0.1, -0.2), m2(0.4, 0.1);
+  Eigen::Matrix2d S1, S2;
+  S1 << 0.2, 0.05, 0.05, 0.1;
+  S2 << 0.15, -0.03, -0.03, 0.25;
+  auto pdf = [](const Eigen::Vector2d& x, const Eigen::Vector2d& m, const Eigen::Matrix2d& S) {
+    const Eigen::Vector2d d = x - m;
+    return std::exp(-0.5 * d.dot(S.inverse() * d)) / (2 * M_PI * std::sqrt(S.determinant()));
+  };
+  for (double alpha : {0.3, 0.5, 0.8}) {
+    // D_a = 1/(a - 1) ln integral p^a q^(1-a), by the midpoint rule on a wide grid.
+    double integral = 0;
+    const double h = 0.01;
+    for (double x = -3; x < 3.5; x += h)
+      for (double y = -3; y < 3.5; y += h) {
+        const Eigen::Vector2d p(x + h / 2, y + h / 2);
+        integral += std::pow(pdf(p, m1, S1), alpha) * std::pow(pdf(p, m2, S2), 1 - alpha) * h * h;
+      }
+    CHECK(renyi_divergence(m1, S1, m2, S2, alpha) == doctest::Approx(std::log(integral) / (alpha - 1)).epsilon(1e-5));
+  }
+  CHECK(renyi_divergence(m1, S1, m2, S2, 0.99999) == doctest::Approx(kl_divergence(m1, S1, m2, S2)).epsilon(1e-4));
+  const double maha = (m1 - m2).dot(S1.inverse() * (m1 - m2));
+  CHECK(renyi_divergence(m1, S1, m2, S1, 0.3) == doctest::Approx(0.15 * maha));
+  CHECK(symmetric_renyi_divergence(m1, S1, m2, S2, 0.5) ==
+        doctest::Approx(symmetric_renyi_divergence(m2, S2, m1, S1, 0.5)));
+  CHECK(std::isinf(renyi_divergence(m1, S1, m2, -S2, 0.5)));
+  CHECK(std::isinf(renyi_divergence(m1, S1, m2, S2, 1.5)));
+}
