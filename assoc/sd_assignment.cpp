@@ -22,7 +22,8 @@ struct DetectionIds {
   int id(size_t s, int k) const { return offset[s] + k - 1; }
 };
 
-double relative_gap(double ub, double lb) { return std::abs(ub) > 1e-12 ? (ub - lb) / std::abs(ub) : 0.0; }
+// Clamped at 0: when the bounds meet, rounding can put the lower one a few ulps above the upper one.
+double relative_gap(double ub, double lb) { return std::abs(ub) > 1e-12 ? std::max(0.0, (ub - lb) / std::abs(ub)) : 0.0; }
 
 // A 2-D assignment with "missed" on both sides: rows 1..R and columns 1..C of `c` (index 0 = missed), where
 // c(r, 0) and c(0, k) are the costs of leaving r or k unpaired.  Returns (row, column) pairs, 0 for missed.

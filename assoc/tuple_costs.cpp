@@ -2,7 +2,7 @@
 
 #include "assoc/bearing_model.hpp"
 #include "assoc/gaussian_divergence.hpp"
-#include "assoc/landmark/jcbb.hpp"
+#include "assoc/chi_square.hpp"
 
 #include <Eigen/LU>
 

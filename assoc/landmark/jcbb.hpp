@@ -10,6 +10,8 @@
 //    plausible but jointly inconsistent pairings of a cluttered or repetitive map.
 // The filter supplies, for each candidate pair, the innovation and the Jacobian row block over its state; this
 // library knows nothing of the state's layout.
+#include "assoc/chi_square.hpp"
+
 #include <Eigen/Core>
 
 #include <functional>
@@ -49,9 +51,5 @@ Hypothesis joint_compatibility_branch_and_bound(const AssociationProblem& p, int
 
 /// D2 of a whole hypothesis (the joint test statistic), and its dimension.
 double joint_distance(const AssociationProblem& p, const Hypothesis& h, int* dimension = nullptr);
-
-/// The chi-square quantile for `dof` degrees of freedom at `probability` (Wilson-Hilferty approximation; exact to
-/// about 1 % for dof >= 2).
-double chi2_quantile(int dof, double probability);
 
 }  // namespace sextant::assoc

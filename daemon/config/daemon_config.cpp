@@ -40,6 +40,10 @@ void read_engine_config(Section& s, engine::EngineConfig& c) {
     Section f = s.child("filter");
     read_stage_config(f, c.filter);
   }
+  {
+    Section a = s.child("association");
+    read_stage_config(a, c.association);
+  }
   s.reject_unknown_keys();
 }
 

@@ -7,5 +7,6 @@ namespace sextant::config {
 
 void read_stage_config(Section& section, engine::DeadReckoningConfig& config);
 void read_stage_config(Section& section, engine::FilterConfig& config);
+void read_stage_config(Section& section, engine::AssociationConfig& config);
 
 }  // namespace sextant::config

@@ -31,7 +31,7 @@ class Engine {
   std::vector<std::unique_ptr<Stage>> stages_;
 };
 
-/// The stages the config enables, in a fixed order (dead reckoning, filter, graph, association).
+/// The stages the config enables, in a fixed order (dead reckoning, filter, association).
 std::vector<std::unique_ptr<Stage>> make_stages(const EngineConfig& config);
 
 }  // namespace sextant::engine

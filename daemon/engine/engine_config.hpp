@@ -1,6 +1,7 @@
 #pragma once
 // Configuration of the engine's stages: plain structs with in-class defaults.  YAML parsing and validation with
 // file:line errors live in daemon/config/; each stage's struct sits next to its stage.
+#include "daemon/engine/association_stage_config.hpp"
 #include "daemon/engine/dead_reckoning_stage_config.hpp"
 #include "daemon/engine/filter_stage_config.hpp"
 
@@ -14,6 +15,7 @@ struct EngineConfig {
   std::string primary_estimator = "auto";
   DeadReckoningConfig dead_reckoning;
   FilterConfig filter;
+  AssociationConfig association;
 };
 
 }  // namespace sextant::engine

@@ -1,0 +1,85 @@
+#include "daemon/engine/association_stage.hpp"
+
+#include "assoc/sd_assignment.hpp"
+
+namespace sextant::engine {
+
+void AssociationStage::handle(const Event& e, const Emit& emit) {
+  const auto& scan = std::get<BearingScan>(e);
+  ++scans_;
+  if (scan.scan_id <= last_associated_) {
+    ++late_scans_;  // its group was already associated
+    return;
+  }
+  auto& group = pending_[scan.scan_id];
+  if (!group.emplace(scan.sensor_id, scan).second) ++duplicate_sensor_;
+  // Older groups are complete once a newer scan_id shows up.
+  while (!pending_.empty() && pending_.begin()->first < scan.scan_id) associate(pending_.begin()->first, emit);
+  if (config_.expected_sensors > 0 && static_cast<int>(group.size()) >= config_.expected_sensors) associate(scan.scan_id, emit);
+  while (static_cast<int>(pending_.size()) > config_.max_pending_scans) {
+    ++forced_;
+    associate(pending_.begin()->first, emit);
+  }
+}
+
+void AssociationStage::finish(const Emit& emit) {
+  while (!pending_.empty()) associate(pending_.begin()->first, emit);
+}
+
+void AssociationStage::associate(int64_t scan_id, const Emit& emit) {
+  auto node = pending_.extract(scan_id);
+  last_associated_ = std::max(last_associated_, scan_id);
+  const auto& group = node.mapped();
+  if (group.size() < 2) {
+    ++too_few_sensors_;
+    return;
+  }
+  ++groups_;
+  assoc::Scan scan;
+  Targets out;
+  out.scan_id = scan_id;
+  out.cost_kind = config_.cost;
+  std::vector<int> sizes;
+  for (const auto& [sensor_id, s] : group) {
+    out.utime = std::max(out.utime, s.utime);
+    out.sensor_ids.push_back(sensor_id);
+    scan.sensors.push_back(s.sensor_position);
+    std::vector<assoc::Detection> d;
+    for (const auto& b : s.detections) d.push_back({b.azimuth, b.elevation, b.sigma_azimuth, b.sigma_elevation});
+    sizes.push_back(static_cast<int>(d.size()));
+    scan.detections.push_back(std::move(d));
+  }
+  assoc::CostOptions o;
+  o.kind = assoc::cost_kind_from_string(config_.cost);
+  o.alpha = config_.alpha;
+  o.p_detect = config_.p_detect;
+  o.clutter_density = config_.clutter_density;
+  o.gate_probability = config_.gate_probability;
+  const auto tuples = assoc::build_tuples(scan, o);
+  tuples_ += static_cast<int64_t>(tuples.size());
+  const auto solution = config_.solver == "exact"
+                            ? assoc::solve_sd_exact(tuples, sizes)
+                            : assoc::solve_sd_lagrangian(tuples, sizes, config_.max_iterations, config_.gap_tolerance);
+  out.total_cost = solution.cost;
+  out.duality_gap = solution.gap;
+  for (int t : solution.tuples) {
+    const auto& tuple = tuples[static_cast<size_t>(t)];
+    Target target;
+    target.position = tuple.position;
+    target.covariance = tuple.covariance;
+    target.cost = tuple.cost;
+    for (int k : tuple.index) target.detection_indices.push_back(k - 1);  // -1 = missed
+    out.targets.push_back(std::move(target));
+  }
+  targets_ += static_cast<int64_t>(out.targets.size());
+  emit(out);
+}
+
+Counters AssociationStage::counters() const {
+  return {{"scans", scans_},           {"groups", groups_},
+          {"targets", targets_},       {"tuples", tuples_},
+          {"too_few_sensors", too_few_sensors_}, {"late_scans", late_scans_},
+          {"forced_groups", forced_},  {"duplicate_sensor_scans", duplicate_sensor_}};
+}
+
+}  // namespace sextant::engine
