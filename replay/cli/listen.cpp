@@ -1,16 +1,14 @@
 // sextant listen [CHANNEL...]: prints every sextant message on the bus (or on the given channels), one line each.
 #include "replay/cli/command.hpp"
+#include "replay/cli/handle_until_stopped.hpp"
 #include "replay/message_printer.hpp"
 #include "daemon/runtime/raw_subscription.hpp"
 
 #include <lcm/lcm-cpp.hpp>
 
-#include <atomic>
-#include <csignal>
 #include <cstdio>
 
 namespace {
-std::atomic<bool> g_stop{false};
 
 struct Printer {
   int64_t remaining;  // stop after this many messages (< 0: never)
@@ -18,7 +16,7 @@ struct Printer {
     if (remaining == 0) return;
     std::printf("%-16s %s\n", channel.c_str(), sextant::replay::describe_message(rbuf.data, rbuf.data_size).c_str());
     std::fflush(stdout);
-    if (remaining > 0 && --remaining == 0) g_stop = true;
+    if (remaining > 0) --remaining;
   }
 };
 
@@ -42,14 +40,7 @@ sextant::cli::RegisterCommand reg{"listen", [](CLI::App& app) {
     Printer printer{*count};
     if (channels->empty()) sextant::runtime::subscribe_raw(lcm, ".*", &printer);
     for (const auto& c : *channels) sextant::runtime::subscribe_raw(lcm, c, &printer);
-    std::signal(SIGINT, [](int) { g_stop = true; });
-    std::signal(SIGTERM, [](int) { g_stop = true; });
-    const auto start = std::chrono::steady_clock::now();
-    while (!g_stop) {
-      lcm.handleTimeout(100);
-      if (*seconds > 0 && std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() > *seconds)
-        break;
-    }
+    sextant::cli::handle_until_stopped(lcm, *seconds, [&printer] { return printer.remaining == 0; });
   });
 }};
 }  // namespace

@@ -2,6 +2,7 @@
 // and a summary when it stops.
 #include "daemon/runtime/raw_subscription.hpp"
 #include "replay/cli/command.hpp"
+#include "replay/cli/handle_until_stopped.hpp"
 
 #include <sextant/fused_pose_t.hpp>
 #include <sextant/status_t.hpp>
@@ -11,15 +12,11 @@
 #include <lcm/lcm-cpp.hpp>
 #include <unistd.h>
 
-#include <atomic>
 #include <cmath>
-#include <csignal>
 #include <cstdio>
 #include <map>
 
 namespace {
-
-std::atomic<bool> g_stop{false};
 
 struct Watcher {
   std::string fused_channel, status_channel, targets_channel, trajectory_channel;
@@ -125,14 +122,7 @@ sextant::cli::RegisterCommand reg{"watch", [](CLI::App& app) {
     w.tty = isatty(STDOUT_FILENO) != 0;
     for (const auto* c : {&w.fused_channel, &w.status_channel, &w.targets_channel, &w.trajectory_channel})
       sextant::runtime::subscribe_raw(lcm, *c, &w);
-    std::signal(SIGINT, [](int) { g_stop = true; });
-    std::signal(SIGTERM, [](int) { g_stop = true; });
-    const auto start = std::chrono::steady_clock::now();
-    while (!g_stop) {
-      lcm.handleTimeout(100);
-      if (*seconds > 0 && std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() > *seconds)
-        break;
-    }
+    sextant::cli::handle_until_stopped(lcm, *seconds);
     w.print_summary();
   });
 }};
