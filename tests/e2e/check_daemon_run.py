@@ -9,9 +9,14 @@ Usage: check_daemon_run.py SENT.lcm RECORD.lcm BUS.lcm REPLAYED.lcm
 import sys
 
 from lcmlog import read_log
-from sextant import fused_pose_t, odometry_t, status_t
+from sextant import fused_pose_t, odometry_t, status_t, targets_t, truth_t
 
 INPUTS = ("ODOMETRY", "LANDMARKS", "BEARINGS", "LOOP_CLOSURES", "GROUND_TRUTH")
+
+
+def bearing_scan_id(data):
+    from sextant import bearing_scan_t
+    return bearing_scan_t.decode(data).scan_id
 
 
 def main():
@@ -54,6 +59,25 @@ def main():
     if len(ekf) != len(odometry) or any(f.estimator != "ekf" for f in ekf):
         errors.append(f"{len(ekf)} FUSED_POSE_EKF messages for {len(odometry)} odometry messages")
 
+    # Bearing scans in, TARGETS out: near the simulated targets' true positions.
+    targets = [targets_t.decode(b) for c, b in rec if c == "TARGETS"]
+    scan_ids = {bearing_scan_id(b) for c, b in sent if c == "BEARINGS"}
+    truth = {}
+    for c, b in sent:
+        if c == "GROUND_TRUTH":
+            t = truth_t.decode(b)
+            if t.kind == "target":
+                truth.setdefault(t.utime, []).append(t.position)
+    if len(targets) < len(scan_ids) - 1:
+        errors.append(f"{len(targets)} TARGETS messages for {len(scan_ids)} scans")
+    found = total = 0
+    for m in targets:
+        for p in truth.get(m.utime, []):
+            total += 1
+            found += any(sum((a - b) ** 2 for a, b in zip(t.position, p)) < 1.0 for t in m.targets)
+    if total == 0 or found < 0.9 * total:
+        errors.append(f"TARGETS found {found} of {total} true targets within 1 m")
+
     # What another process sees on the bus (lcm-logger may lose a few datagrams under load).
     if len(on_bus) < 0.95 * len(live):
         errors.append(f"lcm-logger saw only {len(on_bus)} of {len(live)} FUSED_POSE")
@@ -83,6 +107,7 @@ def main():
         if any(b <= a for a, b in zip(uptimes, uptimes[1:])):
             errors.append("status uptime not increasing")
 
+    print(f"TARGETS: {len(targets)} messages, {found} of {total} true targets found within 1 m")
     print(f"played {len(sent)} messages ({len(odometry)} odometry); recorded {len(rec)}; FUSED_POSE live "
           f"{len(live)}, replay {len(offline)}, lcm-logger {len(on_bus)}; {len(statuses)} status messages")
     if errors:

@@ -2,7 +2,8 @@
 # sextantd over a real LCM bus in a private network namespace, fed and watched with LCM's own tools: a simulated run
 # is played with lcm-logplayer, the bus is recorded with lcm-logger, and sextantd records what it receives.  Then a
 # clean SIGTERM.  Checks: exit code 0, a complete recording, one FUSED_POSE per odometry message in order, values
-# identical to a deterministic offline replay, and status messages that account for everything.
+# identical to a deterministic offline replay, status messages that account for everything, and TARGETS from the
+# passive sensors' bearing scans at the simulated targets' true positions.
 set -euo pipefail
 source "$(dirname "$0")/netns.bash"
 require_netns
