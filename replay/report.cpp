@@ -92,7 +92,7 @@ ReportNumbers write_report(const std::string& dir, const ReplayResult& r, const 
   for (const auto& p : r.truth_points)
     if (p.kind == "target") truth_targets.push_back(p.position.head<2>());
   tg.polyline(truth_targets.size() > 1 ? std::vector<Eigen::Vector2d>{} : truth_targets, "#222222", "");
-  tg.points(truth_targets, "#bbbbbb", "target truth", 1.5);
+  tg.points(truth_targets, "#bbbbbb", "target truth (whole run)", 1.5);
   std::vector<Eigen::Vector2d> estimated;
   const size_t first = r.targets.size() > 20 ? r.targets.size() - 20 : 0;
   for (size_t k = first; k < r.targets.size(); ++k)
