@@ -131,7 +131,7 @@ TEST_CASE("planar EKF-SLAM: localization converges, outliers are gated, NaN refu
   CHECK(bad.reason == "non_finite");
 }
 
-TEST_CASE("a spurious unidentified sighting stays tentative and is forgotten; a repeated one is confirmed") {
+TEST_CASE("a spurious unidentified sighting stays tentative and is forgotten, a repeated one is confirmed") {
   PlanarEkfOptions o;
   o.tentative_lifetime = 5;
   PlanarEkf ekf(o);

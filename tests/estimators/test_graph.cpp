@@ -353,7 +353,7 @@ TEST_CASE("chordal initialization: far below the file's guess on smallGrid3D, an
   CHECK(s.final_chi2 <= s2.final_chi2 * (1 + 1e-6));
 }
 
-TEST_CASE("Olson's SGD brings intel from odometry close to the optimum; 3-D graphs are refused") {
+TEST_CASE("Olson's SGD brings intel from odometry close to the optimum, and 3-D graphs are refused") {
   auto g = read_g2o(data("intel.g2o"));
   initialize_by_odometry(g.graph);
   const double odometry_chi2 = g.graph.chi2();

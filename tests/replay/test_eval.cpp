@@ -77,7 +77,7 @@ TEST_CASE("association is greedy by time difference and one to one") {
                        doctest::Contains("at least 2 are needed"), std::invalid_argument);
 }
 
-TEST_CASE("a perfect estimate in another frame has zero ATE; a scaled one needs Sim(3)") {
+TEST_CASE("a perfect estimate in another frame has zero ATE, and a scaled one needs Sim(3)") {
   std::vector<StampedPose> gt, est, scaled;
   const Eigen::Quaterniond R(Eigen::AngleAxisd(0.7, Eigen::Vector3d(0.3, 1, 0.2).normalized()));
   for (int i = 0; i < 50; ++i) {

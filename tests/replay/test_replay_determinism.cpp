@@ -96,7 +96,7 @@ TEST_CASE("replay orders by message utime, not by the log's stamps") {
   std::remove(sim_log.c_str());
 }
 
-TEST_CASE("TUM files: written poses read back; comments, commas, duplicates and bad rows") {
+TEST_CASE("TUM files: written poses read back, and comments, commas, duplicates and bad rows") {
   const auto path = temp_path("traj.txt");
   std::vector<replay::StampedPose> poses(3);
   for (int i = 0; i < 3; ++i) {
