@@ -102,7 +102,9 @@ std::string chordal(FactorGraph& g) {
       for (int b = 0; b < D; ++b) K.template block<D, D>(a * D, b * D) = Z(b, a) * MatD::Identity();
     const int ii = index[static_cast<size_t>(e.i)], jj = index[static_cast<size_t>(e.j)];
     // H += kappa [K'K, -K'; -K, I] over (i, j); known poses move to the right-hand side.
-    Eigen::Map<const Eigen::Matrix<double, D * D, 1>> ri(rotation(e.i).data()), rj(rotation(e.j).data());
+    // vec(R) of the two ends (copies: rotation() returns a temporary).
+    const MatD Ri = rotation(e.i), Rj = rotation(e.j);
+    const Eigen::Map<const Eigen::Matrix<double, D * D, 1>> ri(Ri.data()), rj(Rj.data());
     if (ii >= 0) {
       for (int a = 0; a < nr; ++a) trip.emplace_back(ii * nr + a, ii * nr + a, kappa);  // K'K = I
       if (jj < 0) rhs.segment<D * D>(ii * nr) += kappa * K.transpose() * rj;
