@@ -1,6 +1,7 @@
 #include "daemon/engine/filter_stage.hpp"
 
 #include "daemon/engine/dead_reckoning_stage.hpp"
+#include "daemon/engine/planar_pose_covariance.hpp"
 
 #include <Eigen/Eigenvalues>
 
@@ -61,13 +62,7 @@ void FilterStage::on_odometry(const Odometry& o, const Emit& emit) {
   const SE3 p3 = pose.to_se3();
   out.pose.position = p3.translation();
   out.pose.orientation = p3.rotation().quaternion();
-  // (x, y, theta) covariance -> right perturbation in the body frame: delta_body = blockdiag(R^T, 1) delta_global.
-  Eigen::Matrix3d J = Eigen::Matrix3d::Identity();
-  J.topLeftCorner<2, 2>() = pose.rotation().matrix().transpose();
-  const Eigen::Matrix3d Pb = J * t.ekf.pose_covariance() * J.transpose();
-  const int idx[3] = {0, 1, 5};
-  for (int r = 0; r < 3; ++r)
-    for (int c = 0; c < 3; ++c) out.covariance(idx[r], idx[c]) = Pb(r, c);
+  out.covariance = planar_covariance_in_body_frame(pose, t.ekf.pose_covariance());
   emit(out);
 }
 
