@@ -1,235 +1,389 @@
 #include "assoc/sd_assignment.hpp"
 
-#include "assoc/assignment_2d.hpp"
+#include "assoc/assignment_with_missed.hpp"
+#include "assoc/tuple_packing.hpp"
 
 #include <algorithm>
 #include <cmath>
 #include <limits>
-#include <map>
+#include <stdexcept>
+#include <string>
 
 namespace sextant::assoc {
 namespace {
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
-// Detection (sensor s, index k >= 1) as one integer id.
-struct DetectionIds {
-  std::vector<int> offset;
-  int total = 0;
-  explicit DetectionIds(const std::vector<int>& n) {
-    for (int c : n) offset.push_back(total), total += c;
-  }
-  int id(size_t s, int k) const { return offset[s] + k - 1; }
-};
-
 // Clamped at 0: when the bounds meet, rounding can put the lower one a few ulps above the upper one.
 double relative_gap(double ub, double lb) { return std::abs(ub) > 1e-12 ? std::max(0.0, (ub - lb) / std::abs(ub)) : 0.0; }
 
-// A 2-D assignment with "missed" on both sides: rows 1..R and columns 1..C of `c` (index 0 = missed), where
-// c(r, 0) and c(0, k) are the costs of leaving r or k unpaired.  Returns (row, column) pairs, 0 for missed.
-std::vector<std::pair<int, int>> assign_with_missed(const Eigen::MatrixXd& c, double* value) {
-  const int R = static_cast<int>(c.rows()) - 1, C = static_cast<int>(c.cols()) - 1;
-  Eigen::MatrixXd m = Eigen::MatrixXd::Constant(R + C, C + R, kInf);
-  for (int r = 0; r < R; ++r)
-    for (int k = 0; k < C; ++k) m(r, k) = c(r + 1, k + 1);
-  for (int r = 0; r < R; ++r) m(r, C + r) = c(r + 1, 0);
-  for (int k = 0; k < C; ++k) m(R + k, k) = c(0, k + 1);
-  for (int k = 0; k < C; ++k)
-    for (int r = 0; r < R; ++r) m(R + k, C + r) = 0;
-  const auto a = solve_assignment_2d(m);
-  std::vector<std::pair<int, int>> out;
-  *value = 0;
-  for (int r = 0; r < R; ++r) {
-    const int k = a.column_of_row[static_cast<size_t>(r)];
-    out.push_back({r + 1, k < C ? k + 1 : 0});
-    *value += m(r, k);
+// The caller's tuples as detection sets (detection (s, k >= 1) has id offset[s] + k - 1).
+TuplePacking packing_of(const std::vector<Tuple>& tuples, const std::vector<int>& n) {
+  std::vector<int> offset;
+  TuplePacking p;
+  for (int c : n) offset.push_back(p.detections), p.detections += c;
+  for (const auto& t : tuples) {
+    if (t.index.size() != n.size())
+      throw std::invalid_argument("S-D assignment: a tuple has " + std::to_string(t.index.size()) + " indices for " +
+                                  std::to_string(n.size()) + " sensors");
+    std::vector<int> m;
+    for (size_t s = 0; s < n.size(); ++s) {
+      if (t.index[s] < 0 || t.index[s] > n[s])
+        throw std::invalid_argument("S-D assignment: index " + std::to_string(t.index[s]) + " of sensor " +
+                                    std::to_string(s) + " outside 0.." + std::to_string(n[s]));
+      if (t.index[s] > 0) m.push_back(offset[s] + t.index[s] - 1);
+    }
+    p.members.push_back(std::move(m));
+    p.cost.push_back(t.cost);
   }
-  for (int k = 0; k < C; ++k) {
-    const int col = a.column_of_row[static_cast<size_t>(R + k)];
-    if (col == k) out.push_back({0, k + 1}), *value += m(R + k, k);
-  }
-  return out;
+  return p;
 }
 
-}  // namespace
+// The sub-problem of one component, with detection ids renumbered 0..d-1.
+TuplePacking restrict_to(const TuplePacking& all, const std::vector<int>& group) {
+  TuplePacking p;
+  std::vector<int> local(static_cast<size_t>(all.detections), -1);
+  for (int t : group) {
+    std::vector<int> m;
+    for (int d : all.members[static_cast<size_t>(t)]) {
+      int& l = local[static_cast<size_t>(d)];
+      if (l < 0) l = p.detections++;
+      m.push_back(l);
+    }
+    p.members.push_back(std::move(m));
+    p.cost.push_back(all.cost[static_cast<size_t>(t)]);
+  }
+  return p;
+}
 
-SdSolution solve_sd_exact(const std::vector<Tuple>& tuples, const std::vector<int>& n, long max_nodes) {
-  const DetectionIds ids(n);
-  std::vector<std::vector<int>> members(tuples.size()), of_detection(static_cast<size_t>(ids.total));
-  for (size_t t = 0; t < tuples.size(); ++t)
-    for (size_t s = 0; s < tuples[t].index.size(); ++s)
-      if (tuples[t].index[s] > 0) {
-        const int d = ids.id(s, tuples[t].index[s]);
-        members[t].push_back(d);
-        of_detection[static_cast<size_t>(d)].push_back(static_cast<int>(t));
-      }
+// Branch and bound on one component; `nodes` counts against the caller's budget.  Returns the chosen tuples.
+std::vector<int> branch_and_bound(const TuplePacking& p, long max_nodes, long& nodes, double& best_cost) {
+  const size_t D = static_cast<size_t>(p.detections);
+  std::vector<std::vector<int>> of_detection(D);
+  for (size_t t = 0; t < p.members.size(); ++t)
+    for (int d : p.members[t]) of_detection[static_cast<size_t>(d)].push_back(static_cast<int>(t));
   for (auto& v : of_detection)
-    std::sort(v.begin(), v.end(), [&](int a, int b) { return tuples[static_cast<size_t>(a)].cost < tuples[static_cast<size_t>(b)].cost; });
+    std::sort(v.begin(), v.end(), [&](int a, int b) { return p.cost[static_cast<size_t>(a)] < p.cost[static_cast<size_t>(b)]; });
   // Per detection, the best share of a tuple's cost it can carry.
-  std::vector<double> share(static_cast<size_t>(ids.total), 0.0);
-  for (size_t t = 0; t < tuples.size(); ++t)
-    for (int d : members[t]) share[static_cast<size_t>(d)] = std::min(share[static_cast<size_t>(d)], tuples[t].cost / static_cast<double>(members[t].size()));
-  std::vector<bool> covered(static_cast<size_t>(ids.total), false);
+  std::vector<double> share(D, 0.0);
+  for (size_t t = 0; t < p.members.size(); ++t)
+    for (int d : p.members[t])
+      share[static_cast<size_t>(d)] = std::min(share[static_cast<size_t>(d)], p.cost[t] / static_cast<double>(p.members[t].size()));
+  std::vector<bool> covered(D, false);
   std::vector<int> chosen, best;
-  double best_cost = 0;  // all false alarms
-  long nodes = 0;
-  auto recurse = [&](auto&& self, int d, double cost, double bound_rest) -> void {
+  best_cost = 0;  // all false alarms
+  auto recurse = [&](auto&& self, size_t d, double cost, double bound_rest) -> void {
     if (++nodes > max_nodes) return;
-    while (d < ids.total && covered[static_cast<size_t>(d)]) ++d;  // its share left the bound when it was covered
-    if (d == ids.total) {
+    while (d < D && covered[d]) ++d;  // its share left the bound when it was covered
+    if (d == D) {
       if (cost < best_cost) best_cost = cost, best = chosen;
       return;
     }
     if (cost + bound_rest >= best_cost - 1e-12) return;
-    const double rest = bound_rest - share[static_cast<size_t>(d)];
-    for (int t : of_detection[static_cast<size_t>(d)]) {
-      bool free = true;
-      for (int m : members[static_cast<size_t>(t)]) free = free && !covered[static_cast<size_t>(m)];
-      if (!free) continue;
+    const double rest = bound_rest - share[d];
+    for (int t : of_detection[d]) {
+      const auto& m = p.members[static_cast<size_t>(t)];
+      if (!std::all_of(m.begin(), m.end(), [&](int x) { return !covered[static_cast<size_t>(x)]; })) continue;
       double r = rest;
-      for (int m : members[static_cast<size_t>(t)])
-        if (m != d) covered[static_cast<size_t>(m)] = true, r -= share[static_cast<size_t>(m)];
-      covered[static_cast<size_t>(d)] = true;
+      for (int x : m)
+        if (static_cast<size_t>(x) != d) covered[static_cast<size_t>(x)] = true, r -= share[static_cast<size_t>(x)];
+      covered[d] = true;
       chosen.push_back(t);
-      self(self, d + 1, cost + tuples[static_cast<size_t>(t)].cost, r + 0.0);
+      self(self, d + 1, cost + p.cost[static_cast<size_t>(t)], r);
       chosen.pop_back();
-      for (int m : members[static_cast<size_t>(t)]) covered[static_cast<size_t>(m)] = false;
+      for (int x : m) covered[static_cast<size_t>(x)] = false;
     }
     self(self, d + 1, cost, rest);  // d is a false alarm
   };
   double bound = 0;
   for (double s : share) bound += s;
   recurse(recurse, 0, 0.0, bound);
+  return best;
+}
+
+// One component restated for the relaxation: only the sensors that have detections in it, ordered by decreasing
+// detection count, detections renumbered 1..n_s, tuples sorted lexicographically by their indices.
+struct RelaxationProblem {
+  std::vector<int> n;                    // detections per (reordered) sensor
+  std::vector<std::vector<int>> index;   // per tuple, sorted
+  std::vector<double> cost;
+  std::vector<int> original;             // position in the component's group
+  TuplePacking packing;                  // the same tuples (same order) as detection sets
+
+  RelaxationProblem(const std::vector<Tuple>& tuples, const std::vector<int>& group, size_t S) {
+    std::vector<std::vector<int>> used(S);
+    for (int t : group)
+      for (size_t s = 0; s < S; ++s)
+        if (tuples[static_cast<size_t>(t)].index[s] > 0) used[s].push_back(tuples[static_cast<size_t>(t)].index[s]);
+    std::vector<size_t> sensors;
+    for (size_t s = 0; s < S; ++s) {
+      std::sort(used[s].begin(), used[s].end());
+      used[s].erase(std::unique(used[s].begin(), used[s].end()), used[s].end());
+      if (!used[s].empty()) sensors.push_back(s);
+    }
+    std::stable_sort(sensors.begin(), sensors.end(), [&](size_t a, size_t b) { return used[a].size() > used[b].size(); });
+    for (size_t s : sensors) n.push_back(static_cast<int>(used[s].size()));
+    std::vector<std::vector<int>> idx;
+    for (int t : group) {
+      std::vector<int> v;
+      for (size_t s : sensors) {
+        const int k = tuples[static_cast<size_t>(t)].index[s];
+        v.push_back(k == 0 ? 0 : static_cast<int>(std::lower_bound(used[s].begin(), used[s].end(), k) - used[s].begin()) + 1);
+      }
+      idx.push_back(std::move(v));
+    }
+    std::vector<int> order(group.size());
+    for (size_t i = 0; i < order.size(); ++i) order[i] = static_cast<int>(i);
+    std::sort(order.begin(), order.end(), [&](int a, int b) { return idx[static_cast<size_t>(a)] < idx[static_cast<size_t>(b)]; });
+    std::vector<int> offset;
+    for (int c : n) offset.push_back(packing.detections), packing.detections += c;
+    for (int i : order) {
+      const auto& v = idx[static_cast<size_t>(i)];
+      index.push_back(v);
+      cost.push_back(tuples[static_cast<size_t>(group[static_cast<size_t>(i)])].cost);
+      original.push_back(i);
+      std::vector<int> m;
+      for (size_t s = 0; s < v.size(); ++s)
+        if (v[s] > 0) m.push_back(offset[s] + v[s] - 1);
+      packing.members.push_back(std::move(m));
+      packing.cost.push_back(cost.back());
+    }
+  }
+
+  size_t sensors() const { return n.size(); }
+
+  /// The contiguous range of tuples whose first prefix.size() indices equal `prefix`.
+  std::pair<int, int> range(const std::vector<int>& prefix) const {
+    const size_t L = prefix.size();
+    auto less = [L](const std::vector<int>& a, const std::vector<int>& b) {
+      return std::lexicographical_compare(a.begin(), a.begin() + static_cast<long>(L), b.begin(), b.begin() + static_cast<long>(L));
+    };
+    const auto lo = std::lower_bound(index.begin(), index.end(), prefix, less);
+    const auto hi = std::upper_bound(lo, index.end(), prefix, less);
+    return {static_cast<int>(lo - index.begin()), static_cast<int>(hi - index.begin())};
+  }
+};
+
+struct ComponentResult {
+  std::vector<int> chosen;  // positions in the component's group
+  double ub = 0, lb = 0;
+  int iterations = 0;
+};
+
+// Two sensors: an exact 2-D assignment (a tuple with one detection is that detection's cost of staying unpaired).
+ComponentResult solve_two_sensors(const RelaxationProblem& P) {
+  ComponentResult r;
+  std::vector<double> row_missed(static_cast<size_t>(P.n[0]), 0.0), column_missed(static_cast<size_t>(P.n[1]), 0.0);
+  std::vector<int> row_tuple(row_missed.size(), -1), column_tuple(column_missed.size(), -1), pair_tuple;
+  std::vector<PairCost> pairs;
+  for (size_t t = 0; t < P.index.size(); ++t) {
+    const int a = P.index[t][0] - 1, b = P.index[t][1] - 1;
+    if (a >= 0 && b >= 0) pairs.push_back({a, b, P.cost[t]}), pair_tuple.push_back(static_cast<int>(t));
+    else if (a >= 0 && P.cost[t] < row_missed[static_cast<size_t>(a)]) row_missed[static_cast<size_t>(a)] = P.cost[t], row_tuple[static_cast<size_t>(a)] = static_cast<int>(t);
+    else if (b >= 0 && P.cost[t] < column_missed[static_cast<size_t>(b)]) column_missed[static_cast<size_t>(b)] = P.cost[t], column_tuple[static_cast<size_t>(b)] = static_cast<int>(t);
+  }
+  const auto a = assign_with_missed(row_missed, column_missed, pairs);
+  std::vector<int> chosen;
+  for (size_t i = 0; i < pairs.size(); ++i)
+    if (a.column_of_row[static_cast<size_t>(pairs[i].row)] == pairs[i].column) chosen.push_back(pair_tuple[i]);
+  for (size_t k = 0; k < row_tuple.size(); ++k)
+    if (a.column_of_row[k] < 0 && row_tuple[k] >= 0) chosen.push_back(row_tuple[k]);
+  for (size_t k = 0; k < column_tuple.size(); ++k)
+    if (a.row_of_column[k] < 0 && column_tuple[k] >= 0) chosen.push_back(column_tuple[k]);
+  for (int t : chosen) r.chosen.push_back(P.original[static_cast<size_t>(t)]), r.ub += P.cost[static_cast<size_t>(t)];
+  r.lb = r.ub;
+  return r;
+}
+
+// Feasible solution from the relaxed (1, 2) assignment: each further sensor added by a 2-D assignment of the
+// partial tuples against its detections, the cost of extending a partial tuple by detection k being the best
+// reduced cost (later sensors' multipliers) of a tuple with that prefix and index; 0 for leaving it as it is.
+std::vector<int> recover(const RelaxationProblem& P, const std::vector<std::vector<double>>& u, const MissedAssignment& relaxed) {
+  const size_t S = P.sensors();
+  std::vector<std::vector<int>> partial;
+  for (int a = 0; a < P.n[0]; ++a) partial.push_back({a + 1, relaxed.column_of_row[static_cast<size_t>(a)] + 1});
+  for (int b = 0; b < P.n[1]; ++b)
+    if (relaxed.row_of_column[static_cast<size_t>(b)] < 0) partial.push_back({0, b + 1});
+  std::vector<PairCost> pairs;
+  std::vector<double> row_missed;
+  for (size_t s = 2; s < S; ++s) {
+    pairs.clear();
+    row_missed.assign(partial.size(), 0.0);
+    for (size_t p = 0; p < partial.size(); ++p) {
+      const auto [lo, hi] = P.range(partial[p]);
+      for (int t = lo; t < hi;) {  // tuples of the range grouped by their index at sensor s (sorted)
+        const int k = P.index[static_cast<size_t>(t)][s];
+        double best = kInf;
+        for (; t < hi && P.index[static_cast<size_t>(t)][s] == k; ++t) {
+          double r = P.cost[static_cast<size_t>(t)];
+          for (size_t q = s + 1; q < S; ++q) r -= u[q][static_cast<size_t>(P.index[static_cast<size_t>(t)][q])];
+          best = std::min(best, r);
+        }
+        if (k == 0) row_missed[p] = std::min(0.0, best);
+        else pairs.push_back({static_cast<int>(p), k - 1, best});
+      }
+    }
+    const auto a = assign_with_missed(row_missed, std::vector<double>(static_cast<size_t>(P.n[s]), 0.0), pairs);
+    for (size_t p = 0; p < partial.size(); ++p) partial[p].push_back(a.column_of_row[p] + 1);
+    for (int k = 0; k < P.n[s]; ++k)
+      if (a.row_of_column[static_cast<size_t>(k)] < 0) {
+        std::vector<int> q(s, 0);
+        q.push_back(k + 1);
+        partial.push_back(std::move(q));
+      }
+  }
+  std::vector<int> chosen;  // sorted-tuple positions
+  for (const auto& p : partial) {
+    const auto [lo, hi] = P.range(p);
+    if (hi > lo) chosen.push_back(lo);
+  }
+  return chosen;
+}
+
+ComponentResult solve_relaxation(const RelaxationProblem& P, int max_iterations, double gap_tolerance) {
+  const size_t S = P.sensors(), T = P.index.size();
+  const int n1 = P.n[0], n2 = P.n[1];
+  ComponentResult out;
+  // Groups of tuples with the same (i1, i2), contiguous in the sorted order.
+  struct Group { int a, b, lo, hi; };
+  std::vector<Group> groups;
+  for (int t = 0; t < static_cast<int>(T);) {
+    const int a = P.index[static_cast<size_t>(t)][0], b = P.index[static_cast<size_t>(t)][1];
+    const int lo = t;
+    while (t < static_cast<int>(T) && P.index[static_cast<size_t>(t)][0] == a && P.index[static_cast<size_t>(t)][1] == b) ++t;
+    groups.push_back({a, b, lo, t});
+  }
+  std::vector<std::vector<double>> u(S), g(S);
+  for (size_t s = 0; s < S; ++s) u[s].assign(static_cast<size_t>(P.n[s]) + 1, 0.0), g[s].resize(u[s].size());
+  double best_ub = 0, best_lb = -kInf, factor = 1;
+  int stalled = 0;
+  std::vector<int> best;  // empty: every detection a false alarm, cost 0
+  std::vector<double> reduced(T);
+  std::vector<PairCost> pairs;
+  std::vector<int> pair_tuple, row_tuple, column_tuple, relaxed;
+  for (int it = 0; it < max_iterations; ++it) {
+    out.iterations = it + 1;
+    for (size_t t = 0; t < T; ++t) {
+      double r = P.cost[t];
+      for (size_t s = 2; s < S; ++s) r -= u[s][static_cast<size_t>(P.index[t][s])];
+      reduced[t] = r;
+    }
+    // The relaxed 2-D problem.
+    std::vector<double> row_missed(static_cast<size_t>(n1), 0.0), column_missed(static_cast<size_t>(n2), 0.0);
+    row_tuple.assign(static_cast<size_t>(n1), -1), column_tuple.assign(static_cast<size_t>(n2), -1);
+    pairs.clear(), pair_tuple.clear(), relaxed.clear();
+    double dummy_pair = 0;  // the (0, 0) entry: every negative reduced cost may be taken
+    for (const auto& gr : groups) {
+      int arg = gr.lo;
+      for (int t = gr.lo; t < gr.hi; ++t) {
+        if (reduced[static_cast<size_t>(t)] < reduced[static_cast<size_t>(arg)]) arg = t;
+        if (gr.a == 0 && gr.b == 0 && reduced[static_cast<size_t>(t)] < 0) dummy_pair += reduced[static_cast<size_t>(t)], relaxed.push_back(t);
+      }
+      const double r = reduced[static_cast<size_t>(arg)];
+      if (gr.a == 0 && gr.b == 0) continue;
+      if (gr.b == 0) {
+        if (r < row_missed[static_cast<size_t>(gr.a - 1)]) row_missed[static_cast<size_t>(gr.a - 1)] = r, row_tuple[static_cast<size_t>(gr.a - 1)] = arg;
+      } else if (gr.a == 0) {
+        if (r < column_missed[static_cast<size_t>(gr.b - 1)]) column_missed[static_cast<size_t>(gr.b - 1)] = r, column_tuple[static_cast<size_t>(gr.b - 1)] = arg;
+      } else {
+        pairs.push_back({gr.a - 1, gr.b - 1, r});
+        pair_tuple.push_back(arg);
+      }
+    }
+    const auto a = assign_with_missed(row_missed, column_missed, pairs);
+    double lb = a.value + dummy_pair;
+    for (size_t s = 2; s < S; ++s)
+      for (int k = 1; k <= P.n[s]; ++k) lb += std::min(0.0, u[s][static_cast<size_t>(k)]);  // u, or 0 when the singleton (reduced cost -u) is taken
+    if (lb > best_lb) stalled = 0;
+    else if (++stalled >= 5) factor *= 0.5, stalled = 0;
+    best_lb = std::max(best_lb, lb);
+    // The relaxed solution's tuples.
+    std::vector<int> pair_of_row(static_cast<size_t>(n1), -1);
+    for (size_t i = 0; i < pairs.size(); ++i)
+      if (a.column_of_row[static_cast<size_t>(pairs[i].row)] == pairs[i].column) pair_of_row[static_cast<size_t>(pairs[i].row)] = pair_tuple[i];
+    for (int r = 0; r < n1; ++r) {
+      if (a.column_of_row[static_cast<size_t>(r)] >= 0) relaxed.push_back(pair_of_row[static_cast<size_t>(r)]);
+      else if (row_tuple[static_cast<size_t>(r)] >= 0) relaxed.push_back(row_tuple[static_cast<size_t>(r)]);
+    }
+    for (int k = 0; k < n2; ++k)
+      if (a.row_of_column[static_cast<size_t>(k)] < 0 && column_tuple[static_cast<size_t>(k)] >= 0) relaxed.push_back(column_tuple[static_cast<size_t>(k)]);
+    // Subgradient of the relaxed constraints: 1 - uses (the singleton counts as a use).
+    double g2 = 0;
+    for (size_t s = 2; s < S; ++s) {
+      for (int k = 1; k <= P.n[s]; ++k) g[s][static_cast<size_t>(k)] = u[s][static_cast<size_t>(k)] > 0 ? 0.0 : 1.0;
+      for (int t : relaxed) {
+        const int k = P.index[static_cast<size_t>(t)][s];
+        if (k > 0) g[s][static_cast<size_t>(k)] -= 1;
+      }
+      for (int k = 1; k <= P.n[s]; ++k) g2 += g[s][static_cast<size_t>(k)] * g[s][static_cast<size_t>(k)];
+    }
+    // Upper bound: recovery, then exchange improvement.
+    std::vector<int> feasible = recover(P, u, a);
+    const double ub = improve_by_exchange(P.packing, feasible);
+    if (ub < best_ub) best_ub = ub, best = feasible;
+    if (relative_gap(best_ub, best_lb) <= gap_tolerance || g2 == 0) break;
+    const double step = factor * std::max(best_ub - lb, 1e-9 * std::abs(best_ub)) / g2;
+    for (size_t s = 2; s < S; ++s)
+      for (int k = 1; k <= P.n[s]; ++k) u[s][static_cast<size_t>(k)] += step * g[s][static_cast<size_t>(k)];
+  }
+  out.ub = best_ub;
+  out.lb = std::min(best_lb, best_ub);
+  for (int t : best) out.chosen.push_back(P.original[static_cast<size_t>(t)]);
+  return out;
+}
+
+void add_component(SdSolution& out, const std::vector<int>& group, const std::vector<int>& chosen_in_group) {
+  for (int c : chosen_in_group) out.tuples.push_back(group[static_cast<size_t>(c)]);
+  ++out.components;
+  out.largest_component = std::max(out.largest_component, static_cast<int>(group.size()));
+}
+
+}  // namespace
+
+SdSolution solve_sd_exact(const std::vector<Tuple>& tuples, const std::vector<int>& n, long max_nodes) {
+  const TuplePacking all = packing_of(tuples, n);
   SdSolution out;
-  out.tuples = best;
-  out.cost = best_cost;
-  out.lower_bound = best_cost;
+  long nodes = 0;
+  for (const auto& group : independent_components(all)) {
+    double cost = 0;
+    const auto chosen = branch_and_bound(restrict_to(all, group), max_nodes, nodes, cost);
+    add_component(out, group, chosen);
+    out.cost += cost;
+  }
+  std::sort(out.tuples.begin(), out.tuples.end());
+  out.lower_bound = out.cost;
   out.exact = nodes <= max_nodes;
   return out;
 }
 
 SdSolution solve_sd_lagrangian(const std::vector<Tuple>& tuples, const std::vector<int>& n, int max_iterations,
                                double gap_tolerance) {
-  const size_t S = n.size();
+  const TuplePacking all = packing_of(tuples, n);
   SdSolution out;
-  if (tuples.empty()) return out;
-  // Multipliers u[s][k] for sensors s >= 2 (0-based), k = 1..n_s; u[s][0] = 0.
-  std::vector<std::vector<double>> u(S);
-  for (size_t s = 0; s < S; ++s) u[s].assign(static_cast<size_t>(n[s]) + 1, 0.0);
-  double best_ub = kInf, best_lb = -kInf;
-  std::vector<int> best_tuples;
-  const int n1 = n[0], n2 = S > 1 ? n[1] : 0;
-  for (int it = 0; it < max_iterations; ++it) {
-    out.iterations = it + 1;
-    // Reduced costs on (i1, i2): min over tuples of c - sum_{s>=2} u_s(i_s), with the argmin tuple.
-    Eigen::MatrixXd c2 = Eigen::MatrixXd::Zero(n1 + 1, n2 + 1);  // 0: leaving a detection alone costs 0
-    std::vector<int> arg(static_cast<size_t>((n1 + 1) * (n2 + 1)), -1);
-    double dummy_pair = 0;  // the (0, 0) entry: every negative reduced cost may be taken
-    std::vector<int> dummy_members;
-    for (size_t t = 0; t < tuples.size(); ++t) {
-      double r = tuples[t].cost;
-      for (size_t s = 2; s < S; ++s) r -= u[s][static_cast<size_t>(tuples[t].index[s])];
-      const int a = tuples[t].index[0], b = S > 1 ? tuples[t].index[1] : 0;
-      if (a == 0 && b == 0) {
-        if (r < 0) dummy_pair += r, dummy_members.push_back(static_cast<int>(t));
-        continue;
+  for (const auto& group : independent_components(all)) {
+    ComponentResult r;
+    if (group.size() == 1) {  // one tuple: take it when it beats the false alarms
+      if (all.cost[static_cast<size_t>(group[0])] < 0) r.chosen = {0}, r.ub = all.cost[static_cast<size_t>(group[0])];
+      r.lb = r.ub;
+    } else {
+      const RelaxationProblem P(tuples, group, n.size());
+      if (P.sensors() >= 3) {
+        r = solve_relaxation(P, max_iterations, gap_tolerance);
+      } else if (P.sensors() == 2) {
+        r = solve_two_sensors(P);
+      } else {  // one detection, several single-detection tuples
+        long nodes = 0;
+        r.chosen = branch_and_bound(restrict_to(all, group), 1'000'000, nodes, r.ub);
+        r.lb = r.ub;
       }
-      if (r < c2(a, b)) c2(a, b) = r, arg[static_cast<size_t>(a * (n2 + 1) + b)] = static_cast<int>(t);
     }
-    for (int a = 1; a <= n1; ++a)
-      for (int b = 1; b <= n2; ++b)
-        if (arg[static_cast<size_t>(a * (n2 + 1) + b)] < 0) c2(a, b) = kInf;
-    double value = 0;
-    const auto pairs = assign_with_missed(c2, &value);
-    double lb = value + dummy_pair;
-    for (size_t s = 2; s < S; ++s)
-      for (int k = 1; k <= n[s]; ++k) lb += u[s][static_cast<size_t>(k)];
-    // A detection of a relaxed sensor left alone is the singleton tuple of cost 0, reduced cost -u: the all-missed
-    // pair takes it when that is negative.
-    std::vector<std::vector<bool>> singleton(S);
-    for (size_t s = 2; s < S; ++s) {
-      singleton[s].assign(static_cast<size_t>(n[s]) + 1, false);
-      for (int k = 1; k <= n[s]; ++k)
-        if (u[s][static_cast<size_t>(k)] > 0) lb -= u[s][static_cast<size_t>(k)], singleton[s][static_cast<size_t>(k)] = true;
-    }
-    best_lb = std::max(best_lb, lb);
-    // The relaxed solution's tuples, and the subgradient.
-    std::vector<int> relaxed = dummy_members;
-    for (auto [a, b] : pairs) {
-      const int t = arg[static_cast<size_t>(a * (n2 + 1) + b)];
-      if (t >= 0) relaxed.push_back(t);
-    }
-    std::vector<std::vector<double>> g(S);
-    double g2 = 0;
-    for (size_t s = 2; s < S; ++s) {
-      g[s].assign(static_cast<size_t>(n[s]) + 1, 1.0);
-      g[s][0] = 0;
-      for (int t : relaxed) {
-        const int k = tuples[static_cast<size_t>(t)].index[s];
-        if (k > 0) g[s][static_cast<size_t>(k)] -= 1;
-      }
-      for (int k = 1; k <= n[s]; ++k)
-        if (singleton[s][static_cast<size_t>(k)]) g[s][static_cast<size_t>(k)] -= 1;
-      for (double x : g[s]) g2 += x * x;
-    }
-    // Recovery: keep the (i1, i2) pairs; add sensors 3..S one at a time by 2-D assignments over full tuples.
-    std::vector<std::vector<int>> partial;  // prefixes of length 2 (only real pairs and singles)
-    for (auto [a, b] : pairs) partial.push_back({a, b});
-    for (size_t s = 2; s < S; ++s) {
-      // Cost of extending prefix p with detection k of sensor s: the best tuple with that prefix and index
-      // (its later indices free), or 0 when p stays as it is (k = 0: its detections may still become false alarms).
-      std::map<std::pair<size_t, int>, std::pair<double, int>> best;
-      for (size_t t = 0; t < tuples.size(); ++t) {
-        for (size_t p = 0; p < partial.size(); ++p) {
-          bool match = true;
-          for (size_t q = 0; q < partial[p].size() && match; ++q) match = tuples[t].index[q] == partial[p][q];
-          if (!match) continue;
-          double r = tuples[t].cost;
-          for (size_t q = s + 1; q < S; ++q) r -= u[q][static_cast<size_t>(tuples[t].index[q])];
-          const auto key = std::make_pair(p, tuples[t].index[s]);
-          auto itb = best.find(key);
-          if (itb == best.end() || r < itb->second.first) best[key] = {r, static_cast<int>(t)};
-        }
-      }
-      Eigen::MatrixXd c = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(partial.size()) + 1, n[s] + 1);
-      for (size_t p = 0; p < partial.size(); ++p)
-        for (int k = 1; k <= n[s]; ++k) {
-          auto itb = best.find({p, k});
-          c(static_cast<Eigen::Index>(p) + 1, k) = itb == best.end() ? kInf : itb->second.first;
-        }
-      for (size_t p = 0; p < partial.size(); ++p) {
-        auto itb = best.find({p, 0});
-        c(static_cast<Eigen::Index>(p) + 1, 0) = itb == best.end() ? 0.0 : std::min(0.0, itb->second.first);
-      }
-      double v = 0;
-      const auto ext = assign_with_missed(c, &v);
-      std::vector<std::vector<int>> next;
-      for (auto [p, k] : ext) {
-        std::vector<int> q = p > 0 ? partial[static_cast<size_t>(p - 1)] : std::vector<int>(s, 0);
-        q.push_back(k);
-        next.push_back(q);
-      }
-      partial = std::move(next);
-    }
-    // The feasible solution: prefixes that are whole tuples of the list.
-    std::map<std::vector<int>, int> lookup;
-    for (size_t t = 0; t < tuples.size(); ++t) lookup[tuples[t].index] = static_cast<int>(t);
-    std::vector<int> feasible;
-    double ub = 0;
-    for (const auto& p : partial) {
-      auto itl = lookup.find(p);
-      if (itl != lookup.end()) feasible.push_back(itl->second), ub += tuples[static_cast<size_t>(itl->second)].cost;
-    }
-    if (ub < best_ub) best_ub = ub, best_tuples = feasible;
-    if (relative_gap(best_ub, best_lb) < gap_tolerance || g2 == 0) break;
-    const double step = (best_ub - lb) / g2;
-    for (size_t s = 2; s < S; ++s)
-      for (int k = 1; k <= n[s]; ++k) u[s][static_cast<size_t>(k)] += step * g[s][static_cast<size_t>(k)];
+    add_component(out, group, r.chosen);
+    out.cost += r.ub;
+    out.lower_bound += r.lb;
+    out.iterations = std::max(out.iterations, r.iterations);
   }
-  out.tuples = best_tuples;
-  out.cost = best_ub;
-  out.lower_bound = best_lb;
-  out.gap = relative_gap(best_ub, best_lb);
+  std::sort(out.tuples.begin(), out.tuples.end());
+  out.gap = relative_gap(out.cost, out.lower_bound);
   return out;
 }
 

@@ -22,25 +22,24 @@ Triangulation triangulate_linear(const std::vector<BearingObservation>& obs) {
     t.reason = "fewer than 2 sensors";
     return t;
   }
-  const Eigen::Index m = static_cast<Eigen::Index>(obs.size());
-  Eigen::MatrixXd H(2 * m, 3);
-  Eigen::VectorXd Y(2 * m);
-  for (Eigen::Index s = 0; s < m; ++s) {
-    const auto& o = obs[static_cast<size_t>(s)];
+  // Normal equations accumulated row by row (no heap allocation: this runs for every candidate tuple).
+  Eigen::Matrix3d N = Eigen::Matrix3d::Zero();
+  Eigen::Vector3d HtY = Eigen::Vector3d::Zero();
+  for (const auto& o : obs) {
     const double sa = std::sin(o.azimuth), ca = std::cos(o.azimuth), se = std::sin(o.elevation), ce = std::cos(o.elevation);
-    H.row(2 * s) << sa, -ca, 0;
-    H.row(2 * s + 1) << ca * se, sa * se, -ce;
-    Y[2 * s] = H.row(2 * s).dot(o.sensor);
-    Y[2 * s + 1] = H.row(2 * s + 1).dot(o.sensor);
+    const Eigen::Vector3d rows[2] = {{sa, -ca, 0}, {ca * se, sa * se, -ce}};
+    for (const auto& h : rows) {
+      N.noalias() += h * h.transpose();
+      HtY += h * h.dot(o.sensor);
+    }
   }
-  const Eigen::Matrix3d N = H.transpose() * H;
   Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(N, Eigen::EigenvaluesOnly);
   t.condition = eig.eigenvalues().maxCoeff() / std::max(eig.eigenvalues().minCoeff(), 1e-300);
   if (!(eig.eigenvalues().minCoeff() > 1e-12 * eig.eigenvalues().maxCoeff())) {
     t.reason = "ill-conditioned geometry (lines of sight nearly parallel)";
     return t;
   }
-  t.position = N.ldlt().solve(H.transpose() * Y);
+  t.position = N.ldlt().solve(HtY);
   t.valid = t.position.allFinite();
   if (!t.valid) t.reason = "non-finite solution";
   return t;

@@ -8,7 +8,9 @@
 
 #include <cmath>
 #include <limits>
+#include <algorithm>
 #include <stdexcept>
+#include <string>
 
 namespace sextant::assoc {
 namespace {
@@ -29,6 +31,10 @@ std::vector<BearingObservation> observations_of(const Scan& scan, const std::vec
                    Eigen::Vector2d(d.sigma_azimuth * d.sigma_azimuth, d.sigma_elevation * d.sigma_elevation).asDiagonal()});
   }
   return obs;
+}
+
+double clutter_density(const CostOptions& o, size_t s) {
+  return o.sensor_clutter_density.empty() ? o.clutter_density : o.sensor_clutter_density[s];
 }
 
 bool passes_gate(const Triangulation& t, size_t m, double probability) {
@@ -66,7 +72,7 @@ double tuple_cost(const Scan& scan, const std::vector<int>& index, const CostOpt
     const Eigen::Vector2d z(d.azimuth, d.elevation);
     const Eigen::Vector2d zh(d.azimuth - wrap(d.azimuth - (*h)[0]), (*h)[1]);  // h with its azimuth unwrapped next to z
     const Eigen::Vector2d nu = z - zh;
-    c += -std::log(o.p_detect / (o.clutter_density * std::sqrt((2 * M_PI * R).determinant())));
+    c += -std::log(o.p_detect / (clutter_density(o, s) * std::sqrt((2 * M_PI * R).determinant())));
     const Eigen::Matrix2d Sh = J * t.covariance * J.transpose();
     switch (o.kind) {
       case CostKind::kClassic: c += 0.5 * nu.dot(R.inverse() * nu); break;
@@ -74,34 +80,105 @@ double tuple_cost(const Scan& scan, const std::vector<int>& index, const CostOpt
       case CostKind::kRenyi: c += symmetric_renyi_divergence(z, R, zh, Sh, o.alpha) / o.alpha; break;
     }
   }
+  if (o.target_density > 0) c -= std::log(o.target_density * std::sqrt((2 * M_PI * t.covariance).determinant()));
   return c;
 }
 
 std::vector<Tuple> build_tuples(const Scan& scan, const CostOptions& o) {
   const size_t S = scan.sensors.size();
+  if (scan.detections.size() != S)
+    throw std::invalid_argument("build_tuples: " + std::to_string(scan.detections.size()) + " detection lists for " +
+                                std::to_string(S) + " sensors");
+  if (!o.sensor_clutter_density.empty() && o.sensor_clutter_density.size() != S)
+    throw std::invalid_argument("build_tuples: " + std::to_string(o.sensor_clutter_density.size()) +
+                                " per-sensor clutter densities for " + std::to_string(S) + " sensors");
+  for (size_t s = 0; s < S; ++s)
+    if (!(clutter_density(o, s) > 0)) throw std::invalid_argument("build_tuples: clutter density of sensor " + std::to_string(s) + " is not positive");
+  // Lines of sight and the larger angular sigma of every detection.
+  std::vector<std::vector<Eigen::Vector3d>> los(S);
+  std::vector<std::vector<double>> sigma(S);
+  for (size_t s = 0; s < S; ++s)
+    for (const auto& d : scan.detections[s]) {
+      los[s].push_back(line_of_sight(d.azimuth, d.elevation));
+      sigma[s].push_back(std::max(d.sigma_azimuth, d.sigma_elevation));
+    }
+  // Pair gate.  The closest approach of the two lines of sight must lie in front of both sensors, and the miss
+  // distance within 2 sqrt(chi2_1) times the cross-range noise at those ranges (a loose pre-test: the residual of
+  // the pair's triangulation is about miss^2 / (sigma_s^2 r_s^2 + sigma_t^2 r_t^2) <= chi2_1); then that
+  // residual itself.  compatible[s][t][k] = the detections j of sensor t (1-based, sorted) that pass with (s, k).
+  const double pair_gate = 2 * std::sqrt(chi2_quantile(1, o.gate_probability));
+  std::vector<std::vector<std::vector<std::vector<int>>>> compatible(S, std::vector<std::vector<std::vector<int>>>(S));
+  std::vector<BearingObservation> obs;
+  obs.reserve(S);
+  auto observation = [&](size_t s, int k) {
+    const auto& d = scan.detections[s][static_cast<size_t>(k - 1)];
+    return BearingObservation{scan.sensors[s], d.azimuth, d.elevation,
+                              Eigen::Vector2d(d.sigma_azimuth * d.sigma_azimuth, d.sigma_elevation * d.sigma_elevation).asDiagonal()};
+  };
+  for (size_t s = 0; s < S; ++s)
+    for (size_t t = s + 1; t < S; ++t) {
+      const size_t ns = scan.detections[s].size(), nt = scan.detections[t].size();
+      compatible[s][t].assign(ns + 1, {});
+      compatible[t][s].assign(nt + 1, {});
+      const Eigen::Vector3d w = scan.sensors[s] - scan.sensors[t];
+      for (size_t k = 0; k < ns; ++k)
+        for (size_t j = 0; j < nt; ++j) {
+          const Eigen::Vector3d &us = los[s][k], &ut = los[t][j];
+          const double b = us.dot(ut), d = us.dot(w), e = ut.dot(w), den = 1 - b * b;
+          if (den < 1e-12) continue;  // parallel lines of sight
+          const double rs = (b * e - d) / den, rt = (e - b * d) / den;
+          if (!(rs > 0 && rt > 0)) continue;
+          const double miss = (w + rs * us - rt * ut).norm();
+          if (miss > pair_gate * (sigma[s][k] * rs + sigma[t][j] * rt)) continue;
+          obs.clear();
+          obs.push_back(observation(s, static_cast<int>(k) + 1));
+          obs.push_back(observation(t, static_cast<int>(j) + 1));
+          if (!passes_gate(triangulate(obs, 1), 2, o.gate_probability)) continue;
+          compatible[s][t][k + 1].push_back(static_cast<int>(j) + 1);
+          compatible[t][s][j + 1].push_back(static_cast<int>(k) + 1);
+        }
+    }
+  // Depth-first over the sensors: a detection joins a partial tuple only when it is compatible with each of its
+  // detections; partial tuples of >= 3 detections pass the residual gate before being extended.
   std::vector<Tuple> out;
   std::vector<int> index(S, 0);
-  // Depth-first over sensors; a partial tuple with >= 2 detections must pass the gate to be extended.
-  auto recurse = [&](auto&& self, size_t s, size_t real) -> void {
+  std::vector<size_t> real;  // sensors with a detection in the partial tuple
+  auto recurse = [&](auto&& self, size_t s) -> void {
+    if (real.size() + (S - s) < 2) return;  // cannot reach two detections any more
     if (s == S) {
-      if (real < 2) return;
       Triangulation t;
       const double c = tuple_cost(scan, index, o, &t);
       if (c < 0) out.push_back({index, c, t.position, t.covariance});
       return;
     }
-    for (int k = 0; k <= static_cast<int>(scan.detections[s].size()); ++k) {
-      index[s] = k;
-      const size_t r = real + (k > 0);
-      if (k > 0 && r >= 2 && s + 1 < S) {
-        const auto obs = observations_of(scan, index, s + 1);
-        if (!passes_gate(triangulate(obs, 1), obs.size(), o.gate_probability)) continue;
+    index[s] = 0;
+    if (o.p_detect < 1) self(self, s + 1);  // with P_D = 1 a missed index costs +infinity
+    std::vector<int> cand;
+    if (real.empty()) {
+      for (int k = 1; k <= static_cast<int>(scan.detections[s].size()); ++k) cand.push_back(k);
+    } else {
+      const size_t r0 = real.front();
+      for (int k : compatible[r0][s][static_cast<size_t>(index[r0])]) {
+        bool ok = true;
+        for (size_t q = 1; q < real.size() && ok; ++q) {
+          const auto& list = compatible[real[q]][s][static_cast<size_t>(index[real[q]])];
+          ok = std::binary_search(list.begin(), list.end(), k);
+        }
+        if (ok) cand.push_back(k);
       }
-      self(self, s + 1, r);
+    }
+    for (int k : cand) {
+      index[s] = k;
+      obs.push_back(observation(s, k));
+      real.push_back(s);
+      if (obs.size() < 3 || s + 1 == S || passes_gate(triangulate(obs, 1), obs.size(), o.gate_probability)) self(self, s + 1);
+      real.pop_back();
+      obs.pop_back();
     }
     index[s] = 0;
   };
-  recurse(recurse, 0, 0);
+  obs.clear();
+  recurse(recurse, 0);
   return out;
 }
 

@@ -1,0 +1,31 @@
+#pragma once
+// The 2-D assignment in which any row or column may stay unpaired (the building block of the S-D Lagrangian
+// relaxation, assoc.md §1.5): rows r and columns k, a sparse list of allowed pairings with their costs, and the
+// cost of leaving each row or column unpaired.  Minimizes the total cost.
+//
+// A pairing that does not beat leaving both unpaired (cost(r, k) >= missed(r) + missed(k)) is never needed, so
+// only the improving pairings are kept and the problem splits into the connected components of the bipartite
+// graph they form.  Each component is a small rectangular assignment (rows x (columns + one "unpaired" slot per
+// row)) solved by solve_assignment_2d.  Sparse scans (gated tuples) therefore cost about the sum of cubes of their
+// component sizes instead of the cube of the whole.
+#include <vector>
+
+namespace sextant::assoc {
+
+struct PairCost {
+  int row = 0, column = 0;  // 0-based
+  double cost = 0;          // finite; a duplicate (row, column) keeps the smaller cost
+};
+
+struct MissedAssignment {
+  std::vector<int> column_of_row;  // -1: the row stays unpaired
+  std::vector<int> row_of_column;  // -1: the column stays unpaired
+  double value = 0;                // summed cost of the pairs and of the unpaired rows and columns
+};
+
+/// `row_missed[r]`, `column_missed[k]`: finite costs of leaving row r / column k unpaired.  Throws
+/// std::invalid_argument on an out-of-range index or a non-finite cost.
+MissedAssignment assign_with_missed(const std::vector<double>& row_missed, const std::vector<double>& column_missed,
+                                    const std::vector<PairCost>& pairs);
+
+}  // namespace sextant::assoc

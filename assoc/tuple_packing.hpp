@@ -1,0 +1,27 @@
+#pragma once
+// The S-D assignment seen as weighted set packing: each tuple is the set of detections it uses (the missed index
+// is no detection), a solution is a set of pairwise disjoint tuples, its cost the sum of theirs (uncovered
+// detections are false alarms at cost 0).  Two mechanisms the S-D solvers share:
+//  - independent components: tuples that share no detection, directly or through other tuples, can be solved
+//    separately (union-find over the detections);
+//  - exchange improvement of a feasible solution (the primal step after the Lagrangian recovery): bring in one
+//    tuple, drop the chosen tuples it conflicts with, refill the freed detections greedily with the cheapest
+//    tuples that fit; keep the move when the total cost falls.  Repeated until no move improves.
+#include <vector>
+
+namespace sextant::assoc {
+
+struct TuplePacking {
+  int detections = 0;                      // detection ids are 0..detections-1
+  std::vector<std::vector<int>> members;   // per tuple, its detection ids
+  std::vector<double> cost;                // per tuple
+};
+
+/// Groups of tuple indices, one per independent component (in order of their first tuple).
+std::vector<std::vector<int>> independent_components(const TuplePacking& p);
+
+/// Improves `chosen` (indices of pairwise disjoint tuples) in place by exchange moves; returns its cost.  At most
+/// `max_passes` sweeps over the tuples.
+double improve_by_exchange(const TuplePacking& p, std::vector<int>& chosen, int max_passes = 20);
+
+}  // namespace sextant::assoc
