@@ -1,6 +1,7 @@
 // 2-D assignment against brute force on random matrices, square and rectangular, with forbidden entries, and
-// infeasible matrices reported without hanging.
+// infeasible matrices reported without hanging; the assignment with unpaired rows and columns against brute force.
 #include "assoc/assignment_2d.hpp"
+#include "assoc/assignment_with_missed.hpp"
 
 #include <doctest/doctest.h>
 
@@ -9,6 +10,7 @@
 #include <limits>
 #include <numeric>
 #include <random>
+#include <stdexcept>
 
 using namespace sextant::assoc;
 
@@ -79,4 +81,70 @@ TEST_CASE("the dual potentials certify optimality") {
   CHECK(r.cost == doctest::Approx(brute_force(c)));
   for (int i = 0; i < 3; ++i)
     for (int j = 0; j < 4; ++j) CHECK(r.u[static_cast<size_t>(i)] + r.v[static_cast<size_t>(j)] <= c(i, j) + 1e-12);
+}
+
+namespace {
+// Every partial matching of rows to columns (each row: unpaired or one allowed, unused column).
+double brute_force_missed(const std::vector<double>& rm, const std::vector<double>& cm, const Eigen::MatrixXd& c,
+                          size_t row, std::vector<bool>& used) {
+  if (row == rm.size()) {
+    double s = 0;
+    for (size_t k = 0; k < cm.size(); ++k) s += used[k] ? 0.0 : cm[k];
+    return s;
+  }
+  double best = rm[row] + brute_force_missed(rm, cm, c, row + 1, used);
+  for (size_t k = 0; k < cm.size(); ++k) {
+    if (used[k] || !std::isfinite(c(static_cast<Eigen::Index>(row), static_cast<Eigen::Index>(k)))) continue;
+    used[k] = true;
+    best = std::min(best, c(static_cast<Eigen::Index>(row), static_cast<Eigen::Index>(k)) + brute_force_missed(rm, cm, c, row + 1, used));
+    used[k] = false;
+  }
+  return best;
+}
+}  // namespace
+
+TEST_CASE("assignment with unpaired rows and columns equals brute force on sparse random instances") {
+  std::mt19937 rng(21);
+  std::uniform_real_distribution<double> u(-6, 3);
+  std::bernoulli_distribution allowed(0.35);
+  for (int trial = 0; trial < 300; ++trial) {
+    const int R = 1 + trial % 7, C = 1 + (trial / 7) % 7;
+    std::vector<double> rm(static_cast<size_t>(R)), cm(static_cast<size_t>(C));
+    for (auto& x : rm) x = trial % 3 == 0 ? 0.0 : u(rng);
+    for (auto& x : cm) x = trial % 3 == 0 ? 0.0 : u(rng);
+    Eigen::MatrixXd c = Eigen::MatrixXd::Constant(R, C, kInf);
+    std::vector<PairCost> pairs;
+    for (int r = 0; r < R; ++r)
+      for (int k = 0; k < C; ++k)
+        if (allowed(rng)) c(r, k) = u(rng) - 3, pairs.push_back({r, k, c(r, k)});
+    if (!pairs.empty()) pairs.push_back({pairs[0].row, pairs[0].column, pairs[0].cost + 1});  // a worse duplicate is ignored
+    std::vector<bool> used(static_cast<size_t>(C), false);
+    const double expected = brute_force_missed(rm, cm, c, 0, used);
+    const auto a = assign_with_missed(rm, cm, pairs);
+    CAPTURE(trial);
+    CHECK(a.value == doctest::Approx(expected).epsilon(1e-12));
+    // Consistent both ways, only allowed pairs, and the value adds up.
+    double s = 0;
+    for (int r = 0; r < R; ++r) {
+      const int k = a.column_of_row[static_cast<size_t>(r)];
+      if (k < 0) {
+        s += rm[static_cast<size_t>(r)];
+        continue;
+      }
+      CHECK(a.row_of_column[static_cast<size_t>(k)] == r);
+      CHECK(std::isfinite(c(r, k)));
+      s += c(r, k);
+    }
+    for (int k = 0; k < C; ++k)
+      if (a.row_of_column[static_cast<size_t>(k)] < 0) s += cm[static_cast<size_t>(k)];
+    CHECK(s == doctest::Approx(a.value).epsilon(1e-12));
+  }
+}
+
+TEST_CASE("assignment with unpaired rows and columns rejects bad input") {
+  CHECK_THROWS_AS(assign_with_missed({0.0}, {0.0}, {{1, 0, -1.0}}), std::invalid_argument);
+  CHECK_THROWS_AS(assign_with_missed({0.0}, {0.0}, {{0, 0, kInf}}), std::invalid_argument);
+  CHECK_THROWS_AS(assign_with_missed({kInf}, {0.0}, {}), std::invalid_argument);
+  const auto empty = assign_with_missed({}, {}, {});
+  CHECK(empty.value == 0.0);
 }
