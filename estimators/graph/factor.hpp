@@ -5,6 +5,7 @@
 
 #include <Eigen/Core>
 
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -37,6 +38,15 @@ class Factor {
   Linearization make_linearization(const std::vector<Variable>& vars) const;
   double chi2(const std::vector<Variable>& vars) const;
 
+  /// A copy of this factor.
+  virtual std::unique_ptr<Factor> clone() const = 0;
+  /// The same factor on other variable indices (for feeding a graph's factors to another graph).
+  std::unique_ptr<Factor> rebind(std::vector<int> variables) const {
+    auto f = clone();
+    f->variables_ = std::move(variables);
+    return f;
+  }
+
  private:
   std::vector<int> variables_;
   Eigen::MatrixXd information_;
@@ -48,6 +58,7 @@ class Factor {
 /// 1/2 (w I + [v]x) for q_E = (w, v) (3-D), the derivative of vec(q_E Exp(phi)) at phi = 0.
 class RelativePoseFactor final : public Factor {
  public:
+  std::unique_ptr<Factor> clone() const override { return std::make_unique<RelativePoseFactor>(*this); }
   RelativePoseFactor(int i, int j, const SE2& z, Eigen::Matrix3d information);
   RelativePoseFactor(int i, int j, const SE3& z, Matrix6d information);
   std::string type() const override { return planar_ ? "EDGE_SE2" : "EDGE_SE3:QUAT"; }
@@ -66,6 +77,7 @@ class RelativePoseFactor final : public Factor {
 /// A prior Z on one pose, with the same residual as RelativePoseFactor (E = Z^-1 X).
 class PosePriorFactor final : public Factor {
  public:
+  std::unique_ptr<Factor> clone() const override { return std::make_unique<PosePriorFactor>(*this); }
   PosePriorFactor(int i, const SE2& z, Eigen::Matrix3d information);
   PosePriorFactor(int i, const SE3& z, Matrix6d information);
   std::string type() const override { return "prior"; }
@@ -87,6 +99,7 @@ class PosePriorFactor final : public Factor {
 /// e = h(l) - z, angle components wrapped to (-pi, pi].
 class PointObservationFactor final : public Factor {
  public:
+  std::unique_ptr<Factor> clone() const override { return std::make_unique<PointObservationFactor>(*this); }
   enum class Model { kPosition, kRangeBearing, kRangeAzimuthElevation, kBearing };
   PointObservationFactor(int pose, int point, Model model, Eigen::VectorXd z, Eigen::MatrixXd information,
                          SE3 sensor_offset = SE3());

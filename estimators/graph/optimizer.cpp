@@ -32,29 +32,32 @@ Cost evaluate(const FactorGraph& g, const OptimizerOptions& o) {
 
 }  // namespace
 
+std::string validate_factor(const std::vector<Variable>& vars, const Factor& f, size_t index) {
+  for (int v : f.variables())
+    if (v < 0 || static_cast<size_t>(v) >= vars.size())
+      return "factor " + std::to_string(index) + " (" + f.type() + ") refers to a variable that does not exist";
+  const auto& I = f.information();
+  const std::string name = "factor " + std::to_string(index) + " (" + f.type() + " on variable " +
+                           std::to_string(vars[static_cast<size_t>(f.variables()[0])].id) +
+                           (f.variables().size() > 1 ? " and " + std::to_string(vars[static_cast<size_t>(f.variables()[1])].id) : "") + ")";
+  if (!I.allFinite()) return name + ": information matrix has a NaN or infinite entry";
+  if ((I - I.transpose()).cwiseAbs().maxCoeff() > 1e-9 * std::max(1.0, I.cwiseAbs().maxCoeff()))
+    return name + ": information matrix is not symmetric";
+  Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(I, Eigen::EigenvaluesOnly);
+  if (!(eig.eigenvalues().minCoeff() > 0)) {
+    std::ostringstream s;
+    s << name << ": information matrix is not positive definite (smallest eigenvalue " << eig.eigenvalues().minCoeff() << ")";
+    return s.str();
+  }
+  return "";
+}
+
 std::string validate(const FactorGraph& g) {
   const auto& vars = g.variables();
   for (const auto& v : vars)
     if (!v.finite()) return "variable " + std::to_string(v.id) + " has a NaN or infinite value";
-  for (size_t i = 0; i < g.factors().size(); ++i) {
-    const auto& f = *g.factors()[i];
-    for (int v : f.variables())
-      if (v < 0 || static_cast<size_t>(v) >= vars.size())
-        return "factor " + std::to_string(i) + " (" + f.type() + ") refers to a variable that does not exist";
-    const auto& I = f.information();
-    const std::string name = "factor " + std::to_string(i) + " (" + f.type() + " on variable " +
-                             std::to_string(vars[static_cast<size_t>(f.variables()[0])].id) +
-                             (f.variables().size() > 1 ? " and " + std::to_string(vars[static_cast<size_t>(f.variables()[1])].id) : "") + ")";
-    if (!I.allFinite()) return name + ": information matrix has a NaN or infinite entry";
-    if ((I - I.transpose()).cwiseAbs().maxCoeff() > 1e-9 * std::max(1.0, I.cwiseAbs().maxCoeff()))
-      return name + ": information matrix is not symmetric";
-    Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(I, Eigen::EigenvaluesOnly);
-    if (!(eig.eigenvalues().minCoeff() > 0)) {
-      std::ostringstream s;
-      s << name << ": information matrix is not positive definite (smallest eigenvalue " << eig.eigenvalues().minCoeff() << ")";
-      return s.str();
-    }
-  }
+  for (size_t i = 0; i < g.factors().size(); ++i)
+    if (auto why = validate_factor(vars, *g.factors()[i], i); !why.empty()) return why;
   return "";
 }
 

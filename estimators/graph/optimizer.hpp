@@ -43,6 +43,8 @@ struct OptimizerSummary {
 /// Checks the graph before optimizing: finite values, symmetric positive definite information, factors that
 /// reference existing variables.  Returns an empty string when fine, else what is wrong.
 std::string validate(const FactorGraph& graph);
+/// The same checks for one factor (`index` names it in the message).
+std::string validate_factor(const std::vector<Variable>& vars, const Factor& factor, size_t index);
 
 /// Optimizes the graph's variables in place.
 OptimizerSummary optimize(FactorGraph& graph, const OptimizerOptions& options);

@@ -1,5 +1,7 @@
 #include "estimators/graph/sparse_normal_equations.hpp"
 
+#include "estimators/graph/block_ordering.hpp"
+
 #include <algorithm>
 #include <chrono>
 #include <map>
@@ -91,20 +93,10 @@ SparseNormalEquations::SparseNormalEquations(const FactorGraph& graph, Ordering 
   b_ = Eigen::VectorXd::Zero(n_);
   if (n_ > 0 && ordering == Ordering::kBlockAmd) {
     // The block pattern (upper triangle, one entry per block pair), ordered by AMD, expanded to components.
-    std::vector<int> bp(static_cast<size_t>(nb) + 1, 0), bi;
-    for (int b = 0; b < nb; ++b) {
-      bp[static_cast<size_t>(b)] = static_cast<int>(bi.size());
-      for (int a : rows[static_cast<size_t>(b)]) bi.push_back(a);
-    }
-    bp[static_cast<size_t>(nb)] = static_cast<int>(bi.size());
-    cholmod_sparse* B = cholmod_allocate_sparse(static_cast<size_t>(nb), static_cast<size_t>(nb), bi.size(), 1, 1, 1,
-                                                CHOLMOD_PATTERN, &common_);
-    std::copy(bp.begin(), bp.end(), static_cast<int*>(B->p));
-    std::copy(bi.begin(), bi.end(), static_cast<int*>(B->i));
-    std::vector<int> block_perm(static_cast<size_t>(nb)), perm;
-    const int ok = cholmod_amd(B, nullptr, 0, block_perm.data(), &common_);
-    cholmod_free_sparse(&B, &common_);
-    if (!ok) throw std::runtime_error("CHOLMOD's AMD ordering failed");
+    std::vector<std::vector<int>> upper(static_cast<size_t>(nb));
+    for (int b = 0; b < nb; ++b) upper[static_cast<size_t>(b)].assign(rows[static_cast<size_t>(b)].begin(), rows[static_cast<size_t>(b)].end());
+    const std::vector<int> block_perm = block_amd_order(upper, common_);
+    std::vector<int> perm;
     perm.reserve(static_cast<size_t>(n_));
     for (int b : block_perm) {
       const int v = block_var_[static_cast<size_t>(b)];

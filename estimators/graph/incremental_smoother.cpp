@@ -1,0 +1,463 @@
+#include "estimators/graph/incremental_smoother.hpp"
+
+#include "estimators/graph/block_ordering.hpp"
+#include "estimators/graph/optimizer.hpp"
+
+#include <Eigen/Cholesky>
+#include <Eigen/Eigenvalues>
+
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+#include <stdexcept>
+
+namespace sextant::graph {
+
+/// One factor's share of the normal equations at the linearization point: H_f = C C', g_f = grad, where
+/// C' = U J over the factor's free columns (W = U'U, W = w Omega with the robust weight w).
+struct IncrementalSmoother::Contribution {
+  std::vector<int> cols;  // ascending
+  Eigen::MatrixXd Ct;     // residual_dim x cols.size()
+  Eigen::VectorXd grad;   // cols.size()
+};
+
+namespace {
+
+bool is_rotation_component(VariableKind k, int i) {
+  return (k == VariableKind::kPose2 && i == 2) || (k == VariableKind::kPose3 && i >= 3);
+}
+
+}  // namespace
+
+IncrementalSmoother::IncrementalSmoother(IncrementalOptions options) : options_(options) {
+  cholmod_start(&common_);
+  common_.print = 0;
+}
+
+IncrementalSmoother::~IncrementalSmoother() {
+  if (L_) cholmod_free_factor(&L_, &common_);
+  cholmod_finish(&common_);
+}
+
+int IncrementalSmoother::add_variable(const Variable& v) {
+  if (!v.finite()) throw std::invalid_argument("variable " + std::to_string(v.id) + " has a NaN or infinite value");
+  const int i = graph_.add_variable(v);  // throws for a duplicate id
+  lin_.push_back(v);
+  pos_.push_back(-1);
+  var_factors_.emplace_back();
+  pending_vars_.push_back(i);
+  return i;
+}
+
+void IncrementalSmoother::add_factor(std::unique_ptr<Factor> factor) {
+  if (auto why = validate_factor(graph_.variables(), *factor, graph_.factors().size()); !why.empty())
+    throw std::invalid_argument(why);
+  pending_factors_.push_back(graph_.factors().size());
+  weight_.push_back(0.0);
+  graph_.add_factor(std::move(factor));
+}
+
+size_t IncrementalSmoother::factor_nonzeros() const {
+  if (L_ == nullptr) return 0;
+  const int* nz = static_cast<const int*>(L_->nz);
+  size_t s = 0;
+  for (size_t j = 0; j < L_->n; ++j) s += static_cast<size_t>(nz[j]);
+  return s;
+}
+
+IncrementalSmoother::Contribution IncrementalSmoother::linearize(size_t fi) const {
+  const Factor& f = *graph_.factors()[fi];
+  Linearization lin = f.make_linearization(lin_);
+  f.linearize(lin_, lin);
+  const double s = lin.error.dot(f.information() * lin.error);
+  const Eigen::MatrixXd W = robust_weight(options_.kernel, options_.kernel_width, s) * f.information();
+  const Eigen::MatrixXd U = W.llt().matrixU();
+  Contribution c;
+  std::vector<std::pair<int, int>> blocks;  // (first column, variable slot in the factor)
+  for (size_t k = 0; k < f.variables().size(); ++k) {
+    const int p = pos_[static_cast<size_t>(f.variables()[k])];
+    if (p >= 0) blocks.emplace_back(p, static_cast<int>(k));
+  }
+  std::sort(blocks.begin(), blocks.end());
+  int width = 0;
+  for (auto [p, k] : blocks) width += static_cast<int>(lin.jacobians[static_cast<size_t>(k)].cols());
+  c.Ct.resize(f.residual_dim(), width);
+  c.grad.resize(width);
+  int at = 0;
+  for (auto [p, k] : blocks) {
+    const Eigen::MatrixXd& J = lin.jacobians[static_cast<size_t>(k)];
+    c.Ct.middleCols(at, J.cols()) = U * J;
+    c.grad.segment(at, J.cols()) = J.transpose() * (W * lin.error);
+    for (int d = 0; d < J.cols(); ++d) c.cols.push_back(p + d);
+    at += static_cast<int>(J.cols());
+  }
+  return c;
+}
+
+void IncrementalSmoother::apply(const Contribution& c, bool add) {
+  if (c.cols.empty()) return;
+  const size_t r = static_cast<size_t>(c.Ct.rows()), w = c.cols.size();
+  cholmod_sparse* C = cholmod_allocate_sparse(static_cast<size_t>(capacity_), r, r * w, 1, 1, 0, CHOLMOD_REAL, &common_);
+  if (C == nullptr) throw std::runtime_error("CHOLMOD could not allocate an update");
+  int* p = static_cast<int*>(C->p);
+  int* i = static_cast<int*>(C->i);
+  double* x = static_cast<double*>(C->x);
+  for (size_t k = 0; k < r; ++k) {
+    p[k] = static_cast<int>(k * w);
+    for (size_t j = 0; j < w; ++j) {
+      i[k * w + j] = c.cols[j];
+      x[k * w + j] = c.Ct(static_cast<Eigen::Index>(k), static_cast<Eigen::Index>(j));
+    }
+  }
+  p[r] = static_cast<int>(r * w);
+  const int ok = cholmod_updown(add ? 1 : 0, C, L_, &common_);
+  cholmod_free_sparse(&C, &common_);
+  if (!ok) throw std::runtime_error("CHOLMOD's update of the factor failed (status " + std::to_string(common_.status) + ")");
+  for (size_t j = 0; j < w; ++j) g_[c.cols[j]] += add ? c.grad[static_cast<Eigen::Index>(j)] : -c.grad[static_cast<Eigen::Index>(j)];
+}
+
+// Which pending variables and factors can enter the system: a factor enters when all its variables are in (or
+// enter); a new variable enters when the information its entering factors give it is positive definite, so that the
+// system stays positive definite (a bearing-only sighting alone, say, waits for a second one).
+bool IncrementalSmoother::determined(const std::vector<int>& new_vars, const std::vector<size_t>& new_factors,
+                                     std::vector<char>& ready) const {
+  std::vector<int> slot(graph_.variables().size(), -1);
+  for (size_t k = 0; k < new_vars.size(); ++k) slot[static_cast<size_t>(new_vars[k])] = static_cast<int>(k);
+  ready.assign(new_vars.size(), 1);
+  for (size_t k = 0; k < new_vars.size(); ++k)
+    if (graph_.variables()[static_cast<size_t>(new_vars[k])].fixed) ready[k] = 1;
+  bool changed = true;
+  while (changed) {
+    changed = false;
+    std::vector<Eigen::MatrixXd> info(new_vars.size());
+    for (size_t k = 0; k < new_vars.size(); ++k) {
+      const int d = graph_.variables()[static_cast<size_t>(new_vars[k])].dim();
+      info[k] = Eigen::MatrixXd::Zero(d, d);
+    }
+    for (size_t fi : new_factors) {
+      const Factor& f = *graph_.factors()[fi];
+      bool ok = true;
+      for (int v : f.variables()) {
+        const int s = slot[static_cast<size_t>(v)];
+        if (s >= 0 && !ready[static_cast<size_t>(s)]) ok = false;
+        if (s < 0 && pos_[static_cast<size_t>(v)] < 0 && !graph_.variables()[static_cast<size_t>(v)].fixed) ok = false;
+      }
+      if (!ok) continue;
+      Linearization lin = f.make_linearization(lin_);
+      f.linearize(lin_, lin);
+      for (size_t k = 0; k < f.variables().size(); ++k) {
+        const int s = slot[static_cast<size_t>(f.variables()[k])];
+        if (s >= 0) info[static_cast<size_t>(s)] += lin.jacobians[k].transpose() * f.information() * lin.jacobians[k];
+      }
+    }
+    for (size_t k = 0; k < new_vars.size(); ++k) {
+      if (!ready[k] || graph_.variables()[static_cast<size_t>(new_vars[k])].fixed) continue;
+      Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(info[k], Eigen::EigenvaluesOnly);
+      const double top = eig.eigenvalues().cwiseAbs().maxCoeff();
+      if (!(eig.eigenvalues().minCoeff() > 1e-12 * std::max(top, 1e-300))) ready[k] = 0, changed = true;
+    }
+  }
+  return std::any_of(ready.begin(), ready.end(), [](char c) { return c != 0; });
+}
+
+void IncrementalSmoother::solve() {
+  if (L_ == nullptr || capacity_ == 0) return;
+  cholmod_dense* rhs = cholmod_allocate_dense(static_cast<size_t>(capacity_), 1, static_cast<size_t>(capacity_),
+                                              CHOLMOD_REAL, &common_);
+  double* r = static_cast<double*>(rhs->x);
+  for (int i = 0; i < capacity_; ++i) r[i] = -g_[i];
+  cholmod_dense* sol = cholmod_solve(CHOLMOD_LDLt, L_, rhs, &common_);
+  cholmod_free_dense(&rhs, &common_);
+  if (sol == nullptr) throw std::runtime_error("CHOLMOD's triangular solve failed");
+  dx_ = Eigen::Map<const Eigen::VectorXd>(static_cast<const double*>(sol->x), capacity_);
+  cholmod_free_dense(&sol, &common_);
+  auto& vars = graph_.variables();
+  for (size_t v = 0; v < vars.size(); ++v) {
+    vars[v] = lin_[v];
+    if (pos_[v] >= 0) vars[v].retract(dx_.data() + pos_[v]);
+  }
+}
+
+std::vector<int> IncrementalSmoother::moved_variables() const {
+  std::vector<int> moved;
+  const auto& vars = lin_;
+  for (size_t v = 0; v < vars.size(); ++v) {
+    const int p = pos_[v];
+    if (p < 0) continue;
+    for (int i = 0; i < vars[v].dim(); ++i) {
+      const double step = std::abs(dx_[p + i]);
+      const double limit = is_rotation_component(vars[v].kind, i) ? options_.relinearize_rotation : options_.relinearize_translation;
+      if (step > limit) {
+        moved.push_back(static_cast<int>(v));
+        break;
+      }
+    }
+  }
+  return moved;
+}
+
+bool IncrementalSmoother::relinearize(const std::vector<int>& moved, IncrementalStatus& st) {
+  std::vector<char> mark(graph_.factors().size(), 0);
+  std::vector<size_t> factors;
+  for (int v : moved)
+    for (size_t f : var_factors_[static_cast<size_t>(v)])
+      if (!mark[f]) mark[f] = 1, factors.push_back(f);
+  size_t in_system = 0;
+  for (double w : weight_) in_system += w > 0 ? 1 : 0;
+  if (static_cast<double>(factors.size()) > options_.full_relinearization_fraction * static_cast<double>(in_system))
+    return false;
+  std::vector<Contribution> before;
+  before.reserve(factors.size());
+  for (size_t f : factors) before.push_back(linearize(f));
+  for (int v : moved) lin_[static_cast<size_t>(v)].retract(dx_.data() + pos_[static_cast<size_t>(v)]);
+  // Update with the new linearization before downdating the old one: the matrix stays positive definite throughout.
+  for (size_t k = 0; k < factors.size(); ++k) {
+    apply(linearize(factors[k]), true);
+    apply(before[k], false);
+  }
+  st.relinearized_variables += static_cast<int>(moved.size());
+  st.relinearized_factors += static_cast<int>(factors.size());
+  return true;
+}
+
+IncrementalStatus IncrementalSmoother::update() {
+  IncrementalStatus st;
+  if (!gauge_checked_ && !graph_.variables().empty()) {
+    // The gauge: without a fixed variable or a prior, the first pose is held fixed (as the batch optimizer does).
+    bool gauge = graph_.has_fixed_variable();
+    for (const auto& f : graph_.factors())
+      if (f->type() == "prior") gauge = true;
+    if (!gauge)
+      for (size_t v = 0; v < graph_.variables().size(); ++v)
+        if (graph_.variables()[v].is_pose()) {
+          graph_.variables()[v].fixed = lin_[v].fixed = true;
+          break;
+        }
+    gauge_checked_ = true;
+  }
+  if (L_ == nullptr) return rebuild();
+
+  std::vector<char> ready;
+  determined(pending_vars_, pending_factors_, ready);
+  std::vector<int> vars_in, vars_wait;
+  int new_dim = 0;
+  for (size_t k = 0; k < pending_vars_.size(); ++k) {
+    const int v = pending_vars_[k];
+    if (!ready[k]) {
+      vars_wait.push_back(v);
+      continue;
+    }
+    vars_in.push_back(v);
+    if (!graph_.variables()[static_cast<size_t>(v)].fixed) new_dim += graph_.variables()[static_cast<size_t>(v)].dim();
+  }
+  if (used_ + new_dim > capacity_) return rebuild();
+
+  for (int v : vars_in) {
+    if (graph_.variables()[static_cast<size_t>(v)].fixed) continue;
+    pos_[static_cast<size_t>(v)] = used_;
+    used_ += graph_.variables()[static_cast<size_t>(v)].dim();
+  }
+  std::vector<size_t> factors_in, factors_wait;
+  for (size_t f : pending_factors_) {
+    bool ok = true;
+    for (int v : graph_.factors()[f]->variables())
+      if (pos_[static_cast<size_t>(v)] < 0 && !graph_.variables()[static_cast<size_t>(v)].fixed) ok = false;
+    (ok ? factors_in : factors_wait).push_back(f);
+  }
+  for (size_t f : factors_in) {
+    apply(linearize(f), true);
+    weight_[f] = 1.0;
+    for (int v : graph_.factors()[f]->variables()) var_factors_[static_cast<size_t>(v)].push_back(f);
+  }
+  // Remove the identity that held each newly used column.
+  bool definite = true;
+  for (int v : vars_in) {
+    const int p = pos_[static_cast<size_t>(v)];
+    if (p < 0) continue;
+    Contribution id;
+    const int d = graph_.variables()[static_cast<size_t>(v)].dim();
+    id.Ct = Eigen::MatrixXd::Identity(d, d);
+    id.grad = Eigen::VectorXd::Zero(d);
+    for (int k = 0; k < d; ++k) id.cols.push_back(p + k);
+    apply(id, false);
+    const int* Lp = static_cast<const int*>(L_->p);
+    const double* Lx = static_cast<const double*>(L_->x);
+    for (int k = 0; k < d; ++k)
+      if (!(Lx[Lp[p + k]] > 0)) definite = false;
+  }
+  st.new_variables = static_cast<int>(vars_in.size());
+  st.new_factors = static_cast<int>(factors_in.size());
+  st.deferred_variables = static_cast<int>(vars_wait.size());
+  pending_vars_ = vars_wait;
+  pending_factors_ = factors_wait;
+  if (!definite || common_.status == CHOLMOD_NOT_POSDEF) {
+    common_.status = CHOLMOD_OK;
+    IncrementalStatus r = rebuild();
+    r.new_variables = st.new_variables, r.new_factors = st.new_factors, r.deferred_variables = st.deferred_variables;
+    return r;
+  }
+  if (static_cast<double>(factor_nonzeros()) > options_.refill_ratio * static_cast<double>(ordered_nnz_)) {
+    IncrementalStatus r = rebuild();
+    r.new_variables = st.new_variables, r.new_factors = st.new_factors, r.deferred_variables = st.deferred_variables;
+    return r;
+  }
+  solve();
+  ++st.solves;
+  for (int pass = 0; pass < options_.relinearization_passes; ++pass) {
+    const std::vector<int> moved = moved_variables();
+    if (moved.empty()) break;
+    if (!relinearize(moved, st)) {
+      IncrementalStatus r = rebuild();
+      r.new_variables = st.new_variables, r.new_factors = st.new_factors, r.deferred_variables = st.deferred_variables;
+      return r;
+    }
+    solve();
+    ++st.solves;
+  }
+  return st;
+}
+
+IncrementalStatus IncrementalSmoother::rebuild() {
+  IncrementalStatus st;
+  st.rebuilt = true;
+  // Everything in the system is relinearized at the current estimate.
+  for (size_t v = 0; v < lin_.size(); ++v)
+    if (pos_[v] >= 0) lin_[v] = graph_.variables()[v];
+  std::vector<char> ready;
+  determined(pending_vars_, pending_factors_, ready);
+  std::vector<int> wait;
+  std::vector<char> in(graph_.variables().size(), 0);
+  for (size_t v = 0; v < pos_.size(); ++v) in[v] = pos_[v] >= 0 || graph_.variables()[v].fixed;
+  for (size_t k = 0; k < pending_vars_.size(); ++k) {
+    if (ready[k]) {
+      in[static_cast<size_t>(pending_vars_[k])] = 1;
+      ++st.new_variables;
+    } else {
+      wait.push_back(pending_vars_[k]);
+    }
+  }
+  std::vector<size_t> factors_wait;
+  for (size_t f : pending_factors_) {
+    bool ok = true;
+    for (int v : graph_.factors()[f]->variables()) ok = ok && in[static_cast<size_t>(v)];
+    if (ok) {
+      weight_[f] = 1.0, ++st.new_factors;
+      for (int v : graph_.factors()[f]->variables()) var_factors_[static_cast<size_t>(v)].push_back(f);
+    } else {
+      factors_wait.push_back(f);
+    }
+  }
+  pending_vars_ = wait;
+  pending_factors_ = factors_wait;
+  st.deferred_variables = static_cast<int>(wait.size());
+
+  // Blocks: the free variables in the system, in insertion order; the newest ones are constrained to come last.
+  std::vector<int> block_var, var_block(graph_.variables().size(), -1);
+  for (size_t v = 0; v < in.size(); ++v)
+    if (in[v] && !graph_.variables()[v].fixed) var_block[v] = static_cast<int>(block_var.size()), block_var.push_back(static_cast<int>(v));
+  const size_t nb = block_var.size();
+  std::vector<std::vector<int>> upper(nb);
+  for (size_t b = 0; b < nb; ++b) upper[b].push_back(static_cast<int>(b));
+  for (size_t f = 0; f < graph_.factors().size(); ++f) {
+    if (!(weight_[f] > 0)) continue;
+    for (int u : graph_.factors()[f]->variables())
+      for (int w : graph_.factors()[f]->variables()) {
+        const int bu = var_block[static_cast<size_t>(u)], bw = var_block[static_cast<size_t>(w)];
+        if (bu >= 0 && bw >= 0 && bu < bw) upper[static_cast<size_t>(bw)].push_back(bu);
+      }
+  }
+  for (auto& r : upper) {
+    std::sort(r.begin(), r.end());
+    r.erase(std::unique(r.begin(), r.end()), r.end());
+  }
+  const size_t newest = std::min<size_t>(nb / 10, 100);
+  std::vector<int> group(nb, 0);
+  for (size_t b = nb - newest; b < nb; ++b) group[b] = 1;
+  const std::vector<int> order = block_amd_order(upper, common_, newest > 0 ? &group : nullptr);
+  std::fill(pos_.begin(), pos_.end(), -1);
+  used_ = 0;
+  for (int b : order) {
+    const size_t v = static_cast<size_t>(block_var[static_cast<size_t>(b)]);
+    pos_[v] = used_;
+    used_ += graph_.variables()[v].dim();
+  }
+  capacity_ = used_ + std::max(64, static_cast<int>(options_.capacity_growth * used_));
+  if (auto why = factorize_all(); !why.empty()) {
+    st.ok = false;
+    st.message = why;
+    return st;
+  }
+  ++rebuilds_;
+  solve();
+  ++st.solves;
+  return st;
+}
+
+// Assembles H (upper triangle, by column position, with an identity on the reserved columns) and g from every
+// factor in the system, and factorizes it in the natural order (the positions are the ordering).
+std::string IncrementalSmoother::factorize_all() {
+  if (L_) cholmod_free_factor(&L_, &common_);
+  g_ = Eigen::VectorXd::Zero(capacity_);
+  dx_ = Eigen::VectorXd::Zero(capacity_);
+  size_t nnz = static_cast<size_t>(capacity_);
+  for (size_t f = 0; f < graph_.factors().size(); ++f)
+    if (weight_[f] > 0) {
+      const size_t w = static_cast<size_t>(graph_.factors()[f]->variables().size()) * 6;
+      nnz += w * w;
+    }
+  cholmod_triplet* T = cholmod_allocate_triplet(static_cast<size_t>(capacity_), static_cast<size_t>(capacity_), nnz, 1,
+                                                CHOLMOD_REAL, &common_);
+  if (T == nullptr) return "CHOLMOD could not allocate the normal equations";
+  int* Ti = static_cast<int*>(T->i);
+  int* Tj = static_cast<int*>(T->j);
+  double* Tx = static_cast<double*>(T->x);
+  size_t k = 0;
+  for (size_t f = 0; f < graph_.factors().size(); ++f) {
+    if (!(weight_[f] > 0)) continue;
+    const Contribution c = linearize(f);
+    const Eigen::MatrixXd Hf = c.Ct.transpose() * c.Ct;
+    for (size_t a = 0; a < c.cols.size(); ++a) {
+      g_[c.cols[a]] += c.grad[static_cast<Eigen::Index>(a)];
+      for (size_t b = a; b < c.cols.size(); ++b) {
+        Ti[k] = c.cols[a], Tj[k] = c.cols[b], Tx[k] = Hf(static_cast<Eigen::Index>(a), static_cast<Eigen::Index>(b));
+        ++k;
+      }
+    }
+  }
+  for (int i = used_; i < capacity_; ++i) Ti[k] = i, Tj[k] = i, Tx[k] = 1.0, ++k;
+  T->nnz = k;
+  cholmod_sparse* H = cholmod_triplet_to_sparse(T, k, &common_);
+  cholmod_free_triplet(&T, &common_);
+  if (H == nullptr) return "CHOLMOD could not assemble the normal equations";
+  common_.nmethods = 1;
+  common_.method[0].ordering = CHOLMOD_NATURAL;
+  common_.postorder = 0;
+  common_.supernodal = CHOLMOD_AUTO;
+  common_.final_ll = 0;
+  common_.quick_return_if_not_posdef = 1;
+  L_ = cholmod_analyze(H, &common_);
+  std::string why;
+  if (L_ == nullptr) {
+    why = "CHOLMOD symbolic analysis failed";
+  } else if (!cholmod_factorize(H, L_, &common_) || common_.status == CHOLMOD_NOT_POSDEF || L_->minor < L_->n) {
+    const int col = static_cast<int>(L_->minor < L_->n ? L_->minor : 0);
+    int var = -1;
+    for (size_t v = 0; v < pos_.size(); ++v)
+      if (pos_[v] >= 0 && col >= pos_[v] && col < pos_[v] + graph_.variables()[v].dim()) var = static_cast<int>(v);
+    why = "the normal equations are not positive definite: variable " +
+          (var >= 0 ? std::to_string(graph_.variables()[static_cast<size_t>(var)].id) : std::string("?")) +
+          " is not determined by the factors (under-constrained, or disconnected from the gauge)";
+  } else if (!cholmod_change_factor(CHOLMOD_REAL, 0, 0, 0, 0, L_, &common_)) {
+    why = "CHOLMOD could not convert the factor to LDL' form";
+  }
+  cholmod_free_sparse(&H, &common_);
+  if (!why.empty()) {
+    if (L_) cholmod_free_factor(&L_, &common_);
+    common_.status = CHOLMOD_OK;
+    return why;
+  }
+  ordered_nnz_ = factor_nonzeros();
+  return "";
+}
+
+}  // namespace sextant::graph
