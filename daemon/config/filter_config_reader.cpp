@@ -5,7 +5,7 @@
 namespace sextant::config {
 
 void read_stage_config(Section& s, engine::FilterConfig& c) {
-  s.get("type", c.type, one_of({"ekf", "none"}));
+  s.get("type", c.type, one_of({"ekf", "pf", "none"}));
   s.get("slam", c.slam);
   s.get("gate", c.gate, positive());
   s.get("initial_sigma_xy", c.initial_sigma_xy, positive());
@@ -26,6 +26,13 @@ void read_stage_config(Section& s, engine::FilterConfig& c) {
       throw s.error_at(at, "'" + s.path() + ".map[" + std::to_string(i) + "]': landmark id " + std::to_string(static_cast<int64_t>(r[0])) + " listed twice");
     c.map.push_back({static_cast<int64_t>(r[0]), r[1], r[2]});
   }
+  Section pf = s.child("pf");
+  pf.get("particles", c.pf.particles, int_in_range(1, 1000000));
+  pf.get("resample_threshold", c.pf.resample_threshold, in_range(0, 1));
+  pf.get("seed", c.pf.seed);
+  pf.get("confirmations", c.pf.confirmations, int_in_range(1, 1000000));
+  pf.get("tentative_lifetime", c.pf.tentative_lifetime, int_in_range(1, 1000000));
+  pf.reject_unknown_keys();
   s.reject_unknown_keys();
 }
 

@@ -3,6 +3,7 @@
 #include "daemon/engine/association_stage.hpp"
 #include "daemon/engine/dead_reckoning_stage.hpp"
 #include "daemon/engine/filter_stage.hpp"
+#include "daemon/engine/particle_filter_stage.hpp"
 
 namespace sextant::engine {
 
@@ -10,6 +11,7 @@ std::vector<std::unique_ptr<Stage>> make_stages(const EngineConfig& config) {
   std::vector<std::unique_ptr<Stage>> stages;
   if (config.dead_reckoning.enabled) stages.push_back(std::make_unique<DeadReckoningStage>(config.dead_reckoning));
   if (config.filter.type == "ekf") stages.push_back(std::make_unique<FilterStage>(config.filter));
+  if (config.filter.type == "pf") stages.push_back(std::make_unique<ParticleFilterStage>(config.filter));
   if (config.association.enabled) stages.push_back(std::make_unique<AssociationStage>(config.association));
   return stages;
 }

@@ -5,10 +5,20 @@
 
 namespace sextant::engine {
 
+/// The particle filter's own settings (type "pf": FastSLAM 2.0, estimators/filter/fastslam.hpp).
+struct ParticleFilterConfig {
+  int particles = 100;
+  double resample_threshold = 0.5;  // low-variance resampling when N_eff < resample_threshold * particles
+  uint64_t seed = 1;                // the random number generator's seed (deterministic replay)
+  int confirmations = 3;            // sightings without id that make a tentative landmark permanent
+  int tentative_lifetime = 50;      // sighting batches after which an unconfirmed one is dropped
+};
+
 /// The online filter: a planar EKF per odometry source, fusing odometry increments and range-bearing landmark
-/// sightings (localization against `map`, EKF-SLAM for landmarks not in it).
+/// sightings (localization against `map`, EKF-SLAM for landmarks not in it); or, with type "pf", FastSLAM 2.0 with
+/// the same slam/gate/initial sigma/map settings and the `pf` ones.
 struct FilterConfig {
-  std::string type = "ekf";  // "ekf" or "none"
+  std::string type = "ekf";  // "ekf", "pf" or "none"
   bool slam = true;          // add landmarks that are not in `map` to the state
   double gate = 9.21;        // chi-square threshold (2 dof) on the normalized innovation; 9.21 = 99 %
   double initial_sigma_xy = 0.01;     // m, first pose (the first odometry pose anchors the map frame)
@@ -20,6 +30,7 @@ struct FilterConfig {
     double x = 0, y = 0;
   };
   std::vector<Landmark> map;  // known landmarks (map frame)
+  ParticleFilterConfig pf;
 };
 
 }  // namespace sextant::engine

@@ -5,8 +5,12 @@
 // For SE(2), T = T_hat * Exp(delta_body) gives, to first order, delta_global = blockdiag(R(theta), 1) delta_body, so
 //   delta_body = J delta_global,  J = blockdiag(R(theta)^T, 1),  P_body = J P J^T,
 // placed on the x, y and yaw rows/columns (0, 1, 5); z, roll and pitch are left at zero.
+// Also the other direction, for a planar filter's motion noise: the 3x3 increment covariance of an odometry message.
+#include "daemon/engine/dead_reckoning_stage.hpp"
 #include "daemon/engine/events.hpp"
 #include "estimators/lie/se2.hpp"
+
+#include <Eigen/Eigenvalues>
 
 namespace sextant::engine {
 
@@ -19,6 +23,24 @@ inline Matrix6 planar_covariance_in_body_frame(const SE2& pose, const Eigen::Mat
   for (int r = 0; r < 3; ++r)
     for (int c = 0; c < 3; ++c) out(idx[r], idx[c]) = Pb(r, c);
   return out;
+}
+
+/// The covariance Q (3x3 over [dx, dy, dtheta], body frame after the motion) of the planar increment `delta` that
+/// odometry message `o` brings after a message with pose covariance `previous_covariance`: the message's increment
+/// covariance, or, without one, the growth of its pose covariance (differential mode, as dead reckoning does it).
+/// Symmetrized, with eigenvalues floored at `min_variance` so the filter's prediction stays positive definite.
+inline Eigen::Matrix3d planar_increment_covariance(const Odometry& o, const Matrix6& previous_covariance, const SE2& delta,
+                                                   double min_variance) {
+  const Matrix6 q6 = o.increment_covariance
+                         ? *o.increment_covariance
+                         : Matrix6(o.covariance - DeadReckoningStage::propagate(previous_covariance, delta.to_se3(), Matrix6::Zero()));
+  Eigen::Matrix3d Q;
+  const int idx[3] = {0, 1, 5};
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c) Q(r, c) = q6(idx[r], idx[c]);
+  Q = (0.5 * (Q + Q.transpose())).eval();
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(Q);
+  return eig.eigenvectors() * eig.eigenvalues().cwiseMax(min_variance).asDiagonal() * eig.eigenvectors().transpose();
 }
 
 }  // namespace sextant::engine
