@@ -1,0 +1,180 @@
+// Source B's keyframe rule: thresholds k1/k2 at their edges, the weights, rejection keeping the reference, the
+// planar mode, bad poses and bad options.
+#include "estimators/keyframe/keyframe_selector.hpp"
+
+#include <doctest/doctest.h>
+
+#include <cmath>
+#include <limits>
+
+using namespace sextant;
+
+namespace {
+
+SE3 translation(double x, double y = 0, double z = 0) { return SE3(SO3(), Eigen::Vector3d(x, y, z)); }
+
+Vector6d xi(double rx, double ry, double rz, double wx, double wy, double wz) {
+  Vector6d v;
+  v << rx, ry, rz, wx, wy, wz;
+  return v;
+}
+
+}  // namespace
+
+TEST_CASE("keyframe selector: the first pose is a keyframe, whatever it is") {
+  KeyframeSelector s;
+  CHECK(s.decide(SE3::exp(xi(100, -50, 3, 0.3, -0.2, 2.0))) == KeyframeDecision::kKeyframe);
+  CHECK(s.accepted() == 1);
+  CHECK(s.last_magnitude() == 0);
+}
+
+TEST_CASE("keyframe selector: k1 and k2 are inclusive edges of the keyframe band") {
+  KeyframeSelectorOptions o;
+  o.k1 = 0.3;
+  o.k2 = 5.0;
+  const double e = 1e-9;
+  struct Case {
+    double x;
+    KeyframeDecision expected;
+  };
+  for (const Case c : {Case{0.3 - e, KeyframeDecision::kTooClose}, Case{0.3 + e, KeyframeDecision::kKeyframe},
+                       Case{5.0 - e, KeyframeDecision::kKeyframe}, Case{5.0 + e, KeyframeDecision::kImplausible},
+                       Case{0.0, KeyframeDecision::kTooClose}}) {
+    CAPTURE(c.x);
+    KeyframeSelector s(o);
+    s.decide(translation(1, 2, 3));
+    CHECK(s.decide(translation(1 + c.x, 2, 3)) == c.expected);
+    CHECK(s.last_magnitude() == doctest::Approx(c.x).epsilon(1e-12));
+  }
+  // Exactly on k2 (a pure translation's logarithm is the translation itself).
+  KeyframeSelector s(o);
+  s.decide(SE3());
+  CHECK(s.decide(translation(0, 0, 5.0)) == KeyframeDecision::kKeyframe);
+}
+
+TEST_CASE("keyframe selector: L = sqrt(w_t |rho|^2 + w_r |phi|^2) of the logarithm of the relative motion") {
+  const SE3 kf = SE3::exp(xi(3, 1, -2, 0.1, 0.2, 1.2));
+  const Vector6d mu = xi(0.12, -0.09, 0.05, 0.1, -0.05, 0.15);  // |rho|^2 = 0.025, |phi|^2 = 0.035
+  const SE3 pose = kf * SE3::exp(mu);
+  for (const auto& [wt, wr] : {std::pair{1.0, 1.0}, std::pair{4.0, 0.0}, std::pair{0.0, 9.0}, std::pair{2.5, 0.5}}) {
+    KeyframeSelectorOptions o;
+    o.translation_weight = wt;
+    o.rotation_weight = wr;
+    o.k1 = 0.3;
+    KeyframeSelector s(o);
+    s.decide(kf);
+    const double expected = std::sqrt(wt * 0.025 + wr * 0.035);
+    const auto d = s.decide(pose);
+    CAPTURE(wt);
+    CAPTURE(wr);
+    CHECK(s.last_magnitude() == doctest::Approx(expected).epsilon(1e-9));
+    CHECK(d == (expected >= 0.3 ? KeyframeDecision::kKeyframe : KeyframeDecision::kTooClose));
+  }
+  // The cases above straddle k1: 0.2449 (1,1) too close, 0.3162 (4,0) keyframe, 0.5612 (0,9) keyframe.
+}
+
+TEST_CASE("keyframe selector: a rotation in place becomes a keyframe through the rotation weight") {
+  KeyframeSelectorOptions o;
+  o.k1 = 0.5;
+  o.rotation_weight = 1.0;
+  KeyframeSelector unit(o);
+  o.rotation_weight = 4.0;
+  KeyframeSelector heavy(o);
+  const SE3 turned(SO3::exp(Eigen::Vector3d(0, 0, 0.3)), Eigen::Vector3d::Zero());
+  unit.decide(SE3());
+  heavy.decide(SE3());
+  CHECK(unit.decide(turned) == KeyframeDecision::kTooClose);   // L = 0.3
+  CHECK(heavy.decide(turned) == KeyframeDecision::kKeyframe);  // L = 0.6
+}
+
+TEST_CASE("keyframe selector: the motion is measured from the last keyframe, not from the last pose") {
+  KeyframeSelector s;  // k1 = 0.3
+  s.decide(SE3());
+  CHECK(s.decide(translation(0.1)) == KeyframeDecision::kTooClose);
+  CHECK(s.decide(translation(0.2)) == KeyframeDecision::kTooClose);
+  CHECK(s.decide(translation(0.35)) == KeyframeDecision::kKeyframe);
+  CHECK(s.decide(translation(0.5)) == KeyframeDecision::kTooClose);  // 0.15 from the keyframe at 0.35
+  CHECK(s.too_close() == 3);
+  CHECK(s.accepted() == 2);
+  CHECK(s.reference()->translation().x() == 0.35);
+}
+
+TEST_CASE("keyframe selector: an implausible jump is rejected, counted, and keeps the reference") {
+  KeyframeSelector s;  // k1 = 0.3, k2 = 5
+  s.decide(SE3());
+  CHECK(s.decide(translation(20)) == KeyframeDecision::kImplausible);
+  CHECK(s.last_magnitude() == doctest::Approx(20));
+  CHECK(s.rejected() == 1);
+  CHECK(s.reference()->translation().norm() == 0);
+  // Measured from the kept reference (0 m), not from the rejected 20 m.
+  CHECK(s.decide(translation(0.5)) == KeyframeDecision::kKeyframe);
+  CHECK(s.last_magnitude() == doctest::Approx(0.5));
+  CHECK(s.accepted() == 2);
+  CHECK(s.rejected() == 1);
+}
+
+TEST_CASE("keyframe selector: a non-finite pose is implausible and never becomes the reference") {
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  KeyframeSelector s;
+  CHECK(s.decide(translation(nan)) == KeyframeDecision::kImplausible);  // even as the first pose
+  CHECK(!s.reference());
+  CHECK(std::isnan(s.last_magnitude()));
+  CHECK(s.decide(translation(1)) == KeyframeDecision::kKeyframe);
+  CHECK(s.decide(translation(std::numeric_limits<double>::infinity())) == KeyframeDecision::kImplausible);
+  CHECK(s.rejected() == 2);
+  CHECK(s.reference()->translation().x() == 1);
+}
+
+TEST_CASE("keyframe selector: planar mode measures x, y, yaw only") {
+  KeyframeSelectorOptions o;
+  o.planar = true;
+  KeyframeSelector planar(o);
+  KeyframeSelector spatial;
+  // 3 m up with a 0.5 rad roll and 0.1 m ahead: nothing in the plane.
+  const SE3 bump(SO3::exp(Eigen::Vector3d(0.5, 0, 0)), Eigen::Vector3d(0.1, 0, 3));
+  planar.decide(SE3());
+  spatial.decide(SE3());
+  CHECK(planar.decide(bump) == KeyframeDecision::kTooClose);
+  CHECK(planar.last_magnitude() == doctest::Approx(0.1));
+  CHECK(spatial.decide(bump) == KeyframeDecision::kKeyframe);
+  // In the plane: SE(2) log of (x, y, yaw).
+  const Eigen::Vector3d tau(0.2, 0.3, 0.4);
+  const SE3 move = SE2::exp(tau).to_se3();
+  CHECK(planar.magnitude(SE3(), move) == doctest::Approx(tau.norm()).epsilon(1e-12));
+}
+
+TEST_CASE("keyframe selector: options are validated") {
+  const auto bad = [](KeyframeSelectorOptions o) { CHECK_THROWS_AS(KeyframeSelector{o}, std::invalid_argument); };
+  KeyframeSelectorOptions o;
+  o.k1 = -0.1;
+  bad(o);
+  o = {};
+  o.k1 = 2, o.k2 = 2;
+  bad(o);
+  o = {};
+  o.k2 = std::numeric_limits<double>::quiet_NaN();
+  bad(o);
+  o = {};
+  o.k2 = std::numeric_limits<double>::infinity();
+  bad(o);
+  o = {};
+  o.translation_weight = -1;
+  bad(o);
+  o = {};
+  o.rotation_weight = std::numeric_limits<double>::quiet_NaN();
+  bad(o);
+  o = {};
+  o.translation_weight = 0, o.rotation_weight = 0;
+  bad(o);
+  o = {};
+  o.k1 = 0;  // every motion except none is a keyframe: allowed
+  CHECK_NOTHROW(KeyframeSelector{o});
+  try {
+    KeyframeSelectorOptions x;
+    x.k1 = 3;
+    x.k2 = 1;
+    KeyframeSelector{x};
+  } catch (const std::invalid_argument& e) {
+    CHECK(std::string(e.what()).find("k1 = 3") != std::string::npos);
+  }
+}
