@@ -12,6 +12,7 @@ void read_stage_config(Section& s, engine::FilterConfig& c) {
   s.get("initial_sigma_theta", c.initial_sigma_theta, positive());
   s.get("min_increment_variance", c.min_increment_variance, positive());
   s.get("max_landmarks", c.max_landmarks, int_in_range(1, 1 << 20));
+  s.get("history_s", c.history_s, in_range(0, 60));
   // map: a list of [id, x, y]
   std::vector<std::vector<double>> rows;
   s.get("map", rows);

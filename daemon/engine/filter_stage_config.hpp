@@ -25,6 +25,7 @@ struct FilterConfig {
   double initial_sigma_theta = 0.01;  // rad
   double min_increment_variance = 1e-10;
   int max_landmarks = 4096;
+  double history_s = 0.5;  // late measurements up to this much older than the newest input are re-applied in order
   struct Landmark {
     int64_t id = 0;
     double x = 0, y = 0;
