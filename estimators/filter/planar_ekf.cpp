@@ -97,6 +97,109 @@ UpdateResult PlanarEkf::observe(int64_t id, double range, double bearing, const 
   return out;
 }
 
+namespace {
+
+// d(right perturbation of X)/d[x, y, theta]: delta_body = blockdiag(R(theta)^T, 1) delta_global.
+Eigen::Matrix3d body_from_global(double theta) {
+  Eigen::Matrix3d B = Eigen::Matrix3d::Identity();
+  B.topLeftCorner<2, 2>() = SO2(theta).matrix().transpose();
+  return B;
+}
+
+// r = Log(h^-1 Z) with h = h_hat Exp(J dx): r(dx) ~ r - Jr^-1(r) Ad(E^-1) J dx, E = h_hat^-1 Z.  Returns r and
+// D = Jr^-1(r) Ad(E^-1), so that H = D J.
+Eigen::Vector3d right_innovation(const SE2& h, const SE2& z, Eigen::Matrix3d* D) {
+  const SE2 E = h.inverse() * z;
+  Eigen::Matrix3d Jr_inv;
+  const Eigen::Vector3d r = E.log(&Jr_inv);
+  if (D) *D = Jr_inv * E.inverse().adjoint();
+  return r;
+}
+
+}  // namespace
+
+Eigen::Vector3d PlanarEkf::relative_pose_innovation(const Eigen::Vector3d& c, const Eigen::Vector3d& x, const SE2& z,
+                                                    Eigen::Matrix3d* H_clone, Eigen::Matrix3d* H_robot) {
+  const SE2 C(c[0], c[1], c[2]), X(x[0], x[1], x[2]);
+  Eigen::Matrix3d J_c, J_x, D;
+  const SE2 h = C.between(X, &J_c, &J_x);
+  const Eigen::Vector3d r = right_innovation(h, z, &D);
+  if (H_clone) *H_clone = D * J_c * body_from_global(c[2]);
+  if (H_robot) *H_robot = D * J_x * body_from_global(x[2]);
+  return r;
+}
+
+Eigen::Vector3d PlanarEkf::pose_innovation(const SE2& frame, const Eigen::Vector3d& x, const SE2& z, Eigen::Matrix3d* H_robot) {
+  Eigen::Matrix3d D;
+  const Eigen::Vector3d r = right_innovation(frame.inverse() * SE2(x[0], x[1], x[2]), z, &D);
+  if (H_robot) *H_robot = D * body_from_global(x[2]);
+  return r;
+}
+
+int PlanarEkf::add_pose_clone() {
+  const Eigen::Index n = x_.size();
+  x_.conservativeResize(n + 3);
+  P_.conservativeResize(n + 3, n + 3);
+  const int index = static_cast<int>(n);
+  refresh_clone(index);
+  return index;
+}
+
+void PlanarEkf::refresh_clone(int index) {
+  x_.segment<3>(index) = x_.head<3>();
+  P_.middleRows<3>(index) = P_.topRows<3>();
+  P_.middleCols<3>(index) = P_.leftCols<3>();
+  P_.block<3, 3>(index, index) = P_.topLeftCorner<3, 3>();
+}
+
+UpdateResult PlanarEkf::observe_relative_pose(int clone, const SE2& z, const Eigen::Matrix3d& R, const std::array<bool, 3>& rows,
+                                              double gate) {
+  Eigen::Matrix3d Hc, Hx;
+  const Eigen::Vector3d r = relative_pose_innovation(x_.segment<3>(clone), x_.head<3>(), z, &Hc, &Hx);
+  return update_rows(r, Hx, clone, Hc, R, rows, gate);
+}
+
+UpdateResult PlanarEkf::observe_pose(const SE2& frame, const SE2& z, const Eigen::Matrix3d& R, const std::array<bool, 3>& rows,
+                                     double gate) {
+  Eigen::Matrix3d Hx;
+  const Eigen::Vector3d r = pose_innovation(frame, x_.head<3>(), z, &Hx);
+  return update_rows(r, Hx, -1, Eigen::Matrix3d::Zero(), R, rows, gate);
+}
+
+UpdateResult PlanarEkf::update_rows(const Eigen::Vector3d& r, const Eigen::Matrix3d& Hx, int other, const Eigen::Matrix3d& Ho,
+                                    const Eigen::Matrix3d& R, const std::array<bool, 3>& rows, double gate) {
+  UpdateResult out;
+  if (!r.allFinite() || !R.allFinite() || !Hx.allFinite() || !Ho.allFinite()) {
+    out.reason = "non_finite";
+    return out;
+  }
+  std::vector<int> use;
+  for (int i = 0; i < 3; ++i)
+    if (rows[static_cast<size_t>(i)]) use.push_back(i);
+  const auto m = static_cast<Eigen::Index>(use.size());
+  if (m == 0) {
+    out.reason = "no_components";
+    return out;
+  }
+  Eigen::MatrixXd Hx_m(m, 3), Ho_m(m, 3), R_m(m, m);
+  Eigen::VectorXd r_m(m);
+  for (Eigen::Index i = 0; i < m; ++i) {
+    Hx_m.row(i) = Hx.row(use[static_cast<size_t>(i)]);
+    Ho_m.row(i) = Ho.row(use[static_cast<size_t>(i)]);
+    r_m[i] = r[use[static_cast<size_t>(i)]];
+    for (Eigen::Index j = 0; j < m; ++j) R_m(i, j) = R(use[static_cast<size_t>(i)], use[static_cast<size_t>(j)]);
+  }
+  // H is zero but for the robot's 3 columns (and the clone's 3): P H' and H P H' in O(n).
+  Eigen::MatrixXd PHt = P_.leftCols<3>() * Hx_m.transpose();
+  if (other >= 0) PHt += P_.middleCols<3>(other) * Ho_m.transpose();
+  Eigen::MatrixXd HPHt = Hx_m * PHt.topRows<3>();
+  if (other >= 0) HPHt += Ho_m * PHt.middleRows<3>(other);
+  out = kalman_update_from(x_, P_, r_m, PHt, HPHt, R_m, gate);
+  x_[2] = wrap_angle(x_[2]);
+  if (other >= 0) x_[other + 2] = wrap_angle(x_[other + 2]);
+  return out;
+}
+
 void PlanarEkf::augment(int64_t id, double range, double bearing, const Eigen::Matrix2d& R) {
   const Eigen::Index n = x_.size();
   const double a = x_[2] + bearing, c = std::cos(a), s = std::sin(a);

@@ -7,9 +7,15 @@
 //    on the right of Delta (in the body frame after the motion):  F = d x'/d x,  G = d x'/d w = blockdiag(R(theta'), 1).
 //  - Observation of landmark l from the robot origin: h = [|l - p|, atan2(ly - py, lx - px) - theta], the bearing
 //    innovation wrapped to (-pi, pi].
+//  - Pose measurements (other odometry sources, estimators/filter/multi_source_ekf.hpp): a pose Z = h(x) * Exp(v),
+//    v ~ N(0, R) on the right, either of the robot pose in another frame, h = F^-1 X (absolute), or of its motion
+//    since a clone of an earlier pose, h = C^-1 X (relative; the clone is a copy of the robot pose kept in the
+//    state, "stochastic cloning", Roumeliotis & Burdick, ICRA 2002).  Innovation r = Log(h^-1 Z), on any subset
+//    of its [x, y, theta] rows.
 #include "estimators/filter/kalman_update.hpp"
 #include "estimators/lie/se2.hpp"
 
+#include <array>
 #include <map>
 
 namespace sextant::filter {
@@ -51,6 +57,16 @@ class PlanarEkf {
   /// a landmark in the state updates; a new one is added (SLAM mode).  Refused when gated or degenerate.
   UpdateResult observe(int64_t id, double range, double bearing, const Eigen::Matrix2d& R);
 
+  /// Adds a copy of the current robot pose to the state, fully correlated with it (stochastic cloning); returns
+  /// its index in the state.  `refresh_clone` sets an existing clone to the current pose again.
+  int add_pose_clone();
+  void refresh_clone(int index);
+  /// Z = C^-1 X Exp(v): the motion since the clone at `clone_index`, measured with covariance R over
+  /// [dx, dy, dtheta] (right perturbation, body frame); only the rows with `rows[i]` true are fused.
+  UpdateResult observe_relative_pose(int clone_index, const SE2& z, const Eigen::Matrix3d& R, const std::array<bool, 3>& rows, double gate);
+  /// Z = F^-1 X Exp(v): the robot pose in the frame F.
+  UpdateResult observe_pose(const SE2& frame, const SE2& z, const Eigen::Matrix3d& R, const std::array<bool, 3>& rows, double gate);
+
   /// Sightings without ids: associated by JCBB (assoc/landmark/jcbb.hpp) against every landmark of the map and
   /// the state, then updated jointly; the unpaired ones go through the tentative-landmark rule above.
   AssociationOutcome observe_unidentified(const std::vector<Sighting>& sightings);
@@ -66,9 +82,17 @@ class PlanarEkf {
   static Eigen::Vector3d motion(const Eigen::Vector3d& x, const SE2& delta, Eigen::Matrix3d* F, Eigen::Matrix3d* G);
   static Eigen::Vector2d observation(const Eigen::Vector3d& robot, const Eigen::Vector2d& landmark,
                                      Eigen::Matrix<double, 2, 3>* H_robot, Eigen::Matrix2d* H_landmark);
+  /// The innovation r = Log((C^-1 X)^-1 Z) of a relative pose measurement, for the clone C and the robot X given
+  /// as [x, y, theta]; H_clone = -dr/dC and H_robot = -dr/dX (so that r(x + dx) ~ r - H dx, the EKF convention).
+  static Eigen::Vector3d relative_pose_innovation(const Eigen::Vector3d& clone, const Eigen::Vector3d& robot, const SE2& z,
+                                                  Eigen::Matrix3d* H_clone, Eigen::Matrix3d* H_robot);
+  /// The innovation of an absolute pose measurement Z of F^-1 X, with H_robot = -dr/dX.
+  static Eigen::Vector3d pose_innovation(const SE2& frame, const Eigen::Vector3d& robot, const SE2& z, Eigen::Matrix3d* H_robot);
 
  private:
   void augment(int64_t id, double range, double bearing, const Eigen::Matrix2d& R);
+  UpdateResult update_rows(const Eigen::Vector3d& r, const Eigen::Matrix3d& H_robot, int other, const Eigen::Matrix3d& H_other,
+                           const Eigen::Matrix3d& R, const std::array<bool, 3>& rows, double gate);
 
   PlanarEkfOptions options_;
   bool initialized_ = false;

@@ -1,0 +1,143 @@
+#include "estimators/filter/multi_source_ekf.hpp"
+
+#include <Eigen/Eigenvalues>
+
+#include <stdexcept>
+
+namespace sextant::filter {
+namespace {
+
+Eigen::Matrix3d clamp_spd(const Eigen::Matrix3d& Q, double min_variance) {
+  const Eigen::Matrix3d S = 0.5 * (Q + Q.transpose());
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(S);
+  return eig.eigenvectors() * eig.eigenvalues().cwiseMax(min_variance).asDiagonal() * eig.eigenvectors().transpose();
+}
+
+bool any(const std::array<bool, 6>& f, int from, int to) {
+  for (int i = from; i < to; ++i)
+    if (f[static_cast<size_t>(i)]) return true;
+  return false;
+}
+
+}  // namespace
+
+MultiSourceEkf::MultiSourceEkf(const PlanarEkfOptions& options, const Eigen::Matrix3d& initial_covariance,
+                               std::map<std::string, OdometrySourceOptions> sources, double min_increment_variance)
+    : options_(options), initial_covariance_(initial_covariance), min_variance_(min_increment_variance), ekf_(options) {
+  int predicting = 0;
+  for (auto& [name, o] : sources) {
+    if (o.predict) {
+      ++predicting;
+      if (!(o.fuse[0] && o.fuse[1] && o.fuse[2]) || any(o.fuse, 3, 6))
+        throw std::invalid_argument("odometry source '" + name + "' predicts: it must fuse x, y and yaw and no velocity");
+    } else {
+      if (!any(o.fuse, 0, 6)) throw std::invalid_argument("odometry source '" + name + "' fuses no component");
+      if (o.differential && any(o.fuse, 0, 3) && any(o.fuse, 3, 6))
+        throw std::invalid_argument("odometry source '" + name + "': a differential pose and velocities fuse the same motion twice");
+    }
+    if (o.gate < 0 || o.timeout_s < 0) throw std::invalid_argument("odometry source '" + name + "': negative gate or timeout");
+    sources_[name].options = o;
+    counters_[name];
+  }
+  if (predicting != 1)
+    throw std::invalid_argument("a body needs exactly one odometry source with predict (has " + std::to_string(predicting) + ")");
+}
+
+Eigen::Matrix3d MultiSourceEkf::increment_noise(const PlanarOdometry& prev, const PlanarOdometry& cur, double min_variance) {
+  if (cur.increment_covariance) return clamp_spd(*cur.increment_covariance, min_variance);
+  const Eigen::Matrix3d A = prev.pose.between(cur.pose).inverse().adjoint();
+  return clamp_spd(cur.covariance - A * prev.covariance * A.transpose(), min_variance);
+}
+
+void MultiSourceEkf::advance(int64_t utime) {
+  clock_ = std::max(clock_, utime);
+  for (auto& [name, s] : sources_) {
+    auto& c = counters_[name];
+    if (s.options.timeout_s <= 0 || c.silent || !s.last) continue;
+    if (static_cast<double>(clock_ - s.last_seen) > s.options.timeout_s * 1e6) {
+      c.silent = true;
+      ++c.timeouts;
+      if (!s.options.predict) s.last.reset();  // re-anchor on its next message
+    }
+  }
+}
+
+OdometryOutcome MultiSourceEkf::odometry(const std::string& name, const PlanarOdometry& m) {
+  auto it = sources_.find(name);
+  if (it == sources_.end()) return OdometryOutcome::unknown_source;
+  Source& s = it->second;
+  SourceCounters& c = counters_[name];
+  ++c.messages;
+  if (s.last && m.utime <= s.last->utime) return OdometryOutcome::duplicate;
+  advance(m.utime);
+  s.last_seen = m.utime;
+  c.silent = false;
+  if (s.options.predict) {
+    if (!started_) {
+      ekf_.initialize(m.pose, initial_covariance_);
+      started_ = true;
+      s.last = m;
+      utime_ = m.utime;
+      return OdometryOutcome::initialized;
+    }
+    ekf_.predict(s.last->pose.between(m.pose), increment_noise(*s.last, m, min_variance_));
+    s.last = m;
+    utime_ = m.utime;
+    return OdometryOutcome::predicted;
+  }
+  if (!started_) return OdometryOutcome::before_start;
+  return measure(s, c, m);
+}
+
+OdometryOutcome MultiSourceEkf::measure(Source& s, SourceCounters& c, const PlanarOdometry& m) {
+  const auto& f = s.options.fuse;
+  const bool relative = any(f, 3, 6) || s.options.differential;
+  if (!s.last) {  // anchor: nothing to fuse yet
+    if (relative) {
+      if (s.clone < 0) s.clone = ekf_.add_pose_clone();
+      else ekf_.refresh_clone(s.clone);
+    }
+    if (any(f, 0, 3) && !s.options.differential) s.frame = ekf_.pose() * m.pose.inverse();
+    s.last = m;
+    return OdometryOutcome::anchored;
+  }
+  // Every update this message makes must be accepted; the first refusal is the outcome.
+  UpdateResult r;
+  r.accepted = true;
+  const auto combine = [&r](const UpdateResult& u) {
+    if (r.accepted && !u.accepted) r = u;
+  };
+  if (any(f, 3, 6)) {  // velocities, integrated over the interval
+    if (m.twist && s.last->twist) {
+      const double dt = static_cast<double>(m.utime - s.last->utime) * 1e-6;
+      const Eigen::Vector3d v = 0.5 * (*m.twist + *s.last->twist);
+      const Eigen::Matrix3d R = clamp_spd(0.5 * (m.twist_covariance + s.last->twist_covariance) * dt * dt, min_variance_);
+      combine(ekf_.observe_relative_pose(s.clone, SE2::exp(v * dt), R, {f[3], f[4], f[5]}, s.options.gate));
+    } else {
+      UpdateResult u;
+      u.reason = "no_twist";
+      combine(u);
+    }
+  }
+  if (any(f, 0, 3)) {
+    const std::array<bool, 3> rows{f[0], f[1], f[2]};
+    if (s.options.differential)
+      combine(ekf_.observe_relative_pose(s.clone, s.last->pose.between(m.pose), increment_noise(*s.last, m, min_variance_), rows, s.options.gate));
+    else
+      combine(ekf_.observe_pose(s.frame, m.pose, clamp_spd(m.covariance, min_variance_), rows, s.options.gate));
+  }
+  if (relative) ekf_.refresh_clone(s.clone);
+  s.last = m;
+  if (r.accepted) {
+    ++c.fused;
+    return OdometryOutcome::fused;
+  }
+  if (r.reason == "gate") {
+    ++c.gated;
+    return OdometryOutcome::gated;
+  }
+  ++c.rejected;
+  return OdometryOutcome::rejected;
+}
+
+}  // namespace sextant::filter
