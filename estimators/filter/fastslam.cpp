@@ -256,10 +256,12 @@ void FastSlam::observe_particle(Particle& p, const std::vector<RangeBearing>& ba
       double log_likelihood = -INFINITY;
       PoseGaussian pose;
     } best;
+    double nearest_d2 = INFINITY;
     const auto consider = [&](int tree, int64_t key, const Eigen::Vector2d& mean, const Eigen::Matrix2d& cov) {
       if (used.count({tree, key})) return;
       PoseGaussian trial = g;
       const auto step = refine_proposal(trial, mean, cov, z, s.covariance);
+      if (step) nearest_d2 = std::min(nearest_d2, step->d2);
       if (step && step->d2 <= options_.gate && step->log_likelihood > best.log_likelihood)
         best = {tree, key, step->log_likelihood, trial};
     };
@@ -275,7 +277,8 @@ void FastSlam::observe_particle(Particle& p, const std::vector<RangeBearing>& ba
       if (stats) ++stats->associated;
     } else {
       log_w += log_p0;
-      if (options_.slam && identified_count + p.unidentified.slots() < options_.max_landmarks) {
+      if (options_.slam && nearest_d2 > options_.new_landmark_gate &&
+          identified_count + p.unidentified.slots() < options_.max_landmarks) {
         pending.push_back({j, true, true, -1});
         if (stats) ++stats->created;
       }

@@ -31,7 +31,9 @@
 //   - id < 0: per-particle maximum-likelihood association over the known map and the particle's landmarks:
 //     the candidate of largest N(z - z_hat; 0, L) among those with Mahalanobis distance d2 = nu' L^-1 nu below
 //     `gate` (each landmark used once per image); none: a new tentative landmark, weighted by the likelihood of a
-//     sighting at the gate, exp(-gate / 2) / (2 pi sqrt|R|) (the "new landmark" probability p0).  A tentative
+//     sighting at the gate, exp(-gate / 2) / (2 pi sqrt|R|) (the "new landmark" probability p0), provided d2
+//     exceeds `new_landmark_gate` for every candidate (between the two gates the sighting is ambiguous: weighted
+//     by p0, used for nothing; otherwise the 1 % of true sightings beyond the gate would seed duplicates).  A tentative
 //     landmark that is not seen `confirmations` times within `tentative_lifetime` images is removed, so a
 //     spurious sighting does not stay in the map.
 // Outliers: a sighting whose d2 exceeds `gate` in a particle does not update that particle, whose weight is
@@ -56,6 +58,7 @@ struct FastSlamOptions {
   uint64_t seed = 1;
   bool slam = true;                 // false: only the known map is used (localization)
   double gate = 9.21;               // chi-square (2 dof) on d2 = nu' L^-1 nu; 9.21 = 99 %
+  double new_landmark_gate = 18.42; // a sighting without id makes a new landmark only beyond this d2 (99.99 %)
   int max_landmarks = 4096;         // per particle
   int confirmations = 3;            // sightings that make a landmark without id permanent
   int tentative_lifetime = 50;      // images after which an unconfirmed landmark without id is dropped

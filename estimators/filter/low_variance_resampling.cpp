@@ -42,7 +42,7 @@ std::vector<int> low_variance_resample(const std::vector<double>& weights, int c
   const int last = static_cast<int>(weights.size()) - 1;
   for (int m = 0; m < count; ++m) {
     const double target = r + m * step;
-    while (target > c && i < last) c += weights[static_cast<size_t>(++i)];
+    while (c <= target && i < last) c += weights[static_cast<size_t>(++i)];  // skips zero weights
     out.push_back(i);
   }
   return out;
