@@ -28,6 +28,7 @@
 // draws, so the same seed and the same request sequence give the same answers on every platform.
 #include "daemon/engine/events.hpp"
 #include "daemon/engine/outputs.hpp"
+#include "estimators/lie/se2.hpp"
 #include "replay/interpolated_trajectory.hpp"
 
 #include <cstdint>
