@@ -1,8 +1,58 @@
 #include "daemon/config/stage_config_readers.hpp"
+#include "estimators/filter/multi_source_ekf.hpp"
 
+#include <algorithm>
 #include <set>
 
 namespace sextant::config {
+
+namespace {
+
+// sources: {NAME: {body, predict, fuse: [x, y, yaw, vx, vy, vyaw], differential, gate, timeout_s}}
+void read_odometry_sources(Section& s, engine::FilterConfig& c) {
+  Section list = s.child("sources");
+  if (!list.node().IsDefined() || list.node().IsNull()) return;
+  if (!list.node().IsMap()) throw list.error("'" + list.path() + "': expected a map of source name -> settings");
+  const std::vector<std::string> names{"x", "y", "yaw", "vx", "vy", "vyaw"};
+  for (const auto& kv : list.node()) {
+    const auto name = kv.first.as<std::string>();
+    Section e = list.child(name);
+    engine::FilterConfig::OdometrySource o;
+    e.get("body", o.body);
+    e.get("predict", o.predict);
+    std::vector<std::string> fuse;
+    e.get("fuse", fuse);
+    if (e.node()["fuse"].IsDefined()) {
+      o.fuse.fill(false);
+      for (const auto& f : fuse) {
+        const auto at = std::find(names.begin(), names.end(), f);
+        if (at == names.end()) throw e.error_at(e.node()["fuse"], "'" + e.path() + ".fuse': unknown component '" + f + "' (x, y, yaw, vx, vy, vyaw)");
+        o.fuse[static_cast<size_t>(at - names.begin())] = true;
+      }
+    }
+    e.get("differential", o.differential);
+    e.get("gate", o.gate, non_negative());
+    e.get("timeout_s", o.timeout_s, non_negative());
+    e.reject_unknown_keys();
+    if (o.body.empty()) o.body = name;
+    c.sources[name] = o;
+  }
+  // Each body's sources must make a valid filter; a body without a predicting source gets the unlisted source of
+  // its own name as its predictor.
+  std::map<std::string, std::map<std::string, filter::OdometrySourceOptions>> bodies;
+  for (const auto& [name, o] : c.sources) bodies[o.body][name] = {o.predict, o.fuse, o.differential, o.gate, o.timeout_s};
+  for (auto& [body, sources] : bodies) {
+    const bool has_predictor = std::any_of(sources.begin(), sources.end(), [](const auto& kv) { return kv.second.predict; });
+    if (!has_predictor && !c.sources.contains(body)) sources[body].predict = true;
+    try {
+      filter::MultiSourceEkf::validate(sources);
+    } catch (const std::invalid_argument& ex) {
+      throw list.error("'" + list.path() + "': body '" + body + "': " + ex.what());
+    }
+  }
+}
+
+}  // namespace
 
 void read_stage_config(Section& s, engine::FilterConfig& c) {
   s.get("type", c.type, one_of({"ekf", "pf", "none"}));
@@ -34,6 +84,7 @@ void read_stage_config(Section& s, engine::FilterConfig& c) {
   pf.get("confirmations", c.pf.confirmations, int_in_range(1, 1000000));
   pf.get("tentative_lifetime", c.pf.tentative_lifetime, int_in_range(1, 1000000));
   pf.reject_unknown_keys();
+  read_odometry_sources(s, c);
   s.reject_unknown_keys();
 }
 

@@ -1,18 +1,64 @@
 #include "daemon/engine/filter_stage.hpp"
 
-#include "daemon/engine/dead_reckoning_stage.hpp"
-
-#include <Eigen/Eigenvalues>
+#include <algorithm>
 
 namespace sextant::engine {
 namespace {
 
-constexpr int kOdometryRank = 0, kSightingsRank = 1;  // equal stamps: predict first, then update
+constexpr int kPredictRank = 0, kMeasureRank = 1, kSightingsRank = 2;  // order at equal stamps
+constexpr int kPlanar[3] = {0, 1, 5};                                   // x, y, yaw in sextant's 6-D tangent order
+
+Eigen::Matrix3d planar_block(const Matrix6& m) {
+  Eigen::Matrix3d out;
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c) out(r, c) = m(kPlanar[r], kPlanar[c]);
+  return out;
+}
+
+filter::PlanarOdometry planar_odometry(const Odometry& o) {
+  filter::PlanarOdometry m;
+  m.utime = o.utime;
+  m.pose = SE2::from_se3(SE3(o.pose.orientation, o.pose.position));
+  m.covariance = planar_block(o.covariance);
+  if (o.increment_covariance) m.increment_covariance = planar_block(*o.increment_covariance);
+  if (o.twist) {
+    m.twist = Eigen::Vector3d(o.twist->linear.x(), o.twist->linear.y(), o.twist->angular.z());
+    m.twist_covariance = planar_block(o.twist->covariance);
+  }
+  return m;
+}
 
 }  // namespace
 
+std::string FilterStage::body_of(const std::string& source) const {
+  auto it = config_.sources.find(source);
+  return it == config_.sources.end() || it->second.body.empty() ? source : it->second.body;
+}
+
+bool FilterStage::predicts(const std::string& source) const {
+  auto it = config_.sources.find(source);
+  return it == config_.sources.end() || it->second.predict;  // unlisted: a body of its own, or its body's predictor
+}
+
+FilterStage::Track FilterStage::new_track(const std::string& body) const {
+  filter::PlanarEkfOptions opt;
+  opt.gate = config_.gate;
+  opt.slam = config_.slam;
+  opt.max_landmarks = config_.max_landmarks;
+  std::map<std::string, filter::OdometrySourceOptions> sources;
+  for (const auto& [name, s] : config_.sources)
+    if (body_of(name) == body) sources[name] = {s.predict, s.fuse, s.differential, s.gate, s.timeout_s};
+  const bool has_predictor = std::any_of(sources.begin(), sources.end(), [](const auto& kv) { return kv.second.predict; });
+  if (!has_predictor && !config_.sources.contains(body)) sources[body].predict = true;  // the body's own, unlisted source
+  const double sxy = config_.initial_sigma_xy, sth = config_.initial_sigma_theta;
+  Track t{filter::MultiSourceEkf(opt, Eigen::Vector3d(sxy * sxy, sxy * sxy, sth * sth).asDiagonal(), std::move(sources),
+                                 config_.min_increment_variance)};
+  for (const auto& l : config_.map) t.fusion.ekf().set_known_landmark(l.id, {l.x, l.y});
+  return t;
+}
+
 void FilterStage::handle(const Event& e, const Emit& emit) {
-  const std::string* source = nullptr;
+  std::string body;
   int64_t utime = 0;
   int rank = 0;
   Input in;
@@ -21,32 +67,31 @@ void FilterStage::handle(const Event& e, const Emit& emit) {
       ++not_planar_;
       return;
     }
-    source = &o->source, utime = o->utime, rank = kOdometryRank, in = *o;
+    body = body_of(o->source), utime = o->utime, rank = predicts(o->source) ? kPredictRank : kMeasureRank, in = *o;
   } else if (const auto* s = std::get_if<LandmarkSightings>(&e)) {
     if (!s->planar) {
       ++not_planar_;
       return;
     }
-    if (!histories_.contains(s->source)) {
+    body = body_of(s->source), utime = s->utime, rank = kSightingsRank, in = *s;
+    if (!histories_.contains(body)) {
       ++before_odometry_;
       return;
     }
-    source = &s->source, utime = s->utime, rank = kSightingsRank, in = *s;
   } else {
     return;
   }
-  auto it = histories_.find(*source);
-  if (it == histories_.end())
-    it = histories_.try_emplace(*source, static_cast<int64_t>(config_.history_s * 1e6), Track()).first;
+  auto it = histories_.find(body);
+  if (it == histories_.end()) it = histories_.try_emplace(body, static_cast<int64_t>(config_.history_s * 1e6), new_track(body)).first;
   const auto outcome = it->second.add(utime, rank, std::move(in), [this](Track& t, const Input& x) { apply(t, x); });
   if (outcome == History::Outcome::too_late) ++too_late_;
   else if (outcome == History::Outcome::reapplied) ++reapplied_;
   const Track& t = it->second.state();
-  if (rank == kOdometryRank && t.started && t.utime == utime) {
-    auto [p, first] = published_.try_emplace(*source, utime);
+  if (rank == kPredictRank && t.fusion.started() && t.fusion.utime() == utime) {
+    auto [p, first] = published_.try_emplace(body, utime);
     if (first || p->second < utime) {
       p->second = utime;
-      publish(*source, t, emit);
+      publish(body, t, emit);
     }
   }
 }
@@ -57,50 +102,20 @@ void FilterStage::apply(Track& t, const Input& in) const {
 }
 
 void FilterStage::apply_odometry(Track& t, const Odometry& o) const {
-  const SE2 odom = SE2::from_se3(SE3(o.pose.orientation, o.pose.position));
-  if (!t.started) {
-    filter::PlanarEkfOptions opt;
-    opt.gate = config_.gate;
-    opt.slam = config_.slam;
-    opt.max_landmarks = config_.max_landmarks;
-    t.ekf = filter::PlanarEkf(opt);
-    for (const auto& l : config_.map) t.ekf.set_known_landmark(l.id, {l.x, l.y});
-    const double sxy = config_.initial_sigma_xy, sth = config_.initial_sigma_theta;
-    t.ekf.initialize(odom, Eigen::Vector3d(sxy * sxy, sxy * sxy, sth * sth).asDiagonal());
-    t.started = true;
-  } else {
-    if (o.utime <= t.utime) {  // inputs come in utime order: only an equal stamp gets here
-      ++t.duplicates;
-      return;
-    }
-    const SE2 delta = t.last_odom.between(odom);
-    Matrix6 q6;
-    if (o.increment_covariance) {
-      q6 = *o.increment_covariance;
-    } else {  // differential mode, as dead reckoning does it
-      q6 = o.covariance - DeadReckoningStage::propagate(t.last_covariance, delta.to_se3(), Matrix6::Zero());
-    }
-    Eigen::Matrix3d Q;
-    const int idx[3] = {0, 1, 5};
-    for (int r = 0; r < 3; ++r)
-      for (int c = 0; c < 3; ++c) Q(r, c) = q6(idx[r], idx[c]);
-    Q = (0.5 * (Q + Q.transpose())).eval();
-    Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(Q);
-    Q = eig.eigenvectors() * eig.eigenvalues().cwiseMax(config_.min_increment_variance).asDiagonal() *
-        eig.eigenvectors().transpose();
-    t.ekf.predict(delta, Q);
-    ++t.predictions;
+  switch (t.fusion.odometry(o.source, planar_odometry(o))) {
+    case filter::OdometryOutcome::predicted: ++t.predictions; break;
+    case filter::OdometryOutcome::duplicate: ++t.duplicates; break;
+    case filter::OdometryOutcome::unknown_source: ++t.unknown_sources; break;
+    default: break;  // the fusion counts per source
   }
-  t.last_odom = odom;
-  t.last_covariance = o.covariance;
-  t.utime = o.utime;
 }
 
-void FilterStage::publish(const std::string& source, const Track& t, const Emit& emit) const {
-  const SE2 pose = t.ekf.pose();
+void FilterStage::publish(const std::string& body, const Track& t, const Emit& emit) const {
+  const filter::PlanarEkf& ekf = t.fusion.ekf();
+  const SE2 pose = ekf.pose();
   FusedPose out;
-  out.utime = t.utime;
-  out.source = source;
+  out.utime = t.fusion.utime();
+  out.source = body;
   out.estimator = "ekf";
   out.planar = true;
   const SE3 p3 = pose.to_se3();
@@ -109,32 +124,33 @@ void FilterStage::publish(const std::string& source, const Track& t, const Emit&
   // (x, y, theta) covariance -> right perturbation in the body frame: delta_body = blockdiag(R^T, 1) delta_global.
   Eigen::Matrix3d J = Eigen::Matrix3d::Identity();
   J.topLeftCorner<2, 2>() = pose.rotation().matrix().transpose();
-  const Eigen::Matrix3d Pb = J * t.ekf.pose_covariance() * J.transpose();
-  const int idx[3] = {0, 1, 5};
+  const Eigen::Matrix3d Pb = J * ekf.pose_covariance() * J.transpose();
   for (int r = 0; r < 3; ++r)
-    for (int c = 0; c < 3; ++c) out.covariance(idx[r], idx[c]) = Pb(r, c);
+    for (int c = 0; c < 3; ++c) out.covariance(kPlanar[r], kPlanar[c]) = Pb(r, c);
   emit(out);
 }
 
 void FilterStage::apply_landmarks(Track& t, const LandmarkSightings& s) const {
-  if (!t.started) {
+  t.fusion.advance(s.utime);
+  if (!t.fusion.started()) {
     ++t.before_odometry;
     return;
   }
+  filter::PlanarEkf& ekf = t.fusion.ekf();
   std::vector<filter::Sighting> unidentified;
   for (const auto& ob : s.observations) {
     if (ob.id < 0) {
       unidentified.push_back({ob.range, ob.azimuth, ob.covariance.topLeftCorner<2, 2>()});
       continue;
     }
-    const auto r = t.ekf.observe(ob.id, ob.range, ob.azimuth, ob.covariance.topLeftCorner<2, 2>());
+    const auto r = ekf.observe(ob.id, ob.range, ob.azimuth, ob.covariance.topLeftCorner<2, 2>());
     if (r.accepted) (r.reason == "new_landmark" ? t.new_landmarks : t.updates)++;
     else if (r.reason == "gate") ++t.gated;
     else if (r.reason == "unknown_landmark") ++t.unknown;
     else ++t.rejected;
   }
   if (!unidentified.empty()) {
-    const auto a = t.ekf.observe_unidentified(unidentified);
+    const auto a = ekf.observe_unidentified(unidentified);
     t.associated += a.paired;
     t.gated += a.gated;
     t.tentative += a.tentative;
@@ -143,37 +159,52 @@ void FilterStage::apply_landmarks(Track& t, const LandmarkSightings& s) const {
 }
 
 Counters FilterStage::counters() const {
-  Track sum;
-  for (const auto& [source, h] : histories_) {
+  int64_t predictions = 0, updates = 0, gated = 0, new_landmarks = 0, unknown = 0, rejected = 0, before = 0, associated = 0,
+          tentative = 0, duplicates = 0, unknown_sources = 0;
+  std::map<std::string, filter::SourceCounters> sources;
+  for (const auto& [body, h] : histories_) {
     const Track& t = h.state();
-    sum.predictions += t.predictions, sum.updates += t.updates, sum.gated += t.gated;
-    sum.new_landmarks += t.new_landmarks, sum.unknown += t.unknown, sum.rejected += t.rejected;
-    sum.before_odometry += t.before_odometry, sum.associated += t.associated, sum.tentative += t.tentative;
-    sum.duplicates += t.duplicates;
+    predictions += t.predictions, updates += t.updates, gated += t.gated, new_landmarks += t.new_landmarks;
+    unknown += t.unknown, rejected += t.rejected, before += t.before_odometry, associated += t.associated;
+    tentative += t.tentative, duplicates += t.duplicates, unknown_sources += t.unknown_sources;
+    for (const auto& [name, c] : t.fusion.counters()) sources[name] = c;
   }
-  return {{"predictions", sum.predictions},
-          {"updates", sum.updates},
-          {"gated", sum.gated},
-          {"new_landmarks", sum.new_landmarks},
-          {"unknown_landmarks", sum.unknown},
-          {"rejected", sum.rejected},
-          {"not_planar", not_planar_},
-          {"landmarks_before_odometry", before_odometry_ + sum.before_odometry},
-          {"associated", sum.associated},
-          {"tentative_landmarks", sum.tentative},
-          {"duplicate_stamps", sum.duplicates},
-          {"too_late", too_late_},
-          {"late_reapplied", reapplied_}};
+  Counters out = {{"predictions", predictions},
+                  {"updates", updates},
+                  {"gated", gated},
+                  {"new_landmarks", new_landmarks},
+                  {"unknown_landmarks", unknown},
+                  {"rejected", rejected},
+                  {"not_planar", not_planar_},
+                  {"landmarks_before_odometry", before_odometry_ + before},
+                  {"associated", associated},
+                  {"tentative_landmarks", tentative},
+                  {"duplicate_stamps", duplicates},
+                  {"too_late", too_late_},
+                  {"late_reapplied", reapplied_}};
+  // Per configured source (the measurement sources of multi-source bodies): fused, gated, rejected, timeouts, and
+  // whether it is silent now.
+  for (const auto& [name, cfg] : config_.sources) {
+    auto it = sources.find(name);
+    if (it == sources.end()) continue;
+    const auto& c = it->second;
+    out.push_back({"source." + name + ".fused", c.fused});
+    out.push_back({"source." + name + ".gated", c.gated});
+    out.push_back({"source." + name + ".rejected", c.rejected});
+    out.push_back({"source." + name + ".timeouts", c.timeouts});
+    out.push_back({"source." + name + ".silent", c.silent ? 1 : 0});
+  }
+  return out;
 }
 
-std::map<int64_t, Eigen::Vector2d> FilterStage::landmarks(const std::string& source) const {
-  const auto* e = ekf(source);
+std::map<int64_t, Eigen::Vector2d> FilterStage::landmarks(const std::string& body) const {
+  const auto* e = ekf(body);
   return e == nullptr ? std::map<int64_t, Eigen::Vector2d>{} : e->landmarks();
 }
 
-const filter::PlanarEkf* FilterStage::ekf(const std::string& source) const {
-  auto it = histories_.find(source);
-  return it == histories_.end() || !it->second.state().started ? nullptr : &it->second.state().ekf;
+const filter::PlanarEkf* FilterStage::ekf(const std::string& body) const {
+  auto it = histories_.find(body);
+  return it == histories_.end() || !it->second.state().fusion.started() ? nullptr : &it->second.state().fusion.ekf();
 }
 
 }  // namespace sextant::engine

@@ -1,20 +1,23 @@
 #pragma once
-// The filter stage: one planar EKF (estimators/filter/planar_ekf.hpp) per odometry source.  Odometry predicts
-// (the increment between consecutive odometry poses, with the message's increment covariance) and publishes a
-// FusedPose "ekf" at the odometry rate; landmark sightings update.  The covariance published is converted from the
-// filter's (x, y, theta) parameterization to sextant's right perturbation in the body frame.
+// The filter stage: one planar EKF per body (estimators/filter/multi_source_ekf.hpp).  odometry_t.source names an
+// odometry source; `FilterConfig::sources` maps sources to bodies (an unlisted source is a body of its own).  The
+// body's predicting source drives the prediction and publishes a FusedPose "ekf" (source = the body) at its rate;
+// its other sources are fused as differential increments, absolute poses or integrated twists, with their masks,
+// gates and timeouts; landmark sightings (landmarks_t.source: the body, or one of its sources) update.  The
+// covariance published is converted from the filter's (x, y, theta) parameterization to sextant's right
+// perturbation in the body frame.
 //
-// Late measurements (estimators/filter/measurement_history.hpp): each filter keeps `history_s` of its inputs; an
+// Late measurements (estimators/filter/measurement_history.hpp): each body keeps `history_s` of its inputs; an
 // odometry message or a sighting older than the newest input but inside that window is inserted in time order and
-// everything after it re-applied (equal stamps: odometry before sightings), so the result is the one in-order
-// arrival gives.  A pose is published only for the newest odometry (published stamps never go backwards; a late
-// correction shows in the next one).  Older than the window: counted as "too_late" and dropped.  A second odometry
-// message of a source with the same utime is counted as "duplicate_stamps" and dropped.
+// everything after it re-applied (equal stamps: the predicting source, then other sources, then sightings), so the
+// result is the one in-order arrival gives.  A pose is published only for the newest prediction (published stamps
+// never go backwards; a late correction shows in the next one).  Older than the window: counted as "too_late" and
+// dropped.  A second odometry message of a source with the same utime is counted as "duplicate_stamps".
 // 3-D sources are not handled yet (counted as "not_planar").
 #include "daemon/engine/filter_stage_config.hpp"
 #include "daemon/engine/stage.hpp"
 #include "estimators/filter/measurement_history.hpp"
-#include "estimators/filter/planar_ekf.hpp"
+#include "estimators/filter/multi_source_ekf.hpp"
 
 #include <map>
 
@@ -31,34 +34,34 @@ class FilterStage final : public Stage {
   void handle(const Event& e, const Emit& emit) override;
   Counters counters() const override;
 
-  /// The landmark estimates of a source's filter (known map and SLAM landmarks).
-  std::map<int64_t, Eigen::Vector2d> landmarks(const std::string& source) const;
-  /// The current EKF of a source (nullptr before its first odometry message), for tests.
-  const filter::PlanarEkf* ekf(const std::string& source) const;
+  /// The landmark estimates of a body's filter (known map and SLAM landmarks).
+  std::map<int64_t, Eigen::Vector2d> landmarks(const std::string& body) const;
+  /// The current EKF of a body (nullptr before its first prediction), for tests.
+  const filter::PlanarEkf* ekf(const std::string& body) const;
+  /// The body an odometry source (or a sightings' source) belongs to.
+  std::string body_of(const std::string& source) const;
 
  private:
-  // Everything one filter has consumed, counters included: the history copies it into checkpoints and re-applies
-  // inputs to it, so re-application never counts twice.
+  // Everything one body's filter has consumed, counters included: the history copies it into checkpoints and
+  // re-applies inputs to it, so re-application never counts twice.
   struct Track {
-    filter::PlanarEkf ekf;
-    bool started = false;
-    SE2 last_odom;
-    Matrix6 last_covariance = Matrix6::Zero();
-    int64_t utime = 0;  // of the newest odometry applied
+    filter::MultiSourceEkf fusion;
     int64_t predictions = 0, updates = 0, gated = 0, new_landmarks = 0, unknown = 0, rejected = 0,
-            before_odometry = 0, associated = 0, tentative = 0, duplicates = 0;
+            before_odometry = 0, associated = 0, tentative = 0, duplicates = 0, unknown_sources = 0;
   };
   using Input = std::variant<Odometry, LandmarkSightings>;
   using History = filter::MeasurementHistory<Track, Input>;
 
+  Track new_track(const std::string& body) const;
   void apply(Track& t, const Input& in) const;
   void apply_odometry(Track& t, const Odometry& o) const;
   void apply_landmarks(Track& t, const LandmarkSightings& s) const;
-  void publish(const std::string& source, const Track& t, const Emit& emit) const;
+  void publish(const std::string& body, const Track& t, const Emit& emit) const;
+  bool predicts(const std::string& source) const;
 
   FilterConfig config_;
-  std::map<std::string, History> histories_;
-  std::map<std::string, int64_t> published_;  // newest utime published per source
+  std::map<std::string, History> histories_;  // by body
+  std::map<std::string, int64_t> published_;  // newest utime published per body
   int64_t not_planar_ = 0, before_odometry_ = 0, too_late_ = 0, reapplied_ = 0;
 };
 

@@ -1,5 +1,7 @@
 #pragma once
+#include <array>
 #include <cstdint>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -31,6 +33,19 @@ struct FilterConfig {
     double x = 0, y = 0;
   };
   std::vector<Landmark> map;  // known landmarks (map frame)
+  /// Odometry sources (odometry_t.source) and the body each belongs to (estimators/filter/multi_source_ekf.hpp):
+  /// one filter per body; exactly one source of a body predicts, the others are fused as measurements.  A source
+  /// not listed is a body of its own that predicts; a body without a predicting source gets the unlisted source of
+  /// its own name as its predictor (so `vo: {body: robot1}` adds vo to robot1's own odometry).
+  struct OdometrySource {
+    std::string body;  // "" = the source's own name
+    bool predict = false;
+    std::array<bool, 6> fuse{true, true, true, false, false, false};  // x, y, yaw, vx, vy, vyaw
+    bool differential = true;
+    double gate = 0;       // chi-square threshold on the fused components; 0 = none
+    double timeout_s = 0;  // 0 = never
+  };
+  std::map<std::string, OdometrySource> sources;
   ParticleFilterConfig pf;
 };
 

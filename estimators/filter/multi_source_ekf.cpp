@@ -24,8 +24,16 @@ bool any(const std::array<bool, 6>& f, int from, int to) {
 MultiSourceEkf::MultiSourceEkf(const PlanarEkfOptions& options, const Eigen::Matrix3d& initial_covariance,
                                std::map<std::string, OdometrySourceOptions> sources, double min_increment_variance)
     : options_(options), initial_covariance_(initial_covariance), min_variance_(min_increment_variance), ekf_(options) {
+  validate(sources);
+  for (const auto& [name, o] : sources) {
+    sources_[name].options = o;
+    counters_[name];
+  }
+}
+
+void MultiSourceEkf::validate(const std::map<std::string, OdometrySourceOptions>& sources) {
   int predicting = 0;
-  for (auto& [name, o] : sources) {
+  for (const auto& [name, o] : sources) {
     if (o.predict) {
       ++predicting;
       if (!(o.fuse[0] && o.fuse[1] && o.fuse[2]) || any(o.fuse, 3, 6))
@@ -36,8 +44,6 @@ MultiSourceEkf::MultiSourceEkf(const PlanarEkfOptions& options, const Eigen::Mat
         throw std::invalid_argument("odometry source '" + name + "': a differential pose and velocities fuse the same motion twice");
     }
     if (o.gate < 0 || o.timeout_s < 0) throw std::invalid_argument("odometry source '" + name + "': negative gate or timeout");
-    sources_[name].options = o;
-    counters_[name];
   }
   if (predicting != 1)
     throw std::invalid_argument("a body needs exactly one odometry source with predict (has " + std::to_string(predicting) + ")");

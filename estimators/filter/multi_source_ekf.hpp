@@ -77,6 +77,9 @@ class MultiSourceEkf {
   MultiSourceEkf(const PlanarEkfOptions& options, const Eigen::Matrix3d& initial_covariance,
                  std::map<std::string, OdometrySourceOptions> sources, double min_increment_variance = 1e-10);
 
+  /// Throws std::invalid_argument unless the sources make a valid body (the rules of the constructor).
+  static void validate(const std::map<std::string, OdometrySourceOptions>& sources);
+
   OdometryOutcome odometry(const std::string& source, const PlanarOdometry& m);
   /// Advances the body's clock to `utime` (any input of the body does): sources silent for longer than their
   /// timeout are reported.
