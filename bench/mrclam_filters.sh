@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
-# ATE of dead reckoning, EKF localization (known map) and EKF-SLAM on MRCLAM Dataset 7, robots 1-5.
-# Usage: bench/mrclam_filters.sh [BUILD_DIR]   (prints a markdown table)
+# ATE of dead reckoning, EKF localization (known map), EKF-SLAM and FastSLAM 2.0 (SLAM, PF_PARTICLES particles,
+# default "100 1000") on MRCLAM Dataset 7, robots 1-5 (ROBOTS, default "1 2 3 4 5").
+# Usage: [PF_PARTICLES="100"] [ROBOTS="1"] bench/mrclam_filters.sh [BUILD_DIR]   (prints a markdown table)
 set -euo pipefail
 build=${1:-build}
 root=$(cd "$(dirname "$0")/.." && pwd)
@@ -8,14 +9,27 @@ data="$root/../shared/data/landmarks/MRCLAM_Dataset7"
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 printf 'daemon:\n  queue_capacity: 4096\nengine:\n  filter:\n    slam: true\n    initial_sigma_xy: 0.02\n    initial_sigma_theta: 0.02\n' > "$work/slam.yaml"
+particles=${PF_PARTICLES-100 1000}
+robots=${ROBOTS:-1 2 3 4 5}
+for n in $particles; do
+  printf 'daemon:\n  queue_capacity: 4096\nengine:\n  filter:\n    type: pf\n    slam: true\n    initial_sigma_xy: 0.02\n    initial_sigma_theta: 0.02\n    pf:\n      particles: %d\n      seed: 1\n' "$n" > "$work/pf$n.yaml"
+done
 ate() { "$root/$build/bin/sextant" eval --gt "$1" --est "$2" --json | python3 -c 'import json,sys; print("%.3f" % json.load(sys.stdin)["ate_rmse"])'; }
-echo "| robot | dead reckoning ATE [m] | EKF localization, known map [m] | EKF-SLAM [m] | SLAM / dead reckoning |"
-echo "|---|---|---|---|---|"
-for r in 1 2 3 4 5; do
+pf_head=""; pf_rule=""
+for n in $particles; do pf_head="$pf_head FastSLAM 2.0, $n particles [m] | FastSLAM $n / dead reckoning |"; pf_rule="$pf_rule---|---|"; done
+echo "| robot | dead reckoning ATE [m] | EKF localization, known map [m] | EKF-SLAM [m] | SLAM / dead reckoning |$pf_head"
+echo "|---|---|---|---|---|$pf_rule"
+for r in $robots; do
   "$root/$build/bin/sextant" convert mrclam "$data" --robot $r -o "$work/r.lcm" --gt-out "$work/gt.txt" > /dev/null
   "$root/$build/bin/sextant" replay "$work/r.lcm" --config "$root/config/mrclam.yaml" --estimator dead_reckoning --tum-out "$work/dr.txt" > /dev/null
-  "$root/$build/bin/sextant" replay "$work/r.lcm" --config "$root/config/mrclam.yaml" --tum-out "$work/loc.txt" > /dev/null
-  "$root/$build/bin/sextant" replay "$work/r.lcm" --config "$work/slam.yaml" --tum-out "$work/slam.txt" > /dev/null
+  "$root/$build/bin/sextant" replay "$work/r.lcm" --config "$root/config/mrclam.yaml" --estimator ekf --tum-out "$work/loc.txt" > /dev/null
+  "$root/$build/bin/sextant" replay "$work/r.lcm" --config "$work/slam.yaml" --estimator ekf --tum-out "$work/slam.txt" > /dev/null
   dr=$(ate "$work/gt.txt" "$work/dr.txt"); loc=$(ate "$work/gt.txt" "$work/loc.txt"); slam=$(ate "$work/gt.txt" "$work/slam.txt")
-  echo "| $r | $dr | $loc | $slam | $(python3 -c "print('%.2f' % ($slam / $dr))") |"
+  pf_cells=""
+  for n in $particles; do
+    "$root/$build/bin/sextant" replay "$work/r.lcm" --config "$work/pf$n.yaml" --estimator pf --tum-out "$work/pf.txt" > /dev/null
+    pf=$(ate "$work/gt.txt" "$work/pf.txt")
+    pf_cells="$pf_cells $pf | $(python3 -c "print('%.2f' % ($pf / $dr))") |"
+  done
+  echo "| $r | $dr | $loc | $slam | $(python3 -c "print('%.2f' % ($slam / $dr))") |$pf_cells"
 done

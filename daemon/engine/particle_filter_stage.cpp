@@ -52,7 +52,9 @@ void ParticleFilterStage::on_odometry(const Odometry& o, const Emit& emit) {
     t.utime = o.utime;
   }
   const Track& t = it->second;
-  const SE2 pose = t.pf.mean_pose();
+  SE2 pose;
+  Eigen::Matrix3d covariance;
+  t.pf.mixture(&pose, &covariance);
   FusedPose out;
   out.utime = o.utime;
   out.source = o.source;
@@ -61,7 +63,7 @@ void ParticleFilterStage::on_odometry(const Odometry& o, const Emit& emit) {
   const SE3 p3 = pose.to_se3();
   out.pose.position = p3.translation();
   out.pose.orientation = p3.rotation().quaternion();
-  out.covariance = planar_covariance_in_body_frame(pose, t.pf.pose_covariance());
+  out.covariance = planar_covariance_in_body_frame(pose, covariance);
   emit(out);
 }
 

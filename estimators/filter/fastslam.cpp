@@ -345,8 +345,12 @@ void FastSlam::resample() {
   ++resamplings_;
 }
 
-SE2 FastSlam::mean_pose() const {
-  if (particles_.empty()) return SE2();
+void FastSlam::mixture(SE2* mean, Eigen::Matrix3d* covariance) const {
+  if (particles_.empty()) {
+    if (mean) *mean = SE2();
+    if (covariance) covariance->setZero();
+    return;
+  }
   const std::vector<double> w = weights();
   Eigen::Vector2d t = Eigen::Vector2d::Zero();
   double c = 0, s = 0;
@@ -355,21 +359,28 @@ SE2 FastSlam::mean_pose() const {
     c += w[i] * std::cos(particles_[i].pose.mean[2]);
     s += w[i] * std::sin(particles_[i].pose.mean[2]);
   }
-  return SE2(t.x(), t.y(), std::atan2(s, c));
-}
-
-Eigen::Matrix3d FastSlam::pose_covariance() const {
+  const Eigen::Vector3d m(t.x(), t.y(), std::atan2(s, c));
+  if (mean) *mean = SE2(m[0], m[1], m[2]);
+  if (!covariance) return;
   Eigen::Matrix3d out = Eigen::Matrix3d::Zero();
-  if (particles_.empty()) return out;
-  const std::vector<double> w = weights();
-  const SE2 m = mean_pose();
-  const Eigen::Vector3d mean(m.translation().x(), m.translation().y(), m.angle());
   for (size_t i = 0; i < particles_.size(); ++i) {
-    Eigen::Vector3d d = particles_[i].pose.mean - mean;
+    Eigen::Vector3d d = particles_[i].pose.mean - m;
     d[2] = wrap_angle(d[2]);
     out += w[i] * (d * d.transpose() + particles_[i].pose.covariance);
   }
-  return 0.5 * (out + out.transpose());
+  *covariance = 0.5 * (out + out.transpose());
+}
+
+SE2 FastSlam::mean_pose() const {
+  SE2 m;
+  mixture(&m, nullptr);
+  return m;
+}
+
+Eigen::Matrix3d FastSlam::pose_covariance() const {
+  Eigen::Matrix3d c;
+  mixture(nullptr, &c);
+  return c;
 }
 
 std::map<int64_t, Eigen::Vector2d> FastSlam::landmarks() const {

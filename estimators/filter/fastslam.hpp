@@ -118,6 +118,8 @@ class FastSlam {
   /// sum_i w_i (d_i d_i' + P_i), d_i = s_hat_i - mean (theta difference wrapped).  Map-frame (x, y, theta).
   SE2 mean_pose() const;
   Eigen::Matrix3d pose_covariance() const;
+  /// Both at once (one pass over the weights); either pointer may be null.
+  void mixture(SE2* mean, Eigen::Matrix3d* covariance) const;
 
   const std::vector<Particle>& particles() const { return particles_; }
   std::vector<double> weights() const;
