@@ -13,6 +13,7 @@ namespace sextant::assoc {
 namespace {
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
+constexpr double kPromising = 0.0;  // relative margin above the best upper bound for a recovery to be improved
 
 // Clamped at 0: when the bounds meet, rounding can put the lower one a few ulps above the upper one.
 double relative_gap(double ub, double lb) { return std::abs(ub) > 1e-12 ? std::max(0.0, (ub - lb) / std::abs(ub)) : 0.0; }
@@ -258,6 +259,8 @@ ComponentResult solve_relaxation(const RelaxationProblem& P, int max_iterations,
   double best_ub = 0, best_lb = -kInf, factor = 1;
   int stalled = 0;
   std::vector<int> best;  // empty: every detection a false alarm, cost 0
+  ExchangeImprover exchange(P.packing, 4);
+  std::vector<std::vector<int>> recovered;  // recoveries already improved (the same one recurs across iterations)
   std::vector<double> reduced(T);
   std::vector<PairCost> pairs;
   std::vector<int> pair_tuple, row_tuple, column_tuple, relaxed;
@@ -319,7 +322,15 @@ ComponentResult solve_relaxation(const RelaxationProblem& P, int max_iterations,
     }
     // Upper bound: recovery, then exchange improvement.
     std::vector<int> feasible = recover(P, u, a);
-    const double ub = improve_by_exchange(P.packing, feasible);
+    std::sort(feasible.begin(), feasible.end());
+    double ub = 0;
+    for (int t : feasible) ub += P.cost[static_cast<size_t>(t)];
+    // Exchange moves on promising recoveries only (already as good as the best improved one: the first, and any
+    // that ties or beats it), each distinct one once.
+    if (ub <= best_ub + kPromising * std::abs(best_ub) && std::find(recovered.begin(), recovered.end(), feasible) == recovered.end()) {
+      recovered.push_back(feasible);
+      ub = exchange.improve(feasible, 3);
+    }
     if (ub < best_ub) best_ub = ub, best = feasible;
     if (relative_gap(best_ub, best_lb) <= gap_tolerance || g2 == 0) break;
     const double step = factor * std::max(best_ub - lb, 1e-9 * std::abs(best_ub)) / g2;

@@ -33,7 +33,8 @@ Triangulation triangulate_linear(const std::vector<BearingObservation>& obs) {
       HtY += h * h.dot(o.sensor);
     }
   }
-  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(N, Eigen::EigenvaluesOnly);
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig;
+  eig.computeDirect(N, Eigen::EigenvaluesOnly);  // closed form for 3 x 3
   t.condition = eig.eigenvalues().maxCoeff() / std::max(eig.eigenvalues().minCoeff(), 1e-300);
   if (!(eig.eigenvalues().minCoeff() > 1e-12 * eig.eigenvalues().maxCoeff())) {
     t.reason = "ill-conditioned geometry (lines of sight nearly parallel)";
@@ -77,7 +78,8 @@ Triangulation triangulate(const std::vector<BearingObservation>& obs, int steps,
       steps = it + 1;  // converged: one more pass for the covariance and residual at x
     }
   }
-  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(info, Eigen::EigenvaluesOnly);
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig;
+  eig.computeDirect(info, Eigen::EigenvaluesOnly);
   t.condition = eig.eigenvalues().maxCoeff() / std::max(eig.eigenvalues().minCoeff(), 1e-300);
   if (!(t.condition < max_condition)) {
     t.valid = false;

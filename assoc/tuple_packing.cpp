@@ -28,68 +28,80 @@ std::vector<std::vector<int>> independent_components(const TuplePacking& p) {
   return groups;
 }
 
-double improve_by_exchange(const TuplePacking& p, std::vector<int>& chosen, int max_passes) {
+ExchangeImprover::ExchangeImprover(const TuplePacking& p, int refill_candidates)
+    : p_(p), refill_candidates_(refill_candidates) {
   const size_t T = p.members.size(), D = static_cast<size_t>(p.detections);
-  std::vector<int> owner(D, -1);
-  std::vector<char> in(T, 0);
-  for (int t : chosen) {
-    in[static_cast<size_t>(t)] = 1;
-    for (int d : p.members[static_cast<size_t>(t)]) owner[static_cast<size_t>(d)] = t;
-  }
-  // Candidates, cheapest first; per detection its candidate tuples, cheapest first.
-  std::vector<int> order;
   for (size_t t = 0; t < T; ++t)
-    if (p.cost[t] < 0) order.push_back(static_cast<int>(t));
-  std::stable_sort(order.begin(), order.end(), [&](int a, int b) { return p.cost[static_cast<size_t>(a)] < p.cost[static_cast<size_t>(b)]; });
-  std::vector<std::vector<int>> of_detection(D);
-  for (int t : order)
-    for (int d : p.members[static_cast<size_t>(t)]) of_detection[static_cast<size_t>(d)].push_back(t);
-  // Stamps instead of clearing flags per move.
-  std::vector<long> dropped(T, -1), blocked(D, -1);
-  long stamp = 0;
+    if (p.cost[t] < 0) order_.push_back(static_cast<int>(t));
+  std::stable_sort(order_.begin(), order_.end(), [&](int a, int b) { return p.cost[static_cast<size_t>(a)] < p.cost[static_cast<size_t>(b)]; });
+  of_detection_.resize(D);
+  cheapest_.assign(D, 0.0);
+  for (int t : order_)
+    for (int d : p.members[static_cast<size_t>(t)]) {
+      of_detection_[static_cast<size_t>(d)].push_back(t);
+      cheapest_[static_cast<size_t>(d)] = std::min(cheapest_[static_cast<size_t>(d)], p.cost[static_cast<size_t>(t)]);
+    }
+  owner_.assign(D, -1);
+  in_.assign(T, 0);
+  dropped_.assign(T, -1);
+  blocked_.assign(D, -1);
+}
+
+double ExchangeImprover::improve(std::vector<int>& chosen, int max_passes) {
+  const auto& p = p_;
+  std::fill(owner_.begin(), owner_.end(), -1);
+  std::fill(in_.begin(), in_.end(), 0);
+  for (int t : chosen) {
+    in_[static_cast<size_t>(t)] = 1;
+    for (int d : p.members[static_cast<size_t>(t)]) owner_[static_cast<size_t>(d)] = t;
+  }
   std::vector<int> conflicts, freed, refill;
   for (int pass = 0; pass < max_passes; ++pass) {
     bool improved = false;
-    for (int t : order) {
-      if (in[static_cast<size_t>(t)]) continue;
-      ++stamp;
+    for (int t : order_) {
+      if (in_[static_cast<size_t>(t)]) continue;
+      const long stamp = ++stamp_;
       conflicts.clear(), freed.clear(), refill.clear();
       double delta = p.cost[static_cast<size_t>(t)];
       for (int d : p.members[static_cast<size_t>(t)]) {
-        blocked[static_cast<size_t>(d)] = stamp;
-        const int o = owner[static_cast<size_t>(d)];
-        if (o >= 0 && dropped[static_cast<size_t>(o)] != stamp) {
-          dropped[static_cast<size_t>(o)] = stamp, conflicts.push_back(o), delta -= p.cost[static_cast<size_t>(o)];
+        blocked_[static_cast<size_t>(d)] = stamp;
+        const int o = owner_[static_cast<size_t>(d)];
+        if (o >= 0 && dropped_[static_cast<size_t>(o)] != stamp) {
+          dropped_[static_cast<size_t>(o)] = stamp, conflicts.push_back(o), delta -= p.cost[static_cast<size_t>(o)];
         }
       }
+      double bound = delta;  // each refill tuple holds a freed detection of its own
       for (int o : conflicts)
         for (int d : p.members[static_cast<size_t>(o)])
-          if (blocked[static_cast<size_t>(d)] != stamp) freed.push_back(d);
+          if (blocked_[static_cast<size_t>(d)] != stamp) freed.push_back(d), bound += cheapest_[static_cast<size_t>(d)];
+      if (!(bound < -1e-9)) continue;
       // Greedy refill of the freed detections with tuples that fit.
       for (int d : freed) {
-        if (blocked[static_cast<size_t>(d)] == stamp) continue;
-        for (int c : of_detection[static_cast<size_t>(d)]) {
-          if (c == t || in[static_cast<size_t>(c)]) continue;
+        if (blocked_[static_cast<size_t>(d)] == stamp) continue;
+        int looked = 0;
+        for (int c : of_detection_[static_cast<size_t>(d)]) {
+          if (++looked > refill_candidates_) break;
+          if (c == t || in_[static_cast<size_t>(c)]) continue;
           bool fits = true;
           for (int m : p.members[static_cast<size_t>(c)]) {
-            const int o = owner[static_cast<size_t>(m)];
-            fits = fits && blocked[static_cast<size_t>(m)] != stamp && (o < 0 || dropped[static_cast<size_t>(o)] == stamp);
+            const int o = owner_[static_cast<size_t>(m)];
+            fits = fits && blocked_[static_cast<size_t>(m)] != stamp && (o < 0 || dropped_[static_cast<size_t>(o)] == stamp);
           }
           if (!fits) continue;
           refill.push_back(c), delta += p.cost[static_cast<size_t>(c)];
-          for (int m : p.members[static_cast<size_t>(c)]) blocked[static_cast<size_t>(m)] = stamp;
+          for (int m : p.members[static_cast<size_t>(c)]) blocked_[static_cast<size_t>(m)] = stamp;
           break;
         }
       }
       if (!(delta < -1e-9)) continue;
       for (int o : conflicts) {
-        in[static_cast<size_t>(o)] = 0;
-        for (int d : p.members[static_cast<size_t>(o)]) owner[static_cast<size_t>(d)] = -1;
+        in_[static_cast<size_t>(o)] = 0;
+        for (int d : p.members[static_cast<size_t>(o)]) owner_[static_cast<size_t>(d)] = -1;
       }
       refill.push_back(t);
       for (int c : refill) {
-        in[static_cast<size_t>(c)] = 1;
-        for (int d : p.members[static_cast<size_t>(c)]) owner[static_cast<size_t>(d)] = c;
+        in_[static_cast<size_t>(c)] = 1;
+        for (int d : p.members[static_cast<size_t>(c)]) owner_[static_cast<size_t>(d)] = c;
       }
       improved = true;
     }
@@ -97,9 +109,13 @@ double improve_by_exchange(const TuplePacking& p, std::vector<int>& chosen, int 
   }
   chosen.clear();
   double cost = 0;
-  for (size_t t = 0; t < T; ++t)
-    if (in[t]) chosen.push_back(static_cast<int>(t)), cost += p.cost[t];
+  for (size_t t = 0; t < in_.size(); ++t)
+    if (in_[t]) chosen.push_back(static_cast<int>(t)), cost += p.cost[t];
   return cost;
+}
+
+double improve_by_exchange(const TuplePacking& p, std::vector<int>& chosen, int max_passes) {
+  return ExchangeImprover(p).improve(chosen, max_passes);
 }
 
 }  // namespace sextant::assoc

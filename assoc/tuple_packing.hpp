@@ -20,8 +20,30 @@ struct TuplePacking {
 /// Groups of tuple indices, one per independent component (in order of their first tuple).
 std::vector<std::vector<int>> independent_components(const TuplePacking& p);
 
-/// Improves `chosen` (indices of pairwise disjoint tuples) in place by exchange moves; returns its cost.  At most
-/// `max_passes` sweeps over the tuples.
+/// Exchange improvement over one fixed tuple list (the per-list preparation is done once, then `improve` runs on
+/// each candidate solution).  A move is evaluated only when it can pay: its gain is bounded below by the tuple's
+/// cost minus the dropped ones plus, per freed detection, the cheapest tuple containing it; the refill looks at
+/// the `refill_candidates` cheapest tuples of each freed detection.
+class ExchangeImprover {
+ public:
+  explicit ExchangeImprover(const TuplePacking& p, int refill_candidates = 16);
+  /// Improves `chosen` (indices of pairwise disjoint tuples) in place; returns its cost.  At most `max_passes`
+  /// sweeps over the tuples.
+  double improve(std::vector<int>& chosen, int max_passes = 20);
+
+ private:
+  const TuplePacking& p_;
+  int refill_candidates_;
+  std::vector<int> order_;                      // tuples of negative cost, cheapest first
+  std::vector<std::vector<int>> of_detection_;  // per detection, its tuples of negative cost, cheapest first
+  std::vector<double> cheapest_;                // per detection, min(0, the cheapest tuple containing it)
+  std::vector<int> owner_;
+  std::vector<char> in_;
+  std::vector<long> dropped_, blocked_;
+  long stamp_ = 0;
+};
+
+/// ExchangeImprover(p).improve(chosen, max_passes).
 double improve_by_exchange(const TuplePacking& p, std::vector<int>& chosen, int max_passes = 20);
 
 }  // namespace sextant::assoc
