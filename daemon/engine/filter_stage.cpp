@@ -7,6 +7,7 @@ namespace {
 
 constexpr int kPredictRank = 0, kMeasureRank = 1, kSightingsRank = 2;  // order at equal stamps
 constexpr int kPlanar[3] = {0, 1, 5};                                   // x, y, yaw in sextant's 6-D tangent order
+constexpr size_t kMaxPending = 64;  // sighting batches waiting for the next prediction
 
 Eigen::Matrix3d planar_block(const Matrix6& m) {
   Eigen::Matrix3d out;
@@ -51,8 +52,9 @@ FilterStage::Track FilterStage::new_track(const std::string& body) const {
   const bool has_predictor = std::any_of(sources.begin(), sources.end(), [](const auto& kv) { return kv.second.predict; });
   if (!has_predictor && !config_.sources.contains(body)) sources[body].predict = true;  // the body's own, unlisted source
   const double sxy = config_.initial_sigma_xy, sth = config_.initial_sigma_theta;
-  Track t{filter::MultiSourceEkf(opt, Eigen::Vector3d(sxy * sxy, sxy * sxy, sth * sth).asDiagonal(), std::move(sources),
-                                 config_.min_increment_variance)};
+  Track t;
+  t.fusion = filter::MultiSourceEkf(opt, Eigen::Vector3d(sxy * sxy, sxy * sxy, sth * sth).asDiagonal(), std::move(sources),
+                                    config_.min_increment_variance);
   for (const auto& l : config_.map) t.fusion.ekf().set_known_landmark(l.id, {l.x, l.y});
   return t;
 }
@@ -102,7 +104,17 @@ void FilterStage::apply(Track& t, const Input& in) const {
 }
 
 void FilterStage::apply_odometry(Track& t, const Odometry& o) const {
-  switch (t.fusion.odometry(o.source, planar_odometry(o))) {
+  std::vector<int64_t> stops;
+  if (predicts(o.source) && !t.pending.empty() && t.fusion.started()) {
+    for (const auto& p : t.pending) stops.push_back(p.utime);
+  }
+  std::vector<LandmarkSightings> waiting;
+  waiting.swap(t.pending);
+  const auto outcome = t.fusion.odometry(o.source, planar_odometry(o), stops, [&](size_t i) { update_with(t, waiting[i]); });
+  // Sightings the prediction did not pass (duplicate stamp, a measurement source) wait for the next one.
+  for (auto& p : waiting)
+    if (outcome != filter::OdometryOutcome::predicted || p.utime >= o.utime) t.pending.push_back(std::move(p));
+  switch (outcome) {
     case filter::OdometryOutcome::predicted: ++t.predictions; break;
     case filter::OdometryOutcome::duplicate: ++t.duplicates; break;
     case filter::OdometryOutcome::unknown_source: ++t.unknown_sources; break;
@@ -136,6 +148,18 @@ void FilterStage::apply_landmarks(Track& t, const LandmarkSightings& s) const {
     ++t.before_odometry;
     return;
   }
+  if (s.utime <= t.fusion.utime()) {
+    update_with(t, s);
+    return;
+  }
+  if (t.pending.size() >= kMaxPending) {  // the predicting source is silent: do not hoard
+    t.pending.erase(t.pending.begin());
+    ++t.stale_sightings;
+  }
+  t.pending.push_back(s);
+}
+
+void FilterStage::update_with(Track& t, const LandmarkSightings& s) const {
   filter::PlanarEkf& ekf = t.fusion.ekf();
   std::vector<filter::Sighting> unidentified;
   for (const auto& ob : s.observations) {
@@ -160,13 +184,13 @@ void FilterStage::apply_landmarks(Track& t, const LandmarkSightings& s) const {
 
 Counters FilterStage::counters() const {
   int64_t predictions = 0, updates = 0, gated = 0, new_landmarks = 0, unknown = 0, rejected = 0, before = 0, associated = 0,
-          tentative = 0, duplicates = 0, unknown_sources = 0;
+          tentative = 0, duplicates = 0, unknown_sources = 0, stale = 0;
   std::map<std::string, filter::SourceCounters> sources;
   for (const auto& [body, h] : histories_) {
     const Track& t = h.state();
     predictions += t.predictions, updates += t.updates, gated += t.gated, new_landmarks += t.new_landmarks;
     unknown += t.unknown, rejected += t.rejected, before += t.before_odometry, associated += t.associated;
-    tentative += t.tentative, duplicates += t.duplicates, unknown_sources += t.unknown_sources;
+    tentative += t.tentative, duplicates += t.duplicates, unknown_sources += t.unknown_sources, stale += t.stale_sightings;
     for (const auto& [name, c] : t.fusion.counters()) sources[name] = c;
   }
   Counters out = {{"predictions", predictions},
@@ -180,6 +204,8 @@ Counters FilterStage::counters() const {
                   {"associated", associated},
                   {"tentative_landmarks", tentative},
                   {"duplicate_stamps", duplicates},
+                  {"unknown_sources", unknown_sources},
+                  {"sightings_without_prediction", stale},
                   {"too_late", too_late_},
                   {"late_reapplied", reapplied_}};
   // Per configured source (the measurement sources of multi-source bodies): fused, gated, rejected, timeouts, and

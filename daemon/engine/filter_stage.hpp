@@ -13,6 +13,10 @@
 // result is the one in-order arrival gives.  A pose is published only for the newest prediction (published stamps
 // never go backwards; a late correction shows in the next one).  Older than the window: counted as "too_late" and
 // dropped.  A second odometry message of a source with the same utime is counted as "duplicate_stamps".
+// Sightings taken between two predictions wait for the next one, which is split at their stamps (interpolated on
+// SE(2)) so that they update the pose they were taken from (applied at the previous prediction instead, a 2 m/s
+// robot with 50 Hz odometry and 10 Hz sightings was 1 cm off and its NEES four times too large).  At most 64
+// batches wait; older ones are dropped and counted ("sightings_without_prediction").
 // 3-D sources are not handled yet (counted as "not_planar").
 #include "daemon/engine/filter_stage_config.hpp"
 #include "daemon/engine/stage.hpp"
@@ -46,8 +50,10 @@ class FilterStage final : public Stage {
   // re-applies inputs to it, so re-application never counts twice.
   struct Track {
     filter::MultiSourceEkf fusion;
+    std::vector<LandmarkSightings> pending;  // taken after the newest prediction: applied inside the next one
     int64_t predictions = 0, updates = 0, gated = 0, new_landmarks = 0, unknown = 0, rejected = 0,
-            before_odometry = 0, associated = 0, tentative = 0, duplicates = 0, unknown_sources = 0;
+            before_odometry = 0, associated = 0, tentative = 0, duplicates = 0, unknown_sources = 0,
+            stale_sightings = 0;
   };
   using Input = std::variant<Odometry, LandmarkSightings>;
   using History = filter::MeasurementHistory<Track, Input>;
@@ -56,6 +62,7 @@ class FilterStage final : public Stage {
   void apply(Track& t, const Input& in) const;
   void apply_odometry(Track& t, const Odometry& o) const;
   void apply_landmarks(Track& t, const LandmarkSightings& s) const;
+  void update_with(Track& t, const LandmarkSightings& s) const;
   void publish(const std::string& body, const Track& t, const Emit& emit) const;
   bool predicts(const std::string& source) const;
 

@@ -68,7 +68,10 @@ void MultiSourceEkf::advance(int64_t utime) {
   }
 }
 
-OdometryOutcome MultiSourceEkf::odometry(const std::string& name, const PlanarOdometry& m) {
+OdometryOutcome MultiSourceEkf::odometry(const std::string& name, const PlanarOdometry& m) { return odometry(name, m, {}, {}); }
+
+OdometryOutcome MultiSourceEkf::odometry(const std::string& name, const PlanarOdometry& m, const std::vector<int64_t>& stops,
+                                         const std::function<void(size_t)>& at_stop) {
   auto it = sources_.find(name);
   if (it == sources_.end()) return OdometryOutcome::unknown_source;
   Source& s = it->second;
@@ -86,7 +89,23 @@ OdometryOutcome MultiSourceEkf::odometry(const std::string& name, const PlanarOd
       utime_ = m.utime;
       return OdometryOutcome::initialized;
     }
-    ekf_.predict(s.last->pose.between(m.pose), increment_noise(*s.last, m, min_variance_));
+    const SE2 delta = s.last->pose.between(m.pose);
+    const Eigen::Matrix3d Q = increment_noise(*s.last, m, min_variance_);
+    const Eigen::Vector3d tau = delta.log();
+    const auto t0 = static_cast<double>(s.last->utime), span = static_cast<double>(m.utime - s.last->utime);
+    SE2 reached;  // identity: the part of delta predicted so far
+    double done = 0;
+    for (size_t i = 0; i < stops.size(); ++i) {
+      if (stops[i] <= s.last->utime || stops[i] >= m.utime) continue;
+      const double a = (static_cast<double>(stops[i]) - t0) / span;
+      if (a > done) {
+        const SE2 target = SE2::exp(a * tau);
+        ekf_.predict(reached.between(target), (a - done) * Q);
+        reached = target, done = a;
+      }
+      if (at_stop) at_stop(i);
+    }
+    ekf_.predict(reached.between(delta), (1 - done) * Q);
     s.last = m;
     utime_ = m.utime;
     return OdometryOutcome::predicted;

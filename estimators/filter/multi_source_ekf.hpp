@@ -20,15 +20,17 @@
 // chi-square threshold on the normalized innovation of the fused components (0: none); rejected measurements are
 // counted.  Timeout: a source silent for more than `timeout_s` (measured on the body's newest input stamp) is
 // reported once and no longer fused; its first message afterwards re-anchors it (the gap's motion is not fused,
-// robot_localization#871).  Messages are applied at the state of the body's latest prediction (stamps of different
-// sources are not interpolated), like landmark sightings.
+// robot_localization#871).  Measurement sources are applied at the state of the body's latest prediction (their
+// stamps are not interpolated); landmark sightings can be placed between two predictions (the `stops` overload).
 #include "estimators/filter/planar_ekf.hpp"
 
 #include <array>
 #include <cstdint>
+#include <functional>
 #include <map>
 #include <optional>
 #include <string>
+#include <vector>
 
 namespace sextant::filter {
 
@@ -81,6 +83,13 @@ class MultiSourceEkf {
   static void validate(const std::map<std::string, OdometrySourceOptions>& sources);
 
   OdometryOutcome odometry(const std::string& source, const PlanarOdometry& m);
+  /// The same, for a message of the predicting source whose prediction passes through `stops` (utimes strictly
+  /// between the previous prediction and m.utime, increasing): the increment Delta is split by interpolation on
+  /// SE(2), Delta_a = Exp(a Log Delta) with a the fraction of the interval, its noise in proportion (a Q), and
+  /// `at_stop(i)` runs with the state predicted to stops[i] (to apply sightings taken between two odometry
+  /// messages at the pose they were taken from).  Stops outside the interval are skipped.
+  OdometryOutcome odometry(const std::string& source, const PlanarOdometry& m, const std::vector<int64_t>& stops,
+                           const std::function<void(size_t)>& at_stop);
   /// Advances the body's clock to `utime` (any input of the body does): sources silent for longer than their
   /// timeout are reported.
   void advance(int64_t utime);

@@ -220,3 +220,30 @@ TEST_CASE("odometry source configuration errors") {
   CHECK_THROWS_AS(MultiSourceEkf(PlanarEkfOptions{}, kP0, {{"a", masked_predict}}), std::invalid_argument);
   CHECK_NOTHROW(MultiSourceEkf(PlanarEkfOptions{}, kP0, {{"a", p}, {"b", m}}));
 }
+
+TEST_CASE("a prediction split at stops reaches the same pose, with the stops at the interpolated poses") {
+  OdometrySourceOptions wheel;
+  wheel.predict = true;
+  MultiSourceEkf split(PlanarEkfOptions{}, kP0, {{"wheel", wheel}}), whole(PlanarEkfOptions{}, kP0, {{"wheel", wheel}});
+  const SE2 a(1, 2, 0.3), b = a * SE2(0.04, 0.002, 0.02);  // one 20 ms step of a 2 m/s robot
+  split.odometry("wheel", reading(0, a, Eigen::Matrix3d::Zero(), kQw));
+  whole.odometry("wheel", reading(0, a, Eigen::Matrix3d::Zero(), kQw));
+  std::vector<SE2> at;
+  // reading(1) is 100 ms later: stops at 25 and 75 ms, one outside the interval, one repeated.
+  const std::vector<int64_t> stops{1'000'000 + 25'000, 1'000'000 + 25'000, 1'000'000 + 75'000, 1'000'000 + 200'000};
+  std::vector<size_t> called;
+  split.odometry("wheel", reading(1, b, Eigen::Matrix3d::Zero(), kQw), stops, [&](size_t i) {
+    called.push_back(i);
+    at.push_back(split.ekf().pose());
+  });
+  whole.odometry("wheel", reading(1, b, Eigen::Matrix3d::Zero(), kQw));
+  CHECK(called == std::vector<size_t>{0, 1, 2});
+  CHECK((vec(split.ekf().pose()) - vec(whole.ekf().pose())).norm() < 1e-12);
+  const Eigen::Vector3d tau = a.between(b).log();
+  CHECK((vec(at[0]) - vec(a * SE2::exp(0.25 * tau))).norm() < 1e-12);
+  CHECK((vec(at[2]) - vec(a * SE2::exp(0.75 * tau))).norm() < 1e-12);
+  // The noise is split in proportion (accumulated along the path rather than at the end): the same to first order.
+  const Eigen::Matrix3d Ps = split.ekf().pose_covariance(), Pw = whole.ekf().pose_covariance();
+  MESSAGE("split/whole covariance difference " << (Ps - Pw).norm() / Pw.norm());
+  CHECK((Ps - Pw).norm() < 0.01 * Pw.norm());
+}

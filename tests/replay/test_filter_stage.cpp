@@ -214,3 +214,28 @@ TEST_CASE("filter stage: a second odometry source of the same body is fused, tim
   CHECK(out_fused[mid].covariance(0, 0) < out_single[mid].covariance(0, 0));
   CHECK(out_fused[mid].covariance(5, 5) < out_single[mid].covariance(5, 5));
 }
+
+TEST_CASE("filter stage: sightings after the newest prediction wait for the next one, at most 64 batches") {
+  replay::SimulationOptions o;
+  o.duration_s = 1;
+  o.seed = 12;
+  const auto events = simulated_events(o);
+  engine::FilterStage stage(engine::FilterConfig{});
+  engine::LandmarkSightings batch;
+  int64_t last = 0;
+  for (const auto& e : events) {
+    stage.handle(e, [](engine::Output) {});
+    if (const auto* s = std::get_if<engine::LandmarkSightings>(&e); s != nullptr && !s->observations.empty()) batch = *s;
+    last = std::max(last, engine::event_utime(e));
+  }
+  REQUIRE(!batch.observations.empty());
+  const auto before = counters_of(stage);
+  // The odometry stops; 70 more batches arrive after the last prediction.
+  for (int k = 1; k <= 70; ++k) {
+    batch.utime = last + 1000 * k;
+    stage.handle(batch, [](engine::Output) {});
+  }
+  const auto c = counters_of(stage);
+  CHECK(c.at("sightings_without_prediction") == 6);
+  CHECK(c.at("updates") == before.at("updates"));  // none applied yet: they wait for a prediction
+}
