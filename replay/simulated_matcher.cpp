@@ -43,7 +43,7 @@ std::optional<SE3> SimulatedMatcher::true_relative(const std::string& source, in
 std::optional<engine::LoopClosure> SimulatedMatcher::answer(const engine::MatchRequest& r) {
   ++counts_.requests;
   const auto it = truth_.find(r.source);
-  if (it == truth_.end() || r.a.utime <= 0 || r.b.utime <= 0 || r.a.utime == r.b.utime || r.a.id < 0 || r.b.id < 0) {
+  if (it == truth_.end() || r.a.utime <= 0 || r.b.utime <= 0 || r.a.utime == r.b.utime) {
     ++counts_.invalid;
     return std::nullopt;
   }
@@ -102,7 +102,7 @@ std::optional<engine::LoopClosure> SimulatedMatcher::answer(const engine::MatchR
     relative = relative * SE3::exp(eta);
     for (int i = 0; i < 6; ++i) lc.information(i, i) = 1 / std::pow(i < 3 ? o.sigma_t : o.sigma_r, 2);
   }
-  lc.utime = r.utime;
+  lc.utime = r.utime > 0 ? r.utime : r.a.utime;
   lc.source = r.source;
   lc.planar = planar;
   lc.utime_from = r.b.utime;

@@ -4,8 +4,8 @@
 // (replay/cli/matcher.cpp) decodes requests and publishes the answers.
 //
 // For a request to match keyframe a (the new one, at utime_a) against keyframe b (earlier, at utime_b):
-//  - a request of a body with no truth, or invalid (utime_a or utime_b <= 0, utime_a == utime_b, negative
-//    keyframe ids) is counted in `invalid` and not answered; a request with utime_a or utime_b outside the truth's
+//  - a request of a body with no truth, or invalid (utime_a or utime_b <= 0, or utime_a == utime_b: the codec
+//    refuses such a loop closure) is counted in `invalid` and not answered; a request with utime_a or utime_b outside the truth's
 //    time span is counted in `out_of_span` and not answered (no draw is made for either);
 //  - otherwise one uniform draw u decides: u < failure_rate: no answer (`failed`); u < failure_rate + wrong_rate:
 //    a wrong answer (`wrong`); else the correct answer (`answered`);
@@ -23,7 +23,7 @@
 //    planar parts, SE2(T_b)^-1 SE2(T_a) * Exp(eta) with eta ~ N(0, diag(sigma_t^2, sigma_t^2, sigma_r^2)) over
 //    [x, y, yaw], written with planar = true and information nonzero only at x, y and yaw (indices 0, 1, 5).
 //  - The answer's utime is the request's utime (the body's clock: the matcher has no other clock consistent with
-//    a replayed log), matcher = options.name, score = 1.
+//    a replayed log; utime_a when the request's is not positive), matcher = options.name, score = 1.
 // Deterministic for a seed: one std::mt19937_64 consumed in request order through estimators/random's portable
 // draws, so the same seed and the same request sequence give the same answers on every platform.
 #include "daemon/engine/events.hpp"

@@ -151,8 +151,11 @@ TEST_CASE("simulated matcher: an answer between truth stamps uses the interpolat
   o.sigma_t = 1e-6;
   o.sigma_r = 1e-7;
   auto m = matcher_for(helix_truth(), o);
-  const auto lc = m.answer(request(10.03, 40.07));
+  auto r = request(10.03, 40.07);
+  r.utime = 0;  // a request without its own time: the answer takes utime_a
+  const auto lc = m.answer(r);
   REQUIRE(lc);
+  CHECK(lc->utime == at_s(40.07));
   // Independent: interpolate by hand between the 10 Hz samples.
   const auto interp = [](double t) {
     const double t0 = std::floor(t * 10 + 1e-9) / 10, s = (t - t0) / 0.1;
@@ -259,14 +262,14 @@ TEST_CASE("simulated matcher: unanswerable requests are counted and use no rando
   auto interrupted = matcher_for(helix_truth(), o);
   for (int i = 0; i < 50; ++i) {
     const auto r = request(5 + i * 0.5, 40, i);
-    // Outside the span (before the first or after the last stamp), unknown body, equal times, negative id.
+    // Outside the span (before the first or after the last stamp), unknown body, equal times, a non-positive time.
     CHECK(!interrupted.answer(request(-1, 40)));
     CHECK(!interrupted.answer(request(10, 60.1)));
     CHECK(!interrupted.answer(request(10, 40, 1, "robot2")));
     CHECK(!interrupted.answer(request(20, 20)));
-    auto negative = r;
-    negative.b.id = -1;
-    CHECK(!interrupted.answer(negative));
+    auto zero = r;
+    zero.b.utime = 0;
+    CHECK(!interrupted.answer(zero));
     const auto x = plain.answer(r), y = interrupted.answer(r);
     REQUIRE(x.has_value() == y.has_value());
     if (x) CHECK(x->relative.position == y->relative.position);
