@@ -47,8 +47,7 @@ void one_run(const ConsistencyOptions& o, uint64_t seed, std::vector<double>& ne
       if (auto* e = std::get_if<engine::Event>(&d)) events.push_back(*e);
     }
   }
-  std::map<int64_t, SE2> truth;
-  for (const auto& [t, p] : summary.robot_truth) truth[t] = planar(p);
+  std::map<int64_t, engine::Pose> truth(summary.robot_truth.begin(), summary.robot_truth.end());
   engine::FilterStage stage(cfg);
   int64_t published = 0;
   size_t sample = 0;
@@ -56,18 +55,27 @@ void one_run(const ConsistencyOptions& o, uint64_t seed, std::vector<double>& ne
     stage.handle(e, [&](engine::Output out) {
       const auto& f = std::get<engine::FusedPose>(out);
       if (published++ % o.every != 0) return;
-      const Eigen::Vector3d err = planar(f.pose).between(truth.at(f.utime)).log();
-      Eigen::Matrix3d P;
-      const int idx[3] = {0, 1, 5};
-      for (int r = 0; r < 3; ++r)
-        for (int c = 0; c < 3; ++c) P(r, c) = f.covariance(idx[r], idx[c]);
-      const double n = err.dot(P.ldlt().solve(err));
+      double n = 0, position2 = 0;
+      if (f.planar) {
+        const Eigen::Vector3d err = planar(f.pose).between(planar(truth.at(f.utime))).log();
+        Eigen::Matrix3d P;
+        const int idx[3] = {0, 1, 5};
+        for (int r = 0; r < 3; ++r)
+          for (int c = 0; c < 3; ++c) P(r, c) = f.covariance(idx[r], idx[c]);
+        n = err.dot(P.ldlt().solve(err));
+        position2 = err.head<2>().squaredNorm();
+      } else {
+        const engine::Pose& t = truth.at(f.utime);
+        const SE3::Vector6 err = SE3(f.pose.orientation, f.pose.position).between(SE3(t.orientation, t.position)).log();
+        n = err.dot(f.covariance.ldlt().solve(err));
+        position2 = (t.position - f.pose.position).squaredNorm();
+      }
       if (sample >= nees.size()) {
         nees.push_back(0), position_error.push_back(0);
         time_s.push_back(static_cast<double>(f.utime - sim.start_utime) * 1e-6);
       }
       nees[sample] += n;
-      position_error[sample] += err.head<2>().squaredNorm();
+      position_error[sample] += position2;
       ++sample;
     });
   }
@@ -81,8 +89,9 @@ ConsistencyResult pose_nees_over_runs(const ConsistencyOptions& o) {
   std::vector<double> sum, sq;
   for (int r = 0; r < o.runs; ++r) one_run(o, o.first_seed + static_cast<uint64_t>(r), sum, out.time_s, sq);
   const double N = o.runs;
-  out.lower = assoc::chi2_quantile(3 * o.runs, 0.025) / N;
-  out.upper = assoc::chi2_quantile(3 * o.runs, 0.975) / N;
+  const int dof = o.simulation.scenario == "planar" ? 3 : 6;
+  out.lower = assoc::chi2_quantile(dof * o.runs, 0.025) / N;
+  out.upper = assoc::chi2_quantile(dof * o.runs, 0.975) / N;
   int inside = 0;
   for (double s : sum) {
     out.anees.push_back(s / N);

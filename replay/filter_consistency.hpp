@@ -5,7 +5,9 @@
 // FUSED_POSE covariance (right perturbation, body frame), is averaged per time step into ANEES_k.  For a consistent
 // filter N * ANEES_k ~ chi-square(3 N), so ANEES_k lies inside [chi2(3N, 0.025), chi2(3N, 0.975)] / N (the 95 %
 // bounds) about 95 % of the time.
-// Each run: `sextant simulate` (planar scenario) with the seed, its odometry and landmark events fed in order
+// 3-D runs (`simulation.scenario` "spatial"): e = Log(X_hat^-1 X_true) over all 6 dof with the 6x6 covariance,
+// bounds chi2(6N, .)/N.
+// Each run: `sextant simulate` with the seed, its odometry and landmark events fed in order
 // through the filter stage, localization against the simulator's landmarks (known map) or EKF-SLAM (no map).
 #include "daemon/engine/filter_stage_config.hpp"
 #include "replay/simulator.hpp"
@@ -26,7 +28,7 @@ struct ConsistencyOptions {
 struct ConsistencyResult {
   std::vector<double> time_s;  // since the start of the run
   std::vector<double> anees;   // per sample, averaged over the runs
-  double lower = 0, upper = 0;  // 95 % bounds of ANEES_k for `runs` runs
+  double lower = 0, upper = 0;  // 95 % bounds of ANEES_k for `runs` runs (3 dof planar, 6 dof 3-D)
   double mean_anees = 0;        // ANEES averaged over the samples
   double fraction_inside = 0;   // of samples with ANEES_k inside [lower, upper]
   double final_position_rmse = 0;  // m, over the runs, at the last sample

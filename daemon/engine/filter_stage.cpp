@@ -1,6 +1,13 @@
 #include "daemon/engine/filter_stage.hpp"
 
+#include "assoc/chi_square.hpp"
+#include "daemon/engine/dead_reckoning_stage.hpp"
+#include "estimators/filter/interpolated_prediction.hpp"
+
+#include <Eigen/Eigenvalues>
+
 #include <algorithm>
+#include <type_traits>
 
 namespace sextant::engine {
 namespace {
@@ -63,38 +70,58 @@ void FilterStage::handle(const Event& e, const Emit& emit) {
   std::string body;
   int64_t utime = 0;
   int rank = 0;
+  bool planar = true;
   Input in;
   if (const auto* o = std::get_if<Odometry>(&e)) {
-    if (!o->planar) {
-      ++not_planar_;
-      return;
-    }
-    body = body_of(o->source), utime = o->utime, rank = predicts(o->source) ? kPredictRank : kMeasureRank, in = *o;
+    body = body_of(o->source), utime = o->utime, planar = o->planar, in = *o;
+    rank = predicts(o->source) ? kPredictRank : kMeasureRank;
   } else if (const auto* s = std::get_if<LandmarkSightings>(&e)) {
-    if (!s->planar) {
-      ++not_planar_;
-      return;
-    }
-    body = body_of(s->source), utime = s->utime, rank = kSightingsRank, in = *s;
-    if (!histories_.contains(body)) {
+    body = body_of(s->source), utime = s->utime, planar = s->planar, in = *s;
+    rank = kSightingsRank;
+    if (!histories_.contains(body) && !spatial_.contains(body)) {
       ++before_odometry_;
       return;
     }
   } else {
     return;
   }
-  auto it = histories_.find(body);
-  if (it == histories_.end()) it = histories_.try_emplace(body, static_cast<int64_t>(config_.history_s * 1e6), new_track(body)).first;
-  const auto outcome = it->second.add(utime, rank, std::move(in), [this](Track& t, const Input& x) { apply(t, x); });
-  if (outcome == History::Outcome::too_late) ++too_late_;
-  else if (outcome == History::Outcome::reapplied) ++reapplied_;
-  const Track& t = it->second.state();
-  if (rank == kPredictRank && t.fusion.started() && t.fusion.utime() == utime) {
-    auto [p, first] = published_.try_emplace(body, utime);
-    if (first || p->second < utime) {
-      p->second = utime;
-      publish(body, t, emit);
-    }
+  // A body is planar or 3-D from its first message on.
+  if ((planar && spatial_.contains(body)) || (!planar && histories_.contains(body))) {
+    ++mixed_;
+    return;
+  }
+  const auto window = static_cast<int64_t>(config_.history_s * 1e6);
+  if (planar) {
+    auto it = histories_.find(body);
+    if (it == histories_.end()) it = histories_.try_emplace(body, window, new_track(body)).first;
+    add(it->second, body, utime, rank, std::move(in), emit);
+  } else {
+    auto it = spatial_.find(body);
+    if (it == spatial_.end()) it = spatial_.try_emplace(body, window, new_spatial_track()).first;
+    add(it->second, body, utime, rank, std::move(in), emit);
+  }
+}
+
+template <class H>
+void FilterStage::add(H& history, const std::string& body, int64_t utime, int rank, Input in, const Emit& emit) {
+  const auto outcome = history.add(utime, rank, std::move(in), [this](auto& t, const Input& x) { apply(t, x); });
+  if (outcome == H::Outcome::too_late) ++too_late_;
+  else if (outcome == H::Outcome::reapplied) ++reapplied_;
+  const auto& t = history.state();
+  if (rank != kPredictRank) return;
+  int64_t newest = 0;
+  if constexpr (std::is_same_v<H, History>) {
+    if (!t.fusion.started()) return;
+    newest = t.fusion.utime();
+  } else {
+    if (!t.started) return;
+    newest = t.utime;
+  }
+  if (newest != utime) return;
+  auto [p, first] = published_.try_emplace(body, utime);
+  if (first || p->second < utime) {
+    p->second = utime;
+    publish(body, t, emit);
   }
 }
 
@@ -182,6 +209,100 @@ void FilterStage::update_with(Track& t, const LandmarkSightings& s) const {
   }
 }
 
+FilterStage::SpatialTrack FilterStage::new_spatial_track() const {
+  filter::SpatialEkfOptions opt;
+  opt.gate = assoc::chi2_quantile(3, 0.99);
+  opt.slam = config_.slam;
+  opt.max_landmarks = config_.max_landmarks;
+  SpatialTrack t;
+  t.ekf = filter::SpatialEkf(opt);
+  return t;
+}
+
+void FilterStage::apply(SpatialTrack& t, const Input& in) const {
+  if (const auto* s = std::get_if<LandmarkSightings>(&in)) {
+    if (!t.started) {
+      ++t.before_odometry;
+    } else if (s->utime <= t.utime) {
+      update_with(t, *s);
+    } else {
+      if (t.pending.size() >= kMaxPending) {
+        t.pending.erase(t.pending.begin());
+        ++t.stale_sightings;
+      }
+      t.pending.push_back(*s);
+    }
+    return;
+  }
+  const auto& o = std::get<Odometry>(in);
+  if (!predicts(o.source)) {
+    ++t.unfused;
+    return;
+  }
+  const SE3 odom(o.pose.orientation, o.pose.position);
+  if (!t.started) {
+    const double sxy = config_.initial_sigma_xy, sth = config_.initial_sigma_theta;
+    Matrix6 P0 = Matrix6::Zero();
+    P0.diagonal() << sxy * sxy, sxy * sxy, sxy * sxy, sth * sth, sth * sth, sth * sth;
+    t.ekf.initialize(odom, P0);
+    t.started = true;
+  } else {
+    if (o.utime <= t.utime) {
+      ++t.duplicates;
+      return;
+    }
+    const SE3 delta = t.last_odom.between(odom);
+    Matrix6 Q = o.increment_covariance ? *o.increment_covariance
+                                       : Matrix6(o.covariance - DeadReckoningStage::propagate(t.last_covariance, delta, Matrix6::Zero()));
+    Q = (0.5 * (Q + Q.transpose())).eval();
+    Eigen::SelfAdjointEigenSolver<Matrix6> eig(Q);
+    Q = eig.eigenvectors() * eig.eigenvalues().cwiseMax(config_.min_increment_variance).asDiagonal() * eig.eigenvectors().transpose();
+    std::vector<int64_t> stops;
+    for (const auto& p : t.pending) stops.push_back(p.utime);
+    std::vector<LandmarkSightings> waiting;
+    waiting.swap(t.pending);
+    filter::predict_through_stops(
+        delta, Q, t.utime, o.utime, stops, [&t](const SE3& piece, const Matrix6& q) { t.ekf.predict(piece, q); },
+        [&](size_t i) { update_with(t, waiting[i]); });
+    for (auto& p : waiting)
+      if (p.utime >= o.utime) t.pending.push_back(std::move(p));
+    ++t.predictions;
+  }
+  t.last_odom = odom;
+  t.last_covariance = o.covariance;
+  t.utime = o.utime;
+}
+
+void FilterStage::update_with(SpatialTrack& t, const LandmarkSightings& s) const {
+  for (const auto& ob : s.observations) {
+    if (ob.id < 0) {
+      ++t.unidentified;
+      continue;
+    }
+    const auto r = t.ekf.observe(ob.id, Eigen::Vector3d(ob.range, ob.azimuth, ob.elevation), ob.covariance);
+    if (r.accepted) (r.reason == "new_landmark" ? t.new_landmarks : t.updates)++;
+    else if (r.reason == "gate") ++t.gated;
+    else ++t.rejected;
+  }
+}
+
+void FilterStage::publish(const std::string& body, const SpatialTrack& t, const Emit& emit) const {
+  FusedPose out;
+  out.utime = t.utime;
+  out.source = body;
+  out.estimator = "ekf";
+  out.planar = false;
+  out.pose.position = t.ekf.pose().translation();
+  out.pose.orientation = t.ekf.pose().rotation().quaternion();
+  out.covariance = t.ekf.pose_covariance();  // already the right perturbation [rho, phi]
+  emit(out);
+}
+
+const filter::SpatialEkf* FilterStage::spatial_ekf(const std::string& body) const {
+  auto it = spatial_.find(body);
+  return it == spatial_.end() || !it->second.state().started ? nullptr : &it->second.state().ekf;
+}
+
 Counters FilterStage::counters() const {
   int64_t predictions = 0, updates = 0, gated = 0, new_landmarks = 0, unknown = 0, rejected = 0, before = 0, associated = 0,
           tentative = 0, duplicates = 0, unknown_sources = 0, stale = 0;
@@ -193,13 +314,22 @@ Counters FilterStage::counters() const {
     tentative += t.tentative, duplicates += t.duplicates, unknown_sources += t.unknown_sources, stale += t.stale_sightings;
     for (const auto& [name, c] : t.fusion.counters()) sources[name] = c;
   }
+  int64_t unidentified = 0, unfused = 0;
+  for (const auto& [body, h] : spatial_) {
+    const SpatialTrack& t = h.state();
+    predictions += t.predictions, updates += t.updates, gated += t.gated, new_landmarks += t.new_landmarks;
+    rejected += t.rejected, before += t.before_odometry, duplicates += t.duplicates, stale += t.stale_sightings;
+    unidentified += t.unidentified, unfused += t.unfused;
+  }
   Counters out = {{"predictions", predictions},
                   {"updates", updates},
                   {"gated", gated},
                   {"new_landmarks", new_landmarks},
                   {"unknown_landmarks", unknown},
                   {"rejected", rejected},
-                  {"not_planar", not_planar_},
+                  {"mixed_dimensions", mixed_},
+                  {"unidentified_3d", unidentified},
+                  {"unfused_3d", unfused},
                   {"landmarks_before_odometry", before_odometry_ + before},
                   {"associated", associated},
                   {"tentative_landmarks", tentative},

@@ -17,11 +17,17 @@
 // SE(2)) so that they update the pose they were taken from (applied at the previous prediction instead, a 2 m/s
 // robot with 50 Hz odometry and 10 Hz sightings was 1 cm off and its NEES four times too large).  At most 64
 // batches wait; older ones are dropped and counted ("sightings_without_prediction").
-// 3-D sources are not handled yet (counted as "not_planar").
+// 3-D bodies (odometry_t.planar false) get a 3-D EKF (estimators/filter/spatial_ekf.hpp): their predicting source's
+// increments, range/azimuth/elevation sightings with ids (EKF-SLAM; sightings without id are counted as
+// "unidentified_3d"; the planar known map does not apply), the same history and sighting interpolation, and a
+// FusedPose with the full 6x6 covariance.  Only the predicting source of a 3-D body is used (its other sources are
+// counted as "unfused_3d"); a body that mixes planar and 3-D messages keeps the kind it started with and counts
+// the others as "mixed_dimensions".
 #include "daemon/engine/filter_stage_config.hpp"
 #include "daemon/engine/stage.hpp"
 #include "estimators/filter/measurement_history.hpp"
 #include "estimators/filter/multi_source_ekf.hpp"
+#include "estimators/filter/spatial_ekf.hpp"
 
 #include <map>
 
@@ -42,6 +48,7 @@ class FilterStage final : public Stage {
   std::map<int64_t, Eigen::Vector2d> landmarks(const std::string& body) const;
   /// The current EKF of a body (nullptr before its first prediction), for tests.
   const filter::PlanarEkf* ekf(const std::string& body) const;
+  const filter::SpatialEkf* spatial_ekf(const std::string& body) const;
   /// The body an odometry source (or a sightings' source) belongs to.
   std::string body_of(const std::string& source) const;
 
@@ -57,6 +64,18 @@ class FilterStage final : public Stage {
   };
   using Input = std::variant<Odometry, LandmarkSightings>;
   using History = filter::MeasurementHistory<Track, Input>;
+  // A 3-D body: the same, with the 3-D filter and its predicting source's previous message.
+  struct SpatialTrack {
+    filter::SpatialEkf ekf;
+    bool started = false;
+    SE3 last_odom;
+    Matrix6 last_covariance = Matrix6::Zero();
+    int64_t utime = 0;
+    std::vector<LandmarkSightings> pending;
+    int64_t predictions = 0, updates = 0, gated = 0, new_landmarks = 0, rejected = 0, before_odometry = 0,
+            duplicates = 0, unidentified = 0, unfused = 0, stale_sightings = 0;
+  };
+  using SpatialHistory = filter::MeasurementHistory<SpatialTrack, Input>;
 
   Track new_track(const std::string& body) const;
   void apply(Track& t, const Input& in) const;
@@ -65,11 +84,18 @@ class FilterStage final : public Stage {
   void update_with(Track& t, const LandmarkSightings& s) const;
   void publish(const std::string& body, const Track& t, const Emit& emit) const;
   bool predicts(const std::string& source) const;
+  SpatialTrack new_spatial_track() const;
+  void apply(SpatialTrack& t, const Input& in) const;
+  void update_with(SpatialTrack& t, const LandmarkSightings& s) const;
+  void publish(const std::string& body, const SpatialTrack& t, const Emit& emit) const;
+  template <class H>
+  void add(H& history, const std::string& body, int64_t utime, int rank, Input in, const Emit& emit);
 
   FilterConfig config_;
   std::map<std::string, History> histories_;  // by body
+  std::map<std::string, SpatialHistory> spatial_;  // 3-D bodies
   std::map<std::string, int64_t> published_;  // newest utime published per body
-  int64_t not_planar_ = 0, before_odometry_ = 0, too_late_ = 0, reapplied_ = 0;
+  int64_t mixed_ = 0, before_odometry_ = 0, too_late_ = 0, reapplied_ = 0;
 };
 
 }  // namespace sextant::engine

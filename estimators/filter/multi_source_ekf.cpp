@@ -1,5 +1,7 @@
 #include "estimators/filter/multi_source_ekf.hpp"
 
+#include "estimators/filter/interpolated_prediction.hpp"
+
 #include <Eigen/Eigenvalues>
 
 #include <stdexcept>
@@ -89,23 +91,12 @@ OdometryOutcome MultiSourceEkf::odometry(const std::string& name, const PlanarOd
       utime_ = m.utime;
       return OdometryOutcome::initialized;
     }
-    const SE2 delta = s.last->pose.between(m.pose);
-    const Eigen::Matrix3d Q = increment_noise(*s.last, m, min_variance_);
-    const Eigen::Vector3d tau = delta.log();
-    const auto t0 = static_cast<double>(s.last->utime), span = static_cast<double>(m.utime - s.last->utime);
-    SE2 reached;  // identity: the part of delta predicted so far
-    double done = 0;
-    for (size_t i = 0; i < stops.size(); ++i) {
-      if (stops[i] <= s.last->utime || stops[i] >= m.utime) continue;
-      const double a = (static_cast<double>(stops[i]) - t0) / span;
-      if (a > done) {
-        const SE2 target = SE2::exp(a * tau);
-        ekf_.predict(reached.between(target), (a - done) * Q);
-        reached = target, done = a;
-      }
-      if (at_stop) at_stop(i);
-    }
-    ekf_.predict(reached.between(delta), (1 - done) * Q);
+    predict_through_stops(
+        s.last->pose.between(m.pose), increment_noise(*s.last, m, min_variance_), s.last->utime, m.utime, stops,
+        [this](const SE2& piece, const Eigen::Matrix3d& Q) { ekf_.predict(piece, Q); },
+        [&at_stop](size_t i) {
+          if (at_stop) at_stop(i);
+        });
     s.last = m;
     utime_ = m.utime;
     return OdometryOutcome::predicted;

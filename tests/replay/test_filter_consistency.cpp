@@ -38,3 +38,13 @@ TEST_CASE("EKF-SLAM is consistent on short runs: average pose NEES inside the 95
   CHECK(r.mean_anees < r.upper);
   CHECK(r.fraction_inside > 0.85);
 }
+
+TEST_CASE("3-D EKF-SLAM pose NEES (6 dof) over seeds") {
+  auto o = short_runs(true);
+  o.simulation.scenario = "spatial";
+  const auto r = replay::pose_nees_over_runs(o);
+  MESSAGE("3-D SLAM: mean ANEES " << r.mean_anees << " in [" << r.lower << ", " << r.upper << "], "
+                                  << 100 * r.fraction_inside << " % of samples inside, final position RMSE " << r.final_position_rmse);
+  CHECK(r.mean_anees > r.lower);
+  CHECK(r.mean_anees < r.upper);
+}
