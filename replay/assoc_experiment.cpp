@@ -9,20 +9,102 @@
 #include <random>
 #include <set>
 
+#include <time.h>
+
 namespace sextant::replay {
+namespace {
+
+double wrap(double a) {
+  a = std::remainder(a, 2 * M_PI);
+  return a <= -M_PI ? a + 2 * M_PI : a;
+}
+
+struct Box {
+  Eigen::Vector3d lo, hi;
+};
+
+// A sensor's field of view: azimuth (relative to `centre_azimuth`) and elevation bounds of the region, padded.
+struct FieldOfView {
+  double centre_azimuth = 0, az_lo = 0, az_hi = 0, el_lo = 0, el_hi = 0;
+  double area() const { return (az_hi - az_lo) * (el_hi - el_lo); }
+};
+
+FieldOfView field_of_view(const Eigen::Vector3d& sensor, const Box& region, double pad) {
+  FieldOfView f;
+  f.centre_azimuth = (*assoc::bearing(sensor, 0.5 * (region.lo + region.hi)))[0];
+  f.az_lo = f.el_lo = 1e9, f.az_hi = f.el_hi = -1e9;
+  // The boundary sampled densely enough for the elevation extremes, which need not be at corners.
+  constexpr int kSteps = 16;
+  for (int i = 0; i <= kSteps; ++i)
+    for (int j = 0; j <= kSteps; ++j)
+      for (double z : {region.lo.z(), region.hi.z()}) {
+        const Eigen::Vector3d x(region.lo.x() + (region.hi.x() - region.lo.x()) * i / kSteps,
+                                region.lo.y() + (region.hi.y() - region.lo.y()) * j / kSteps, z);
+        const auto h = assoc::bearing(sensor, x);
+        if (!h) continue;
+        const double az = wrap((*h)[0] - f.centre_azimuth);
+        f.az_lo = std::min(f.az_lo, az), f.az_hi = std::max(f.az_hi, az);
+        f.el_lo = std::min(f.el_lo, (*h)[1]), f.el_hi = std::max(f.el_hi, (*h)[1]);
+      }
+  f.az_lo -= pad, f.az_hi += pad, f.el_lo -= pad, f.el_hi += pad;
+  return f;
+}
+
+double thread_cpu_ms() {
+  timespec t{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
+  return 1e3 * static_cast<double>(t.tv_sec) + 1e-6 * static_cast<double>(t.tv_nsec);
+}
+
+double percentile(std::vector<double> v, double q) {
+  if (v.empty()) return 0;
+  const size_t k = std::min(v.size() - 1, static_cast<size_t>(q * static_cast<double>(v.size())));
+  std::nth_element(v.begin(), v.begin() + static_cast<long>(k), v.end());
+  return v[k];
+}
+
+}  // namespace
+
+std::vector<Eigen::Vector3d> assoc_experiment_sensors(int count) {
+  std::vector<Eigen::Vector3d> s = {{30, 0, 0.1}, {0, 30, 0.1}, {0, 0, 0}, {30, 30, 0.1}, {15, -10, 0}, {-10, 15, 0.05}, {40, 15, 0.05}};
+  s.resize(static_cast<size_t>(std::min(count, 7)));
+  for (int k = 7; k < count; ++k) {
+    const double a = 2 * M_PI * (k - 7) / (count - 7) + 0.3;
+    s.push_back({15 + 30 * std::cos(a), 15 + 30 * std::sin(a), 0.1});
+  }
+  return s;
+}
 
 AssocExperimentResult run_assoc_experiment(const AssocExperimentOptions& o) {
   std::mt19937_64 rng(o.seed);
   std::uniform_real_distribution<double> unit(0, 1);
   std::normal_distribution<double> noise(0, o.sigma);
-  std::vector<Eigen::Vector3d> sensors = {{30, 0, 0.1}, {0, 30, 0.1}, {0, 0, 0}};
-  sensors.resize(static_cast<size_t>(std::min(o.sensors, 3)));
-  for (int s = 3; s < o.sensors; ++s) {
-    const double a = 2 * M_PI * (s - 3) / std::max(1, o.sensors - 3) + 0.4;
-    sensors.push_back({15 + 30 * std::cos(a), 15 + 30 * std::sin(a), 0.5 * unit(rng)});
+  const auto sensors = assoc_experiment_sensors(o.sensors);
+  // The grid layout (more than 2 targets).
+  const int cols = static_cast<int>(std::ceil(std::sqrt(o.targets)));
+  const int rows = (o.targets + cols - 1) / cols;
+  Box region{{5, 5, 2}, {25 + (o.targets == 2 ? o.spacing : 0.0), 25, 8}};
+  if (o.targets != 2 && !o.uniform_layout) {
+    region.lo.x() = std::min(region.lo.x(), 15 - o.spacing * (cols - 1) / 2.0);
+    region.hi.x() = std::max(region.hi.x(), 15 + o.spacing * (cols - 1) / 2.0);
+    region.lo.y() = std::min(region.lo.y(), 15 - o.spacing * (rows - 1) / 2.0);
+    region.hi.y() = std::max(region.hi.y(), 15 + o.spacing * (rows - 1) / 2.0);
   }
+  std::vector<FieldOfView> fov;
+  assoc::CostOptions co;
+  co.kind = o.cost;
+  co.alpha = o.alpha;
+  co.p_detect = o.p_detect;
+  for (const auto& s : sensors) {
+    fov.push_back(field_of_view(s, region, 5 * o.sigma));
+    co.sensor_clutter_density.push_back((o.clutter > 0 ? o.clutter : 0.1) / fov.back().area());
+  }
+  if (o.target_prior) co.target_density = o.targets / (region.hi - region.lo).prod();
+
   AssocExperimentResult r;
-  double time_ms = 0, gap = 0, sq_err = 0, tuples = 0;
+  double gap = 0, sq_err = 0, tuples = 0, iterations = 0;
+  std::vector<double> ms, cpu_ms, build_ms;
+  std::vector<std::pair<double, double>> per_run;  // (correct, observable) of every run
   int64_t err_n = 0;
   for (int run = 0; run < o.runs; ++run) {
     // Targets.
@@ -30,9 +112,12 @@ AssocExperimentResult run_assoc_experiment(const AssocExperimentOptions& o) {
     if (o.targets == 2) {
       const Eigen::Vector3d c(5 + 20 * unit(rng), 5 + 20 * unit(rng), 2 + 6 * unit(rng));
       truth = {c, c + Eigen::Vector3d(o.spacing, 0, 0)};
+    } else if (o.uniform_layout) {
+      for (int attempt = 0; static_cast<int>(truth.size()) < o.targets && attempt < 1000 * o.targets; ++attempt) {
+        const Eigen::Vector3d x(5 + 20 * unit(rng), 5 + 20 * unit(rng), 2 + 6 * unit(rng));
+        if (std::all_of(truth.begin(), truth.end(), [&](const Eigen::Vector3d& y) { return (x - y).norm() >= o.spacing; })) truth.push_back(x);
+      }
     } else {
-      const int cols = static_cast<int>(std::ceil(std::sqrt(o.targets)));
-      const int rows = (o.targets + cols - 1) / cols;
       for (int k = 0; k < o.targets; ++k)
         truth.push_back({15 + o.spacing * (k % cols - (cols - 1) / 2.0), 15 + o.spacing * (k / cols - (rows - 1) / 2.0), 5});
     }
@@ -42,18 +127,17 @@ AssocExperimentResult run_assoc_experiment(const AssocExperimentOptions& o) {
     std::vector<std::vector<int>> origin(sensors.size());
     for (size_t s = 0; s < sensors.size(); ++s) {
       std::vector<std::pair<assoc::Detection, int>> list;
-      double az_lo = 1e9, az_hi = -1e9, el_lo = 1e9, el_hi = -1e9;
       for (size_t t = 0; t < truth.size(); ++t) {
         const auto h = *assoc::bearing(sensors[s], truth[t]);
-        az_lo = std::min(az_lo, h[0]), az_hi = std::max(az_hi, h[0]), el_lo = std::min(el_lo, h[1]), el_hi = std::max(el_hi, h[1]);
         if (unit(rng) >= o.p_detect) continue;
         list.push_back({{h[0] + noise(rng), h[1] + noise(rng), o.sigma, o.sigma}, static_cast<int>(t)});
       }
-      const double pad = 5 * o.sigma;
-      az_lo -= pad, az_hi += pad, el_lo -= pad, el_hi += pad;
       const int n_false = o.clutter > 0 ? std::poisson_distribution<int>(o.clutter)(rng) : 0;
-      for (int k = 0; k < n_false; ++k)
-        list.push_back({{az_lo + (az_hi - az_lo) * unit(rng), el_lo + (el_hi - el_lo) * unit(rng), o.sigma, o.sigma}, -1});
+      const auto& f = fov[s];
+      for (int k = 0; k < n_false; ++k) {
+        const double az = wrap(f.centre_azimuth + f.az_lo + (f.az_hi - f.az_lo) * unit(rng));
+        list.push_back({{az, f.el_lo + (f.el_hi - f.el_lo) * unit(rng), o.sigma, o.sigma}, -1});
+      }
       std::shuffle(list.begin(), list.end(), rng);
       std::vector<assoc::Detection> d;
       for (const auto& [det, org] : list) d.push_back(det), origin[s].push_back(org);
@@ -67,20 +151,30 @@ AssocExperimentResult run_assoc_experiment(const AssocExperimentOptions& o) {
         if (origin[s][k] >= 0) tuple_of[static_cast<size_t>(origin[s][k])][s] = static_cast<int>(k) + 1;
     for (const auto& t : tuple_of)
       if (std::count_if(t.begin(), t.end(), [](int k) { return k > 0; }) >= 2) true_tuples.insert(t), ++r.observable_targets;
+    const int64_t correct_before = r.correct, observable_before = r.observable_targets - static_cast<int64_t>(true_tuples.size());
     // Associate.
-    assoc::CostOptions co;
-    co.kind = o.cost;
-    co.alpha = o.alpha;
-    co.p_detect = o.p_detect;
-    co.clutter_density = 1e-3;
-    if (o.clutter > 0) co.clutter_density = std::max(1e-3, o.clutter / std::pow(0.05, 2));  // a nominal 0.05 rad box
     std::vector<int> sizes;
     for (const auto& d : scan.detections) sizes.push_back(static_cast<int>(d.size()));
     const auto t0 = std::chrono::steady_clock::now();
+    const double c0 = thread_cpu_ms();
     const auto list = assoc::build_tuples(scan, co);
-    const auto sol = o.exact ? assoc::solve_sd_exact(list, sizes) : assoc::solve_sd_lagrangian(list, sizes);
-    time_ms += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+    const double c1 = thread_cpu_ms();
+    const auto sol = o.exact ? assoc::solve_sd_exact(list, sizes)
+                             : assoc::solve_sd_lagrangian(list, sizes, o.max_iterations, o.gap_tolerance);
+    const double c2 = thread_cpu_ms();
+    ms.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
+    cpu_ms.push_back(c2 - c0);
+    build_ms.push_back(c1 - c0);
+    if (o.compare_exact && !o.exact) {
+      const auto best = assoc::solve_sd_exact(list, sizes);
+      if (best.exact) {
+        ++r.exact_compared;
+        r.lr_optimal += std::abs(sol.cost - best.cost) <= 1e-6 * std::max(1.0, std::abs(best.cost));
+      }
+    }
     gap += sol.gap;
+    r.gap_max = std::max(r.gap_max, sol.gap);
+    iterations += sol.iterations;
     tuples += static_cast<double>(list.size());
     for (int idx : sol.tuples) {
       const auto& tu = list[static_cast<size_t>(idx)];
@@ -93,15 +187,29 @@ AssocExperimentResult run_assoc_experiment(const AssocExperimentOptions& o) {
         ++r.ghost_tuples;
       }
     }
+    per_run.push_back({static_cast<double>(r.correct - correct_before), static_cast<double>(r.observable_targets - observable_before)});
   }
   const double n = std::max<double>(1, static_cast<double>(r.observable_targets));
+  const double runs = std::max(1, o.runs);
   r.correct_rate = static_cast<double>(r.correct) / n;
-  r.correct_rate_stderr = std::sqrt(r.correct_rate * (1 - r.correct_rate) / n);
-  r.ghosts_per_scan = static_cast<double>(r.ghost_tuples) / std::max(1, o.runs);
+  // Standard error of the ratio sum(correct) / sum(observable) over runs (the targets of one run are not
+  // independent): sqrt(sum (c_i - R n_i)^2 / (k (k - 1))) / mean(n_i).
+  if (per_run.size() > 1) {
+    double ss = 0;
+    for (const auto& [c, m] : per_run) ss += (c - r.correct_rate * m) * (c - r.correct_rate * m);
+    const double k = static_cast<double>(per_run.size());
+    r.correct_rate_stderr = std::sqrt(ss / (k * (k - 1))) / (n / k);
+  }
+  r.ghosts_per_scan = static_cast<double>(r.ghost_tuples) / runs;
   r.position_rmse = err_n ? std::sqrt(sq_err / static_cast<double>(err_n)) : 0.0;
-  r.mean_ms = time_ms / std::max(1, o.runs);
-  r.gap_mean = gap / std::max(1, o.runs);
-  r.tuples_mean = tuples / std::max(1, o.runs);
+  for (double m : ms) r.mean_ms += m / runs;
+  r.median_ms = percentile(ms, 0.5);
+  r.p95_ms = percentile(ms, 0.95);
+  r.median_cpu_ms = percentile(cpu_ms, 0.5);
+  r.build_median_ms = percentile(build_ms, 0.5);
+  r.gap_mean = gap / runs;
+  r.tuples_mean = tuples / runs;
+  r.iterations_mean = iterations / runs;
   return r;
 }
 
