@@ -41,6 +41,10 @@ void read_engine_config(Section& s, engine::EngineConfig& c) {
     read_stage_config(f, c.filter);
   }
   {
+    Section g = s.child("graph");
+    read_stage_config(g, c.graph);
+  }
+  {
     Section a = s.child("association");
     read_stage_config(a, c.association);
   }

@@ -8,5 +8,6 @@ namespace sextant::config {
 void read_stage_config(Section& section, engine::DeadReckoningConfig& config);
 void read_stage_config(Section& section, engine::FilterConfig& config);
 void read_stage_config(Section& section, engine::AssociationConfig& config);
+void read_stage_config(Section& section, engine::GraphConfig& config);
 
 }  // namespace sextant::config

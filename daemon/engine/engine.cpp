@@ -3,6 +3,8 @@
 #include "daemon/engine/association_stage.hpp"
 #include "daemon/engine/dead_reckoning_stage.hpp"
 #include "daemon/engine/filter_stage.hpp"
+#include "daemon/engine/graph_pose_stage.hpp"
+#include "daemon/engine/graph_stage.hpp"
 #include "daemon/engine/particle_filter_stage.hpp"
 
 namespace sextant::engine {
@@ -12,6 +14,13 @@ std::vector<std::unique_ptr<Stage>> make_stages(const EngineConfig& config) {
   if (config.dead_reckoning.enabled) stages.push_back(std::make_unique<DeadReckoningStage>(config.dead_reckoning));
   if (config.filter.type == "ekf") stages.push_back(std::make_unique<FilterStage>(config.filter));
   if (config.filter.type == "pf") stages.push_back(std::make_unique<ParticleFilterStage>(config.filter));
+  if (config.graph.enabled) {
+    // Two stages around one shared correction: the back end (keyframes, loops, solves) and the fused-pose path that
+    // must never wait for a solve (graph_correction.hpp).
+    auto corrections = std::make_shared<GraphCorrections>();
+    stages.push_back(std::make_unique<GraphStage>(config.graph, corrections));
+    stages.push_back(std::make_unique<GraphPoseStage>(corrections));
+  }
   if (config.association.enabled) stages.push_back(std::make_unique<AssociationStage>(config.association));
   return stages;
 }

@@ -4,6 +4,7 @@
 #include "daemon/engine/association_stage_config.hpp"
 #include "daemon/engine/dead_reckoning_stage_config.hpp"
 #include "daemon/engine/filter_stage_config.hpp"
+#include "daemon/engine/graph_stage_config.hpp"
 
 #include <string>
 
@@ -15,6 +16,7 @@ struct EngineConfig {
   std::string primary_estimator = "auto";
   DeadReckoningConfig dead_reckoning;
   FilterConfig filter;
+  GraphConfig graph;
   AssociationConfig association;
 };
 

@@ -1,9 +1,12 @@
 #pragma once
-// Feeding a whole graph to the incremental smoother in its factors' order, as a robot would have produced it: a
-// variable enters when a factor first references it, initialized by composing a relative-pose measurement with the
-// end already known (else with the graph's own value), and the smoother updates before each new pose enters, so one
-// update holds a pose's odometry edge and the loop closures that arrived with it.  This is how
-// `sextant optimize --incremental` and the incremental benchmarks measure per-step latency.
+// Feeding a whole graph to the incremental smoother as a robot would have produced it, one pose per update: update k
+// brings pose k (in the file's vertex order) and every factor whose latest pose is k, in file order (so its odometry
+// edge and the loop closures that arrived with it; the standard data sets list all odometry first and all loops
+// after, so a literal line-by-line feed would be one odometry-only pass and one batch problem at the end).  A
+// variable enters with the first factor that references it, initialized by composing that relative-pose measurement
+// with the end already estimated (the previous pose's current estimate and the odometry, as GTSAM's
+// timeIncremental does), else with the file's value.  This is how `sextant optimize --incremental` and the
+// incremental benchmarks measure per-step latency (the protocol of ../shared/peers/RESULTS.md for iSAM2).
 #include "estimators/graph/incremental_smoother.hpp"
 
 #include <string>

@@ -49,11 +49,12 @@ int IncrementalSmoother::add_variable(const Variable& v) {
   return i;
 }
 
-void IncrementalSmoother::add_factor(std::unique_ptr<Factor> factor) {
+void IncrementalSmoother::add_factor(std::unique_ptr<Factor> factor, bool robust) {
   if (auto why = validate_factor(graph_.variables(), *factor, graph_.factors().size()); !why.empty())
     throw std::invalid_argument(why);
   pending_factors_.push_back(graph_.factors().size());
   weight_.push_back(0.0);
+  robust_.push_back(robust ? 1 : 0);
   graph_.add_factor(std::move(factor));
 }
 
@@ -70,7 +71,8 @@ IncrementalSmoother::Contribution IncrementalSmoother::linearize(size_t fi) cons
   Linearization lin = f.make_linearization(lin_);
   f.linearize(lin_, lin);
   const double s = lin.error.dot(f.information() * lin.error);
-  const Eigen::MatrixXd W = robust_weight(options_.kernel, options_.kernel_width, s) * f.information();
+  const double w = robust_[fi] ? robust_weight(options_.kernel, options_.kernel_width, s) : 1.0;
+  const Eigen::MatrixXd W = w * f.information();
   const Eigen::MatrixXd U = W.llt().matrixU();
   Contribution c;
   std::vector<std::pair<int, int>> blocks;  // (first column, variable slot in the factor)
@@ -160,6 +162,34 @@ bool IncrementalSmoother::determined(const std::vector<int>& new_vars, const std
   return std::any_of(ready.begin(), ready.end(), [](char c) { return c != 0; });
 }
 
+double IncrementalSmoother::robust_weight_of(size_t fi) const {
+  if (!robust_[fi]) return 1.0;
+  const Factor& f = *graph_.factors()[fi];
+  Eigen::VectorXd e(f.residual_dim());
+  f.error(lin_, e);
+  return robust_weight(options_.kernel, options_.kernel_width, e.dot(f.information() * e));
+}
+
+Eigen::MatrixXd IncrementalSmoother::marginal_covariance(int index) const {
+  const int p = pos_[static_cast<size_t>(index)];
+  if (L_ == nullptr || p < 0) return {};
+  const int d = graph_.variables()[static_cast<size_t>(index)].dim();
+  cholmod_common& c = const_cast<cholmod_common&>(common_);
+  cholmod_dense* rhs = cholmod_zeros(static_cast<size_t>(capacity_), static_cast<size_t>(d), CHOLMOD_REAL, &c);
+  double* r = static_cast<double*>(rhs->x);
+  for (int k = 0; k < d; ++k) r[static_cast<size_t>(k) * static_cast<size_t>(capacity_) + static_cast<size_t>(p + k)] = 1.0;
+  cholmod_dense* sol = cholmod_solve(CHOLMOD_LDLt, L_, rhs, &c);
+  cholmod_free_dense(&rhs, &c);
+  if (sol == nullptr) return {};
+  Eigen::MatrixXd out(d, d);
+  const double* x = static_cast<const double*>(sol->x);
+  for (int k = 0; k < d; ++k)
+    for (int i = 0; i < d; ++i) out(i, k) = x[static_cast<size_t>(k) * static_cast<size_t>(capacity_) + static_cast<size_t>(p + i)];
+  cholmod_free_dense(&sol, &c);
+  // H = sum J' W J is the Fisher information of the estimate (Omega = covariance^-1): its covariance is H^-1.
+  return 0.5 * (out + out.transpose());
+}
+
 void IncrementalSmoother::solve() {
   if (L_ == nullptr || capacity_ == 0) return;
   cholmod_dense* rhs = cholmod_allocate_dense(static_cast<size_t>(capacity_), 1, static_cast<size_t>(capacity_),
@@ -196,16 +226,20 @@ std::vector<int> IncrementalSmoother::moved_variables() const {
   return moved;
 }
 
+size_t IncrementalSmoother::update_limit() const {
+  return std::max(static_cast<size_t>(options_.min_update_factors),
+                  static_cast<size_t>(options_.update_fraction * static_cast<double>(factors_in_system_)));
+}
+
 bool IncrementalSmoother::relinearize(const std::vector<int>& moved, IncrementalStatus& st) {
+  // Rank updates cost about the path of each factor's columns to the root of the elimination tree; past a few
+  // dozen factors a rebuild is cheaper (measured on M3500: bench/RESULTS.md), and the caller rebuilds instead.
   std::vector<char> mark(graph_.factors().size(), 0);
   std::vector<size_t> factors;
   for (int v : moved)
     for (size_t f : var_factors_[static_cast<size_t>(v)])
       if (!mark[f]) mark[f] = 1, factors.push_back(f);
-  size_t in_system = 0;
-  for (double w : weight_) in_system += w > 0 ? 1 : 0;
-  if (static_cast<double>(factors.size()) > options_.full_relinearization_fraction * static_cast<double>(in_system))
-    return false;
+  if (factors.size() > update_limit()) return false;
   std::vector<Contribution> before;
   before.reserve(factors.size());
   for (size_t f : factors) before.push_back(linearize(f));
@@ -250,7 +284,18 @@ IncrementalStatus IncrementalSmoother::update() {
     vars_in.push_back(v);
     if (!graph_.variables()[static_cast<size_t>(v)].fixed) new_dim += graph_.variables()[static_cast<size_t>(v)].dim();
   }
-  if (used_ + new_dim > capacity_) return rebuild();
+  size_t entering = 0;
+  for (size_t f : pending_factors_) {
+    bool ok = true;
+    for (int v : graph_.factors()[f]->variables()) {
+      const size_t vi = static_cast<size_t>(v);
+      if (pos_[vi] < 0 && !graph_.variables()[vi].fixed &&
+          std::find(vars_in.begin(), vars_in.end(), v) == vars_in.end())
+        ok = false;
+    }
+    entering += ok ? 1 : 0;
+  }
+  if (used_ + new_dim > capacity_ || entering > update_limit()) return rebuild();
 
   for (int v : vars_in) {
     if (graph_.variables()[static_cast<size_t>(v)].fixed) continue;
@@ -267,6 +312,7 @@ IncrementalStatus IncrementalSmoother::update() {
   for (size_t f : factors_in) {
     apply(linearize(f), true);
     weight_[f] = 1.0;
+    ++factors_in_system_;
     for (int v : graph_.factors()[f]->variables()) var_factors_[static_cast<size_t>(v)].push_back(f);
   }
   // Remove the identity that held each newly used column.
@@ -303,7 +349,9 @@ IncrementalStatus IncrementalSmoother::update() {
   }
   solve();
   ++st.solves;
-  for (int pass = 0; pass < options_.relinearization_passes; ++pass) {
+  ++updates_;
+  const bool check = options_.relinearize_skip <= 1 || updates_ % options_.relinearize_skip == 0;
+  for (int pass = 0; check && pass < options_.relinearization_passes; ++pass) {
     const std::vector<int> moved = moved_variables();
     if (moved.empty()) break;
     if (!relinearize(moved, st)) {
@@ -341,7 +389,7 @@ IncrementalStatus IncrementalSmoother::rebuild() {
     bool ok = true;
     for (int v : graph_.factors()[f]->variables()) ok = ok && in[static_cast<size_t>(v)];
     if (ok) {
-      weight_[f] = 1.0, ++st.new_factors;
+      weight_[f] = 1.0, ++st.new_factors, ++factors_in_system_;
       for (int v : graph_.factors()[f]->variables()) var_factors_[static_cast<size_t>(v)].push_back(f);
     } else {
       factors_wait.push_back(f);
@@ -382,14 +430,21 @@ IncrementalStatus IncrementalSmoother::rebuild() {
     used_ += graph_.variables()[v].dim();
   }
   capacity_ = used_ + std::max(64, static_cast<int>(options_.capacity_growth * used_));
-  if (auto why = factorize_all(); !why.empty()) {
-    st.ok = false;
-    st.message = why;
-    return st;
-  }
   ++rebuilds_;
-  solve();
-  ++st.solves;
+  for (int it = 0; it < std::max(1, options_.rebuild_iterations); ++it) {
+    if (it > 0) {
+      if (moved_variables().empty()) break;
+      for (size_t v = 0; v < lin_.size(); ++v)
+        if (pos_[v] >= 0) lin_[v] = graph_.variables()[v];
+    }
+    if (auto why = factorize_all(); !why.empty()) {
+      st.ok = false;
+      st.message = why;
+      return st;
+    }
+    solve();
+    ++st.solves;
+  }
   return st;
 }
 

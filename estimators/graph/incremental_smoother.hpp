@@ -14,10 +14,11 @@
 //   3. fluid relinearization: every variable whose step |dx_v| exceeds the thresholds moves its linearization point,
 //      x0_v <- x0_v (+) dx_v, and each factor touching it is downdated at its old linearization and updated at the
 //      new one; then dx is solved again (at most `relinearization_passes` rounds per update).
-// When a round would relinearize more than `full_relinearization_fraction` of the factors, when the reserved
+// When one round would change more factors than rank updates do cheaply (`update_fraction`), when the reserved
 // columns run out, or when the factor has filled in past `refill_ratio` times its size after the last ordering, the
-// system is rebuilt: every factor relinearized at the current estimate, a fresh block-AMD ordering (newest variables
-// last), and a numeric factorization (supernodal, then converted to the simplicial LDL' form the updates need).
+// system is rebuilt: a fresh block-AMD ordering (newest variables last), then Gauss-Newton iterations, each
+// relinearizing every factor at the current estimate and factorizing numerically (supernodal, then converted to the
+// simplicial LDL' form the updates need), until no variable moves past the thresholds.
 //
 // Units: a variable's step is compared component-wise: translation components (metres, point coordinates) against
 // `relinearize_translation`, rotation components (radians) against `relinearize_rotation`.
@@ -36,10 +37,15 @@
 namespace sextant::graph {
 
 struct IncrementalOptions {
-  double relinearize_translation = 0.05;  // m: relinearize a variable whose step exceeds this in a translation component
-  double relinearize_rotation = 0.05;     // rad: ... or this in a rotation component
+  double relinearize_translation = 0.1;   // m: relinearize a variable whose step exceeds this in a translation component
+  double relinearize_rotation = 0.1;      // rad: ... or this in a rotation component
   int relinearization_passes = 2;         // relinearize + re-solve rounds per update
-  double full_relinearization_fraction = 0.25;  // beyond this share of factors a round rebuilds the whole system
+  int relinearize_skip = 1;               // look for variables to relinearize every this many updates (iSAM2's relinearizeSkip)
+  /// Factors changed by rank updates in one round (new ones or relinearized ones) beyond which a rebuild is cheaper:
+  /// max(min_update_factors, update_fraction x factors in the system).
+  double update_fraction = 0.02;
+  int min_update_factors = 32;
+  int rebuild_iterations = 10;            // Gauss-Newton iterations of a rebuild, until no variable moves past the thresholds
   double refill_ratio = 2.5;              // rebuild (reorder) when nnz(L) exceeds this multiple of its size after ordering
   double capacity_growth = 1.0;           // reserved columns at a rebuild: this fraction of the used ones (and >= 64)
   RobustKernel kernel = RobustKernel::kNone;
@@ -67,8 +73,9 @@ class IncrementalSmoother {
   /// Throws std::invalid_argument for a duplicate id or a non-finite value.
   int add_variable(const Variable& v);
   /// Adds a factor over existing variables (indices from add_variable).  Throws std::invalid_argument when it names
-  /// an unknown variable or its information is not finite, symmetric and positive definite.
-  void add_factor(std::unique_ptr<Factor> factor);
+  /// an unknown variable or its information is not finite, symmetric and positive definite.  `robust`: the
+  /// options' kernel applies to it (e.g. loop closures robust, odometry not).
+  void add_factor(std::unique_ptr<Factor> factor, bool robust = true);
   /// Brings the new variables and factors into the solution and relinearizes (see the file comment).
   IncrementalStatus update();
   /// Relinearizes everything at the current estimate, reorders and refactorizes; then solves.
@@ -80,6 +87,13 @@ class IncrementalSmoother {
   int index_of(int64_t id) const { return graph_.index_of(id); }
   /// g2o's chi2 of the current estimate: sum of e' Omega e over all factors (pending ones included).
   double chi2() const { return graph_.chi2(); }
+  /// Marginal covariance of variable `index` in its tangent space (the block of H^-1, one solve per component);
+  /// empty for a fixed or not yet determined variable.
+  Eigen::MatrixXd marginal_covariance(int index) const;
+  /// The robust weight of factor `index` at its linearization point (1 without a kernel): a loop closure whose
+  /// weight DCS has driven near 0 has been switched off.
+  double robust_weight_of(size_t index) const;
+
   /// Scalar unknowns in the factorized system, the nonzeros of L, and how many rebuilds happened.
   int dimension() const { return used_; }
   size_t factor_nonzeros() const;
@@ -94,20 +108,24 @@ class IncrementalSmoother {
                   std::vector<char>& ready) const;
   void solve();
   std::vector<int> moved_variables() const;
-  bool relinearize(const std::vector<int>& vars, IncrementalStatus& st);
+  bool relinearize(const std::vector<int>& moved, IncrementalStatus& st);
   std::string factorize_all();
 
   IncrementalOptions options_;
   FactorGraph graph_;                 // estimates and factors
   std::vector<Variable> lin_;         // linearization points
   std::vector<int> pos_;              // per variable: first column in L (the ordering), -1: fixed or not yet in
-  std::vector<double> weight_;        // per factor: robust weight at its linearization (0: not yet in the system)
+  std::vector<double> weight_;        // per factor: 1 once in the system, 0 while pending
+  std::vector<char> robust_;          // per factor: the kernel applies
   std::vector<std::vector<size_t>> var_factors_;  // per variable: the factors in the system that touch it
   std::vector<int> pending_vars_;
   std::vector<size_t> pending_factors_;
   int used_ = 0, capacity_ = 0;
   size_t ordered_nnz_ = 0;
   int rebuilds_ = 0;
+  size_t factors_in_system_ = 0;
+  int64_t updates_ = 0;
+  size_t update_limit() const;
   bool gauge_checked_ = false;
   cholmod_common common_{};
   cholmod_factor* L_ = nullptr;

@@ -25,7 +25,7 @@ struct Options {
   double tolerance = 1e-6;
   bool json = false;
   bool incremental = false;
-  double relin_translation = 0.05, relin_rotation = 0.05;
+  double relin_translation = 0.1, relin_rotation = 0.1;
 };
 
 graph::RobustKernel kernel_of(const std::string& name) {

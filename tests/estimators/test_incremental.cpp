@@ -112,7 +112,8 @@ int run_and_compare(const SyntheticGraph& g, const std::vector<size_t>& order, i
     const auto sum = optimize(b2, bo);
     REQUIRE(sum.usable());
     const double inc = s.chi2(), ref = sum.final_chi2;
-    CHECK_MESSAGE(inc <= ref * 1.001 + 1e-9, "update " << updates << ": incremental chi2 " << inc << " batch " << ref);
+    // 0.1 % of chi2, and an absolute 1e-3 for graphs whose optimum has chi2 ~ 0 (a tree: no loop yet).
+    CHECK_MESSAGE(inc <= ref * 1.001 + 1e-3, "update " << updates << ": incremental chi2 " << inc << " batch " << ref);
     double worst = 0;
     for (size_t v = 0; v < b2.variables().size(); ++v)
       worst = std::max(worst, (s.graph().variables()[v].as_se3().translation() - b2.variables()[v].as_se3().translation()).norm());
@@ -270,6 +271,10 @@ TEST_CASE("with DCS a wrong loop closure does not bend the incremental map") {
   // A confident but wrong loop: pose 5 claimed 8 m from where pose 30 really is.
   s.add_factor(make_factor(g, Edge{5, 30, g.truth[5].inverse() * g.truth[30] * SE3(SO3(), Eigen::Vector3d(8, 0, 0))}, idx[5], idx[30]));
   REQUIRE(s.update().ok);
+  // Compared at convergence (a rebuild iterates Gauss-Newton to the end), so that what differs is the wrong loop's
+  // pull and not the two smoothers' different relinearization histories.
+  REQUIRE(s.rebuild().ok);
+  REQUIRE(clean.rebuild().ok);
   double worst = 0;
   for (size_t v = 0; v < g.truth.size(); ++v)
     worst = std::max(worst, (s.graph().variables()[static_cast<size_t>(idx[v])].as_se3().translation() -

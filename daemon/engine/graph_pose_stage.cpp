@@ -1,0 +1,39 @@
+#include "daemon/engine/graph_pose_stage.hpp"
+
+#include "daemon/engine/pose_conversion.hpp"
+#include "daemon/engine/pose_covariance.hpp"
+
+namespace sextant::engine {
+
+void GraphPoseStage::handle(const Event& e, const Emit& emit) {
+  const auto& o = std::get<Odometry>(e);
+  auto [it, first] = last_utime_.try_emplace(o.source, o.utime);
+  if (!first) {
+    if (o.utime <= it->second) {
+      ++out_of_order_;
+      return;
+    }
+    it->second = o.utime;
+  }
+  FusedPose out;
+  out.utime = o.utime;
+  out.source = o.source;
+  out.estimator = "graph";
+  out.planar = o.planar;
+  const SE3 odom = to_se3(o.pose);
+  if (const auto c = corrections_->get(o.source)) {
+    const SE3 delta = c->keyframe_odom.between(odom);
+    // The odometry's own uncertainty growth since the keyframe: its pose covariance minus the transported one.
+    const Matrix6 growth = nearest_psd(o.covariance - compose_covariance(c->keyframe_odom_covariance, delta, Matrix6::Zero()));
+    out.pose = to_pose(c->keyframe_map * delta);
+    out.covariance = compose_covariance(c->keyframe_covariance, delta, growth);
+  } else {
+    ++before_correction_;
+    out.pose = o.pose;
+    out.covariance = o.covariance;
+  }
+  ++published_;
+  emit(out);
+}
+
+}  // namespace sextant::engine

@@ -1,0 +1,290 @@
+#include "daemon/engine/graph_stage.hpp"
+
+#include "assoc/chi_square.hpp"
+#include "daemon/engine/pose_conversion.hpp"
+#include "daemon/engine/pose_covariance.hpp"
+
+#include <Eigen/Cholesky>
+
+#include <chrono>
+#include <cmath>
+
+namespace sextant::engine {
+namespace {
+
+constexpr int kPlanar[] = {0, 1, 5};  // x, y, yaw in sextant's 6-D tangent order
+
+Eigen::Matrix3d planar_block(const Matrix6& m) {
+  Eigen::Matrix3d out;
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c) out(r, c) = m(kPlanar[r], kPlanar[c]);
+  return out;
+}
+
+Matrix6 embed_planar(const Eigen::MatrixXd& m3) {
+  Matrix6 out = Matrix6::Zero();
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c) out(kPlanar[r], kPlanar[c]) = m3(r, c);
+  return out;
+}
+
+graph::RobustKernel kernel_of(const std::string& name) {
+  return name == "huber" ? graph::RobustKernel::kHuber
+         : name == "cauchy" ? graph::RobustKernel::kCauchy
+         : name == "dcs" ? graph::RobustKernel::kDcs : graph::RobustKernel::kNone;
+}
+
+graph::IncrementalOptions smoother_options(const GraphConfig& c) {
+  graph::IncrementalOptions o;
+  o.kernel = kernel_of(c.robust);
+  o.kernel_width = c.kernel_width;
+  o.relinearize_translation = c.relinearize_translation;
+  o.relinearize_rotation = c.relinearize_rotation;
+  return o;
+}
+
+}  // namespace
+
+GraphStage::GraphStage(const GraphConfig& config, std::shared_ptr<GraphCorrections> corrections)
+    : config_(config),
+      corrections_(std::move(corrections)),
+      proposer_(config.proposals),
+      smoother_(smoother_options(config)),
+      chi2_gate_planar_(assoc::chi2_quantile(3, config.loop_gate_probability)),
+      chi2_gate_spatial_(assoc::chi2_quantile(6, config.loop_gate_probability)) {
+  KeyframeSelector check(config.keyframes);  // throws std::invalid_argument for bad thresholds
+  (void)check;
+}
+
+void GraphStage::handle(const Event& e, const Emit& emit) {
+  if (const auto* o = std::get_if<Odometry>(&e)) on_odometry(*o, emit);
+  else if (const auto* l = std::get_if<LoopClosure>(&e)) on_loop(*l, emit);
+}
+
+void GraphStage::on_odometry(const Odometry& o, const Emit& emit) {
+  auto it = bodies_.find(o.source);
+  if (it == bodies_.end()) {
+    KeyframeSelectorOptions ko = config_.keyframes;
+    ko.planar = o.planar;
+    Body body;
+    body.planar = o.planar;
+    body.selector = KeyframeSelector(ko);
+    it = bodies_.emplace(o.source, std::move(body)).first;
+  } else if (o.utime <= it->second.last_utime) {
+    ++out_of_order_;
+    return;
+  }
+  Body& b = it->second;
+  const SE3 odom = to_se3(o.pose);
+  if (!b.keyframes.empty()) {
+    const SE3 delta = b.last_odom.between(odom);
+    b.since_keyframe = compose_covariance(b.since_keyframe, delta,
+                                          increment_covariance(o, delta, b.last_odom_covariance, config_.min_increment_variance));
+  }
+  b.last_utime = o.utime;
+  b.last_odom = odom;
+  if (b.odometry.size() >= static_cast<size_t>(config_.odometry_history))
+    b.odometry.erase(b.odometry.begin(), b.odometry.begin() + static_cast<std::ptrdiff_t>(b.odometry.size() / 2));
+  b.odometry.emplace_back(o.utime, odom);
+  b.last_odom_covariance = o.covariance;
+
+  const KeyframeDecision d = b.selector.decide(odom);
+  if (d == KeyframeDecision::kImplausible) ++keyframes_rejected_;
+  if (d != KeyframeDecision::kKeyframe) return;
+
+  KeyframeNode node;
+  node.utime = o.utime;
+  node.odom = odom;
+  node.odom_covariance = o.covariance;
+  graph::Variable v;
+  v.id = next_variable_id_++;
+  v.kind = b.planar ? graph::VariableKind::kPose2 : graph::VariableKind::kPose3;
+  SE3 initial = odom;
+  if (b.keyframes.empty()) {
+    v.fixed = true;  // the body's map frame: its odometry frame at the first keyframe
+  } else {
+    const KeyframeNode& prev = b.keyframes.back();
+    node.edge = prev.odom.between(odom);
+    node.edge_covariance = b.since_keyframe;
+    initial = smoother_.graph().variables()[static_cast<size_t>(prev.variable)].as_se3() * node.edge;
+  }
+  if (b.planar) v.pose2 = SE2::from_se3(initial);
+  else v.pose3 = initial;
+  node.variable = smoother_.add_variable(v);
+  if (!b.keyframes.empty()) {
+    const KeyframeNode& prev = b.keyframes.back();
+    if (b.planar) {
+      smoother_.add_factor(std::make_unique<graph::RelativePoseFactor>(prev.variable, node.variable, SE2::from_se3(node.edge),
+                                                                       Eigen::Matrix3d(planar_block(node.edge_covariance).inverse())),
+                           false);
+    } else {
+      smoother_.add_factor(std::make_unique<graph::RelativePoseFactor>(prev.variable, node.variable, node.edge,
+                                                                       Matrix6d(node.edge_covariance.inverse())),
+                           false);
+    }
+  }
+  b.since_keyframe.setZero();
+  b.by_utime[o.utime] = b.keyframes.size();
+  b.keyframes.push_back(node);
+  ++keyframes_;
+  optimize_and_publish(o.source, b, o.utime, emit);
+
+  if (!config_.propose_loops) return;
+  const int64_t k = static_cast<int64_t>(b.keyframes.size()) - 1;
+  for (const LoopProposal& p : proposer_.propose(k)) {
+    MatchRequest r;
+    r.utime = o.utime;
+    r.source = o.source;
+    r.request_id = next_request_id_++;
+    r.kind = p.random ? "random" : "local";
+    const KeyframeNode& a = b.keyframes[static_cast<size_t>(p.from)];
+    const KeyframeNode& c = b.keyframes[static_cast<size_t>(p.to)];
+    r.a = Keyframe{p.from, a.utime, to_pose(smoother_.graph().variables()[static_cast<size_t>(a.variable)].as_se3())};
+    r.b = Keyframe{p.to, c.utime, to_pose(smoother_.graph().variables()[static_cast<size_t>(c.variable)].as_se3())};
+    ++requests_;
+    emit(r);
+  }
+}
+
+std::optional<std::pair<size_t, SE3>> GraphStage::resolve(const Body& b, int64_t keyframe_id, int64_t utime) const {
+  if (keyframe_id >= 0 && keyframe_id < static_cast<int64_t>(b.keyframes.size()) &&
+      b.keyframes[static_cast<size_t>(keyframe_id)].utime == utime)
+    return std::make_pair(static_cast<size_t>(keyframe_id), SE3());
+  const auto tolerance = static_cast<int64_t>(config_.loop_time_tolerance_s * 1e6);
+  auto hi = b.by_utime.lower_bound(utime);
+  std::optional<size_t> best;
+  int64_t best_gap = tolerance + 1;
+  if (hi != b.by_utime.end() && hi->first - utime < best_gap) best = hi->second, best_gap = hi->first - utime;
+  if (hi != b.by_utime.begin()) {
+    auto lo = std::prev(hi);
+    if (utime - lo->first < best_gap) best = lo->second;
+  }
+  if (!best) return std::nullopt;
+  const KeyframeNode& kf = b.keyframes[*best];
+  if (kf.utime == utime) return std::make_pair(*best, SE3());
+  // The odometry pose at the loop's time (exact stamp, as a front end answers about frames it was given).
+  auto at = std::lower_bound(b.odometry.begin(), b.odometry.end(), utime,
+                             [](const std::pair<int64_t, SE3>& x, int64_t t) { return x.first < t; });
+  if (at == b.odometry.end() || at->first != utime) return std::nullopt;
+  return std::make_pair(*best, kf.odom.between(at->second));
+}
+
+void GraphStage::on_loop(const LoopClosure& l, const Emit& emit) {
+  auto it = bodies_.find(l.source);
+  if (it == bodies_.end()) {
+    ++loops_unknown_source_;
+    return;
+  }
+  Body& b = it->second;
+  const auto end_from = resolve(b, l.keyframe_from, l.utime_from);
+  const auto end_to = resolve(b, l.keyframe_to, l.utime_to);
+  if (!end_from || !end_to || end_from->first == end_to->first) {
+    ++loops_unmatched_;
+    return;
+  }
+  const std::optional<size_t> from = end_from->first, to = end_to->first;
+  // Consistency: the loop against the current estimate, with the loop's covariance plus the odometry's between the
+  // two keyframes (an upper bound of the estimate's relative uncertainty, so a true loop passes with the gate's
+  // probability however far the odometry drifted — as long as the odometry's covariance is honest; it is scaled up
+  // by loop_gate_odometry_scale for the biases real odometry does not report).
+  const size_t lo = std::min(*from, *to), hi = std::max(*from, *to);
+  Matrix6 path = Matrix6::Zero();
+  SE3 chain;
+  for (size_t k = lo + 1; k <= hi; ++k) {
+    path = compose_covariance(path, b.keyframes[k].edge, b.keyframes[k].edge_covariance);
+    chain = chain * b.keyframes[k].edge;
+  }
+  if (*from > *to) {  // the covariance of the inverse motion: Ad(X) P Ad(X)'
+    const Matrix6 ad = chain.adjoint();
+    path = ad * path * ad.transpose();
+  }
+  const auto& vars = smoother_.graph().variables();
+  const SE3 predicted = vars[static_cast<size_t>(b.keyframes[*from].variable)].as_se3().between(
+      vars[static_cast<size_t>(b.keyframes[*to].variable)].as_se3());
+  // The loop moved onto the keyframes: T_kf_from^-1 T_kf_to = D_from z D_to^-1.
+  const SE3 z = end_from->second * to_se3(l.relative) * end_to->second.inverse();
+  double d2;
+  if (b.planar) {
+    const Eigen::Matrix3d info = planar_block(l.information);
+    const Eigen::Vector3d e = SE2::from_se3(z).between(SE2::from_se3(predicted)).log();
+    const double k2 = config_.loop_gate_odometry_scale * config_.loop_gate_odometry_scale;
+    const Eigen::Matrix3d S = info.inverse() + k2 * planar_block(path);
+    d2 = e.dot(S.ldlt().solve(e));
+  } else {
+    const Vector6d e = z.between(predicted).log();
+    const Matrix6 S = l.information.inverse() + config_.loop_gate_odometry_scale * config_.loop_gate_odometry_scale * path;
+    d2 = e.dot(S.ldlt().solve(e));
+  }
+  if (!(d2 <= (b.planar ? chi2_gate_planar_ : chi2_gate_spatial_))) {
+    ++loops_rejected_;
+    return;
+  }
+  const int vf = b.keyframes[*from].variable, vt = b.keyframes[*to].variable;
+  if (b.planar)
+    smoother_.add_factor(std::make_unique<graph::RelativePoseFactor>(vf, vt, SE2::from_se3(z), Eigen::Matrix3d(planar_block(l.information))));
+  else
+    smoother_.add_factor(std::make_unique<graph::RelativePoseFactor>(vf, vt, z, Matrix6d(l.information)));
+  ++loops_accepted_;
+  optimize_and_publish(l.source, b, b.keyframes.back().utime, emit);
+}
+
+void GraphStage::optimize_and_publish(const std::string& source, Body& b, int64_t utime, const Emit& emit) {
+  const auto t0 = std::chrono::steady_clock::now();
+  const graph::IncrementalStatus st = smoother_.update();
+  last_update_ms_ = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  rebuilds_ += st.rebuilt ? 1 : 0;
+  relinearized_ += st.relinearized_factors;
+  if (!st.ok) {
+    ++optimizer_failures_;
+    return;
+  }
+  Trajectory t;
+  t.utime = utime;
+  t.source = source;
+  t.chi2 = smoother_.chi2();
+  t.iterations = st.solves;
+  t.solve_ms = last_update_ms_;
+  t.keyframes = keyframes(source);
+  if (t.keyframes.size() > static_cast<size_t>(config_.trajectory_max_keyframes))
+    t.keyframes.erase(t.keyframes.begin(), t.keyframes.end() - config_.trajectory_max_keyframes);
+  emit(t);
+
+  const KeyframeNode& newest = b.keyframes.back();
+  GraphCorrection c;
+  c.keyframe_utime = newest.utime;
+  c.keyframe_odom = newest.odom;
+  c.keyframe_map = smoother_.graph().variables()[static_cast<size_t>(newest.variable)].as_se3();
+  const Eigen::MatrixXd marginal = smoother_.marginal_covariance(newest.variable);
+  if (marginal.size() > 0) c.keyframe_covariance = b.planar ? embed_planar(marginal) : Matrix6(marginal);
+  c.keyframe_odom_covariance = newest.odom_covariance;
+  corrections_->set(source, c);
+}
+
+std::vector<Keyframe> GraphStage::keyframes(const std::string& source) const {
+  std::vector<Keyframe> out;
+  auto it = bodies_.find(source);
+  if (it == bodies_.end()) return out;
+  const auto& vars = smoother_.graph().variables();
+  for (size_t k = 0; k < it->second.keyframes.size(); ++k) {
+    const KeyframeNode& n = it->second.keyframes[k];
+    out.push_back(Keyframe{static_cast<int64_t>(k), n.utime, to_pose(vars[static_cast<size_t>(n.variable)].as_se3())});
+  }
+  return out;
+}
+
+Counters GraphStage::counters() const {
+  return {{"keyframes", keyframes_},
+          {"keyframes_rejected", keyframes_rejected_},
+          {"match_requests", requests_},
+          {"loops_accepted", loops_accepted_},
+          {"loops_rejected", loops_rejected_},
+          {"loops_unmatched", loops_unmatched_},
+          {"loops_unknown_source", loops_unknown_source_},
+          {"optimizer_failures", optimizer_failures_},
+          {"rebuilds", rebuilds_},
+          {"relinearized_factors", relinearized_},
+          {"odometry_out_of_order", out_of_order_},
+          {"last_update_us", static_cast<int64_t>(last_update_ms_ * 1000)}};
+}
+
+}  // namespace sextant::engine

@@ -1,0 +1,81 @@
+#pragma once
+// The graph back end (source B on the incremental smoother, estimators/graph/incremental_smoother.hpp).
+// Per body (odometry source):
+//  - keyframes: each odometry pose is classified by KeyframeSelector (too close / keyframe / implausible jump,
+//    counted); a keyframe becomes a pose variable linked to the previous keyframe by the odometry between them, with
+//    the composed increment covariance as information;
+//  - loop proposals: for each new keyframe the LoopProposer's pairs go out as MatchRequests (keyframe ids are the
+//    body's keyframe indices, 0, 1, 2, ...);
+//  - loop closures (answers and unsolicited ones) are tied to keyframes by id or by time — a time between keyframes
+//    is moved to the nearest keyframe through the odometry recorded between them (z' = (O_kf^-1 O_t) z (O_t'^-1 O_kf'),
+//    O the odometry poses) — then checked against the
+//    current estimate with a chi-square gate whose covariance is the loop's plus the odometry's between the two
+//    keyframes (an upper bound of the estimate's relative uncertainty), and added with a robust kernel (DCS by
+//    default); rejected loops are counted;
+//  - after every update: a Trajectory of the body, and the map -> odometry correction for GraphPoseStage.
+// The first keyframe of a body is held fixed at its odometry pose: the map frame is the odometry frame at the
+// body's first keyframe, as for dead reckoning.
+#include "daemon/engine/graph_correction.hpp"
+#include "daemon/engine/graph_stage_config.hpp"
+#include "daemon/engine/stage.hpp"
+#include "estimators/graph/incremental_smoother.hpp"
+
+#include <map>
+#include <memory>
+
+namespace sextant::engine {
+
+class GraphStage final : public Stage {
+ public:
+  GraphStage(const GraphConfig& config, std::shared_ptr<GraphCorrections> corrections);
+  std::string_view name() const override { return "graph"; }
+  bool accepts(const Event& e) const override {
+    return std::holds_alternative<Odometry>(e) || std::holds_alternative<LoopClosure>(e);
+  }
+  void handle(const Event& e, const Emit& emit) override;
+  Counters counters() const override;
+
+  const graph::IncrementalSmoother& smoother() const { return smoother_; }
+  /// The keyframes of a body (optimized poses), oldest first.
+  std::vector<Keyframe> keyframes(const std::string& source) const;
+
+ private:
+  struct KeyframeNode {
+    int64_t utime = 0;
+    int variable = -1;
+    SE3 odom;
+    Matrix6 odom_covariance = Matrix6::Zero();
+    Matrix6 edge_covariance = Matrix6::Zero();  // of the odometry from the previous keyframe
+    SE3 edge;                                   // that odometry
+  };
+  struct Body {
+    bool planar = false;
+    KeyframeSelector selector;
+    int64_t last_utime = 0;
+    SE3 last_odom;
+    Matrix6 last_odom_covariance = Matrix6::Zero();
+    Matrix6 since_keyframe = Matrix6::Zero();  // covariance of the odometry since the last keyframe
+    std::vector<KeyframeNode> keyframes;
+    std::map<int64_t, size_t> by_utime;
+    std::vector<std::pair<int64_t, SE3>> odometry;  // recent odometry poses (bounded), for loops between keyframes
+  };
+  void on_odometry(const Odometry& o, const Emit& emit);
+  void on_loop(const LoopClosure& l, const Emit& emit);
+  /// The keyframe a loop's end refers to, and the odometry motion from that keyframe to the loop's time.
+  std::optional<std::pair<size_t, SE3>> resolve(const Body& b, int64_t keyframe_id, int64_t utime) const;
+  void optimize_and_publish(const std::string& source, Body& b, int64_t utime, const Emit& emit);
+
+  GraphConfig config_;
+  std::shared_ptr<GraphCorrections> corrections_;
+  LoopProposer proposer_;
+  graph::IncrementalSmoother smoother_;
+  std::map<std::string, Body> bodies_;
+  int64_t next_variable_id_ = 0, next_request_id_ = 0;
+  double chi2_gate_planar_ = 0, chi2_gate_spatial_ = 0;
+  int64_t keyframes_ = 0, keyframes_rejected_ = 0, requests_ = 0, loops_accepted_ = 0, loops_rejected_ = 0,
+          loops_unmatched_ = 0, loops_unknown_source_ = 0, optimizer_failures_ = 0, rebuilds_ = 0,
+          relinearized_ = 0, out_of_order_ = 0;
+  double last_update_ms_ = 0;
+};
+
+}  // namespace sextant::engine
