@@ -18,7 +18,7 @@ namespace {
 std::string simulated_log(const std::string& name, uint64_t seed, bool unknown_ids) {
   const auto log = (std::filesystem::temp_directory_path() / (name + std::to_string(::getpid()) + ".lcm")).string();
   replay::SimulationOptions o;
-  o.duration_s = 40;
+  o.duration_s = 60;
   o.seed = seed;
   o.unknown_ids = unknown_ids;
   runtime::LogWriter w(log);
