@@ -1,6 +1,7 @@
 // Source C's experiment reproduces the sanity anchors of issue 6: two targets at d = 0 are associated correctly
 // exactly a quarter of the time (the two tuples are indistinguishable; each of the 4 detection pairings of the
-// second and third sensors is equally likely), and at d = 2 km with 5 mrad almost always.
+// second and third sensors is equally likely), and at d = 2 km with 5 mrad almost always.  The relaxation matches
+// the exact solver, the target-prior term cuts ghosts under clutter, and the sensor layouts are assoc.md's.
 #include "replay/assoc_experiment.hpp"
 
 #include <doctest/doctest.h>
@@ -30,10 +31,60 @@ TEST_CASE("Lagrangian relaxation matches the exact solver on 6-target scans") {
   o.targets = 6;
   o.spacing = 1.0;
   o.runs = 30;
+  o.p_detect = 0.9;
+  o.clutter = 2;
+  o.compare_exact = true;
   const auto lr = run_assoc_experiment(o);
+  CHECK(lr.exact_compared == 30);
+  CHECK(lr.gap_max <= 0.01);
+  // At the default 1 % gap tolerance the relaxation may stop short of the optimum (bench/RESULTS.md: 83 % of such
+  // coplanar-grid scans); run to 100 iterations it finds it on nearly all (98 %).
+  o.gap_tolerance = 0;
+  const auto full = run_assoc_experiment(o);
+  MESSAGE("LR optimal on " << lr.lr_optimal << " of 30 at a 1 % gap tolerance, " << full.lr_optimal << " of 30 at 0");
+  CHECK(full.lr_optimal >= 28);
+  CHECK(full.lr_optimal >= lr.lr_optimal);
+  o.gap_tolerance = 0.01;
+  o.compare_exact = false;
   o.exact = true;
   const auto exact = run_assoc_experiment(o);
-  // At the default 1 % duality-gap tolerance the relaxation may stop short of the optimum on a few scans.
   CHECK(std::abs(lr.correct_rate - exact.correct_rate) <= 2 * exact.correct_rate_stderr + 0.01);
-  CHECK(lr.gap_mean <= 0.01);
+}
+
+TEST_CASE("the target-prior term cuts ghost tuples under clutter") {
+  AssocExperimentOptions o;
+  o.spacing = 2.0;
+  o.runs = 300;
+  o.p_detect = 0.9;
+  o.clutter = 1;
+  const auto plain = run_assoc_experiment(o);
+  o.target_prior = true;
+  const auto prior = run_assoc_experiment(o);
+  MESSAGE("ghosts per scan " << plain.ghosts_per_scan << " -> " << prior.ghosts_per_scan << ", correct " << plain.correct_rate
+                             << " -> " << prior.correct_rate);
+  CHECK(prior.ghosts_per_scan < 0.5 * plain.ghosts_per_scan);
+  CHECK(prior.correct_rate > plain.correct_rate + 3 * plain.correct_rate_stderr);
+}
+
+TEST_CASE("sensor layouts and the uniform target layout") {
+  const auto five = assoc_experiment_sensors(5), seven = assoc_experiment_sensors(7);
+  REQUIRE(five.size() == 5);
+  REQUIRE(seven.size() == 7);
+  CHECK(five[3] == Eigen::Vector3d(30, 30, 0.1));
+  CHECK(five[4] == Eigen::Vector3d(15, -10, 0));
+  CHECK(seven[6] == Eigen::Vector3d(40, 15, 0.05));  // sees the region around azimuth pi: the field of view wraps
+  CHECK(assoc_experiment_sensors(9).size() == 9);
+  AssocExperimentOptions o;
+  o.sensors = 7;
+  o.targets = 20;
+  o.uniform_layout = true;
+  o.spacing = 1.5;
+  o.runs = 5;
+  o.p_detect = 0.9;
+  o.clutter = 5;
+  o.target_prior = true;
+  const auto r = run_assoc_experiment(o);
+  CHECK(r.observable_targets == 100);  // 7 sensors at P_D 0.9: every target is seen by >= 2 of them (P ~ 1 - 6e-6)
+  CHECK(r.correct_rate > 0.8);
+  CHECK(r.gap_max <= 0.01);
 }
