@@ -29,6 +29,8 @@ sextant::cli::RegisterCommand reg{"simulate", [](CLI::App& app) {
   cmd->add_option("--odometry-rate", o->odometry_rate_hz, "Hz")->check(CLI::PositiveNumber);
   cmd->add_option("--odometry-noise", o->odometry_trans_noise, "translation noise, m per m travelled");
   cmd->add_option("--speed", o->speed, "m/s")->check(CLI::PositiveNumber);
+  cmd->add_option("--loop-distance", o->loop_distance, "loop closures when the robot returns within this distance, m "
+                  "(0: none, e.g. when a matcher answers the daemon's requests instead)")->check(CLI::NonNegativeNumber);
   cmd->callback([=] {
     std::string gt = *tum;
     if (gt.empty()) {
