@@ -5,6 +5,7 @@
 #include <doctest/doctest.h>
 
 #include <Eigen/Dense>
+#include <Eigen/Eigenvalues>
 
 #include <random>
 
@@ -246,4 +247,29 @@ TEST_CASE("a prediction split at stops reaches the same pose, with the stops at 
   const Eigen::Matrix3d Ps = split.ekf().pose_covariance(), Pw = whole.ekf().pose_covariance();
   MESSAGE("split/whole covariance difference " << (Ps - Pw).norm() / Pw.norm());
   CHECK((Ps - Pw).norm() < 0.01 * Pw.norm());
+}
+
+TEST_CASE("odometry noise that is not positive definite is repaired, so P stays symmetric positive definite") {
+  OdometrySourceOptions wheel, vo;
+  wheel.predict = true;
+  MultiSourceEkf ekf(PlanarEkfOptions{}, kP0, {{"wheel", wheel}, {"vo", vo}}, 1e-10);
+  const auto X = truth_run();
+  Eigen::Matrix3d bad;  // symmetric with a negative eigenvalue, and an asymmetric part
+  bad << 1e-4, 2e-4, 0, 2e-4, 1e-4, 0, 1e-5, 0, -1e-6;
+  for (int k = 0; k < 5; ++k) {
+    ekf.odometry("wheel", reading(k, X[static_cast<size_t>(k)], Eigen::Matrix3d::Zero(), bad));
+    ekf.odometry("vo", reading(k, X[static_cast<size_t>(k)], Eigen::Matrix3d::Zero(), bad));
+  }
+  CHECK(ekf.counters().at("vo").fused == 4);
+  const Eigen::MatrixXd& P = ekf.ekf().covariance();
+  CHECK((P - P.transpose()).norm() == 0.0);
+  // The clone of a differential source equals the pose right after each message: the full P is positive
+  // semi-definite by construction (rounding aside); the pose block is positive definite.
+  Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(P);
+  CHECK(eig.eigenvalues().minCoeff() > -1e-15);
+  CHECK(Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(ekf.ekf().pose_covariance()).eigenvalues().minCoeff() > 0);
+  const Eigen::Matrix3d Q = MultiSourceEkf::increment_noise(reading(0, X[0], Eigen::Matrix3d::Zero(), std::nullopt),
+                                                            reading(1, X[1], Eigen::Matrix3d::Zero(), bad), 1e-10);
+  CHECK((Q - Q.transpose()).norm() == 0.0);
+  CHECK(Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(Q).eigenvalues().minCoeff() >= 1e-10 * 0.999);
 }
