@@ -337,6 +337,13 @@ ComponentResult solve_relaxation(const RelaxationProblem& P, int max_iterations,
     for (size_t s = 2; s < S; ++s)
       for (int k = 1; k <= P.n[s]; ++k) u[s][static_cast<size_t>(k)] += step * g[s][static_cast<size_t>(k)];
   }
+  // Gap still open: a last, more thorough exchange pass over the best solution (more refill candidates, more sweeps).
+  if (relative_gap(best_ub, best_lb) > gap_tolerance) {
+    ExchangeImprover thorough(P.packing, 64);
+    std::vector<int> polished = best;
+    const double c = thorough.improve(polished, 20);
+    if (c < best_ub) best_ub = c, best = polished;
+  }
   out.ub = best_ub;
   out.lb = std::min(best_lb, best_ub);
   for (int t : best) out.chosen.push_back(P.original[static_cast<size_t>(t)]);
