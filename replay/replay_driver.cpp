@@ -52,6 +52,9 @@ ReplayResult replay_log(const std::string& log_path, const config::DaemonConfig&
                                  result.published.push_back({channel, utime, bytes});
                                });
   const engine::Emit emit = [&](engine::Output o) {
+    // A solve's wall-clock time differs from run to run; replay's outputs must not (the stage latencies of the
+    // report keep the timing).
+    if (auto* t = std::get_if<engine::Trajectory>(&o)) t->solve_ms = 0;
     std::visit(
         [&](const auto& x) {
           using T = std::decay_t<decltype(x)>;

@@ -295,7 +295,8 @@ IncrementalStatus IncrementalSmoother::update() {
     }
     entering += ok ? 1 : 0;
   }
-  if (used_ + new_dim > capacity_ || entering > update_limit()) return rebuild();
+  if (entering > update_limit()) return rebuild();     // a batch of new factors: iterate as a batch solve would
+  if (used_ + new_dim > capacity_) return rebuild_with(1);  // only room is needed
 
   for (int v : vars_in) {
     if (graph_.variables()[static_cast<size_t>(v)].fixed) continue;
@@ -343,7 +344,7 @@ IncrementalStatus IncrementalSmoother::update() {
     return r;
   }
   if (static_cast<double>(factor_nonzeros()) > options_.refill_ratio * static_cast<double>(ordered_nnz_)) {
-    IncrementalStatus r = rebuild();
+    IncrementalStatus r = rebuild_with(1);  // the new ordering is the point: one iteration
     r.new_variables = st.new_variables, r.new_factors = st.new_factors, r.deferred_variables = st.deferred_variables;
     return r;
   }
@@ -355,7 +356,7 @@ IncrementalStatus IncrementalSmoother::update() {
     const std::vector<int> moved = moved_variables();
     if (moved.empty()) break;
     if (!relinearize(moved, st)) {
-      IncrementalStatus r = rebuild();
+      IncrementalStatus r = rebuild_with(1);  // relinearizing everything at the estimate is the point: one iteration
       r.new_variables = st.new_variables, r.new_factors = st.new_factors, r.deferred_variables = st.deferred_variables;
       return r;
     }
@@ -365,7 +366,9 @@ IncrementalStatus IncrementalSmoother::update() {
   return st;
 }
 
-IncrementalStatus IncrementalSmoother::rebuild() {
+IncrementalStatus IncrementalSmoother::rebuild() { return rebuild_with(options_.rebuild_iterations); }
+
+IncrementalStatus IncrementalSmoother::rebuild_with(int iterations) {
   IncrementalStatus st;
   st.rebuilt = true;
   // Everything in the system is relinearized at the current estimate.
@@ -431,7 +434,7 @@ IncrementalStatus IncrementalSmoother::rebuild() {
   }
   capacity_ = used_ + std::max(64, static_cast<int>(options_.capacity_growth * used_));
   ++rebuilds_;
-  for (int it = 0; it < std::max(1, options_.rebuild_iterations); ++it) {
+  for (int it = 0; it < std::max(1, iterations); ++it) {
     if (it > 0) {
       if (moved_variables().empty()) break;
       for (size_t v = 0; v < lin_.size(); ++v)

@@ -45,7 +45,9 @@ struct IncrementalOptions {
   /// max(min_update_factors, update_fraction x factors in the system).
   double update_fraction = 0.02;
   int min_update_factors = 32;
-  int rebuild_iterations = 10;            // Gauss-Newton iterations of a rebuild, until no variable moves past the thresholds
+  int rebuild_iterations = 10;            // Gauss-Newton iterations of a rebuild for new factors that would cost more as
+                                          // rank updates (until no variable moves past the thresholds); a rebuild for
+                                          // relinearization or reordering takes one
   double refill_ratio = 2.5;              // rebuild (reorder) when nnz(L) exceeds this multiple of its size after ordering
   double capacity_growth = 1.0;           // reserved columns at a rebuild: this fraction of the used ones (and >= 64)
   RobustKernel kernel = RobustKernel::kNone;
@@ -110,6 +112,7 @@ class IncrementalSmoother {
   std::vector<int> moved_variables() const;
   bool relinearize(const std::vector<int>& moved, IncrementalStatus& st);
   std::string factorize_all();
+  IncrementalStatus rebuild_with(int iterations);
 
   IncrementalOptions options_;
   FactorGraph graph_;                 // estimates and factors
