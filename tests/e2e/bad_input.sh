@@ -12,8 +12,8 @@ trap '[ -n "${KEEP:-}" ] || rm -rf "$work"' EXIT; echo "work dir: $work"
 
 python3 "$(dirname "$0")/make_bad_log.py" "$work/bad.lcm" "$work/expected.json" --flood-seconds 2
 # Dead reckoning only: the accounting below follows one stage's queue.
-printf 'daemon:\n  status_period_s: 0.2\nengine:\n  filter:\n    type: none\n' > "$work/normal.yaml"
-printf 'daemon:\n  status_period_s: 0.2\n  queue_capacity: 2\nengine:\n  filter:\n    type: none\n' > "$work/tiny.yaml"
+printf 'daemon:\n  status_period_s: 0.2\nengine:\n  filter:\n    type: none\n  graph:\n    enabled: false\n' > "$work/normal.yaml"
+printf 'daemon:\n  status_period_s: 0.2\n  queue_capacity: 2\nengine:\n  filter:\n    type: none\n  graph:\n    enabled: false\n' > "$work/tiny.yaml"
 
 cat > "$work/run.sh" <<EOS
 set -euo pipefail
