@@ -22,8 +22,9 @@ dom = open(sys.argv[1]).read()
 svgs = re.findall(r"<svg[^>]*class=\"plot\".*?</svg>", dom, re.S)
 titles = [re.search(r"font-weight=\"bold\">([^<]*)<", s).group(1) for s in svgs]
 print("plots:", titles)
-need = ["Top view", "Position error of ekf", "Targets (last 20 scans)", "Input messages per channel",
+need = ["Top view", "Position error of graph", "Targets (last 20 scans)", "Input messages per channel",
         "Processing time per event: dead_reckoning", "Processing time per event: filter",
+        "Processing time per event: graph", "Processing time per event: graph_pose",
         "Processing time per event: association"]
 missing = [t for t in need if t not in titles]
 assert not missing, f"missing plots: {missing}"
@@ -31,7 +32,7 @@ for s, t in zip(svgs, titles):
     series = len(re.findall(r'class="series"', s))
     points = sum(len(p.split()) for p in re.findall(r'class="series" points="([^"]*)"', s))
     assert series > 0, f"plot '{t}' has no data"
-    if t in ("Top view", "Position error of ekf"):
+    if t in ("Top view", "Position error of graph"):
         assert points > 100, f"plot '{t}' has only {points} points"
 assert "ATE (SE(3)-aligned" in dom, "no ATE line"
 EOP

@@ -318,7 +318,7 @@ TEST_CASE("fastslam: determinism for a seed") {
   CHECK(c.poses.back() != a.poses.back());
 }
 
-TEST_CASE("fastslam: resampling shares the maps of duplicated particles; a later update unshares one") {
+TEST_CASE("fastslam: resampling shares the maps of duplicated particles, a later update unshares one") {
   FastSlamOptions o;
   o.particles = 40;
   o.seed = 3;

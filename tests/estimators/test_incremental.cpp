@@ -213,7 +213,7 @@ TEST_CASE("bad input: unknown variables, NaN, non-positive-definite information,
   CHECK(s.graph().variables()[static_cast<size_t>(b)].pose2.translation().x() == doctest::Approx(1.0));
 }
 
-TEST_CASE("a variable no factor determines waits; a component not tied to the gauge is reported by id") {
+TEST_CASE("a variable no factor determines waits, a component not tied to the gauge is reported by id") {
   IncrementalSmoother s;
   const int a = s.add_variable(pose_variable(true, 0, SE3()));
   const int p = [&] {

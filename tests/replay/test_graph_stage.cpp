@@ -145,7 +145,7 @@ TEST_CASE("graph stage: keyframes by motion, proposals, loops from the simulated
   CHECK(fused.back().covariance(0, 0) > 0);
 }
 
-TEST_CASE("graph stage: a confident wrong loop is rejected and leaves the map as it was; a time is bridged by odometry") {
+TEST_CASE("graph stage: a confident wrong loop is rejected and leaves the map as it was, a time is bridged by odometry") {
   const Run run = circle_run(30, 4);
   EngineConfig cfg;
   cfg.filter.type = "none";

@@ -170,7 +170,7 @@ TEST_CASE("simulated matcher: an answer between truth stamps uses the interpolat
   CHECK((helix(10).between(helix(40.1)).translation() - expected.translation()).norm() > 1e-2);
 }
 
-TEST_CASE("simulated matcher: failure and wrong-match fractions within binomial bounds; wrong answers are wrong") {
+TEST_CASE("simulated matcher: failure and wrong-match fractions within binomial bounds, wrong answers are wrong") {
   SimulatedMatcherOptions o;
   o.sigma_t = 0.01;
   o.sigma_r = 0.001;
@@ -222,7 +222,7 @@ TEST_CASE("simulated matcher: a body that never moves still gets wrong answers, 
   CHECK(m.counts().wrong == 20);
 }
 
-TEST_CASE("simulated matcher: planar bodies get planar answers (x, y, yaw; information at 0, 1, 5)") {
+TEST_CASE("simulated matcher: planar bodies get planar answers (x, y, yaw, information at 0, 1, 5)") {
   SimulatedMatcherOptions o;
   o.sigma_t = 0.05;
   o.sigma_r = 0.02;
