@@ -96,6 +96,21 @@ void GraphStage::on_odometry(const Odometry& o, const Emit& emit) {
   node.utime = o.utime;
   node.odom = odom;
   node.odom_covariance = o.covariance;
+  Eigen::MatrixXd information;
+  if (!b.keyframes.empty()) {
+    node.edge = b.keyframes.back().odom.between(odom);
+    node.edge_covariance = b.since_keyframe;
+    // The odometry edge's information; a covariance that cannot be inverted (it can only come from a sender's
+    // malformed covariances) drops the keyframe and keeps accumulating towards the next one.
+    const Eigen::MatrixXd cov = b.planar ? Eigen::MatrixXd(planar_block(node.edge_covariance)) : Eigen::MatrixXd(node.edge_covariance);
+    Eigen::LLT<Eigen::MatrixXd> llt(cov);
+    if (llt.info() != Eigen::Success || !cov.allFinite()) {
+      ++bad_edges_;
+      return;
+    }
+    information = llt.solve(Eigen::MatrixXd::Identity(cov.rows(), cov.cols()));
+    information = 0.5 * (information + information.transpose());
+  }
   graph::Variable v;
   v.id = next_variable_id_++;
   v.kind = b.planar ? graph::VariableKind::kPose2 : graph::VariableKind::kPose3;
@@ -103,25 +118,24 @@ void GraphStage::on_odometry(const Odometry& o, const Emit& emit) {
   if (b.keyframes.empty()) {
     v.fixed = true;  // the body's map frame: its odometry frame at the first keyframe
   } else {
-    const KeyframeNode& prev = b.keyframes.back();
-    node.edge = prev.odom.between(odom);
-    node.edge_covariance = b.since_keyframe;
-    initial = smoother_.graph().variables()[static_cast<size_t>(prev.variable)].as_se3() * node.edge;
+    initial = smoother_.graph().variables()[static_cast<size_t>(b.keyframes.back().variable)].as_se3() * node.edge;
   }
   if (b.planar) v.pose2 = SE2::from_se3(initial);
   else v.pose3 = initial;
-  node.variable = smoother_.add_variable(v);
-  if (!b.keyframes.empty()) {
-    const KeyframeNode& prev = b.keyframes.back();
-    if (b.planar) {
-      smoother_.add_factor(std::make_unique<graph::RelativePoseFactor>(prev.variable, node.variable, SE2::from_se3(node.edge),
-                                                                       Eigen::Matrix3d(planar_block(node.edge_covariance).inverse())),
-                           false);
-    } else {
-      smoother_.add_factor(std::make_unique<graph::RelativePoseFactor>(prev.variable, node.variable, node.edge,
-                                                                       Matrix6d(node.edge_covariance.inverse())),
-                           false);
+  try {
+    node.variable = smoother_.add_variable(v);
+    if (!b.keyframes.empty()) {
+      const KeyframeNode& prev = b.keyframes.back();
+      if (b.planar)
+        smoother_.add_factor(std::make_unique<graph::RelativePoseFactor>(prev.variable, node.variable, SE2::from_se3(node.edge),
+                                                                         Eigen::Matrix3d(information)), false);
+      else
+        smoother_.add_factor(std::make_unique<graph::RelativePoseFactor>(prev.variable, node.variable, node.edge,
+                                                                         Matrix6d(information)), false);
     }
+  } catch (const std::invalid_argument&) {
+    ++bad_edges_;  // a non-finite pose or information: never reaches the smoother's system (it stays pending)
+    return;
   }
   b.since_keyframe.setZero();
   b.by_utime[o.utime] = b.keyframes.size();
@@ -220,10 +234,15 @@ void GraphStage::on_loop(const LoopClosure& l, const Emit& emit) {
     return;
   }
   const int vf = b.keyframes[*from].variable, vt = b.keyframes[*to].variable;
-  if (b.planar)
-    smoother_.add_factor(std::make_unique<graph::RelativePoseFactor>(vf, vt, SE2::from_se3(z), Eigen::Matrix3d(planar_block(l.information))));
-  else
-    smoother_.add_factor(std::make_unique<graph::RelativePoseFactor>(vf, vt, z, Matrix6d(l.information)));
+  try {
+    if (b.planar)
+      smoother_.add_factor(std::make_unique<graph::RelativePoseFactor>(vf, vt, SE2::from_se3(z), Eigen::Matrix3d(planar_block(l.information))));
+    else
+      smoother_.add_factor(std::make_unique<graph::RelativePoseFactor>(vf, vt, z, Matrix6d(l.information)));
+  } catch (const std::invalid_argument&) {
+    ++loops_rejected_;  // an information the intake let through but the smoother cannot use (e.g. planar block)
+    return;
+  }
   ++loops_accepted_;
   optimize_and_publish(l.source, b, b.keyframes.back().utime, emit);
 }
@@ -284,6 +303,7 @@ Counters GraphStage::counters() const {
           {"rebuilds", rebuilds_},
           {"relinearized_factors", relinearized_},
           {"odometry_out_of_order", out_of_order_},
+          {"odometry_edges_rejected", bad_edges_},
           {"last_update_us", static_cast<int64_t>(last_update_ms_ * 1000)}};
 }
 

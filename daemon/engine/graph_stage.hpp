@@ -74,7 +74,7 @@ class GraphStage final : public Stage {
   double chi2_gate_planar_ = 0, chi2_gate_spatial_ = 0;
   int64_t keyframes_ = 0, keyframes_rejected_ = 0, requests_ = 0, loops_accepted_ = 0, loops_rejected_ = 0,
           loops_unmatched_ = 0, loops_unknown_source_ = 0, optimizer_failures_ = 0, rebuilds_ = 0,
-          relinearized_ = 0, out_of_order_ = 0;
+          relinearized_ = 0, out_of_order_ = 0, bad_edges_ = 0;
   double last_update_ms_ = 0;
 };
 
