@@ -28,15 +28,9 @@ Matrix6 embed_planar(const Eigen::MatrixXd& m3) {
   return out;
 }
 
-graph::RobustKernel kernel_of(const std::string& name) {
-  return name == "huber" ? graph::RobustKernel::kHuber
-         : name == "cauchy" ? graph::RobustKernel::kCauchy
-         : name == "dcs" ? graph::RobustKernel::kDcs : graph::RobustKernel::kNone;
-}
-
 graph::IncrementalOptions smoother_options(const GraphConfig& c) {
   graph::IncrementalOptions o;
-  o.kernel = kernel_of(c.robust);
+  o.kernel = graph::robust_kernel_from_name(c.robust);
   o.kernel_width = c.kernel_width;
   o.relinearize_translation = c.relinearize_translation;
   o.relinearize_rotation = c.relinearize_rotation;

@@ -13,6 +13,13 @@ namespace sextant::graph {
 
 enum class RobustKernel { kNone, kHuber, kCauchy, kDcs };
 
+/// The kernel named "none", "huber", "cauchy" or "dcs" (anything else: none; callers validate names first).
+inline RobustKernel robust_kernel_from_name(const std::string& name) {
+  return name == "huber" ? RobustKernel::kHuber
+         : name == "cauchy" ? RobustKernel::kCauchy
+         : name == "dcs" ? RobustKernel::kDcs : RobustKernel::kNone;
+}
+
 /// IRLS weight of a factor whose squared error is `s`.
 inline double robust_weight(RobustKernel k, double width, double s) {
   switch (k) {

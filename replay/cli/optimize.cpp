@@ -28,11 +28,6 @@ struct Options {
   double relin_translation = 0.1, relin_rotation = 0.1;
 };
 
-graph::RobustKernel kernel_of(const std::string& name) {
-  return name == "huber" ? graph::RobustKernel::kHuber
-         : name == "cauchy" ? graph::RobustKernel::kCauchy
-         : name == "dcs" ? graph::RobustKernel::kDcs : graph::RobustKernel::kNone;
-}
 
 double percentile(std::vector<double> v, double q) {
   if (v.empty()) return 0;
@@ -44,7 +39,7 @@ double percentile(std::vector<double> v, double q) {
 // Gauss-Newton solve of the same graph from the same start for the final chi2 ratio.
 void run_incremental(graph::G2oGraph& g, const Options& o) {
   graph::IncrementalOptions io;
-  io.kernel = kernel_of(o.robust);
+  io.kernel = graph::robust_kernel_from_name(o.robust);
   io.kernel_width = o.kernel_width;
   io.relinearize_translation = o.relin_translation;
   io.relinearize_rotation = o.relin_rotation;
@@ -144,7 +139,7 @@ sextant::cli::RegisterCommand reg{"optimize", [](CLI::App& app) {
     opt.method = o->solver == "lm" ? graph::Method::kLevenbergMarquardt : graph::Method::kGaussNewton;
     opt.max_iterations = o->max_iters;
     opt.relative_tolerance = o->tolerance;
-    opt.kernel = kernel_of(o->robust);
+    opt.kernel = graph::robust_kernel_from_name(o->robust);
     opt.kernel_width = o->kernel_width;
     opt.ordering = o->ordering == "block-amd" ? graph::Ordering::kBlockAmd
                    : o->ordering == "colamd" ? graph::Ordering::kColamd
