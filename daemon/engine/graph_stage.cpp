@@ -82,6 +82,17 @@ void GraphStage::on_odometry(const Odometry& o, const Emit& emit) {
   b.odometry.emplace_back(o.utime, odom);
   b.last_odom_covariance = o.covariance;
 
+  on_keyframe_candidate(o, b, odom, emit);
+  // Loops that arrived before the odometry of their times: try them now that the odometry has reached them.
+  if (!b.early_loops.empty()) {
+    std::vector<LoopClosure> due, later;
+    for (auto& l : b.early_loops) (std::max(l.utime_from, l.utime_to) <= b.last_utime ? due : later).push_back(std::move(l));
+    b.early_loops = std::move(later);
+    for (const auto& l : due) on_loop(l, emit);
+  }
+}
+
+void GraphStage::on_keyframe_candidate(const Odometry& o, Body& b, const SE3& odom, const Emit& emit) {
   const KeyframeDecision d = b.selector.decide(odom);
   if (d == KeyframeDecision::kImplausible) ++keyframes_rejected_;
   if (d != KeyframeDecision::kKeyframe) return;
@@ -186,6 +197,10 @@ void GraphStage::on_loop(const LoopClosure& l, const Emit& emit) {
   Body& b = it->second;
   const auto end_from = resolve(b, l.keyframe_from, l.utime_from);
   const auto end_to = resolve(b, l.keyframe_to, l.utime_to);
+  if ((!end_from || !end_to) && std::max(l.utime_from, l.utime_to) > b.last_utime && b.early_loops.size() < 256) {
+    b.early_loops.push_back(l);  // ahead of the odometry: retried when it gets there
+    return;
+  }
   if (!end_from || !end_to || end_from->first == end_to->first) {
     ++loops_unmatched_;
     return;

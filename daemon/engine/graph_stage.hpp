@@ -12,6 +12,8 @@
 //    current estimate with a chi-square gate whose covariance is the loop's plus the odometry's between the two
 //    keyframes (an upper bound of the estimate's relative uncertainty), and added with a robust kernel (DCS by
 //    default); rejected loops are counted;
+//    A loop about a time the body's odometry has not reached yet waits (at most 256 per body) and is tried again
+//    when the odometry gets there;
 //  - after every update: a Trajectory of the body, and the map -> odometry correction for GraphPoseStage.
 // The first keyframe of a body is held fixed at its odometry pose: the map frame is the odometry frame at the
 // body's first keyframe, as for dead reckoning.
@@ -58,8 +60,10 @@ class GraphStage final : public Stage {
     std::vector<KeyframeNode> keyframes;
     std::map<int64_t, size_t> by_utime;
     std::vector<std::pair<int64_t, SE3>> odometry;  // recent odometry poses (bounded), for loops between keyframes
+    std::vector<LoopClosure> early_loops;  // loops about times this body's odometry has not reached yet (bounded)
   };
   void on_odometry(const Odometry& o, const Emit& emit);
+  void on_keyframe_candidate(const Odometry& o, Body& b, const SE3& odom, const Emit& emit);
   void on_loop(const LoopClosure& l, const Emit& emit);
   /// The keyframe a loop's end refers to, and the odometry motion from that keyframe to the loop's time.
   std::optional<std::pair<size_t, SE3>> resolve(const Body& b, int64_t keyframe_id, int64_t utime) const;

@@ -224,3 +224,33 @@ TEST_CASE("graph pose stage: odometry composed with the correction, never a utim
   CHECK(out.size() == 2);
   CHECK(stage.counters()[1].second == 2);  // out_of_order
 }
+
+TEST_CASE("graph stage: a loop about a time the odometry has not reached waits for it") {
+  const Run run = circle_run(30, 4);
+  EngineConfig cfg;
+  cfg.filter.type = "none";
+  cfg.association.enabled = false;
+  cfg.graph.keyframes.k1 = 1.0;
+  cfg.graph.propose_loops = false;
+  Engine engine(cfg);
+  GraphStage* graph = nullptr;
+  for (auto& s : engine.stages())
+    if (s->name() == "graph") graph = dynamic_cast<GraphStage*>(s.get());
+  const Emit ignore = [](Output) {};
+  std::map<int64_t, SE3> truth(run.truth.begin(), run.truth.end());
+  for (size_t k = 0; k < 100; ++k) engine.handle(run.odometry[k], ignore);
+  LoopClosure early;
+  early.utime = run.odometry[99].utime;
+  early.source = "robot";
+  early.planar = true;
+  early.utime_from = run.odometry[20].utime;
+  early.utime_to = run.odometry[150].utime;  // the odometry is at 99: the loop is early (as the simulator writes it)
+  early.relative = to_pose(truth.at(early.utime_from).inverse() * truth.at(early.utime_to));
+  early.information = Matrix6::Identity() * 1e4;
+  engine.handle(early, ignore);
+  CHECK(counter(*graph, "loops_accepted") == 0);
+  CHECK(counter(*graph, "loops_unmatched") == 0);
+  for (size_t k = 100; k < run.odometry.size(); ++k) engine.handle(run.odometry[k], ignore);
+  CHECK(counter(*graph, "loops_accepted") == 1);
+  CHECK(counter(*graph, "loops_unmatched") == 0);
+}
