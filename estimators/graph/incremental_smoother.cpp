@@ -121,7 +121,7 @@ void IncrementalSmoother::apply(const Contribution& c, bool add) {
 // Which pending variables and factors can enter the system: a factor enters when all its variables are in (or
 // enter); a new variable enters when the information its entering factors give it is positive definite, so that the
 // system stays positive definite (a bearing-only sighting alone, say, waits for a second one).
-bool IncrementalSmoother::determined(const std::vector<int>& new_vars, const std::vector<size_t>& new_factors,
+void IncrementalSmoother::determined(const std::vector<int>& new_vars, const std::vector<size_t>& new_factors,
                                      std::vector<char>& ready) const {
   std::vector<int> slot(graph_.variables().size(), -1);
   for (size_t k = 0; k < new_vars.size(); ++k) slot[static_cast<size_t>(new_vars[k])] = static_cast<int>(k);
@@ -159,7 +159,6 @@ bool IncrementalSmoother::determined(const std::vector<int>& new_vars, const std
       if (!(eig.eigenvalues().minCoeff() > 1e-12 * std::max(top, 1e-300))) ready[k] = 0, changed = true;
     }
   }
-  return std::any_of(ready.begin(), ready.end(), [](char c) { return c != 0; });
 }
 
 double IncrementalSmoother::robust_weight_of(size_t fi) const {
@@ -284,31 +283,25 @@ IncrementalStatus IncrementalSmoother::update() {
     vars_in.push_back(v);
     if (!graph_.variables()[static_cast<size_t>(v)].fixed) new_dim += graph_.variables()[static_cast<size_t>(v)].dim();
   }
-  size_t entering = 0;
+  // The pending factors all of whose variables are in the system or entering it now.
+  std::vector<char> entering_var(graph_.variables().size(), 0);
+  for (int v : vars_in) entering_var[static_cast<size_t>(v)] = 1;
+  std::vector<size_t> factors_in, factors_wait;
   for (size_t f : pending_factors_) {
     bool ok = true;
     for (int v : graph_.factors()[f]->variables()) {
       const size_t vi = static_cast<size_t>(v);
-      if (pos_[vi] < 0 && !graph_.variables()[vi].fixed &&
-          std::find(vars_in.begin(), vars_in.end(), v) == vars_in.end())
-        ok = false;
+      if (pos_[vi] < 0 && !graph_.variables()[vi].fixed && !entering_var[vi]) ok = false;
     }
-    entering += ok ? 1 : 0;
+    (ok ? factors_in : factors_wait).push_back(f);
   }
-  if (entering > update_limit()) return rebuild();     // a batch of new factors: iterate as a batch solve would
+  if (factors_in.size() > update_limit()) return rebuild();  // a batch of new factors: iterate as a batch solve would
   if (used_ + new_dim > capacity_) return rebuild_with(1);  // only room is needed
 
   for (int v : vars_in) {
     if (graph_.variables()[static_cast<size_t>(v)].fixed) continue;
     pos_[static_cast<size_t>(v)] = used_;
     used_ += graph_.variables()[static_cast<size_t>(v)].dim();
-  }
-  std::vector<size_t> factors_in, factors_wait;
-  for (size_t f : pending_factors_) {
-    bool ok = true;
-    for (int v : graph_.factors()[f]->variables())
-      if (pos_[static_cast<size_t>(v)] < 0 && !graph_.variables()[static_cast<size_t>(v)].fixed) ok = false;
-    (ok ? factors_in : factors_wait).push_back(f);
   }
   for (size_t f : factors_in) {
     apply(linearize(f), true);

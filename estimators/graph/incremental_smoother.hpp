@@ -106,7 +106,7 @@ class IncrementalSmoother {
   struct Contribution;  // one factor's (W^1/2 J)' and J' W e at the linearization point
   Contribution linearize(size_t factor) const;
   void apply(const Contribution& c, bool add);
-  bool determined(const std::vector<int>& new_vars, const std::vector<size_t>& new_factors,
+  void determined(const std::vector<int>& new_vars, const std::vector<size_t>& new_factors,
                   std::vector<char>& ready) const;
   void solve();
   std::vector<int> moved_variables() const;
