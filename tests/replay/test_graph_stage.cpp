@@ -11,6 +11,7 @@
 
 #include <cmath>
 #include <random>
+#include <stdexcept>
 
 using namespace sextant;
 using namespace sextant::engine;
@@ -63,6 +64,22 @@ std::map<std::string, replay::MatcherTruth> matcher_truth(const Run& r) {
   return m;
 }
 
+// An engine with dead reckoning and the graph back end only (keyframes every metre).
+EngineConfig graph_only_config(bool propose_loops) {
+  EngineConfig cfg;
+  cfg.filter.type = "none";
+  cfg.association.enabled = false;
+  cfg.graph.keyframes.k1 = 1.0;  // a keyframe per metre
+  cfg.graph.propose_loops = propose_loops;
+  return cfg;
+}
+
+GraphStage& graph_stage_of(Engine& engine) {
+  for (auto& s : engine.stages())
+    if (s->name() == "graph") return dynamic_cast<GraphStage&>(*s);
+  throw std::runtime_error("no graph stage");
+}
+
 int64_t counter(const Stage& s, const std::string& name) {
   for (const auto& [k, v] : s.counters())
     if (k == name) return v;
@@ -82,18 +99,12 @@ double keyframe_error(const GraphStage& g, const Run& r) {
 
 TEST_CASE("graph stage: keyframes by motion, proposals, loops from the simulated matcher correct the drift") {
   const Run run = circle_run(120, 3);  // two laps
-  EngineConfig cfg;
-  cfg.filter.type = "none";
-  cfg.association.enabled = false;
-  cfg.graph.keyframes.k1 = 1.0;  // a keyframe per metre
+  EngineConfig cfg = graph_only_config(true);
   cfg.graph.keyframes.k2 = 5.0;
   cfg.graph.proposals.n1 = 2;
   cfg.graph.proposals.seed = 9;
   Engine engine(cfg);
-  GraphStage* graph = nullptr;
-  for (auto& s : engine.stages())
-    if (s->name() == "graph") graph = dynamic_cast<GraphStage*>(s.get());
-  REQUIRE(graph != nullptr);
+  GraphStage* graph = &graph_stage_of(engine);
   CHECK(engine.primary_estimator() == "graph");
 
   replay::SimulatedMatcherOptions mo;
@@ -147,15 +158,8 @@ TEST_CASE("graph stage: keyframes by motion, proposals, loops from the simulated
 
 TEST_CASE("graph stage: a confident wrong loop is rejected and leaves the map as it was, a time is bridged by odometry") {
   const Run run = circle_run(30, 4);
-  EngineConfig cfg;
-  cfg.filter.type = "none";
-  cfg.association.enabled = false;
-  cfg.graph.keyframes.k1 = 1.0;
-  cfg.graph.propose_loops = false;
-  Engine engine(cfg);
-  GraphStage* graph = nullptr;
-  for (auto& s : engine.stages())
-    if (s->name() == "graph") graph = dynamic_cast<GraphStage*>(s.get());
+  Engine engine(graph_only_config(false));
+  GraphStage* graph = &graph_stage_of(engine);
   const Emit ignore = [](Output) {};
   for (const auto& o : run.odometry) engine.handle(o, ignore);
   const auto before = graph->keyframes("robot");
@@ -227,15 +231,8 @@ TEST_CASE("graph pose stage: odometry composed with the correction, never a utim
 
 TEST_CASE("graph stage: a loop about a time the odometry has not reached waits for it") {
   const Run run = circle_run(30, 4);
-  EngineConfig cfg;
-  cfg.filter.type = "none";
-  cfg.association.enabled = false;
-  cfg.graph.keyframes.k1 = 1.0;
-  cfg.graph.propose_loops = false;
-  Engine engine(cfg);
-  GraphStage* graph = nullptr;
-  for (auto& s : engine.stages())
-    if (s->name() == "graph") graph = dynamic_cast<GraphStage*>(s.get());
+  Engine engine(graph_only_config(false));
+  GraphStage* graph = &graph_stage_of(engine);
   const Emit ignore = [](Output) {};
   std::map<int64_t, SE3> truth(run.truth.begin(), run.truth.end());
   for (size_t k = 0; k < 100; ++k) engine.handle(run.odometry[k], ignore);
