@@ -46,51 +46,58 @@ Triangulation triangulate_linear(const std::vector<BearingObservation>& obs) {
   return t;
 }
 
+bool add_observation(NormalEquations& n, const BearingObservation& o, const Eigen::Matrix2d& Ri, const Eigen::Vector3d& x) {
+  Eigen::Matrix<double, 2, 3> J;
+  const auto h = bearing(o.sensor, x, &J);
+  if (!h) return false;
+  const Eigen::Vector2d nu(wrap(o.azimuth - (*h)[0]), o.elevation - (*h)[1]);
+  const Eigen::Matrix<double, 3, 2> JtRi = J.transpose() * Ri;
+  n.information.noalias() += JtRi * J;
+  n.gradient.noalias() += JtRi * nu;
+  n.residual += nu.dot(Ri * nu);
+  return true;
+}
+
+Triangulation triangulation_at(const Eigen::Vector3d& x, const NormalEquations& n, double max_condition) {
+  Triangulation t;
+  t.residual = n.residual;
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig;
+  eig.computeDirect(n.information, Eigen::EigenvaluesOnly);
+  t.condition = eig.eigenvalues().maxCoeff() / std::max(eig.eigenvalues().minCoeff(), 1e-300);
+  if (!(t.condition < max_condition)) {
+    t.reason = "ill-conditioned geometry (position not observable along one direction)";
+    return t;
+  }
+  t.position = x;
+  t.covariance = n.information.inverse();
+  t.valid = t.position.allFinite() && t.covariance.allFinite();
+  if (!t.valid) t.reason = "non-finite solution";
+  return t;
+}
+
 Triangulation triangulate(const std::vector<BearingObservation>& obs, int steps, double max_condition) {
   Triangulation t = triangulate_linear(obs);
   if (!t.valid) return t;
   Eigen::Vector3d x = t.position;
-  Eigen::Matrix3d info;
+  NormalEquations n;
   for (int it = 0; it <= steps; ++it) {
-    info.setZero();
-    Eigen::Vector3d g = Eigen::Vector3d::Zero();
-    double cost = 0;
+    n = NormalEquations{};
     for (const auto& o : obs) {
-      Eigen::Matrix<double, 2, 3> J;
-      const auto h = bearing(o.sensor, x, &J);
-      if (!h) {
+      if (!add_observation(n, o, o.covariance.inverse(), x)) {
         t.valid = false;
         t.reason = "target on a sensor's vertical (azimuth undefined)";
         return t;
       }
-      const Eigen::Vector2d nu(wrap(o.azimuth - (*h)[0]), o.elevation - (*h)[1]);
-      const Eigen::Matrix2d Ri = o.covariance.inverse();
-      info += J.transpose() * Ri * J;
-      g += J.transpose() * Ri * nu;
-      cost += nu.dot(Ri * nu);
     }
-    t.residual = cost;
     if (it == steps) break;
-    const Eigen::Vector3d dx = info.ldlt().solve(g);
+    const Eigen::Vector3d dx = n.information.ldlt().solve(n.gradient);
     if (!dx.allFinite()) break;
     x += dx;
     if (dx.norm() < 1e-12 * std::max(1.0, x.norm())) {
       steps = it + 1;  // converged: one more pass for the covariance and residual at x
     }
   }
-  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig;
-  eig.computeDirect(info, Eigen::EigenvaluesOnly);
-  t.condition = eig.eigenvalues().maxCoeff() / std::max(eig.eigenvalues().minCoeff(), 1e-300);
-  if (!(t.condition < max_condition)) {
-    t.valid = false;
-    t.reason = "ill-conditioned geometry (position not observable along one direction)";
-    return t;
-  }
-  t.position = x;
-  t.covariance = info.inverse();
-  t.valid = t.position.allFinite() && t.covariance.allFinite();
-  if (!t.valid) t.reason = "non-finite solution";
-  return t;
+  return triangulation_at(x, n, max_condition);
 }
 
 }  // namespace sextant::assoc

@@ -31,6 +31,24 @@ struct Triangulation {
   double condition = 0; // condition number of the information matrix
 };
 
+/// The Gauss-Newton normal equations of sum nu' R^-1 nu linearized at a position x: information = sum J' R^-1 J,
+/// gradient = sum J' R^-1 nu (the step toward the minimum is information^-1 gradient), residual = sum nu' R^-1 nu,
+/// with nu = [wrapped azimuth, elevation] measured minus predicted at x.
+struct NormalEquations {
+  Eigen::Matrix3d information = Eigen::Matrix3d::Zero();
+  Eigen::Vector3d gradient = Eigen::Vector3d::Zero();
+  double residual = 0;
+};
+
+/// Adds observation `o` (with `inverse_covariance` = R^-1, given so callers can compute it once) linearized at `x`
+/// to `n`.  False, leaving `n` unchanged, when x is on the sensor's vertical (azimuth undefined).
+bool add_observation(NormalEquations& n, const BearingObservation& o, const Eigen::Matrix2d& inverse_covariance,
+                     const Eigen::Vector3d& x);
+
+/// Step 3 at a final position: `valid` when x and the covariance information^-1 are finite and the information's
+/// condition number is below `max_condition`; residual from `n`.
+Triangulation triangulation_at(const Eigen::Vector3d& x, const NormalEquations& n, double max_condition = 1e10);
+
 /// The linear least-squares position alone (step 1).
 Triangulation triangulate_linear(const std::vector<BearingObservation>& obs);
 

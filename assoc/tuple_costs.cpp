@@ -4,6 +4,7 @@
 #include "assoc/gaussian_divergence.hpp"
 #include "assoc/chi_square.hpp"
 
+#include <Eigen/Cholesky>
 #include <Eigen/LU>
 
 #include <cmath>
@@ -16,6 +17,8 @@ namespace sextant::assoc {
 namespace {
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
+// Gauss-Newton steps of tuple_cost from the linear solution (the builder takes the same two for pairs).
+constexpr int kReferenceSteps = 2;
 
 double wrap(double a) {
   a = std::remainder(a, 2 * M_PI);
@@ -52,12 +55,11 @@ CostKind cost_kind_from_string(const std::string& s) {
   throw std::invalid_argument("unknown cost '" + s + "' (classic, kl or renyi)");
 }
 
-double tuple_cost(const Scan& scan, const std::vector<int>& index, const CostOptions& o, Triangulation* out) {
-  const auto obs = observations_of(scan, index, index.size());
-  if (obs.size() < 2) return kInf;
-  const Triangulation t = triangulate(obs, 2);
-  if (!passes_gate(t, obs.size(), o.gate_probability)) return kInf;
-  if (out) *out = t;
+namespace {
+
+// The cost of a tuple whose detections were triangulated to `t` (valid, gate passed).  The classic term
+// sum 1/2 nu' R^-1 nu is half the triangulation's residual (same R, same nu at the same position).
+double cost_at(const Scan& scan, const std::vector<int>& index, const CostOptions& o, const Triangulation& t) {
   double c = 0;
   for (size_t s = 0; s < index.size(); ++s) {
     if (index[s] == 0) {
@@ -66,22 +68,30 @@ double tuple_cost(const Scan& scan, const std::vector<int>& index, const CostOpt
     }
     const auto& d = scan.detections[s][static_cast<size_t>(index[s] - 1)];
     const Eigen::Matrix2d R = Eigen::Vector2d(d.sigma_azimuth * d.sigma_azimuth, d.sigma_elevation * d.sigma_elevation).asDiagonal();
+    c += -std::log(o.p_detect / (clutter_density(o, s) * 2 * M_PI * d.sigma_azimuth * d.sigma_elevation));  // sqrt|2 pi R|
+    if (o.kind == CostKind::kClassic) continue;
     Eigen::Matrix<double, 2, 3> J;
     const auto h = bearing(scan.sensors[s], t.position, &J);
     if (!h) return kInf;
     const Eigen::Vector2d z(d.azimuth, d.elevation);
     const Eigen::Vector2d zh(d.azimuth - wrap(d.azimuth - (*h)[0]), (*h)[1]);  // h with its azimuth unwrapped next to z
-    const Eigen::Vector2d nu = z - zh;
-    c += -std::log(o.p_detect / (clutter_density(o, s) * std::sqrt((2 * M_PI * R).determinant())));
     const Eigen::Matrix2d Sh = J * t.covariance * J.transpose();
-    switch (o.kind) {
-      case CostKind::kClassic: c += 0.5 * nu.dot(R.inverse() * nu); break;
-      case CostKind::kKl: c += kl_divergence(z, R, zh, Sh); break;
-      case CostKind::kRenyi: c += symmetric_renyi_divergence(z, R, zh, Sh, o.alpha) / o.alpha; break;
-    }
+    c += o.kind == CostKind::kKl ? kl_divergence(z, R, zh, Sh) : symmetric_renyi_divergence(z, R, zh, Sh, o.alpha) / o.alpha;
   }
+  if (o.kind == CostKind::kClassic) c += 0.5 * t.residual;
   if (o.target_density > 0) c -= std::log(o.target_density * std::sqrt((2 * M_PI * t.covariance).determinant()));
   return c;
+}
+
+}  // namespace
+
+double tuple_cost(const Scan& scan, const std::vector<int>& index, const CostOptions& o, Triangulation* out) {
+  const auto obs = observations_of(scan, index, index.size());
+  if (obs.size() < 2) return kInf;
+  const Triangulation t = triangulate(obs, kReferenceSteps);
+  if (!passes_gate(t, obs.size(), o.gate_probability)) return kInf;
+  if (out) *out = t;
+  return cost_at(scan, index, o, t);
 }
 
 std::vector<Tuple> build_tuples(const Scan& scan, const CostOptions& o) {
@@ -140,14 +150,65 @@ std::vector<Tuple> build_tuples(const Scan& scan, const CostOptions& o) {
     }
   // Depth-first over the sensors: a detection joins a partial tuple only when it is compatible with each of its
   // detections; partial tuples of >= 3 detections pass the residual gate before being extended.
+  //
+  // Triangulation along the search (each partial tuple once, no linear solve below the pairs): a pair starts from
+  // its linear solution and takes two Gauss-Newton steps; a partial tuple of m >= 3 detections starts from its
+  // parent's position (the maximum-likelihood point of m - 1 of its detections, already close) and takes one
+  // step, reusing the parent's normal equations at that point (only the new detection is linearized there).  A
+  // complete tuple uses the triangulation of its deepest partial tuple as it is.
+  struct Level {
+    Eigen::Vector3d x = Eigen::Vector3d::Zero();
+    NormalEquations at_x;  // of the level's detections, at x
+    Triangulation t;
+  };
+  std::vector<Level> level(S + 1);  // by number of detections
+  std::vector<std::vector<Eigen::Matrix2d>> information(S);  // R^-1 of every detection
+  for (size_t s = 0; s < S; ++s)
+    for (const auto& d : scan.detections[s])
+      information[s].push_back(Eigen::Vector2d(1 / (d.sigma_azimuth * d.sigma_azimuth), 1 / (d.sigma_elevation * d.sigma_elevation)).asDiagonal());
+  std::vector<std::pair<size_t, int>> members;  // (sensor, detection) of the partial tuple, aligned with obs
+  // x_to = x_from + one Gauss-Newton step from the normal equations at x_from; at_to = those at x_to.
+  auto step = [&](const Eigen::Vector3d& x_from, const NormalEquations& at_from, Eigen::Vector3d& x_to, NormalEquations& at_to) {
+    const Eigen::Vector3d dx = at_from.information.ldlt().solve(at_from.gradient);
+    if (!dx.allFinite()) return false;
+    x_to = x_from + dx;
+    at_to = NormalEquations{};
+    for (size_t i = 0; i < obs.size(); ++i)
+      if (!add_observation(at_to, obs[i], information[members[i].first][static_cast<size_t>(members[i].second - 1)], x_to)) return false;
+    return true;
+  };
+  // Triangulates the partial tuple obs (m >= 2 detections) into level[m]; false when degenerate.
+  auto triangulate_level = [&](size_t m) {
+    Level& L = level[m];
+    if (m == 2) {
+      const Triangulation lin = triangulate_linear(obs);
+      if (!lin.valid) return false;
+      Eigen::Vector3d x1;
+      NormalEquations at_x0, at_x1;
+      for (size_t i = 0; i < 2; ++i)
+        if (!add_observation(at_x0, obs[i], information[members[i].first][static_cast<size_t>(members[i].second - 1)], lin.position)) return false;
+      if (!step(lin.position, at_x0, x1, at_x1) || !step(x1, at_x1, L.x, L.at_x)) return false;
+    } else {
+      const Level& parent = level[m - 1];
+      NormalEquations at_parent = parent.at_x;
+      const auto [s, k] = members.back();
+      if (!add_observation(at_parent, obs.back(), information[s][static_cast<size_t>(k - 1)], parent.x)) return false;
+      Eigen::Vector3d x1;
+      NormalEquations at_x1;
+      if (!step(parent.x, at_parent, x1, at_x1) || !step(x1, at_x1, L.x, L.at_x)) return false;
+    }
+    L.t = triangulation_at(L.x, L.at_x);
+    return L.t.valid;
+  };
   std::vector<Tuple> out;
   std::vector<int> index(S, 0);
   std::vector<size_t> real;  // sensors with a detection in the partial tuple
   auto recurse = [&](auto&& self, size_t s) -> void {
     if (real.size() + (S - s) < 2) return;  // cannot reach two detections any more
     if (s == S) {
-      Triangulation t;
-      const double c = tuple_cost(scan, index, o, &t);
+      const Triangulation& t = level[real.size()].t;
+      if (!passes_gate(t, real.size(), o.gate_probability)) return;  // pairs: gated here (the pair gate used 1 step)
+      const double c = cost_at(scan, index, o, t);
       if (c < 0) out.push_back({index, c, t.position, t.covariance});
       return;
     }
@@ -170,9 +231,12 @@ std::vector<Tuple> build_tuples(const Scan& scan, const CostOptions& o) {
     for (int k : cand) {
       index[s] = k;
       obs.push_back(observation(s, k));
+      members.push_back({s, k});
       real.push_back(s);
-      if (obs.size() < 3 || s + 1 == S || passes_gate(triangulate(obs, 1), obs.size(), o.gate_probability)) self(self, s + 1);
+      const size_t m = obs.size();
+      if (m < 2 || (triangulate_level(m) && (m < 3 || passes_gate(level[m].t, m, o.gate_probability)))) self(self, s + 1);
       real.pop_back();
+      members.pop_back();
       obs.pop_back();
     }
     index[s] = 0;

@@ -28,89 +28,125 @@ std::vector<std::vector<int>> independent_components(const TuplePacking& p) {
   return groups;
 }
 
-ExchangeImprover::ExchangeImprover(const TuplePacking& p, int refill_candidates)
-    : p_(p), refill_candidates_(refill_candidates) {
+ExchangeImprover::ExchangeImprover(const TuplePacking& p, int refill_candidates) : refill_candidates_(refill_candidates) {
   const size_t T = p.members.size(), D = static_cast<size_t>(p.detections);
-  for (size_t t = 0; t < T; ++t)
-    if (p.cost[t] < 0) order_.push_back(static_cast<int>(t));
-  std::stable_sort(order_.begin(), order_.end(), [&](int a, int b) { return p.cost[static_cast<size_t>(a)] < p.cost[static_cast<size_t>(b)]; });
-  of_detection_.resize(D);
+  tuple_of_rank_.resize(T);
+  std::iota(tuple_of_rank_.begin(), tuple_of_rank_.end(), 0);
+  std::stable_sort(tuple_of_rank_.begin(), tuple_of_rank_.end(), [&](int a, int b) {
+    const double ca = p.cost[static_cast<size_t>(a)], cb = p.cost[static_cast<size_t>(b)];
+    return ca < 0 && cb < 0 ? ca < cb : ca < 0 && !(cb < 0);  // negative ones cheapest first, the rest after
+  });
+  rank_of_tuple_.resize(T);
+  member_begin_.assign(1, 0);
+  for (size_t r = 0; r < T; ++r) {
+    const auto t = static_cast<size_t>(tuple_of_rank_[r]);
+    rank_of_tuple_[t] = static_cast<int>(r);
+    cost_.push_back(p.cost[t]);
+    if (p.cost[t] < 0) ++negative_;
+    members_.insert(members_.end(), p.members[t].begin(), p.members[t].end());
+    member_begin_.push_back(static_cast<int>(members_.size()));
+  }
+  // Per detection, its negative tuples by rank (counting sort: ranks come out ascending, i.e. cheapest first).
+  of_detection_begin_.assign(D + 1, 0);
   cheapest_.assign(D, 0.0);
-  for (int t : order_)
-    for (int d : p.members[static_cast<size_t>(t)]) {
-      of_detection_[static_cast<size_t>(d)].push_back(t);
-      cheapest_[static_cast<size_t>(d)] = std::min(cheapest_[static_cast<size_t>(d)], p.cost[static_cast<size_t>(t)]);
+  for (int r = 0; r < negative_; ++r)
+    for (int i = member_begin_[static_cast<size_t>(r)]; i < member_begin_[static_cast<size_t>(r) + 1]; ++i) {
+      const auto d = static_cast<size_t>(members_[static_cast<size_t>(i)]);
+      ++of_detection_begin_[d + 1];
+      cheapest_[d] = std::min(cheapest_[d], cost_[static_cast<size_t>(r)]);
     }
+  for (size_t d = 0; d < D; ++d) of_detection_begin_[d + 1] += of_detection_begin_[d];
+  of_detection_.resize(static_cast<size_t>(of_detection_begin_[D]));
+  std::vector<int> fill(of_detection_begin_.begin(), of_detection_begin_.end() - 1);
+  for (int r = 0; r < negative_; ++r)
+    for (int i = member_begin_[static_cast<size_t>(r)]; i < member_begin_[static_cast<size_t>(r) + 1]; ++i)
+      of_detection_[static_cast<size_t>(fill[static_cast<size_t>(members_[static_cast<size_t>(i)])]++)] = r;
   owner_.assign(D, -1);
   in_.assign(T, 0);
+  look_.assign(T, 0);
   dropped_.assign(T, -1);
   blocked_.assign(D, -1);
 }
 
 double ExchangeImprover::improve(std::vector<int>& chosen, int max_passes) {
-  const auto& p = p_;
   std::fill(owner_.begin(), owner_.end(), -1);
   std::fill(in_.begin(), in_.end(), 0);
+  std::fill(look_.begin(), look_.begin() + negative_, 1);
+  const int* mem = members_.data();
+  const int* begin = member_begin_.data();
   for (int t : chosen) {
-    in_[static_cast<size_t>(t)] = 1;
-    for (int d : p.members[static_cast<size_t>(t)]) owner_[static_cast<size_t>(d)] = t;
+    const int r = rank_of_tuple_[static_cast<size_t>(t)];
+    in_[static_cast<size_t>(r)] = 1;
+    for (int i = begin[r]; i < begin[r + 1]; ++i) owner_[static_cast<size_t>(mem[i])] = r;
   }
   std::vector<int> conflicts, freed, refill;
+  // Detection d changed hands: every tuple containing it has a new bound.
+  auto touched = [&](int d) {
+    for (int i = of_detection_begin_[static_cast<size_t>(d)]; i < of_detection_begin_[static_cast<size_t>(d) + 1]; ++i)
+      look_[static_cast<size_t>(of_detection_[static_cast<size_t>(i)])] = 1;
+  };
   for (int pass = 0; pass < max_passes; ++pass) {
     bool improved = false;
-    for (int t : order_) {
-      if (in_[static_cast<size_t>(t)]) continue;
+    for (int t = 0; t < negative_; ++t) {
+      if (!look_[static_cast<size_t>(t)] || in_[static_cast<size_t>(t)]) continue;
+      look_[static_cast<size_t>(t)] = 0;
       const long stamp = ++stamp_;
       conflicts.clear(), freed.clear(), refill.clear();
-      double delta = p.cost[static_cast<size_t>(t)];
-      for (int d : p.members[static_cast<size_t>(t)]) {
+      double delta = cost_[static_cast<size_t>(t)];
+      for (int i = begin[t]; i < begin[t + 1]; ++i) {
+        const int d = mem[i];
         blocked_[static_cast<size_t>(d)] = stamp;
         const int o = owner_[static_cast<size_t>(d)];
         if (o >= 0 && dropped_[static_cast<size_t>(o)] != stamp) {
-          dropped_[static_cast<size_t>(o)] = stamp, conflicts.push_back(o), delta -= p.cost[static_cast<size_t>(o)];
+          dropped_[static_cast<size_t>(o)] = stamp, conflicts.push_back(o), delta -= cost_[static_cast<size_t>(o)];
         }
       }
       double bound = delta;  // each refill tuple holds a freed detection of its own
       for (int o : conflicts)
-        for (int d : p.members[static_cast<size_t>(o)])
-          if (blocked_[static_cast<size_t>(d)] != stamp) freed.push_back(d), bound += cheapest_[static_cast<size_t>(d)];
+        for (int i = begin[o]; i < begin[o + 1]; ++i)
+          if (blocked_[static_cast<size_t>(mem[i])] != stamp) freed.push_back(mem[i]), bound += cheapest_[static_cast<size_t>(mem[i])];
       if (!(bound < -1e-9)) continue;
+      look_[static_cast<size_t>(t)] = 1;  // the refill below depends on more than its own detections' owners
       // Greedy refill of the freed detections with tuples that fit.
       for (int d : freed) {
         if (blocked_[static_cast<size_t>(d)] == stamp) continue;
         int looked = 0;
-        for (int c : of_detection_[static_cast<size_t>(d)]) {
+        for (int j = of_detection_begin_[static_cast<size_t>(d)]; j < of_detection_begin_[static_cast<size_t>(d) + 1]; ++j) {
+          const int c = of_detection_[static_cast<size_t>(j)];
           if (++looked > refill_candidates_) break;
           if (c == t || in_[static_cast<size_t>(c)]) continue;
           bool fits = true;
-          for (int m : p.members[static_cast<size_t>(c)]) {
+          for (int i = begin[c]; i < begin[c + 1]; ++i) {
+            const int m = mem[i];
             const int o = owner_[static_cast<size_t>(m)];
             fits = fits && blocked_[static_cast<size_t>(m)] != stamp && (o < 0 || dropped_[static_cast<size_t>(o)] == stamp);
           }
           if (!fits) continue;
-          refill.push_back(c), delta += p.cost[static_cast<size_t>(c)];
-          for (int m : p.members[static_cast<size_t>(c)]) blocked_[static_cast<size_t>(m)] = stamp;
+          refill.push_back(c), delta += cost_[static_cast<size_t>(c)];
+          for (int i = begin[c]; i < begin[c + 1]; ++i) blocked_[static_cast<size_t>(mem[i])] = stamp;
           break;
         }
       }
       if (!(delta < -1e-9)) continue;
       for (int o : conflicts) {
         in_[static_cast<size_t>(o)] = 0;
-        for (int d : p.members[static_cast<size_t>(o)]) owner_[static_cast<size_t>(d)] = -1;
+        for (int i = begin[o]; i < begin[o + 1]; ++i) owner_[static_cast<size_t>(mem[i])] = -1, touched(mem[i]);
       }
       refill.push_back(t);
       for (int c : refill) {
         in_[static_cast<size_t>(c)] = 1;
-        for (int d : p.members[static_cast<size_t>(c)]) owner_[static_cast<size_t>(d)] = c;
+        for (int i = begin[c]; i < begin[c + 1]; ++i) owner_[static_cast<size_t>(mem[i])] = c, touched(mem[i]);
       }
       improved = true;
     }
     if (!improved) break;
   }
   chosen.clear();
-  double cost = 0;
-  for (size_t t = 0; t < in_.size(); ++t)
-    if (in_[t]) chosen.push_back(static_cast<int>(t)), cost += p.cost[t];
+  for (size_t r = 0; r < in_.size(); ++r)
+    if (in_[r]) chosen.push_back(tuple_of_rank_[r]);
+  std::sort(chosen.begin(), chosen.end());
+  double cost = 0;  // summed in tuple order, as the callers sum
+  for (int t : chosen) cost += cost_[static_cast<size_t>(rank_of_tuple_[static_cast<size_t>(t)])];
   return cost;
 }
 

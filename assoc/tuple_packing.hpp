@@ -24,6 +24,10 @@ std::vector<std::vector<int>> independent_components(const TuplePacking& p);
 /// each candidate solution).  A move is evaluated only when it can pay: its gain is bounded below by the tuple's
 /// cost minus the dropped ones plus, per freed detection, the cheapest tuple containing it; the refill looks at
 /// the `refill_candidates` cheapest tuples of each freed detection.
+///
+/// Speed (the same moves in the same order as sweeping every tuple every pass): the bound of a tuple depends only
+/// on which chosen tuples own its detections, so a tuple whose bound ruled it out is looked at again only after a
+/// move changed the owner of one of its detections; the tuples are stored cheapest first in flat arrays.
 class ExchangeImprover {
  public:
   explicit ExchangeImprover(const TuplePacking& p, int refill_candidates = 16);
@@ -32,13 +36,16 @@ class ExchangeImprover {
   double improve(std::vector<int>& chosen, int max_passes = 20);
 
  private:
-  const TuplePacking& p_;
+  // Tuples are addressed by rank: 0..negative_-1 the tuples of negative cost, cheapest first, then the others.
   int refill_candidates_;
-  std::vector<int> order_;                      // tuples of negative cost, cheapest first
-  std::vector<std::vector<int>> of_detection_;  // per detection, its tuples of negative cost, cheapest first
+  int negative_ = 0;
+  std::vector<int> tuple_of_rank_, rank_of_tuple_;
+  std::vector<double> cost_;                    // by rank
+  std::vector<int> member_begin_, members_;     // by rank: members_[member_begin_[r] .. member_begin_[r + 1])
+  std::vector<int> of_detection_begin_, of_detection_;  // per detection, the ranks of its negative tuples, ascending
   std::vector<double> cheapest_;                // per detection, min(0, the cheapest tuple containing it)
-  std::vector<int> owner_;
-  std::vector<char> in_;
+  std::vector<int> owner_;                      // per detection, the rank of the chosen tuple holding it, or -1
+  std::vector<char> in_, look_;                 // by rank: chosen; to be evaluated in the next sweep
   std::vector<long> dropped_, blocked_;
   long stamp_ = 0;
 };
