@@ -10,6 +10,7 @@ namespace sextant::assoc {
 namespace {
 
 double wrap(double a) {
+  if (a > -M_PI && a <= M_PI) return a;  // the usual case: a residual
   a = std::remainder(a, 2 * M_PI);
   return a <= -M_PI ? a + 2 * M_PI : a;
 }

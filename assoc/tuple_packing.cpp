@@ -66,6 +66,8 @@ ExchangeImprover::ExchangeImprover(const TuplePacking& p, int refill_candidates)
   look_.assign(T, 0);
   dropped_.assign(T, -1);
   blocked_.assign(D, -1);
+  freed_.assign(D, -1);
+  counted_.assign(D, -1);
 }
 
 double ExchangeImprover::improve(std::vector<int>& chosen, int max_passes) {
@@ -104,26 +106,39 @@ double ExchangeImprover::improve(std::vector<int>& chosen, int max_passes) {
       double bound = delta;  // each refill tuple holds a freed detection of its own
       for (int o : conflicts)
         for (int i = begin[o]; i < begin[o + 1]; ++i)
-          if (blocked_[static_cast<size_t>(mem[i])] != stamp) freed.push_back(mem[i]), bound += cheapest_[static_cast<size_t>(mem[i])];
+          if (blocked_[static_cast<size_t>(mem[i])] != stamp) {
+            freed.push_back(mem[i]), bound += cheapest_[static_cast<size_t>(mem[i])];
+            freed_[static_cast<size_t>(mem[i])] = stamp;
+          }
       if (!(bound < -1e-9)) continue;
       look_[static_cast<size_t>(t)] = 1;  // the refill below depends on more than its own detections' owners
-      // Greedy refill of the freed detections with tuples that fit.
+      // Greedy refill of the freed detections with tuples that fit.  `rest` bounds what the freed detections not
+      // yet refilled can still gain (each at most its cheapest tuple); once delta + rest cannot go below zero the
+      // move is rejected without looking further (the same decision as finishing the refill).
+      double rest = bound - delta;
       for (int d : freed) {
-        if (blocked_[static_cast<size_t>(d)] == stamp) continue;
+        if (!(delta + rest < -1e-9)) break;
+        if (blocked_[static_cast<size_t>(d)] == stamp) continue;  // taken by an earlier refill tuple
+        rest -= cheapest_[static_cast<size_t>(d)];
+        counted_[static_cast<size_t>(d)] = stamp;
         int looked = 0;
         for (int j = of_detection_begin_[static_cast<size_t>(d)]; j < of_detection_begin_[static_cast<size_t>(d) + 1]; ++j) {
           const int c = of_detection_[static_cast<size_t>(j)];
           if (++looked > refill_candidates_) break;
           if (c == t || in_[static_cast<size_t>(c)]) continue;
+          // Fits: every detection unblocked and either free or freed by this move.
           bool fits = true;
-          for (int i = begin[c]; i < begin[c + 1]; ++i) {
-            const int m = mem[i];
-            const int o = owner_[static_cast<size_t>(m)];
-            fits = fits && blocked_[static_cast<size_t>(m)] != stamp && (o < 0 || dropped_[static_cast<size_t>(o)] == stamp);
+          for (int i = begin[c]; i < begin[c + 1] && fits; ++i) {
+            const auto m = static_cast<size_t>(mem[i]);
+            fits = blocked_[m] != stamp && (owner_[m] < 0 || freed_[m] == stamp);
           }
           if (!fits) continue;
           refill.push_back(c), delta += cost_[static_cast<size_t>(c)];
-          for (int i = begin[c]; i < begin[c + 1]; ++i) blocked_[static_cast<size_t>(mem[i])] = stamp;
+          for (int i = begin[c]; i < begin[c + 1]; ++i) {
+            const auto m = static_cast<size_t>(mem[i]);
+            if (freed_[m] == stamp && counted_[m] != stamp) rest -= cheapest_[m], counted_[m] = stamp;  // refilled along with d
+            blocked_[m] = stamp;
+          }
           break;
         }
       }

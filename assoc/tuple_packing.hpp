@@ -46,7 +46,9 @@ class ExchangeImprover {
   std::vector<double> cheapest_;                // per detection, min(0, the cheapest tuple containing it)
   std::vector<int> owner_;                      // per detection, the rank of the chosen tuple holding it, or -1
   std::vector<char> in_, look_;                 // by rank: chosen; to be evaluated in the next sweep
-  std::vector<long> dropped_, blocked_;
+  std::vector<long> dropped_;                   // by rank: stamp of the evaluation that drops it
+  std::vector<long> blocked_, freed_, counted_; // per detection: stamp of the evaluation that takes / frees it /
+                                                // has taken its refill bound
   long stamp_ = 0;
 };
 
