@@ -1,24 +1,13 @@
 #include "assoc/assignment_with_missed.hpp"
 
-#include "assoc/assignment_2d.hpp"
-
-#include <Eigen/Core>
-
+#include <algorithm>
 #include <cmath>
-#include <limits>
-#include <numeric>
+#include <functional>
+#include <queue>
 #include <stdexcept>
 #include <string>
 
 namespace sextant::assoc {
-namespace {
-
-int find_root(std::vector<int>& parent, int x) {
-  while (parent[static_cast<size_t>(x)] != x) x = parent[static_cast<size_t>(x)] = parent[static_cast<size_t>(parent[static_cast<size_t>(x)])];
-  return x;
-}
-
-}  // namespace
 
 MissedAssignment assign_with_missed(const std::vector<double>& row_missed, const std::vector<double>& column_missed,
                                     const std::vector<PairCost>& pairs) {
@@ -34,9 +23,8 @@ MissedAssignment assign_with_missed(const std::vector<double>& row_missed, const
     if (!std::isfinite(m)) throw std::invalid_argument("assign_with_missed: non-finite cost of an unpaired column");
     out.value += m;
   }
-  // Improving pairings, as gains w = cost - missed(row) - missed(column) < 0; nodes 0..R-1 rows, R..R+C-1 columns.
-  std::vector<int> parent(static_cast<size_t>(R + C));
-  std::iota(parent.begin(), parent.end(), 0);
+  // Improving pairings, as gains w = cost - missed(row) - missed(column) < 0, by row (CSR), a duplicate (row,
+  // column) keeping its smallest gain.
   std::vector<PairCost> gains;
   for (const auto& p : pairs) {
     if (p.row < 0 || p.row >= R || p.column < 0 || p.column >= C)
@@ -44,49 +32,91 @@ MissedAssignment assign_with_missed(const std::vector<double>& row_missed, const
                                   ") outside " + std::to_string(R) + " x " + std::to_string(C));
     if (!std::isfinite(p.cost)) throw std::invalid_argument("assign_with_missed: non-finite pair cost");
     const double w = p.cost - row_missed[static_cast<size_t>(p.row)] - column_missed[static_cast<size_t>(p.column)];
-    if (!(w < 0)) continue;
-    gains.push_back({p.row, p.column, w});
-    parent[static_cast<size_t>(find_root(parent, p.row))] = find_root(parent, R + p.column);
+    if (w < 0) gains.push_back({p.row, p.column, w});
   }
   if (gains.empty()) return out;
-  // Components: local numbering of their rows and columns.
-  std::vector<int> component(static_cast<size_t>(R + C), -1), local(static_cast<size_t>(R + C), -1);
-  std::vector<std::vector<int>> rows, columns;
-  std::vector<std::vector<PairCost>> edges;
-  auto component_of = [&](int node) {
-    const int root = find_root(parent, node);
-    if (component[static_cast<size_t>(root)] < 0) {
-      component[static_cast<size_t>(root)] = static_cast<int>(rows.size());
-      rows.emplace_back(), columns.emplace_back(), edges.emplace_back();
-    }
-    return component[static_cast<size_t>(root)];
-  };
-  for (const auto& g : gains) {
-    const int c = component_of(g.row);
-    if (local[static_cast<size_t>(g.row)] < 0) local[static_cast<size_t>(g.row)] = static_cast<int>(rows[static_cast<size_t>(c)].size()), rows[static_cast<size_t>(c)].push_back(g.row);
-    const int col = R + g.column;
-    if (local[static_cast<size_t>(col)] < 0) local[static_cast<size_t>(col)] = static_cast<int>(columns[static_cast<size_t>(c)].size()), columns[static_cast<size_t>(c)].push_back(g.column);
-    edges[static_cast<size_t>(c)].push_back(g);
+  std::sort(gains.begin(), gains.end(), [](const PairCost& a, const PairCost& b) {
+    return a.row != b.row ? a.row < b.row : a.column != b.column ? a.column < b.column : a.cost < b.cost;
+  });
+  std::vector<int> begin(static_cast<size_t>(R) + 1, 0), column;
+  std::vector<double> gain;
+  for (size_t e = 0; e < gains.size(); ++e) {
+    if (e > 0 && gains[e].row == gains[e - 1].row && gains[e].column == gains[e - 1].column) continue;
+    ++begin[static_cast<size_t>(gains[e].row) + 1];
+    column.push_back(gains[e].column);
+    gain.push_back(gains[e].cost);
   }
-  constexpr double kInf = std::numeric_limits<double>::infinity();
-  for (size_t c = 0; c < rows.size(); ++c) {
-    const auto nr = static_cast<Eigen::Index>(rows[c].size()), nc = static_cast<Eigen::Index>(columns[c].size());
-    // Rows x (columns, then one zero-gain "unpaired" slot per row): every row is assigned, columns may stay free.
-    Eigen::MatrixXd m = Eigen::MatrixXd::Constant(nr, nc + nr, kInf);
-    m.rightCols(nr).setZero();
-    for (const auto& e : edges[c]) {
-      double& x = m(local[static_cast<size_t>(e.row)], local[static_cast<size_t>(R + e.column)]);
-      x = std::min(x, e.cost);
+  for (int r = 0; r < R; ++r) begin[static_cast<size_t>(r) + 1] += begin[static_cast<size_t>(r)];
+  // Successive shortest augmenting paths (Dijkstra on reduced costs c - u_row - v_column >= 0, kept so by the
+  // potential update), one row at a time.  Column nodes: 0..C-1 the real columns, C + r row r's own "unpaired"
+  // slot (gain 0, adjacent to row r only), so every search ends at the latest at the row's own slot.  Only the
+  // rows and columns a search reaches are touched: sparse scans cost about their edges, not rows x columns.
+  const int N = C + R;
+  std::vector<double> u(static_cast<size_t>(R), 0.0), v(static_cast<size_t>(N), 0.0), d(static_cast<size_t>(N), 0.0);
+  std::vector<int> row_of(static_cast<size_t>(N), -1), column_of(static_cast<size_t>(R), -1), way(static_cast<size_t>(N), -1);
+  std::vector<int> seen(static_cast<size_t>(N), -1);  // the search (row) that last reached the column
+  std::vector<char> final(static_cast<size_t>(N), 0);
+  std::vector<int> scanned;
+  using Entry = std::pair<double, int>;
+  std::priority_queue<Entry, std::vector<Entry>, std::greater<Entry>> heap;
+  for (int r = 0; r < R; ++r) {
+    const int b = begin[static_cast<size_t>(r)], e = begin[static_cast<size_t>(r) + 1];
+    if (b == e) continue;  // no improving pairing: stays unpaired
+    auto relax = [&](int i, int j, double w, double base) {
+      const double nd = base + w - u[static_cast<size_t>(i)] - v[static_cast<size_t>(j)];
+      if (seen[static_cast<size_t>(j)] != r) seen[static_cast<size_t>(j)] = r, final[static_cast<size_t>(j)] = 0;
+      else if (final[static_cast<size_t>(j)] || !(nd < d[static_cast<size_t>(j)])) return;
+      d[static_cast<size_t>(j)] = nd, way[static_cast<size_t>(j)] = i;
+      heap.push({nd, j});
+    };
+    double ur = -v[static_cast<size_t>(C + r)];
+    for (int k = b; k < e; ++k) ur = std::min(ur, gain[static_cast<size_t>(k)] - v[static_cast<size_t>(column[static_cast<size_t>(k)])]);
+    u[static_cast<size_t>(r)] = ur;
+    scanned.clear();
+    heap = {};
+    relax(r, C + r, 0.0, 0.0);
+    for (int k = b; k < e; ++k) relax(r, column[static_cast<size_t>(k)], gain[static_cast<size_t>(k)], 0.0);
+    int end = -1;
+    double delta = 0;
+    while (!heap.empty()) {
+      const auto [dj, j] = heap.top();
+      heap.pop();
+      if (final[static_cast<size_t>(j)] || dj > d[static_cast<size_t>(j)]) continue;
+      final[static_cast<size_t>(j)] = 1;
+      const int i = row_of[static_cast<size_t>(j)];
+      if (i < 0) {
+        end = j, delta = dj;
+        break;
+      }
+      scanned.push_back(j);
+      relax(i, C + i, 0.0, dj);
+      for (int k = begin[static_cast<size_t>(i)]; k < begin[static_cast<size_t>(i) + 1]; ++k)
+        relax(i, column[static_cast<size_t>(k)], gain[static_cast<size_t>(k)], dj);
     }
-    const auto a = solve_assignment_2d(m);  // always feasible: the unpaired slots
-    for (Eigen::Index r = 0; r < nr; ++r) {
-      const int k = a.column_of_row[static_cast<size_t>(r)];
-      if (k < 0 || k >= nc) continue;
-      const int row = rows[c][static_cast<size_t>(r)], column = columns[c][static_cast<size_t>(k)];
-      out.column_of_row[static_cast<size_t>(row)] = column;
-      out.row_of_column[static_cast<size_t>(column)] = row;
-      out.value += m(r, k);
+    // Potentials: rows on the search tree and the columns finalized before the end move by (delta - distance).
+    u[static_cast<size_t>(r)] += delta;
+    for (int j : scanned) {
+      const double t = delta - d[static_cast<size_t>(j)];
+      v[static_cast<size_t>(j)] -= t;
+      u[static_cast<size_t>(row_of[static_cast<size_t>(j)])] += t;
     }
+    for (int j = end;;) {  // augment along the path back to r
+      const int i = way[static_cast<size_t>(j)];
+      const int previous = column_of[static_cast<size_t>(i)];
+      column_of[static_cast<size_t>(i)] = j, row_of[static_cast<size_t>(j)] = i;
+      if (i == r) break;
+      j = previous;
+    }
+  }
+  for (int r = 0; r < R; ++r) {
+    const int k = column_of[static_cast<size_t>(r)];
+    if (k < 0 || k >= C) continue;  // unpaired (its own slot)
+    double w = 0;
+    for (int e = begin[static_cast<size_t>(r)]; e < begin[static_cast<size_t>(r) + 1]; ++e)
+      if (column[static_cast<size_t>(e)] == k) w = gain[static_cast<size_t>(e)];
+    out.column_of_row[static_cast<size_t>(r)] = k;
+    out.row_of_column[static_cast<size_t>(k)] = r;
+    out.value += w;
   }
   return out;
 }

@@ -4,10 +4,10 @@
 // cost of leaving each row or column unpaired.  Minimizes the total cost.
 //
 // A pairing that does not beat leaving both unpaired (cost(r, k) >= missed(r) + missed(k)) is never needed, so
-// only the improving pairings are kept and the problem splits into the connected components of the bipartite
-// graph they form.  Each component is a small rectangular assignment (rows x (columns + one "unpaired" slot per
-// row)) solved by solve_assignment_2d.  Sparse scans (gated tuples) therefore cost about the sum of cubes of their
-// component sizes instead of the cube of the whole.
+// only the improving pairings are kept, as gains; the rest is a maximum-gain bipartite matching, solved by
+// successive shortest augmenting paths (Dijkstra with dual potentials, one row at a time; each row has a private
+// zero-gain "unpaired" slot, so every search ends).  A search only touches what it reaches: sparse scans (gated
+// tuples) cost about their number of pairings times a logarithm, not rows x columns.
 #include <vector>
 
 namespace sextant::assoc {

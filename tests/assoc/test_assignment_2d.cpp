@@ -148,3 +148,36 @@ TEST_CASE("assignment with unpaired rows and columns rejects bad input") {
   const auto empty = assign_with_missed({}, {}, {});
   CHECK(empty.value == 0.0);
 }
+
+TEST_CASE("assignment with unpaired rows and columns equals the dense 2-D assignment on larger sparse instances") {
+  // The same problem stated densely for solve_assignment_2d: rows x (columns, then one zero-cost "unpaired" slot
+  // per row), costs as gains over leaving both unpaired.  Up to 60 x 60 with a few pairings per row, as in the
+  // relaxation's subproblems.
+  std::mt19937 rng(22);
+  std::uniform_real_distribution<double> u(-6, 1);
+  for (int trial = 0; trial < 60; ++trial) {
+    const int R = 5 + trial % 56, C = 5 + (trial * 7) % 56;
+    std::vector<double> rm(static_cast<size_t>(R)), cm(static_cast<size_t>(C));
+    for (auto& x : rm) x = u(rng) / 3;
+    for (auto& x : cm) x = u(rng) / 3;
+    std::vector<PairCost> pairs;
+    std::uniform_int_distribution<int> column(0, C - 1), degree(0, 5);
+    Eigen::MatrixXd dense = Eigen::MatrixXd::Constant(R, C + R, kInf);
+    dense.rightCols(R).setZero();
+    double all_unpaired = 0;
+    for (double x : rm) all_unpaired += x;
+    for (double x : cm) all_unpaired += x;
+    for (int r = 0; r < R; ++r)
+      for (int n = degree(rng); n > 0; --n) {
+        const PairCost p{r, column(rng), u(rng) - 2};
+        pairs.push_back(p);
+        const double g = p.cost - rm[static_cast<size_t>(r)] - cm[static_cast<size_t>(p.column)];
+        if (g < 0) dense(r, p.column) = std::min(dense(r, p.column), g);
+      }
+    const auto reference = solve_assignment_2d(dense);
+    REQUIRE(reference.feasible);
+    const auto a = assign_with_missed(rm, cm, pairs);
+    CAPTURE(trial);
+    CHECK(a.value == doctest::Approx(all_unpaired + reference.cost).epsilon(1e-12));
+  }
+}
