@@ -169,7 +169,7 @@ std::vector<Tuple> build_tuples(const Scan& scan, const CostOptions& o) {
   std::vector<std::pair<size_t, int>> members;  // (sensor, detection) of the partial tuple, aligned with obs
   // x_to = x_from + one Gauss-Newton step from the normal equations at x_from; at_to = those at x_to.
   auto step = [&](const Eigen::Vector3d& x_from, const NormalEquations& at_from, Eigen::Vector3d& x_to, NormalEquations& at_to) {
-    const Eigen::Vector3d dx = at_from.information.ldlt().solve(at_from.gradient);
+    const Eigen::Vector3d dx = at_from.information.inverse() * at_from.gradient;  // closed-form 3 x 3 (conditioning is checked at the end)
     if (!dx.allFinite()) return false;
     x_to = x_from + dx;
     at_to = NormalEquations{};
