@@ -34,6 +34,7 @@
 #include <lcm/lcm-cpp.hpp>
 
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <chrono>
 #include <cmath>
@@ -136,6 +137,7 @@ struct Monitor {
   struct Status {
     int64_t at_ns;
     std::map<std::string, std::map<std::string, int64_t>> counters;  // stage -> counters (+ processed/dropped/queue)
+    std::map<std::string, std::array<double, 3>> latency_ms;         // stage -> p50, p99, max (event in -> processed)
   };
   std::mutex mutex;
   std::vector<Solve> solves;
@@ -153,13 +155,14 @@ struct Monitor {
     } else if (channel == status_channel) {
       sextant::status_t m;
       if (m.decode(b.data, 0, static_cast<int>(b.data_size)) < 0) return;
-      Status s{t, {}};
+      Status s{t, {}, {}};
       for (const auto& st : m.stages) {
         auto& c = s.counters[st.name];
         for (int i = 0; i < st.num_counters; ++i) c[st.counter_names[static_cast<size_t>(i)]] = st.counter_values[static_cast<size_t>(i)];
         c["processed"] = st.processed;
         c["dropped"] = st.dropped;
         c["queue_depth"] = st.queue_depth;
+        s.latency_ms[st.name] = {st.latency_ms_p50, st.latency_ms_p99, st.latency_ms_max};
       }
       std::lock_guard lock(mutex);
       statuses.push_back(std::move(s));
@@ -169,7 +172,7 @@ struct Monitor {
 
 struct FeedOptions {
   std::string path;
-  int64_t window = 20;     // poses ahead of the newest optimized keyframe
+  int64_t window = 4;      // poses ahead of the newest optimized keyframe
   double max_rate = 1000;  // poses per second
 };
 
@@ -387,7 +390,7 @@ int run_measure(const MeasureOptions& o) {
   for (const auto& c : channels) row(c);
   row(raw);
   for (const auto& c : channels)
-    if (raw.latency.p50_ms > 0)
+    if (raw.latency.p50_ms > 0 && c.received > 0)
       std::printf("  %-26s daemon/raw: p50 x%.2f, p99 x%.2f\n", c.channel.c_str(), c.latency.p50_ms / raw.latency.p50_ms,
                   c.latency.p99_ms / raw.latency.p99_ms);
   std::printf("optimizer during the measurement (fed body '%s', %lld of %lld poses fed so far%s):\n", o.fed_source.c_str(),
@@ -403,6 +406,11 @@ int run_measure(const MeasureOptions& o) {
   std::printf("  graph queue depth max %lld; dropped: graph +%lld, graph_pose +%lld, filter +%lld\n", static_cast<long long>(graph_queue_max),
               static_cast<long long>(delta("graph", "dropped")), static_cast<long long>(delta("graph_pose", "dropped")),
               static_cast<long long>(delta("filter", "dropped")));
+  const std::array<double, 3> graph_latency = after != nullptr && after->latency_ms.count("graph") ? after->latency_ms.at("graph") : std::array<double, 3>{};
+  std::printf("  graph stage, event in -> processed (its last 4096 events, from SEXTANT_STATUS): p50 %.1f ms, p99 %.1f ms, max %.1f ms\n",
+              graph_latency[0], graph_latency[1], graph_latency[2]);
+  if (fed.finished_ns >= 0)
+    std::printf("  the whole graph was fed %.1f s into the measurement\n", static_cast<double>(fed.finished_ns - t_begin) * 1e-9);
   if (receiver.duplicates + receiver.undecodable + receiver.unknown_time > 0)
     std::printf("  receiver: %lld duplicates, %lld undecodable, %lld unknown times\n", static_cast<long long>(receiver.duplicates),
                 static_cast<long long>(receiver.undecodable), static_cast<long long>(receiver.unknown_time));
@@ -425,7 +433,9 @@ int run_measure(const MeasureOptions& o) {
         .field("loops_rejected", delta("graph", "loops_rejected")).field("solves_fed", solves_fed).field("solves_body", solves_body)
         .field("solve_ms_p50", solve.p50_ms).field("solve_ms_p99", solve.p99_ms).field("solve_ms_max", solve.max_ms)
         .field("busy_fraction", busy_ms / window_ms).field("graph_queue_max", graph_queue_max)
-        .field("graph_dropped", delta("graph", "dropped")).end_object();
+        .field("graph_dropped", delta("graph", "dropped"))
+        .field("graph_event_latency_ms_p50", graph_latency[0]).field("graph_event_latency_ms_p99", graph_latency[1])
+        .field("feed_finished_s", fed.finished_ns >= 0 ? static_cast<double>(fed.finished_ns - t_begin) * 1e-9 : -1.0).end_object();
     j.end_object();
     std::ofstream(o.json) << j.str() << "\n";
   }

@@ -6,8 +6,9 @@
 # control; the daemon runs bench/latency/daemon.yaml (every city10000 pose a keyframe).
 # Usage: bench/latency/run.sh BUILD [JSON_OUT]   (BUILD: a build folder, relative to the project or absolute, built
 #        with -DSEXTANT_BENCH=ON and the targets sextantd sextant daemon_latency)
-# env: DURATION (60 s), RATE (1000 Hz), WINDOW (20 poses ahead of the optimizer), FEED_RATE (1000 poses/s),
-#      GRAPH (city10000.g2o in ../shared/data/posegraph), CONFIG (bench/latency/daemon.yaml)
+# env: DURATION (60 s), RATE (1000 Hz), WINDOW (4 poses ahead of the optimizer), FEED_RATE (1000 poses/s),
+#      GRAPH (city10000.g2o in ../shared/data/posegraph), CONFIG (bench/latency/daemon.yaml),
+#      TRAJECTORY_KEYFRAMES (the config's trajectory_max_keyframes: keyframes per TRAJECTORY message)
 set -euo pipefail
 build=${1:?usage: bench/latency/run.sh BUILD [JSON_OUT]}
 json=${2:+$(realpath -m "$2")}
@@ -20,9 +21,11 @@ done
 source "$root/tests/e2e/netns.bash"
 require_netns
 graph=${GRAPH:-$root/../shared/data/posegraph/city10000.g2o}
-config=${CONFIG:-$root/bench/latency/daemon.yaml}
 work=$(mktemp -d)
 trap '[ -n "${KEEP:-}" ] || rm -rf "$work"' EXIT
+config="$work/daemon.yaml"
+sed "${TRAJECTORY_KEYFRAMES:+s/trajectory_max_keyframes: [0-9]*/trajectory_max_keyframes: $TRAJECTORY_KEYFRAMES/}" \
+    "${CONFIG:-$root/bench/latency/daemon.yaml}" > "$config"
 
 "$bin/sextant" convert g2o "$graph" -o "$work/graph.lcm" > /dev/null
 cat > "$work/inside.sh" <<EOS
@@ -34,7 +37,7 @@ echo=\$!
 sleep 0.7
 rc=0
 "$bin/daemon_latency" measure --feed "$work/graph.lcm" --duration ${DURATION:-60} --rate ${RATE:-1000} \
-    --window ${WINDOW:-20} --feed-rate ${FEED_RATE:-1000} ${json:+--json "$json"} || rc=\$?
+    --window ${WINDOW:-4} --feed-rate ${FEED_RATE:-1000} ${json:+--json "$json"} || rc=\$?
 kill -TERM \$echo; wait \$echo || true
 kill -TERM \$daemon
 drc=0; wait \$daemon || drc=\$?
