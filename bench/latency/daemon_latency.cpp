@@ -235,7 +235,7 @@ struct MeasureOptions {
   std::string source = "latency_body", fed_source = "robot1";
   double duration_s = 60, rate_hz = 1000, warmup_s = 2, settle_s = 1.5;
   FeedOptions feed;
-  std::string json;
+  std::string json, samples;
 };
 
 const Monitor::Status* status_at(const std::vector<Monitor::Status>& all, int64_t t) {
@@ -440,6 +440,22 @@ int run_measure(const MeasureOptions& o) {
     std::ofstream(o.json) << j.str() << "\n";
   }
 
+  if (!o.samples.empty()) {  // one line per message: k, send time [s from the start], latency per channel [ms]
+    std::ofstream f(o.samples);
+    f << "k,sent_s";
+    for (const auto& [channel, arrivals] : receiver.arrivals) f << "," << channel;
+    f << "\n";
+    for (size_t k = 0; k < sent; ++k) {
+      f << k << "," << static_cast<double>(sent_odo[k] - t_begin) * 1e-9;
+      for (const auto& [channel, arrivals] : receiver.arrivals) {
+        const int64_t s0 = channel == o.pong ? sent_ping[k] : sent_odo[k];
+        f << ",";
+        if (arrivals[k] >= 0) f << static_cast<double>(arrivals[k] - s0) * 1e-6;
+      }
+      f << "\n";
+    }
+  }
+
   int rc = 0;
   for (const auto& c : channels)
     if (c.received == 0) {
@@ -489,6 +505,7 @@ int main(int argc, char** argv) {
   measure->add_option("--ping", mo.ping, "ping channel");
   measure->add_option("--pong", mo.pong, "echo channel");
   measure->add_option("--json", mo.json, "write the figures as JSON to this file");
+  measure->add_option("--samples", mo.samples, "write every message's latencies as CSV to this file");
   CLI11_PARSE(app, argc, argv);
 
   if (echo->parsed()) return run_echo(url, ping, pong);

@@ -8,10 +8,12 @@
 #        with -DSEXTANT_BENCH=ON and the targets sextantd sextant daemon_latency)
 # env: DURATION (60 s), RATE (1000 Hz), WINDOW (4 poses ahead of the optimizer), FEED_RATE (1000 poses/s),
 #      GRAPH (city10000.g2o in ../shared/data/posegraph), CONFIG (bench/latency/daemon.yaml),
-#      TRAJECTORY_KEYFRAMES (the config's trajectory_max_keyframes: keyframes per TRAJECTORY message)
+#      TRAJECTORY_KEYFRAMES (the config's trajectory_max_keyframes: keyframes per TRAJECTORY message),
+#      SAMPLES (a CSV file: every message's latencies)
 set -euo pipefail
 build=${1:?usage: bench/latency/run.sh BUILD [JSON_OUT]}
 json=${2:+$(realpath -m "$2")}
+samples=${SAMPLES:+$(realpath -m "$SAMPLES")}
 root=$(cd "$(dirname "$0")/../.." && pwd)
 [[ $build = /* ]] || build="$root/$build"
 bin="$build/bin"
@@ -37,7 +39,7 @@ echo=\$!
 sleep 0.7
 rc=0
 "$bin/daemon_latency" measure --feed "$work/graph.lcm" --duration ${DURATION:-60} --rate ${RATE:-1000} \
-    --window ${WINDOW:-4} --feed-rate ${FEED_RATE:-1000} ${json:+--json "$json"} || rc=\$?
+    --window ${WINDOW:-4} --feed-rate ${FEED_RATE:-1000} ${json:+--json "$json"} ${samples:+--samples "$samples"} || rc=\$?
 kill -TERM \$echo; wait \$echo || true
 kill -TERM \$daemon
 drc=0; wait \$daemon || drc=\$?
