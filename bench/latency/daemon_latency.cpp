@@ -5,7 +5,8 @@
 //   daemon_latency echo [--lcm-url URL] [--ping CH] [--pong CH]
 //       The trivial peer of the raw round trip: republishes every message of CH, byte for byte, on PONG, until
 //       SIGINT/SIGTERM.
-//   daemon_latency measure --feed GRAPH.lcm [--duration S] [--rate HZ] [--window N] [--feed-rate HZ] [--json FILE]
+//   daemon_latency measure (--feed GRAPH.lcm | --idle) [--duration S] [--rate HZ] [--window N] [--feed-rate HZ]
+//                          [--json FILE] [--samples FILE]
 //       Four threads, one LCM instance each:
 //       - sender: odometry of one body (odometry_track.hpp) on ODOMETRY at --rate, and the same bytes on the ping
 //         channel half a period later; utime k <-> send time k (steady clock, taken just before lcm_publish);
@@ -17,6 +18,8 @@
 //         per second — so the optimizer always has work queued and its queue never overflows;
 //       - monitor: TRAJECTORY of the fed body (solve_ms, keyframe ids) and SEXTANT_STATUS (the graph stage's counters,
 //         queue depth, drops).
+//       --idle: no feeder (the baseline: the same measurement with the optimizer idle but for the measured body's own
+//       keyframes).
 //       Reports p50 / p99 / max of each latency (nearest rank), samples and lost messages per channel, and the
 //       optimizer's progress during the measurement.  Exit 1 when no fused pose of the body arrives on an expected
 //       channel, when no pong arrives, or when the optimizer did not run during the measurement; 3 when LCM
@@ -235,6 +238,7 @@ struct MeasureOptions {
   std::string source = "latency_body", fed_source = "robot1";
   double duration_s = 60, rate_hz = 1000, warmup_s = 2, settle_s = 1.5;
   FeedOptions feed;
+  bool idle = false;
   std::string json, samples;
 };
 
@@ -261,7 +265,7 @@ int run_measure(const MeasureOptions& o) {
   }
   std::vector<sextant::runtime::LogRecord> log;
   try {
-    log = sextant::runtime::LogReader::read_all(o.feed.path);
+    if (!o.idle) log = sextant::runtime::LogReader::read_all(o.feed.path);
   } catch (const std::exception& e) {
     std::fprintf(stderr, "daemon_latency: --feed: %s\n", e.what());
     return 2;
@@ -302,8 +306,8 @@ int run_measure(const MeasureOptions& o) {
   };
   // The optimizer must be running before the measurement starts.
   const auto deadline = Clock::now() + std::chrono::seconds(15);
-  while (monitor.newest_keyframe.load() < 0 && Clock::now() < deadline) std::this_thread::sleep_for(std::chrono::milliseconds(10));
-  if (monitor.newest_keyframe.load() < 0) {
+  while (!o.idle && monitor.newest_keyframe.load() < 0 && Clock::now() < deadline) std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  if (!o.idle && monitor.newest_keyframe.load() < 0) {
     shutdown();
     std::fprintf(stderr, "daemon_latency: FAIL: no TRAJECTORY of '%s' within 15 s: the daemon's graph back end is not running\n",
                  o.fed_source.c_str());
@@ -409,7 +413,7 @@ int run_measure(const MeasureOptions& o) {
   const std::array<double, 3> graph_latency = after != nullptr && after->latency_ms.count("graph") ? after->latency_ms.at("graph") : std::array<double, 3>{};
   std::printf("  graph stage, event in -> processed (its last 4096 events, from SEXTANT_STATUS): p50 %.1f ms, p99 %.1f ms, max %.1f ms\n",
               graph_latency[0], graph_latency[1], graph_latency[2]);
-  if (fed.finished_ns >= 0)
+  if (!o.idle && fed.finished_ns >= 0)
     std::printf("  the whole graph was fed %.1f s into the measurement\n", static_cast<double>(fed.finished_ns - t_begin) * 1e-9);
   if (receiver.duplicates + receiver.undecodable + receiver.unknown_time > 0)
     std::printf("  receiver: %lld duplicates, %lld undecodable, %lld unknown times\n", static_cast<long long>(receiver.duplicates),
@@ -470,7 +474,7 @@ int run_measure(const MeasureOptions& o) {
     std::fprintf(stderr, "daemon_latency: FAIL: no answer on %s: is `daemon_latency echo` running?\n", o.pong.c_str());
     rc = 1;
   }
-  if (solves_fed == 0 || delta("graph", "keyframes") <= 0) {
+  if (!o.idle && (solves_fed == 0 || delta("graph", "keyframes") <= 0)) {
     std::fprintf(stderr, "daemon_latency: FAIL: the optimizer did not run during the measurement (%lld solves, %lld keyframes)\n",
                  static_cast<long long>(solves_fed), static_cast<long long>(delta("graph", "keyframes")));
     rc = 1;
@@ -493,7 +497,8 @@ int main(int argc, char** argv) {
 
   MeasureOptions mo;
   auto* measure = app.add_subcommand("measure", "publish odometry, time the daemon's fused poses and the echo");
-  measure->add_option("--feed", mo.feed.path, "LCM log of the background body (sextant convert g2o)")->required()->check(CLI::ExistingFile);
+  auto* feed_option = measure->add_option("--feed", mo.feed.path, "LCM log of the background body (sextant convert g2o)")->check(CLI::ExistingFile);
+  measure->add_flag("--idle", mo.idle, "no background body: the baseline with the optimizer idle")->excludes(feed_option);
   measure->add_option("--fed-source", mo.fed_source, "odometry source of the background body in that log");
   measure->add_option("--window", mo.feed.window, "poses fed ahead of the newest optimized keyframe")->check(CLI::PositiveNumber);
   measure->add_option("--feed-rate", mo.feed.max_rate, "largest feeding rate, poses per second")->check(CLI::PositiveNumber);
@@ -509,6 +514,10 @@ int main(int argc, char** argv) {
   CLI11_PARSE(app, argc, argv);
 
   if (echo->parsed()) return run_echo(url, ping, pong);
+  if (mo.feed.path.empty() && !mo.idle) {
+    std::fprintf(stderr, "daemon_latency measure: --feed GRAPH.lcm or --idle is required\n");
+    return 2;
+  }
   mo.url = url;
   std::signal(SIGINT, [](int) { g_interrupted = true; });
   return run_measure(mo);

@@ -9,7 +9,7 @@
 # env: DURATION (60 s), RATE (1000 Hz), WINDOW (4 poses ahead of the optimizer), FEED_RATE (1000 poses/s),
 #      GRAPH (city10000.g2o in ../shared/data/posegraph), CONFIG (bench/latency/daemon.yaml),
 #      TRAJECTORY_KEYFRAMES (the config's trajectory_max_keyframes: keyframes per TRAJECTORY message),
-#      SAMPLES (a CSV file: every message's latencies)
+#      SAMPLES (a CSV file: every message's latencies), IDLE=1 (the baseline: no background graph, optimizer idle)
 set -euo pipefail
 build=${1:?usage: bench/latency/run.sh BUILD [JSON_OUT]}
 json=${2:+$(realpath -m "$2")}
@@ -29,7 +29,11 @@ config="$work/daemon.yaml"
 sed "${TRAJECTORY_KEYFRAMES:+s/trajectory_max_keyframes: [0-9]*/trajectory_max_keyframes: $TRAJECTORY_KEYFRAMES/}" \
     "${CONFIG:-$root/bench/latency/daemon.yaml}" > "$config"
 
-"$bin/sextant" convert g2o "$graph" -o "$work/graph.lcm" > /dev/null
+feed="--idle"
+if [ -z "${IDLE:-}" ]; then
+  "$bin/sextant" convert g2o "$graph" -o "$work/graph.lcm" > /dev/null
+  feed="--feed $work/graph.lcm"
+fi
 cat > "$work/inside.sh" <<EOS
 set -euo pipefail
 "$bin/sextantd" --config "$config" > "$work/daemon.log" 2>&1 &
@@ -38,7 +42,7 @@ daemon=\$!
 echo=\$!
 sleep 0.7
 rc=0
-"$bin/daemon_latency" measure --feed "$work/graph.lcm" --duration ${DURATION:-60} --rate ${RATE:-1000} \
+"$bin/daemon_latency" measure $feed --duration ${DURATION:-60} --rate ${RATE:-1000} \
     --window ${WINDOW:-4} --feed-rate ${FEED_RATE:-1000} ${json:+--json "$json"} ${samples:+--samples "$samples"} || rc=\$?
 kill -TERM \$echo; wait \$echo || true
 kill -TERM \$daemon
