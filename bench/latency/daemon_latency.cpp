@@ -397,9 +397,12 @@ int run_measure(const MeasureOptions& o) {
     if (raw.latency.p50_ms > 0 && c.received > 0)
       std::printf("  %-26s daemon/raw: p50 x%.2f, p99 x%.2f\n", c.channel.c_str(), c.latency.p50_ms / raw.latency.p50_ms,
                   c.latency.p99_ms / raw.latency.p99_ms);
-  std::printf("optimizer during the measurement (fed body '%s', %lld of %lld poses fed so far%s):\n", o.fed_source.c_str(),
-              static_cast<long long>(fed.odometry), static_cast<long long>(fed.total_odometry),
-              fed.finished_ns >= 0 && fed.finished_ns < t_end ? ", the whole graph sent BEFORE the end" : "");
+  if (o.idle)
+    std::printf("optimizer during the measurement (idle baseline: no background body):\n");
+  else
+    std::printf("optimizer during the measurement (fed body '%s', %lld of %lld poses fed so far%s):\n", o.fed_source.c_str(),
+                static_cast<long long>(fed.odometry), static_cast<long long>(fed.total_odometry),
+                fed.finished_ns >= 0 && fed.finished_ns < t_end ? ", the whole graph sent BEFORE the end" : "");
   std::printf("  keyframes on TRAJECTORY %lld -> %lld; graph stage: keyframes +%lld, loops accepted +%lld, rejected +%lld, unmatched +%lld\n",
               static_cast<long long>(first_kf), static_cast<long long>(last_kf), static_cast<long long>(delta("graph", "keyframes")),
               static_cast<long long>(delta("graph", "loops_accepted")), static_cast<long long>(delta("graph", "loops_rejected")),
