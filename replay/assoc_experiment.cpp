@@ -1,6 +1,7 @@
 #include "replay/assoc_experiment.hpp"
 
 #include "assoc/bearing_model.hpp"
+#include "assoc/field_of_view.hpp"
 #include "assoc/sd_assignment.hpp"
 
 #include <algorithm>
@@ -22,33 +23,6 @@ double wrap(double a) {
 struct Box {
   Eigen::Vector3d lo, hi;
 };
-
-// A sensor's field of view: azimuth (relative to `centre_azimuth`) and elevation bounds of the region, padded.
-struct FieldOfView {
-  double centre_azimuth = 0, az_lo = 0, az_hi = 0, el_lo = 0, el_hi = 0;
-  double area() const { return (az_hi - az_lo) * (el_hi - el_lo); }
-};
-
-FieldOfView field_of_view(const Eigen::Vector3d& sensor, const Box& region, double pad) {
-  FieldOfView f;
-  f.centre_azimuth = (*assoc::bearing(sensor, 0.5 * (region.lo + region.hi)))[0];
-  f.az_lo = f.el_lo = 1e9, f.az_hi = f.el_hi = -1e9;
-  // The boundary sampled densely enough for the elevation extremes, which need not be at corners.
-  constexpr int kSteps = 16;
-  for (int i = 0; i <= kSteps; ++i)
-    for (int j = 0; j <= kSteps; ++j)
-      for (double z : {region.lo.z(), region.hi.z()}) {
-        const Eigen::Vector3d x(region.lo.x() + (region.hi.x() - region.lo.x()) * i / kSteps,
-                                region.lo.y() + (region.hi.y() - region.lo.y()) * j / kSteps, z);
-        const auto h = assoc::bearing(sensor, x);
-        if (!h) continue;
-        const double az = wrap((*h)[0] - f.centre_azimuth);
-        f.az_lo = std::min(f.az_lo, az), f.az_hi = std::max(f.az_hi, az);
-        f.el_lo = std::min(f.el_lo, (*h)[1]), f.el_hi = std::max(f.el_hi, (*h)[1]);
-      }
-  f.az_lo -= pad, f.az_hi += pad, f.el_lo -= pad, f.el_hi += pad;
-  return f;
-}
 
 double thread_cpu_ms() {
   timespec t{};
@@ -90,13 +64,13 @@ AssocExperimentResult run_assoc_experiment(const AssocExperimentOptions& o) {
     region.lo.y() = std::min(region.lo.y(), 15 - o.spacing * (rows - 1) / 2.0);
     region.hi.y() = std::max(region.hi.y(), 15 + o.spacing * (rows - 1) / 2.0);
   }
-  std::vector<FieldOfView> fov;
+  std::vector<assoc::FieldOfView> fov;
   assoc::CostOptions co;
   co.kind = o.cost;
   co.alpha = o.alpha;
   co.p_detect = o.p_detect;
   for (const auto& s : sensors) {
-    fov.push_back(field_of_view(s, region, 5 * o.sigma));
+    fov.push_back(assoc::field_of_view(s, region.lo, region.hi, 5 * o.sigma));
     co.sensor_clutter_density.push_back((o.clutter > 0 ? o.clutter : 0.1) / fov.back().area());
   }
   if (o.target_prior) co.target_density = o.targets / (region.hi - region.lo).prod();
@@ -135,8 +109,8 @@ AssocExperimentResult run_assoc_experiment(const AssocExperimentOptions& o) {
       const int n_false = o.clutter > 0 ? std::poisson_distribution<int>(o.clutter)(rng) : 0;
       const auto& f = fov[s];
       for (int k = 0; k < n_false; ++k) {
-        const double az = wrap(f.centre_azimuth + f.az_lo + (f.az_hi - f.az_lo) * unit(rng));
-        list.push_back({{az, f.el_lo + (f.el_hi - f.el_lo) * unit(rng), o.sigma, o.sigma}, -1});
+        const double az = wrap(f.centre_azimuth + f.azimuth_lo + (f.azimuth_hi - f.azimuth_lo) * unit(rng));
+        list.push_back({{az, f.elevation_lo + (f.elevation_hi - f.elevation_lo) * unit(rng), o.sigma, o.sigma}, -1});
       }
       std::shuffle(list.begin(), list.end(), rng);
       std::vector<assoc::Detection> d;

@@ -1,6 +1,9 @@
 #include "daemon/engine/association_stage.hpp"
 
+#include "assoc/field_of_view.hpp"
 #include "assoc/sd_assignment.hpp"
+
+#include <algorithm>
 
 namespace sextant::engine {
 
@@ -55,6 +58,18 @@ void AssociationStage::associate(int64_t scan_id, const Emit& emit) {
   o.p_detect = config_.p_detect;
   o.clutter_density = config_.clutter_density;
   o.gate_probability = config_.gate_probability;
+  if (!config_.region_min.empty()) {
+    const Eigen::Vector3d lo(config_.region_min[0], config_.region_min[1], config_.region_min[2]);
+    const Eigen::Vector3d hi(config_.region_max[0], config_.region_max[1], config_.region_max[2]);
+    if (config_.false_alarms_per_scan > 0)
+      for (size_t s = 0; s < scan.sensors.size(); ++s) {
+        double sigma = 0;  // the field of view is padded by 5 sigma, as in assoc-sim
+        for (const auto& d : scan.detections[s]) sigma = std::max({sigma, d.sigma_azimuth, d.sigma_elevation});
+        const double area = assoc::field_of_view(scan.sensors[s], lo, hi, 5 * sigma).area();
+        o.sensor_clutter_density.push_back(config_.false_alarms_per_scan / std::max(area, 1e-12));
+      }
+    if (config_.target_prior) o.target_density = config_.expected_targets / (hi - lo).prod();
+  }
   const auto tuples = assoc::build_tuples(scan, o);
   tuples_ += static_cast<int64_t>(tuples.size());
   const auto solution = config_.solver == "exact"

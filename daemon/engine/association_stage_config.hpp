@@ -1,5 +1,6 @@
 #pragma once
 #include <string>
+#include <vector>
 
 namespace sextant::engine {
 
@@ -9,7 +10,15 @@ struct AssociationConfig {
   std::string cost = "classic";    // classic | kl | renyi
   double alpha = 0.5;              // Renyi order
   double p_detect = 0.9;
-  double clutter_density = 1.0;    // false alarms per rad^2
+  double clutter_density = 1.0;    // false alarms per rad^2, the same for every sensor (when no region is given)
+  // The surveillance region, an axis-aligned box [region_min, region_max] (world frame, metres; both empty or both
+  // 3 numbers).  With it, each sensor's false-alarm density is false_alarms_per_scan / the area of its field of
+  // view over the region (assoc/field_of_view.hpp, padded by 5 times the sensor's largest detection sigma), and
+  // the target prior is available.
+  std::vector<double> region_min, region_max;
+  double false_alarms_per_scan = 0;  // expected false alarms per sensor and scan; > 0 needs the region
+  bool target_prior = false;         // add the target-prior term (assoc/tuple_costs.hpp); needs the region
+  double expected_targets = 1;       // targets expected in the region (mu_T = this / region volume)
   double gate_probability = 0.9999;
   std::string solver = "lr";       // lr (Lagrangian relaxation) | exact (branch and bound; small scans only)
   int max_iterations = 100;

@@ -1,6 +1,7 @@
 // Passive-sensor geometry: the bearing model's Jacobian, triangulation on an exact case, its covariance against
 // Monte Carlo, degenerate geometry, and the Gaussian divergences against numerical integration.
 #include "assoc/bearing_model.hpp"
+#include "assoc/field_of_view.hpp"
 #include "assoc/gaussian_divergence.hpp"
 #include "assoc/triangulation.hpp"
 
@@ -10,6 +11,7 @@
 
 #include <cmath>
 #include <random>
+#include <stdexcept>
 
 using namespace sextant::assoc;
 
@@ -120,4 +122,36 @@ TEST_CASE("Renyi divergence: closed form against numerical integration, its alph
         doctest::Approx(symmetric_renyi_divergence(m2, S2, m1, S1, 0.5)));
   CHECK(std::isinf(renyi_divergence(m1, S1, m2, -S2, 0.5)));
   CHECK(std::isinf(renyi_divergence(m1, S1, m2, S2, 1.5)));
+}
+
+TEST_CASE("field of view of a box region: bounds and area against the geometry, padding, a sensor inside") {
+  // Sensor at the origin, region x in [10, 20], y in [-5, 5], z in [0, 10]: azimuth within +-atan(5/10) (near
+  // corners), elevation from 0 (the floor) to 45 degrees (the top at the nearest point (10, 0, 10)).
+  const Eigen::Vector3d lo(10, -5, 0), hi(20, 5, 10);
+  const auto f = field_of_view(Eigen::Vector3d::Zero(), lo, hi, 0.0);
+  CHECK(f.centre_azimuth == doctest::Approx(0.0));
+  CHECK(f.azimuth_lo == doctest::Approx(-std::atan(0.5)));
+  CHECK(f.azimuth_hi == doctest::Approx(std::atan(0.5)));
+  CHECK(f.elevation_lo == doctest::Approx(0.0));
+  CHECK(f.elevation_hi == doctest::Approx(M_PI / 4));
+  CHECK(f.area() == doctest::Approx(2 * std::atan(0.5) * M_PI / 4));
+  const auto padded = field_of_view(Eigen::Vector3d::Zero(), lo, hi, 0.01);
+  CHECK(padded.area() == doctest::Approx((2 * std::atan(0.5) + 0.02) * (M_PI / 4 + 0.02)));
+  // Every direction to a point of the region is inside (relative azimuth, elevation).
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> u(0, 1);
+  for (int k = 0; k < 200; ++k) {
+    const Eigen::Vector3d x = lo + (hi - lo).cwiseProduct(Eigen::Vector3d(u(rng), u(rng), u(rng)));
+    const auto h = *bearing(Eigen::Vector3d::Zero(), x);
+    CHECK(h[0] - f.centre_azimuth >= f.azimuth_lo - 1e-12);
+    CHECK(h[0] - f.centre_azimuth <= f.azimuth_hi + 1e-12);
+    CHECK(h[1] >= f.elevation_lo - 1e-12);
+    CHECK(h[1] <= f.elevation_hi + 1e-12);
+  }
+  // A sensor inside the region's horizontal extent sees every azimuth.
+  const auto inside = field_of_view(Eigen::Vector3d(15, 0, -1), lo, hi, 0.01);
+  CHECK(inside.azimuth_hi - inside.azimuth_lo == doctest::Approx(2 * M_PI));
+  CHECK(inside.elevation_hi <= M_PI / 2);
+  CHECK_THROWS_AS(field_of_view(Eigen::Vector3d::Zero(), hi, lo, 0.0), std::invalid_argument);
+  CHECK_THROWS_AS(field_of_view(Eigen::Vector3d(NAN, 0, 0), lo, hi, 0.0), std::invalid_argument);
 }
