@@ -30,6 +30,15 @@ void read_stage_config(Section& s, engine::GraphConfig& c) {
     p.get("time_tolerance_s", c.loop_time_tolerance_s, non_negative());
     p.reject_unknown_keys();
   }
+  {
+    Section l = s.child("landmarks");
+    l.get("enabled", c.landmarks.enabled);
+    l.get("robust", c.landmarks.robust);
+    l.get("gate_probability", c.landmarks.gate_probability, in_range(0.5, 0.999999999));
+    l.get("gate_odometry_scale", c.landmarks.gate_odometry_scale, positive());
+    l.get("max_waiting", c.landmarks.max_waiting, int_in_range(0, 1 << 20));
+    l.reject_unknown_keys();
+  }
   s.get("relinearize_translation", c.relinearize_translation, positive());
   s.get("relinearize_rotation", c.relinearize_rotation, positive());
   s.get("min_increment_variance", c.min_increment_variance, positive());

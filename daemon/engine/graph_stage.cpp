@@ -6,6 +6,7 @@
 
 #include <Eigen/Cholesky>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 
@@ -45,7 +46,9 @@ GraphStage::GraphStage(const GraphConfig& config, std::shared_ptr<GraphCorrectio
       proposer_(config.proposals),
       smoother_(smoother_options(config)),
       chi2_gate_planar_(assoc::chi2_quantile(3, config.loop_gate_probability)),
-      chi2_gate_spatial_(assoc::chi2_quantile(6, config.loop_gate_probability)) {
+      chi2_gate_spatial_(assoc::chi2_quantile(6, config.loop_gate_probability)),
+      sighting_gate_planar_(assoc::chi2_quantile(2, config.landmarks.gate_probability)),
+      sighting_gate_spatial_(assoc::chi2_quantile(3, config.landmarks.gate_probability)) {
   KeyframeSelector check(config.keyframes);  // throws std::invalid_argument for bad thresholds
   (void)check;
 }
@@ -53,6 +56,7 @@ GraphStage::GraphStage(const GraphConfig& config, std::shared_ptr<GraphCorrectio
 void GraphStage::handle(const Event& e, const Emit& emit) {
   if (const auto* o = std::get_if<Odometry>(&e)) on_odometry(*o, emit);
   else if (const auto* l = std::get_if<LoopClosure>(&e)) on_loop(*l, emit);
+  else if (const auto* s = std::get_if<LandmarkSightings>(&e); s && config_.landmarks.enabled) on_sightings(*s, emit);
 }
 
 void GraphStage::on_odometry(const Odometry& o, const Emit& emit) {
@@ -70,10 +74,25 @@ void GraphStage::on_odometry(const Odometry& o, const Emit& emit) {
   }
   Body& b = it->second;
   const SE3 odom = to_se3(o.pose);
+  // Sightings that waited for this message (taken after the previous one): anchored on the newest keyframe, their
+  // part of the increment interpolated on the group, Delta_a = Exp(a Log Delta) with covariance a Q.
+  std::vector<std::pair<LandmarkSightings, SightingAnchor>> due_sightings;
   if (!b.keyframes.empty()) {
     const SE3 delta = b.last_odom.between(odom);
-    b.since_keyframe = compose_covariance(b.since_keyframe, delta,
-                                          increment_covariance(o, delta, b.last_odom_covariance, config_.min_increment_variance));
+    const Matrix6 q = increment_covariance(o, delta, b.last_odom_covariance, config_.min_increment_variance);
+    const SE3 keyframe_to_last = b.keyframes.back().odom.between(b.last_odom);
+    while (!b.early_sightings.empty() && b.early_sightings.front().utime <= o.utime) {
+      const double a = static_cast<double>(b.early_sightings.front().utime - b.last_utime) / static_cast<double>(o.utime - b.last_utime);
+      const SE3 part = SE3::exp(a * delta.log());
+      SightingAnchor anchor{b.keyframes.size() - 1, keyframe_to_last * part, compose_covariance(b.since_keyframe, part, a * q)};
+      due_sightings.emplace_back(std::move(b.early_sightings.front()), anchor);
+      b.early_sightings.erase(b.early_sightings.begin());
+    }
+    b.since_keyframe = compose_covariance(b.since_keyframe, delta, q);
+  }
+  while (!b.early_sightings.empty() && b.early_sightings.front().utime <= o.utime) {  // a body without keyframes
+    sightings_before_keyframe_ += static_cast<int64_t>(b.early_sightings.front().observations.size());
+    b.early_sightings.erase(b.early_sightings.begin());
   }
   b.last_utime = o.utime;
   b.last_odom = odom;
@@ -82,6 +101,7 @@ void GraphStage::on_odometry(const Odometry& o, const Emit& emit) {
   b.odometry.emplace_back(o.utime, odom);
   b.last_odom_covariance = o.covariance;
 
+  for (const auto& [sightings, anchor] : due_sightings) add_sightings(sightings, b, anchor, emit);
   on_keyframe_candidate(o, b, odom, emit);
   // Loops that arrived before the odometry of their times: try them now that the odometry has reached them.
   if (!b.early_loops.empty()) {
@@ -256,6 +276,152 @@ void GraphStage::on_loop(const LoopClosure& l, const Emit& emit) {
   optimize_and_publish(l.source, b, b.keyframes.back().utime, emit);
 }
 
+void GraphStage::on_sightings(const LandmarkSightings& s, const Emit& emit) {
+  const auto n = static_cast<int64_t>(s.observations.size());
+  auto it = bodies_.find(s.source);
+  if (it == bodies_.end()) {
+    sightings_unknown_source_ += n;
+    return;
+  }
+  Body& b = it->second;
+  if (s.planar != b.planar) {
+    sightings_malformed_ += n;  // a planar body's sightings must be planar, and a 3-D body's 3-D
+    return;
+  }
+  if (s.utime > b.last_utime) {  // ahead of the odometry: anchored when the odometry passes it (on_odometry)
+    if (config_.landmarks.max_waiting <= 0) {
+      sightings_dropped_ += n;
+      return;
+    }
+    if (b.early_sightings.size() >= static_cast<size_t>(config_.landmarks.max_waiting)) {
+      sightings_dropped_ += static_cast<int64_t>(b.early_sightings.front().observations.size());
+      b.early_sightings.erase(b.early_sightings.begin());
+    }
+    const auto at = std::upper_bound(b.early_sightings.begin(), b.early_sightings.end(), s.utime,
+                                     [](int64_t t, const LandmarkSightings& x) { return t < x.utime; });
+    b.early_sightings.insert(at, s);
+    return;
+  }
+  if (b.keyframes.empty() || b.by_utime.upper_bound(s.utime) == b.by_utime.begin()) {
+    sightings_before_keyframe_ += n;
+    return;
+  }
+  const auto anchor = anchor_of(b, s.utime);
+  if (!anchor) {
+    sightings_unmatched_ += n;
+    return;
+  }
+  add_sightings(s, b, *anchor, emit);
+}
+
+std::optional<GraphStage::SightingAnchor> GraphStage::anchor_of(const Body& b, int64_t utime) const {
+  const size_t k = std::prev(b.by_utime.upper_bound(utime))->second;
+  SE3 pose = b.last_odom;
+  if (utime != b.last_utime) {
+    auto at = std::lower_bound(b.odometry.begin(), b.odometry.end(), utime,
+                               [](const std::pair<int64_t, SE3>& x, int64_t t) { return x.first < t; });
+    if (at == b.odometry.end() || (at->first != utime && at == b.odometry.begin())) return std::nullopt;
+    if (at->first == utime) {
+      pose = at->second;
+    } else {
+      const auto& [t0, p0] = *std::prev(at);
+      const double a = static_cast<double>(utime - t0) / static_cast<double>(at->first - t0);
+      pose = p0 * SE3::exp(a * p0.between(at->second).log());
+    }
+  }
+  // The odometry's covariance from the keyframe to the next keyframe (or to the latest odometry): it contains the
+  // motion to the sighting and a little more.
+  const Matrix6 cov = k + 1 < b.keyframes.size() ? b.keyframes[k + 1].edge_covariance : b.since_keyframe;
+  return SightingAnchor{k, b.keyframes[k].odom.between(pose), cov};
+}
+
+void GraphStage::add_sightings(const LandmarkSightings& s, Body& b, const SightingAnchor& anchor, const Emit& emit) {
+  using graph::PointObservationFactor;
+  const KeyframeNode& kf = b.keyframes[anchor.keyframe];
+  const int n = b.planar ? 2 : 3;
+  const auto model = b.planar ? PointObservationFactor::Model::kRangeBearing : PointObservationFactor::Model::kRangeAzimuthElevation;
+  const SE3 sensor = anchor.motion * to_se3(s.sensor_in_body);  // the sensor at the sighting, in the keyframe's frame
+  // The pose at the sighting X_K D and the landmark, as a two-variable problem to evaluate the factor on: its first
+  // Jacobian is dh/dD (a right perturbation of X_K D is one of D).
+  std::vector<graph::Variable> local(2);
+  local[0].kind = b.planar ? graph::VariableKind::kPose2 : graph::VariableKind::kPose3;
+  local[1].kind = b.planar ? graph::VariableKind::kPoint2 : graph::VariableKind::kPoint3;
+  const SE3 at_sighting = smoother_.graph().variables()[static_cast<size_t>(kf.variable)].as_se3() * anchor.motion;
+  if (b.planar) local[0].pose2 = SE2::from_se3(at_sighting);
+  else local[0].pose3 = at_sighting;
+  const Eigen::MatrixXd sigma_d = b.planar ? Eigen::MatrixXd(planar_block(anchor.covariance)) : Eigen::MatrixXd(anchor.covariance);
+  const Matrix6 ad6 = anchor.motion.inverse().adjoint();  // X_K Exp(xi) D = X_K D Exp(Ad(D^-1) xi)
+  const Eigen::MatrixXd ad = b.planar ? Eigen::MatrixXd(planar_block(ad6)) : Eigen::MatrixXd(ad6);
+  const double k2 = config_.landmarks.gate_odometry_scale * config_.landmarks.gate_odometry_scale;
+  bool added = false;
+  for (const LandmarkObservation& ob : s.observations) {
+    if (ob.id < 0) {
+      ++sightings_without_id_;
+      continue;
+    }
+    Eigen::VectorXd z(n);
+    z[0] = ob.range, z[1] = ob.azimuth;
+    if (!b.planar) z[2] = ob.elevation;
+    const Eigen::MatrixXd R = ob.covariance.topLeftCorner(n, n);
+    if (!z.allFinite() || !(ob.range > 0) || !R.allFinite() || R.llt().info() != Eigen::Success) {
+      ++sightings_malformed_;
+      continue;
+    }
+    auto lm = b.landmarks.find(ob.id);
+    const bool known = lm != b.landmarks.end();
+    if (known) {
+      local[1].point = smoother_.graph().variables()[static_cast<size_t>(lm->second.variable)].point;
+    } else {  // the landmark where this sighting puts it: X_K D S l(z)
+      const double c = std::cos(b.planar ? 0.0 : ob.elevation);
+      const Eigen::Vector3d l(ob.range * c * std::cos(ob.azimuth), ob.range * c * std::sin(ob.azimuth),
+                              b.planar ? 0.0 : ob.range * std::sin(ob.elevation));
+      local[1].point = at_sighting * to_se3(s.sensor_in_body) * l;
+      if (b.planar) local[1].point.z() = 0;
+    }
+    const PointObservationFactor probe(0, 1, model, z, Eigen::MatrixXd::Identity(n, n), SE3(to_se3(s.sensor_in_body)));
+    graph::Linearization lin = probe.make_linearization(local);
+    probe.linearize(local, lin);
+    const Eigen::MatrixXd odometry_part = lin.jacobians[0] * sigma_d * lin.jacobians[0].transpose();
+    if (known) {
+      const Eigen::MatrixXd p_landmark = smoother_.marginal_covariance(lm->second.variable);
+      if (p_landmark.size() > 0) {  // determined: gate against the estimate
+        Eigen::MatrixXd S = R + k2 * odometry_part + lin.jacobians[1] * p_landmark * lin.jacobians[1].transpose();
+        const Eigen::MatrixXd p_keyframe = smoother_.marginal_covariance(kf.variable);
+        if (p_keyframe.size() > 0) {
+          const Eigen::MatrixXd jk = lin.jacobians[0] * ad;
+          S += jk * p_keyframe * jk.transpose();
+        }
+        const double d2 = lin.error.dot(S.ldlt().solve(lin.error));
+        if (!(d2 <= (b.planar ? sighting_gate_planar_ : sighting_gate_spatial_))) {
+          ++sightings_rejected_;
+          continue;
+        }
+      }
+    }
+    Eigen::MatrixXd cov = R + odometry_part;
+    cov = 0.5 * (cov + cov.transpose());
+    Eigen::MatrixXd information = cov.llt().solve(Eigen::MatrixXd::Identity(n, n));
+    information = 0.5 * (information + information.transpose());
+    try {
+      if (!known) {
+        graph::Variable v = local[1];
+        v.id = next_variable_id_++;
+        lm = b.landmarks.emplace(ob.id, Body::Landmark{smoother_.add_variable(v), 0}).first;
+        ++landmarks_;
+      }
+      smoother_.add_factor(std::make_unique<PointObservationFactor>(kf.variable, lm->second.variable, model, z, information, sensor),
+                           config_.landmarks.robust);
+    } catch (const std::invalid_argument&) {
+      ++sightings_malformed_;  // a value the checks above let through but the smoother refuses
+      continue;
+    }
+    ++lm->second.sightings;
+    ++sightings_accepted_;
+    added = true;
+  }
+  if (added) optimize_and_publish(s.source, b, b.keyframes.back().utime, emit);
+}
+
 void GraphStage::optimize_and_publish(const std::string& source, Body& b, int64_t utime, const Emit& emit) {
   const auto t0 = std::chrono::steady_clock::now();
   const graph::IncrementalStatus st = smoother_.update();
@@ -300,6 +466,15 @@ std::vector<Keyframe> GraphStage::keyframes(const std::string& source) const {
   return out;
 }
 
+std::vector<GraphLandmark> GraphStage::landmarks(const std::string& source) const {
+  std::vector<GraphLandmark> out;
+  auto it = bodies_.find(source);
+  if (it == bodies_.end()) return out;
+  for (const auto& [id, l] : it->second.landmarks)
+    out.push_back(GraphLandmark{id, smoother_.graph().variables()[static_cast<size_t>(l.variable)].point, l.sightings});
+  return out;
+}
+
 Counters GraphStage::counters() const {
   return {{"keyframes", keyframes_},
           {"keyframes_rejected", keyframes_rejected_},
@@ -313,6 +488,15 @@ Counters GraphStage::counters() const {
           {"relinearized_factors", relinearized_},
           {"odometry_out_of_order", out_of_order_},
           {"odometry_edges_rejected", bad_edges_},
+          {"landmarks", landmarks_},
+          {"sightings_accepted", sightings_accepted_},
+          {"sightings_rejected", sightings_rejected_},
+          {"sightings_without_id", sightings_without_id_},
+          {"sightings_unknown_source", sightings_unknown_source_},
+          {"sightings_before_keyframe", sightings_before_keyframe_},
+          {"sightings_unmatched", sightings_unmatched_},
+          {"sightings_malformed", sightings_malformed_},
+          {"sightings_dropped", sightings_dropped_},
           {"last_update_us", static_cast<int64_t>(last_update_ms_ * 1000)}};
 }
 

@@ -14,6 +14,25 @@
 //    default); rejected loops are counted;
 //    A loop about a time the body's odometry has not reached yet waits (at most 256 per body) and is tried again
 //    when the odometry gets there;
+//  - landmark sightings (LandmarkSightings with a landmark id; sightings without an id, -1, are counted as
+//    sightings_without_id and left to the filters' association) become point variables of the observing body (one
+//    per id and body: each body's map has its own frame) and range/bearing factors (range/azimuth/elevation for 3-D
+//    bodies; PointObservationFactor, estimators/graph/factor.hpp).  A sighting is taken at an odometry time, not at a
+//    keyframe time; it becomes a keyframe-relative observation: the factor is on the newest keyframe K at or before
+//    the sighting, with the sensor offset D S (D = O_K^-1 O_t the odometry from K to the sighting, interpolated on
+//    the group between the two odometry messages around t; S the sensor in the body) and the odometry's uncertainty
+//    folded into the measurement's: R' = R + J_D Sigma_D J_D', J_D = dh/dD (right perturbation).  A sighting ahead of
+//    the odometry waits (at most max_waiting messages per body) for the odometry message after it, where Sigma_D is
+//    exact (the covariance since K plus the interpolated part of the increment); a sighting the odometry has already
+//    passed takes the covariance to the next keyframe, or to the latest odometry (a little more than its own).
+//    Several sightings in one odometry interval share D's error but enter as independent (slightly optimistic).
+//    A sighting of a known landmark is gated against the current estimate: d2 = e' S^-1 e with
+//    S = R + k^2 J_D Sigma_D J_D' + J_K P_K J_K' + J_p P_p J_p' (P: marginal covariances of keyframe and landmark,
+//    their correlation ignored, which makes S larger for a landmark mapped from the same poses), chi-square at
+//    gate_probability; rejected sightings are counted.  Accepted ones enter with the smoother's robust kernel, so a
+//    mis-identified landmark that passes the gate is down-weighted rather than bending the map.  A landmark's first
+//    sighting initializes it and is not gated: a wrong first id plants a wrong landmark, that later true sightings
+//    are gated against (limitation).  Landmark positions after each update: landmarks(source).
 //  - after every update: a Trajectory of the body, and the map -> odometry correction for GraphPoseStage.
 // The first keyframe of a body is held fixed at its odometry pose: the map frame is the odometry frame at the
 // body's first keyframe, as for dead reckoning.
@@ -27,12 +46,21 @@
 
 namespace sextant::engine {
 
+/// A landmark of the graph's map: its id (the sightings' landmark id), position in the body's map frame (metres; z = 0
+/// for planar bodies) and how many of its sightings are in the graph.
+struct GraphLandmark {
+  int64_t id = 0;
+  Eigen::Vector3d position = Eigen::Vector3d::Zero();
+  int64_t sightings = 0;
+};
+
 class GraphStage final : public Stage {
  public:
   GraphStage(const GraphConfig& config, std::shared_ptr<GraphCorrections> corrections);
   std::string_view name() const override { return "graph"; }
   bool accepts(const Event& e) const override {
-    return std::holds_alternative<Odometry>(e) || std::holds_alternative<LoopClosure>(e);
+    return std::holds_alternative<Odometry>(e) || std::holds_alternative<LoopClosure>(e) ||
+           (config_.landmarks.enabled && std::holds_alternative<LandmarkSightings>(e));
   }
   void handle(const Event& e, const Emit& emit) override;
   Counters counters() const override;
@@ -40,6 +68,8 @@ class GraphStage final : public Stage {
   const graph::IncrementalSmoother& smoother() const { return smoother_; }
   /// The keyframes of a body (optimized poses), oldest first.
   std::vector<Keyframe> keyframes(const std::string& source) const;
+  /// The landmarks of a body (optimized positions), by id.
+  std::vector<GraphLandmark> landmarks(const std::string& source) const;
 
  private:
   struct KeyframeNode {
@@ -61,12 +91,29 @@ class GraphStage final : public Stage {
     std::map<int64_t, size_t> by_utime;
     std::vector<std::pair<int64_t, SE3>> odometry;  // recent odometry poses (bounded), for loops between keyframes
     std::vector<LoopClosure> early_loops;  // loops about times this body's odometry has not reached yet (bounded)
+    std::vector<LandmarkSightings> early_sightings;  // sightings ahead of the odometry, in time order (bounded)
+    struct Landmark {
+      int variable = -1;
+      int64_t sightings = 0;
+    };
+    std::map<int64_t, Landmark> landmarks;  // by landmark id
+  };
+  /// Where a sighting is taken from: keyframe K, the odometry D from K to the sighting and D's covariance.
+  struct SightingAnchor {
+    size_t keyframe = 0;
+    SE3 motion;
+    Matrix6 covariance = Matrix6::Zero();
   };
   void on_odometry(const Odometry& o, const Emit& emit);
   void on_keyframe_candidate(const Odometry& o, Body& b, const SE3& odom, const Emit& emit);
   void on_loop(const LoopClosure& l, const Emit& emit);
   /// The keyframe a loop's end refers to, and the odometry motion from that keyframe to the loop's time.
   std::optional<std::pair<size_t, SE3>> resolve(const Body& b, int64_t keyframe_id, int64_t utime) const;
+  void on_sightings(const LandmarkSightings& s, const Emit& emit);
+  /// The anchor of a sighting at a time the odometry has reached, after the body's first keyframe (nullopt: older
+  /// than the odometry history).
+  std::optional<SightingAnchor> anchor_of(const Body& b, int64_t utime) const;
+  void add_sightings(const LandmarkSightings& s, Body& b, const SightingAnchor& anchor, const Emit& emit);
   void optimize_and_publish(const std::string& source, Body& b, int64_t utime, const Emit& emit);
 
   GraphConfig config_;
@@ -75,10 +122,13 @@ class GraphStage final : public Stage {
   graph::IncrementalSmoother smoother_;
   std::map<std::string, Body> bodies_;
   int64_t next_variable_id_ = 0, next_request_id_ = 0;
-  double chi2_gate_planar_ = 0, chi2_gate_spatial_ = 0;
+  double chi2_gate_planar_ = 0, chi2_gate_spatial_ = 0, sighting_gate_planar_ = 0, sighting_gate_spatial_ = 0;
   int64_t keyframes_ = 0, keyframes_rejected_ = 0, requests_ = 0, loops_accepted_ = 0, loops_rejected_ = 0,
           loops_unmatched_ = 0, loops_unknown_source_ = 0, optimizer_failures_ = 0, rebuilds_ = 0,
           relinearized_ = 0, out_of_order_ = 0, bad_edges_ = 0;
+  int64_t landmarks_ = 0, sightings_accepted_ = 0, sightings_rejected_ = 0, sightings_without_id_ = 0,
+          sightings_unknown_source_ = 0, sightings_before_keyframe_ = 0, sightings_unmatched_ = 0,
+          sightings_malformed_ = 0, sightings_dropped_ = 0;
   double last_update_ms_ = 0;
 };
 
