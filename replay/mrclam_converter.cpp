@@ -112,8 +112,11 @@ MrclamConversion convert_mrclam(const std::string& dir, int robot, const std::st
   }
   result.truth = seq_truth;
 
-  // Odometry: start from the ground truth nearest the first odometry stamp.
-  const double t_first = odometry.front().second[0];
+  // Odometry: a command's motion happens `command_delay_s` after its stamp; start from the ground truth nearest the
+  // first (delayed) odometry stamp.
+  if (!std::isfinite(o.command_delay_s)) throw std::runtime_error("MRCLAM command delay is not finite");
+  const double delay = o.command_delay_s;
+  const double t_first = odometry.front().second[0] + delay;
   size_t g = 0;
   while (g + 1 < gt.size() && std::abs(gt[g + 1].t - t_first) < std::abs(gt[g].t - t_first)) ++g;
   SE2 pose = SE2::from_se3(SE3(gt[g].pose.orientation, gt[g].pose.position));
@@ -149,7 +152,7 @@ MrclamConversion convert_mrclam(const std::string& dir, int robot, const std::st
     cov = ad * cov * ad.transpose() + q;
     cov = (0.5 * (cov + cov.transpose())).eval();
     pose = pose * delta;
-    emit_odometry(odometry[k + 1].second[0], q);
+    emit_odometry(odometry[k + 1].second[0] + delay, q);
   }
 
   // Landmark sightings, one message per image (rows sharing a stamp).
@@ -174,7 +177,8 @@ MrclamConversion convert_mrclam(const std::string& dir, int robot, const std::st
       ob.id = it->second;
       ob.range = v[2];
       ob.azimuth = v[3];
-      ob.covariance = Eigen::Vector3d(o.range_sigma * o.range_sigma, o.bearing_sigma * o.bearing_sigma, 0).asDiagonal();
+      const double range_sigma = o.range_sigma_per_metre * ob.range;
+      ob.covariance = Eigen::Vector3d(range_sigma * range_sigma, o.bearing_sigma * o.bearing_sigma, 0).asDiagonal();
       s.observations.push_back(ob);
     }
     if (s.observations.empty()) continue;

@@ -48,9 +48,14 @@ sextant::cli::RegisterCommand reg{"convert", [](CLI::App& app) {
   mr->add_option("--robot", *m_robot, "robot number, 1 to 5")->required()->check(CLI::Range(1, 5));
   mr->add_option("-o,--output", *m_out, "output LCM log")->required();
   mr->add_option("--gt-out", *m_gt, "the robot's ground truth as a TUM trajectory");
+  auto m_opt = std::make_shared<MrclamOptions>();
+  mr->add_option("--command-delay", m_opt->command_delay_s, "seconds between a velocity command's stamp and the motion it causes")
+      ->check(CLI::Range(-1.0, 1.0));
+  mr->add_option("--range-sigma-per-metre", m_opt->range_sigma_per_metre, "range noise, m per m of range")->check(CLI::PositiveNumber);
+  mr->add_option("--bearing-sigma", m_opt->bearing_sigma, "bearing noise, rad")->check(CLI::PositiveNumber);
   mr->callback([=] {
     guarded("mrclam", [&] {
-      const auto r = convert_mrclam(*m_dir, *m_robot, *m_out, *m_gt);
+      const auto r = convert_mrclam(*m_dir, *m_robot, *m_out, *m_gt, *m_opt);
       std::printf("%s: %lld odometry, %lld landmark messages (%lld sightings; %lld robot sightings and %lld unknown "
                   "barcodes left out), %lld truth\n",
                   m_out->c_str(), (long long)r.odometry, (long long)r.landmark_messages, (long long)r.landmark_observations,

@@ -1,8 +1,9 @@
 // Converters: a g2o graph through an LCM log reproduces its edges; TUM ground truth without noise gives odometry
-// equal to the truth; bad rows are named by line.
+// equal to the truth; bad rows are named by line; MRCLAM's command delay and sighting noise.
 #include "daemon/runtime/codec.hpp"
 #include "daemon/runtime/lcm_log.hpp"
 #include "estimators/graph/g2o_io.hpp"
+#include "estimators/lie/se2.hpp"
 #include "replay/g2o_converter.hpp"
 #include "replay/mrclam_converter.hpp"
 #include "replay/trajectory_io.hpp"
@@ -10,9 +11,12 @@
 
 #include <doctest/doctest.h>
 
+#include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <optional>
 
 using namespace sextant;
 
@@ -136,4 +140,64 @@ TEST_CASE("MRCLAM: landmark, robot and unknown-barcode sightings as in SOURCES.m
   CHECK_THROWS_WITH(replay::convert_mrclam(dir, 7, log, ""), doctest::Contains("numbered 1 to 5"));
   std::remove(log.c_str());
   std::remove(gt.c_str());
+}
+
+TEST_CASE("MRCLAM: the command delay shifts the odometry stamps only, and brings the commanded turns closer to the truth") {
+  const std::string dir = std::string(SEXTANT_SHARED_DIR) + "/data/landmarks/MRCLAM_Dataset7";
+  const auto log0 = temp("mrclam_d0.lcm"), log1 = temp("mrclam_d1.lcm"), gt = temp("mrclam_d_gt.txt");
+  replay::MrclamOptions immediate;
+  immediate.command_delay_s = 0;
+  const replay::MrclamOptions delayed;  // the default delay
+  REQUIRE(delayed.command_delay_s > 0.1);
+  replay::convert_mrclam(dir, 4, log0, "", immediate);
+  replay::convert_mrclam(dir, 4, log1, gt, delayed);
+  const auto odo0 = events_of<engine::Odometry>(log0, runtime::InputKind::kOdometry, "ODOMETRY");
+  const auto odo1 = events_of<engine::Odometry>(log1, runtime::InputKind::kOdometry, "ODOMETRY");
+  REQUIRE(odo0.size() == odo1.size());
+  REQUIRE(odo0.size() > 60000);
+  const auto shift = static_cast<int64_t>(std::llround(delayed.command_delay_s * 1e6));
+  bool shifted = true;
+  for (size_t k = 0; k < odo0.size(); ++k) shifted = shifted && odo1[k].utime - odo0[k].utime == shift;
+  CHECK(shifted);
+  // Sightings keep their stamps; their covariance follows the options (range sigma proportional to the range).
+  const auto s0 = events_of<engine::LandmarkSightings>(log0, runtime::InputKind::kLandmarks, "LANDMARKS");
+  const auto s1 = events_of<engine::LandmarkSightings>(log1, runtime::InputKind::kLandmarks, "LANDMARKS");
+  REQUIRE(s0.size() == s1.size());
+  REQUIRE(!s1.empty());
+  CHECK(s0.front().utime == s1.front().utime);
+  CHECK(s0.back().utime == s1.back().utime);
+  const auto& ob = s1.front().observations.front();
+  CHECK(ob.covariance(0, 0) == doctest::Approx(std::pow(delayed.range_sigma_per_metre * ob.range, 2)));
+  CHECK(ob.covariance(1, 1) == doctest::Approx(delayed.bearing_sigma * delayed.bearing_sigma));
+  // Heading change of the odometry over 1 s windows against the Vicon truth's over the same stamps: the delayed
+  // commands match the truth's turns better (the robots carry a command out ~0.15-0.2 s after its stamp).
+  const auto truth = replay::read_tum(gt);
+  auto yaw_at = [&](double t) {
+    auto it = std::lower_bound(truth.begin(), truth.end(), t, [](const auto& p, double x) { return p.t < x; });
+    if (it == truth.begin() || it == truth.end()) return std::optional<double>{};
+    return std::optional<double>{SE2::from_se3(SE3(it->pose.orientation, it->pose.position)).angle()};
+  };
+  auto yaw_error = [&](const std::vector<engine::Odometry>& odo) {
+    double sum = 0;
+    int n = 0;
+    for (size_t k = 0; k + 65 < odo.size(); k += 65) {
+      const double t0 = odo[k].utime * 1e-6, t1 = odo[k + 65].utime * 1e-6;
+      const auto a = yaw_at(t0), b = yaw_at(t1);
+      if (!a || !b) continue;
+      const double d_odo = wrap_angle(SE2::from_se3(SE3(odo[k + 65].pose.orientation, odo[k + 65].pose.position)).angle() -
+                                      SE2::from_se3(SE3(odo[k].pose.orientation, odo[k].pose.position)).angle());
+      sum += std::pow(wrap_angle(d_odo - wrap_angle(*b - *a)), 2);
+      ++n;
+    }
+    REQUIRE(n > 500);
+    return std::sqrt(sum / n);
+  };
+  const double e0 = yaw_error(odo0), e1 = yaw_error(odo1);
+  CAPTURE(e0);
+  CAPTURE(e1);
+  CHECK(e1 < 0.8 * e0);
+  replay::MrclamOptions bad;
+  bad.command_delay_s = std::nan("");
+  CHECK_THROWS_WITH(replay::convert_mrclam(dir, 4, log0, "", bad), doctest::Contains("delay"));
+  for (const auto& f : {log0, log1, gt}) std::remove(f.c_str());
 }
