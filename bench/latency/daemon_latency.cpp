@@ -15,7 +15,8 @@
 //       - feeder: republishes a log of ODOMETRY + LOOP_CLOSURES of a second body (`sextant convert g2o` output: one
 //         odometry message per vertex, each loop right after the odometry of its later vertex) with flow control:
 //         at most --window poses ahead of the newest keyframe on the daemon's TRAJECTORY, at most --feed-rate poses
-//         per second — so the optimizer always has work queued and its queue never overflows;
+//         per second — so the optimizer always has work queued without a growing backlog of the fed body (the
+//         measured body's odometry still goes through the graph stage's queue: drops there are reported);
 //       - monitor: TRAJECTORY of the fed body (solve_ms, keyframe ids) and SEXTANT_STATUS (the graph stage's counters,
 //         queue depth, drops).
 //       --idle: no feeder (the baseline: the same measurement with the optimizer idle but for the measured body's own
