@@ -1,6 +1,7 @@
 #include "estimators/filter/planar_ekf.hpp"
 
 #include "assoc/landmark/jcbb.hpp"
+#include "estimators/filter/state_augmentation.hpp"
 
 #include <cmath>
 
@@ -210,14 +211,7 @@ void PlanarEkf::augment(int64_t id, double range, double bearing, const Eigen::M
   Jz << c, -range * s, s, range * c;
   x_.conservativeResize(n + 2);
   x_.tail<2>() = l;
-  Eigen::MatrixXd P(n + 2, n + 2);
-  P.topLeftCorner(n, n) = P_;
-  const Eigen::MatrixXd cross = Jx * P_.topRows(3);  // 2 x n
-  P.bottomLeftCorner(2, n) = cross;
-  P.topRightCorner(n, 2) = cross.transpose();
-  const Eigen::Matrix2d Pll = Jx * P_.topLeftCorner<3, 3>() * Jx.transpose() + Jz * R * Jz.transpose();
-  P.bottomRightCorner<2, 2>() = 0.5 * (Pll + Pll.transpose());
-  P_ = std::move(P);
+  P_ = augmented_covariance(P_, Jx, Jz, R);
   slot_[id] = static_cast<int>(n);
 }
 

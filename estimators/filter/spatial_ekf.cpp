@@ -1,5 +1,6 @@
 #include "estimators/filter/spatial_ekf.hpp"
 
+#include "estimators/filter/state_augmentation.hpp"
 #include "estimators/lie/so2.hpp"
 
 #include <cmath>
@@ -111,14 +112,7 @@ void SpatialEkf::augment(int64_t id, const Eigen::Vector3d& z, const Eigen::Matr
   const Eigen::Vector3d l = inverse_observation(pose_, z, &Jx, &Jz);
   landmarks_.conservativeResize(landmarks_.size() + 3);
   landmarks_.tail<3>() = l;
-  Eigen::MatrixXd P(n + 3, n + 3);
-  P.topLeftCorner(n, n) = P_;
-  const Eigen::MatrixXd cross = Jx * P_.topRows(6);  // 3 x n
-  P.bottomLeftCorner(3, n) = cross;
-  P.topRightCorner(n, 3) = cross.transpose();
-  const Eigen::Matrix3d Pll = Jx * P_.topLeftCorner<6, 6>() * Jx.transpose() + Jz * R * Jz.transpose();
-  P.bottomRightCorner<3, 3>() = 0.5 * (Pll + Pll.transpose());
-  P_ = std::move(P);
+  P_ = augmented_covariance(P_, Jx, Jz, R);
   slot_[id] = static_cast<int>(n);
 }
 

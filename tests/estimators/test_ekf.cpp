@@ -1,6 +1,7 @@
 // The Kalman update against the textbook linear Kalman filter, the planar EKF's Jacobians against central
 // differences, gating, NaN rejection and a covariance that stays symmetric positive definite.
 #include "estimators/filter/planar_ekf.hpp"
+#include "estimators/filter/state_augmentation.hpp"
 
 #include <doctest/doctest.h>
 
@@ -149,4 +150,35 @@ TEST_CASE("a spurious unidentified sighting stays tentative and is forgotten, a 
   a = ekf.observe_unidentified({{5.0, 0.3, R}});
   CHECK(a.tentative == 1);
   CHECK(a.confirmed == 0);
+}
+
+TEST_CASE("state augmentation equals the dense Jacobian transform J blockdiag(P, R) J' and refuses bad sizes") {
+  // l = g(x_r, z) appended to a 7-state [robot(3); landmark(2); landmark(2)]: J = [I 0; Jx 0 Jz] (independent
+  // computation of the same covariance).
+  std::mt19937 rng(11);
+  std::normal_distribution<double> n(0, 1);
+  Eigen::MatrixXd A(7, 7), Jx(2, 3), Jz(2, 2), B(2, 2);
+  for (int r = 0; r < 7; ++r)
+    for (int c = 0; c < 7; ++c) A(r, c) = n(rng);
+  for (int r = 0; r < 2; ++r)
+    for (int c = 0; c < 3; ++c) Jx(r, c) = n(rng);
+  for (int r = 0; r < 2; ++r)
+    for (int c = 0; c < 2; ++c) Jz(r, c) = n(rng), B(r, c) = n(rng);
+  const Eigen::MatrixXd P = A * A.transpose() + Eigen::MatrixXd::Identity(7, 7);
+  const Eigen::MatrixXd R = B * B.transpose() + 0.1 * Eigen::MatrixXd::Identity(2, 2);
+  Eigen::MatrixXd J = Eigen::MatrixXd::Zero(9, 9);
+  J.topLeftCorner(7, 7).setIdentity();
+  J.block(7, 0, 2, 3) = Jx;
+  J.block(7, 7, 2, 2) = Jz;
+  Eigen::MatrixXd D = Eigen::MatrixXd::Zero(9, 9);
+  D.topLeftCorner(7, 7) = P;
+  D.bottomRightCorner(2, 2) = R;
+  const Eigen::MatrixXd expected = J * D * J.transpose();
+  const Eigen::MatrixXd got = augmented_covariance(P, Jx, Jz, R);
+  REQUIRE(got.rows() == 9);
+  CHECK((got - expected).cwiseAbs().maxCoeff() < 1e-12 * expected.cwiseAbs().maxCoeff());
+  CHECK((got - got.transpose()).cwiseAbs().maxCoeff() == 0.0);
+  CHECK(Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(got).eigenvalues().minCoeff() > 0);
+  CHECK_THROWS_WITH(augmented_covariance(P, Eigen::MatrixXd::Zero(2, 8), Jz, R), doctest::Contains("augmented_covariance"));
+  CHECK_THROWS_WITH(augmented_covariance(P, Jx, Jz, Eigen::MatrixXd::Zero(3, 3)), doctest::Contains("augmented_covariance"));
 }
