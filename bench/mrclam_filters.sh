@@ -3,6 +3,7 @@
 # default "100 1000"; median over the seeds PF_SEEDS, default "1 2 3", each seed's ATE in brackets) on MRCLAM
 # Dataset 7, robots 1-5 (ROBOTS, default "1 2 3 4 5").
 # Usage: [PF_PARTICLES="100"] [PF_SEEDS="1"] [ROBOTS="1"] bench/mrclam_filters.sh [BUILD_DIR]   (prints a markdown table)
+# Then the graph back end (odometry + landmark sightings) in a second table; GRAPH=0 skips it.
 set -euo pipefail
 build=${1:-build}
 root=$(cd "$(dirname "$0")/.." && pwd)
@@ -42,3 +43,38 @@ for r in $robots; do
   done
   echo "| $r | $dr | $loc | $slam | $(python3 -c "print('%.2f' % ($slam / $dr))") |$pf_cells"
 done
+
+# The graph back end (odometry + landmark sightings, no loop closures; engine.graph of config/mrclam.yaml): ATE of its
+# online fused pose (FUSED_POSE_GRAPH: the latest optimized keyframe composed with the odometry since it) and of the
+# final optimized keyframes (the last TRAJECTORY), next to dead reckoning.  GRAPH=0 skips it.
+if [ "${GRAPH:-1}" != 0 ]; then
+  echo
+  echo "| robot | dead reckoning ATE [m] | graph, online fused pose [m] | online / DR | graph, final keyframes [m] | keyframes / DR | keyframes | landmarks | sightings accepted / rejected |"
+  echo "|---|---|---|---|---|---|---|---|---|"
+  for r in $robots; do
+    "$root/$build/bin/sextant" convert mrclam "$data" --robot $r -o "$work/r.lcm" --gt-out "$work/gt.txt" > /dev/null
+    "$root/$build/bin/sextant" replay "$work/r.lcm" --config "$root/config/mrclam.yaml" --estimator dead_reckoning --tum-out "$work/dr.txt" > /dev/null
+    "$root/$build/bin/sextant" replay "$work/r.lcm" --config "$root/config/mrclam.yaml" --estimator graph --tum-out "$work/graph.txt" \
+      --out-log "$work/graph_out.lcm" --json > "$work/graph.json"
+    counts=$(python3 - "$work/graph_out.lcm" "$work/kf.txt" "$work/graph.json" "$root/$build/lcmtypes/python" "$root/tests/e2e" <<'EOP'
+import json, sys
+sys.path.insert(0, sys.argv[4]); sys.path.insert(0, sys.argv[5])
+from lcmlog import read_log
+from sextant import trajectory_t
+last = None
+for _, c, b in read_log(sys.argv[1]):
+    if c == "TRAJECTORY":
+        last = b
+with open(sys.argv[2], "w") as f:
+    for k in trajectory_t.decode(last).keyframes:
+        p, q = k.position, k.orientation
+        f.write(f"{k.utime * 1e-6:.6f} {p[0]:.9f} {p[1]:.9f} {p[2]:.9f} {q[1]:.9f} {q[2]:.9f} {q[3]:.9f} {q[0]:.9f}\n")
+c = next(s["counters"] for s in json.load(open(sys.argv[3]))["stages"] if s["name"] == "graph")
+print(f"{c['keyframes']} | {c['landmarks']} | {c['sightings_accepted']} / {c['sightings_rejected']}")
+EOP
+)
+    rm -f "$work/graph_out.lcm"
+    dr=$(ate "$work/gt.txt" "$work/dr.txt"); g=$(ate "$work/gt.txt" "$work/graph.txt"); kf=$(ate "$work/gt.txt" "$work/kf.txt")
+    echo "| $r | $dr | $g | $(python3 -c "print('%.2f' % ($g / $dr))") | $kf | $(python3 -c "print('%.2f' % ($kf / $dr))") | $counts |"
+  done
+fi
