@@ -340,7 +340,8 @@ void GraphStage::add_sightings(const LandmarkSightings& s, Body& b, const Sighti
   const KeyframeNode& kf = b.keyframes[anchor.keyframe];
   const int n = b.planar ? 2 : 3;
   const auto model = b.planar ? PointObservationFactor::Model::kRangeBearing : PointObservationFactor::Model::kRangeAzimuthElevation;
-  const SE3 sensor = anchor.motion * to_se3(s.sensor_in_body);  // the sensor at the sighting, in the keyframe's frame
+  const SE3 sensor_in_body = to_se3(s.sensor_in_body);
+  const SE3 sensor = anchor.motion * sensor_in_body;  // the sensor at the sighting, in the keyframe's frame
   // The pose at the sighting X_K D and the landmark, as a two-variable problem to evaluate the factor on: its first
   // Jacobian is dh/dD (a right perturbation of X_K D is one of D).
   std::vector<graph::Variable> local(2);
@@ -375,10 +376,10 @@ void GraphStage::add_sightings(const LandmarkSightings& s, Body& b, const Sighti
       const double c = std::cos(b.planar ? 0.0 : ob.elevation);
       const Eigen::Vector3d l(ob.range * c * std::cos(ob.azimuth), ob.range * c * std::sin(ob.azimuth),
                               b.planar ? 0.0 : ob.range * std::sin(ob.elevation));
-      local[1].point = at_sighting * to_se3(s.sensor_in_body) * l;
+      local[1].point = at_sighting * sensor_in_body * l;
       if (b.planar) local[1].point.z() = 0;
     }
-    const PointObservationFactor probe(0, 1, model, z, Eigen::MatrixXd::Identity(n, n), SE3(to_se3(s.sensor_in_body)));
+    const PointObservationFactor probe(0, 1, model, z, Eigen::MatrixXd::Identity(n, n), sensor_in_body);
     graph::Linearization lin = probe.make_linearization(local);
     probe.linearize(local, lin);
     const Eigen::MatrixXd odometry_part = lin.jacobians[0] * sigma_d * lin.jacobians[0].transpose();
