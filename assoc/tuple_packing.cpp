@@ -111,7 +111,6 @@ double ExchangeImprover::improve(std::vector<int>& chosen, int max_passes) {
             freed_[static_cast<size_t>(mem[i])] = stamp;
           }
       if (!(bound < -1e-9)) continue;
-      look_[static_cast<size_t>(t)] = 1;  // the refill below depends on more than its own detections' owners
       // Greedy refill of the freed detections with tuples that fit.  `rest` bounds what the freed detections not
       // yet refilled can still gain (each at most its cheapest tuple); once delta + rest cannot go below zero the
       // move is rejected without looking further (the same decision as finishing the refill).

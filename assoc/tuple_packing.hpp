@@ -25,9 +25,10 @@ std::vector<std::vector<int>> independent_components(const TuplePacking& p);
 /// cost minus the dropped ones plus, per freed detection, the cheapest tuple containing it; the refill looks at
 /// the `refill_candidates` cheapest tuples of each freed detection.
 ///
-/// Speed (the same moves in the same order as sweeping every tuple every pass): the bound of a tuple depends only
-/// on which chosen tuples own its detections, so a tuple whose bound ruled it out is looked at again only after a
-/// move changed the owner of one of its detections; the tuples are stored cheapest first in flat arrays.
+/// Speed: a tuple is evaluated again in a later sweep only after a move changed the owner of one of its
+/// detections ("don't look" marks; a tuple whose move was rejected in its refill is not retried while its own
+/// detections keep their owners, although other moves may have changed what its refill could find); the tuples
+/// are stored cheapest first in flat arrays.
 class ExchangeImprover {
  public:
   explicit ExchangeImprover(const TuplePacking& p, int refill_candidates = 16);
