@@ -2,7 +2,7 @@
 // simulated matcher bringing the keyframes close to the truth, a confident wrong loop rejected, and FUSED_POSE
 // "graph" once per odometry message with strictly increasing times; landmark sightings mapping the landmarks and
 // holding the keyframes near the truth, mis-identified sightings stopped by the gate (and by the robust kernel when
-// the gate is open), and the sightings the stage cannot use counted.
+// the gate is open), a 3-D body mapping 3-D landmarks, and the sightings the stage cannot use counted.
 #include "daemon/engine/engine.hpp"
 #include "daemon/engine/graph_pose_stage.hpp"
 #include "daemon/engine/graph_stage.hpp"
@@ -76,32 +76,36 @@ std::vector<Eigen::Vector3d> ring_landmarks() {
   return out;
 }
 
-LandmarkObservation sighting_of(const SE3& pose, const Eigen::Vector3d& landmark, int64_t id) {
+LandmarkObservation sighting_of(const SE3& pose, const Eigen::Vector3d& landmark, int64_t id, bool planar = true) {
   const Eigen::Vector3d l = pose.inverse() * landmark;
   LandmarkObservation ob;
   ob.id = id;
-  ob.range = std::hypot(l.x(), l.y());
+  ob.range = planar ? std::hypot(l.x(), l.y()) : l.norm();
   ob.azimuth = std::atan2(l.y(), l.x());
-  ob.covariance = Eigen::Vector3d(0.05 * 0.05, 0.02 * 0.02, 0).asDiagonal();
+  ob.elevation = planar ? 0.0 : std::atan2(l.z(), std::hypot(l.x(), l.y()));
+  ob.covariance = Eigen::Vector3d(0.05 * 0.05, 0.02 * 0.02, planar ? 0.0 : 0.02 * 0.02).asDiagonal();
   return ob;
 }
 
-std::vector<LandmarkSightings> ring_sightings(const Run& run, uint64_t seed) {
+std::vector<LandmarkSightings> ring_sightings(const Run& run, uint64_t seed, bool planar = true) {
   std::mt19937_64 rng(seed);
   std::normal_distribution<double> n(0, 1);
-  const auto landmarks = ring_landmarks();
+  auto landmarks = ring_landmarks();
+  if (!planar)
+    for (size_t i = 0; i < landmarks.size(); ++i) landmarks[i].z() = i % 3 == 0 ? 1.0 : i % 3 == 1 ? -0.5 : 2.0;
   std::vector<LandmarkSightings> out;
   for (size_t k = 0; k + 1 < run.odometry.size(); k += 5) {
     LandmarkSightings s;
     s.utime = run.odometry[k].utime + 50'000;
     s.source = "robot";
-    s.planar = true;
+    s.planar = planar;
     const SE3 truth = circle_truth(static_cast<double>(s.utime - run.odometry.front().utime) * 1e-6);
     for (size_t i = 0; i < landmarks.size(); ++i) {
       if ((truth.inverse() * landmarks[i]).norm() > 6.0) continue;
-      LandmarkObservation ob = sighting_of(truth, landmarks[i], 100 + static_cast<int64_t>(i));
+      LandmarkObservation ob = sighting_of(truth, landmarks[i], 100 + static_cast<int64_t>(i), planar);
       ob.range += 0.05 * n(rng);
       ob.azimuth += 0.02 * n(rng);
+      if (!planar) ob.elevation += 0.02 * n(rng);
       s.observations.push_back(ob);
     }
     if (!s.observations.empty()) out.push_back(s);
@@ -478,4 +482,53 @@ TEST_CASE("graph stage: sightings of an unknown body, before the first keyframe,
   s.observations = {sighting_of(circle_truth(1.03), landmarks[0], 100)};
   short_memory.handle(s, ignore);
   CHECK(counter(graph_stage_of(short_memory), "sightings_unmatched") == 1);
+}
+
+TEST_CASE("graph stage: a 3-D body maps 3-D landmarks from range, azimuth and elevation") {
+  // The circle run as 3-D odometry: each planar increment with a little noise in z, roll and pitch on top (and the
+  // increment covariance saying so).
+  Run run = circle_run(120, 3);
+  std::vector<SE3> planar;
+  for (const auto& o : run.odometry) planar.push_back(to_se3(o.pose));
+  std::mt19937_64 rng(21);
+  std::normal_distribution<double> n(0, 1);
+  SE3 odom = planar.front();
+  for (size_t k = 0; k < run.odometry.size(); ++k) {
+    Odometry& o = run.odometry[k];
+    if (k > 0) {
+      Vector6d xi = Vector6d::Zero();
+      xi[2] = 0.002 * n(rng), xi[3] = 0.001 * n(rng), xi[4] = 0.001 * n(rng);
+      odom = odom * planar[k - 1].inverse() * planar[k] * SE3::exp(xi);
+    }
+    o.planar = false;
+    o.pose = to_pose(odom);
+    Matrix6 inc = *o.increment_covariance;
+    inc(2, 2) = 4e-6, inc(3, 3) = inc(4, 4) = 1e-6;
+    o.increment_covariance = inc;
+  }
+  const auto sightings = ring_sightings(run, 13, false);
+  Engine engine(graph_only_config(false));
+  GraphStage* graph = &graph_stage_of(engine);
+  feed(engine, run, sightings, [](Output) {});
+  CHECK(counter(*graph, "landmarks") == 12);
+  CHECK(counter(*graph, "sightings_malformed") == 0);
+  CHECK(counter(*graph, "sightings_accepted") > 300);
+
+  std::map<int64_t, SE3> truth(run.truth.begin(), run.truth.end()), odo;
+  for (const auto& o : run.odometry) odo[o.utime] = to_se3(o.pose);
+  std::vector<replay::StampedPose> gt, est, dr;
+  for (const auto& k : graph->keyframes("robot")) {
+    const double t = static_cast<double>(k.utime) * 1e-6;
+    gt.push_back({t, to_pose(truth.at(k.utime))});
+    est.push_back({t, k.pose});
+    dr.push_back({t, to_pose(odo.at(k.utime))});
+  }
+  const auto ate = replay::absolute_trajectory_error(gt, est), ate_dr = replay::absolute_trajectory_error(gt, dr);
+  MESSAGE("3-D keyframe ATE " << ate.error.rmse << " m, dead reckoning " << ate_dr.error.rmse << " m");
+  CHECK(ate.error.rmse < 0.25 * ate_dr.error.rmse);
+  for (const auto& l : graph->landmarks("robot")) {
+    const size_t i = static_cast<size_t>(l.id - 100);
+    const Eigen::Vector3d want(ring_landmarks()[i].x(), ring_landmarks()[i].y(), i % 3 == 0 ? 1.0 : i % 3 == 1 ? -0.5 : 2.0);
+    CHECK((ate.rotation * l.position + ate.translation - want).norm() < 0.3);
+  }
 }
