@@ -482,6 +482,19 @@ TEST_CASE("graph stage: sightings of an unknown body, before the first keyframe,
   s.observations = {sighting_of(circle_truth(1.03), landmarks[0], 100)};
   short_memory.handle(s, ignore);
   CHECK(counter(graph_stage_of(short_memory), "sightings_unmatched") == 1);
+  // Sightings ahead of the odometry are kept up to max_waiting messages: the oldest beyond that is dropped, counted.
+  EngineConfig few = graph_only_config(false);
+  few.graph.landmarks.max_waiting = 2;
+  Engine waiting(few);
+  for (size_t k = 0; k < 10; ++k) waiting.handle(run.odometry[k], ignore);
+  for (size_t k = 20; k < 23; ++k) {
+    s.utime = run.odometry[k].utime + 30'000;
+    s.observations = {sighting_of(circle_truth(static_cast<double>(k) * 0.1 + 0.03), landmarks[0], 100)};
+    waiting.handle(s, ignore);
+  }
+  CHECK(counter(graph_stage_of(waiting), "sightings_dropped") == 1);
+  for (size_t k = 10; k < 30; ++k) waiting.handle(run.odometry[k], ignore);
+  CHECK(counter(graph_stage_of(waiting), "sightings_accepted") == 2);
 }
 
 TEST_CASE("graph stage: a 3-D body maps 3-D landmarks from range, azimuth and elevation") {
