@@ -36,6 +36,8 @@ IncrementalSmoother::IncrementalSmoother(IncrementalOptions options) : options_(
 
 IncrementalSmoother::~IncrementalSmoother() {
   if (L_) cholmod_free_factor(&L_, &common_);
+  if (y_) cholmod_free_dense(&y_, &common_);
+  if (delta_b_) cholmod_free_dense(&delta_b_, &common_);
   cholmod_finish(&common_);
 }
 
@@ -96,26 +98,55 @@ IncrementalSmoother::Contribution IncrementalSmoother::linearize(size_t fi) cons
   return c;
 }
 
-void IncrementalSmoother::apply(const Contribution& c, bool add) {
-  if (c.cols.empty()) return;
-  const size_t r = static_cast<size_t>(c.Ct.rows()), w = c.cols.size();
-  cholmod_sparse* C = cholmod_allocate_sparse(static_cast<size_t>(capacity_), r, r * w, 1, 1, 0, CHOLMOD_REAL, &common_);
+void IncrementalSmoother::apply(const std::vector<Contribution>& cs, bool add) {
+  // One rank-k modification for all of them: CHOLMOD walks each elimination-tree path once per 8 columns of C
+  // instead of once per factor, which is what a loop closure's long path costs.
+  size_t r = 0, nz = 0;
+  for (const Contribution& c : cs)
+    if (!c.cols.empty()) r += static_cast<size_t>(c.Ct.rows()), nz += static_cast<size_t>(c.Ct.rows()) * c.cols.size();
+  if (r == 0) return;
+  cholmod_sparse* C = cholmod_allocate_sparse(static_cast<size_t>(capacity_), r, nz, 1, 1, 0, CHOLMOD_REAL, &common_);
   if (C == nullptr) throw std::runtime_error("CHOLMOD could not allocate an update");
   int* p = static_cast<int*>(C->p);
   int* i = static_cast<int*>(C->i);
   double* x = static_cast<double*>(C->x);
-  for (size_t k = 0; k < r; ++k) {
-    p[k] = static_cast<int>(k * w);
-    for (size_t j = 0; j < w; ++j) {
-      i[k * w + j] = c.cols[j];
-      x[k * w + j] = c.Ct(static_cast<Eigen::Index>(k), static_cast<Eigen::Index>(j));
+  size_t col = 0, at = 0;
+  for (const Contribution& c : cs) {
+    if (c.cols.empty()) continue;
+    for (Eigen::Index k = 0; k < c.Ct.rows(); ++k, ++col) {
+      p[col] = static_cast<int>(at);
+      for (size_t j = 0; j < c.cols.size(); ++j, ++at) {
+        i[at] = c.cols[j];
+        x[at] = c.Ct(k, static_cast<Eigen::Index>(j));
+      }
     }
   }
-  p[r] = static_cast<int>(r * w);
-  const int ok = cholmod_updown(add ? 1 : 0, C, L_, &common_);
+  p[r] = static_cast<int>(at);
+  // b = -g changes by -(+-grad) on the factor's columns, all of which lie on the modified paths.
+  double* db = static_cast<double*>(delta_b_->x);
+  for (const Contribution& c : cs)
+    for (size_t j = 0; j < c.cols.size(); ++j) {
+      const double d = add ? c.grad[static_cast<Eigen::Index>(j)] : -c.grad[static_cast<Eigen::Index>(j)];
+      g_[c.cols[j]] += d;
+      db[c.cols[j]] -= d;
+    }
+  const int ok = cholmod_updown_solve(add ? 1 : 0, C, L_, y_, delta_b_, &common_);
+  if (ok) {
+    // The columns CHOLMOD modified: the elimination-tree paths from each column's first row to the root.
+    const int* Ci = static_cast<const int*>(C->i);
+    const int* Cp = static_cast<const int*>(C->p);
+    for (size_t k = 0; k < r; ++k)
+      for (int j = Ci[Cp[k]]; j >= 0 && !dirty_[static_cast<size_t>(j)]; j = parent_of(j)) dirty_[static_cast<size_t>(j)] = 1;
+  }
   cholmod_free_sparse(&C, &common_);
   if (!ok) throw std::runtime_error("CHOLMOD's update of the factor failed (status " + std::to_string(common_.status) + ")");
-  for (size_t j = 0; j < w; ++j) g_[c.cols[j]] += add ? c.grad[static_cast<Eigen::Index>(j)] : -c.grad[static_cast<Eigen::Index>(j)];
+}
+
+int IncrementalSmoother::parent_of(int j) const {
+  // CHOLMOD keeps each column of a simplicial factor sorted, diagonal first: the parent is the next row.
+  const int* Lp = static_cast<const int*>(L_->p);
+  const int* Lnz = static_cast<const int*>(L_->nz);
+  return Lnz[j] > 1 ? static_cast<const int*>(L_->i)[Lp[j] + 1] : -1;
 }
 
 // Which pending variables and factors can enter the system: a factor enters when all its variables are in (or
@@ -189,19 +220,41 @@ Eigen::MatrixXd IncrementalSmoother::marginal_covariance(int index) const {
   return 0.5 * (out + out.transpose());
 }
 
-void IncrementalSmoother::solve() {
+void IncrementalSmoother::solve(bool full) {
   if (L_ == nullptr || capacity_ == 0) return;
-  cholmod_dense* rhs = cholmod_allocate_dense(static_cast<size_t>(capacity_), 1, static_cast<size_t>(capacity_),
-                                              CHOLMOD_REAL, &common_);
-  double* r = static_cast<double*>(rhs->x);
-  for (int i = 0; i < capacity_; ++i) r[i] = -g_[i];
-  cholmod_dense* sol = cholmod_solve(CHOLMOD_LDLt, L_, rhs, &common_);
-  cholmod_free_dense(&rhs, &common_);
-  if (sol == nullptr) throw std::runtime_error("CHOLMOD's triangular solve failed");
-  dx_ = Eigen::Map<const Eigen::VectorXd>(static_cast<const double*>(sol->x), capacity_);
-  cholmod_free_dense(&sol, &common_);
+  const int* Lp = static_cast<const int*>(L_->p);
+  const int* Li = static_cast<const int*>(L_->i);
+  const int* Lnz = static_cast<const int*>(L_->nz);
+  const double* Lx = static_cast<const double*>(L_->x);
+  const double* y = static_cast<const double*>(y_->x);
+  // Back-substitution L' dx = D^-1 y, from the root down (a parent's column index exceeds its children's), after
+  // iSAM2's wildfire (Kaess et al. 2012, Alg. 7) at the granularity of columns: a column is recomputed when CHOLMOD
+  // modified it or when a column in its structure moved by more than the threshold since that column last
+  // propagated.  A column that is not recomputed cuts off its subtree: a descendant's structure above it lies in
+  // its own structure (the row-subtree property of L), and no descendant of an unmodified column is modified.
+  std::fill(recomputed_.begin(), recomputed_.end(), 0);
+  std::fill(changed_.begin(), changed_.end(), 0);
+  var_changed_.assign(graph_.variables().size(), 0);
+  const double threshold = full ? -1.0 : options_.wildfire;
+  for (int j = used_ - 1; j >= 0; --j) {
+    const size_t ju = static_cast<size_t>(j);
+    const int first = Lp[j] + 1, end = Lp[j] + Lnz[j];
+    if (first < end && !recomputed_[static_cast<size_t>(Li[first])]) continue;
+    bool need = full || dirty_[ju];
+    for (int k = first; !need && k < end; ++k) need = changed_[static_cast<size_t>(Li[k])] != 0;
+    if (!need) continue;
+    double x = y[j] / Lx[Lp[j]];
+    for (int k = first; k < end; ++k) x -= Lx[k] * dx_[Li[k]];
+    recomputed_[ju] = 1;
+    if (x != dx_[j] && col_var_[ju] >= 0) var_changed_[static_cast<size_t>(col_var_[ju])] = 1;
+    dx_[j] = x;
+    // Compared with the value its dependants last saw, so that small changes cannot accumulate unseen.
+    if (std::abs(x - seen_[ju]) > threshold) changed_[ju] = 1, seen_[ju] = x;
+  }
+  std::fill(dirty_.begin(), dirty_.end(), 0);
   auto& vars = graph_.variables();
   for (size_t v = 0; v < vars.size(); ++v) {
+    if (!(full || var_changed_[v])) continue;
     vars[v] = lin_[v];
     if (pos_[v] >= 0) vars[v].retract(dx_.data() + pos_[v]);
   }
@@ -239,15 +292,20 @@ bool IncrementalSmoother::relinearize(const std::vector<int>& moved, Incremental
     for (size_t f : var_factors_[static_cast<size_t>(v)])
       if (!mark[f]) mark[f] = 1, factors.push_back(f);
   if (factors.size() > update_limit()) return false;
-  std::vector<Contribution> before;
+  std::vector<Contribution> before, after;
   before.reserve(factors.size());
+  after.reserve(factors.size());
   for (size_t f : factors) before.push_back(linearize(f));
-  for (int v : moved) lin_[static_cast<size_t>(v)].retract(dx_.data() + pos_[static_cast<size_t>(v)]);
-  // Update with the new linearization before downdating the old one: the matrix stays positive definite throughout.
-  for (size_t k = 0; k < factors.size(); ++k) {
-    apply(linearize(factors[k]), true);
-    apply(before[k], false);
+  for (int v : moved) {
+    lin_[static_cast<size_t>(v)].retract(dx_.data() + pos_[static_cast<size_t>(v)]);
+    // dx_ must describe the same estimate at the new linearization point: its step is now 0.
+    // (Its subtree's steps depend on this number, not on the estimate it stands for, so they are recomputed.)
+    for (int k = 0; k < lin_[static_cast<size_t>(v)].dim(); ++k) dx_[pos_[static_cast<size_t>(v)] + k] = 0.0;
   }
+  for (size_t f : factors) after.push_back(linearize(f));
+  // Update with the new linearization before downdating the old one: the matrix stays positive definite throughout.
+  apply(after, true);
+  apply(before, false);
   st.relinearized_variables += static_cast<int>(moved.size());
   st.relinearized_factors += static_cast<int>(factors.size());
   return true;
@@ -301,16 +359,20 @@ IncrementalStatus IncrementalSmoother::update() {
   for (int v : vars_in) {
     if (graph_.variables()[static_cast<size_t>(v)].fixed) continue;
     pos_[static_cast<size_t>(v)] = used_;
+    for (int k = 0; k < graph_.variables()[static_cast<size_t>(v)].dim(); ++k) col_var_[static_cast<size_t>(used_ + k)] = v;
     used_ += graph_.variables()[static_cast<size_t>(v)].dim();
   }
+  std::vector<Contribution> added;
+  added.reserve(factors_in.size());
+  for (size_t f : factors_in) added.push_back(linearize(f));
+  apply(added, true);
   for (size_t f : factors_in) {
-    apply(linearize(f), true);
     weight_[f] = 1.0;
     ++factors_in_system_;
     for (int v : graph_.factors()[f]->variables()) var_factors_[static_cast<size_t>(v)].push_back(f);
   }
   // Remove the identity that held each newly used column.
-  bool definite = true;
+  std::vector<Contribution> identities;
   for (int v : vars_in) {
     const int p = pos_[static_cast<size_t>(v)];
     if (p < 0) continue;
@@ -319,12 +381,15 @@ IncrementalStatus IncrementalSmoother::update() {
     id.Ct = Eigen::MatrixXd::Identity(d, d);
     id.grad = Eigen::VectorXd::Zero(d);
     for (int k = 0; k < d; ++k) id.cols.push_back(p + k);
-    apply(id, false);
-    const int* Lp = static_cast<const int*>(L_->p);
-    const double* Lx = static_cast<const double*>(L_->x);
-    for (int k = 0; k < d; ++k)
-      if (!(Lx[Lp[p + k]] > 0)) definite = false;
+    identities.push_back(std::move(id));
   }
+  apply(identities, false);
+  bool definite = true;
+  const int* Lp = static_cast<const int*>(L_->p);
+  const double* Lx = static_cast<const double*>(L_->x);
+  for (const Contribution& id : identities)
+    for (int c : id.cols)
+      if (!(Lx[Lp[c]] > 0)) definite = false;
   st.new_variables = static_cast<int>(vars_in.size());
   st.new_factors = static_cast<int>(factors_in.size());
   st.deferred_variables = static_cast<int>(vars_wait.size());
@@ -341,7 +406,7 @@ IncrementalStatus IncrementalSmoother::update() {
     r.new_variables = st.new_variables, r.new_factors = st.new_factors, r.deferred_variables = st.deferred_variables;
     return r;
   }
-  solve();
+  solve(false);
   ++st.solves;
   ++updates_;
   const bool check = options_.relinearize_skip <= 1 || updates_ % options_.relinearize_skip == 0;
@@ -353,7 +418,7 @@ IncrementalStatus IncrementalSmoother::update() {
       r.new_variables = st.new_variables, r.new_factors = st.new_factors, r.deferred_variables = st.deferred_variables;
       return r;
     }
-    solve();
+    solve(false);
     ++st.solves;
   }
   return st;
@@ -438,7 +503,7 @@ IncrementalStatus IncrementalSmoother::rebuild_with(int iterations) {
       st.message = why;
       return st;
     }
-    solve();
+    solve(true);
     ++st.solves;
   }
   return st;
@@ -448,8 +513,18 @@ IncrementalStatus IncrementalSmoother::rebuild_with(int iterations) {
 // factor in the system, and factorizes it in the natural order (the positions are the ordering).
 std::string IncrementalSmoother::factorize_all() {
   if (L_) cholmod_free_factor(&L_, &common_);
+  if (y_) cholmod_free_dense(&y_, &common_);
+  if (delta_b_) cholmod_free_dense(&delta_b_, &common_);
   g_ = Eigen::VectorXd::Zero(capacity_);
   dx_ = Eigen::VectorXd::Zero(capacity_);
+  dirty_.assign(static_cast<size_t>(capacity_), 0);
+  seen_.assign(static_cast<size_t>(capacity_), 0.0);
+  recomputed_.assign(static_cast<size_t>(capacity_), 0);
+  changed_.assign(static_cast<size_t>(capacity_), 0);
+  col_var_.assign(static_cast<size_t>(capacity_), -1);
+  for (size_t v = 0; v < pos_.size(); ++v)
+    if (pos_[v] >= 0)
+      for (int k = 0; k < graph_.variables()[v].dim(); ++k) col_var_[static_cast<size_t>(pos_[v] + k)] = static_cast<int>(v);
   size_t nnz = static_cast<size_t>(capacity_);
   for (size_t f = 0; f < graph_.factors().size(); ++f)
     if (weight_[f] > 0) {
@@ -483,7 +558,8 @@ std::string IncrementalSmoother::factorize_all() {
   common_.nmethods = 1;
   common_.method[0].ordering = CHOLMOD_NATURAL;
   common_.postorder = 0;
-  common_.supernodal = CHOLMOD_AUTO;
+  common_.supernodal = CHOLMOD_SIMPLICIAL;  // measured: the supernodal factor stores its relaxed
+  // supernodes' zeros, which every later update and solve pays for, and ATLAS is slow on the small supernodes
   common_.final_ll = 0;
   common_.quick_return_if_not_posdef = 1;
   L_ = cholmod_analyze(H, &common_);
@@ -507,6 +583,14 @@ std::string IncrementalSmoother::factorize_all() {
     common_.status = CHOLMOD_OK;
     return why;
   }
+  // y = L^-1 b, b = -g: the forward half of the solve, kept current by every later update (cholmod_updown_solve).
+  cholmod_dense* b = cholmod_zeros(static_cast<size_t>(capacity_), 1, CHOLMOD_REAL, &common_);
+  delta_b_ = cholmod_zeros(static_cast<size_t>(capacity_), 1, CHOLMOD_REAL, &common_);
+  if (b == nullptr || delta_b_ == nullptr) return "CHOLMOD could not allocate the right-hand side";
+  for (int i = 0; i < capacity_; ++i) static_cast<double*>(b->x)[i] = -g_[i];
+  y_ = cholmod_solve(CHOLMOD_L, L_, b, &common_);
+  cholmod_free_dense(&b, &common_);
+  if (y_ == nullptr) return "CHOLMOD's forward solve failed";
   ordered_nnz_ = factor_nonzeros();
   return "";
 }
