@@ -161,6 +161,20 @@ double keyframe_error(const GraphStage& g, const Run& r) {
   return std::sqrt(s / static_cast<double>(kfs.size()));
 }
 
+// ATE as `sextant eval` computes it (rigid alignment) of the keyframes and of dead reckoning at the same times.
+std::pair<replay::AteResult, replay::AteResult> keyframe_and_dead_reckoning_ate(const GraphStage& g, const Run& run) {
+  std::map<int64_t, SE3> truth(run.truth.begin(), run.truth.end()), odo;
+  for (const auto& o : run.odometry) odo[o.utime] = to_se3(o.pose);
+  std::vector<replay::StampedPose> gt, est, dr;
+  for (const auto& k : g.keyframes("robot")) {
+    const double t = static_cast<double>(k.utime) * 1e-6;
+    gt.push_back({t, to_pose(truth.at(k.utime))});
+    est.push_back({t, k.pose});
+    dr.push_back({t, to_pose(odo.at(k.utime))});
+  }
+  return {replay::absolute_trajectory_error(gt, est), replay::absolute_trajectory_error(gt, dr)};
+}
+
 }  // namespace
 
 TEST_CASE("graph stage: keyframes by motion, proposals, loops from the simulated matcher correct the drift") {
@@ -340,17 +354,8 @@ TEST_CASE("graph stage: landmark sightings with ids map the landmarks and hold t
   // ATE as `sextant eval` computes it (rigid alignment: the map's rotation about the fixed first keyframe is only as
   // good as the first sightings' bearings, a gauge the alignment takes out) of the keyframes and of dead reckoning
   // at the same times.
-  std::map<int64_t, SE3> truth(run.truth.begin(), run.truth.end()), odo;
-  for (const auto& o : run.odometry) odo[o.utime] = to_se3(o.pose);
-  std::vector<replay::StampedPose> gt, est, dr;
-  for (const auto& k : graph->keyframes("robot")) {
-    const double t = static_cast<double>(k.utime) * 1e-6;
-    gt.push_back({t, to_pose(truth.at(k.utime))});
-    est.push_back({t, k.pose});
-    dr.push_back({t, to_pose(odo.at(k.utime))});
-  }
-  const auto ate = replay::absolute_trajectory_error(gt, est), ate_dr = replay::absolute_trajectory_error(gt, dr);
-  MESSAGE("keyframe ATE " << ate.error.rmse << " m, dead reckoning " << ate_dr.error.rmse << " m over " << gt.size() << " keyframes");
+  const auto [ate, ate_dr] = keyframe_and_dead_reckoning_ate(*graph, run);
+  MESSAGE("keyframe ATE " << ate.error.rmse << " m, dead reckoning " << ate_dr.error.rmse << " m");
   CHECK(ate_dr.error.rmse > 0.3);  // the drift is real
   CHECK(ate.error.rmse < 0.2 * ate_dr.error.rmse);
   // The landmarks where they are, in the same alignment.
@@ -527,16 +532,7 @@ TEST_CASE("graph stage: a 3-D body maps 3-D landmarks from range, azimuth and el
   CHECK(counter(*graph, "sightings_malformed") == 0);
   CHECK(counter(*graph, "sightings_accepted") > 300);
 
-  std::map<int64_t, SE3> truth(run.truth.begin(), run.truth.end()), odo;
-  for (const auto& o : run.odometry) odo[o.utime] = to_se3(o.pose);
-  std::vector<replay::StampedPose> gt, est, dr;
-  for (const auto& k : graph->keyframes("robot")) {
-    const double t = static_cast<double>(k.utime) * 1e-6;
-    gt.push_back({t, to_pose(truth.at(k.utime))});
-    est.push_back({t, k.pose});
-    dr.push_back({t, to_pose(odo.at(k.utime))});
-  }
-  const auto ate = replay::absolute_trajectory_error(gt, est), ate_dr = replay::absolute_trajectory_error(gt, dr);
+  const auto [ate, ate_dr] = keyframe_and_dead_reckoning_ate(*graph, run);
   MESSAGE("3-D keyframe ATE " << ate.error.rmse << " m, dead reckoning " << ate_dr.error.rmse << " m");
   CHECK(ate.error.rmse < 0.25 * ate_dr.error.rmse);
   for (const auto& l : graph->landmarks("robot")) {
