@@ -238,8 +238,8 @@ void IncrementalSmoother::solve(bool full) {
   const double threshold = full ? -1.0 : options_.wildfire;
   for (int j = used_ - 1; j >= 0; --j) {
     const size_t ju = static_cast<size_t>(j);
-    const int first = Lp[j] + 1, end = Lp[j] + Lnz[j];
-    if (first < end && !recomputed_[static_cast<size_t>(Li[first])]) continue;
+    const int first = Lp[j] + 1, end = Lp[j] + Lnz[j], parent = parent_of(j);
+    if (parent >= 0 && !recomputed_[static_cast<size_t>(parent)]) continue;
     bool need = full || dirty_[ju];
     for (int k = first; !need && k < end; ++k) need = changed_[static_cast<size_t>(Li[k])] != 0;
     if (!need) continue;
@@ -586,7 +586,10 @@ std::string IncrementalSmoother::factorize_all() {
   // y = L^-1 b, b = -g: the forward half of the solve, kept current by every later update (cholmod_updown_solve).
   cholmod_dense* b = cholmod_zeros(static_cast<size_t>(capacity_), 1, CHOLMOD_REAL, &common_);
   delta_b_ = cholmod_zeros(static_cast<size_t>(capacity_), 1, CHOLMOD_REAL, &common_);
-  if (b == nullptr || delta_b_ == nullptr) return "CHOLMOD could not allocate the right-hand side";
+  if (b == nullptr || delta_b_ == nullptr) {
+    if (b) cholmod_free_dense(&b, &common_);
+    return "CHOLMOD could not allocate the right-hand side";
+  }
   for (int i = 0; i < capacity_; ++i) static_cast<double*>(b->x)[i] = -g_[i];
   y_ = cholmod_solve(CHOLMOD_L, L_, b, &common_);
   cholmod_free_dense(&b, &common_);
