@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <cmath>
 #include <functional>
-#include <queue>
 #include <stdexcept>
 #include <string>
 
@@ -11,8 +10,15 @@ namespace sextant::assoc {
 
 MissedAssignment assign_with_missed(const std::vector<double>& row_missed, const std::vector<double>& column_missed,
                                     const std::vector<PairCost>& pairs) {
+  return MissedAssignmentSolver().solve(row_missed, column_missed, pairs);
+}
+
+const MissedAssignment& MissedAssignmentSolver::solve(const std::vector<double>& row_missed,
+                                                      const std::vector<double>& column_missed,
+                                                      const std::vector<PairCost>& pairs) {
   const int R = static_cast<int>(row_missed.size()), C = static_cast<int>(column_missed.size());
-  MissedAssignment out;
+  MissedAssignment& out = out_;
+  out.value = 0;
   out.column_of_row.assign(static_cast<size_t>(R), -1);
   out.row_of_column.assign(static_cast<size_t>(C), -1);
   for (double m : row_missed) {
@@ -25,7 +31,8 @@ MissedAssignment assign_with_missed(const std::vector<double>& row_missed, const
   }
   // Improving pairings, as gains w = cost - missed(row) - missed(column) < 0, by row (CSR), a duplicate (row,
   // column) keeping its smallest gain.
-  std::vector<PairCost> gains;
+  auto& gains = gains_;
+  gains.clear();
   for (const auto& p : pairs) {
     if (p.row < 0 || p.row >= R || p.column < 0 || p.column >= C)
       throw std::invalid_argument("assign_with_missed: pair (" + std::to_string(p.row) + ", " + std::to_string(p.column) +
@@ -38,8 +45,9 @@ MissedAssignment assign_with_missed(const std::vector<double>& row_missed, const
   std::sort(gains.begin(), gains.end(), [](const PairCost& a, const PairCost& b) {
     return a.row != b.row ? a.row < b.row : a.column != b.column ? a.column < b.column : a.cost < b.cost;
   });
-  std::vector<int> begin(static_cast<size_t>(R) + 1, 0), column;
-  std::vector<double> gain;
+  auto &begin = begin_, &column = column_;
+  auto& gain = gain_;
+  begin.assign(static_cast<size_t>(R) + 1, 0), column.clear(), gain.clear();
   for (size_t e = 0; e < gains.size(); ++e) {
     if (e > 0 && gains[e].row == gains[e - 1].row && gains[e].column == gains[e - 1].column) continue;
     ++begin[static_cast<size_t>(gains[e].row) + 1];
@@ -52,13 +60,15 @@ MissedAssignment assign_with_missed(const std::vector<double>& row_missed, const
   // slot (gain 0, adjacent to row r only), so every search ends at the latest at the row's own slot.  Only the
   // rows and columns a search reaches are touched: sparse scans cost about their edges, not rows x columns.
   const int N = C + R;
-  std::vector<double> u(static_cast<size_t>(R), 0.0), v(static_cast<size_t>(N), 0.0), d(static_cast<size_t>(N), 0.0);
-  std::vector<int> row_of(static_cast<size_t>(N), -1), column_of(static_cast<size_t>(R), -1), way(static_cast<size_t>(N), -1);
-  std::vector<int> seen(static_cast<size_t>(N), -1);  // the search (row) that last reached the column
-  std::vector<char> final(static_cast<size_t>(N), 0);
-  std::vector<int> scanned;
-  using Entry = std::pair<double, int>;
-  std::priority_queue<Entry, std::vector<Entry>, std::greater<Entry>> heap;
+  auto &u = u_, &v = v_, &d = d_;
+  auto &row_of = row_of_, &column_of = column_of_, &way = way_, &seen = seen_, &scanned = scanned_;
+  auto& final = final_;
+  auto& heap = heap_;
+  u.assign(static_cast<size_t>(R), 0.0), v.assign(static_cast<size_t>(N), 0.0), d.assign(static_cast<size_t>(N), 0.0);
+  row_of.assign(static_cast<size_t>(N), -1), column_of.assign(static_cast<size_t>(R), -1), way.assign(static_cast<size_t>(N), -1);
+  seen.assign(static_cast<size_t>(N), -1);  // the search (row) that last reached the column
+  final.assign(static_cast<size_t>(N), 0);
+  const auto later = std::greater<std::pair<double, int>>();  // heap order: smallest distance on top
   for (int r = 0; r < R; ++r) {
     const int b = begin[static_cast<size_t>(r)], e = begin[static_cast<size_t>(r) + 1];
     if (b == e) continue;  // no improving pairing: stays unpaired
@@ -67,20 +77,22 @@ MissedAssignment assign_with_missed(const std::vector<double>& row_missed, const
       if (seen[static_cast<size_t>(j)] != r) seen[static_cast<size_t>(j)] = r, final[static_cast<size_t>(j)] = 0;
       else if (final[static_cast<size_t>(j)] || !(nd < d[static_cast<size_t>(j)])) return;
       d[static_cast<size_t>(j)] = nd, way[static_cast<size_t>(j)] = i;
-      heap.push({nd, j});
+      heap.push_back({nd, j});
+      std::push_heap(heap.begin(), heap.end(), later);
     };
     double ur = -v[static_cast<size_t>(C + r)];
     for (int k = b; k < e; ++k) ur = std::min(ur, gain[static_cast<size_t>(k)] - v[static_cast<size_t>(column[static_cast<size_t>(k)])]);
     u[static_cast<size_t>(r)] = ur;
     scanned.clear();
-    heap = {};
+    heap.clear();
     relax(r, C + r, 0.0, 0.0);
     for (int k = b; k < e; ++k) relax(r, column[static_cast<size_t>(k)], gain[static_cast<size_t>(k)], 0.0);
     int end = -1;
     double delta = 0;
     while (!heap.empty()) {
-      const auto [dj, j] = heap.top();
-      heap.pop();
+      std::pop_heap(heap.begin(), heap.end(), later);
+      const auto [dj, j] = heap.back();
+      heap.pop_back();
       if (final[static_cast<size_t>(j)] || dj > d[static_cast<size_t>(j)]) continue;
       final[static_cast<size_t>(j)] = 1;
       const int i = row_of[static_cast<size_t>(j)];

@@ -28,4 +28,21 @@ struct MissedAssignment {
 MissedAssignment assign_with_missed(const std::vector<double>& row_missed, const std::vector<double>& column_missed,
                                     const std::vector<PairCost>& pairs);
 
+/// The same solver keeping its working memory between calls (no allocation once its buffers have grown to the
+/// problem size), for callers that solve many such problems in a loop (the Lagrangian relaxation).  The returned
+/// reference stays valid until the next call.
+class MissedAssignmentSolver {
+ public:
+  const MissedAssignment& solve(const std::vector<double>& row_missed, const std::vector<double>& column_missed,
+                                const std::vector<PairCost>& pairs);
+
+ private:
+  MissedAssignment out_;
+  std::vector<PairCost> gains_;
+  std::vector<int> begin_, column_, row_of_, column_of_, way_, seen_, scanned_;
+  std::vector<double> gain_, u_, v_, d_;
+  std::vector<char> final_;
+  std::vector<std::pair<double, int>> heap_;  // a min-heap on distance
+};
+
 }  // namespace sextant::assoc

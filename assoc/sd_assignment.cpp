@@ -23,19 +23,20 @@ TuplePacking packing_of(const std::vector<Tuple>& tuples, const std::vector<int>
   std::vector<int> offset;
   TuplePacking p;
   for (int c : n) offset.push_back(p.detections), p.detections += c;
+  p.ids.reserve(tuples.size() * n.size());
+  std::vector<int> m;
   for (const auto& t : tuples) {
     if (t.index.size() != n.size())
       throw std::invalid_argument("S-D assignment: a tuple has " + std::to_string(t.index.size()) + " indices for " +
                                   std::to_string(n.size()) + " sensors");
-    std::vector<int> m;
+    m.clear();
     for (size_t s = 0; s < n.size(); ++s) {
       if (t.index[s] < 0 || t.index[s] > n[s])
         throw std::invalid_argument("S-D assignment: index " + std::to_string(t.index[s]) + " of sensor " +
                                     std::to_string(s) + " outside 0.." + std::to_string(n[s]));
       if (t.index[s] > 0) m.push_back(offset[s] + t.index[s] - 1);
     }
-    p.members.push_back(std::move(m));
-    p.cost.push_back(t.cost);
+    p.add(m, t.cost);
   }
   return p;
 }
@@ -43,16 +44,15 @@ TuplePacking packing_of(const std::vector<Tuple>& tuples, const std::vector<int>
 // The sub-problem of one component, with detection ids renumbered 0..d-1.
 TuplePacking restrict_to(const TuplePacking& all, const std::vector<int>& group) {
   TuplePacking p;
-  std::vector<int> local(static_cast<size_t>(all.detections), -1);
+  std::vector<int> local(static_cast<size_t>(all.detections), -1), m;
   for (int t : group) {
-    std::vector<int> m;
-    for (int d : all.members[static_cast<size_t>(t)]) {
+    m.clear();
+    for (int d : all.members(static_cast<size_t>(t))) {
       int& l = local[static_cast<size_t>(d)];
       if (l < 0) l = p.detections++;
       m.push_back(l);
     }
-    p.members.push_back(std::move(m));
-    p.cost.push_back(all.cost[static_cast<size_t>(t)]);
+    p.add(m, all.cost[static_cast<size_t>(t)]);
   }
   return p;
 }
@@ -61,15 +61,15 @@ TuplePacking restrict_to(const TuplePacking& all, const std::vector<int>& group)
 std::vector<int> branch_and_bound(const TuplePacking& p, long max_nodes, long& nodes, double& best_cost) {
   const size_t D = static_cast<size_t>(p.detections);
   std::vector<std::vector<int>> of_detection(D);
-  for (size_t t = 0; t < p.members.size(); ++t)
-    for (int d : p.members[t]) of_detection[static_cast<size_t>(d)].push_back(static_cast<int>(t));
+  for (size_t t = 0; t < p.size(); ++t)
+    for (int d : p.members(t)) of_detection[static_cast<size_t>(d)].push_back(static_cast<int>(t));
   for (auto& v : of_detection)
     std::sort(v.begin(), v.end(), [&](int a, int b) { return p.cost[static_cast<size_t>(a)] < p.cost[static_cast<size_t>(b)]; });
   // Per detection, the best share of a tuple's cost it can carry.
   std::vector<double> share(D, 0.0);
-  for (size_t t = 0; t < p.members.size(); ++t)
-    for (int d : p.members[t])
-      share[static_cast<size_t>(d)] = std::min(share[static_cast<size_t>(d)], p.cost[t] / static_cast<double>(p.members[t].size()));
+  for (size_t t = 0; t < p.size(); ++t)
+    for (int d : p.members(t))
+      share[static_cast<size_t>(d)] = std::min(share[static_cast<size_t>(d)], p.cost[t] / static_cast<double>(p.members(t).size()));
   std::vector<bool> covered(D, false);
   std::vector<int> chosen, best;
   best_cost = 0;  // all false alarms
@@ -83,7 +83,7 @@ std::vector<int> branch_and_bound(const TuplePacking& p, long max_nodes, long& n
     if (cost + bound_rest >= best_cost - 1e-12) return;
     const double rest = bound_rest - share[d];
     for (int t : of_detection[d]) {
-      const auto& m = p.members[static_cast<size_t>(t)];
+      const auto m = p.members(static_cast<size_t>(t));
       if (!std::all_of(m.begin(), m.end(), [&](int x) { return !covered[static_cast<size_t>(x)]; })) continue;
       double r = rest;
       for (int x : m)
@@ -103,65 +103,89 @@ std::vector<int> branch_and_bound(const TuplePacking& p, long max_nodes, long& n
 }
 
 // One component restated for the relaxation: only the sensors that have detections in it, ordered by decreasing
-// detection count, detections renumbered 1..n_s, tuples sorted lexicographically by their indices.
+// detection count, detections renumbered 1..n_s, tuples sorted lexicographically by their indices, which are
+// stored flat (tuple t's index at sensor s is index[t * S + s]).
 struct RelaxationProblem {
-  std::vector<int> n;                    // detections per (reordered) sensor
-  std::vector<std::vector<int>> index;   // per tuple, sorted
+  size_t S = 0;                // sensors
+  std::vector<int> n;          // detections per (reordered) sensor
+  std::vector<int> index;      // per tuple, S indices; rows sorted
   std::vector<double> cost;
-  std::vector<int> original;             // position in the component's group
-  TuplePacking packing;                  // the same tuples (same order) as detection sets
+  std::vector<int> original;   // position in the component's group
+  TuplePacking packing;        // the same tuples (same order) as detection sets
 
-  RelaxationProblem(const std::vector<Tuple>& tuples, const std::vector<int>& group, size_t S) {
-    std::vector<std::vector<int>> used(S);
+  RelaxationProblem(const std::vector<Tuple>& tuples, const std::vector<int>& group, const std::vector<int>& detections) {
+    const size_t all_sensors = detections.size();
+    // Per original sensor, the new number of each of its detections used in the group (0: unused).
+    std::vector<std::vector<int>> renumbered(all_sensors);
+    for (size_t s = 0; s < all_sensors; ++s) renumbered[s].assign(static_cast<size_t>(detections[s]) + 1, 0);
     for (int t : group)
-      for (size_t s = 0; s < S; ++s)
-        if (tuples[static_cast<size_t>(t)].index[s] > 0) used[s].push_back(tuples[static_cast<size_t>(t)].index[s]);
+      for (size_t s = 0; s < all_sensors; ++s)
+        if (const int k = tuples[static_cast<size_t>(t)].index[s]; k > 0) renumbered[s][static_cast<size_t>(k)] = 1;
     std::vector<size_t> sensors;
-    for (size_t s = 0; s < S; ++s) {
-      std::sort(used[s].begin(), used[s].end());
-      used[s].erase(std::unique(used[s].begin(), used[s].end()), used[s].end());
-      if (!used[s].empty()) sensors.push_back(s);
+    std::vector<int> used(all_sensors, 0);
+    for (size_t s = 0; s < all_sensors; ++s) {
+      for (size_t k = 1; k < renumbered[s].size(); ++k)
+        if (renumbered[s][k]) renumbered[s][k] = ++used[s];
+      if (used[s] > 0) sensors.push_back(s);
     }
-    std::stable_sort(sensors.begin(), sensors.end(), [&](size_t a, size_t b) { return used[a].size() > used[b].size(); });
-    for (size_t s : sensors) n.push_back(static_cast<int>(used[s].size()));
-    std::vector<std::vector<int>> idx;
-    for (int t : group) {
-      std::vector<int> v;
-      for (size_t s : sensors) {
-        const int k = tuples[static_cast<size_t>(t)].index[s];
-        v.push_back(k == 0 ? 0 : static_cast<int>(std::lower_bound(used[s].begin(), used[s].end(), k) - used[s].begin()) + 1);
+    std::stable_sort(sensors.begin(), sensors.end(), [&](size_t a, size_t b) { return used[a] > used[b]; });
+    S = sensors.size();
+    for (size_t s : sensors) n.push_back(used[s]);
+    const size_t T = group.size();
+    std::vector<int> rows(T * S);
+    for (size_t i = 0; i < T; ++i)
+      for (size_t q = 0; q < S; ++q) {
+        const size_t s = sensors[q];
+        rows[i * S + q] = renumbered[s][static_cast<size_t>(tuples[static_cast<size_t>(group[i])].index[s])];
       }
-      idx.push_back(std::move(v));
-    }
-    std::vector<int> order(group.size());
-    for (size_t i = 0; i < order.size(); ++i) order[i] = static_cast<int>(i);
-    std::sort(order.begin(), order.end(), [&](int a, int b) { return idx[static_cast<size_t>(a)] < idx[static_cast<size_t>(b)]; });
+    std::vector<int> order(T);
+    for (size_t i = 0; i < T; ++i) order[i] = static_cast<int>(i);
+    std::sort(order.begin(), order.end(), [&](int a, int b) {
+      const int* ra = rows.data() + static_cast<size_t>(a) * S;
+      const int* rb = rows.data() + static_cast<size_t>(b) * S;
+      return std::lexicographical_compare(ra, ra + S, rb, rb + S);
+    });
     std::vector<int> offset;
     for (int c : n) offset.push_back(packing.detections), packing.detections += c;
+    index.reserve(T * S);
+    std::vector<int> m;
     for (int i : order) {
-      const auto& v = idx[static_cast<size_t>(i)];
-      index.push_back(v);
+      const int* r = rows.data() + static_cast<size_t>(i) * S;
+      index.insert(index.end(), r, r + S);
       cost.push_back(tuples[static_cast<size_t>(group[static_cast<size_t>(i)])].cost);
       original.push_back(i);
-      std::vector<int> m;
-      for (size_t s = 0; s < v.size(); ++s)
-        if (v[s] > 0) m.push_back(offset[s] + v[s] - 1);
-      packing.members.push_back(std::move(m));
-      packing.cost.push_back(cost.back());
+      m.clear();
+      for (size_t q = 0; q < S; ++q)
+        if (r[q] > 0) m.push_back(offset[q] + r[q] - 1);
+      packing.add(m, cost.back());
     }
   }
 
-  size_t sensors() const { return n.size(); }
+  size_t sensors() const { return S; }
+  size_t size() const { return cost.size(); }
+  int at(size_t t, size_t s) const { return index[t * S + s]; }
 
-  /// The contiguous range of tuples whose first prefix.size() indices equal `prefix`.
-  std::pair<int, int> range(const std::vector<int>& prefix) const {
-    const size_t L = prefix.size();
-    auto less = [L](const std::vector<int>& a, const std::vector<int>& b) {
-      return std::lexicographical_compare(a.begin(), a.begin() + static_cast<long>(L), b.begin(), b.begin() + static_cast<long>(L));
+  /// The contiguous range of tuples whose first L indices equal prefix[0 .. L).
+  std::pair<int, int> range(const int* prefix, size_t L) const {
+    auto below = [&](size_t t) {  // row t's prefix < prefix
+      return std::lexicographical_compare(index.data() + t * S, index.data() + t * S + L, prefix, prefix + L);
     };
-    const auto lo = std::lower_bound(index.begin(), index.end(), prefix, less);
-    const auto hi = std::upper_bound(lo, index.end(), prefix, less);
-    return {static_cast<int>(lo - index.begin()), static_cast<int>(hi - index.begin())};
+    auto above = [&](size_t t) {  // prefix < row t's prefix
+      return std::lexicographical_compare(prefix, prefix + L, index.data() + t * S, index.data() + t * S + L);
+    };
+    size_t lo = 0, hi = size();
+    while (lo < hi) {  // first row not below
+      const size_t mid = (lo + hi) / 2;
+      if (below(mid)) lo = mid + 1;
+      else hi = mid;
+    }
+    size_t end = lo, top = size();
+    while (end < top) {  // first row above
+      const size_t mid = (end + top) / 2;
+      if (above(mid)) top = mid;
+      else end = mid + 1;
+    }
+    return {static_cast<int>(lo), static_cast<int>(end)};
   }
 };
 
@@ -177,8 +201,8 @@ ComponentResult solve_two_sensors(const RelaxationProblem& P) {
   std::vector<double> row_missed(static_cast<size_t>(P.n[0]), 0.0), column_missed(static_cast<size_t>(P.n[1]), 0.0);
   std::vector<int> row_tuple(row_missed.size(), -1), column_tuple(column_missed.size(), -1), pair_tuple;
   std::vector<PairCost> pairs;
-  for (size_t t = 0; t < P.index.size(); ++t) {
-    const int a = P.index[t][0] - 1, b = P.index[t][1] - 1;
+  for (size_t t = 0; t < P.size(); ++t) {
+    const int a = P.at(t, 0) - 1, b = P.at(t, 1) - 1;
     if (a >= 0 && b >= 0) pairs.push_back({a, b, P.cost[t]}), pair_tuple.push_back(static_cast<int>(t));
     else if (a >= 0 && P.cost[t] < row_missed[static_cast<size_t>(a)]) row_missed[static_cast<size_t>(a)] = P.cost[t], row_tuple[static_cast<size_t>(a)] = static_cast<int>(t);
     else if (b >= 0 && P.cost[t] < column_missed[static_cast<size_t>(b)]) column_missed[static_cast<size_t>(b)] = P.cost[t], column_tuple[static_cast<size_t>(b)] = static_cast<int>(t);
@@ -199,80 +223,115 @@ ComponentResult solve_two_sensors(const RelaxationProblem& P) {
 // Feasible solution from the relaxed (1, 2) assignment: each further sensor added by a 2-D assignment of the
 // partial tuples against its detections, the cost of extending a partial tuple by detection k being the best
 // reduced cost (later sensors' multipliers) of a tuple with that prefix and index; 0 for leaving it as it is.
-std::vector<int> recover(const RelaxationProblem& P, const std::vector<std::vector<double>>& u, const MissedAssignment& relaxed) {
-  const size_t S = P.sensors();
-  std::vector<std::vector<int>> partial;
-  for (int a = 0; a < P.n[0]; ++a) partial.push_back({a + 1, relaxed.column_of_row[static_cast<size_t>(a)] + 1});
-  for (int b = 0; b < P.n[1]; ++b)
-    if (relaxed.row_of_column[static_cast<size_t>(b)] < 0) partial.push_back({0, b + 1});
-  std::vector<PairCost> pairs;
-  std::vector<double> row_missed;
-  for (size_t s = 2; s < S; ++s) {
-    pairs.clear();
-    row_missed.assign(partial.size(), 0.0);
-    for (size_t p = 0; p < partial.size(); ++p) {
-      const auto [lo, hi] = P.range(partial[p]);
-      for (int t = lo; t < hi;) {  // tuples of the range grouped by their index at sensor s (sorted)
-        const int k = P.index[static_cast<size_t>(t)][s];
-        double best = kInf;
-        for (; t < hi && P.index[static_cast<size_t>(t)][s] == k; ++t) {
-          double r = P.cost[static_cast<size_t>(t)];
-          for (size_t q = s + 1; q < S; ++q) r -= u[q][static_cast<size_t>(P.index[static_cast<size_t>(t)][q])];
-          best = std::min(best, r);
+// The buffers are kept from one call to the next (the relaxation recovers once per iteration).
+class Recovery {
+ public:
+  explicit Recovery(const RelaxationProblem& P) : P_(P) {}
+
+  /// The recovered tuples (sorted positions in P), into `chosen`.
+  void recover(const std::vector<std::vector<double>>& u, const MissedAssignment& relaxed, std::vector<int>& chosen) {
+    const size_t S = P_.sensors();
+    partial_.clear();  // partial tuples, S entries each (the later ones 0 until assigned)
+    auto start = [&](size_t s, int k) {
+      partial_.resize(partial_.size() + S, 0);
+      partial_[partial_.size() - S + s] = k;
+    };
+    for (int a = 0; a < P_.n[0]; ++a) start(0, a + 1), partial_[partial_.size() - S + 1] = relaxed.column_of_row[static_cast<size_t>(a)] + 1;
+    for (int b = 0; b < P_.n[1]; ++b)
+      if (relaxed.row_of_column[static_cast<size_t>(b)] < 0) start(1, b + 1);
+    for (size_t s = 2; s < S; ++s) {
+      const size_t rows = partial_.size() / S;
+      pairs_.clear();
+      row_missed_.assign(rows, 0.0);
+      for (size_t p = 0; p < rows; ++p) {
+        const auto [lo, hi] = P_.range(partial_.data() + p * S, s);
+        for (int t = lo; t < hi;) {  // tuples of the range grouped by their index at sensor s (sorted)
+          const int k = P_.at(static_cast<size_t>(t), s);
+          double best = kInf;
+          for (; t < hi && P_.at(static_cast<size_t>(t), s) == k; ++t) {
+            double r = P_.cost[static_cast<size_t>(t)];
+            for (size_t q = s + 1; q < S; ++q) r -= u[q][static_cast<size_t>(P_.at(static_cast<size_t>(t), q))];
+            best = std::min(best, r);
+          }
+          if (k == 0) row_missed_[p] = std::min(0.0, best);
+          else pairs_.push_back({static_cast<int>(p), k - 1, best});
         }
-        if (k == 0) row_missed[p] = std::min(0.0, best);
-        else pairs.push_back({static_cast<int>(p), k - 1, best});
       }
+      column_missed_.assign(static_cast<size_t>(P_.n[s]), 0.0);
+      const auto& a = solver_.solve(row_missed_, column_missed_, pairs_);
+      for (size_t p = 0; p < rows; ++p) partial_[p * S + s] = a.column_of_row[p] + 1;
+      for (int k = 0; k < P_.n[s]; ++k)
+        if (a.row_of_column[static_cast<size_t>(k)] < 0) start(s, k + 1);
     }
-    const auto a = assign_with_missed(row_missed, std::vector<double>(static_cast<size_t>(P.n[s]), 0.0), pairs);
-    for (size_t p = 0; p < partial.size(); ++p) partial[p].push_back(a.column_of_row[p] + 1);
-    for (int k = 0; k < P.n[s]; ++k)
-      if (a.row_of_column[static_cast<size_t>(k)] < 0) {
-        std::vector<int> q(s, 0);
-        q.push_back(k + 1);
-        partial.push_back(std::move(q));
-      }
+    chosen.clear();
+    for (size_t p = 0; p < partial_.size() / S; ++p) {
+      const auto [lo, hi] = P_.range(partial_.data() + p * S, S);
+      if (hi > lo) chosen.push_back(lo);
+    }
+    std::sort(chosen.begin(), chosen.end());
   }
-  std::vector<int> chosen;  // sorted-tuple positions
-  for (const auto& p : partial) {
-    const auto [lo, hi] = P.range(p);
-    if (hi > lo) chosen.push_back(lo);
+
+ private:
+  const RelaxationProblem& P_;
+  std::vector<int> partial_;
+  std::vector<PairCost> pairs_;
+  std::vector<double> row_missed_, column_missed_;
+  MissedAssignmentSolver solver_;
+};
+
+// First multipliers: each detection of a relaxed sensor gets the smallest equal share c_t / m_t of the tuples
+// holding it (m_t = the tuple's detections; 0 when every such tuple costs >= 0).  These shares are a feasible
+// point of the packing LP's dual (each tuple's shares sum to at most its cost), so the first lower bound is at
+// least their sum, and on the passive scans it starts the subgradient far closer to the optimum than u = 0 (half
+// the iterations on the coplanar grid; RESULTS, session 4).
+void equal_share_multipliers(const RelaxationProblem& P, std::vector<std::vector<double>>& u) {
+  const size_t S = P.sensors();
+  for (size_t t = 0; t < P.size(); ++t) {
+    int m = 0;
+    for (size_t s = 0; s < S; ++s) m += P.at(t, s) > 0;
+    const double share = P.cost[t] / m;
+    for (size_t s = 2; s < S; ++s) {
+      const int k = P.at(t, s);
+      if (k > 0) u[s][static_cast<size_t>(k)] = std::min(u[s][static_cast<size_t>(k)], share);
+    }
   }
-  return chosen;
 }
 
 ComponentResult solve_relaxation(const RelaxationProblem& P, int max_iterations, double gap_tolerance) {
-  const size_t S = P.sensors(), T = P.index.size();
+  const size_t S = P.sensors(), T = P.size();
   const int n1 = P.n[0], n2 = P.n[1];
   ComponentResult out;
   // Groups of tuples with the same (i1, i2), contiguous in the sorted order.
   struct Group { int a, b, lo, hi; };
   std::vector<Group> groups;
   for (int t = 0; t < static_cast<int>(T);) {
-    const int a = P.index[static_cast<size_t>(t)][0], b = P.index[static_cast<size_t>(t)][1];
+    const int a = P.at(static_cast<size_t>(t), 0), b = P.at(static_cast<size_t>(t), 1);
     const int lo = t;
-    while (t < static_cast<int>(T) && P.index[static_cast<size_t>(t)][0] == a && P.index[static_cast<size_t>(t)][1] == b) ++t;
+    while (t < static_cast<int>(T) && P.at(static_cast<size_t>(t), 0) == a && P.at(static_cast<size_t>(t), 1) == b) ++t;
     groups.push_back({a, b, lo, t});
   }
   std::vector<std::vector<double>> u(S), g(S);
   for (size_t s = 0; s < S; ++s) u[s].assign(static_cast<size_t>(P.n[s]) + 1, 0.0), g[s].resize(u[s].size());
+  equal_share_multipliers(P, u);
   double best_ub = 0, best_lb = -kInf, factor = 1;
   int stalled = 0;
   std::vector<int> best;  // empty: every detection a false alarm, cost 0
   ExchangeImprover exchange(P.packing, 4);
+  Recovery recovery(P);
+  MissedAssignmentSolver relaxed_solver;
   std::vector<std::vector<int>> recovered;  // recoveries already improved (the same one recurs across iterations)
-  std::vector<double> reduced(T);
+  std::vector<double> reduced(T), row_missed, column_missed;
   std::vector<PairCost> pairs;
-  std::vector<int> pair_tuple, row_tuple, column_tuple, relaxed;
+  std::vector<int> pair_tuple, row_tuple, column_tuple, relaxed, pair_of_row, feasible;
   for (int it = 0; it < max_iterations; ++it) {
     out.iterations = it + 1;
     for (size_t t = 0; t < T; ++t) {
       double r = P.cost[t];
-      for (size_t s = 2; s < S; ++s) r -= u[s][static_cast<size_t>(P.index[t][s])];
+      for (size_t s = 2; s < S; ++s) r -= u[s][static_cast<size_t>(P.at(t, s))];
       reduced[t] = r;
     }
     // The relaxed 2-D problem.
-    std::vector<double> row_missed(static_cast<size_t>(n1), 0.0), column_missed(static_cast<size_t>(n2), 0.0);
+    row_missed.assign(static_cast<size_t>(n1), 0.0), column_missed.assign(static_cast<size_t>(n2), 0.0);
     row_tuple.assign(static_cast<size_t>(n1), -1), column_tuple.assign(static_cast<size_t>(n2), -1);
     pairs.clear(), pair_tuple.clear(), relaxed.clear();
     double dummy_pair = 0;  // the (0, 0) entry: every negative reduced cost may be taken
@@ -293,7 +352,7 @@ ComponentResult solve_relaxation(const RelaxationProblem& P, int max_iterations,
         pair_tuple.push_back(arg);
       }
     }
-    const auto a = assign_with_missed(row_missed, column_missed, pairs);
+    const auto& a = relaxed_solver.solve(row_missed, column_missed, pairs);
     double lb = a.value + dummy_pair;
     for (size_t s = 2; s < S; ++s)
       for (int k = 1; k <= P.n[s]; ++k) lb += std::min(0.0, u[s][static_cast<size_t>(k)]);  // u, or 0 when the singleton (reduced cost -u) is taken
@@ -301,7 +360,7 @@ ComponentResult solve_relaxation(const RelaxationProblem& P, int max_iterations,
     else if (++stalled >= 5) factor *= 0.5, stalled = 0;
     best_lb = std::max(best_lb, lb);
     // The relaxed solution's tuples.
-    std::vector<int> pair_of_row(static_cast<size_t>(n1), -1);
+    pair_of_row.assign(static_cast<size_t>(n1), -1);
     for (size_t i = 0; i < pairs.size(); ++i)
       if (a.column_of_row[static_cast<size_t>(pairs[i].row)] == pairs[i].column) pair_of_row[static_cast<size_t>(pairs[i].row)] = pair_tuple[i];
     for (int r = 0; r < n1; ++r) {
@@ -315,14 +374,13 @@ ComponentResult solve_relaxation(const RelaxationProblem& P, int max_iterations,
     for (size_t s = 2; s < S; ++s) {
       for (int k = 1; k <= P.n[s]; ++k) g[s][static_cast<size_t>(k)] = u[s][static_cast<size_t>(k)] > 0 ? 0.0 : 1.0;
       for (int t : relaxed) {
-        const int k = P.index[static_cast<size_t>(t)][s];
+        const int k = P.at(static_cast<size_t>(t), s);
         if (k > 0) g[s][static_cast<size_t>(k)] -= 1;
       }
       for (int k = 1; k <= P.n[s]; ++k) g2 += g[s][static_cast<size_t>(k)] * g[s][static_cast<size_t>(k)];
     }
     // Upper bound: recovery, then exchange improvement.
-    std::vector<int> feasible = recover(P, u, a);
-    std::sort(feasible.begin(), feasible.end());
+    recovery.recover(u, a, feasible);
     double ub = 0;
     for (int t : feasible) ub += P.cost[static_cast<size_t>(t)];
     // Exchange moves on promising recoveries only (already as good as the best improved one: the first, and any
@@ -384,7 +442,7 @@ SdSolution solve_sd_lagrangian(const std::vector<Tuple>& tuples, const std::vect
       if (all.cost[static_cast<size_t>(group[0])] < 0) r.chosen = {0}, r.ub = all.cost[static_cast<size_t>(group[0])];
       r.lb = r.ub;
     } else {
-      const RelaxationProblem P(tuples, group, n.size());
+      const RelaxationProblem P(tuples, group, n);
       if (P.sensors() >= 3) {
         r = solve_relaxation(P, max_iterations, gap_tolerance);
       } else if (P.sensors() == 2) {

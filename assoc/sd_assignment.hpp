@@ -16,6 +16,8 @@
 //      contiguous range found by binary search: each recovery stage is linear in the number of tuples;
 //    * the recovered solution is improved by exchange moves (tuple_packing.hpp); the best one is kept (upper
 //      bound);
+//    * the multipliers start at each detection's smallest equal share c_t / m_t of the tuples holding it (a feasible
+//      point of the packing LP's dual; far fewer iterations than starting at 0);
 //    * multipliers follow Polyak's subgradient step toward the best upper bound, its factor halved after 5
 //      iterations without a better lower bound.  Stops when the relative gap (UB - LB) / |UB| falls below the
 //      tolerance.

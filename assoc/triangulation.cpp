@@ -1,7 +1,5 @@
 #include "assoc/triangulation.hpp"
 
-#include "assoc/bearing_model.hpp"
-
 #include <Eigen/Eigenvalues>
 
 #include <cmath>
@@ -9,31 +7,32 @@
 namespace sextant::assoc {
 namespace {
 
-double wrap(double a) {
-  if (a > -M_PI && a <= M_PI) return a;  // the usual case: a residual
-  a = std::remainder(a, 2 * M_PI);
-  return a <= -M_PI ? a + 2 * M_PI : a;
+// atan2(y, x) for the small angles of residuals: the Taylor series of atan(y / x) to the 11th power when
+// |y / x| <= 0.05 (truncation error below 2e-17 relative, under a double's rounding), the library's atan2 otherwise.
+double residual_angle(double y, double x) {
+  if (x > 0 && std::abs(y) <= 0.05 * x) {
+    const double t = y / x, t2 = t * t;
+    return t * (1 + t2 * (-1.0 / 3 + t2 * (1.0 / 5 + t2 * (-1.0 / 7 + t2 * (1.0 / 9 + t2 * (-1.0 / 11))))));
+  }
+  return std::atan2(y, x);
 }
 
 }  // namespace
 
-Triangulation triangulate_linear(const std::vector<BearingObservation>& obs) {
+PreparedBearing::PreparedBearing(const BearingObservation& o, const Eigen::Matrix2d& inverse_covariance)
+    : sensor(o.sensor), sin_azimuth(std::sin(o.azimuth)), cos_azimuth(std::cos(o.azimuth)),
+      sin_elevation(std::sin(o.elevation)), cos_elevation(std::cos(o.elevation)), information(inverse_covariance) {
+  // Step 1's two rows (source C eq. 9-12).
+  const Eigen::Vector3d rows[2] = {{sin_azimuth, -cos_azimuth, 0},
+                                   {cos_azimuth * sin_elevation, sin_azimuth * sin_elevation, -cos_elevation}};
+  for (const auto& h : rows) {
+    linear_information.noalias() += h * h.transpose();
+    linear_rhs += h * h.dot(sensor);
+  }
+}
+
+Triangulation triangulate_linear(const Eigen::Matrix3d& N, const Eigen::Vector3d& HtY) {
   Triangulation t;
-  if (obs.size() < 2) {
-    t.reason = "fewer than 2 sensors";
-    return t;
-  }
-  // Normal equations accumulated row by row (no heap allocation: this runs for every candidate tuple).
-  Eigen::Matrix3d N = Eigen::Matrix3d::Zero();
-  Eigen::Vector3d HtY = Eigen::Vector3d::Zero();
-  for (const auto& o : obs) {
-    const double sa = std::sin(o.azimuth), ca = std::cos(o.azimuth), se = std::sin(o.elevation), ce = std::cos(o.elevation);
-    const Eigen::Vector3d rows[2] = {{sa, -ca, 0}, {ca * se, sa * se, -ce}};
-    for (const auto& h : rows) {
-      N.noalias() += h * h.transpose();
-      HtY += h * h.dot(o.sensor);
-    }
-  }
   Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig;
   eig.computeDirect(N, Eigen::EigenvaluesOnly);  // closed form for 3 x 3
   t.condition = eig.eigenvalues().maxCoeff() / std::max(eig.eigenvalues().minCoeff(), 1e-300);
@@ -47,16 +46,42 @@ Triangulation triangulate_linear(const std::vector<BearingObservation>& obs) {
   return t;
 }
 
-bool add_observation(NormalEquations& n, const BearingObservation& o, const Eigen::Matrix2d& Ri, const Eigen::Vector3d& x) {
-  Eigen::Matrix<double, 2, 3> J;
-  const auto h = bearing(o.sensor, x, &J);
-  if (!h) return false;
-  const Eigen::Vector2d nu(wrap(o.azimuth - (*h)[0]), o.elevation - (*h)[1]);
-  const Eigen::Matrix<double, 3, 2> JtRi = J.transpose() * Ri;
+Triangulation triangulate_linear(const std::vector<BearingObservation>& obs) {
+  if (obs.size() < 2) {
+    Triangulation t;
+    t.reason = "fewer than 2 sensors";
+    return t;
+  }
+  // Normal equations accumulated observation by observation.
+  Eigen::Matrix3d N = Eigen::Matrix3d::Zero();
+  Eigen::Vector3d HtY = Eigen::Vector3d::Zero();
+  for (const auto& o : obs) {
+    const PreparedBearing p(o, Eigen::Matrix2d::Identity());
+    N += p.linear_information;
+    HtY += p.linear_rhs;
+  }
+  return triangulate_linear(N, HtY);
+}
+
+bool add_observation(NormalEquations& n, const PreparedBearing& o, const Eigen::Vector3d& x) {
+  const Eigen::Vector3d d = x - o.sensor;
+  const double rho2 = d.x() * d.x() + d.y() * d.y(), rho = std::sqrt(rho2), r2 = d.squaredNorm();
+  if (rho < 1e-9 * std::max(1.0, std::sqrt(r2))) return false;  // as bearing(): on the sensor's vertical
+  Eigen::Matrix<double, 2, 3> J;  // as in bearing_model.hpp
+  J << -d.y() / rho2, d.x() / rho2, 0, -d.x() * d.z() / (r2 * rho), -d.y() * d.z() / (r2 * rho), rho / r2;
+  // z - h: azimuth between (cos az, sin az) and (dx, dy); elevation between (cos el, sin el) and (rho, dz).
+  const Eigen::Vector2d nu(
+      residual_angle(o.sin_azimuth * d.x() - o.cos_azimuth * d.y(), o.cos_azimuth * d.x() + o.sin_azimuth * d.y()),
+      residual_angle(o.sin_elevation * rho - o.cos_elevation * d.z(), o.cos_elevation * rho + o.sin_elevation * d.z()));
+  const Eigen::Matrix<double, 3, 2> JtRi = J.transpose() * o.information;
   n.information.noalias() += JtRi * J;
   n.gradient.noalias() += JtRi * nu;
-  n.residual += nu.dot(Ri * nu);
+  n.residual += nu.dot(o.information * nu);
   return true;
+}
+
+bool add_observation(NormalEquations& n, const BearingObservation& o, const Eigen::Matrix2d& Ri, const Eigen::Vector3d& x) {
+  return add_observation(n, PreparedBearing(o, Ri), x);
 }
 
 Triangulation triangulation_at(const Eigen::Vector3d& x, const NormalEquations& n, double max_condition) {
@@ -80,11 +105,13 @@ Triangulation triangulate(const std::vector<BearingObservation>& obs, int steps,
   Triangulation t = triangulate_linear(obs);
   if (!t.valid) return t;
   Eigen::Vector3d x = t.position;
+  std::vector<PreparedBearing> prepared;
+  for (const auto& o : obs) prepared.emplace_back(o, o.covariance.inverse());
   NormalEquations n;
   for (int it = 0; it <= steps; ++it) {
     n = NormalEquations{};
-    for (const auto& o : obs) {
-      if (!add_observation(n, o, o.covariance.inverse(), x)) {
+    for (const auto& o : prepared) {
+      if (!add_observation(n, o, x)) {
         t.valid = false;
         t.reason = "target on a sensor's vertical (azimuth undefined)";
         return t;

@@ -40,8 +40,27 @@ struct NormalEquations {
   double residual = 0;
 };
 
-/// Adds observation `o` (with `inverse_covariance` = R^-1, given so callers can compute it once) linearized at `x`
-/// to `n`.  False, leaving `n` unchanged, when x is on the sensor's vertical (azimuth undefined).
+/// An observation prepared for linearizing it many times (the tuple builder): what depends on the measurement
+/// alone is computed once.
+struct PreparedBearing {
+  Eigen::Vector3d sensor = Eigen::Vector3d::Zero();
+  double sin_azimuth = 0, cos_azimuth = 1, sin_elevation = 0, cos_elevation = 1;
+  Eigen::Matrix2d information = Eigen::Matrix2d::Identity();  // R^-1
+  Eigen::Matrix3d linear_information = Eigen::Matrix3d::Zero();  // H'H of its two rows of step 1
+  Eigen::Vector3d linear_rhs = Eigen::Vector3d::Zero();          // H'Y of its two rows
+
+  PreparedBearing() = default;
+  /// `inverse_covariance` = R^-1 (given so callers can compute it once).
+  PreparedBearing(const BearingObservation& o, const Eigen::Matrix2d& inverse_covariance);
+};
+
+/// Adds the prepared observation `o` linearized at `x` to `n`.  False, leaving `n` unchanged, when x is on the
+/// sensor's vertical (azimuth undefined).  The residual angles are taken as the angles between measured and
+/// predicted direction, atan2(sin(z - h), cos(z - h)) with sin and cos from the products of their sines and
+/// cosines (already wrapped; no atan2 of the predicted angles themselves).
+bool add_observation(NormalEquations& n, const PreparedBearing& o, const Eigen::Vector3d& x);
+
+/// The same for a plain observation (prepares it first).
 bool add_observation(NormalEquations& n, const BearingObservation& o, const Eigen::Matrix2d& inverse_covariance,
                      const Eigen::Vector3d& x);
 
@@ -51,6 +70,10 @@ Triangulation triangulation_at(const Eigen::Vector3d& x, const NormalEquations& 
 
 /// The linear least-squares position alone (step 1).
 Triangulation triangulate_linear(const std::vector<BearingObservation>& obs);
+
+/// Step 1 from the summed linear normal equations H'H x = H'Y of two or more observations (PreparedBearing's
+/// linear_information and linear_rhs added up).
+Triangulation triangulate_linear(const Eigen::Matrix3d& linear_information, const Eigen::Vector3d& linear_rhs);
 
 /// Steps 1-3.  `max_condition` bounds the information matrix's condition number.
 Triangulation triangulate(const std::vector<BearingObservation>& obs, int gauss_newton_steps = 3,

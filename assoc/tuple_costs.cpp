@@ -104,31 +104,78 @@ std::vector<Tuple> build_tuples(const Scan& scan, const CostOptions& o) {
                                 " per-sensor clutter densities for " + std::to_string(S) + " sensors");
   for (size_t s = 0; s < S; ++s)
     if (!(clutter_density(o, s) > 0)) throw std::invalid_argument("build_tuples: clutter density of sensor " + std::to_string(s) + " is not positive");
-  // Lines of sight and the larger angular sigma of every detection.
+  // Per detection: its line of sight, larger angular sigma and prepared observation (computed once).
   std::vector<std::vector<Eigen::Vector3d>> los(S);
   std::vector<std::vector<double>> sigma(S);
+  std::vector<std::vector<PreparedBearing>> observation(S);
   for (size_t s = 0; s < S; ++s)
     for (const auto& d : scan.detections[s]) {
       los[s].push_back(line_of_sight(d.azimuth, d.elevation));
       sigma[s].push_back(std::max(d.sigma_azimuth, d.sigma_elevation));
+      const Eigen::Vector2d var(d.sigma_azimuth * d.sigma_azimuth, d.sigma_elevation * d.sigma_elevation);
+      observation[s].emplace_back(BearingObservation{scan.sensors[s], d.azimuth, d.elevation, var.asDiagonal()},
+                                  var.cwiseInverse().asDiagonal());
     }
+  // Triangulation of partial tuples, each once (no linear solve above the pairs): a pair starts from its linear
+  // solution and takes two Gauss-Newton steps (in the pair gate below, which keeps the resulting position for the
+  // search); a partial tuple of m >= 3 detections starts from its parent's position (the maximum-likelihood point
+  // of m - 1 of its detections, already close) and takes two steps, reusing the parent's normal equations at that
+  // point (only the new detection is linearized there).  A complete tuple uses the triangulation of its deepest
+  // partial tuple.
+  struct Fit {
+    Eigen::Vector3d x = Eigen::Vector3d::Zero();
+    NormalEquations at_x;  // of the fit's detections, at x
+    Triangulation t;
+  };
+  std::vector<std::pair<size_t, int>> members;  // (sensor, 0-based detection) of the partial tuple being fitted
+  // The normal equations of `members` at x.
+  auto linearize = [&](const Eigen::Vector3d& x, NormalEquations& at_x) {
+    at_x = NormalEquations{};
+    for (const auto& [q, k] : members)
+      if (!add_observation(at_x, observation[q][static_cast<size_t>(k)], x)) return false;
+    return true;
+  };
+  // x_to = x_from + one Gauss-Newton step from the normal equations at x_from.
+  auto step = [](const Eigen::Vector3d& x_from, const NormalEquations& at_from, Eigen::Vector3d& x_to) {
+    x_to = x_from + at_from.information.inverse() * at_from.gradient;  // closed-form 3 x 3 (conditioning is checked at the end)
+    return x_to.allFinite();
+  };
+  // f.x = two steps from `start` (normal equations `at_start` there), f.at_x and f.t at f.x; false when degenerate.
+  auto fit_from = [&](const Eigen::Vector3d& start, const NormalEquations& at_start, Fit& f) {
+    Eigen::Vector3d x1;
+    NormalEquations at_x1;
+    if (!step(start, at_start, x1) || !linearize(x1, at_x1) || !step(x1, at_x1, f.x) || !linearize(f.x, f.at_x)) return false;
+    f.t = triangulation_at(f.x, f.at_x);
+    return f.t.valid;
+  };
+  // The pair `members`: its linear solution, one step, the chi-square gate on the residual there (as
+  // triangulate(pair, 1)), and the second step's position into x2; false when gated out or degenerate.
+  const double pair_residual_gate = chi2_quantile(1, o.gate_probability);
+  auto gate_pair = [&](Eigen::Vector3d& x2) {
+    const PreparedBearing& a = observation[members[0].first][static_cast<size_t>(members[0].second)];
+    const PreparedBearing& b = observation[members[1].first][static_cast<size_t>(members[1].second)];
+    const Triangulation lin = triangulate_linear(a.linear_information + b.linear_information, a.linear_rhs + b.linear_rhs);
+    Eigen::Vector3d x1;
+    NormalEquations at_x0, at_x1;
+    return lin.valid && linearize(lin.position, at_x0) && step(lin.position, at_x0, x1) && linearize(x1, at_x1) &&
+           at_x1.residual <= pair_residual_gate && step(x1, at_x1, x2);
+  };
   // Pair gate.  The closest approach of the two lines of sight must lie in front of both sensors, and the miss
   // distance within 2 sqrt(chi2_1) times the cross-range noise at those ranges (a loose pre-test: the residual of
-  // the pair's triangulation is about miss^2 / (sigma_s^2 r_s^2 + sigma_t^2 r_t^2) <= chi2_1); then that
-  // residual itself.  compatible[s][t][k] = the detections j of sensor t (1-based, sorted) that pass with (s, k).
+  // the pair's triangulation is about miss^2 / (sigma_s^2 r_s^2 + sigma_t^2 r_t^2) <= chi2_1); then the chi-square
+  // gate on the residual of the pair's fit after one Gauss-Newton step from its linear solution (gate_pair; a
+  // complete pair tuple is gated again on its final fit).  compatible[s][t][k] = the detections j of sensor t
+  // (1-based, sorted) that pass with (s, k); for s < t, pair_fit[s][t][k] = the positions of their two-step
+  // positions in `pair_positions` (only the position is kept: 24 bytes a pair, the search linearizes there).
   const double pair_gate = 2 * std::sqrt(chi2_quantile(1, o.gate_probability));
-  std::vector<std::vector<std::vector<std::vector<int>>>> compatible(S, std::vector<std::vector<std::vector<int>>>(S));
-  std::vector<BearingObservation> obs;
-  obs.reserve(S);
-  auto observation = [&](size_t s, int k) {
-    const auto& d = scan.detections[s][static_cast<size_t>(k - 1)];
-    return BearingObservation{scan.sensors[s], d.azimuth, d.elevation,
-                              Eigen::Vector2d(d.sigma_azimuth * d.sigma_azimuth, d.sigma_elevation * d.sigma_elevation).asDiagonal()};
-  };
+  using Lists = std::vector<std::vector<std::vector<std::vector<int>>>>;
+  Lists compatible(S, std::vector<std::vector<std::vector<int>>>(S)), pair_fit = compatible;
+  std::vector<Eigen::Vector3d> pair_positions;
   for (size_t s = 0; s < S; ++s)
     for (size_t t = s + 1; t < S; ++t) {
       const size_t ns = scan.detections[s].size(), nt = scan.detections[t].size();
       compatible[s][t].assign(ns + 1, {});
+      pair_fit[s][t].assign(ns + 1, {});
       compatible[t][s].assign(nt + 1, {});
       const Eigen::Vector3d w = scan.sensors[s] - scan.sensors[t];
       for (size_t k = 0; k < ns; ++k)
@@ -140,108 +187,80 @@ std::vector<Tuple> build_tuples(const Scan& scan, const CostOptions& o) {
           if (!(rs > 0 && rt > 0)) continue;
           const double miss = (w + rs * us - rt * ut).norm();
           if (miss > pair_gate * (sigma[s][k] * rs + sigma[t][j] * rt)) continue;
-          obs.clear();
-          obs.push_back(observation(s, static_cast<int>(k) + 1));
-          obs.push_back(observation(t, static_cast<int>(j) + 1));
-          if (!passes_gate(triangulate(obs, 1), 2, o.gate_probability)) continue;
+          members = {{s, static_cast<int>(k)}, {t, static_cast<int>(j)}};
+          Eigen::Vector3d x2;
+          if (!gate_pair(x2)) continue;
           compatible[s][t][k + 1].push_back(static_cast<int>(j) + 1);
+          pair_fit[s][t][k + 1].push_back(static_cast<int>(pair_positions.size()));
           compatible[t][s][j + 1].push_back(static_cast<int>(k) + 1);
+          pair_positions.push_back(x2);
         }
     }
   // Depth-first over the sensors: a detection joins a partial tuple only when it is compatible with each of its
   // detections; partial tuples of >= 3 detections pass the residual gate before being extended.
-  //
-  // Triangulation along the search (each partial tuple once, no linear solve below the pairs): a pair starts from
-  // its linear solution and takes two Gauss-Newton steps; a partial tuple of m >= 3 detections starts from its
-  // parent's position (the maximum-likelihood point of m - 1 of its detections, already close) and takes one
-  // step, reusing the parent's normal equations at that point (only the new detection is linearized there).  A
-  // complete tuple uses the triangulation of its deepest partial tuple as it is.
-  struct Level {
-    Eigen::Vector3d x = Eigen::Vector3d::Zero();
-    NormalEquations at_x;  // of the level's detections, at x
-    Triangulation t;
-  };
-  std::vector<Level> level(S + 1);  // by number of detections
-  std::vector<std::vector<Eigen::Matrix2d>> information(S);  // R^-1 of every detection
-  for (size_t s = 0; s < S; ++s)
-    for (const auto& d : scan.detections[s])
-      information[s].push_back(Eigen::Vector2d(1 / (d.sigma_azimuth * d.sigma_azimuth), 1 / (d.sigma_elevation * d.sigma_elevation)).asDiagonal());
-  std::vector<std::pair<size_t, int>> members;  // (sensor, detection) of the partial tuple, aligned with obs
-  // x_to = x_from + one Gauss-Newton step from the normal equations at x_from; at_to = those at x_to.
-  auto step = [&](const Eigen::Vector3d& x_from, const NormalEquations& at_from, Eigen::Vector3d& x_to, NormalEquations& at_to) {
-    const Eigen::Vector3d dx = at_from.information.inverse() * at_from.gradient;  // closed-form 3 x 3 (conditioning is checked at the end)
-    if (!dx.allFinite()) return false;
-    x_to = x_from + dx;
-    at_to = NormalEquations{};
-    for (size_t i = 0; i < obs.size(); ++i)
-      if (!add_observation(at_to, obs[i], information[members[i].first][static_cast<size_t>(members[i].second - 1)], x_to)) return false;
-    return true;
-  };
-  // Triangulates the partial tuple obs (m >= 2 detections) into level[m]; false when degenerate.
-  auto triangulate_level = [&](size_t m) {
-    Level& L = level[m];
-    if (m == 2) {
-      const Triangulation lin = triangulate_linear(obs);
-      if (!lin.valid) return false;
-      Eigen::Vector3d x1;
-      NormalEquations at_x0, at_x1;
-      for (size_t i = 0; i < 2; ++i)
-        if (!add_observation(at_x0, obs[i], information[members[i].first][static_cast<size_t>(members[i].second - 1)], lin.position)) return false;
-      if (!step(lin.position, at_x0, x1, at_x1) || !step(x1, at_x1, L.x, L.at_x)) return false;
-    } else {
-      const Level& parent = level[m - 1];
-      NormalEquations at_parent = parent.at_x;
-      const auto [s, k] = members.back();
-      if (!add_observation(at_parent, obs.back(), information[s][static_cast<size_t>(k - 1)], parent.x)) return false;
-      Eigen::Vector3d x1;
-      NormalEquations at_x1;
-      if (!step(parent.x, at_parent, x1, at_x1) || !step(x1, at_x1, L.x, L.at_x)) return false;
-    }
-    L.t = triangulation_at(L.x, L.at_x);
-    return L.t.valid;
+  std::vector<Fit> fit_of(S + 1);  // the current partial tuple's fit, by its number of detections
+  // Fits the partial tuple `members` (m >= 3) from its parent's fit into fit_of[m].
+  auto extend = [&](size_t m) {
+    const Fit& parent = fit_of[m - 1];
+    NormalEquations at_parent = parent.at_x;
+    const auto [q, k] = members.back();
+    if (!add_observation(at_parent, observation[q][static_cast<size_t>(k)], parent.x)) return false;
+    return fit_from(parent.x, at_parent, fit_of[m]);
   };
   std::vector<Tuple> out;
+  out.reserve(2 * pair_positions.size());  // capacity hint (tuples are mostly pairs and their extensions): no growth copies
   std::vector<int> index(S, 0);
   std::vector<size_t> real;  // sensors with a detection in the partial tuple
+  std::vector<std::vector<std::pair<int, int>>> candidates(S);  // per depth: (detection, its pair fit or -1)
   auto recurse = [&](auto&& self, size_t s) -> void {
     if (real.size() + (S - s) < 2) return;  // cannot reach two detections any more
     if (s == S) {
-      const Triangulation& t = level[real.size()].t;
-      if (!passes_gate(t, real.size(), o.gate_probability)) return;  // pairs: gated here (the pair gate used 1 step)
+      const Triangulation& t = fit_of[real.size()].t;
+      if (!passes_gate(t, real.size(), o.gate_probability)) return;
       const double c = cost_at(scan, index, o, t);
       if (c < 0) out.push_back({index, c, t.position, t.covariance});
       return;
     }
     index[s] = 0;
     if (o.p_detect < 1) self(self, s + 1);  // with P_D = 1 a missed index costs +infinity
-    std::vector<int> cand;
+    auto& cand = candidates[s];
+    cand.clear();
     if (real.empty()) {
-      for (int k = 1; k <= static_cast<int>(scan.detections[s].size()); ++k) cand.push_back(k);
+      for (int k = 1; k <= static_cast<int>(scan.detections[s].size()); ++k) cand.push_back({k, -1});
     } else {
       const size_t r0 = real.front();
-      for (int k : compatible[r0][s][static_cast<size_t>(index[r0])]) {
+      const auto& first = compatible[r0][s][static_cast<size_t>(index[r0])];
+      const auto& first_fit = pair_fit[r0][s][static_cast<size_t>(index[r0])];
+      for (size_t i = 0; i < first.size(); ++i) {
+        const int k = first[i];
         bool ok = true;
         for (size_t q = 1; q < real.size() && ok; ++q) {
           const auto& list = compatible[real[q]][s][static_cast<size_t>(index[real[q]])];
           ok = std::binary_search(list.begin(), list.end(), k);
         }
-        if (ok) cand.push_back(k);
+        if (ok) cand.push_back({k, first_fit[i]});
       }
     }
-    for (int k : cand) {
+    for (const auto& [k, pair] : cand) {
       index[s] = k;
-      obs.push_back(observation(s, k));
-      members.push_back({s, k});
+      members.push_back({s, k - 1});
       real.push_back(s);
-      const size_t m = obs.size();
-      if (m < 2 || (triangulate_level(m) && (m < 3 || passes_gate(level[m].t, m, o.gate_probability)))) self(self, s + 1);
+      const size_t m = real.size();
+      bool fitted = true;
+      if (m == 2) {
+        Fit& f = fit_of[2];
+        f.x = pair_positions[static_cast<size_t>(pair)];
+        fitted = linearize(f.x, f.at_x) && (f.t = triangulation_at(f.x, f.at_x)).valid;
+      } else if (m >= 3) {
+        fitted = extend(m) && passes_gate(fit_of[m].t, m, o.gate_probability);
+      }
+      if (fitted) self(self, s + 1);
       real.pop_back();
       members.pop_back();
-      obs.pop_back();
     }
     index[s] = 0;
   };
-  obs.clear();
+  members.clear();
   recurse(recurse, 0);
   return out;
 }

@@ -12,16 +12,19 @@ std::vector<std::vector<int>> independent_components(const TuplePacking& p) {
     while (parent[static_cast<size_t>(x)] != x) x = parent[static_cast<size_t>(x)] = parent[static_cast<size_t>(parent[static_cast<size_t>(x)])];
     return x;
   };
-  for (const auto& m : p.members)
+  for (size_t t = 0; t < p.size(); ++t) {
+    const auto m = p.members(t);
     for (size_t i = 1; i < m.size(); ++i) parent[static_cast<size_t>(root(m[i]))] = root(m[0]);
+  }
   std::vector<int> group_of_root(static_cast<size_t>(p.detections), -1);
   std::vector<std::vector<int>> groups;
-  for (size_t t = 0; t < p.members.size(); ++t) {
-    if (p.members[t].empty()) {
+  for (size_t t = 0; t < p.size(); ++t) {
+    const auto m = p.members(t);
+    if (m.empty()) {
       groups.push_back({static_cast<int>(t)});
       continue;
     }
-    int& g = group_of_root[static_cast<size_t>(root(p.members[t][0]))];
+    int& g = group_of_root[static_cast<size_t>(root(m[0]))];
     if (g < 0) g = static_cast<int>(groups.size()), groups.emplace_back();
     groups[static_cast<size_t>(g)].push_back(static_cast<int>(t));
   }
@@ -29,7 +32,7 @@ std::vector<std::vector<int>> independent_components(const TuplePacking& p) {
 }
 
 ExchangeImprover::ExchangeImprover(const TuplePacking& p, int refill_candidates) : refill_candidates_(refill_candidates) {
-  const size_t T = p.members.size(), D = static_cast<size_t>(p.detections);
+  const size_t T = p.size(), D = static_cast<size_t>(p.detections);
   tuple_of_rank_.resize(T);
   std::iota(tuple_of_rank_.begin(), tuple_of_rank_.end(), 0);
   std::stable_sort(tuple_of_rank_.begin(), tuple_of_rank_.end(), [&](int a, int b) {
@@ -43,7 +46,8 @@ ExchangeImprover::ExchangeImprover(const TuplePacking& p, int refill_candidates)
     rank_of_tuple_[t] = static_cast<int>(r);
     cost_.push_back(p.cost[t]);
     if (p.cost[t] < 0) ++negative_;
-    members_.insert(members_.end(), p.members[t].begin(), p.members[t].end());
+    const auto m = p.members(t);
+    members_.insert(members_.end(), m.begin(), m.end());
     member_begin_.push_back(static_cast<int>(members_.size()));
   }
   // Per detection, its negative tuples by rank (counting sort: ranks come out ascending, i.e. cheapest first).
@@ -81,7 +85,7 @@ double ExchangeImprover::improve(std::vector<int>& chosen, int max_passes) {
     in_[static_cast<size_t>(r)] = 1;
     for (int i = begin[r]; i < begin[r + 1]; ++i) owner_[static_cast<size_t>(mem[i])] = r;
   }
-  std::vector<int> conflicts, freed, refill;
+  auto &conflicts = conflicts_, &freed = freed_ids_, &refill = refill_;  // per move, reused
   // Detection d changed hands: every tuple containing it has a new bound.
   auto touched = [&](int d) {
     for (int i = of_detection_begin_[static_cast<size_t>(d)]; i < of_detection_begin_[static_cast<size_t>(d) + 1]; ++i)

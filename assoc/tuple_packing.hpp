@@ -7,14 +7,30 @@
 //  - exchange improvement of a feasible solution (the primal step after the Lagrangian recovery): bring in one
 //    tuple, drop the chosen tuples it conflicts with, refill the freed detections greedily with the cheapest
 //    tuples that fit; keep the move when the total cost falls.  Repeated until no move improves.
+#include <initializer_list>
+#include <span>
 #include <vector>
 
 namespace sextant::assoc {
 
+/// The tuples in one flat array: tuple t holds the detection ids ids[begin[t] .. begin[t + 1]).
 struct TuplePacking {
-  int detections = 0;                      // detection ids are 0..detections-1
-  std::vector<std::vector<int>> members;   // per tuple, its detection ids
-  std::vector<double> cost;                // per tuple
+  int detections = 0;            // detection ids are 0..detections-1
+  std::vector<int> begin = {0};  // per tuple, where its ids start; one more entry than tuples
+  std::vector<int> ids;
+  std::vector<double> cost;      // per tuple
+
+  /// Appends a tuple (distinct ids in 0..detections-1) of cost `tuple_cost`.
+  void add(std::span<const int> members, double tuple_cost) {
+    ids.insert(ids.end(), members.begin(), members.end());
+    begin.push_back(static_cast<int>(ids.size()));
+    cost.push_back(tuple_cost);
+  }
+  void add(std::initializer_list<int> members, double tuple_cost) { add(std::span<const int>(members.begin(), members.size()), tuple_cost); }
+  size_t size() const { return cost.size(); }
+  std::span<const int> members(size_t t) const {
+    return {ids.data() + begin[t], static_cast<size_t>(begin[t + 1] - begin[t])};
+  }
 };
 
 /// Groups of tuple indices, one per independent component (in order of their first tuple).
@@ -51,6 +67,7 @@ class ExchangeImprover {
   std::vector<long> blocked_, freed_, counted_; // per detection: stamp of the evaluation that takes / frees it /
                                                 // has taken its refill bound
   long stamp_ = 0;
+  std::vector<int> conflicts_, freed_ids_, refill_;  // of the move being evaluated
 };
 
 /// ExchangeImprover(p).improve(chosen, max_passes).

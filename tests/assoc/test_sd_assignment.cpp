@@ -143,8 +143,11 @@ TEST_CASE("independent components and exchange improvement") {
   // Detections 0..5.  Tuples: A {0,1} -1, B {1,2} -1.5, C {2,3} -1, D {4,5} -2, E {0} -0.1.
   TuplePacking p;
   p.detections = 6;
-  p.members = {{0, 1}, {1, 2}, {2, 3}, {4, 5}, {0}};
-  p.cost = {-1, -1.5, -1, -2, -0.1};
+  for (const auto& [members, cost] : std::vector<std::pair<std::vector<int>, double>>{
+           {{0, 1}, -1}, {{1, 2}, -1.5}, {{2, 3}, -1}, {{4, 5}, -2}, {{0}, -0.1}})
+    p.add(members, cost);
+  REQUIRE(p.size() == 5);
+  CHECK(std::vector<int>(p.members(1).begin(), p.members(1).end()) == std::vector<int>{1, 2});
   const auto groups = independent_components(p);
   REQUIRE(groups.size() == 2);
   CHECK(groups[0] == std::vector<int>{0, 1, 2, 4});
@@ -170,7 +173,7 @@ bool explained_by_gates(const Scan& scan, const std::vector<int>& index, const C
     }
   for (size_t a = 0; a < all.size(); ++a)
     for (size_t b = a + 1; b < all.size(); ++b) {
-      const auto t = triangulate({all[a], all[b]}, 1);
+      const auto t = triangulate({all[a], all[b]}, 1);  // the pair gate: residual after one step from the linear solution
       if (!t.valid || t.residual > chi2_quantile(1, o.gate_probability)) return true;
     }
   if (index.size() == 4 && index[0] > 0 && index[1] > 0 && index[2] > 0) {
