@@ -24,6 +24,12 @@ class Stage {
   /// Whether `handle` wants this event (the dispatcher routes only accepted events to the stage's queue).
   virtual bool accepts(const Event& event) const = 0;
   virtual void handle(const Event& event, const Emit& emit) = 0;
+  /// Daemon only: how an accepted event enters the stage.  Called on the intake thread, concurrently with `handle`
+  /// on the stage's thread; `enqueue` puts the event on the stage's bounded queue (false: full, dropped and counted).
+  /// A stage may fold the event into bounded state of its own instead, drained by the events it handles (the graph
+  /// stage coalesces each body's odometry, odometry_coalescer.hpp).  False: the event was dropped.  Replay never calls
+  /// it (it calls `handle` for every event).
+  virtual bool offer(const Event& /*event*/, const std::function<bool()>& enqueue) { return enqueue(); }
   /// End of input (replay end, daemon shutdown): emit what is still pending.
   virtual void finish(const Emit& /*emit*/) {}
   virtual Counters counters() const { return {}; }

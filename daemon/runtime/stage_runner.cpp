@@ -7,7 +7,9 @@ StageRunner::StageRunner(engine::Stage& stage, size_t queue_capacity, engine::Em
 
 StageRunner::~StageRunner() { drain_and_stop(); }
 
-bool StageRunner::offer(const QueuedEvent& event) { return queue_.try_push(event); }
+bool StageRunner::offer(const QueuedEvent& event) {
+  return stage_.offer(event.event, [&] { return queue_.try_push(event); });
+}
 
 void StageRunner::start() {
   if (!thread_.joinable()) thread_ = std::thread([this] { loop(); });

@@ -1,0 +1,161 @@
+#include "daemon/engine/odometry_coalescer.hpp"
+
+#include "daemon/engine/pose_conversion.hpp"
+#include "daemon/engine/pose_covariance.hpp"
+
+#include <algorithm>
+
+namespace sextant::engine {
+namespace {
+
+constexpr size_t kMaxSightingTimes = 4096;  // per body; beyond, a sighting is anchored over a merged interval
+
+// The floor increment_covariance() adds to the variances a source uses, to take it off a composed covariance again.
+Matrix6 variance_floor(bool planar, double min_variance) {
+  Matrix6 f = Matrix6::Zero();
+  if (planar) {
+    for (int i : {0, 1, 5}) f(i, i) = min_variance;
+  } else {
+    f.diagonal().setConstant(min_variance);
+  }
+  return f;
+}
+
+// The body an event is about (empty for events of no body, e.g. bearing scans).
+std::string source_of(const Event& e) {
+  return std::visit([](const auto& x) -> std::string {
+    if constexpr (requires { x.source; }) return x.source;
+    else return {};
+  }, e);
+}
+
+}  // namespace
+
+OdometryCoalescer::OdometryCoalescer(const OdometryCoalescerOptions& options) : options_(options) {
+  if (options_.max_entries == 0) options_.max_entries = 1;
+  if (options_.max_passed == 0) options_.max_passed = 1;
+  KeyframeSelector check(options_.keyframes);  // throws std::invalid_argument for bad thresholds
+  (void)check;
+}
+
+OdometryCoalescer::Entry OdometryCoalescer::make_entry(const Body& b, const Odometry& o, KeyframeDecision d,
+                                                       bool pinned) const {
+  Entry e;
+  e.message = o;
+  e.pinned = pinned;
+  e.decision = d;
+  if (b.has_last) {
+    const SE3 pose = to_se3(o.pose);
+    e.increment = increment_covariance(o, b.last_pose.between(pose), b.last_covariance, options_.min_increment_variance);
+  }
+  return e;
+}
+
+bool OdometryCoalescer::offer(const Event& event, const std::function<bool()>& enqueue) {
+  const auto* o = std::get_if<Odometry>(&event);
+  if (o == nullptr) {
+    // A loop, a sighting or anything else of a body: its odometry after this event goes into a new batch behind it.
+    {
+      std::lock_guard lock(mutex_);
+      auto it = bodies_.find(source_of(event));
+      if (it != bodies_.end()) {
+        Body& b = it->second;
+        b.open = false;
+        if (const auto* s = std::get_if<LandmarkSightings>(&event);
+            s && (!b.has_last || s->utime > b.last_utime) && b.sighting_times.size() < kMaxSightingTimes)
+          b.sighting_times.insert(std::upper_bound(b.sighting_times.begin(), b.sighting_times.end(), s->utime), s->utime);
+      }
+    }
+    return enqueue();
+  }
+
+  std::lock_guard lock(mutex_);
+  auto it = bodies_.find(o->source);
+  if (it == bodies_.end()) {
+    KeyframeSelectorOptions ko = options_.keyframes;
+    ko.planar = o->planar;
+    Body body;
+    body.selector = KeyframeSelector(ko);
+    it = bodies_.emplace(o->source, std::move(body)).first;
+  }
+  Body& b = it->second;
+  if (b.has_last && o->utime <= b.last_utime) {
+    ++out_of_order_;  // the stage would count and drop it too (odometry_out_of_order)
+    return true;
+  }
+  const SE3 pose = to_se3(o->pose);
+  KeyframeSelector selector = b.selector;  // decided on a copy: a message the queue refuses leaves no trace
+  const KeyframeDecision d = selector.decide(pose);
+  const bool after_sighting = !b.sighting_times.empty() && b.sighting_times.front() <= o->utime;
+  const bool pinned = d == KeyframeDecision::kKeyframe || after_sighting;
+
+  bool taken = true;
+  if (b.open && !b.batches.back().back().pinned) {
+    // Merge into the newest message: its time and pose go to `passed`, the increments' covariances compose.
+    Entry& e = b.batches.back().back();
+    const SE3 delta = b.last_pose.between(pose);
+    const Matrix6 q = increment_covariance(*o, delta, b.last_covariance, options_.min_increment_variance);
+    if (e.passed.size() >= options_.max_passed)
+      e.passed.erase(e.passed.begin(), e.passed.begin() + static_cast<std::ptrdiff_t>(e.passed.size() / 2));
+    e.passed.emplace_back(e.message.utime, b.last_pose);
+    if (e.decision == KeyframeDecision::kImplausible) ++e.implausible;
+    e.increment = compose_covariance(e.increment, delta, q);
+    e.message = *o;
+    e.message.increment_covariance = e.increment - variance_floor(o->planar, options_.min_increment_variance);
+    e.decision = d;
+    e.pinned = pinned;
+    ++coalesced_;
+  } else if (b.open && b.batches.back().size() < options_.max_entries) {
+    b.batches.back().push_back(make_entry(b, *o, d, pinned));
+    ++waiting_;
+  } else {
+    // A new batch behind everything queued so far; the event itself is its token.
+    b.batches.push_back(Batch{make_entry(b, *o, d, pinned)});
+    taken = enqueue();
+    if (!taken) {
+      b.batches.pop_back();
+      b.open = false;
+      return false;  // dropped (the queue counts it): the body's state stays as it was before this message
+    }
+    b.open = true;
+    ++waiting_;
+  }
+  b.selector = selector;
+  b.has_last = true;
+  b.last_utime = o->utime;
+  b.last_pose = pose;
+  b.last_covariance = o->covariance;
+  if (after_sighting)
+    b.sighting_times.erase(b.sighting_times.begin(),
+                           std::upper_bound(b.sighting_times.begin(), b.sighting_times.end(), o->utime));
+  return taken;
+}
+
+std::optional<OdometryCoalescer::Batch> OdometryCoalescer::take(const std::string& source) {
+  std::lock_guard lock(mutex_);
+  auto it = bodies_.find(source);
+  if (it == bodies_.end() || it->second.batches.empty()) return std::nullopt;
+  Body& b = it->second;
+  Batch batch = std::move(b.batches.front());
+  b.batches.pop_front();
+  if (b.batches.empty()) b.open = false;  // its token has been handled: the next message needs a new one
+  waiting_ -= static_cast<int64_t>(batch.size());
+  return batch;
+}
+
+int64_t OdometryCoalescer::coalesced() const {
+  std::lock_guard lock(mutex_);
+  return coalesced_;
+}
+
+int64_t OdometryCoalescer::out_of_order() const {
+  std::lock_guard lock(mutex_);
+  return out_of_order_;
+}
+
+int64_t OdometryCoalescer::waiting() const {
+  std::lock_guard lock(mutex_);
+  return waiting_;
+}
+
+}  // namespace sextant::engine
