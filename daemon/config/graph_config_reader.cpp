@@ -43,6 +43,8 @@ void read_stage_config(Section& s, engine::GraphConfig& c) {
   s.get("relinearize_rotation", c.relinearize_rotation, positive());
   s.get("min_increment_variance", c.min_increment_variance, positive());
   s.get("odometry_history", c.odometry_history, int_in_range(1, 100000000));
+  s.get("coalesce_odometry", c.coalesce_odometry);
+  s.get("odometry_batch_max", c.odometry_batch_max, int_in_range(1, 1 << 20));
   s.get("trajectory_max_keyframes", c.trajectory_max_keyframes, int_in_range(1, 1 << 20));
   s.reject_unknown_keys();
 }

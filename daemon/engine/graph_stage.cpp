@@ -38,6 +38,15 @@ graph::IncrementalOptions smoother_options(const GraphConfig& c) {
   return o;
 }
 
+OdometryCoalescerOptions coalescer_options(const GraphConfig& c) {
+  OdometryCoalescerOptions o;
+  o.keyframes = c.keyframes;
+  o.min_increment_variance = c.min_increment_variance;
+  o.max_entries = static_cast<size_t>(std::max(1, c.odometry_batch_max));
+  o.max_passed = static_cast<size_t>(std::max(1, c.odometry_history));
+  return o;
+}
+
 }  // namespace
 
 GraphStage::GraphStage(const GraphConfig& config, std::shared_ptr<GraphCorrections> corrections)
@@ -45,6 +54,7 @@ GraphStage::GraphStage(const GraphConfig& config, std::shared_ptr<GraphCorrectio
       corrections_(std::move(corrections)),
       proposer_(config.proposals),
       smoother_(smoother_options(config)),
+      coalescer_(coalescer_options(config)),
       chi2_gate_planar_(assoc::chi2_quantile(3, config.loop_gate_probability)),
       chi2_gate_spatial_(assoc::chi2_quantile(6, config.loop_gate_probability)),
       sighting_gate_planar_(assoc::chi2_quantile(2, config.landmarks.gate_probability)),
@@ -53,8 +63,17 @@ GraphStage::GraphStage(const GraphConfig& config, std::shared_ptr<GraphCorrectio
   (void)check;
 }
 
+bool GraphStage::offer(const Event& e, const std::function<bool()>& enqueue) {
+  return config_.coalesce_odometry ? coalescer_.offer(e, enqueue) : enqueue();
+}
+
 void GraphStage::handle(const Event& e, const Emit& emit) {
-  if (const auto* o = std::get_if<Odometry>(&e)) on_odometry(*o, emit);
+  if (const auto* o = std::get_if<Odometry>(&e)) {
+    if (auto batch = coalescer_.take(o->source))  // a token: the body's odometry since it was queued
+      for (const auto& entry : *batch) on_coalesced(entry, emit);
+    else
+      on_odometry(*o, emit);
+  }
   else if (const auto* l = std::get_if<LoopClosure>(&e)) on_loop(*l, emit);
   else if (const auto* s = std::get_if<LandmarkSightings>(&e); s && config_.landmarks.enabled) on_sightings(*s, emit);
 }
@@ -96,9 +115,7 @@ void GraphStage::on_odometry(const Odometry& o, const Emit& emit) {
   }
   b.last_utime = o.utime;
   b.last_odom = odom;
-  if (b.odometry.size() >= static_cast<size_t>(config_.odometry_history))
-    b.odometry.erase(b.odometry.begin(), b.odometry.begin() + static_cast<std::ptrdiff_t>(b.odometry.size() / 2));
-  b.odometry.emplace_back(o.utime, odom);
+  remember_odometry(b, o.utime, odom, static_cast<size_t>(config_.odometry_history));
   b.last_odom_covariance = o.covariance;
 
   for (const auto& [sightings, anchor] : due_sightings) add_sightings(sightings, b, anchor, emit);
@@ -110,6 +127,20 @@ void GraphStage::on_odometry(const Odometry& o, const Emit& emit) {
     b.early_loops = std::move(later);
     for (const auto& l : due) on_loop(l, emit);
   }
+}
+
+void GraphStage::remember_odometry(Body& b, int64_t utime, const SE3& pose, size_t history) {
+  if (b.odometry.size() >= history)
+    b.odometry.erase(b.odometry.begin(), b.odometry.begin() + static_cast<std::ptrdiff_t>(b.odometry.size() / 2));
+  b.odometry.emplace_back(utime, pose);
+}
+
+void GraphStage::on_coalesced(const OdometryCoalescer::Entry& entry, const Emit& emit) {
+  if (auto it = bodies_.find(entry.message.source); it != bodies_.end())
+    for (const auto& [utime, pose] : entry.passed)
+      if (utime > it->second.last_utime) remember_odometry(it->second, utime, pose, static_cast<size_t>(config_.odometry_history));
+  keyframes_rejected_ += entry.implausible;
+  on_odometry(entry.message, emit);
 }
 
 void GraphStage::on_keyframe_candidate(const Odometry& o, Body& b, const SE3& odom, const Emit& emit) {
@@ -487,7 +518,9 @@ Counters GraphStage::counters() const {
           {"optimizer_failures", optimizer_failures_},
           {"rebuilds", rebuilds_},
           {"relinearized_factors", relinearized_},
-          {"odometry_out_of_order", out_of_order_},
+          {"odometry_out_of_order", out_of_order_ + coalescer_.out_of_order()},
+          {"odometry_coalesced", coalescer_.coalesced()},
+          {"odometry_waiting", coalescer_.waiting()},
           {"odometry_edges_rejected", bad_edges_},
           {"landmarks", landmarks_},
           {"sightings_accepted", sightings_accepted_},

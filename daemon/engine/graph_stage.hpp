@@ -34,10 +34,14 @@
 //    sighting initializes it and is not gated: a wrong first id plants a wrong landmark, that later true sightings
 //    are gated against (limitation).  Landmark positions after each update: landmarks(source).
 //  - after every update: a Trajectory of the body, and the map -> odometry correction for GraphPoseStage.
+//  - in the daemon, each body's odometry reaches the stage through an OdometryCoalescer (odometry_coalescer.hpp)
+//    instead of one queue slot per message: a 1 kHz body cannot fill the queue during a long solve, and the stage's
+//    keyframes, loops and sightings come out as from the single messages (config: coalesce_odometry).
 // The first keyframe of a body is held fixed at its odometry pose: the map frame is the odometry frame at the
 // body's first keyframe, as for dead reckoning.
 #include "daemon/engine/graph_correction.hpp"
 #include "daemon/engine/graph_stage_config.hpp"
+#include "daemon/engine/odometry_coalescer.hpp"
 #include "daemon/engine/stage.hpp"
 #include "estimators/graph/incremental_smoother.hpp"
 
@@ -62,6 +66,8 @@ class GraphStage final : public Stage {
     return std::holds_alternative<Odometry>(e) || std::holds_alternative<LoopClosure>(e) ||
            (config_.landmarks.enabled && std::holds_alternative<LandmarkSightings>(e));
   }
+  /// Daemon intake thread: odometry goes to the coalescer (when coalesce_odometry), everything else to the queue.
+  bool offer(const Event& e, const std::function<bool()>& enqueue) override;
   void handle(const Event& e, const Emit& emit) override;
   Counters counters() const override;
 
@@ -105,6 +111,9 @@ class GraphStage final : public Stage {
     Matrix6 covariance = Matrix6::Zero();
   };
   void on_odometry(const Odometry& o, const Emit& emit);
+  /// A coalesced message: the poses merged into it go to the odometry history first.
+  void on_coalesced(const OdometryCoalescer::Entry& entry, const Emit& emit);
+  static void remember_odometry(Body& b, int64_t utime, const SE3& pose, size_t history);
   void on_keyframe_candidate(const Odometry& o, Body& b, const SE3& odom, const Emit& emit);
   void on_loop(const LoopClosure& l, const Emit& emit);
   /// The keyframe a loop's end refers to, and the odometry motion from that keyframe to the loop's time.
@@ -120,6 +129,7 @@ class GraphStage final : public Stage {
   std::shared_ptr<GraphCorrections> corrections_;
   LoopProposer proposer_;
   graph::IncrementalSmoother smoother_;
+  OdometryCoalescer coalescer_;
   std::map<std::string, Body> bodies_;
   int64_t next_variable_id_ = 0, next_request_id_ = 0;
   double chi2_gate_planar_ = 0, chi2_gate_spatial_ = 0, sighting_gate_planar_ = 0, sighting_gate_spatial_ = 0;

@@ -32,6 +32,9 @@ struct GraphConfig {
                                          // gate (odometry covariances are optimistic: biases are not in them)
   double loop_time_tolerance_s = 1.0;    // a loop's times must be this close to keyframes' times (odometry bridges the gap)
   int odometry_history = 100000;         // odometry poses kept per body to bridge loop times to keyframes
+  bool coalesce_odometry = true;         // daemon: a body's odometry waiting for the stage is coalesced instead of
+                                         // taking one queue slot per message (odometry_coalescer.hpp)
+  int odometry_batch_max = 256;          // messages a coalesced batch keeps unmerged (keyframe candidates, sighting times)
   double relinearize_translation = 0.1;   // m
   double relinearize_rotation = 0.1;      // rad
   double min_increment_variance = 1e-10;
