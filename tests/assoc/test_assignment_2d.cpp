@@ -103,8 +103,9 @@ double brute_force_missed(const std::vector<double>& rm, const std::vector<doubl
 }
 }  // namespace
 
-TEST_CASE("assignment with unpaired rows and columns equals brute force on sparse random instances") {
+TEST_CASE("assignment with unpaired rows and columns equals brute force on sparse random instances, also with a reused solver") {
   std::mt19937 rng(21);
+  MissedAssignmentSolver reused;  // one instance over all trials (sizes change from trial to trial)
   std::uniform_real_distribution<double> u(-6, 3);
   std::bernoulli_distribution allowed(0.35);
   for (int trial = 0; trial < 300; ++trial) {
@@ -123,6 +124,10 @@ TEST_CASE("assignment with unpaired rows and columns equals brute force on spars
     const auto a = assign_with_missed(rm, cm, pairs);
     CAPTURE(trial);
     CHECK(a.value == doctest::Approx(expected).epsilon(1e-12));
+    const auto& again = reused.solve(rm, cm, pairs);
+    CHECK(again.value == a.value);
+    CHECK(again.column_of_row == a.column_of_row);
+    CHECK(again.row_of_column == a.row_of_column);
     // Consistent both ways, only allowed pairs, and the value adds up.
     double s = 0;
     for (int r = 0; r < R; ++r) {
@@ -155,6 +160,7 @@ TEST_CASE("assignment with unpaired rows and columns equals the dense 2-D assign
   // relaxation's subproblems.
   std::mt19937 rng(22);
   std::uniform_real_distribution<double> u(-6, 1);
+  MissedAssignmentSolver reused;
   for (int trial = 0; trial < 60; ++trial) {
     const int R = 5 + trial % 56, C = 5 + (trial * 7) % 56;
     std::vector<double> rm(static_cast<size_t>(R)), cm(static_cast<size_t>(C));
@@ -179,5 +185,6 @@ TEST_CASE("assignment with unpaired rows and columns equals the dense 2-D assign
     const auto a = assign_with_missed(rm, cm, pairs);
     CAPTURE(trial);
     CHECK(a.value == doctest::Approx(all_unpaired + reference.cost).epsilon(1e-12));
+    CHECK(reused.solve(rm, cm, pairs).value == doctest::Approx(a.value).epsilon(1e-12));
   }
 }

@@ -79,6 +79,41 @@ TEST_CASE("the triangulation covariance matches Monte Carlo") {
   CHECK((sample - predicted).norm() < 0.1 * predicted.norm());
 }
 
+TEST_CASE("prepared-bearing linearization equals the bearing model's residual and Jacobian") {
+  // add_observation takes the residual angles as the angles between measured and predicted direction (a series
+  // for small ones); the reference wraps z - h(x) with h and J from bearing().  Small and large residuals (the
+  // series and the atan2 fallback), azimuths across +-pi.
+  std::mt19937 rng(31);
+  std::uniform_real_distribution<double> u(-1, 1);
+  const Eigen::Matrix2d Ri = Eigen::Vector2d(1 / 2.5e-5, 1 / 1e-4).asDiagonal();
+  int small = 0, large = 0;
+  for (int trial = 0; trial < 400; ++trial) {
+    const Eigen::Vector3d sensor(10 * u(rng), 10 * u(rng), 0.1 * u(rng));
+    const Eigen::Vector3d x = sensor + Eigen::Vector3d(-20 + 2 * u(rng), 3 * u(rng), 5 + 2 * u(rng));  // azimuth near pi
+    const auto h = *bearing(sensor, x);
+    const double spread = trial % 2 ? 0.01 : 0.5;
+    BearingObservation o{sensor, h[0] + spread * u(rng), h[1] + spread * u(rng), Eigen::Matrix2d::Identity()};
+    if (o.azimuth > M_PI) o.azimuth -= 2 * M_PI;
+    Eigen::Matrix<double, 2, 3> J;
+    const auto hx = *bearing(sensor, x, &J);
+    const Eigen::Vector2d nu(std::remainder(o.azimuth - hx[0], 2 * M_PI), o.elevation - hx[1]);
+    (std::abs(nu[0]) < 0.04 && std::abs(nu[1]) < 0.04 ? small : large) += 1;
+    NormalEquations n;
+    REQUIRE(add_observation(n, PreparedBearing(o, Ri), x));
+    CAPTURE(trial);
+    CHECK((n.information - J.transpose() * Ri * J).norm() <= 1e-9 * (J.transpose() * Ri * J).norm());
+    CHECK((n.gradient - J.transpose() * Ri * nu).norm() <= 1e-9 * (J.transpose() * Ri * nu).norm() + 1e-9);
+    CHECK(n.residual == doctest::Approx(nu.dot(Ri * nu)).epsilon(1e-9));
+  }
+  CHECK(small > 100);
+  CHECK(large > 100);
+  // On the sensor's vertical: refused, the normal equations untouched.
+  NormalEquations n;
+  CHECK_FALSE(add_observation(n, PreparedBearing({kSensors[0], 0.3, 0.2, Eigen::Matrix2d::Identity()}, Ri), kSensors[0] + Eigen::Vector3d(0, 0, 5)));
+  CHECK(n.residual == 0.0);
+  CHECK(n.information.isZero());
+}
+
 TEST_CASE("degenerate geometry is flagged, never NaN") {
   std::vector<BearingObservation> one(1);
   CHECK_FALSE(triangulate(one).valid);
