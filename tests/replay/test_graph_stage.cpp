@@ -12,7 +12,10 @@
 
 #include <doctest/doctest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <deque>
+#include <map>
 #include <random>
 #include <stdexcept>
 
@@ -35,29 +38,31 @@ SE3 circle_truth(double t) {
              Eigen::Vector3d(10 * std::cos(a), 10 * std::sin(a), 0));
 }
 
-Run circle_run(double seconds, uint64_t seed) {
+// rate_hz: odometry messages per second (the noise per message scaled so that the drift per second stays the same).
+Run circle_run(double seconds, uint64_t seed, int rate_hz = 10, const std::string& source = "robot") {
   Run r;
   std::mt19937_64 rng(seed);
   std::normal_distribution<double> n(0, 1);
+  const double dt = 1.0 / rate_hz, scale = std::sqrt(10.0 / rate_hz);
   SE3 odom;
   SE3 prev_truth;
-  for (int k = 0; k <= static_cast<int>(seconds * 10); ++k) {
-    const SE3 truth = circle_truth(k * 0.1);
+  for (int k = 0; k <= static_cast<int>(seconds * rate_hz); ++k) {
+    const SE3 truth = circle_truth(k * dt);
     if (k > 0) {
       Vector6d xi = Vector6d::Zero();
-      xi[0] = 0.01 * n(rng), xi[1] = 0.01 * n(rng), xi[5] = 0.006 * n(rng);
+      xi[0] = 0.01 * scale * n(rng), xi[1] = 0.01 * scale * n(rng), xi[5] = 0.006 * scale * n(rng);
       odom = odom * prev_truth.inverse() * truth * SE3::exp(xi);
     } else {
       odom = truth;
     }
     prev_truth = truth;
     Odometry o;
-    o.utime = 1'000'000 + k * 100'000;
-    o.source = "robot";
+    o.utime = 1'000'000 + k * (1'000'000 / rate_hz);
+    o.source = source;
     o.planar = true;
     o.pose = to_pose(odom);
     Matrix6 inc = Matrix6::Zero();
-    inc(0, 0) = inc(1, 1) = 1e-4, inc(5, 5) = 3.6e-5;
+    inc(0, 0) = inc(1, 1) = 1e-4 * scale * scale, inc(5, 5) = 3.6e-5 * scale * scale;
     o.increment_covariance = inc;
     r.odometry.push_back(o);
     r.truth.emplace_back(o.utime, truth);
@@ -540,4 +545,211 @@ TEST_CASE("graph stage: a 3-D body maps 3-D landmarks from range, azimuth and el
     const Eigen::Vector3d want(ring_landmarks()[i].x(), ring_landmarks()[i].y(), i % 3 == 0 ? 1.0 : i % 3 == 1 ? -0.5 : 2.0);
     CHECK((ate.rotation * l.position + ate.translation - want).norm() < 0.3);
   }
+}
+
+namespace {
+
+// The daemon's way into a stage (Stage::offer into a bounded queue), without threads: every event is offered while
+// the stage is busy (nothing handled), then the queue is handled in order.
+struct BlockedStageFeed {
+  size_t capacity = 1024;
+  std::deque<Event> queue;
+  size_t peak = 0, dropped = 0, queued_other = 0;
+  bool offer(Stage& stage, const Event& e) {
+    return stage.offer(e, [&] {
+      if (queue.size() >= capacity) {
+        ++dropped;
+        return false;
+      }
+      queue.push_back(e);
+      peak = std::max(peak, queue.size());
+      queued_other += std::holds_alternative<Odometry>(e) ? 0 : 1;
+      return true;
+    });
+  }
+  void drain(Stage& stage, const Emit& emit) {
+    for (; !queue.empty(); queue.pop_front()) stage.handle(queue.front(), emit);
+  }
+};
+
+// Odometry without increment covariances: the pose covariance grows by the same amount per message (the stage derives
+// each increment's covariance from the growth).
+void derive_increments(Run& run) {
+  for (size_t k = 0; k < run.odometry.size(); ++k) {
+    run.odometry[k].covariance = *run.odometry[k].increment_covariance * static_cast<double>(k);
+    run.odometry[k].increment_covariance.reset();
+  }
+}
+
+// The burst: body "other" (10 Hz, sightings of the ring's landmarks) for 20 s, then 10,001 odometry messages of body
+// "fast" (1 kHz for 10 s), then a loop of "other", a loop of "fast" between odometry times that are no keyframes' (the
+// odometry history bridges them), a sighting of "other" ahead of its odometry, and the rest of "other"'s run.
+std::vector<Event> burst_events(bool increments_given) {
+  Run other = circle_run(30, 5, 10, "other"), fast = circle_run(10, 6, 1000, "fast");
+  if (!increments_given) derive_increments(other), derive_increments(fast);
+  auto sightings = ring_sightings(other, 13);
+  for (auto& s : sightings) s.source = "other";
+  std::map<int64_t, SE3> truth_other(other.truth.begin(), other.truth.end()), truth_fast(fast.truth.begin(), fast.truth.end());
+  std::vector<Event> out;
+  size_t j = 0;
+  for (size_t k = 0; k <= 200; ++k) {
+    for (; j < sightings.size() && sightings[j].utime < other.odometry[k].utime; ++j) out.emplace_back(sightings[j]);
+    out.emplace_back(other.odometry[k]);
+  }
+  const size_t other_next_sighting = j;
+  for (const auto& o : fast.odometry) out.emplace_back(o);
+  auto loop = [](const std::string& source, int64_t from, int64_t to, const std::map<int64_t, SE3>& truth) {
+    LoopClosure l;
+    l.utime = to;
+    l.source = source;
+    l.planar = true;
+    l.utime_from = from;
+    l.utime_to = to;
+    l.relative = to_pose(truth.at(from).inverse() * truth.at(to));
+    l.information = Matrix6::Identity() * 1e4;
+    return l;
+  };
+  out.emplace_back(loop("other", other.odometry[20].utime, other.odometry[190].utime, truth_other));
+  out.emplace_back(loop("fast", fast.odometry[1234].utime, fast.odometry[9876].utime, truth_fast));
+  REQUIRE(sightings[other_next_sighting].utime > other.odometry[200].utime);  // ahead of "other"'s odometry
+  out.emplace_back(sightings[other_next_sighting]);
+  j = other_next_sighting + 1;
+  for (size_t k = 201; k < other.odometry.size(); ++k) {
+    for (; j < sightings.size() && sightings[j].utime < other.odometry[k].utime; ++j) out.emplace_back(sightings[j]);
+    out.emplace_back(other.odometry[k]);
+  }
+  for (; j < sightings.size(); ++j) out.emplace_back(sightings[j]);
+  return out;
+}
+
+GraphConfig burst_config() { return graph_only_config(false).graph; }  // a keyframe per metre
+
+// The same results: keyframes (times and poses), landmarks, counters, the smoother's chi2 and every variable's
+// marginal covariance (the odometry edges' information, i.e. the composed increment covariances).
+void check_same_graph(const GraphStage& a, const GraphStage& b) {
+  for (const std::string body : {"other", "fast"}) {
+    const auto ka = a.keyframes(body), kb = b.keyframes(body);
+    REQUIRE(ka.size() == kb.size());
+    for (size_t k = 0; k < ka.size(); ++k) {
+      CHECK(ka[k].utime == kb[k].utime);
+      CHECK((ka[k].pose.position - kb[k].pose.position).norm() < 1e-9);
+      CHECK(ka[k].pose.orientation.angularDistance(kb[k].pose.orientation) < 1e-9);
+    }
+    const auto la = a.landmarks(body), lb = b.landmarks(body);
+    REQUIRE(la.size() == lb.size());
+    for (size_t k = 0; k < la.size(); ++k) {
+      CHECK(la[k].id == lb[k].id);
+      CHECK(la[k].sightings == lb[k].sightings);
+      CHECK((la[k].position - lb[k].position).norm() < 1e-9);
+    }
+  }
+  for (const char* name : {"keyframes", "keyframes_rejected", "loops_accepted", "loops_rejected", "loops_unmatched",
+                           "landmarks", "sightings_accepted", "sightings_rejected", "sightings_unmatched",
+                           "sightings_dropped", "odometry_out_of_order", "odometry_edges_rejected"})
+    CHECK_MESSAGE(counter(a, name) == counter(b, name), name);
+  CHECK(a.smoother().chi2() == doctest::Approx(b.smoother().chi2()).epsilon(1e-9));
+  const size_t n = a.smoother().graph().variables().size();
+  REQUIRE(n == b.smoother().graph().variables().size());
+  for (size_t v = 0; v < n; ++v) {
+    const Eigen::MatrixXd pa = a.smoother().marginal_covariance(static_cast<int>(v));
+    const Eigen::MatrixXd pb = b.smoother().marginal_covariance(static_cast<int>(v));
+    REQUIRE(pa.rows() == pb.rows());
+    if (pa.size() > 0) CHECK((pa - pb).norm() <= 1e-9 * pa.norm());
+  }
+}
+
+}  // namespace
+
+TEST_CASE("graph stage (daemon path): a 10,000-message odometry burst is coalesced; keyframes, loops and sightings as with a slow feed") {
+  const Emit ignore = [](Output) {};
+  for (const bool increments_given : {true, false}) {
+    CAPTURE(increments_given);
+    const std::vector<Event> events = burst_events(increments_given);
+    size_t odometry = 0;
+    for (const auto& e : events) odometry += std::holds_alternative<Odometry>(e) ? 1 : 0;
+    REQUIRE(odometry == 301 + 10001);
+
+    // The slow feed: the stage keeps up, every event handled as it arrives.
+    GraphStage slow(burst_config(), std::make_shared<GraphCorrections>());
+    for (const auto& e : events) slow.handle(e, ignore);
+
+    // The daemon's path with the stage busy through the whole run: one 1024-event queue.
+    GraphStage busy(burst_config(), std::make_shared<GraphCorrections>());
+    BlockedStageFeed feed;
+    for (const auto& e : events) CHECK(feed.offer(busy, e));
+    CHECK(feed.dropped == 0);
+    CHECK(feed.queued_other == events.size() - odometry);  // every loop and sighting queued, none coalesced
+    CHECK(feed.peak <= 2 * feed.queued_other + 2);  // odometry: a slot per body and other event, not per message
+    CHECK(counter(busy, "odometry_waiting") > 0);
+    feed.drain(busy, ignore);
+    CHECK(counter(busy, "odometry_waiting") == 0);
+    MESSAGE("queue peak " << feed.peak << " events for " << events.size() << " offered; odometry coalesced "
+                          << counter(busy, "odometry_coalesced") << " of " << odometry);
+    CHECK(counter(busy, "odometry_coalesced") > 10000 - 100);
+    CHECK(counter(slow, "odometry_coalesced") == 0);
+
+    // The same graph; the loops (one between odometry times of "fast") and the sightings applied.
+    check_same_graph(busy, slow);
+    CHECK(counter(busy, "loops_accepted") == 2);
+    CHECK(counter(busy, "loops_unmatched") == 0);
+    CHECK(busy.keyframes("fast").size() >= 9);
+    CHECK(counter(busy, "sightings_accepted") > 100);
+
+    // Without coalescing the same burst fills the queue: the loops, the sighting and the rest are dropped.
+    GraphConfig plain = burst_config();
+    plain.coalesce_odometry = false;
+    GraphStage dropping(plain, std::make_shared<GraphCorrections>());
+    BlockedStageFeed old_feed;
+    for (const auto& e : events) old_feed.offer(dropping, e);
+    old_feed.drain(dropping, ignore);
+    CHECK(old_feed.dropped > 9000);
+    CHECK(counter(dropping, "loops_accepted") == 0);
+  }
+}
+
+TEST_CASE("graph stage (daemon path): out-of-order and duplicate odometry, small batches and a full queue") {
+  const Emit ignore = [](Output) {};
+  GraphConfig cfg = burst_config();
+  cfg.keyframes.k1 = 0.2;
+  cfg.odometry_batch_max = 2;  // a new batch (one more queue slot) every second pinned message
+  Run fast = circle_run(3, 7, 1000, "fast");
+  std::vector<Odometry> sent = fast.odometry;
+  sent.insert(sent.begin() + 501, fast.odometry[500]);   // a duplicate stamp
+  sent.insert(sent.begin() + 1002, fast.odometry[999]);  // an old message after a newer one
+
+  GraphStage slow(cfg, std::make_shared<GraphCorrections>());
+  for (const auto& o : sent) slow.handle(o, ignore);
+  CHECK(counter(slow, "odometry_out_of_order") == 2);
+
+  GraphStage busy(cfg, std::make_shared<GraphCorrections>());
+  BlockedStageFeed feed;
+  for (const auto& o : sent) CHECK(feed.offer(busy, o));
+  feed.drain(busy, ignore);
+  CHECK(counter(busy, "odometry_out_of_order") == 2);
+  REQUIRE(busy.keyframes("fast").size() > 10);
+  CHECK(feed.peak >= busy.keyframes("fast").size() / 2);  // a batch (a queue slot) per two keyframe candidates
+  CHECK(feed.peak <= busy.keyframes("fast").size() / 2 + 2);
+  check_same_graph(busy, slow);
+
+  // A queue with room for one event: the first batch's token takes it; when a batch is full, the next message needs a
+  // new token, the queue refuses it and the message is dropped without a trace (the keyframe selector has not seen
+  // it).  Once the stage has taken the batch, the odometry goes on; the keyframes are those of the messages that got
+  // through.
+  GraphStage tight(cfg, std::make_shared<GraphCorrections>());
+  GraphStage reference(cfg, std::make_shared<GraphCorrections>());
+  BlockedStageFeed one;
+  one.capacity = 1;
+  size_t refused = 0;
+  for (size_t k = 0; k < fast.odometry.size(); ++k) {
+    if (one.offer(tight, fast.odometry[k])) reference.handle(fast.odometry[k], ignore);
+    else ++refused;
+    if (k % 500 == 499) one.drain(tight, ignore);  // the stage gets to its queue now and then
+  }
+  one.drain(tight, ignore);
+  CHECK(refused > 100);
+  CHECK(one.dropped == refused);
+  const auto kt = tight.keyframes("fast"), kr = reference.keyframes("fast");
+  REQUIRE(kt.size() == kr.size());
+  CHECK(kt.size() >= 4);
+  for (size_t k = 0; k < kt.size(); ++k) CHECK(kt[k].utime == kr[k].utime);
 }
