@@ -243,6 +243,13 @@ struct MeasureOptions {
   std::string json, samples;
 };
 
+/// The 1-minute load average (/proc/loadavg; -1 where there is none).
+double load_average() {
+  double load = -1;
+  std::ifstream("/proc/loadavg") >> load;
+  return load;
+}
+
 const Monitor::Status* status_at(const std::vector<Monitor::Status>& all, int64_t t) {
   const Monitor::Status* best = nullptr;
   for (const auto& s : all)
@@ -323,6 +330,7 @@ int run_measure(const MeasureOptions& o) {
   track_options.start_utime = start_utime;
   track_options.period_us = period_us;
   sextant::bench::OdometryTrack track(track_options);
+  const double load_begin = load_average();
   const int64_t t_begin = now_ns();
   {
     const auto t0 = Clock::now() + std::chrono::milliseconds(1);
@@ -341,6 +349,7 @@ int run_measure(const MeasureOptions& o) {
     }
   }
   const int64_t t_end = now_ns();
+  const double load_end = load_average();
   std::this_thread::sleep_for(std::chrono::duration<double>(o.settle_s));
   shutdown();
   size_t sent = 0;
@@ -379,13 +388,18 @@ int run_measure(const MeasureOptions& o) {
   const LatencySummary solve = solve_ms.summary();
   const double window_ms = static_cast<double>(t_end - t_begin) * 1e-6;
   auto delta = [&](const std::string& stage, const std::string& name) { return counter(after, stage, name) - counter(before, stage, name); };
-  int64_t graph_queue_max = 0;
+  int64_t graph_queue_max = 0, odometry_waiting_max = 0;
   for (const auto& s : monitor.statuses)
-    if (s.at_ns >= t_begin && s.at_ns <= t_end) graph_queue_max = std::max(graph_queue_max, counter(&s, "graph", "queue_depth"));
+    if (s.at_ns >= t_begin && s.at_ns <= t_end) {
+      graph_queue_max = std::max(graph_queue_max, counter(&s, "graph", "queue_depth"));
+      odometry_waiting_max = std::max(odometry_waiting_max, counter(&s, "graph", "odometry_waiting"));
+    }
+  const double per_minute = 60e3 / window_ms;
 
   // Report.
   std::printf("daemon latency: %zu odometry messages of '%s' at %.0f Hz over %.1f s; raw round trip: the same bytes at the same rate\n",
               sent, o.source.c_str(), o.rate_hz, window_ms * 1e-3);
+  std::printf("  1-minute load average at the start / end of the measurement: %.2f / %.2f\n", load_begin, load_end);
   std::printf("  %-26s %-28s %8s %6s %8s %8s %8s\n", "channel", "path", "samples", "lost", "p50_ms", "p99_ms", "max_ms");
   auto row = [](const ChannelResult& c) {
     std::printf("  %-26s %-28s %8lld %6lld %8.3f %8.3f %8.3f\n", c.channel.c_str(), c.label.c_str(),
@@ -411,9 +425,14 @@ int run_measure(const MeasureOptions& o) {
   std::printf("  solves (TRAJECTORY) %lld of the fed body + %lld of '%s'; solve_ms p50 %.2f p99 %.2f max %.2f; busy %.0f %% of the time; chi2 %.1f\n",
               static_cast<long long>(solves_fed), static_cast<long long>(solves_body), o.source.c_str(), solve.p50_ms,
               solve.p99_ms, solve.max_ms, 100.0 * busy_ms / window_ms, last_chi2);
+  std::printf("  per minute: keyframes %.0f, loops accepted %.0f (graph stage counters over the measurement)\n",
+              static_cast<double>(delta("graph", "keyframes")) * per_minute,
+              static_cast<double>(delta("graph", "loops_accepted")) * per_minute);
   std::printf("  graph queue depth max %lld; dropped: graph +%lld, graph_pose +%lld, filter +%lld\n", static_cast<long long>(graph_queue_max),
               static_cast<long long>(delta("graph", "dropped")), static_cast<long long>(delta("graph_pose", "dropped")),
               static_cast<long long>(delta("filter", "dropped")));
+  std::printf("  graph odometry: coalesced +%lld (merged into a later message before the stage), waiting max %lld (after merging)\n",
+              static_cast<long long>(delta("graph", "odometry_coalesced")), static_cast<long long>(odometry_waiting_max));
   const std::array<double, 3> graph_latency = after != nullptr && after->latency_ms.count("graph") ? after->latency_ms.at("graph") : std::array<double, 3>{};
   std::printf("  graph stage, event in -> processed (its last 4096 events, from SEXTANT_STATUS): p50 %.1f ms, p99 %.1f ms, max %.1f ms\n",
               graph_latency[0], graph_latency[1], graph_latency[2]);
@@ -425,7 +444,8 @@ int run_measure(const MeasureOptions& o) {
 
   if (!o.json.empty()) {
     sextant::replay::JsonWriter j;
-    j.begin_object().field("samples_sent", sent).field("rate_hz", o.rate_hz).field("window_s", window_ms * 1e-3);
+    j.begin_object().field("samples_sent", sent).field("rate_hz", o.rate_hz).field("window_s", window_ms * 1e-3)
+        .field("load_begin", load_begin).field("load_end", load_end);
     auto put = [&](const ChannelResult& c) {
       j.key(c.channel).begin_object().field("received", c.received).field("lost", c.lost).field("p50_ms", c.latency.p50_ms)
           .field("p99_ms", c.latency.p99_ms).field("max_ms", c.latency.max_ms).end_object();
@@ -441,7 +461,11 @@ int run_measure(const MeasureOptions& o) {
         .field("loops_rejected", delta("graph", "loops_rejected")).field("solves_fed", solves_fed).field("solves_body", solves_body)
         .field("solve_ms_p50", solve.p50_ms).field("solve_ms_p99", solve.p99_ms).field("solve_ms_max", solve.max_ms)
         .field("busy_fraction", busy_ms / window_ms).field("graph_queue_max", graph_queue_max)
-        .field("graph_dropped", delta("graph", "dropped"))
+        .field("graph_dropped", delta("graph", "dropped")).field("graph_pose_dropped", delta("graph_pose", "dropped"))
+        .field("filter_dropped", delta("filter", "dropped"))
+        .field("odometry_coalesced", delta("graph", "odometry_coalesced")).field("odometry_waiting_max", odometry_waiting_max)
+        .field("keyframes_per_minute", static_cast<double>(delta("graph", "keyframes")) * per_minute)
+        .field("loops_per_minute", static_cast<double>(delta("graph", "loops_accepted")) * per_minute)
         .field("graph_event_latency_ms_p50", graph_latency[0]).field("graph_event_latency_ms_p99", graph_latency[1])
         .field("feed_finished_s", fed.finished_ns >= 0 ? static_cast<double>(fed.finished_ns - t_begin) * 1e-9 : -1.0).end_object();
     j.end_object();
