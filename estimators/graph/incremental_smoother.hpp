@@ -52,6 +52,9 @@ struct IncrementalOptions {
                                           // relinearization or reordering takes one
   double refill_ratio = 1.5;              // rebuild (reorder) when nnz(L) exceeds this multiple of its size after ordering
                                           // (city10000: 1.5 takes 0.68 of the CPU time of 2.5, 1.25 0.62 with more rebuilds)
+  /// Orderings at rebuilds: constrained AMD with the newest variables last up to this many variables, METIS nested
+  /// dissection above (city10000: half the factorization flops; M3500: its ordering time outweighs the gain).
+  int nested_dissection_above = 5000;
   double capacity_growth = 1.0;           // reserved columns at a rebuild: this fraction of the used ones (and >= 64)
   /// Wildfire threshold of the back-substitution (as iSAM2's): a change of a step by less than this (m or rad) is not
   /// propagated to the variables that depend on it (they keep a value stale by less than it).  0: exact.
@@ -115,7 +118,10 @@ class IncrementalSmoother {
  private:
   struct Contribution;  // one factor's (W^1/2 J)' and J' W e at the linearization point
   Contribution linearize(size_t factor) const;
+  double kernel_weight(size_t factor, const Eigen::VectorXd& error) const;  // the robust weight at this residual
+  cholmod_sparse* assemble_normal_equations();  // H (upper, reserved columns = identity) and g_; nullptr: no memory
   void apply(const std::vector<Contribution>& cs, bool add);
+  void make_room(const cholmod_sparse* C);  // packs L before an update that could otherwise make CHOLMOD reallocate it
   void determined(const std::vector<int>& new_vars, const std::vector<size_t>& new_factors,
                   std::vector<char>& ready) const;
   /// dx from y by back-substitution: every column (`full`), or only the modified ones and those that depend on a
@@ -126,6 +132,7 @@ class IncrementalSmoother {
   bool relinearize(const std::vector<int>& moved, IncrementalStatus& st);
   std::string factorize_all();
   IncrementalStatus rebuild_with(int iterations);
+  void order_blocks(const std::vector<char>& in);
 
   IncrementalOptions options_;
   FactorGraph graph_;                 // estimates and factors
@@ -151,6 +158,7 @@ class IncrementalSmoother {
   cholmod_dense* delta_b_ = nullptr;  // scratch for cholmod_updown_solve (zero between calls)
   std::vector<char> dirty_;           // per column: modified by an update since the last solve
   std::vector<char> recomputed_;      // per column, during a solve
+  std::vector<char> on_path_;         // per column, during make_room (all 0 between calls)
   std::vector<char> changed_;         // per column, during a solve: moved past the wildfire threshold
   std::vector<double> seen_;          // per column: its step when its subtree was last recomputed
   std::vector<int> col_var_;          // per column: the variable, -1 for a reserved column
