@@ -18,7 +18,7 @@
 //      bound);
 //    * the multipliers start at each detection's smallest equal share c_t / m_t of the tuples holding it (a feasible
 //      point of the packing LP's dual; far fewer iterations than starting at 0);
-//    * multipliers follow Polyak's subgradient step toward the best upper bound, its factor halved after 5
+//    * multipliers follow Polyak's subgradient step toward the best upper bound, its factor halved after 10
 //      iterations without a better lower bound.  Stops when the relative gap (UB - LB) / |UB| falls below the
 //      tolerance.
 #include "assoc/tuple_costs.hpp"

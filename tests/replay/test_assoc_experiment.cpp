@@ -8,10 +8,18 @@
 
 using namespace sextant::replay;
 
+namespace {
+
+// A scenario of the experiment: `targets` targets at separation `spacing` km, detection probability, mean false
+// alarms per sensor and scan, Monte Carlo runs; the rest at the defaults (3 sensors, 5 mrad, classic cost, grid).
+AssocExperimentOptions scenario(int targets, double spacing, double p_detect, double clutter, int runs) {
+  return {.targets = targets, .spacing = spacing, .runs = runs, .p_detect = p_detect, .clutter = clutter};
+}
+
+}  // namespace
+
 TEST_CASE("association sanity anchors: d = 0 gives 1/4, d = 2 km at 5 mrad gives ~1") {
-  AssocExperimentOptions o;
-  o.runs = 600;
-  o.spacing = 0;
+  auto o = scenario(2, 0.0, 1.0, 0.0, 600);
   const auto zero = run_assoc_experiment(o);
   CHECK(std::abs(zero.correct_rate - 0.25) < 4 * zero.correct_rate_stderr + 0.01);
   o.spacing = 2.0;
@@ -27,12 +35,7 @@ TEST_CASE("association sanity anchors: d = 0 gives 1/4, d = 2 km at 5 mrad gives
 }
 
 TEST_CASE("Lagrangian relaxation matches the exact solver on 6-target scans") {
-  AssocExperimentOptions o;
-  o.targets = 6;
-  o.spacing = 1.0;
-  o.runs = 30;
-  o.p_detect = 0.9;
-  o.clutter = 2;
+  auto o = scenario(6, 1.0, 0.9, 2, 30);
   o.compare_exact = true;
   const auto lr = run_assoc_experiment(o);
   CHECK(lr.exact_compared == 30);
@@ -52,11 +55,7 @@ TEST_CASE("Lagrangian relaxation matches the exact solver on 6-target scans") {
 }
 
 TEST_CASE("the target-prior term cuts ghost tuples under clutter") {
-  AssocExperimentOptions o;
-  o.spacing = 2.0;
-  o.runs = 300;
-  o.p_detect = 0.9;
-  o.clutter = 1;
+  auto o = scenario(2, 2.0, 0.9, 1, 300);
   const auto plain = run_assoc_experiment(o);
   o.target_prior = true;
   const auto prior = run_assoc_experiment(o);
@@ -74,14 +73,9 @@ TEST_CASE("sensor layouts and the uniform target layout") {
   CHECK(five[4] == Eigen::Vector3d(15, -10, 0));
   CHECK(seven[6] == Eigen::Vector3d(40, 15, 0.05));  // sees the region around azimuth pi: the field of view wraps
   CHECK(assoc_experiment_sensors(9).size() == 9);
-  AssocExperimentOptions o;
+  auto o = scenario(20, 1.5, 0.9, 5, 5);
   o.sensors = 7;
-  o.targets = 20;
   o.uniform_layout = true;
-  o.spacing = 1.5;
-  o.runs = 5;
-  o.p_detect = 0.9;
-  o.clutter = 5;
   o.target_prior = true;
   const auto r = run_assoc_experiment(o);
   CHECK(r.observable_targets == 100);  // 7 sensors at P_D 0.9: every target is seen by >= 2 of them (P ~ 1 - 6e-6)

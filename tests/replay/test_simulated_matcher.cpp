@@ -171,12 +171,7 @@ TEST_CASE("simulated matcher: an answer between truth stamps uses the interpolat
 }
 
 TEST_CASE("simulated matcher: failure and wrong-match fractions within binomial bounds, wrong answers are wrong") {
-  SimulatedMatcherOptions o;
-  o.sigma_t = 0.01;
-  o.sigma_r = 0.001;
-  o.failure_rate = 0.2;
-  o.wrong_rate = 0.1;
-  o.seed = 99;
+  const SimulatedMatcherOptions o{.sigma_t = 0.01, .sigma_r = 0.001, .failure_rate = 0.2, .wrong_rate = 0.1, .seed = 99};
   auto m = matcher_for(helix_truth(), o);
   const int n = 6000;
   int none = 0, far = 0, near = 0;
