@@ -68,16 +68,15 @@ size_t IncrementalSmoother::factor_nonzeros() const {
   return s;
 }
 
-double IncrementalSmoother::kernel_weight(size_t fi, const Eigen::VectorXd& error) const {
-  if (!robust_[fi]) return 1.0;
-  return robust_weight(options_.kernel, options_.kernel_width, error.dot(graph_.factors()[fi]->information() * error));
+double IncrementalSmoother::kernel_weight(size_t fi, double chi2) const {
+  return robust_[fi] ? robust_weight(options_.kernel, options_.kernel_width, chi2) : 1.0;
 }
 
 IncrementalSmoother::Contribution IncrementalSmoother::linearize(size_t fi) const {
   const Factor& f = *graph_.factors()[fi];
   Linearization lin = f.make_linearization(lin_);
   f.linearize(lin_, lin);
-  const Eigen::MatrixXd W = kernel_weight(fi, lin.error) * f.information();
+  const Eigen::MatrixXd W = kernel_weight(fi, lin.error.dot(f.information() * lin.error)) * f.information();
   const Eigen::MatrixXd U = W.llt().matrixU();
   Contribution c;
   std::vector<std::pair<int, int>> blocks;  // (first column, variable slot in the factor)
@@ -233,7 +232,7 @@ double IncrementalSmoother::robust_weight_of(size_t fi) const {
   const Factor& f = *graph_.factors()[fi];
   Eigen::VectorXd e(f.residual_dim());
   f.error(lin_, e);
-  return kernel_weight(fi, e);
+  return kernel_weight(fi, e.dot(f.information() * e));
 }
 
 Eigen::MatrixXd IncrementalSmoother::marginal_covariance(int index) const {
@@ -562,24 +561,31 @@ void IncrementalSmoother::order_blocks(const std::vector<char>& in) {
 cholmod_sparse* IncrementalSmoother::assemble_normal_equations() {
   const auto& vars = graph_.variables();
   const auto& factors = graph_.factors();
-  // Per variable in the system: the variables before it in the ordering that share a factor with it, by position;
-  // its own block comes last in each of its columns (the diagonal is the last entry of an upper-triangular column).
-  std::vector<std::vector<int>> before(vars.size());
-  for (size_t f = 0; f < factors.size(); ++f) {
-    if (!(weight_[f] > 0)) continue;
-    for (int a : factors[f]->variables())
-      for (int b : factors[f]->variables())
-        if (pos_[static_cast<size_t>(a)] >= 0 && pos_[static_cast<size_t>(a)] < pos_[static_cast<size_t>(b)])
-          before[static_cast<size_t>(b)].push_back(a);
-  }
+  // Per variable in the system: the variables before it in the ordering that share a factor with it, by position
+  // (flat: before[first[v] .. first[v] + count[v])); its own block comes last in each of its columns (the diagonal
+  // is the last entry of an upper-triangular column).
+  const size_t nv = vars.size();
+  std::vector<int> first(nv + 1, 0), count(nv, 0);
+  auto each_pair = [&](auto&& visit) {
+    for (size_t f = 0; f < factors.size(); ++f) {
+      if (!(weight_[f] > 0)) continue;
+      for (int a : factors[f]->variables())
+        for (int b : factors[f]->variables())
+          if (pos_[static_cast<size_t>(a)] >= 0 && pos_[static_cast<size_t>(a)] < pos_[static_cast<size_t>(b)]) visit(a, b);
+    }
+  };
+  each_pair([&](int, int b) { ++first[static_cast<size_t>(b) + 1]; });
+  for (size_t v = 0; v < nv; ++v) first[v + 1] += first[v];
+  std::vector<int> before(static_cast<size_t>(first[nv]));
+  each_pair([&](int a, int b) { before[static_cast<size_t>(first[static_cast<size_t>(b)] + count[static_cast<size_t>(b)]++)] = a; });
   size_t nnz = static_cast<size_t>(capacity_ - used_);
-  for (size_t v = 0; v < vars.size(); ++v) {
-    auto& r = before[v];
-    std::sort(r.begin(), r.end(), [&](int a, int b) { return pos_[static_cast<size_t>(a)] < pos_[static_cast<size_t>(b)]; });
-    r.erase(std::unique(r.begin(), r.end()), r.end());
+  for (size_t v = 0; v < nv; ++v) {
+    int* r = before.data() + first[v];
+    std::sort(r, r + count[v], [&](int a, int b) { return pos_[static_cast<size_t>(a)] < pos_[static_cast<size_t>(b)]; });
+    count[v] = static_cast<int>(std::unique(r, r + count[v]) - r);
     if (pos_[v] < 0) continue;
     size_t above = 0;
-    for (int u : r) above += static_cast<size_t>(vars[static_cast<size_t>(u)].dim());
+    for (int k = 0; k < count[v]; ++k) above += static_cast<size_t>(vars[static_cast<size_t>(r[k])].dim());
     const size_t d = static_cast<size_t>(vars[v].dim());
     nnz += d * above + d * (d + 1) / 2;
   }
@@ -602,8 +608,9 @@ cholmod_sparse* IncrementalSmoother::assemble_normal_equations() {
     const int d = vars[static_cast<size_t>(v)].dim();
     for (int k = 0; k < d; ++k) {
       Hp[c + k] = static_cast<int>(at);
-      for (int u : before[static_cast<size_t>(v)])
-        for (int i = 0; i < vars[static_cast<size_t>(u)].dim(); ++i) Hi[at++] = pos_[static_cast<size_t>(u)] + i;
+      for (int j = first[static_cast<size_t>(v)]; j < first[static_cast<size_t>(v)] + count[static_cast<size_t>(v)]; ++j)
+        for (int i = 0; i < vars[static_cast<size_t>(before[static_cast<size_t>(j)])].dim(); ++i)
+          Hi[at++] = pos_[static_cast<size_t>(before[static_cast<size_t>(j)])] + i;
       for (int i = 0; i <= k; ++i) Hi[at++] = c + i;
     }
     c += d - 1;
@@ -612,7 +619,8 @@ cholmod_sparse* IncrementalSmoother::assemble_normal_equations() {
   // Block (a, b), pos a <= pos b, of a factor: J_a' W J_b added at a's rows in b's columns.
   auto offset_in_column = [&](int a, int b) {
     int off = 0;
-    for (int u : before[static_cast<size_t>(b)]) {
+    for (int j = first[static_cast<size_t>(b)]; j < first[static_cast<size_t>(b)] + count[static_cast<size_t>(b)]; ++j) {
+      const int u = before[static_cast<size_t>(j)];
       if (u == a) return off;
       off += vars[static_cast<size_t>(u)].dim();
     }
@@ -632,8 +640,9 @@ cholmod_sparse* IncrementalSmoother::assemble_normal_equations() {
       same_shape = lin.jacobians[k].cols() == vars[static_cast<size_t>(fv[k])].dim();
     if (!same_shape) lin = fac.make_linearization(lin_);
     fac.linearize(lin_, lin);
-    const double w = kernel_weight(f, lin.error);
-    We.noalias() = w * (fac.information() * lin.error);
+    We.noalias() = fac.information() * lin.error;
+    const double w = kernel_weight(f, lin.error.dot(We));
+    We *= w;
     for (size_t ka = 0; ka < fv.size(); ++ka) {
       const int pa = pos_[static_cast<size_t>(fv[ka])];
       if (pa < 0) continue;

@@ -118,7 +118,7 @@ class IncrementalSmoother {
  private:
   struct Contribution;  // one factor's (W^1/2 J)' and J' W e at the linearization point
   Contribution linearize(size_t factor) const;
-  double kernel_weight(size_t factor, const Eigen::VectorXd& error) const;  // the robust weight at this residual
+  double kernel_weight(size_t factor, double chi2) const;  // the robust weight at e' Omega e = chi2
   cholmod_sparse* assemble_normal_equations();  // H (upper, reserved columns = identity) and g_; nullptr: no memory
   void apply(const std::vector<Contribution>& cs, bool add);
   void make_room(const cholmod_sparse* C);  // packs L before an update that could otherwise make CHOLMOD reallocate it
