@@ -29,6 +29,18 @@ Matrix6 embed_planar(const Eigen::MatrixXd& m3) {
   return out;
 }
 
+/// The information of a 3-D RelativePoseFactor from an information over sextant's tangent [t; phi] (the odometry's
+/// and the loops' covariances, rotation in radians).  The factor's residual is g2o's [t_E; vec(q_E)] with
+/// vec(q_E) ~ phi / 2, so [t; phi] ~ T [t_E; vec(q_E)], T = diag(I, 2 I), and its information is T Omega T: the
+/// rotation block times 4, the cross blocks times 2 (the inverse of replay::g2o_information_to_sextant).  Passing
+/// Omega unchanged weighted every rotation 4 times too little.
+Matrix6d residual_information(const Eigen::MatrixXd& tangent) {
+  Matrix6d out = tangent;
+  out.bottomRows<3>() *= 2;
+  out.rightCols<3>() *= 2;
+  return out;
+}
+
 graph::IncrementalOptions smoother_options(const GraphConfig& c) {
   graph::IncrementalOptions o;
   o.kernel = graph::robust_kernel_from_name(c.robust);
@@ -187,7 +199,7 @@ void GraphStage::on_keyframe_candidate(const Odometry& o, Body& b, const SE3& od
                                                                          Eigen::Matrix3d(information)), false);
       else
         smoother_.add_factor(std::make_unique<graph::RelativePoseFactor>(prev.variable, node.variable, node.edge,
-                                                                         Matrix6d(information)), false);
+                                                                         residual_information(information)), false);
     }
   } catch (const std::invalid_argument&) {
     ++bad_edges_;  // a non-finite pose or information: never reaches the smoother's system (it stays pending)
@@ -298,7 +310,7 @@ void GraphStage::on_loop(const LoopClosure& l, const Emit& emit) {
     if (b.planar)
       smoother_.add_factor(std::make_unique<graph::RelativePoseFactor>(vf, vt, SE2::from_se3(z), Eigen::Matrix3d(planar_block(l.information))));
     else
-      smoother_.add_factor(std::make_unique<graph::RelativePoseFactor>(vf, vt, z, Matrix6d(l.information)));
+      smoother_.add_factor(std::make_unique<graph::RelativePoseFactor>(vf, vt, z, residual_information(l.information)));
   } catch (const std::invalid_argument&) {
     ++loops_rejected_;  // an information the intake let through but the smoother cannot use (e.g. planar block)
     return;
