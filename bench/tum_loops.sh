@@ -4,7 +4,11 @@
 # with `sextant matcher` answering its loop proposals from the ground truth.  Reports ATE (TUM semantics, `sextant
 # eval`) of the raw odometry and of the optimized keyframes, at the keyframe times.
 # Usage: bench/tum_loops.sh BUILD [SEQUENCES...]; env: N1 (3), N2 (-1: 2 N1), WRONG (0.05), K1 (0.1), K2 (1.0),
-# FAIL (0.1), SPEED (4), matcher noise SIGMA_T (0.01 m) and SIGMA_R (0.005 rad), DRIFT_YAW (0.002 rad/m).
+# FAIL (0.1), SPEED (4), matcher noise SIGMA_T (0.01 m) and SIGMA_R (0.005 rad), DRIFT_YAW (0.002 rad/m), the loops'
+# kernel ROBUST (dcs) and its width PHI (22.46: the 6-DOF chi-square 0.999 quantile, the gate's; with the daemon's
+# default phi = 1 a true 6-DOF loop at its median chi2 5.3 keeps a weight of (2 / 6.3)^2 = 0.1, see RESULTS);
+# KEEP=DIR keeps each sequence's vo.lcm, gt.txt and bus.lcm in DIR/SEQUENCE (for bench/tum_graph_diagnosis.py);
+# VO_FROM=DIR plays DIR/SEQUENCE/vo.lcm and gt.txt (kept by an earlier KEEP run) instead of converting anew.
 set -euo pipefail
 build=${1:-build}; shift || true
 root=$(cd "$(dirname "$0")/.." && pwd)
@@ -13,10 +17,14 @@ source "$root/tests/e2e/netns.bash"
 bin="$root/$build/bin"
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
-printf '| sequence | n1 | n2 | k1 | k2 | wrong | keyframes | ATE odometry [m] | ATE keyframes [m] | ratio | loops accepted / rejected |\n|---|---|---|---|---|---|---|---|---|---|---|\n'
+printf '| sequence | n1 | n2 | k1 | k2 | wrong | keyframes | ATE odometry [m] | ATE keyframes [m] | ratio | RPE odometry [m/s, deg/s] | RPE keyframes [m/s, deg/s] | loops accepted / rejected |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|\n'
 for s in $seqs; do
   gt="$root/../shared/data/tum/$s/groundtruth.txt"
-  "$bin/sextant" convert tum "$gt" -o "$work/vo.lcm" --gt-out "$work/gt.txt" --seed 1 --drift-yaw ${DRIFT_YAW:-0.002} > /dev/null
+  if [ -n "${VO_FROM:-}" ]; then
+    cp "$VO_FROM/$s/vo.lcm" "$VO_FROM/$s/gt.txt" "$work/"
+  else
+    "$bin/sextant" convert tum "$gt" -o "$work/vo.lcm" --gt-out "$work/gt.txt" --seed 1 --drift-yaw ${DRIFT_YAW:-0.002} > /dev/null
+  fi
   cat > "$work/config.yaml" <<EOC
 daemon:
   status_period_s: 0.5
@@ -26,7 +34,7 @@ engine:
   association: {enabled: false}
   graph:
     keyframes: {k1: ${K1:-0.1}, k2: ${K2:-1.0}}
-    loops: {n1: ${N1:-3}, n2: ${N2:--1}}
+    loops: {n1: ${N1:-3}, n2: ${N2:--1}, robust: ${ROBUST:-dcs}, kernel_width: ${PHI:-22.46}}
 EOC
   cat > "$work/run.sh" <<EOS
 set -euo pipefail
@@ -46,8 +54,13 @@ EOS
   rm -f "$work/bus.lcm"
   in_netns bash "$work/run.sh"
   n=$(python3 "$root/bench/tum_loops_extract.py" "$work/bus.lcm" "$work/kf.txt" "$work/odo.txt" "$root/$build/lcmtypes/python" "$root/tests/e2e" | cut -d' ' -f1)
-  a_odo=$("$bin/sextant" eval --gt "$work/gt.txt" --est "$work/odo.txt" --json | python3 -c 'import json,sys; print("%.4f" % json.load(sys.stdin)["ate_rmse"])')
-  a_kf=$("$bin/sextant" eval --gt "$work/gt.txt" --est "$work/kf.txt" --json | python3 -c 'import json,sys; print("%.4f" % json.load(sys.stdin)["ate_rmse"])')
+  score() {  # ATE, then RPE over 1 s (translation, rotation)
+    "$bin/sextant" eval --gt "$work/gt.txt" --est "$1" --json |
+      python3 -c 'import json,sys; j=json.load(sys.stdin); print("%.4f %.4f, %.2f" % (j["ate_rmse"], j["rpe_trans_rmse"], j["rpe_rot_rmse_deg"]))'
+  }
+  read -r a_odo r_odo <<< "$(score "$work/odo.txt")"
+  read -r a_kf r_kf <<< "$(score "$work/kf.txt")"
+  if [ -n "${KEEP:-}" ]; then mkdir -p "$KEEP/$s" && cp "$work/vo.lcm" "$work/gt.txt" "$work/bus.lcm" "$KEEP/$s/"; fi
   loops=$(python3 - "$work/bus.lcm" "$root/$build/lcmtypes/python" "$root/tests/e2e" <<'EOP'
 import sys
 sys.path.insert(0, sys.argv[2]); sys.path.insert(0, sys.argv[3])
@@ -64,5 +77,5 @@ EOP
 )
   ratio=$(python3 -c "print('%.2f' % ($a_kf / $a_odo))")
   n2=${N2:--1}; [ "$n2" = -1 ] && n2=$((2 * ${N1:-3}))
-  echo "| $s | ${N1:-3} | $n2 | ${K1:-0.1} | ${K2:-1.0} | ${WRONG:-0.05} | $n | $a_odo | $a_kf | $ratio | $loops |"
+  echo "| $s | ${N1:-3} | $n2 | ${K1:-0.1} | ${K2:-1.0} | ${WRONG:-0.05} | $n | $a_odo | $a_kf | $ratio | $r_odo | $r_kf | $loops |"
 done

@@ -70,8 +70,9 @@ sextant::cli::RegisterCommand reg{"convert", [](CLI::App& app) {
   tum->add_option("-o,--output", *t_out, "output LCM log")->required();
   tum->add_option("--gt-out", *t_gt, "copy the ground truth (TUM) here");
   tum->add_option("--seed", t_opt->seed, "random seed");
-  tum->add_option("--noise-trans", t_opt->trans_noise, "translation noise, m per m travelled");
-  tum->add_option("--noise-rot", t_opt->rot_noise, "rotation noise, rad per m travelled");
+  tum->add_option("--noise-trans", t_opt->trans_noise, "translation noise, m per sqrt(m) travelled (per axis)");
+  tum->add_option("--noise-rot", t_opt->rot_noise, "rotation noise, rad per sqrt(rad) turned (per axis)");
+  tum->add_option("--frame-rate", t_opt->frame_rate_hz, "odometry rate, Hz (0: every ground-truth sample)");
   tum->add_option("--drift-yaw", t_opt->yaw_drift, "heading bias, rad per m travelled");
   tum->add_option("--drift-scale", t_opt->scale_drift, "translation scale error");
   tum->callback([=] {

@@ -95,6 +95,7 @@ TEST_CASE("TUM ground truth -> odometry: exact without noise, drifting with it, 
   replay::TumConversionOptions o;
   o.trans_noise = o.rot_noise = o.yaw_drift = o.scale_drift = 0;
   o.min_sigma = 1e-9;
+  o.frame_rate_hz = 0;  // one odometry message per ground-truth row, so that index k pairs them
   replay::convert_tum(gt, log, o);
   const auto truth = replay::read_tum(gt);
   auto odo = events_of<engine::Odometry>(log, runtime::InputKind::kOdometry, "ODOMETRY");
