@@ -18,7 +18,8 @@
 //      new one; then dx is solved again (at most `relinearization_passes` rounds per update).
 // When one round would change more factors than rank updates do cheaply (`update_fraction`), when the reserved
 // columns run out, or when the factor has filled in past `refill_ratio` times its size after the last ordering, the
-// system is rebuilt: a fresh block-AMD ordering (newest variables last), then Gauss-Newton iterations, each
+// system is rebuilt: a fresh block ordering (constrained AMD with the newest variables last, or METIS nested
+// dissection above `nested_dissection_above` variables), then Gauss-Newton iterations, each
 // relinearizing every factor at the current estimate and factorizing numerically (simplicial LDL', the form the
 // updates need), until no variable moves past the thresholds.
 //
