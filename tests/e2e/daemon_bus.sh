@@ -14,22 +14,8 @@ trap '[ -n "${KEEP:-}" ] || rm -rf "$work"' EXIT
 printf 'daemon:\n  status_period_s: 0.5\nengine:\n  primary_estimator: dead_reckoning\n' > "$work/config.yaml"
 "$SEXTANT_BIN/sextant" replay "$work/sim.lcm" --config "$work/config.yaml" --out-log "$work/replayed.lcm" > /dev/null
 
-cat > "$work/run.sh" <<EOS
-set -euo pipefail
-"$SEXTANT_BIN/sextantd" --config "$work/config.yaml" --record "$work/record.lcm" > "$work/daemon.log" 2>&1 &
-daemon=\$!
-lcm-logger -f "$work/bus.lcm" > /dev/null 2>&1 &
-logger=\$!
-sleep 0.7
-lcm-logplayer -s 4 "$work/sim.lcm" > /dev/null
-sleep 1.2
-kill -TERM \$daemon
-rc=0; wait \$daemon || rc=\$?
-sleep 0.2
-kill -INT \$logger; wait \$logger || true
-if [ \$rc -ne 0 ]; then echo "sextantd exited with \$rc"; cat "$work/daemon.log"; exit 1; fi
+in_netns_fn feed_daemon "$work/daemon.log" "$work/bus.lcm" "$work/sim.lcm" 1.2 \
+    --config "$work/config.yaml" --record "$work/record.lcm"
 grep -q "recording closed" "$work/daemon.log" || { echo "no 'recording closed' in the daemon log"; cat "$work/daemon.log"; exit 1; }
-EOS
-in_netns bash "$work/run.sh"
 python3 "$(dirname "$0")/check_daemon_run.py" "$work/sim.lcm" "$work/record.lcm" "$work/bus.lcm" "$work/replayed.lcm"
 echo "daemon_bus: ok"

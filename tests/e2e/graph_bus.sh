@@ -17,22 +17,14 @@ printf 'daemon:\n  status_period_s: 0.5\nengine:\n  primary_estimator: graph\n  
 
 cat > "$work/run.sh" <<EOS
 set -euo pipefail
-"$SEXTANT_BIN/sextantd" --config "$work/config.yaml" > "$work/daemon.log" 2>&1 &
-daemon=\$!
+source "$(dirname "$0")/netns.bash"
 "$SEXTANT_BIN/sextant" matcher --truth "$work/sim.lcm" --failure-rate 0.1 --wrong-rate 0.1 --seed 3 --json \
     > "$work/matcher.json" 2> "$work/matcher.err" &
 matcher=\$!
-lcm-logger -f "$work/bus.lcm" > /dev/null 2>&1 &
-logger=\$!
-sleep 0.7
-lcm-logplayer -s 4 "$work/sim.lcm" > /dev/null
-sleep 1.5
-kill -TERM \$daemon
-rc=0; wait \$daemon || rc=\$?
+rc=0
+feed_daemon "$work/daemon.log" "$work/bus.lcm" "$work/sim.lcm" 1.5 --config "$work/config.yaml" || rc=\$?
 kill -TERM \$matcher; wait \$matcher || true
-sleep 0.2
-kill -INT \$logger; wait \$logger || true
-if [ \$rc -ne 0 ]; then echo "sextantd exited with \$rc"; cat "$work/daemon.log"; exit 1; fi
+exit \$rc
 EOS
 in_netns bash "$work/run.sh"
 python3 "$(dirname "$0")/check_graph_run.py" "$work/sim.lcm" "$work/bus.lcm" "$work/matcher.json"
