@@ -28,18 +28,23 @@ bench:
 	@cmake --build $(BUILD) -j $(JOBS)
 	@bench/run_all.sh $(BUILD)
 
-# Tests under AddressSanitizer + UndefinedBehaviorSanitizer, and under ThreadSanitizer.
+# Tests under AddressSanitizer + UndefinedBehaviorSanitizer, and under ThreadSanitizer.  A whole sanitizer build is
+# long (15-40 min on two free cores, hours on busy ones); SAN_TARGETS and SAN_TESTS (a ctest -R regex) scope a run to
+# what was built, e.g. the daemon's threads and its end-to-end scripts:
+#   make tsan SAN_TARGETS="sextantd sextant test_daemon" SAN_TESTS='^(daemon|e2e): '
+SAN_TARGETS ?= all
+SAN_TESTS ?= .
 asan: deps
 	@cmake -S . -B build-asan -DCMAKE_BUILD_TYPE=RelWithDebInfo -DSEXTANT_SANITIZE=address,undefined >/dev/null
-	@cmake --build build-asan -j $(JOBS)
+	@cmake --build build-asan -j $(JOBS) --target $(SAN_TARGETS)
 	@ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1 \
-	  ctest --test-dir build-asan --output-on-failure -j $(JOBS) --timeout 1200
+	  ctest --test-dir build-asan -R '$(SAN_TESTS)' --output-on-failure -j $(JOBS) --timeout 1200
 
 tsan: deps
 	@cmake -S . -B build-tsan -DCMAKE_BUILD_TYPE=RelWithDebInfo -DSEXTANT_SANITIZE=thread >/dev/null
-	@cmake --build build-tsan -j $(JOBS)
+	@cmake --build build-tsan -j $(JOBS) --target $(SAN_TARGETS)
 	@TSAN_OPTIONS=halt_on_error=1:second_deadlock_stack=1:suppressions=$(CURDIR)/tests/tsan.supp \
-	  ctest --test-dir build-tsan --output-on-failure -j $(JOBS) --timeout 1200
+	  ctest --test-dir build-tsan -R '$(SAN_TESTS)' --output-on-failure -j $(JOBS) --timeout 1200
 
 # lcm-spy with sextant's message types on the classpath (Debian's lcm-spy wrapper passes a JVM flag
 # that Java 17 no longer accepts, so the JVM is started directly).
