@@ -8,7 +8,7 @@
 namespace sextant::engine {
 namespace {
 
-constexpr size_t kMaxSightingTimes = 4096;  // per body; beyond, a sighting is anchored over a merged interval
+constexpr size_t kMaxWaitingTimes = 4096;  // per body; beyond, a waiting event is taken up over a merged interval
 
 // The floor increment_covariance() adds to the variances a source uses, to take it off a composed covariance again.
 Matrix6 variance_floor(bool planar, double min_variance) {
@@ -61,9 +61,13 @@ bool OdometryCoalescer::offer(const Event& event, const std::function<bool()>& e
       if (it != bodies_.end()) {
         Body& b = it->second;
         b.open = false;
-        if (const auto* s = std::get_if<LandmarkSightings>(&event);
-            s && (!b.has_last || s->utime > b.last_utime) && b.sighting_times.size() < kMaxSightingTimes)
-          b.sighting_times.insert(std::upper_bound(b.sighting_times.begin(), b.sighting_times.end(), s->utime), s->utime);
+        // The stage takes up a sighting or a loop ahead of the odometry at the first message at or after its time
+        // (a loop: after both of its times): that message is pinned, so that it happens at the same message.
+        std::optional<int64_t> waits_for;
+        if (const auto* s = std::get_if<LandmarkSightings>(&event)) waits_for = s->utime;
+        if (const auto* l = std::get_if<LoopClosure>(&event)) waits_for = std::max(l->utime_from, l->utime_to);
+        if (waits_for && (!b.has_last || *waits_for > b.last_utime) && b.waiting_times.size() < kMaxWaitingTimes)
+          b.waiting_times.insert(std::upper_bound(b.waiting_times.begin(), b.waiting_times.end(), *waits_for), *waits_for);
       }
     }
     return enqueue();
@@ -86,8 +90,8 @@ bool OdometryCoalescer::offer(const Event& event, const std::function<bool()>& e
   const SE3 pose = to_se3(o->pose);
   KeyframeSelector selector = b.selector;  // decided on a copy: a message the queue refuses leaves no trace
   const KeyframeDecision d = selector.decide(pose);
-  const bool after_sighting = !b.sighting_times.empty() && b.sighting_times.front() <= o->utime;
-  const bool pinned = d == KeyframeDecision::kKeyframe || after_sighting;
+  const bool after_waiting = !b.waiting_times.empty() && b.waiting_times.front() <= o->utime;
+  const bool pinned = d == KeyframeDecision::kKeyframe || after_waiting;
 
   bool taken = true;
   if (b.open && !b.batches.back().back().pinned) {
@@ -125,9 +129,9 @@ bool OdometryCoalescer::offer(const Event& event, const std::function<bool()>& e
   b.last_utime = o->utime;
   b.last_pose = pose;
   b.last_covariance = o->covariance;
-  if (after_sighting)
-    b.sighting_times.erase(b.sighting_times.begin(),
-                           std::upper_bound(b.sighting_times.begin(), b.sighting_times.end(), o->utime));
+  if (after_waiting)
+    b.waiting_times.erase(b.waiting_times.begin(),
+                           std::upper_bound(b.waiting_times.begin(), b.waiting_times.end(), o->utime));
   return taken;
 }
 

@@ -15,8 +15,9 @@
 //  - pinned, never merged into: a keyframe candidate (a mirror of the stage's KeyframeSelector decides on every
 //    pose here; too-close and implausible decisions leave the selector's reference unchanged, so the stage's own
 //    selector, fed with the pinned and the newest messages, takes the same decisions at the same poses), and the
-//    first message at or after a sighting that arrived ahead of the odometry (the stage anchors it by interpolating
-//    between the two messages around it, exactly as without coalescing);
+//    first message at or after the time of a sighting or a loop that arrived ahead of the odometry (the stage anchors
+//    the sighting by interpolating between the two messages around it, and tries the loop again at that message,
+//    exactly as without coalescing);
 //  - a body's other events (loops, sightings) close its open batch: the next odometry starts a new batch behind them,
 //    so each body's events reach the stage in arrival order;
 //  - out-of-order and duplicate stamps are counted and dropped here, as the stage would.
@@ -58,7 +59,7 @@ class OdometryCoalescer {
     Odometry message;  // merged: the newest message, its increment_covariance the composed one (before the floor)
     std::vector<std::pair<int64_t, SE3>> passed;  // times and poses of the messages merged into it, oldest first
     int64_t implausible = 0;  // merged messages the keyframe selector found implausible (the stage counts them)
-    bool pinned = false;      // a keyframe candidate or the first message after a waiting sighting's time
+    bool pinned = false;      // a keyframe candidate or the first message after a waiting sighting's or loop's time
     Matrix6 increment = Matrix6::Zero();  // covariance of the motion since the previous message, floor included
     KeyframeDecision decision = KeyframeDecision::kTooClose;  // of `message`
   };
@@ -88,7 +89,7 @@ class OdometryCoalescer {
     Matrix6 last_covariance = Matrix6::Zero();
     std::deque<Batch> batches;          // queued tokens' batches, oldest first
     bool open = false;                  // batches.back() still takes messages
-    std::vector<int64_t> sighting_times;  // sightings ahead of the odometry, ascending (bounded)
+    std::vector<int64_t> waiting_times;  // of sightings and loops ahead of the odometry, ascending (bounded)
   };
   Entry make_entry(const Body& b, const Odometry& o, KeyframeDecision d, bool pinned) const;
 

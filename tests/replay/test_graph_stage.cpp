@@ -7,12 +7,14 @@
 #include "daemon/engine/graph_pose_stage.hpp"
 #include "daemon/engine/graph_stage.hpp"
 #include "daemon/engine/pose_conversion.hpp"
+#include "daemon/runtime/stage_runner.hpp"
 #include "replay/simulated_matcher.hpp"
 #include "replay/trajectory_eval.hpp"
 
 #include <doctest/doctest.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <deque>
 #include <map>
@@ -752,4 +754,42 @@ TEST_CASE("graph stage (daemon path): out-of-order and duplicate odometry, small
   REQUIRE(kt.size() == kr.size());
   CHECK(kt.size() >= 4);
   for (size_t k = 0; k < kt.size(); ++k) CHECK(kt[k].utime == kr[k].utime);
+}
+
+TEST_CASE("graph stage (daemon path): its thread behind a 16-event queue takes a 10,000-message burst and two loops as the slow feed does") {
+  const Emit ignore = [](Output) {};
+  const Run fast = circle_run(10, 8, 1000, "fast");
+  std::map<int64_t, SE3> truth(fast.truth.begin(), fast.truth.end());
+  auto loop = [&](size_t from, size_t to) {
+    LoopClosure l;
+    l.utime = fast.odometry[to].utime;
+    l.source = "fast";
+    l.planar = true;
+    l.utime_from = fast.odometry[from].utime;
+    l.utime_to = fast.odometry[to].utime;
+    l.relative = to_pose(truth.at(l.utime_from).inverse() * truth.at(l.utime_to));
+    l.information = Matrix6::Identity() * 1e4;
+    return l;
+  };
+  std::vector<Event> events;
+  for (size_t k = 0; k < fast.odometry.size(); ++k) {
+    events.emplace_back(fast.odometry[k]);
+    if (k == 6000) events.emplace_back(loop(1234, 5876));  // behind the odometry, between keyframes
+    if (k == 7000) events.emplace_back(loop(2000, 9876));  // ahead of it: waits
+  }
+  GraphStage slow(burst_config(), std::make_shared<GraphCorrections>());
+  for (const auto& e : events) slow.handle(e, ignore);
+
+  GraphStage threaded(burst_config(), std::make_shared<GraphCorrections>());
+  size_t refused = 0;
+  {
+    runtime::StageRunner runner(threaded, 16, ignore);
+    runner.start();
+    for (const auto& e : events) refused += runner.offer(runtime::QueuedEvent{e, std::chrono::steady_clock::now()}) ? 0 : 1;
+    runner.drain_and_stop();
+    CHECK(runner.status().dropped == 0);
+  }
+  CHECK(refused == 0);
+  CHECK(counter(threaded, "loops_accepted") == 2);
+  check_same_graph(threaded, slow);
 }
