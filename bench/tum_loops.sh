@@ -7,6 +7,7 @@
 # FAIL (0.1), SPEED (4), matcher noise SIGMA_T (0.01 m) and SIGMA_R (0.005 rad), DRIFT_YAW (0.002 rad/m), the loops'
 # kernel ROBUST (dcs) and its width PHI (22.46: the 6-DOF chi-square 0.999 quantile, the gate's; with the daemon's
 # default phi = 1 a true 6-DOF loop at its median chi2 5.3 keeps a weight of (2 / 6.3)^2 = 0.1, see RESULTS);
+# SEED (1) of the converter's noise and of the matcher;
 # KEEP=DIR keeps each sequence's vo.lcm, gt.txt and bus.lcm in DIR/SEQUENCE (for bench/tum_graph_diagnosis.py);
 # VO_FROM=DIR plays DIR/SEQUENCE/vo.lcm and gt.txt (kept by an earlier KEEP run) instead of converting anew.
 set -euo pipefail
@@ -23,7 +24,7 @@ for s in $seqs; do
   if [ -n "${VO_FROM:-}" ]; then
     cp "$VO_FROM/$s/vo.lcm" "$VO_FROM/$s/gt.txt" "$work/"
   else
-    "$bin/sextant" convert tum "$gt" -o "$work/vo.lcm" --gt-out "$work/gt.txt" --seed 1 --drift-yaw ${DRIFT_YAW:-0.002} > /dev/null
+    "$bin/sextant" convert tum "$gt" -o "$work/vo.lcm" --gt-out "$work/gt.txt" --seed ${SEED:-1} --drift-yaw ${DRIFT_YAW:-0.002} > /dev/null
   fi
   cat > "$work/config.yaml" <<EOC
 daemon:
@@ -40,7 +41,7 @@ EOC
 set -euo pipefail
 "$bin/sextantd" --config "$work/config.yaml" > "$work/daemon.log" 2>&1 &
 d=\$!
-"$bin/sextant" matcher --truth "$work/vo.lcm" --sigma-t ${SIGMA_T:-0.01} --sigma-r ${SIGMA_R:-0.005} --failure-rate ${FAIL:-0.1} --wrong-rate ${WRONG:-0.05} --seed 1 > /dev/null 2>&1 &
+"$bin/sextant" matcher --truth "$work/vo.lcm" --sigma-t ${SIGMA_T:-0.01} --sigma-r ${SIGMA_R:-0.005} --failure-rate ${FAIL:-0.1} --wrong-rate ${WRONG:-0.05} --seed ${SEED:-1} > /dev/null 2>&1 &
 m=\$!
 lcm-logger -f "$work/bus.lcm" > /dev/null 2>&1 &
 l=\$!
