@@ -7,6 +7,7 @@
 #include <Eigen/Eigenvalues>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <numeric>
 #include <stdexcept>
@@ -19,6 +20,37 @@ struct IncrementalSmoother::Contribution {
   std::vector<int> cols;  // ascending
   Eigen::MatrixXd Ct;     // residual_dim x cols.size()
   Eigen::VectorXd grad;   // cols.size()
+};
+
+/// A linearized system being built: which factors, at which linearization point, in which column positions, and
+/// its normal equations and factor as far as they got.
+struct IncrementalSmoother::System {
+  explicit System(cholmod_common* c) : common(c) {}
+  ~System() {
+    if (H) cholmod_free_sparse(&H, common);
+    if (L) cholmod_free_factor(&L, common);
+    if (y) cholmod_free_dense(&y, common);
+  }
+  System(const System&) = delete;
+  System& operator=(const System&) = delete;
+
+  cholmod_common* common;
+  std::vector<size_t> factors;  // the factors in the system, ascending
+  std::vector<Variable> lin;    // the linearization point: every variable's estimate when the system was begun
+  std::vector<int> pos;         // per variable: first column, -1 when not in the system
+  std::vector<int> col_var;     // per column: the variable, -1 for a reserved column
+  int used = 0, capacity = 0;
+  // H's column pattern by variable: the variables before it in the ordering that share a factor with it, by position
+  // (flat: before[first[v] .. first[v] + count[v])); its own block comes last in each of its columns.
+  std::vector<int> first, count, before;
+  cholmod_sparse* H = nullptr;  // upper triangle; freed once factorized
+  Eigen::VectorXd g;
+  cholmod_factor* L = nullptr;
+  cholmod_dense* y = nullptr;   // L^-1 (-g)
+  size_t assembled = 0;         // factors linearized into H and g
+  size_t factorized = 0;        // rows of L computed
+  bool done = false;
+  std::string error;            // why it failed (when done)
 };
 
 namespace {
@@ -347,6 +379,8 @@ bool IncrementalSmoother::relinearize(const std::vector<int>& moved, Incremental
 }
 
 IncrementalStatus IncrementalSmoother::update() {
+  const auto started = std::chrono::steady_clock::now();
+  ++update_calls_;
   IncrementalStatus st;
   if (!gauge_checked_ && !graph_.variables().empty()) {
     // The gauge: without a fixed variable or a prior, the first pose is held fixed (as the batch optimizer does).
@@ -362,6 +396,7 @@ IncrementalStatus IncrementalSmoother::update() {
     gauge_checked_ = true;
   }
   if (L_ == nullptr) return rebuild();
+  if (reordering_ && update_calls_ >= reorder_due_ && !finish_reordering(st)) return rebuild_with(1);
 
   std::vector<char> ready;
   determined(pending_vars_, pending_factors_, ready);
@@ -436,11 +471,14 @@ IncrementalStatus IncrementalSmoother::update() {
     r.new_variables = st.new_variables, r.new_factors = st.new_factors, r.deferred_variables = st.deferred_variables;
     return r;
   }
-  if (static_cast<double>(factor_nonzeros()) > options_.refill_ratio * static_cast<double>(ordered_nnz_)) {
+  const bool filled = static_cast<double>(factor_nonzeros()) > options_.refill_ratio * static_cast<double>(ordered_nnz_);
+  if (filled && options_.reorder_spread <= 0) {
     IncrementalStatus r = rebuild_with(1);  // the new ordering is the point: one iteration
     r.new_variables = st.new_variables, r.new_factors = st.new_factors, r.deferred_variables = st.deferred_variables;
     return r;
   }
+  if (!reordering_ && options_.reorder_spread > 0 && (filled || 4 * (capacity_ - used_) < reserve_at_order_))
+    begin_reordering();
   solve(false);
   ++st.solves;
   ++updates_;
@@ -456,15 +494,38 @@ IncrementalStatus IncrementalSmoother::update() {
     solve(false);
     ++st.solves;
   }
+  if (reordering_) {
+    const auto deadline = started + std::chrono::duration<double, std::milli>(options_.reorder_slice_ms);
+    advance(*reordering_, [&] { return std::chrono::steady_clock::now() >= deadline; });
+  }
   return st;
 }
 
 IncrementalStatus IncrementalSmoother::rebuild() { return rebuild_with(options_.rebuild_iterations); }
 
+void IncrementalSmoother::begin_reordering() {
+  std::vector<char> in(graph_.variables().size(), 0);
+  for (size_t v = 0; v < pos_.size(); ++v) in[v] = pos_[v] >= 0;
+  reordering_ = begin_system(in, false);
+  reorder_due_ = update_calls_ + options_.reorder_spread;
+}
+
+bool IncrementalSmoother::finish_reordering(IncrementalStatus& st) {
+  std::unique_ptr<System> s = std::move(reordering_);
+  advance(*s, [] { return false; });
+  if (!s->error.empty()) return false;  // the caller rebuilds, which names the cause
+  install(*s);
+  st.rebuilt = true;
+  ++rebuilds_;
+  ++st.solves;
+  return true;
+}
+
 IncrementalStatus IncrementalSmoother::rebuild_with(int iterations) {
   IncrementalStatus st;
   st.rebuilt = true;
-  // Everything in the system is relinearized at the current estimate.
+  reordering_.reset();  // superseded
+  // Everything in the system is relinearized at the current estimate (begin_system).
   for (size_t v = 0; v < lin_.size(); ++v)
     if (pos_[v] >= 0) lin_[v] = graph_.variables()[v];
   std::vector<char> ready;
@@ -495,28 +556,26 @@ IncrementalStatus IncrementalSmoother::rebuild_with(int iterations) {
   pending_factors_ = factors_wait;
   st.deferred_variables = static_cast<int>(wait.size());
 
-  order_blocks(in);
   ++rebuilds_;
   for (int it = 0; it < std::max(1, iterations); ++it) {
-    if (it > 0) {
-      if (moved_variables().empty()) break;
-      for (size_t v = 0; v < lin_.size(); ++v)
-        if (pos_[v] >= 0) lin_[v] = graph_.variables()[v];
-    }
-    if (auto why = factorize_all(); !why.empty()) {
+    if (it > 0 && moved_variables().empty()) break;
+    // Every factor in the system linearized at the current estimate; the first iteration orders, the others keep it.
+    std::unique_ptr<System> s = begin_system(in, it > 0);
+    advance(*s, [] { return false; });
+    if (!s->error.empty()) {
+      if (L_) cholmod_free_factor(&L_, &common_);  // the next update starts over
       st.ok = false;
-      st.message = why;
+      st.message = s->error;
       return st;
     }
-    if (it == 0) ordered_nnz_ = factor_nonzeros();
-    solve(true);
+    install(*s);
     ++st.solves;
   }
   return st;
 }
 
 // Positions for the free variables marked in `in`: a fill-reducing ordering of the block graph.
-void IncrementalSmoother::order_blocks(const std::vector<char>& in) {
+void IncrementalSmoother::order_blocks(const std::vector<char>& in, System& s) const {
   // Blocks: the free variables in the system, in insertion order; the newest ones are constrained to come last.
   std::vector<int> block_var, var_block(graph_.variables().size(), -1);
   for (size_t v = 0; v < in.size(); ++v)
@@ -524,14 +583,12 @@ void IncrementalSmoother::order_blocks(const std::vector<char>& in) {
   const size_t nb = block_var.size();
   std::vector<std::vector<int>> upper(nb);
   for (size_t b = 0; b < nb; ++b) upper[b].push_back(static_cast<int>(b));
-  for (size_t f = 0; f < graph_.factors().size(); ++f) {
-    if (!(weight_[f] > 0)) continue;
+  for (size_t f : s.factors)
     for (int u : graph_.factors()[f]->variables())
       for (int w : graph_.factors()[f]->variables()) {
         const int bu = var_block[static_cast<size_t>(u)], bw = var_block[static_cast<size_t>(w)];
         if (bu >= 0 && bw >= 0 && bu < bw) upper[static_cast<size_t>(bw)].push_back(bu);
       }
-  }
   for (auto& r : upper) {
     std::sort(r.begin(), r.end());
     r.erase(std::unique(r.begin(), r.end()), r.end());
@@ -545,82 +602,105 @@ void IncrementalSmoother::order_blocks(const std::vector<char>& in) {
     for (size_t b = nb - newest; b < nb; ++b) group[b] = 1;
     order = block_amd_order(upper, common_, newest > 0 ? &group : nullptr);
   }
-  std::fill(pos_.begin(), pos_.end(), -1);
-  used_ = 0;
+  s.pos.assign(graph_.variables().size(), -1);
+  s.used = 0;
   for (int b : order) {
     const size_t v = static_cast<size_t>(block_var[static_cast<size_t>(b)]);
-    pos_[v] = used_;
-    used_ += graph_.variables()[v].dim();
+    s.pos[v] = s.used;
+    s.used += graph_.variables()[v].dim();
   }
-  capacity_ = used_ + std::max(64, static_cast<int>(options_.capacity_growth * used_));
+  s.capacity = s.used + std::max(64, static_cast<int>(options_.capacity_growth * s.used));
+  s.col_var.assign(static_cast<size_t>(s.capacity), -1);
+  for (size_t v = 0; v < s.pos.size(); ++v)
+    for (int k = 0; s.pos[v] >= 0 && k < graph_.variables()[v].dim(); ++k) s.col_var[static_cast<size_t>(s.pos[v] + k)] = static_cast<int>(v);
 }
 
-// H (upper triangle, by column position, with an identity on the reserved columns) and g from every factor in the
-// system, written straight into compressed columns: the pattern is known from which variables share a factor, so
-// there is no triplet list to sort and sum (on city10000 that conversion alone took as long as linearizing).
-cholmod_sparse* IncrementalSmoother::assemble_normal_equations() {
+// The system of every factor now in the system, at the current estimates, ordered afresh or in the current order.
+std::unique_ptr<IncrementalSmoother::System> IncrementalSmoother::begin_system(const std::vector<char>& in,
+                                                                               bool keep_ordering) const {
+  auto s = std::make_unique<System>(&common_);
+  s->lin = graph_.variables();
+  for (size_t f = 0; f < weight_.size(); ++f)
+    if (weight_[f] > 0) s->factors.push_back(f);
+  if (keep_ordering) {
+    s->pos = pos_, s->col_var = col_var_, s->used = used_, s->capacity = capacity_;
+  } else {
+    order_blocks(in, *s);
+  }
+  assemble_pattern(*s);
+  return s;
+}
+
+// H's pattern (upper triangle, by column position, an identity on the reserved columns), written straight into
+// compressed columns: it is known from which variables share a factor, so there is no triplet list to sort and sum
+// (on city10000 that conversion alone took as long as linearizing).
+void IncrementalSmoother::assemble_pattern(System& s) const {
   const auto& vars = graph_.variables();
   const auto& factors = graph_.factors();
-  // Per variable in the system: the variables before it in the ordering that share a factor with it, by position
-  // (flat: before[first[v] .. first[v] + count[v])); its own block comes last in each of its columns (the diagonal
-  // is the last entry of an upper-triangular column).
   const size_t nv = vars.size();
-  std::vector<int> first(nv + 1, 0), count(nv, 0);
+  s.first.assign(nv + 1, 0);
+  s.count.assign(nv, 0);
   auto each_pair = [&](auto&& visit) {
-    for (size_t f = 0; f < factors.size(); ++f) {
-      if (!(weight_[f] > 0)) continue;
+    for (size_t f : s.factors)
       for (int a : factors[f]->variables())
         for (int b : factors[f]->variables())
-          if (pos_[static_cast<size_t>(a)] >= 0 && pos_[static_cast<size_t>(a)] < pos_[static_cast<size_t>(b)]) visit(a, b);
-    }
+          if (s.pos[static_cast<size_t>(a)] >= 0 && s.pos[static_cast<size_t>(a)] < s.pos[static_cast<size_t>(b)]) visit(a, b);
   };
-  each_pair([&](int, int b) { ++first[static_cast<size_t>(b) + 1]; });
-  for (size_t v = 0; v < nv; ++v) first[v + 1] += first[v];
-  std::vector<int> before(static_cast<size_t>(first[nv]));
-  each_pair([&](int a, int b) { before[static_cast<size_t>(first[static_cast<size_t>(b)] + count[static_cast<size_t>(b)]++)] = a; });
-  size_t nnz = static_cast<size_t>(capacity_ - used_);
+  each_pair([&](int, int b) { ++s.first[static_cast<size_t>(b) + 1]; });
+  for (size_t v = 0; v < nv; ++v) s.first[v + 1] += s.first[v];
+  s.before.assign(static_cast<size_t>(s.first[nv]), 0);
+  each_pair([&](int a, int b) { s.before[static_cast<size_t>(s.first[static_cast<size_t>(b)] + s.count[static_cast<size_t>(b)]++)] = a; });
+  size_t nnz = static_cast<size_t>(s.capacity - s.used);
   for (size_t v = 0; v < nv; ++v) {
-    int* r = before.data() + first[v];
-    std::sort(r, r + count[v], [&](int a, int b) { return pos_[static_cast<size_t>(a)] < pos_[static_cast<size_t>(b)]; });
-    count[v] = static_cast<int>(std::unique(r, r + count[v]) - r);
-    if (pos_[v] < 0) continue;
+    int* r = s.before.data() + s.first[v];
+    std::sort(r, r + s.count[v], [&](int a, int b) { return s.pos[static_cast<size_t>(a)] < s.pos[static_cast<size_t>(b)]; });
+    s.count[v] = static_cast<int>(std::unique(r, r + s.count[v]) - r);
+    if (s.pos[v] < 0) continue;
     size_t above = 0;
-    for (int k = 0; k < count[v]; ++k) above += static_cast<size_t>(vars[static_cast<size_t>(r[k])].dim());
+    for (int k = 0; k < s.count[v]; ++k) above += static_cast<size_t>(vars[static_cast<size_t>(r[k])].dim());
     const size_t d = static_cast<size_t>(vars[v].dim());
     nnz += d * above + d * (d + 1) / 2;
   }
-  cholmod_sparse* H = cholmod_allocate_sparse(static_cast<size_t>(capacity_), static_cast<size_t>(capacity_), nnz, 1, 1, 1,
-                                              CHOLMOD_REAL, &common_);
-  if (H == nullptr) return nullptr;
-  int* Hp = static_cast<int*>(H->p);
-  int* Hi = static_cast<int*>(H->i);
-  double* Hx = static_cast<double*>(H->x);
+  s.H = cholmod_allocate_sparse(static_cast<size_t>(s.capacity), static_cast<size_t>(s.capacity), nnz, 1, 1, 1,
+                                CHOLMOD_REAL, &common_);
+  if (s.H == nullptr) throw std::runtime_error("CHOLMOD could not allocate the normal equations");
+  int* Hp = static_cast<int*>(s.H->p);
+  int* Hi = static_cast<int*>(s.H->i);
+  double* Hx = static_cast<double*>(s.H->x);
   std::fill(Hx, Hx + nnz, 0.0);
   size_t at = 0;
-  for (int c = 0; c < capacity_; ++c) {
+  for (int c = 0; c < s.capacity; ++c) {
     Hp[c] = static_cast<int>(at);
-    if (c >= used_) {
+    if (c >= s.used) {
       Hi[at] = c, Hx[at] = 1.0, ++at;
       continue;
     }
-    const int v = col_var_[static_cast<size_t>(c)];  // set for the positions in use; a variable's columns are
-                                                     // filled together, at its first one
-    const int d = vars[static_cast<size_t>(v)].dim();
+    const size_t v = static_cast<size_t>(s.col_var[static_cast<size_t>(c)]);  // a variable's columns are filled
+    const int d = vars[v].dim();                                              // together, at its first one
     for (int k = 0; k < d; ++k) {
       Hp[c + k] = static_cast<int>(at);
-      for (int j = first[static_cast<size_t>(v)]; j < first[static_cast<size_t>(v)] + count[static_cast<size_t>(v)]; ++j)
-        for (int i = 0; i < vars[static_cast<size_t>(before[static_cast<size_t>(j)])].dim(); ++i)
-          Hi[at++] = pos_[static_cast<size_t>(before[static_cast<size_t>(j)])] + i;
+      for (int j = s.first[v]; j < s.first[v] + s.count[v]; ++j) {
+        const size_t u = static_cast<size_t>(s.before[static_cast<size_t>(j)]);
+        for (int i = 0; i < vars[u].dim(); ++i) Hi[at++] = s.pos[u] + i;
+      }
       for (int i = 0; i <= k; ++i) Hi[at++] = c + i;
     }
     c += d - 1;
   }
-  Hp[capacity_] = static_cast<int>(at);
+  Hp[s.capacity] = static_cast<int>(at);
+  s.g = Eigen::VectorXd::Zero(s.capacity);
+}
+
+void IncrementalSmoother::assemble_values(System& s, size_t end) const {
+  const auto& vars = graph_.variables();
+  const auto& factors = graph_.factors();
+  const int* Hp = static_cast<const int*>(s.H->p);
+  double* Hx = static_cast<double*>(s.H->x);
   // Block (a, b), pos a <= pos b, of a factor: J_a' W J_b added at a's rows in b's columns.
   auto offset_in_column = [&](int a, int b) {
     int off = 0;
-    for (int j = first[static_cast<size_t>(b)]; j < first[static_cast<size_t>(b)] + count[static_cast<size_t>(b)]; ++j) {
-      const int u = before[static_cast<size_t>(j)];
+    for (int j = s.first[static_cast<size_t>(b)]; j < s.first[static_cast<size_t>(b)] + s.count[static_cast<size_t>(b)]; ++j) {
+      const int u = s.before[static_cast<size_t>(j)];
       if (u == a) return off;
       off += vars[static_cast<size_t>(u)].dim();
     }
@@ -631,26 +711,26 @@ cholmod_sparse* IncrementalSmoother::assemble_normal_equations() {
   Linearization lin;
   Eigen::VectorXd We;
   Eigen::MatrixXd JaW, block;
-  for (size_t f = 0; f < factors.size(); ++f) {
-    if (!(weight_[f] > 0)) continue;
+  for (; s.assembled < end; ++s.assembled) {
+    const size_t f = s.factors[s.assembled];
     const Factor& fac = *factors[f];
     const auto& fv = fac.variables();
     bool same_shape = lin.error.size() == fac.residual_dim() && lin.jacobians.size() == fv.size();
     for (size_t k = 0; same_shape && k < fv.size(); ++k)
       same_shape = lin.jacobians[k].cols() == vars[static_cast<size_t>(fv[k])].dim();
-    if (!same_shape) lin = fac.make_linearization(lin_);
-    fac.linearize(lin_, lin);
+    if (!same_shape) lin = fac.make_linearization(s.lin);
+    fac.linearize(s.lin, lin);
     We.noalias() = fac.information() * lin.error;
     const double w = kernel_weight(f, lin.error.dot(We));
     We *= w;
     for (size_t ka = 0; ka < fv.size(); ++ka) {
-      const int pa = pos_[static_cast<size_t>(fv[ka])];
+      const int pa = s.pos[static_cast<size_t>(fv[ka])];
       if (pa < 0) continue;
       const Eigen::MatrixXd& Ja = lin.jacobians[ka];
-      g_.segment(pa, Ja.cols()).noalias() += Ja.transpose() * We;
+      s.g.segment(pa, Ja.cols()).noalias() += Ja.transpose() * We;
       JaW.noalias() = w * (Ja.transpose() * fac.information());
       for (size_t kb = 0; kb < fv.size(); ++kb) {
-        const int pb = pos_[static_cast<size_t>(fv[kb])];
+        const int pb = s.pos[static_cast<size_t>(fv[kb])];
         if (pb < pa) continue;
         block.noalias() = JaW * lin.jacobians[kb];
         const int off = offset_in_column(fv[ka], fv[kb]);
@@ -662,67 +742,122 @@ cholmod_sparse* IncrementalSmoother::assemble_normal_equations() {
       }
     }
   }
-  return H;
 }
 
-// Factorizes the normal equations in the natural order (the positions are the ordering).
-std::string IncrementalSmoother::factorize_all() {
+// The positions are the ordering, so CHOLMOD analyzes and factorizes in the natural order.  The factorization is
+// up-looking, row by row (cholmod_rowfac): rows [0, k) of L depend only on rows [0, k) of H, so it stops and resumes
+// at any row, and the slices give the factor one call would.
+template <class Deadline>
+bool IncrementalSmoother::advance(System& s, const Deadline& deadline) {
+  constexpr size_t kFactorsPerSlice = 512;  // between looks at the clock: well under a millisecond each
+  constexpr size_t kRowsPerSlice = 96;
+  const size_t n = static_cast<size_t>(s.capacity);
+  auto fail = [&](std::string why) {
+    s.error = std::move(why);
+    s.done = true;
+    common_.status = CHOLMOD_OK;
+    return true;
+  };
+  while (!s.done) {
+    if (deadline()) return false;
+    if (s.assembled < s.factors.size()) {
+      assemble_values(s, std::min(s.assembled + kFactorsPerSlice, s.factors.size()));
+    } else if (s.L == nullptr) {
+      common_.nmethods = 1;
+      common_.method[0].ordering = CHOLMOD_NATURAL;
+      common_.postorder = 0;
+      common_.supernodal = CHOLMOD_SIMPLICIAL;  // measured: the supernodal factor stores its relaxed
+      // supernodes' zeros, which every later update and solve pays for, and ATLAS is slow on the small supernodes
+      common_.final_ll = 0;
+      common_.quick_return_if_not_posdef = 1;
+      s.L = cholmod_analyze(s.H, &common_);
+      if (s.L == nullptr) return fail("CHOLMOD symbolic analysis failed");
+    } else if (s.factorized < n) {
+      const size_t end = std::min(s.factorized + kRowsPerSlice, n);
+      double beta[2] = {0.0, 0.0};
+      const int ok = cholmod_rowfac(s.H, nullptr, beta, s.factorized, end, s.L, &common_);
+      if (!ok || common_.status == CHOLMOD_NOT_POSDEF || s.L->minor < s.L->n) {
+        const size_t col = s.L->minor < s.L->n ? s.L->minor : s.factorized;
+        const int var = col < s.col_var.size() ? s.col_var[col] : -1;
+        return fail("the normal equations are not positive definite: variable " +
+                    (var >= 0 ? std::to_string(graph_.variables()[static_cast<size_t>(var)].id) : std::string("?")) +
+                    " is not determined by the factors (under-constrained, or disconnected from the gauge)");
+      }
+      s.factorized = end;
+    } else {
+      cholmod_free_sparse(&s.H, &common_);
+      if (!cholmod_change_factor(CHOLMOD_REAL, 0, 0, 0, 0, s.L, &common_))
+        return fail("CHOLMOD could not convert the factor to LDL' form");
+      // y = L^-1 b, b = -g: the forward half of the solve, kept current by every later update (cholmod_updown_solve).
+      cholmod_dense* b = cholmod_zeros(n, 1, CHOLMOD_REAL, &common_);
+      if (b == nullptr) return fail("CHOLMOD could not allocate the right-hand side");
+      for (size_t i = 0; i < n; ++i) static_cast<double*>(b->x)[i] = -s.g[static_cast<Eigen::Index>(i)];
+      s.y = cholmod_solve(CHOLMOD_L, s.L, b, &common_);
+      cholmod_free_dense(&b, &common_);
+      if (s.y == nullptr) return fail("CHOLMOD's forward solve failed");
+      s.done = true;
+    }
+  }
+  return true;
+}
+
+// The new system replaces the current one.  Factors that entered the current system after `s` was begun are not in
+// `s`: they, and the variables that entered with them, become pending again and enter `s` by rank updates in the
+// update that installed it (their variables' linearization point is their current estimate).
+void IncrementalSmoother::install(System& s) {
+  const size_t nv = graph_.variables().size();
+  std::vector<char> in_s(graph_.factors().size(), 0);
+  for (size_t f : s.factors) in_s[f] = 1;
+  std::vector<size_t> later_factors;
+  for (size_t f = 0; f < weight_.size(); ++f)
+    if (weight_[f] > 0 && !in_s[f]) later_factors.push_back(f), weight_[f] = 0.0;
+  if (!later_factors.empty()) {
+    later_factors.insert(later_factors.end(), pending_factors_.begin(), pending_factors_.end());
+    std::sort(later_factors.begin(), later_factors.end());
+    pending_factors_ = std::move(later_factors);
+  }
+  std::vector<int> later_vars;
+  for (size_t v = 0; v < nv; ++v) {
+    const bool in_new = v < s.pos.size() && s.pos[v] >= 0;
+    if (in_new) {
+      lin_[v] = s.lin[v];
+    } else if (pos_[v] >= 0) {
+      later_vars.push_back(static_cast<int>(v));
+      lin_[v] = graph_.variables()[v];
+    }
+  }
+  if (!later_vars.empty()) {
+    later_vars.insert(later_vars.end(), pending_vars_.begin(), pending_vars_.end());
+    std::sort(later_vars.begin(), later_vars.end());
+    pending_vars_ = std::move(later_vars);
+  }
+  pos_ = s.pos;
+  pos_.resize(nv, -1);
+  col_var_ = std::move(s.col_var);
+  used_ = s.used;
+  capacity_ = s.capacity;
+  for (auto& fs : var_factors_) fs.clear();
+  for (size_t f : s.factors)
+    for (int v : graph_.factors()[f]->variables()) var_factors_[static_cast<size_t>(v)].push_back(f);
+  factors_in_system_ = s.factors.size();
+
   if (L_) cholmod_free_factor(&L_, &common_);
   if (y_) cholmod_free_dense(&y_, &common_);
   if (delta_b_) cholmod_free_dense(&delta_b_, &common_);
-  g_ = Eigen::VectorXd::Zero(capacity_);
+  L_ = s.L, s.L = nullptr;
+  y_ = s.y, s.y = nullptr;
+  g_ = std::move(s.g);
+  delta_b_ = cholmod_zeros(static_cast<size_t>(capacity_), 1, CHOLMOD_REAL, &common_);
+  if (delta_b_ == nullptr) throw std::runtime_error("CHOLMOD could not allocate the update's right-hand side");
   dx_ = Eigen::VectorXd::Zero(capacity_);
   dirty_.assign(static_cast<size_t>(capacity_), 0);
   seen_.assign(static_cast<size_t>(capacity_), 0.0);
   recomputed_.assign(static_cast<size_t>(capacity_), 0);
   on_path_.assign(static_cast<size_t>(capacity_), 0);
   changed_.assign(static_cast<size_t>(capacity_), 0);
-  col_var_.assign(static_cast<size_t>(capacity_), -1);
-  for (size_t v = 0; v < pos_.size(); ++v)
-    if (pos_[v] >= 0)
-      for (int k = 0; k < graph_.variables()[v].dim(); ++k) col_var_[static_cast<size_t>(pos_[v] + k)] = static_cast<int>(v);
-  cholmod_sparse* H = assemble_normal_equations();
-  if (H == nullptr) return "CHOLMOD could not allocate the normal equations";
-  common_.nmethods = 1;
-  common_.method[0].ordering = CHOLMOD_NATURAL;
-  common_.postorder = 0;
-  common_.supernodal = CHOLMOD_SIMPLICIAL;  // measured: the supernodal factor stores its relaxed
-  // supernodes' zeros, which every later update and solve pays for, and ATLAS is slow on the small supernodes
-  common_.final_ll = 0;
-  common_.quick_return_if_not_posdef = 1;
-  L_ = cholmod_analyze(H, &common_);
-  std::string why;
-  if (L_ == nullptr) {
-    why = "CHOLMOD symbolic analysis failed";
-  } else if (!cholmod_factorize(H, L_, &common_) || common_.status == CHOLMOD_NOT_POSDEF || L_->minor < L_->n) {
-    const int col = static_cast<int>(L_->minor < L_->n ? L_->minor : 0);
-    int var = -1;
-    for (size_t v = 0; v < pos_.size(); ++v)
-      if (pos_[v] >= 0 && col >= pos_[v] && col < pos_[v] + graph_.variables()[v].dim()) var = static_cast<int>(v);
-    why = "the normal equations are not positive definite: variable " +
-          (var >= 0 ? std::to_string(graph_.variables()[static_cast<size_t>(var)].id) : std::string("?")) +
-          " is not determined by the factors (under-constrained, or disconnected from the gauge)";
-  } else if (!cholmod_change_factor(CHOLMOD_REAL, 0, 0, 0, 0, L_, &common_)) {
-    why = "CHOLMOD could not convert the factor to LDL' form";
-  }
-  cholmod_free_sparse(&H, &common_);
-  if (!why.empty()) {
-    if (L_) cholmod_free_factor(&L_, &common_);
-    common_.status = CHOLMOD_OK;
-    return why;
-  }
-  // y = L^-1 b, b = -g: the forward half of the solve, kept current by every later update (cholmod_updown_solve).
-  cholmod_dense* b = cholmod_zeros(static_cast<size_t>(capacity_), 1, CHOLMOD_REAL, &common_);
-  delta_b_ = cholmod_zeros(static_cast<size_t>(capacity_), 1, CHOLMOD_REAL, &common_);
-  if (b == nullptr || delta_b_ == nullptr) {
-    if (b) cholmod_free_dense(&b, &common_);
-    return "CHOLMOD could not allocate the right-hand side";
-  }
-  for (int i = 0; i < capacity_; ++i) static_cast<double*>(b->x)[i] = -g_[i];
-  y_ = cholmod_solve(CHOLMOD_L, L_, b, &common_);
-  cholmod_free_dense(&b, &common_);
-  if (y_ == nullptr) return "CHOLMOD's forward solve failed";
-  return "";
+  ordered_nnz_ = factor_nonzeros();
+  reserve_at_order_ = capacity_ - used_;
+  solve(true);
 }
 
 }  // namespace sextant::graph

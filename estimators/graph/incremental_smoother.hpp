@@ -16,12 +16,22 @@
 //   3. fluid relinearization: every variable whose step |dx_v| exceeds the thresholds moves its linearization point,
 //      x0_v <- x0_v (+) dx_v, and each factor touching it is downdated at its old linearization and updated at the
 //      new one; then dx is solved again (at most `relinearization_passes` rounds per update).
-// When one round would change more factors than rank updates do cheaply (`update_fraction`), when the reserved
-// columns run out, or when the factor has filled in past `refill_ratio` times its size after the last ordering, the
-// system is rebuilt: a fresh block ordering (constrained AMD with the newest variables last, or METIS nested
-// dissection above `nested_dissection_above` variables), then Gauss-Newton iterations, each
+// When one round would change more factors than rank updates do cheaply (`update_fraction`), or when the reserved
+// columns run out, the system is rebuilt: a fresh block ordering (constrained AMD with the newest variables last, or
+// METIS nested dissection above `nested_dissection_above` variables), then Gauss-Newton iterations, each
 // relinearizing every factor at the current estimate and factorizing numerically (simplicial LDL', the form the
 // updates need), until no variable moves past the thresholds.
+//
+// Reordering in the background of the updates.  When the factor has filled in past `refill_ratio` times its size
+// after the last ordering (or the reserved columns are three quarters used), the current factor is still exact, only
+// slower to update; so the new ordering and factorization are built a slice at a time at the end of the next
+// `reorder_spread` updates (each spends on it what is left of `reorder_slice_ms` after its own work), and the new
+// system replaces the old one at the start of the update `reorder_spread` after the one that began it, whatever the
+// clock said: the estimates after every update are the same on a fast or a slow machine (deterministic replay), only
+// the per-update latency depends on the slices.  The new system is linearized at the estimates of the update that
+// began it; the factors and variables that arrived in between enter it as the pending ones of the replacing update.
+// The work is CHOLMOD's row-by-row factorization (cholmod_rowfac, which can compute any range of rows whose
+// descendants are done), so the slices give exactly the factor one call would.
 //
 // Units: a variable's step is compared component-wise: translation components (metres, point coordinates) against
 // `relinearize_translation`, rotation components (radians) against `relinearize_rotation`.
@@ -57,6 +67,9 @@ struct IncrementalOptions {
   /// dissection above (city10000: half the factorization flops; M3500: its ordering time outweighs the gain).
   int nested_dissection_above = 5000;
   double capacity_growth = 1.0;           // reserved columns at a rebuild: this fraction of the used ones (and >= 64)
+  /// Updates over which a fill-triggered reordering is spread (see the file comment); 0: reorder within the update.
+  int reorder_spread = 8;
+  double reorder_slice_ms = 4.0;          // ms: an update works on a spread reordering until this long after it began
   /// Wildfire threshold of the back-substitution (as iSAM2's): a change of a step by less than this (m or rad) is not
   /// propagated to the variables that depend on it (they keep a value stale by less than it).  0: exact.
   double wildfire = 1e-3;
@@ -70,7 +83,8 @@ struct IncrementalStatus {
   int new_variables = 0, new_factors = 0;
   int deferred_variables = 0;        // new variables not yet determined by their factors (kept pending)
   int relinearized_variables = 0, relinearized_factors = 0;
-  bool rebuilt = false;              // the system was reordered and refactorized in this update
+  bool rebuilt = false;              // the system was reordered and refactorized in this update (or a spread
+                                     // reordering was put in place)
   int solves = 0;
 };
 
@@ -114,13 +128,23 @@ class IncrementalSmoother {
   int dimension() const { return used_; }
   size_t factor_nonzeros() const;
   int rebuilds() const { return rebuilds_; }
+  /// True while a spread reordering is being built.
+  bool reordering() const { return reordering_ != nullptr; }
   const IncrementalOptions& options() const { return options_; }
 
  private:
   struct Contribution;  // one factor's (W^1/2 J)' and J' W e at the linearization point
   Contribution linearize(size_t factor) const;
   double kernel_weight(size_t factor, double chi2) const;  // the robust weight at e' Omega e = chi2
-  cholmod_sparse* assemble_normal_equations();  // H (upper, reserved columns = identity) and g_; nullptr: no memory
+  struct System;  // an ordering, a linearization point and the factorization being built for them
+  std::unique_ptr<System> begin_system(const std::vector<char>& in, bool keep_ordering) const;
+  void assemble_pattern(System& s) const;          // H's pattern (upper, reserved columns = identity), zero values
+  void assemble_values(System& s, size_t end) const;  // linearizes the system's factors up to `end` into H and g
+  /// Works on `s` until `deadline` (or to the end): assembly, symbolic analysis, factorization row by row, the forward
+  /// solve.  Returns true when done (s.error says whether it failed).
+  template <class Deadline>
+  bool advance(System& s, const Deadline& deadline);
+  void install(System& s);                         // makes `s` the current system (see the file comment)
   void apply(const std::vector<Contribution>& cs, bool add);
   void make_room(const cholmod_sparse* C);  // packs L before an update that could otherwise make CHOLMOD reallocate it
   void determined(const std::vector<int>& new_vars, const std::vector<size_t>& new_factors,
@@ -131,9 +155,10 @@ class IncrementalSmoother {
   int parent_of(int column) const;  // in the elimination tree of L, -1 for a root
   std::vector<int> moved_variables() const;
   bool relinearize(const std::vector<int>& moved, IncrementalStatus& st);
-  std::string factorize_all();
   IncrementalStatus rebuild_with(int iterations);
-  void order_blocks(const std::vector<char>& in);
+  void order_blocks(const std::vector<char>& in, System& s) const;
+  void begin_reordering();  // a spread reordering of everything in the system at the current estimates
+  bool finish_reordering(IncrementalStatus& st);  // puts a due reordering in place; false: it failed (rebuild)
 
   IncrementalOptions options_;
   FactorGraph graph_;                 // estimates and factors
@@ -148,10 +173,11 @@ class IncrementalSmoother {
   size_t ordered_nnz_ = 0;
   int rebuilds_ = 0;
   size_t factors_in_system_ = 0;
-  int64_t updates_ = 0;
+  int64_t updates_ = 0;              // updates that solved incrementally (relinearize_skip counts these)
+  int64_t update_calls_ = 0;         // every update(): the clock of spread reorderings
   size_t update_limit() const;
   bool gauge_checked_ = false;
-  cholmod_common common_{};
+  mutable cholmod_common common_{};  // CHOLMOD's settings and workspace (used by const queries too)
   cholmod_factor* L_ = nullptr;
   Eigen::VectorXd g_;                 // gradient J' W e at the linearization point, by column
   Eigen::VectorXd dx_;                // solution, by column
@@ -164,6 +190,9 @@ class IncrementalSmoother {
   std::vector<double> seen_;          // per column: its step when its subtree was last recomputed
   std::vector<int> col_var_;          // per column: the variable, -1 for a reserved column
   std::vector<char> var_changed_;     // per variable, after a solve: its step changed
+  std::unique_ptr<System> reordering_;  // a spread reordering under way
+  int64_t reorder_due_ = 0;           // the update (updates_ count) at which it replaces the current system
+  int reserve_at_order_ = 0;          // reserved columns right after the last ordering
 };
 
 }  // namespace sextant::graph
