@@ -346,8 +346,9 @@ std::vector<int> IncrementalSmoother::moved_variables() const {
 }
 
 size_t IncrementalSmoother::update_limit() const {
-  return std::max(static_cast<size_t>(options_.min_update_factors),
-                  static_cast<size_t>(options_.update_fraction * static_cast<double>(factors_in_system_)));
+  const size_t fraction = std::max(static_cast<size_t>(options_.min_update_factors),
+                                   static_cast<size_t>(options_.update_fraction * static_cast<double>(factors_in_system_)));
+  return std::min(fraction, static_cast<size_t>(std::max(options_.max_update_factors, options_.min_update_factors)));
 }
 
 bool IncrementalSmoother::relinearize(const std::vector<int>& moved, IncrementalStatus& st) {

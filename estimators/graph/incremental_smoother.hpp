@@ -55,9 +55,12 @@ struct IncrementalOptions {
   int relinearization_passes = 2;         // relinearize + re-solve rounds per update
   int relinearize_skip = 1;               // look for variables to relinearize every this many updates (iSAM2's relinearizeSkip)
   /// Factors changed by rank updates in one round (new ones or relinearized ones) beyond which a rebuild is cheaper:
-  /// max(min_update_factors, update_fraction x factors in the system).
+  /// max(min_update_factors, update_fraction x factors in the system), at most max_update_factors.  The cap matters on
+  /// large graphs, where each factor's path to the root is long: on city10000 relinearizing 158 factors by rank
+  /// updates took 80-90 ms, more than a rebuild (bench/RESULTS.md, session 5).
   double update_fraction = 0.02;
   int min_update_factors = 32;
+  int max_update_factors = 64;
   int rebuild_iterations = 10;            // Gauss-Newton iterations of a rebuild for new factors that would cost more as
                                           // rank updates (until no variable moves past the thresholds); a rebuild for
                                           // relinearization or reordering takes one
