@@ -5,9 +5,9 @@
 # eval`) of the raw odometry and of the optimized keyframes, at the keyframe times.
 # Usage: bench/tum_loops.sh BUILD [SEQUENCES...]; env: N1 (3), N2 (-1: 2 N1), WRONG (0.05), K1 (0.1), K2 (1.0),
 # FAIL (0.1), SPEED (4), matcher noise SIGMA_T (0.01 m) and SIGMA_R (0.005 rad), DRIFT_YAW (0.002 rad/m), the loops'
-# kernel ROBUST (dcs) and its width PHI (22.46: the 6-DOF chi-square 0.999 quantile, the gate's; with the daemon's
-# default phi = 1 a true 6-DOF loop at its median chi2 5.3 keeps a weight of (2 / 6.3)^2 = 0.1, see RESULTS);
-# SEED (1) of the converter's noise and of the matcher;
+# kernel ROBUST (dcs) and its width PHI (auto, the daemon's default: for these 3-D loops the 6-DOF chi-square 0.999
+# quantile as the gate computes it, 22.68; with phi = 1 a true 6-DOF loop at its median chi2 5.3 keeps a weight of
+# (2 / 6.3)^2 = 0.1, see RESULTS); SEED (1) of the converter's noise and of the matcher;
 # KEEP=DIR keeps each sequence's vo.lcm, gt.txt and bus.lcm in DIR/SEQUENCE (for bench/tum_graph_diagnosis.py);
 # VO_FROM=DIR plays DIR/SEQUENCE/vo.lcm and gt.txt (kept by an earlier KEEP run) instead of converting anew.
 set -euo pipefail
@@ -35,7 +35,7 @@ engine:
   association: {enabled: false}
   graph:
     keyframes: {k1: ${K1:-0.1}, k2: ${K2:-1.0}}
-    loops: {n1: ${N1:-3}, n2: ${N2:--1}, robust: ${ROBUST:-dcs}, kernel_width: ${PHI:-22.46}}
+    loops: {n1: ${N1:-3}, n2: ${N2:--1}, robust: ${ROBUST:-dcs}, kernel_width: ${PHI:-auto}}
 EOC
   cat > "$work/run.sh" <<EOS
 set -euo pipefail

@@ -1,5 +1,8 @@
 #include "daemon/config/stage_config_readers.hpp"
 
+#include <cmath>
+#include <cstdlib>
+
 namespace sextant::config {
 
 void read_stage_config(Section& s, engine::GraphConfig& c) {
@@ -24,7 +27,18 @@ void read_stage_config(Section& s, engine::GraphConfig& c) {
     p.get("seed", seed, int_in_range(0, 2147483647));
     c.proposals.seed = static_cast<uint64_t>(seed);
     p.get("robust", c.robust, one_of({"none", "huber", "cauchy", "dcs"}));
-    p.get("kernel_width", c.kernel_width, positive());
+    // "auto" (a chi-square quantile of the loops' dimension, kernel_width_for in graph_stage_config.hpp) or a number.
+    std::string width;  // stays empty when the key is absent (the default stays)
+    p.get("kernel_width", width, Check<std::string>([](const std::string& v) -> std::optional<std::string> {
+      if (v == "auto") return std::nullopt;
+      char* end = nullptr;
+      const double x = std::strtod(v.c_str(), &end);
+      if (end == v.c_str() || *end != '\0' || !std::isfinite(x) || !(x > 0))
+        return "expected 'auto' or a positive number, got '" + v + "'";
+      return std::nullopt;
+    }));
+    if (width == "auto") c.kernel_width.reset();
+    else if (!width.empty()) c.kernel_width = std::strtod(width.c_str(), nullptr);
     p.get("gate_probability", c.loop_gate_probability, in_range(0.5, 0.999999999));
     p.get("gate_odometry_scale", c.loop_gate_odometry_scale, positive());
     p.get("time_tolerance_s", c.loop_time_tolerance_s, non_negative());

@@ -41,10 +41,10 @@ Matrix6d residual_information(const Eigen::MatrixXd& tangent) {
   return out;
 }
 
-graph::IncrementalOptions smoother_options(const GraphConfig& c) {
+graph::IncrementalOptions smoother_options(const GraphConfig& c, bool planar) {
   graph::IncrementalOptions o;
   o.kernel = graph::robust_kernel_from_name(c.robust);
-  o.kernel_width = c.kernel_width;
+  o.kernel_width = kernel_width_for(c, planar);
   o.relinearize_translation = c.relinearize_translation;
   o.relinearize_rotation = c.relinearize_rotation;
   return o;
@@ -61,11 +61,16 @@ OdometryCoalescerOptions coalescer_options(const GraphConfig& c) {
 
 }  // namespace
 
+double kernel_width_for(const GraphConfig& config, bool planar) {
+  if (config.kernel_width) return *config.kernel_width;
+  const double q = assoc::chi2_quantile(planar ? 3 : 6, config.loop_gate_probability);
+  return graph::robust_kernel_from_name(config.robust) == graph::RobustKernel::kDcs ? q : std::sqrt(q);
+}
+
 GraphStage::GraphStage(const GraphConfig& config, std::shared_ptr<GraphCorrections> corrections)
     : config_(config),
       corrections_(std::move(corrections)),
       proposer_(config.proposals),
-      smoother_(smoother_options(config)),
       coalescer_(coalescer_options(config)),
       chi2_gate_planar_(assoc::chi2_quantile(3, config.loop_gate_probability)),
       chi2_gate_spatial_(assoc::chi2_quantile(6, config.loop_gate_probability)),
@@ -73,6 +78,12 @@ GraphStage::GraphStage(const GraphConfig& config, std::shared_ptr<GraphCorrectio
       sighting_gate_spatial_(assoc::chi2_quantile(3, config.landmarks.gate_probability)) {
   KeyframeSelector check(config.keyframes);  // throws std::invalid_argument for bad thresholds
   (void)check;
+}
+
+graph::IncrementalSmoother& GraphStage::smoother_for(bool planar) {
+  auto& s = smoothers_[planar ? 1 : 0];
+  if (!s) s = std::make_unique<graph::IncrementalSmoother>(smoother_options(config_, planar));
+  return *s;
 }
 
 bool GraphStage::offer(const Event& e, const std::function<bool()>& enqueue) {
@@ -98,6 +109,7 @@ void GraphStage::on_odometry(const Odometry& o, const Emit& emit) {
     Body body;
     body.planar = o.planar;
     body.selector = KeyframeSelector(ko);
+    body.smoother = &smoother_for(o.planar);
     it = bodies_.emplace(o.source, std::move(body)).first;
   } else if (o.utime <= it->second.last_utime) {
     ++out_of_order_;
@@ -186,19 +198,19 @@ void GraphStage::on_keyframe_candidate(const Odometry& o, Body& b, const SE3& od
   if (b.keyframes.empty()) {
     v.fixed = true;  // the body's map frame: its odometry frame at the first keyframe
   } else {
-    initial = smoother_.graph().variables()[static_cast<size_t>(b.keyframes.back().variable)].as_se3() * node.edge;
+    initial = b.smoother->graph().variables()[static_cast<size_t>(b.keyframes.back().variable)].as_se3() * node.edge;
   }
   if (b.planar) v.pose2 = SE2::from_se3(initial);
   else v.pose3 = initial;
   try {
-    node.variable = smoother_.add_variable(v);
+    node.variable = b.smoother->add_variable(v);
     if (!b.keyframes.empty()) {
       const KeyframeNode& prev = b.keyframes.back();
       if (b.planar)
-        smoother_.add_factor(std::make_unique<graph::RelativePoseFactor>(prev.variable, node.variable, SE2::from_se3(node.edge),
+        b.smoother->add_factor(std::make_unique<graph::RelativePoseFactor>(prev.variable, node.variable, SE2::from_se3(node.edge),
                                                                          Eigen::Matrix3d(information)), false);
       else
-        smoother_.add_factor(std::make_unique<graph::RelativePoseFactor>(prev.variable, node.variable, node.edge,
+        b.smoother->add_factor(std::make_unique<graph::RelativePoseFactor>(prev.variable, node.variable, node.edge,
                                                                          residual_information(information)), false);
     }
   } catch (const std::invalid_argument&) {
@@ -221,8 +233,8 @@ void GraphStage::on_keyframe_candidate(const Odometry& o, Body& b, const SE3& od
     r.kind = p.random ? "random" : "local";
     const KeyframeNode& a = b.keyframes[static_cast<size_t>(p.from)];
     const KeyframeNode& c = b.keyframes[static_cast<size_t>(p.to)];
-    r.a = Keyframe{p.from, a.utime, to_pose(smoother_.graph().variables()[static_cast<size_t>(a.variable)].as_se3())};
-    r.b = Keyframe{p.to, c.utime, to_pose(smoother_.graph().variables()[static_cast<size_t>(c.variable)].as_se3())};
+    r.a = Keyframe{p.from, a.utime, to_pose(b.smoother->graph().variables()[static_cast<size_t>(a.variable)].as_se3())};
+    r.b = Keyframe{p.to, c.utime, to_pose(b.smoother->graph().variables()[static_cast<size_t>(c.variable)].as_se3())};
     ++requests_;
     emit(r);
   }
@@ -284,7 +296,7 @@ void GraphStage::on_loop(const LoopClosure& l, const Emit& emit) {
     const Matrix6 ad = chain.adjoint();
     path = ad * path * ad.transpose();
   }
-  const auto& vars = smoother_.graph().variables();
+  const auto& vars = b.smoother->graph().variables();
   const SE3 predicted = vars[static_cast<size_t>(b.keyframes[*from].variable)].as_se3().between(
       vars[static_cast<size_t>(b.keyframes[*to].variable)].as_se3());
   // The loop moved onto the keyframes: T_kf_from^-1 T_kf_to = D_from z D_to^-1.
@@ -308,9 +320,9 @@ void GraphStage::on_loop(const LoopClosure& l, const Emit& emit) {
   const int vf = b.keyframes[*from].variable, vt = b.keyframes[*to].variable;
   try {
     if (b.planar)
-      smoother_.add_factor(std::make_unique<graph::RelativePoseFactor>(vf, vt, SE2::from_se3(z), Eigen::Matrix3d(planar_block(l.information))));
+      b.smoother->add_factor(std::make_unique<graph::RelativePoseFactor>(vf, vt, SE2::from_se3(z), Eigen::Matrix3d(planar_block(l.information))));
     else
-      smoother_.add_factor(std::make_unique<graph::RelativePoseFactor>(vf, vt, z, residual_information(l.information)));
+      b.smoother->add_factor(std::make_unique<graph::RelativePoseFactor>(vf, vt, z, residual_information(l.information)));
   } catch (const std::invalid_argument&) {
     ++loops_rejected_;  // an information the intake let through but the smoother cannot use (e.g. planar block)
     return;
@@ -390,7 +402,7 @@ void GraphStage::add_sightings(const LandmarkSightings& s, Body& b, const Sighti
   std::vector<graph::Variable> local(2);
   local[0].kind = b.planar ? graph::VariableKind::kPose2 : graph::VariableKind::kPose3;
   local[1].kind = b.planar ? graph::VariableKind::kPoint2 : graph::VariableKind::kPoint3;
-  const SE3 at_sighting = smoother_.graph().variables()[static_cast<size_t>(kf.variable)].as_se3() * anchor.motion;
+  const SE3 at_sighting = b.smoother->graph().variables()[static_cast<size_t>(kf.variable)].as_se3() * anchor.motion;
   if (b.planar) local[0].pose2 = SE2::from_se3(at_sighting);
   else local[0].pose3 = at_sighting;
   const Eigen::MatrixXd sigma_d = b.planar ? Eigen::MatrixXd(planar_block(anchor.covariance)) : Eigen::MatrixXd(anchor.covariance);
@@ -414,7 +426,7 @@ void GraphStage::add_sightings(const LandmarkSightings& s, Body& b, const Sighti
     auto lm = b.landmarks.find(ob.id);
     const bool known = lm != b.landmarks.end();
     if (known) {
-      local[1].point = smoother_.graph().variables()[static_cast<size_t>(lm->second.variable)].point;
+      local[1].point = b.smoother->graph().variables()[static_cast<size_t>(lm->second.variable)].point;
     } else {  // the landmark where this sighting puts it: X_K D S l(z)
       const double c = std::cos(b.planar ? 0.0 : ob.elevation);
       const Eigen::Vector3d l(ob.range * c * std::cos(ob.azimuth), ob.range * c * std::sin(ob.azimuth),
@@ -427,10 +439,10 @@ void GraphStage::add_sightings(const LandmarkSightings& s, Body& b, const Sighti
     probe.linearize(local, lin);
     const Eigen::MatrixXd odometry_part = lin.jacobians[0] * sigma_d * lin.jacobians[0].transpose();
     if (known) {
-      const Eigen::MatrixXd p_landmark = smoother_.marginal_covariance(lm->second.variable);
+      const Eigen::MatrixXd p_landmark = b.smoother->marginal_covariance(lm->second.variable);
       if (p_landmark.size() > 0) {  // determined: gate against the estimate
         Eigen::MatrixXd S = R + k2 * odometry_part + lin.jacobians[1] * p_landmark * lin.jacobians[1].transpose();
-        const Eigen::MatrixXd p_keyframe = smoother_.marginal_covariance(kf.variable);
+        const Eigen::MatrixXd p_keyframe = b.smoother->marginal_covariance(kf.variable);
         if (p_keyframe.size() > 0) {
           const Eigen::MatrixXd jk = lin.jacobians[0] * ad;
           S += jk * p_keyframe * jk.transpose();
@@ -450,10 +462,10 @@ void GraphStage::add_sightings(const LandmarkSightings& s, Body& b, const Sighti
       if (!known) {
         graph::Variable v = local[1];
         v.id = next_variable_id_++;
-        lm = b.landmarks.emplace(ob.id, Body::Landmark{smoother_.add_variable(v), 0}).first;
+        lm = b.landmarks.emplace(ob.id, Body::Landmark{b.smoother->add_variable(v), 0}).first;
         ++landmarks_;
       }
-      smoother_.add_factor(std::make_unique<PointObservationFactor>(kf.variable, lm->second.variable, model, z, information, sensor),
+      b.smoother->add_factor(std::make_unique<PointObservationFactor>(kf.variable, lm->second.variable, model, z, information, sensor),
                            config_.landmarks.robust);
     } catch (const std::invalid_argument&) {
       ++sightings_malformed_;  // a value the checks above let through but the smoother refuses
@@ -468,7 +480,7 @@ void GraphStage::add_sightings(const LandmarkSightings& s, Body& b, const Sighti
 
 void GraphStage::optimize_and_publish(const std::string& source, Body& b, int64_t utime, const Emit& emit) {
   const auto t0 = std::chrono::steady_clock::now();
-  const graph::IncrementalStatus st = smoother_.update();
+  const graph::IncrementalStatus st = b.smoother->update();
   last_update_ms_ = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
   rebuilds_ += st.rebuilt ? 1 : 0;
   relinearized_ += st.relinearized_factors;
@@ -479,7 +491,7 @@ void GraphStage::optimize_and_publish(const std::string& source, Body& b, int64_
   Trajectory t;
   t.utime = utime;
   t.source = source;
-  t.chi2 = smoother_.chi2();
+  t.chi2 = b.smoother->chi2();
   t.iterations = st.solves;
   t.solve_ms = last_update_ms_;
   t.keyframes = keyframes(source);
@@ -491,8 +503,8 @@ void GraphStage::optimize_and_publish(const std::string& source, Body& b, int64_
   GraphCorrection c;
   c.keyframe_utime = newest.utime;
   c.keyframe_odom = newest.odom;
-  c.keyframe_map = smoother_.graph().variables()[static_cast<size_t>(newest.variable)].as_se3();
-  const Eigen::MatrixXd marginal = smoother_.marginal_covariance(newest.variable);
+  c.keyframe_map = b.smoother->graph().variables()[static_cast<size_t>(newest.variable)].as_se3();
+  const Eigen::MatrixXd marginal = b.smoother->marginal_covariance(newest.variable);
   if (marginal.size() > 0) c.keyframe_covariance = b.planar ? embed_planar(marginal) : Matrix6(marginal);
   c.keyframe_odom_covariance = newest.odom_covariance;
   corrections_->set(source, c);
@@ -502,7 +514,7 @@ std::vector<Keyframe> GraphStage::keyframes(const std::string& source) const {
   std::vector<Keyframe> out;
   auto it = bodies_.find(source);
   if (it == bodies_.end()) return out;
-  const auto& vars = smoother_.graph().variables();
+  const auto& vars = it->second.smoother->graph().variables();
   for (size_t k = 0; k < it->second.keyframes.size(); ++k) {
     const KeyframeNode& n = it->second.keyframes[k];
     out.push_back(Keyframe{static_cast<int64_t>(k), n.utime, to_pose(vars[static_cast<size_t>(n.variable)].as_se3())});
@@ -515,7 +527,7 @@ std::vector<GraphLandmark> GraphStage::landmarks(const std::string& source) cons
   auto it = bodies_.find(source);
   if (it == bodies_.end()) return out;
   for (const auto& [id, l] : it->second.landmarks)
-    out.push_back(GraphLandmark{id, smoother_.graph().variables()[static_cast<size_t>(l.variable)].point, l.sightings});
+    out.push_back(GraphLandmark{id, it->second.smoother->graph().variables()[static_cast<size_t>(l.variable)].point, l.sightings});
   return out;
 }
 

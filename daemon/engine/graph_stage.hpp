@@ -11,7 +11,7 @@
 //    O the odometry poses) — then checked against the
 //    current estimate with a chi-square gate whose covariance is the loop's plus the odometry's between the two
 //    keyframes (an upper bound of the estimate's relative uncertainty), and added with a robust kernel (DCS by
-//    default); rejected loops are counted;
+//    default, its width per kind of body: kernel_width_for in graph_stage_config.hpp); rejected loops are counted;
 //    A loop about a time the body's odometry has not reached yet waits (at most 256 per body) and is tried again
 //    when the odometry gets there;
 //  - landmark sightings (LandmarkSightings with a landmark id; sightings without an id, -1, are counted as
@@ -30,7 +30,9 @@
 //    S = R + k^2 J_D Sigma_D J_D' + J_K P_K J_K' + J_p P_p J_p' (P: marginal covariances of keyframe and landmark,
 //    their correlation ignored, which makes S larger for a landmark mapped from the same poses), chi-square at
 //    gate_probability; rejected sightings are counted.  Accepted ones enter with the smoother's robust kernel, so a
-//    mis-identified landmark that passes the gate is down-weighted rather than bending the map.  A landmark's first
+//    mis-identified landmark that passes the gate is down-weighted rather than bending the map (at the width of the
+//    body's loops: the smoother holds one width for all its factors, so with "auto" a 2-D sighting gets 16.55 rather
+//    than a 2-D quantile's 14.13, a 3-D one 22.68 rather than 16.55 — slightly more tolerant; the gate rejects first).  A landmark's first
 //    sighting initializes it and is not gated: a wrong first id plants a wrong landmark, that later true sightings
 //    are gated against (limitation).  Landmark positions after each update: landmarks(source).
 //  - after every update: a Trajectory of the body, and the map -> odometry correction for GraphPoseStage.
@@ -71,7 +73,8 @@ class GraphStage final : public Stage {
   void handle(const Event& e, const Emit& emit) override;
   Counters counters() const override;
 
-  const graph::IncrementalSmoother& smoother() const { return smoother_; }
+  /// The smoother of the planar bodies or of the 3-D ones (nullptr before the first such body).
+  const graph::IncrementalSmoother* smoother(bool planar) const { return smoothers_[planar ? 1 : 0].get(); }
   /// The keyframes of a body (optimized poses), oldest first.
   std::vector<Keyframe> keyframes(const std::string& source) const;
   /// The landmarks of a body (optimized positions), by id.
@@ -88,6 +91,7 @@ class GraphStage final : public Stage {
   };
   struct Body {
     bool planar = false;
+    graph::IncrementalSmoother* smoother = nullptr;  // smoothers_[planar]
     KeyframeSelector selector;
     int64_t last_utime = 0;
     SE3 last_odom;
@@ -124,11 +128,15 @@ class GraphStage final : public Stage {
   std::optional<SightingAnchor> anchor_of(const Body& b, int64_t utime) const;
   void add_sightings(const LandmarkSightings& s, Body& b, const SightingAnchor& anchor, const Emit& emit);
   void optimize_and_publish(const std::string& source, Body& b, int64_t utime, const Emit& emit);
+  graph::IncrementalSmoother& smoother_for(bool planar);
 
   GraphConfig config_;
   std::shared_ptr<GraphCorrections> corrections_;
   LoopProposer proposer_;
-  graph::IncrementalSmoother smoother_;
+  /// One smoother per kind of body, [0] 3-D and [1] planar, created with the first such body: the bodies' graphs
+  /// share no variable, and the robust kernel's width depends on the loops' dimension (kernel_width_for), which the
+  /// smoother holds for all its factors.
+  std::unique_ptr<graph::IncrementalSmoother> smoothers_[2];
   OdometryCoalescer coalescer_;
   std::map<std::string, Body> bodies_;
   int64_t next_variable_id_ = 0, next_request_id_ = 0;

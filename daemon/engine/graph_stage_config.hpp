@@ -2,6 +2,7 @@
 #include "estimators/keyframe/keyframe_selector.hpp"
 #include "estimators/keyframe/loop_proposals.hpp"
 
+#include <optional>
 #include <string>
 
 namespace sextant::engine {
@@ -17,6 +18,18 @@ struct GraphLandmarkOptions {
   int max_waiting = 256;                // sighting messages per body ahead of its odometry, kept until it gets there
 };
 
+/// The robust kernel's width for the loops of one kind of body (planar: x, y, yaw residuals, d = 3; spatial: d = 6).
+/// The configured width if there is one; "auto" takes q = chi2_d(loop_gate_probability), the loop gate's quantile
+/// (assoc::chi2_quantile, Wilson-Hilferty: 16.55 for d = 3 and 22.68 for d = 6 at 0.999, 1-2 % above the exact 16.27
+/// and 22.46), so that a true loop keeps its full weight with that probability whatever its dimension:
+///  - DCS phi = q (Agarwal et al., "Robust Map Optimization using Dynamic Covariance Scaling", ICRA 2013): the scale
+///    min(1, 2 phi / (phi + chi2)) is 1 for chi2 <= phi, a gate that fades instead of cutting;
+///  - Huber and Cauchy delta = sqrt(q) (their weights are functions of sqrt(chi2) / delta).
+/// A fixed phi cannot serve both kinds: a 6-DOF residual's chi2 is on average twice a 3-DOF one's, and phi = 1 keeps a
+/// true 6-DOF loop at its median chi2 (5.35) only (2 / 6.35)^2 = 0.10 of its weight (bench/RESULTS.md, session 4).
+struct GraphConfig;
+double kernel_width_for(const GraphConfig& config, bool planar);
+
 /// The graph back end (source B): keyframes by motion magnitude, loop proposals on MATCH_REQUESTS, loop closures
 /// from LOOP_CLOSURES, landmark sightings from LANDMARKS, incremental smoothing, TRAJECTORY after each optimization
 /// and FUSED_POSE "graph" at the odometry rate.
@@ -26,7 +39,9 @@ struct GraphConfig {
   bool propose_loops = true;           // publish MATCH_REQUESTS for each new keyframe
   LoopProposalOptions proposals;       // n1 local, n2 random (-1: 2 n1), seed
   std::string robust = "dcs";          // kernel on loop closures (and landmark sightings): none | huber | cauchy | dcs
-  double kernel_width = 1.0;           // Huber/Cauchy delta or DCS phi
+  /// Huber/Cauchy delta or DCS phi.  nullopt ("auto"): per body kind, from the chi-square quantile of the loop
+  /// residual's dimension at loop_gate_probability, q = chi2_d(p), d = 3 planar / 6 spatial (kernel_width_for).
+  std::optional<double> kernel_width;
   double loop_gate_probability = 0.999;  // chi-square consistency gate of a loop against the current estimate
   double loop_gate_odometry_scale = 3.0; // the odometry's standard deviations are taken this many times larger in the
                                          // gate (odometry covariances are optimistic: biases are not in them)

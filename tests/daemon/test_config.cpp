@@ -1,8 +1,11 @@
 // Config parsing: defaults, overrides, and every error naming its file:line.
+#include "assoc/chi_square.hpp"
 #include "daemon/config/daemon_config.hpp"
+#include "daemon/engine/graph_stage_config.hpp"
 
 #include <doctest/doctest.h>
 
+#include <cmath>
 #include <string>
 
 using sextant::config::ConfigError;
@@ -89,4 +92,34 @@ TEST_CASE("a section that is not a mapping is refused") {
 TEST_CASE("a missing file is a config error naming the path") {
   CHECK_THROWS_WITH_AS(sextant::config::load_daemon_config("/nonexistent/x.yaml"),
                        "/nonexistent/x.yaml: cannot open config file", ConfigError);
+}
+
+TEST_CASE("the loops' kernel width: auto by default (a chi-square quantile of the loop's dimension), or a number") {
+  using sextant::engine::kernel_width_for;
+  // Defaults: DCS, gate probability 0.999.  The width is the loop gate's quantile (assoc::chi2_quantile, the
+  // Wilson-Hilferty approximation), which is within 2 % of the tables: 3 dof 16.266, 6 dof 22.458.
+  const auto d = parse_daemon_config("", "t").engine.graph;
+  CHECK_FALSE(d.kernel_width.has_value());
+  CHECK(kernel_width_for(d, true) == sextant::assoc::chi2_quantile(3, 0.999));
+  CHECK(kernel_width_for(d, false) == sextant::assoc::chi2_quantile(6, 0.999));
+  CHECK(kernel_width_for(d, true) == doctest::Approx(16.266).epsilon(0.02));
+  CHECK(kernel_width_for(d, false) == doctest::Approx(22.458).epsilon(0.02));
+  // The shipped default config says auto too.
+  const auto shipped = sextant::config::load_daemon_config(std::string(SEXTANT_SOURCE_DIR) + "/config/default.yaml");
+  CHECK_FALSE(shipped.engine.graph.kernel_width.has_value());
+  // Huber's and Cauchy's delta act on sqrt(chi2): the square root of the same quantile; at 0.99, 6 dof: 16.812.
+  const auto huber = parse_daemon_config("engine:\n  graph:\n    loops: {robust: huber, gate_probability: 0.99}\n", "t").engine.graph;
+  CHECK(kernel_width_for(huber, false) == doctest::Approx(std::sqrt(sextant::assoc::chi2_quantile(6, 0.99))));
+  CHECK(kernel_width_for(huber, false) == doctest::Approx(std::sqrt(16.812)).epsilon(0.01));
+  // A number applies to both kinds of body; "auto" spelled out is the default.
+  const auto five = parse_daemon_config("engine:\n  graph:\n    loops: {kernel_width: 5}\n", "t").engine.graph;
+  CHECK(kernel_width_for(five, true) == 5.0);
+  CHECK(kernel_width_for(five, false) == 5.0);
+  CHECK_FALSE(parse_daemon_config("engine:\n  graph:\n    loops: {kernel_width: auto}\n", "t").engine.graph.kernel_width);
+  // Anything else names its place.
+  for (const char* bad : {"wide", "-1", "0", "1e400", "5m"}) {
+    const std::string e = error_of(std::string("engine:\n  graph:\n    loops:\n      kernel_width: ") + bad + "\n");
+    CHECK(e.find("test.yaml:4:21:") == 0);
+    CHECK(e.find("expected 'auto' or a positive number") != std::string::npos);
+  }
 }

@@ -18,8 +18,10 @@
 #include <cmath>
 #include <deque>
 #include <map>
+#include <optional>
 #include <random>
 #include <stdexcept>
+#include <utility>
 
 using namespace sextant;
 using namespace sextant::engine;
@@ -70,6 +72,30 @@ Run circle_run(double seconds, uint64_t seed, int rate_hz = 10, const std::strin
     r.truth.emplace_back(o.utime, truth);
   }
   return r;
+}
+
+// The circle run as 3-D odometry: each planar increment with a little noise in z, roll and pitch on top (and the
+// increment covariance saying so); the truth stays the planar one.
+Run spatial_run(Run run, uint64_t seed) {
+  std::vector<SE3> planar;
+  for (const auto& o : run.odometry) planar.push_back(to_se3(o.pose));
+  std::mt19937_64 rng(seed);
+  std::normal_distribution<double> n(0, 1);
+  SE3 odom = planar.front();
+  for (size_t k = 0; k < run.odometry.size(); ++k) {
+    Odometry& o = run.odometry[k];
+    if (k > 0) {
+      Vector6d xi = Vector6d::Zero();
+      xi[2] = 0.002 * n(rng), xi[3] = 0.001 * n(rng), xi[4] = 0.001 * n(rng);
+      odom = odom * planar[k - 1].inverse() * planar[k] * SE3::exp(xi);
+    }
+    o.planar = false;
+    o.pose = to_pose(odom);
+    Matrix6 inc = *o.increment_covariance;
+    inc(2, 2) = 4e-6, inc(3, 3) = inc(4, 4) = 1e-6;
+    o.increment_covariance = inc;
+  }
+  return run;
 }
 
 // Twelve landmarks around the circle (ids 100..111, 3 m inside and outside it), seen from the run at 2 Hz, 50 ms after
@@ -241,6 +267,64 @@ TEST_CASE("graph stage: keyframes by motion, proposals, loops from the simulated
   CHECK(fused.size() == run.odometry.size());
   for (size_t k = 1; k < fused.size(); ++k) CHECK(fused[k].utime > fused[k - 1].utime);
   CHECK(fused.back().covariance(0, 0) > 0);
+}
+
+TEST_CASE("graph stage: the default kernel width keeps true loops at full weight, planar and 3-D bodies alike") {
+  // Two bodies in one stage, a planar one and a 3-D one, loops answered from the truth (no wrong answers).  With the
+  // default width ("auto": chi2 quantile of the loop's dimension at the gate's 0.999) a true loop's chi2 stays below
+  // phi and keeps weight 1 (but for a few per mille); with phi = 1 most true loops are down-weighted, 3-D ones most
+  // (P(chi2_3 > 1) = 0.80, P(chi2_6 > 1) = 0.99).
+  const Run flat = circle_run(60, 3, 10, "flat");
+  const Run spatial = spatial_run(circle_run(60, 4, 10, "spatial"), 22);
+  std::map<std::string, replay::MatcherTruth> truth;
+  truth["flat"] = {replay::InterpolatedTrajectory(flat.truth), true};
+  truth["spatial"] = {replay::InterpolatedTrajectory(spatial.truth), false};
+  // Each smoother's kernel width, and the fraction of its loops with a weight below 1 at the end of the run.
+  auto run_with = [&](std::optional<double> width) {
+    EngineConfig cfg = graph_only_config(true);
+    cfg.graph.kernel_width = width;
+    Engine engine(cfg);
+    replay::SimulatedMatcher matcher(truth, replay::SimulatedMatcherOptions{});
+    std::vector<MatchRequest> requests;
+    const Emit emit = [&](Output out) {
+      if (auto* r = std::get_if<MatchRequest>(&out)) requests.push_back(*r);
+    };
+    for (size_t k = 0; k < flat.odometry.size(); ++k) {
+      engine.handle(flat.odometry[k], emit);
+      engine.handle(spatial.odometry[k], emit);
+      for (const MatchRequest& r : std::exchange(requests, {}))
+        if (auto answer = matcher.answer(r)) engine.handle(*answer, emit);
+    }
+    const GraphStage& g = graph_stage_of(engine);
+    CHECK(counter(g, "loops_rejected") <= counter(g, "loops_accepted") / 100);  // the gate: 0.1 % of true loops
+    std::map<bool, std::pair<double, double>> out;  // planar -> (kernel width, fraction down-weighted)
+    for (const bool planar : {true, false}) {
+      const graph::IncrementalSmoother* sm = g.smoother(planar);
+      REQUIRE(sm != nullptr);
+      int loops = 0, weak = 0;
+      for (size_t f = 0; f < sm->graph().factors().size(); ++f) {
+        // Loops between keyframes that are not consecutive (odometry edges join consecutive ones; one body per
+        // smoother and no landmarks here, so consecutive keyframes have consecutive variable indices).
+        const auto& v = sm->graph().factors()[f]->variables();
+        if (v.size() != 2 || std::abs(v[1] - v[0]) == 1) continue;
+        ++loops;
+        weak += sm->robust_weight_of(f) < 0.999 ? 1 : 0;
+      }
+      REQUIRE(loops > 100);
+      out[planar] = {sm->options().kernel_width, static_cast<double>(weak) / loops};
+    }
+    return out;
+  };
+  const auto by_default = run_with(std::nullopt), phi1 = run_with(1.0);
+  MESSAGE("down-weighted true loops, auto: planar " << by_default.at(true).second << ", 3-D " << by_default.at(false).second
+          << "; phi = 1: planar " << phi1.at(true).second << ", 3-D " << phi1.at(false).second);
+  CHECK(by_default.at(true).first == doctest::Approx(16.266).epsilon(0.02));  // chi2_3(0.999), as the gate computes it
+  CHECK(by_default.at(false).first == doctest::Approx(22.458).epsilon(0.02));  // chi2_6(0.999)
+  CHECK(by_default.at(true).second < 0.02);
+  CHECK(by_default.at(false).second < 0.02);
+  CHECK(phi1.at(true).first == 1.0);
+  CHECK(phi1.at(true).second > 0.5);
+  CHECK(phi1.at(false).second > 0.8);
 }
 
 TEST_CASE("graph stage: a confident wrong loop is rejected and leaves the map as it was, a time is bridged by odometry") {
@@ -510,27 +594,7 @@ TEST_CASE("graph stage: sightings of an unknown body, before the first keyframe,
 }
 
 TEST_CASE("graph stage: a 3-D body maps 3-D landmarks from range, azimuth and elevation") {
-  // The circle run as 3-D odometry: each planar increment with a little noise in z, roll and pitch on top (and the
-  // increment covariance saying so).
-  Run run = circle_run(120, 3);
-  std::vector<SE3> planar;
-  for (const auto& o : run.odometry) planar.push_back(to_se3(o.pose));
-  std::mt19937_64 rng(21);
-  std::normal_distribution<double> n(0, 1);
-  SE3 odom = planar.front();
-  for (size_t k = 0; k < run.odometry.size(); ++k) {
-    Odometry& o = run.odometry[k];
-    if (k > 0) {
-      Vector6d xi = Vector6d::Zero();
-      xi[2] = 0.002 * n(rng), xi[3] = 0.001 * n(rng), xi[4] = 0.001 * n(rng);
-      odom = odom * planar[k - 1].inverse() * planar[k] * SE3::exp(xi);
-    }
-    o.planar = false;
-    o.pose = to_pose(odom);
-    Matrix6 inc = *o.increment_covariance;
-    inc(2, 2) = 4e-6, inc(3, 3) = inc(4, 4) = 1e-6;
-    o.increment_covariance = inc;
-  }
+  const Run run = spatial_run(circle_run(120, 3), 21);
   const auto sightings = ring_sightings(run, 13, false);
   Engine engine(graph_only_config(false));
   GraphStage* graph = &graph_stage_of(engine);
@@ -649,14 +713,19 @@ void check_same_graph(const GraphStage& a, const GraphStage& b) {
                            "landmarks", "sightings_accepted", "sightings_rejected", "sightings_unmatched",
                            "sightings_dropped", "odometry_out_of_order", "odometry_edges_rejected"})
     CHECK_MESSAGE(counter(a, name) == counter(b, name), name);
-  CHECK(a.smoother().chi2() == doctest::Approx(b.smoother().chi2()).epsilon(1e-9));
-  const size_t n = a.smoother().graph().variables().size();
-  REQUIRE(n == b.smoother().graph().variables().size());
-  for (size_t v = 0; v < n; ++v) {
-    const Eigen::MatrixXd pa = a.smoother().marginal_covariance(static_cast<int>(v));
-    const Eigen::MatrixXd pb = b.smoother().marginal_covariance(static_cast<int>(v));
-    REQUIRE(pa.rows() == pb.rows());
-    if (pa.size() > 0) CHECK((pa - pb).norm() <= 1e-9 * pa.norm());
+  for (const bool planar : {false, true}) {  // each kind of body has its smoother
+    const graph::IncrementalSmoother *sa = a.smoother(planar), *sb = b.smoother(planar);
+    REQUIRE((sa == nullptr) == (sb == nullptr));
+    if (sa == nullptr) continue;
+    CHECK(sa->chi2() == doctest::Approx(sb->chi2()).epsilon(1e-9));
+    const size_t n = sa->graph().variables().size();
+    REQUIRE(n == sb->graph().variables().size());
+    for (size_t v = 0; v < n; ++v) {
+      const Eigen::MatrixXd pa = sa->marginal_covariance(static_cast<int>(v));
+      const Eigen::MatrixXd pb = sb->marginal_covariance(static_cast<int>(v));
+      REQUIRE(pa.rows() == pb.rows());
+      if (pa.size() > 0) CHECK((pa - pb).norm() <= 1e-9 * pa.norm());
+    }
   }
 }
 
