@@ -3,10 +3,13 @@
 # default "100 1000"; median over the seeds PF_SEEDS, default "1 2 3", each seed's ATE in brackets) on MRCLAM
 # Dataset 7, robots 1-5 (ROBOTS, default "1 2 3 4 5").
 # Usage: [PF_PARTICLES="100"] [PF_SEEDS="1"] [ROBOTS="1"] bench/mrclam_filters.sh [BUILD_DIR]   (prints a markdown table)
-# Then the graph back end (odometry + landmark sightings) in a second table; GRAPH=0 skips it.
+# Then the graph back end (odometry + landmark sightings) in a second table; GRAPH=0 skips it.  CONFIG (default
+# config/mrclam.yaml) is the config of the dead-reckoning, EKF-localization and graph runs (e.g. a copy with one
+# setting changed, for a before/after).
 set -euo pipefail
 build=${1:-build}
 root=$(cd "$(dirname "$0")/.." && pwd)
+config=${CONFIG:-$root/config/mrclam.yaml}
 data="$root/../shared/data/landmarks/MRCLAM_Dataset7"
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
@@ -27,8 +30,8 @@ echo "| robot | dead reckoning ATE [m] | EKF localization, known map [m] | EKF-S
 echo "|---|---|---|---|---|$pf_rule"
 for r in $robots; do
   "$root/$build/bin/sextant" convert mrclam "$data" --robot $r -o "$work/r.lcm" --gt-out "$work/gt.txt" > /dev/null
-  "$root/$build/bin/sextant" replay "$work/r.lcm" --config "$root/config/mrclam.yaml" --estimator dead_reckoning --tum-out "$work/dr.txt" > /dev/null
-  "$root/$build/bin/sextant" replay "$work/r.lcm" --config "$root/config/mrclam.yaml" --estimator ekf --tum-out "$work/loc.txt" > /dev/null
+  "$root/$build/bin/sextant" replay "$work/r.lcm" --config "$config" --estimator dead_reckoning --tum-out "$work/dr.txt" > /dev/null
+  "$root/$build/bin/sextant" replay "$work/r.lcm" --config "$config" --estimator ekf --tum-out "$work/loc.txt" > /dev/null
   "$root/$build/bin/sextant" replay "$work/r.lcm" --config "$work/slam.yaml" --estimator ekf --tum-out "$work/slam.txt" > /dev/null
   dr=$(ate "$work/gt.txt" "$work/dr.txt"); loc=$(ate "$work/gt.txt" "$work/loc.txt"); slam=$(ate "$work/gt.txt" "$work/slam.txt")
   pf_cells=""
@@ -53,8 +56,8 @@ if [ "${GRAPH:-1}" != 0 ]; then
   echo "|---|---|---|---|---|---|---|---|---|"
   for r in $robots; do
     "$root/$build/bin/sextant" convert mrclam "$data" --robot $r -o "$work/r.lcm" --gt-out "$work/gt.txt" > /dev/null
-    "$root/$build/bin/sextant" replay "$work/r.lcm" --config "$root/config/mrclam.yaml" --estimator dead_reckoning --tum-out "$work/dr.txt" > /dev/null
-    "$root/$build/bin/sextant" replay "$work/r.lcm" --config "$root/config/mrclam.yaml" --estimator graph --tum-out "$work/graph.txt" \
+    "$root/$build/bin/sextant" replay "$work/r.lcm" --config "$config" --estimator dead_reckoning --tum-out "$work/dr.txt" > /dev/null
+    "$root/$build/bin/sextant" replay "$work/r.lcm" --config "$config" --estimator graph --tum-out "$work/graph.txt" \
       --out-log "$work/graph_out.lcm" --json > "$work/graph.json"
     counts=$(python3 - "$work/graph_out.lcm" "$work/kf.txt" "$work/graph.json" "$root/$build/lcmtypes/python" "$root/tests/e2e" <<'EOP'
 import json, sys

@@ -13,6 +13,7 @@ void read_stage_config(Section& s, engine::GraphConfig& c) {
     k.get("k2", c.keyframes.k2, positive());
     k.get("translation_weight", c.keyframes.translation_weight, non_negative());
     k.get("rotation_weight", c.keyframes.rotation_weight, non_negative());
+    k.get("reanchor_after", c.keyframes.reanchor_after, int_in_range(0, 1 << 20));
     if (!(c.keyframes.k1 < c.keyframes.k2)) throw k.error("'" + k.path() + "': k1 must be smaller than k2");
     if (c.keyframes.translation_weight == 0 && c.keyframes.rotation_weight == 0)
       throw k.error("'" + k.path() + "': translation_weight and rotation_weight cannot both be 0");

@@ -59,6 +59,26 @@ OdometryCoalescerOptions coalescer_options(const GraphConfig& c) {
   return o;
 }
 
+/// The covariance added to the odometry edge of a keyframe re-anchored after a jump (KeyframeSelector's kReanchored):
+/// the odometry across the jump is what made it implausible, so the edge only says "somewhere around there": each
+/// translation axis gets the variance |rho|^2 and each rotation axis |phi|^2, mu = Log(edge) = [rho; phi] (planar:
+/// x, y and yaw only).  The new segment stays connected (one graph, one map frame, the smoother's system stays
+/// determined) and starts where the odometry put it, but a loop across the jump moves it almost freely, and the loop
+/// gate's odometry path covariance (on_loop) widens by the same amount, so such loops are not refused.
+Matrix6 jump_covariance(const SE3& edge, bool planar) {
+  Matrix6 c = Matrix6::Zero();
+  if (planar) {
+    const Eigen::Vector3d mu = SE2::from_se3(edge).log();
+    c(0, 0) = c(1, 1) = mu.head<2>().squaredNorm();
+    c(5, 5) = mu[2] * mu[2];
+  } else {
+    const Vector6d mu = edge.log();
+    c.topLeftCorner<3, 3>().diagonal().setConstant(mu.head<3>().squaredNorm());
+    c.bottomRightCorner<3, 3>().diagonal().setConstant(mu.tail<3>().squaredNorm());
+  }
+  return c;
+}
+
 }  // namespace
 
 double kernel_width_for(const GraphConfig& config, bool planar) {
@@ -160,9 +180,12 @@ void GraphStage::remember_odometry(Body& b, int64_t utime, const SE3& pose, size
 }
 
 void GraphStage::on_coalesced(const OdometryCoalescer::Entry& entry, const Emit& emit) {
-  if (auto it = bodies_.find(entry.message.source); it != bodies_.end())
+  if (auto it = bodies_.find(entry.message.source); it != bodies_.end()) {
     for (const auto& [utime, pose] : entry.passed)
       if (utime > it->second.last_utime) remember_odometry(it->second, utime, pose, static_cast<size_t>(config_.odometry_history));
+    // The coalescer's selector saw the merged messages too (their run towards re-anchoring): continue from it.
+    it->second.selector = entry.selector;
+  }
   keyframes_rejected_ += entry.implausible;
   on_odometry(entry.message, emit);
 }
@@ -170,7 +193,8 @@ void GraphStage::on_coalesced(const OdometryCoalescer::Entry& entry, const Emit&
 void GraphStage::on_keyframe_candidate(const Odometry& o, Body& b, const SE3& odom, const Emit& emit) {
   const KeyframeDecision d = b.selector.decide(odom);
   if (d == KeyframeDecision::kImplausible) ++keyframes_rejected_;
-  if (d != KeyframeDecision::kKeyframe) return;
+  if (d != KeyframeDecision::kKeyframe && d != KeyframeDecision::kReanchored) return;
+  const bool reanchored = d == KeyframeDecision::kReanchored && !b.keyframes.empty();
 
   KeyframeNode node;
   node.utime = o.utime;
@@ -180,6 +204,7 @@ void GraphStage::on_keyframe_candidate(const Odometry& o, Body& b, const SE3& od
   if (!b.keyframes.empty()) {
     node.edge = b.keyframes.back().odom.between(odom);
     node.edge_covariance = b.since_keyframe;
+    if (reanchored) node.edge_covariance += jump_covariance(node.edge, b.planar);
     // The odometry edge's information; a covariance that cannot be inverted (it can only come from a sender's
     // malformed covariances) drops the keyframe and keeps accumulating towards the next one.
     const Eigen::MatrixXd cov = b.planar ? Eigen::MatrixXd(planar_block(node.edge_covariance)) : Eigen::MatrixXd(node.edge_covariance);
@@ -221,6 +246,7 @@ void GraphStage::on_keyframe_candidate(const Odometry& o, Body& b, const SE3& od
   b.by_utime[o.utime] = b.keyframes.size();
   b.keyframes.push_back(node);
   ++keyframes_;
+  if (reanchored) ++keyframes_reanchored_;
   optimize_and_publish(o.source, b, o.utime, emit);
 
   if (!config_.propose_loops) return;
@@ -534,6 +560,7 @@ std::vector<GraphLandmark> GraphStage::landmarks(const std::string& source) cons
 Counters GraphStage::counters() const {
   return {{"keyframes", keyframes_},
           {"keyframes_rejected", keyframes_rejected_},
+          {"keyframes_reanchored", keyframes_reanchored_},
           {"match_requests", requests_},
           {"loops_accepted", loops_accepted_},
           {"loops_rejected", loops_rejected_},

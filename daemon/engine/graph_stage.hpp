@@ -4,6 +4,13 @@
 //  - keyframes: each odometry pose is classified by KeyframeSelector (too close / keyframe / implausible jump,
 //    counted); a keyframe becomes a pose variable linked to the previous keyframe by the odometry between them, with
 //    the composed increment covariance as information;
+//  - after a real jump (reanchor_after consistent implausible poses in a row: the odometry lost track and resumed
+//    elsewhere) the selector re-anchors (keyframes_reanchored): the new keyframe is linked to the last one before the
+//    jump by the odometry across it, its covariance inflated by the jump's own size (jump_covariance in the .cpp).
+//    Why one graph and not a new segment: a new segment would need its own gauge (a fixed first keyframe and its own
+//    map frame, so FUSED_POSE would jump to another frame) and loops across the two could not join them without
+//    moving a fixed pose; with a weak edge the map frame stays, the fused pose continues from the odometry's guess,
+//    and the first loops across the jump pull the new segment into place;
 //  - loop proposals: for each new keyframe the LoopProposer's pairs go out as MatchRequests (keyframe ids are the
 //    body's keyframe indices, 0, 1, 2, ...);
 //  - loop closures (answers and unsolicited ones) are tied to keyframes by id or by time — a time between keyframes
@@ -141,7 +148,7 @@ class GraphStage final : public Stage {
   std::map<std::string, Body> bodies_;
   int64_t next_variable_id_ = 0, next_request_id_ = 0;
   double chi2_gate_planar_ = 0, chi2_gate_spatial_ = 0, sighting_gate_planar_ = 0, sighting_gate_spatial_ = 0;
-  int64_t keyframes_ = 0, keyframes_rejected_ = 0, requests_ = 0, loops_accepted_ = 0, loops_rejected_ = 0,
+  int64_t keyframes_ = 0, keyframes_rejected_ = 0, keyframes_reanchored_ = 0, requests_ = 0, loops_accepted_ = 0, loops_rejected_ = 0,
           loops_unmatched_ = 0, loops_unknown_source_ = 0, optimizer_failures_ = 0, rebuilds_ = 0,
           relinearized_ = 0, out_of_order_ = 0, bad_edges_ = 0;
   int64_t landmarks_ = 0, sightings_accepted_ = 0, sightings_rejected_ = 0, sightings_without_id_ = 0,

@@ -44,6 +44,7 @@ OdometryCoalescer::Entry OdometryCoalescer::make_entry(const Body& b, const Odom
   e.message = o;
   e.pinned = pinned;
   e.decision = d;
+  e.selector = b.selector;
   if (b.has_last) {
     const SE3 pose = to_se3(o.pose);
     e.increment = increment_covariance(o, b.last_pose.between(pose), b.last_covariance, options_.min_increment_variance);
@@ -91,7 +92,7 @@ bool OdometryCoalescer::offer(const Event& event, const std::function<bool()>& e
   KeyframeSelector selector = b.selector;  // decided on a copy: a message the queue refuses leaves no trace
   const KeyframeDecision d = selector.decide(pose);
   const bool after_waiting = !b.waiting_times.empty() && b.waiting_times.front() <= o->utime;
-  const bool pinned = d == KeyframeDecision::kKeyframe || after_waiting;
+  const bool pinned = d == KeyframeDecision::kKeyframe || d == KeyframeDecision::kReanchored || after_waiting;
 
   bool taken = true;
   if (b.open && !b.batches.back().back().pinned) {
@@ -107,6 +108,7 @@ bool OdometryCoalescer::offer(const Event& event, const std::function<bool()>& e
     e.message = *o;
     e.message.increment_covariance = e.increment - variance_floor(o->planar, options_.min_increment_variance);
     e.decision = d;
+    e.selector = b.selector;
     e.pinned = pinned;
     ++coalesced_;
   } else if (b.open && b.batches.back().size() < options_.max_entries) {

@@ -13,8 +13,10 @@
 //    from the single messages; the merged message's time and pose are kept in `passed` for the stage's odometry
 //    history (loops and sightings at exact odometry times still resolve);
 //  - pinned, never merged into: a keyframe candidate (a mirror of the stage's KeyframeSelector decides on every
-//    pose here; too-close and implausible decisions leave the selector's reference unchanged, so the stage's own
-//    selector, fed with the pinned and the newest messages, takes the same decisions at the same poses), and the
+//    pose here: keyframes and re-anchorings are pinned; too-close and implausible decisions leave the reference
+//    unchanged, but implausible ones advance the selector's run towards re-anchoring, so each entry carries the
+//    mirror's selector as it was before its message and the stage continues from that one: it takes the same
+//    decisions at the same poses as from the single messages), and the
 //    first message at or after the time of a sighting or a loop that arrived ahead of the odometry (the stage anchors
 //    the sighting by interpolating between the two messages around it, and tries the loop again at that message,
 //    exactly as without coalescing);
@@ -62,6 +64,7 @@ class OdometryCoalescer {
     bool pinned = false;      // a keyframe candidate or the first message after a waiting sighting's or loop's time
     Matrix6 increment = Matrix6::Zero();  // covariance of the motion since the previous message, floor included
     KeyframeDecision decision = KeyframeDecision::kTooClose;  // of `message`
+    KeyframeSelector selector;  // the mirror's selector before deciding `message` (after every earlier message)
   };
   using Batch = std::vector<Entry>;
 

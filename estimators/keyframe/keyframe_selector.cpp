@@ -19,6 +19,7 @@ const char* to_string(KeyframeDecision d) {
     case KeyframeDecision::kTooClose: return "too_close";
     case KeyframeDecision::kKeyframe: return "keyframe";
     case KeyframeDecision::kImplausible: return "implausible";
+    case KeyframeDecision::kReanchored: return "reanchored";
   }
   return "unknown";
 }
@@ -33,6 +34,8 @@ KeyframeSelector::KeyframeSelector(const KeyframeSelectorOptions& o) : options_(
     why << "keyframe selector: rotation_weight must be finite and >= 0, got " << o.rotation_weight;
   else if (o.translation_weight == 0 && o.rotation_weight == 0)
     why << "keyframe selector: translation_weight and rotation_weight are both 0 (every motion would measure 0)";
+  else if (o.reanchor_after < 0)
+    why << "keyframe selector: reanchor_after must be >= 0, got " << o.reanchor_after;
   if (!why.str().empty()) throw std::invalid_argument(why.str());
 }
 
@@ -54,6 +57,8 @@ KeyframeDecision KeyframeSelector::decide(const SE3& pose) {
   if (!finite(pose)) {
     last_magnitude_ = std::numeric_limits<double>::quiet_NaN();
     ++rejected_;
+    jump_run_ = 0;
+    jump_last_.reset();
     return KeyframeDecision::kImplausible;
   }
   if (!reference_) {
@@ -64,9 +69,22 @@ KeyframeDecision KeyframeSelector::decide(const SE3& pose) {
   }
   last_magnitude_ = magnitude(*reference_, pose);
   if (!std::isfinite(last_magnitude_) || last_magnitude_ > options_.k2) {
+    // A run continues while each implausible pose is a plausible step from the one before it.
+    const bool continues = jump_last_ && magnitude(*jump_last_, pose) <= options_.k2;
+    jump_run_ = continues ? jump_run_ + 1 : 1;
+    jump_last_ = pose;
+    if (options_.reanchor_after > 0 && jump_run_ >= options_.reanchor_after) {
+      reference_ = pose;
+      jump_run_ = 0;
+      jump_last_.reset();
+      ++reanchored_;
+      return KeyframeDecision::kReanchored;
+    }
     ++rejected_;
     return KeyframeDecision::kImplausible;
   }
+  jump_run_ = 0;
+  jump_last_.reset();
   if (last_magnitude_ < options_.k1) {
     ++too_close_;
     return KeyframeDecision::kTooClose;

@@ -11,8 +11,16 @@
 //     k1 <= L <= k2  kKeyframe      a new keyframe: it becomes the reference
 //     L >  k2        kImplausible   an implausible jump (a wrong odometry estimate): rejected, counted, the
 //                                   reference stays
+// Re-anchoring (sextant's addition; source B keeps the reference for good): a jump can be real — the odometry lost
+// track and resumed somewhere else, or the body was carried — and then every later pose is implausible against the
+// old reference and keyframing would stop forever.  A jump is taken as real when `reanchor_after` poses in a row are
+// implausible *and* consistent with each other (each within k2 of the implausible pose before it, by the same L):
+// the last of them becomes the reference and the decision is kReanchored (counted).  A spurious spike — one pose, or
+// a few, off and then back — is still rejected; so is a run of wild poses that do not agree with each other (a
+// pose farther than k2 from the previous implausible one starts a new run).  Any too-close or keyframe decision ends
+// the run.  reanchor_after = 0 never re-anchors (source B's behaviour).
 // The first pose is always a keyframe.  A pose with a non-finite component (or whose motion magnitude is not
-// finite) is kImplausible and counted, and never becomes the reference.
+// finite) is kImplausible and counted, never becomes the reference and ends a run towards re-anchoring.
 // Source B's own run used k1 = 0.8, k2 = 2 in its units; sextant's defaults are for metres and radians.
 #include "estimators/lie/se2.hpp"
 #include "estimators/lie/se3.hpp"
@@ -28,19 +36,24 @@ struct KeyframeSelectorOptions {
   double translation_weight = 1.0;  // w_t, per m^2
   double rotation_weight = 1.0;     // w_r, per rad^2
   bool planar = false;              // measure the motion in SE(2) (x, y, yaw of each pose; z, roll, pitch ignored)
+  int reanchor_after = 10;          // consecutive, mutually consistent implausible poses that make the last one the
+                                    // new reference (a real jump); 0: never
 };
 
-enum class KeyframeDecision { kTooClose, kKeyframe, kImplausible };
+/// kReanchored: after a real jump (see above) the pose becomes the new reference, as a keyframe does; a graph should
+/// link it across the jump with a weak edge (or start a new segment), not with the odometry's own covariance.
+enum class KeyframeDecision { kTooClose, kKeyframe, kImplausible, kReanchored };
 
 const char* to_string(KeyframeDecision d);
 
 class KeyframeSelector {
  public:
-  /// Throws std::invalid_argument unless 0 <= k1 < k2 (finite) and both weights are finite, >= 0 and not both 0.
+  /// Throws std::invalid_argument unless 0 <= k1 < k2 (finite), both weights are finite, >= 0 and not both 0, and
+  /// reanchor_after >= 0.
   explicit KeyframeSelector(const KeyframeSelectorOptions& options = {});
 
-  /// Classifies the odometry pose `odometry_pose` (any fixed frame, the same for every call); on kKeyframe it
-  /// becomes the reference of the next decisions.
+  /// Classifies the odometry pose `odometry_pose` (any fixed frame, the same for every call); on kKeyframe and
+  /// kReanchored it becomes the reference of the next decisions.
   KeyframeDecision decide(const SE3& odometry_pose);
 
   /// L of the last decide() (0 for the first pose; NaN after a non-finite pose).
@@ -51,6 +64,9 @@ class KeyframeSelector {
   int64_t accepted() const { return accepted_; }  // keyframes, the first pose included
   int64_t rejected() const { return rejected_; }  // kImplausible decisions
   int64_t too_close() const { return too_close_; }
+  int64_t reanchored() const { return reanchored_; }  // kReanchored decisions
+  /// Implausible poses in the current run towards re-anchoring (0 when the last decision was not kImplausible).
+  int jump_run() const { return jump_run_; }
   /// The pose of the last keyframe (nullopt before the first one).
   const std::optional<SE3>& reference() const { return reference_; }
   const KeyframeSelectorOptions& options() const { return options_; }
@@ -58,8 +74,10 @@ class KeyframeSelector {
  private:
   KeyframeSelectorOptions options_;
   std::optional<SE3> reference_;
+  std::optional<SE3> jump_last_;  // the last implausible pose of the current run
+  int jump_run_ = 0;
   double last_magnitude_ = 0;
-  int64_t accepted_ = 0, rejected_ = 0, too_close_ = 0;
+  int64_t accepted_ = 0, rejected_ = 0, too_close_ = 0, reanchored_ = 0;
 };
 
 }  // namespace sextant

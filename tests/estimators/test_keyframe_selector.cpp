@@ -113,6 +113,45 @@ TEST_CASE("keyframe selector: an implausible jump is rejected, counted, and keep
   CHECK(s.rejected() == 1);
 }
 
+TEST_CASE("keyframe selector: spikes are rejected, a persistent jump re-anchors after reanchor_after poses") {
+  KeyframeSelectorOptions o;  // k1 = 0.3, k2 = 5
+  o.reanchor_after = 4;
+  KeyframeSelector s(o);
+  s.decide(SE3());
+  // A spike of three poses (one short of re-anchoring), then back: all rejected, the reference stays at 0.
+  for (double x : {20.0, 20.1, 20.2}) CHECK(s.decide(translation(x)) == KeyframeDecision::kImplausible);
+  CHECK(s.jump_run() == 3);
+  CHECK(s.decide(translation(0.1)) == KeyframeDecision::kTooClose);
+  CHECK(s.jump_run() == 0);
+  CHECK(s.reference()->translation().norm() == 0);
+  // Wild poses that disagree with each other (each > k2 from the one before) never re-anchor.
+  for (int k = 0; k < 20; ++k) CHECK(s.decide(translation(k % 2 ? 30.0 : -30.0)) == KeyframeDecision::kImplausible);
+  CHECK(s.jump_run() == 1);
+  CHECK(s.reanchored() == 0);
+  CHECK(s.rejected() == 23);
+  // A real jump to 40 m, the body moving on from there: rejected three times, the fourth pose is the new reference.
+  CHECK(s.decide(translation(0.2)) == KeyframeDecision::kTooClose);  // ends the wild run
+  for (double x : {40.0, 40.2, 40.4}) CHECK(s.decide(translation(x)) == KeyframeDecision::kImplausible);
+  CHECK(s.decide(translation(40.6)) == KeyframeDecision::kReanchored);
+  CHECK(s.reanchored() == 1);
+  CHECK(s.rejected() == 26);
+  CHECK(s.jump_run() == 0);
+  CHECK(s.reference()->translation().x() == 40.6);
+  // Keyframing resumes from there.
+  CHECK(s.decide(translation(40.7)) == KeyframeDecision::kTooClose);
+  CHECK(s.decide(translation(41.0)) == KeyframeDecision::kKeyframe);
+  // A non-finite pose ends a run; reanchor_after = 0 never re-anchors.
+  for (double x : {0.0, 0.1, 0.2}) CHECK(s.decide(translation(x)) == KeyframeDecision::kImplausible);
+  CHECK(s.decide(translation(std::numeric_limits<double>::quiet_NaN())) == KeyframeDecision::kImplausible);
+  CHECK(s.decide(translation(0.3)) == KeyframeDecision::kImplausible);
+  CHECK(s.jump_run() == 1);
+  o.reanchor_after = 0;
+  KeyframeSelector never(o);
+  never.decide(SE3());
+  for (int k = 0; k < 100; ++k) CHECK(never.decide(translation(50 + 0.1 * k)) == KeyframeDecision::kImplausible);
+  CHECK(never.reanchored() == 0);
+}
+
 TEST_CASE("keyframe selector: a non-finite pose is implausible and never becomes the reference") {
   const double nan = std::numeric_limits<double>::quiet_NaN();
   KeyframeSelector s;
@@ -165,6 +204,9 @@ TEST_CASE("keyframe selector: options are validated") {
   bad(o);
   o = {};
   o.translation_weight = 0, o.rotation_weight = 0;
+  bad(o);
+  o = {};
+  o.reanchor_after = -1;
   bad(o);
   o = {};
   o.k1 = 0;  // every motion except none is a keyframe: allowed

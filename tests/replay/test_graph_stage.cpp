@@ -709,7 +709,7 @@ void check_same_graph(const GraphStage& a, const GraphStage& b) {
       CHECK((la[k].position - lb[k].position).norm() < 1e-9);
     }
   }
-  for (const char* name : {"keyframes", "keyframes_rejected", "loops_accepted", "loops_rejected", "loops_unmatched",
+  for (const char* name : {"keyframes", "keyframes_rejected", "keyframes_reanchored", "loops_accepted", "loops_rejected", "loops_unmatched",
                            "landmarks", "sightings_accepted", "sightings_rejected", "sightings_unmatched",
                            "sightings_dropped", "odometry_out_of_order", "odometry_edges_rejected"})
     CHECK_MESSAGE(counter(a, name) == counter(b, name), name);
@@ -823,6 +823,85 @@ TEST_CASE("graph stage (daemon path): out-of-order and duplicate odometry, small
   REQUIRE(kt.size() == kr.size());
   CHECK(kt.size() >= 4);
   for (size_t k = 0; k < kt.size(); ++k) CHECK(kt[k].utime == kr[k].utime);
+}
+
+TEST_CASE("graph stage: after a real jump keyframing re-anchors and loops pull the new segment in; a spike is rejected") {
+  // 60 s on the circle at 10 Hz; the odometry stops at 20 s and resumes at 30 s (the robot went on 10 m meanwhile:
+  // a 9.6 m chord, > k2 = 5) with a wrong guess of that motion (0.5 m and 0.1 rad off, as a visual odometry that
+  // re-initialized).  The matcher answers loop proposals from the truth.
+  Run run = circle_run(60, 5, 10, "fast");
+  const int64_t t0 = run.odometry.front().utime;
+  const SE3 reinit_error(SO3::exp(Eigen::Vector3d(0, 0, 0.1)), Eigen::Vector3d(0.5, -0.3, 0));
+  std::vector<Odometry> kept;
+  for (Odometry o : run.odometry) {
+    if (o.utime >= t0 + 20'000'000 && o.utime < t0 + 30'000'000) continue;
+    if (o.utime >= t0 + 30'000'000) o.pose = to_pose(reinit_error * to_se3(o.pose));
+    kept.push_back(o);
+  }
+  run.odometry = kept;
+  std::map<std::string, replay::MatcherTruth> truth;
+  truth["fast"] = {replay::InterpolatedTrajectory(run.truth), true};
+  EngineConfig cfg = graph_only_config(true);
+  cfg.graph.proposals.n1 = 2;
+  REQUIRE(cfg.graph.keyframes.reanchor_after == 10);  // the default
+  Engine engine(cfg);
+  GraphStage& graph = graph_stage_of(engine);
+  replay::SimulatedMatcher matcher(truth, replay::SimulatedMatcherOptions{});
+  std::vector<MatchRequest> requests;
+  const Emit emit = [&](Output out) {
+    if (auto* r = std::get_if<MatchRequest>(&out)) requests.push_back(*r);
+  };
+  for (const auto& o : run.odometry) {
+    engine.handle(o, emit);
+    for (const MatchRequest& r : std::exchange(requests, {}))
+      if (auto answer = matcher.answer(r)) engine.handle(*answer, emit);
+  }
+  CHECK(counter(graph, "keyframes_reanchored") == 1);
+  CHECK(counter(graph, "keyframes_rejected") == 9);  // the nine poses before the tenth re-anchored
+  const auto kfs = graph.keyframes("fast");
+  std::map<int64_t, SE3> truth_at(run.truth.begin(), run.truth.end()), odo;
+  for (const auto& o : run.odometry) odo[o.utime] = to_se3(o.pose);
+  // The re-anchored keyframe is the tenth message after the gap; keyframing goes on after it.
+  const auto first_after = std::find_if(kfs.begin(), kfs.end(), [&](const Keyframe& k) { return k.utime >= t0 + 30'000'000; });
+  REQUIRE(first_after != kfs.end());
+  CHECK(first_after->utime == t0 + 30'900'000);
+  CHECK(std::distance(first_after, kfs.end()) >= 25);
+  // After the jump: the odometry is off by the re-initialization, the keyframes are back on the truth (the map frame
+  // is the odometry's at the first keyframe, which is the truth there).
+  double odo_err = 0, kf_err = 0;
+  int n = 0;
+  for (auto k = first_after; k != kfs.end(); ++k, ++n) {
+    odo_err += (odo.at(k->utime).translation() - truth_at.at(k->utime).translation()).squaredNorm();
+    kf_err += (to_se3(k->pose).translation() - truth_at.at(k->utime).translation()).squaredNorm();
+  }
+  odo_err = std::sqrt(odo_err / n), kf_err = std::sqrt(kf_err / n);
+  MESSAGE("after the jump: odometry RMS error " << odo_err << " m, keyframes " << kf_err << " m");
+  CHECK(odo_err > 0.5);
+  CHECK(kf_err < 0.2 * odo_err);
+
+  // Without loops: one spurious spike (20 m off for one message) is rejected and changes no keyframe; the daemon's
+  // coalescing path re-anchors at the same message as the slow feed (the coalescer's selector saw the merged poses).
+  Run spiked = run;
+  Odometry& spike = spiked.odometry[100];
+  spike.pose.position.x() += 20;
+  GraphStage plain(graph_only_config(false).graph, std::make_shared<GraphCorrections>());
+  GraphStage with_spike(graph_only_config(false).graph, std::make_shared<GraphCorrections>());
+  GraphStage busy(graph_only_config(false).graph, std::make_shared<GraphCorrections>());
+  const Emit ignore = [](Output) {};
+  BlockedStageFeed feed;
+  for (size_t k = 0; k < run.odometry.size(); ++k) {
+    plain.handle(run.odometry[k], ignore);
+    with_spike.handle(spiked.odometry[k], ignore);
+    CHECK(feed.offer(busy, spiked.odometry[k]));
+  }
+  feed.drain(busy, ignore);
+  CHECK(counter(with_spike, "keyframes_rejected") == counter(plain, "keyframes_rejected") + 1);
+  CHECK(counter(with_spike, "keyframes_reanchored") == 1);
+  const auto kp = plain.keyframes("fast"), ks = with_spike.keyframes("fast");
+  REQUIRE(kp.size() == ks.size());
+  for (size_t k = 0; k < kp.size(); ++k) CHECK(kp[k].utime == ks[k].utime);
+  CHECK(counter(busy, "odometry_coalesced") > 400);
+  check_same_graph(busy, with_spike);
 }
 
 TEST_CASE("graph stage (daemon path): its thread behind a 16-event queue takes a 10,000-message burst and two loops as the slow feed does") {
