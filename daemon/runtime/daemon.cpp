@@ -120,8 +120,6 @@ int run_daemon(const config::DaemonConfig& cfg, const std::atomic<bool>& stop) {
   } handler{intake, runners, stats, recorder.get()};
   // LCM keeps 30 undelivered messages per subscription by default and silently drops beyond that; our own
   // bounded queues do the counting, so give LCM's queue room for bursts.
-  // LCM keeps 30 undelivered messages per subscription by default and silently drops beyond that; our own
-  // bounded queues do the counting, so give LCM's queue room for bursts.
   lcm_subscription_set_queue_capacity(subscribe_raw(lcm, ".*", &handler), cfg.queue_capacity * 8);
 
   for (auto& r : runners) r->start();

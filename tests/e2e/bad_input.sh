@@ -17,12 +17,15 @@ printf 'daemon:\n  status_period_s: 0.2\n  queue_capacity: 2\nengine:\n  filter:
 
 cat > "$work/run.sh" <<EOS
 set -euo pipefail
+source "$(cd "$(dirname "$0")" && pwd)/netns.bash"
 run() {  # run CONFIG SPEED BUS.lcm RSS.txt RECORD.lcm
-  "$SEXTANT_BIN/sextantd" --config "\$1" --record "\$5" --log-level error > "$work/daemon.log" 2>&1 &
-  daemon=\$!
   lcm-logger -f "\$3" > /dev/null 2>&1 &
   logger=\$!
-  sleep 0.5
+  "$SEXTANT_BIN/sextantd" --config "\$1" --record "\$5" --log-level info > "$work/daemon.log" 2>&1 &
+  daemon=\$!
+  # Until it runs (its SIGTERM handler is installed and it is subscribed): a fixed sleep lost that race on slow builds.
+  wait_running \$daemon "$work/daemon.log" || { kill -INT \$logger; exit 1; }
+  sleep 0.2  # the logger, started first, is subscribed by now
   ( while kill -0 \$daemon 2>/dev/null; do grep VmRSS /proc/\$daemon/status | awk '{print \$2}'; sleep 0.2; done ) > "\$4" &
   sampler=\$!
   lcm-logplayer -s "\$2" "$work/bad.lcm"

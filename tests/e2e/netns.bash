@@ -25,6 +25,21 @@ in_netns_fn() {
   in_netns bash -c 'source "$0" && "$@"' "${BASH_SOURCE[0]}" "$@"
 }
 
+# wait_running PID DAEMON_LOG: waits until the sextantd of PID logs that it is running (subscribed, signal handlers
+# installed), however slowly it starts (sanitizer builds, a loaded machine; at most 60 s).  Its log level must show
+# info.  Returns non-zero, with the daemon's log on stdout, when it dies or does not get there (it is then stopped).
+wait_running() {
+  local daemon=$1 daemon_log=$2 waited=0
+  until grep -q "running on" "$daemon_log"; do
+    if ! kill -0 "$daemon" 2> /dev/null || [ "$waited" -ge 600 ]; then
+      echo "sextantd did not start (waited ${waited}x0.1 s)"; cat "$daemon_log"
+      kill -TERM "$daemon" 2> /dev/null
+      return 1
+    fi
+    sleep 0.1; waited=$((waited + 1))
+  done
+}
+
 # feed_daemon DAEMON_LOG BUS_LOG SIM_LOG SETTLE_S SEXTANTD_ARG...: inside a namespace, one run of sextantd fed over
 # the bus with LCM's own tools.  lcm-logger records the bus into BUS_LOG; sextantd starts with SEXTANTD_ARG... (its
 # output into DAEMON_LOG; its log level must show info) and is waited for until it logs that it is running
@@ -38,15 +53,11 @@ feed_daemon() {
   lcm-logger -f "$bus_log" > /dev/null 2>&1 &
   local logger=$!
   "$SEXTANT_BIN/sextantd" "$@" > "$daemon_log" 2>&1 &
-  local daemon=$! waited=0
-  until grep -q "running on" "$daemon_log"; do
-    if ! kill -0 "$daemon" 2> /dev/null || [ "$waited" -ge 600 ]; then
-      echo "sextantd did not start (waited ${waited}x0.1 s)"; cat "$daemon_log"
-      kill -TERM "$daemon" 2> /dev/null; kill -INT "$logger"; wait "$logger" || true
-      return 1
-    fi
-    sleep 0.1; waited=$((waited + 1))
-  done
+  local daemon=$!
+  if ! wait_running "$daemon" "$daemon_log"; then
+    kill -INT "$logger"; wait "$logger" || true
+    return 1
+  fi
   sleep 0.2  # the logger, started first, is subscribed by now
   local played=0
   lcm-logplayer -s 4 "$sim_log" > /dev/null || played=$?
