@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <optional>
 #include <stdexcept>
 #include <string>
 
@@ -322,7 +323,7 @@ ComponentResult solve_relaxation(const RelaxationProblem& P, int max_iterations,
   int stalled = 0;
   std::vector<int> best;  // empty: every detection a false alarm, cost 0
   ExchangeImprover exchange(P.packing, 4);
-  SensorReassignment reassignment(S, P.n, P.index, P.cost);
+  std::optional<SensorReassignment> reassignment;  // built at the second promising recovery
   Recovery recovery(P);
   MissedAssignmentSolver relaxed_solver;
   std::vector<std::vector<int>> recovered;  // recoveries already improved (the same one recurs across iterations)
@@ -394,15 +395,20 @@ ComponentResult solve_relaxation(const RelaxationProblem& P, int max_iterations,
     double ub = 0;
     for (int t : feasible) ub += P.cost[static_cast<size_t>(t)];
     // Local search on promising recoveries only (already as good as the best improved one: the first, and any
-    // that ties or beats it), each distinct one once: re-assignment one sensor at a time (sensor_reassignment.hpp),
-    // and on the first recovery also the exchange moves.  Later recoveries differ from earlier ones mostly by
-    // detections traded among the same tuples, which the re-assignment covers at a fraction of the exchange's cost
-    // (coplanar grid 3 x 20 + 5: LR optimal on 298 instead of 296 of 300 at gap 0, 4.5 % fewer instructions per
-    // scan; RESULTS, passive association session 5).
+    // that ties or beats it), each distinct one once: the first by exchange moves, the later ones by re-assigning
+    // one sensor at a time (sensor_reassignment.hpp; built only when needed, so a component whose gap closes at the
+    // first recovery does not pay for it).  Later recoveries differ from the earlier ones mostly by detections
+    // traded among the same tuples, which the re-assignment covers (several tuples at once) at a fraction of the
+    // exchange's cost.  Coplanar grid: LR optimal on 299 instead of 296 of 300 at gap 0, 4.6 % fewer instructions
+    // on 3 x 20 + 5; RESULTS, passive association session 5.
     if (ub <= best_ub + kPromising * std::abs(best_ub) && std::find(recovered.begin(), recovered.end(), feasible) == recovered.end()) {
       recovered.push_back(feasible);
-      ub = reassignment.improve(feasible);
-      if (recovered.size() == 1) ub = exchange.improve(feasible, 3);
+      if (recovered.size() == 1) {
+        ub = exchange.improve(feasible, 3);
+      } else {
+        if (!reassignment) reassignment.emplace(S, P.n, P.index, P.cost);
+        ub = reassignment->improve(feasible);
+      }
     }
     if (ub < best_ub) best_ub = ub, best = feasible;
     // The relaxed solution itself, when it uses no detection twice, is a feasible one; with g = 0 it is optimal

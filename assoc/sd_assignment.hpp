@@ -14,9 +14,10 @@
 //    * recovery: the (1, 2) pairs are fixed and each further sensor is added by a 2-D assignment of the partial
 //      tuples against its detections.  The tuples are kept sorted, so the tuples extending a partial tuple are one
 //      contiguous range found by binary search: each recovery stage is linear in the number of tuples;
-//    * the recovered solution is improved by local search: re-assigning one sensor at a time with the others
-//      fixed (sensor_reassignment.hpp), and on the first recovery also exchange moves (tuple_packing.hpp); the
-//      best solution is kept (upper bound);
+//    * the recovered solution is improved by local search: the first one by exchange moves (tuple_packing.hpp),
+//      later ones that tie or beat the best by re-assigning one sensor at a time with the others fixed
+//      (sensor_reassignment.hpp); the relaxed solution itself counts when it uses no detection twice; the best
+//      solution is kept (upper bound);
 //    * the multipliers start at each detection's smallest equal share c_t / m_t of the tuples holding it (a feasible
 //      point of the packing LP's dual; far fewer iterations than starting at 0);
 //    * multipliers follow Polyak's subgradient step toward the best upper bound, its factor halved after 10
