@@ -1,5 +1,6 @@
 #include "replay/simulator.hpp"
 
+#include "assoc/field_of_view.hpp"
 #include "daemon/engine/dead_reckoning_stage.hpp"
 #include "daemon/runtime/codec.hpp"
 
@@ -71,6 +72,12 @@ class Simulation {
       throw std::invalid_argument("duration, speed and rates must be positive");
     if (o.sensors < 2) throw std::invalid_argument("at least 2 passive sensors");
     if (o.p_detect < 0 || o.p_detect > 1 || o.clutter < 0) throw std::invalid_argument("bad p_detect or clutter");
+    if (o.clutter_region_min.size() != o.clutter_region_max.size() ||
+        (!o.clutter_region_min.empty() && o.clutter_region_min.size() != 3))
+      throw std::invalid_argument("clutter region: min and max need 3 numbers each (x, y, z), or neither");
+    for (size_t i = 0; i < o.clutter_region_min.size(); ++i)
+      if (!(o.clutter_region_min[i] < o.clutter_region_max[i]))
+        throw std::invalid_argument("clutter region: min must be below max on every axis (axis " + std::to_string(i) + ")");
     planar_ = o.scenario == "planar";
   }
 
@@ -138,6 +145,10 @@ class Simulation {
     for (int i = 0; i < o_.sensors; ++i) {
       const double a = 2 * kPi * i / o_.sensors + 0.3;
       sensors_.push_back({ring * std::cos(a), ring * 0.7 * std::sin(a), 0.5 + 1.5 * (i % 3)});
+      if (!o_.clutter_region_min.empty()) {
+        const Eigen::Vector3d lo(o_.clutter_region_min.data()), hi(o_.clutter_region_max.data());
+        clutter_view_.push_back(assoc::field_of_view(sensors_.back(), lo, hi, 5 * o_.bearing_sensor_sigma));
+      }
     }
     for (int i = 0; i < o_.targets; ++i)
       targets_.push_back({Eigen::Vector3d(uniform(-20, 20), uniform(-12, 12), uniform(5, 15)), uniform(2, 6),
@@ -250,7 +261,13 @@ class Simulation {
       }
       const int n_false = std::poisson_distribution<int>(o_.clutter)(rng_);
       for (int k = 0; k < n_false; ++k) {
-        scan.detections.push_back({uniform(-kPi, kPi), uniform(0.0, 0.8), sg, sg});
+        if (clutter_view_.empty()) {
+          scan.detections.push_back({uniform(-kPi, kPi), uniform(0.0, 0.8), sg, sg});
+        } else {
+          const auto& f = clutter_view_[static_cast<size_t>(si)];
+          const double az = std::remainder(f.centre_azimuth + uniform(f.azimuth_lo, f.azimuth_hi), 2 * kPi);
+          scan.detections.push_back({az, uniform(f.elevation_lo, f.elevation_hi), sg, sg});
+        }
         ++summary_.false_alarms;
       }
       std::shuffle(scan.detections.begin(), scan.detections.end(), rng_);
@@ -312,6 +329,7 @@ class Simulation {
   Course course_;
   std::vector<Eigen::Vector3d> landmarks_, sensors_;
   std::vector<Target> targets_;
+  std::vector<assoc::FieldOfView> clutter_view_;  // per sensor, with a clutter region
   std::map<std::string, int64_t> seq_;
   bool started_ = false;
   Eigen::Isometry3d odom_ = Eigen::Isometry3d::Identity(), last_truth_ = Eigen::Isometry3d::Identity();

@@ -9,8 +9,9 @@
 //  - LANDMARKS (landmarks_t): point landmarks within range and field of view, as range/azimuth(/elevation) with
 //    Gaussian noise; ids known, or -1 with `unknown_ids`.
 //  - BEARINGS (bearing_scan_t): static passive sensors observing slowly moving targets: azimuth/elevation with
-//    Gaussian noise, detection probability p_detect, Poisson false alarms; one scan_id per round across sensors,
-//    detections shuffled so their order carries no information.
+//    Gaussian noise, detection probability p_detect, Poisson false alarms (anywhere, or in each sensor's field of
+//    view over a surveillance box); one scan_id per round across sensors, detections shuffled so their order carries
+//    no information.
 //  - LOOP_CLOSURES (loop_closure_t): when the robot comes back within `loop_distance` of a pose at least
 //    `loop_min_age_s` old, the true relative pose plus noise, with the matching information matrix.
 //  - GROUND_TRUTH (truth_t): robot poses at the odometry rate, target positions per scan, landmarks once.
@@ -53,6 +54,12 @@ struct SimulationOptions {
   double bearing_sensor_sigma = 0.005;  // rad (5 mrad)
   double p_detect = 0.9;
   double clutter = 1.0;  // mean false alarms per sensor per scan
+  // Where the false alarms are drawn.  Empty (default): uniform over all azimuths and elevations 0..0.8 rad, mostly
+  // far from every target's direction.  A box [clutter_region_min, clutter_region_max] (world frame, m, 3 numbers
+  // each): uniform in each sensor's field of view over that box padded by 5 bearing sigmas (assoc/field_of_view.hpp),
+  // as `sextant assoc-sim` draws them, so they compete with the targets' detections and the daemon's
+  // `association.region_min/max` + `false_alarms_per_scan` (same box, same count) state the true clutter density.
+  std::vector<double> clutter_region_min, clutter_region_max;
 
   // Loop closures.
   double loop_distance = 2.0;     // m

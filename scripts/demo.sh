@@ -9,8 +9,10 @@ out="$root/out/demo"
 mkdir -p "$out"
 rm -f "$out"/*.lcm
 
-echo "== 1. simulating a planar run: robot laps, landmarks, 4 passive sensors watching 4 targets, loop closures"
-"$bin/sextant" simulate planar -o "$out/run.lcm" --seed 1 --duration 50 --tum-out "$out/ground_truth.txt"
+echo "== 1. simulating a planar run: robot laps, landmarks, 4 passive sensors watching 4 targets (with false alarms"
+echo "      in their fields of view over the targets' region), loop closures"
+"$bin/sextant" simulate planar -o "$out/run.lcm" --seed 1 --duration 50 --tum-out "$out/ground_truth.txt" \
+  --clutter-region -30 -20 4 30 20 16
 
 cat > "$out/live.sh" <<EOS
 set -euo pipefail

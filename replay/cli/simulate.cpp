@@ -1,4 +1,5 @@
-// sextant simulate SCENARIO -o OUT.lcm [--seed N] [--duration S] [--tum-out GT.txt] [--unknown-ids] ...
+// sextant simulate SCENARIO -o OUT.lcm [--seed N] [--duration S] [--tum-out GT.txt] [--unknown-ids]
+//                  [--clutter N] [--clutter-region XMIN YMIN ZMIN XMAX YMAX ZMAX] ...
 #include "replay/cli/command.hpp"
 #include "replay/simulator.hpp"
 #include "replay/trajectory_io.hpp"
@@ -13,6 +14,7 @@ sextant::cli::RegisterCommand reg{"simulate", [](CLI::App& app) {
   auto o = std::make_shared<sextant::replay::SimulationOptions>();
   auto out = std::make_shared<std::string>();
   auto tum = std::make_shared<std::string>();
+  auto region = std::make_shared<std::vector<double>>();
   cmd->add_option("scenario", o->scenario, "planar (2D robot) or spatial (3D)")
       ->required()
       ->check(CLI::IsMember({"planar", "spatial"}));
@@ -26,12 +28,20 @@ sextant::cli::RegisterCommand reg{"simulate", [](CLI::App& app) {
   cmd->add_option("--targets", o->targets, "number of moving targets")->check(CLI::NonNegativeNumber);
   cmd->add_option("--pd", o->p_detect, "detection probability of the passive sensors")->check(CLI::Range(0.0, 1.0));
   cmd->add_option("--clutter", o->clutter, "mean false alarms per sensor per scan")->check(CLI::NonNegativeNumber);
+  cmd->add_option("--clutter-region", *region,
+                  "false alarms in each sensor's field of view over the box XMIN YMIN ZMIN XMAX YMAX ZMAX (m) "
+                  "instead of over all azimuths (match it with association.region_min/max in the daemon's config)")
+      ->expected(6);
   cmd->add_option("--odometry-rate", o->odometry_rate_hz, "Hz")->check(CLI::PositiveNumber);
   cmd->add_option("--odometry-noise", o->odometry_trans_noise, "translation noise, m per m travelled");
   cmd->add_option("--speed", o->speed, "m/s")->check(CLI::PositiveNumber);
   cmd->add_option("--loop-distance", o->loop_distance, "loop closures when the robot returns within this distance, m "
                   "(0: none, e.g. when a matcher answers the daemon's requests instead)")->check(CLI::NonNegativeNumber);
   cmd->callback([=] {
+    if (!region->empty()) {
+      o->clutter_region_min.assign(region->begin(), region->begin() + 3);
+      o->clutter_region_max.assign(region->begin() + 3, region->end());
+    }
     std::string gt = *tum;
     if (gt.empty()) {
       gt = *out;

@@ -70,13 +70,19 @@ def main():
                 truth.setdefault(t.utime, []).append(t.position)
     if len(targets) < len(scan_ids) - 1:
         errors.append(f"{len(targets)} TARGETS messages for {len(scan_ids)} scans")
-    found = total = 0
+    found = total = estimates = ghosts = 0
+    near = lambda x, p: sum((a - b) ** 2 for a, b in zip(x, p)) < 1.0
     for m in targets:
         for p in truth.get(m.utime, []):
             total += 1
-            found += any(sum((a - b) ** 2 for a, b in zip(t.position, p)) < 1.0 for t in m.targets)
+            found += any(near(t.position, p) for t in m.targets)
+        for t in m.targets:  # an estimate farther than 1 m from every true target (false alarms or a wrong tuple)
+            estimates += 1
+            ghosts += not any(near(t.position, p) for p in truth.get(m.utime, []))
     if total == 0 or found < 0.9 * total:
         errors.append(f"TARGETS found {found} of {total} true targets within 1 m")
+    if ghosts > 0.15 * estimates:
+        errors.append(f"TARGETS: {ghosts} of {estimates} estimates are ghosts (farther than 1 m from every true target)")
 
     # What another process sees on the bus (lcm-logger may lose a few datagrams under load).
     if len(on_bus) < 0.95 * len(live):
@@ -107,7 +113,7 @@ def main():
         if any(b <= a for a, b in zip(uptimes, uptimes[1:])):
             errors.append("status uptime not increasing")
 
-    print(f"TARGETS: {len(targets)} messages, {found} of {total} true targets found within 1 m")
+    print(f"TARGETS: {len(targets)} messages, {found} of {total} true targets found within 1 m, {ghosts} ghosts of {estimates} estimates")
     print(f"played {len(sent)} messages ({len(odometry)} odometry); recorded {len(rec)}; FUSED_POSE live "
           f"{len(live)}, replay {len(offline)}, lcm-logger {len(on_bus)}; {len(statuses)} status messages")
     if errors:

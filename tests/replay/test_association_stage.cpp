@@ -47,10 +47,10 @@ TargetScore score(const replay::ReplayResult& r) {
   return s;
 }
 
-// A 30 s simulated run (4 sensors, 4 targets, P_D 0.9, 1 false alarm per sensor and scan) replayed with `config`.
-replay::ReplayResult replay_simulated(const config::DaemonConfig& config) {
+// A 30 s simulated run (4 sensors, 4 targets, P_D 0.9, 1 false alarm per sensor and scan unless `o` says
+// otherwise) replayed with `config`.
+replay::ReplayResult replay_simulated(const config::DaemonConfig& config, replay::SimulationOptions o = {}) {
   const auto log = (std::filesystem::temp_directory_path() / ("sextant_assoc_" + std::to_string(::getpid()) + ".lcm")).string();
-  replay::SimulationOptions o;
   o.duration_s = 30;
   o.seed = 5;
   {
@@ -96,6 +96,25 @@ TEST_CASE("per-sensor false-alarm densities over a region and the target prior: 
   REQUIRE(s.scans >= 50);
   CHECK(s.found >= 0.9 * static_cast<double>(s.truth));
   CHECK(s.ghosts <= plain.ghosts);
+}
+
+TEST_CASE("false alarms simulated in the sensors' fields of view: targets still found, the region's density cuts ghosts") {
+  // Two false alarms per sensor and scan inside the view of the targets' region (the simulator's clutter region,
+  // the box the config names): they compete with the targets' detections, unlike clutter over all azimuths.
+  replay::SimulationOptions o;
+  o.clutter = 2;
+  o.clutter_region_min = {-30, -20, 4}, o.clutter_region_max = {30, 20, 16};
+  const auto plain = score(replay_simulated(config::DaemonConfig{}, o));
+  const auto c = config::parse_daemon_config(std::string(kRegion) + "    false_alarms_per_scan: 2\n    target_prior: true\n"
+                                             "    expected_targets: 4\n", "test.yaml");
+  const auto s = score(replay_simulated(c, o));
+  MESSAGE("clutter in view, region density and prior: found " << s.found << " of " << s.truth << ", ghosts " << s.ghosts
+          << " of " << s.estimates << " (scalar density, no prior: found " << plain.found << ", ghosts " << plain.ghosts
+          << " of " << plain.estimates << ")");
+  REQUIRE(s.scans >= 50);
+  CHECK(s.found >= 0.9 * static_cast<double>(s.truth));
+  CHECK(s.ghosts <= 0.15 * static_cast<double>(s.estimates));
+  CHECK(s.ghosts < plain.ghosts);
 }
 
 TEST_CASE("association region, false alarms and target prior: bad values are errors naming file:line") {
