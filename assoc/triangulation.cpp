@@ -67,16 +67,29 @@ bool add_observation(NormalEquations& n, const PreparedBearing& o, const Eigen::
   const Eigen::Vector3d d = x - o.sensor;
   const double rho2 = d.x() * d.x() + d.y() * d.y(), rho = std::sqrt(rho2), r2 = d.squaredNorm();
   if (rho < 1e-9 * std::max(1.0, std::sqrt(r2))) return false;  // as bearing(): on the sensor's vertical
-  Eigen::Matrix<double, 2, 3> J;  // as in bearing_model.hpp
-  J << -d.y() / rho2, d.x() / rho2, 0, -d.x() * d.z() / (r2 * rho), -d.y() * d.z() / (r2 * rho), rho / r2;
+  // The Jacobian's rows (bearing_model.hpp): azimuth a = (-dy, dx, 0) / rho^2, elevation
+  // e = (-dx dz / rho, -dy dz / rho, rho) / r^2.  Written out rather than as Eigen products: the tuple builder
+  // calls this for every partial tuple and Gauss-Newton step (the largest single item of its profile), and a's third
+  // entry is 0 and J' R^-1 J is symmetric (6 entries, not 9).
+  const double inv_rho2 = 1 / rho2, inv_r2 = 1 / r2, s = d.z() / rho * inv_r2;
+  const double a0 = -d.y() * inv_rho2, a1 = d.x() * inv_rho2;
+  const double e0 = -d.x() * s, e1 = -d.y() * s, e2 = rho * inv_r2;
   // z - h: azimuth between (cos az, sin az) and (dx, dy); elevation between (cos el, sin el) and (rho, dz).
-  const Eigen::Vector2d nu(
-      residual_angle(o.sin_azimuth * d.x() - o.cos_azimuth * d.y(), o.cos_azimuth * d.x() + o.sin_azimuth * d.y()),
-      residual_angle(o.sin_elevation * rho - o.cos_elevation * d.z(), o.cos_elevation * rho + o.sin_elevation * d.z()));
-  const Eigen::Matrix<double, 3, 2> JtRi = J.transpose() * o.information;
-  n.information.noalias() += JtRi * J;
-  n.gradient.noalias() += JtRi * nu;
-  n.residual += nu.dot(o.information * nu);
+  const double nu0 = residual_angle(o.sin_azimuth * d.x() - o.cos_azimuth * d.y(), o.cos_azimuth * d.x() + o.sin_azimuth * d.y());
+  const double nu1 = residual_angle(o.sin_elevation * rho - o.cos_elevation * d.z(), o.cos_elevation * rho + o.sin_elevation * d.z());
+  // J' R^-1 = [c0 c1] with R^-1 = [p q; q w]: c0 = p a + q e, c1 = q a + w e.
+  const double p = o.information(0, 0), q = 0.5 * (o.information(0, 1) + o.information(1, 0)), w = o.information(1, 1);
+  const double c00 = p * a0 + q * e0, c01 = p * a1 + q * e1, c02 = q * e2;
+  const double c10 = q * a0 + w * e0, c11 = q * a1 + w * e1, c12 = w * e2;
+  auto& I = n.information;
+  const double i00 = c00 * a0 + c10 * e0, i01 = c00 * a1 + c10 * e1, i02 = c10 * e2;
+  const double i11 = c01 * a1 + c11 * e1, i12 = c11 * e2, i22 = c12 * e2;
+  I(0, 0) += i00, I(1, 1) += i11, I(2, 2) += i22;
+  I(0, 1) += i01, I(1, 0) += i01, I(0, 2) += i02, I(2, 0) += i02, I(1, 2) += i12, I(2, 1) += i12;
+  n.gradient.x() += c00 * nu0 + c10 * nu1;
+  n.gradient.y() += c01 * nu0 + c11 * nu1;
+  n.gradient.z() += c02 * nu0 + c12 * nu1;
+  n.residual += p * nu0 * nu0 + 2 * q * nu0 * nu1 + w * nu1 * nu1;
   return true;
 }
 
