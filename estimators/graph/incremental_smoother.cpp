@@ -473,12 +473,13 @@ IncrementalStatus IncrementalSmoother::update() {
     return r;
   }
   const bool filled = static_cast<double>(factor_nonzeros()) > options_.refill_ratio * static_cast<double>(ordered_nnz_);
-  if (filled && options_.reorder_spread <= 0) {
+  const bool spread = options_.reorder_spread > 0 && static_cast<int>(graph_.variables().size()) > options_.reorder_spread_above;
+  if (filled && !spread) {
     IncrementalStatus r = rebuild_with(1);  // the new ordering is the point: one iteration
     r.new_variables = st.new_variables, r.new_factors = st.new_factors, r.deferred_variables = st.deferred_variables;
     return r;
   }
-  if (!reordering_ && options_.reorder_spread > 0 && (filled || 4 * (capacity_ - used_) < reserve_at_order_))
+  if (!reordering_ && spread && (filled || 4 * (capacity_ - used_) < reserve_at_order_))
     begin_reordering();
   solve(false);
   ++st.solves;

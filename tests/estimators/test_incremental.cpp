@@ -167,6 +167,7 @@ TEST_CASE("a reordering spread over updates equals batch, and gives the same est
   IncrementalOptions opt;
   opt.refill_ratio = 1.05;
   opt.reorder_spread = 3;
+  opt.reorder_spread_above = 0;
   for (bool planar : {true, false}) {
     CAPTURE(planar);
     const SyntheticGraph g = make_graph(planar, 3, 24, 7);
