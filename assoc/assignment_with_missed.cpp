@@ -42,9 +42,12 @@ const MissedAssignment& MissedAssignmentSolver::solve(const std::vector<double>&
     if (w < 0) gains.push_back({p.row, p.column, w});
   }
   if (gains.empty()) return out;
-  std::sort(gains.begin(), gains.end(), [](const PairCost& a, const PairCost& b) {
+  const auto by_row = [](const PairCost& a, const PairCost& b) {
     return a.row != b.row ? a.row < b.row : a.column != b.column ? a.column < b.column : a.cost < b.cost;
-  });
+  };
+  // The S-D solvers list their pairs row by row with ascending columns already (their tuples are sorted): a linear
+  // check spares them the sort (about 2 % of the coplanar grid's instructions).
+  if (!std::is_sorted(gains.begin(), gains.end(), by_row)) std::sort(gains.begin(), gains.end(), by_row);
   auto &begin = begin_, &column = column_;
   auto& gain = gain_;
   begin.assign(static_cast<size_t>(R) + 1, 0), column.clear(), gain.clear();
