@@ -31,7 +31,8 @@ bench:
 # Tests under AddressSanitizer + UndefinedBehaviorSanitizer, and under ThreadSanitizer.  A whole sanitizer build is
 # long (15-40 min on two free cores, hours on busy ones); SAN_TARGETS and SAN_TESTS (a ctest -R regex) scope a run to
 # what was built, e.g. the daemon's threads and its end-to-end scripts:
-#   make tsan SAN_TARGETS="sextantd sextant test_daemon" SAN_TESTS='^(daemon|e2e): '
+#   make tsan SAN_TARGETS="sextantd sextant test_daemon" SAN_TESTS='^(daemon|e2e):'
+# (doctest's ctest names are 'daemon:NAME', no space; the e2e scripts are 'e2e: NAME')
 SAN_TARGETS ?= all
 SAN_TESTS ?= .
 asan: deps
