@@ -57,10 +57,10 @@ struct IncrementalOptions {
   /// Factors changed by rank updates in one round (new ones or relinearized ones) beyond which a rebuild is cheaper:
   /// max(min_update_factors, update_fraction x factors in the system), at most max_update_factors.  The cap matters on
   /// large graphs, where each factor's path to the root is long: on city10000 relinearizing 158 factors by rank
-  /// updates took 80-90 ms, more than a rebuild (bench/RESULTS.md, session 5).
+  /// updates took 80-90 ms, more than a rebuild; below 6400 factors it changes nothing (bench/RESULTS.md, session 5).
   double update_fraction = 0.02;
   int min_update_factors = 32;
-  int max_update_factors = 64;
+  int max_update_factors = 128;
   int rebuild_iterations = 10;            // Gauss-Newton iterations of a rebuild for new factors that would cost more as
                                           // rank updates (until no variable moves past the thresholds); a rebuild for
                                           // relinearization or reordering takes one
