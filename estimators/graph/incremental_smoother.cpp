@@ -11,6 +11,7 @@
 #include <cmath>
 #include <numeric>
 #include <stdexcept>
+#include <type_traits>
 
 namespace sextant::graph {
 
@@ -21,6 +22,12 @@ struct IncrementalSmoother::Contribution {
   Eigen::MatrixXd Ct;     // residual_dim x cols.size()
   Eigen::VectorXd grad;   // cols.size()
 };
+
+namespace {
+struct Never {  // the deadline of work that must finish now
+  bool operator()() const { return false; }
+};
+}  // namespace
 
 /// A linearized system being built: which factors, at which linearization point, in which column positions, and
 /// its normal equations and factor as far as they got.
@@ -514,7 +521,7 @@ void IncrementalSmoother::begin_reordering() {
 
 bool IncrementalSmoother::finish_reordering(IncrementalStatus& st) {
   std::unique_ptr<System> s = std::move(reordering_);
-  advance(*s, [] { return false; });
+  advance(*s, Never{});
   if (!s->error.empty()) return false;  // the caller rebuilds, which names the cause
   install(*s);
   st.rebuilt = true;
@@ -567,7 +574,7 @@ IncrementalStatus IncrementalSmoother::rebuild_with(int iterations) {
     if (y_) cholmod_free_dense(&y_, &common_);
     // Every factor in the system linearized at the current estimate; the first iteration orders, the others keep it.
     std::unique_ptr<System> s = begin_system(in, it > 0);
-    advance(*s, [] { return false; });
+    advance(*s, Never{});
     if (!s->error.empty()) {  // L_ is gone: the next update starts over
       st.ok = false;
       st.message = s->error;
@@ -778,9 +785,15 @@ bool IncrementalSmoother::advance(System& s, const Deadline& deadline) {
       s.L = cholmod_analyze(s.H, &common_);
       if (s.L == nullptr) return fail("CHOLMOD symbolic analysis failed");
     } else if (s.factorized < n) {
-      const size_t end = std::min(s.factorized + kRowsPerSlice, n);
+      // Sliced only when a deadline can stop it: each call costs a pass over CHOLMOD's workspace.
+      const size_t end = std::is_same_v<Deadline, Never> ? n : std::min(s.factorized + kRowsPerSlice, n);
       double beta[2] = {0.0, 0.0};
+      // As cholmod_factorize does: the first call turns the symbolic factor into a numeric one with exactly the
+      // space the column counts need (grow2 = 0); later updates grow it through make_room.
+      const size_t grow2 = common_.grow2;
+      if (s.factorized == 0) s.L->is_ll = 0, common_.grow2 = 0;
       const int ok = cholmod_rowfac(s.H, nullptr, beta, s.factorized, end, s.L, &common_);
+      common_.grow2 = grow2;
       if (!ok || common_.status == CHOLMOD_NOT_POSDEF || s.L->minor < s.L->n) {
         const size_t col = s.L->minor < s.L->n ? s.L->minor : s.factorized;
         const int var = col < s.col_var.size() ? s.col_var[col] : -1;
@@ -791,7 +804,7 @@ bool IncrementalSmoother::advance(System& s, const Deadline& deadline) {
       s.factorized = end;
     } else {
       cholmod_free_sparse(&s.H, &common_);
-      if (!cholmod_change_factor(CHOLMOD_REAL, 0, 0, 0, 0, s.L, &common_))
+      if (!cholmod_change_factor(CHOLMOD_REAL, 0, 0, 1, 1, s.L, &common_))  // LDL', packed, monotonic
         return fail("CHOLMOD could not convert the factor to LDL' form");
       // y = L^-1 b, b = -g: the forward half of the solve, kept current by every later update (cholmod_updown_solve).
       cholmod_dense* b = cholmod_zeros(n, 1, CHOLMOD_REAL, &common_);
