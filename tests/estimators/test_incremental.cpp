@@ -72,6 +72,15 @@ Variable pose_variable(bool planar, int64_t id, const SE3& x) {
   return v;
 }
 
+// The initial value of pose `end` of edge e when it enters: the edge composed with the other end's estimate in `s`
+// (identity when the other end is not in yet).
+SE3 initial_pose(const IncrementalSmoother& s, const std::vector<int>& index, const Edge& e, int end) {
+  const int other = end == e.i ? e.j : e.i;
+  if (index[static_cast<size_t>(other)] < 0) return SE3();
+  const SE3 known = s.graph().variables()[static_cast<size_t>(index[static_cast<size_t>(other)])].as_se3();
+  return end == e.j ? known * e.z : known * e.z.inverse();
+}
+
 // Feeds the edges in `order` (a pose enters when first referenced, initialized by composing the edge with the known
 // end), updating after each edge; every `check_every` updates compares with a batch solve of the same graph from the
 // same start.  Returns the number of comparisons made.
@@ -84,12 +93,7 @@ int run_and_compare(const SyntheticGraph& g, const std::vector<size_t>& order, i
     const Edge& e = g.edges[k];
     for (int end : {e.i, e.j}) {
       if (index[static_cast<size_t>(end)] >= 0) continue;
-      const int other = end == e.i ? e.j : e.i;
-      SE3 init;
-      if (index[static_cast<size_t>(other)] >= 0) {
-        const SE3 known = s.graph().variables()[static_cast<size_t>(index[static_cast<size_t>(other)])].as_se3();
-        init = end == e.j ? known * e.z : known * e.z.inverse();
-      }
+      const SE3 init = initial_pose(s, index, e, end);
       index[static_cast<size_t>(end)] = s.add_variable(pose_variable(g.planar, end, init));
       start.add_variable(pose_variable(g.planar, end, init));
     }
@@ -186,12 +190,7 @@ TEST_CASE("a reordering spread over updates equals batch, and gives the same est
     for (const Edge& e : g.edges) {
       for (int end : {e.i, e.j}) {
         if (ia[static_cast<size_t>(end)] >= 0) continue;
-        const int other = end == e.i ? e.j : e.i;
-        SE3 init;
-        if (ia[static_cast<size_t>(other)] >= 0) {
-          const SE3 known = a.graph().variables()[static_cast<size_t>(ia[static_cast<size_t>(other)])].as_se3();
-          init = end == e.j ? known * e.z : known * e.z.inverse();
-        }
+        const SE3 init = initial_pose(a, ia, e, end);
         ia[static_cast<size_t>(end)] = a.add_variable(pose_variable(planar, end, init));
         ib[static_cast<size_t>(end)] = b.add_variable(pose_variable(planar, end, init));
       }
