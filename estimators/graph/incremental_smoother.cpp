@@ -90,12 +90,15 @@ int IncrementalSmoother::add_variable(const Variable& v) {
   return i;
 }
 
-void IncrementalSmoother::add_factor(std::unique_ptr<Factor> factor, bool robust) {
+void IncrementalSmoother::add_factor(std::unique_ptr<Factor> factor, bool robust, std::optional<double> kernel_width) {
   if (auto why = validate_factor(graph_.variables(), *factor, graph_.factors().size()); !why.empty())
     throw std::invalid_argument(why);
+  if (kernel_width && !(std::isfinite(*kernel_width) && *kernel_width > 0))
+    throw std::invalid_argument("factor " + std::to_string(graph_.factors().size()) + ": kernel width " +
+                                std::to_string(*kernel_width) + " is not a positive finite number");
   pending_factors_.push_back(graph_.factors().size());
   weight_.push_back(0.0);
-  robust_.push_back(robust ? 1 : 0);
+  kernel_width_.push_back(robust ? kernel_width.value_or(options_.kernel_width) : 0.0);
   graph_.add_factor(std::move(factor));
 }
 
@@ -108,7 +111,7 @@ size_t IncrementalSmoother::factor_nonzeros() const {
 }
 
 double IncrementalSmoother::kernel_weight(size_t fi, double chi2) const {
-  return robust_[fi] ? robust_weight(options_.kernel, options_.kernel_width, chi2) : 1.0;
+  return kernel_width_[fi] > 0 ? robust_weight(options_.kernel, kernel_width_[fi], chi2) : 1.0;
 }
 
 IncrementalSmoother::Contribution IncrementalSmoother::linearize(size_t fi) const {
@@ -267,7 +270,7 @@ void IncrementalSmoother::determined(const std::vector<int>& new_vars, const std
 }
 
 double IncrementalSmoother::robust_weight_of(size_t fi) const {
-  if (!robust_[fi]) return 1.0;
+  if (kernel_width_[fi] == 0) return 1.0;
   const Factor& f = *graph_.factors()[fi];
   Eigen::VectorXd e(f.residual_dim());
   f.error(lin_, e);

@@ -44,6 +44,7 @@
 #include <cholmod.h>
 
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -106,8 +107,10 @@ class IncrementalSmoother {
   int add_variable(const Variable& v);
   /// Adds a factor over existing variables (indices from add_variable).  Throws std::invalid_argument when it names
   /// an unknown variable or its information is not finite, symmetric and positive definite.  `robust`: the
-  /// options' kernel applies to it (e.g. loop closures robust, odometry not).
-  void add_factor(std::unique_ptr<Factor> factor, bool robust = true);
+  /// options' kernel applies to it (e.g. loop closures robust, odometry not), with `kernel_width` when given (a
+  /// factor's own width, e.g. a chi-square quantile of its residual's dimension, in the units of e' Omega e) or the
+  /// options' kernel_width; a width that is not positive and finite throws std::invalid_argument.
+  void add_factor(std::unique_ptr<Factor> factor, bool robust = true, std::optional<double> kernel_width = {});
   /// Brings the new variables and factors into the solution and relinearizes (see the file comment).
   IncrementalStatus update();
   /// Relinearizes everything at the current estimate, reorders and refactorizes; then solves.
@@ -171,7 +174,7 @@ class IncrementalSmoother {
   std::vector<Variable> lin_;         // linearization points
   std::vector<int> pos_;              // per variable: first column in L (the ordering), -1: fixed or not yet in
   std::vector<double> weight_;        // per factor: 1 once in the system, 0 while pending
-  std::vector<char> robust_;          // per factor: the kernel applies
+  std::vector<double> kernel_width_;  // per factor: its robust kernel's width, 0: no kernel
   std::vector<std::vector<size_t>> var_factors_;  // per variable: the factors in the system that touch it
   std::vector<int> pending_vars_;
   std::vector<size_t> pending_factors_;

@@ -8,8 +8,10 @@
 #include <doctest/doctest.h>
 
 #include <algorithm>
-#include <numeric>
 #include <cmath>
+#include <limits>
+#include <numeric>
+#include <optional>
 #include <random>
 
 using namespace sextant;
@@ -299,37 +301,68 @@ TEST_CASE("a variable no factor determines waits, a component not tied to the ga
   CHECK((st.message.find("variable 50") != std::string::npos || st.message.find("variable 51") != std::string::npos));
 }
 
-TEST_CASE("with DCS a wrong loop closure does not bend the incremental map") {
+// How far a confident but wrong loop closure (pose 5 claimed 8 m from where pose 30 really is) moves the map of a
+// DCS smoother whose options' width is `options_width`, the loop added with its own `loop_width` when given; and the
+// loop's robust weight at the end.
+struct WrongLoopEffect {
+  double worst_shift = 0, loop_weight = 0, loop_chi2 = 0;
+};
+WrongLoopEffect wrong_loop_effect(double options_width, std::optional<double> loop_width) {
   const SyntheticGraph g = make_graph(true, 2, 20, 11);
   IncrementalOptions opt;
   opt.kernel = RobustKernel::kDcs;
-  opt.kernel_width = 1.0;
+  opt.kernel_width = options_width;
   IncrementalSmoother s(opt), clean(opt);  // the same kernel, without the wrong loop
   std::vector<int> idx(g.truth.size(), -1), idx_clean(g.truth.size(), -1);
   for (const Edge& e : g.edges) {
     for (auto* sm : {&s, &clean}) {
       auto& ix = sm == &s ? idx : idx_clean;
-      if (ix[static_cast<size_t>(e.j)] < 0) {
-        const SE3 init = e.i >= 0 && ix[static_cast<size_t>(e.i)] >= 0 && e.j == e.i + 1
-                             ? sm->graph().variables()[static_cast<size_t>(ix[static_cast<size_t>(e.i)])].as_se3() * e.z
-                             : SE3();
-        if (ix[0] < 0) ix[0] = sm->add_variable(pose_variable(true, 0, SE3()));
-        if (ix[static_cast<size_t>(e.j)] < 0) ix[static_cast<size_t>(e.j)] = sm->add_variable(pose_variable(true, e.j, init));
-      }
+      for (const int end : {e.i, e.j})
+        if (ix[static_cast<size_t>(end)] < 0) ix[static_cast<size_t>(end)] = sm->add_variable(pose_variable(true, end, initial_pose(*sm, ix, e, end)));
       sm->add_factor(make_factor(g, e, ix[static_cast<size_t>(e.i)], ix[static_cast<size_t>(e.j)]));
       REQUIRE(sm->update().ok);
     }
   }
-  // A confident but wrong loop: pose 5 claimed 8 m from where pose 30 really is.
-  s.add_factor(make_factor(g, Edge{5, 30, g.truth[5].inverse() * g.truth[30] * SE3(SO3(), Eigen::Vector3d(8, 0, 0))}, idx[5], idx[30]));
+  s.add_factor(make_factor(g, Edge{5, 30, g.truth[5].inverse() * g.truth[30] * SE3(SO3(), Eigen::Vector3d(8, 0, 0))}, idx[5], idx[30]),
+               true, loop_width);
   REQUIRE(s.update().ok);
   // Compared at convergence (a rebuild iterates Gauss-Newton to the end), so that what differs is the wrong loop's
   // pull and not the two smoothers' different relinearization histories.
   REQUIRE(s.rebuild().ok);
   REQUIRE(clean.rebuild().ok);
-  double worst = 0;
+  WrongLoopEffect r;
   for (size_t v = 0; v < g.truth.size(); ++v)
-    worst = std::max(worst, (s.graph().variables()[static_cast<size_t>(idx[v])].as_se3().translation() -
-                             clean.graph().variables()[static_cast<size_t>(idx_clean[v])].as_se3().translation()).norm());
-  CHECK(worst < 0.1);
+    r.worst_shift = std::max(r.worst_shift, (s.graph().variables()[static_cast<size_t>(idx[v])].as_se3().translation() -
+                                             clean.graph().variables()[static_cast<size_t>(idx_clean[v])].as_se3().translation()).norm());
+  const size_t loop = s.graph().factors().size() - 1;
+  const Factor& f = *s.graph().factors()[loop];
+  Eigen::VectorXd e(f.residual_dim());
+  f.error(s.linearization_point(), e);
+  r.loop_chi2 = e.dot(f.information() * e);
+  r.loop_weight = s.robust_weight_of(loop);
+  return r;
+}
+
+TEST_CASE("with DCS a wrong loop closure does not bend the incremental map; a factor's own kernel width applies to it") {
+  // DCS weight (Agarwal et al. 2013): min(1, 2 phi / (phi + chi2))^2, computed here from the loop's own residual.
+  const auto dcs = [](double phi, double chi2) { return std::pow(std::min(1.0, 2 * phi / (phi + chi2)), 2); };
+  const WrongLoopEffect narrow = wrong_loop_effect(1.0, std::nullopt);
+  CHECK(narrow.worst_shift < 0.1);
+  CHECK(narrow.loop_weight == doctest::Approx(dcs(1.0, narrow.loop_chi2)).epsilon(1e-12));
+  // So wide a kernel is no kernel: the wrong loop bends the map ...
+  const WrongLoopEffect wide = wrong_loop_effect(1e12, std::nullopt);
+  CHECK(wide.worst_shift > 1.0);
+  CHECK(wide.loop_weight == doctest::Approx(1.0));
+  // ... unless the loop brings its own width, which overrides the options' for it alone.
+  const WrongLoopEffect own = wrong_loop_effect(1e12, 1.0);
+  CHECK(own.worst_shift < 0.1);
+  CHECK(own.loop_weight == doctest::Approx(dcs(1.0, own.loop_chi2)).epsilon(1e-12));
+  CHECK(own.loop_weight < 1e-3);
+  // A width that is not a positive finite number is refused, naming the factor.
+  IncrementalSmoother s;
+  const int a = s.add_variable(pose_variable(true, 0, SE3()));
+  const int b = s.add_variable(pose_variable(true, 1, SE3()));
+  for (const double bad : {0.0, -1.0, std::nan(""), std::numeric_limits<double>::infinity()})
+    CHECK_THROWS_WITH_AS(s.add_factor(std::make_unique<RelativePoseFactor>(a, b, SE2(1, 0, 0), Eigen::Matrix3d::Identity()), true, bad),
+                         doctest::Contains("factor 0: kernel width"), std::invalid_argument);
 }
