@@ -2,6 +2,9 @@
 
 #include <cmath>
 #include <cstdlib>
+#include <limits>
+#include <optional>
+#include <string>
 
 namespace sextant::config {
 
@@ -54,8 +57,42 @@ void read_stage_config(Section& s, engine::GraphConfig& c) {
     l.get("max_waiting", c.landmarks.max_waiting, int_in_range(0, 1 << 20));
     l.reject_unknown_keys();
   }
-  s.get("relinearize_translation", c.relinearize_translation, positive());
-  s.get("relinearize_rotation", c.relinearize_rotation, positive());
+  {
+    // The incremental smoother's options (estimators/graph/incremental_smoother.hpp says what each does); an absent
+    // key keeps IncrementalOptions' default.
+    Section m = s.child("smoother");
+    graph::IncrementalOptions& o = c.smoother;
+    m.get("relinearize_translation", o.relinearize_translation, positive());
+    m.get("relinearize_rotation", o.relinearize_rotation, positive());
+    m.get("relinearization_passes", o.relinearization_passes, int_in_range(0, 100));
+    m.get("relinearize_skip", o.relinearize_skip, int_in_range(1, 1 << 20));
+    m.get("wildfire", o.wildfire, non_negative());
+    m.get("update_fraction", o.update_fraction, in_range(0.0, 1.0));
+    m.get("min_update_factors", o.min_update_factors, int_in_range(1, 1 << 20));
+    m.get("max_update_factors", o.max_update_factors, int_in_range(1, 1 << 20));
+    m.get("refill_ratio", o.refill_ratio, Check<double>([](const double& v) -> std::optional<std::string> {
+      if (v > 1 && std::isfinite(v)) return std::nullopt;  // at 1 any fill-in would reorder at every update
+      return "must be a number > 1, got " + std::to_string(v);
+    }));
+    m.get("nested_dissection_above", o.nested_dissection_above, int_in_range(0, std::numeric_limits<int>::max()));
+    m.get("reorder_spread", o.reorder_spread, int_in_range(0, 1000));
+    m.get("reorder_spread_above", o.reorder_spread_above, int_in_range(0, std::numeric_limits<int>::max()));
+    m.get("reorder_slice_ms", o.reorder_slice_ms, non_negative());
+    if (o.max_update_factors < o.min_update_factors) {
+      // The smoother would quietly take the larger; name the key that was set.
+      const YAML::Node& n = m.node();
+      const YAML::Node at = n.IsMap() && n["max_update_factors"] ? n["max_update_factors"] : n.IsMap() ? n["min_update_factors"] : n;
+      throw m.error_at(at, "'" + m.path() + "': max_update_factors (" + std::to_string(o.max_update_factors) +
+                               ") must not be smaller than min_update_factors (" + std::to_string(o.min_update_factors) + ")");
+    }
+    m.reject_unknown_keys();
+  }
+  // The relinearization thresholds were keys of this section before session 6: say where they went.
+  if (s.node().IsMap())
+    for (const auto& kv : s.node())
+      for (const char* moved : {"relinearize_translation", "relinearize_rotation"})
+        if (kv.first.as<std::string>() == moved)
+          throw s.error_at(kv.first, "'" + s.path() + "." + moved + "' has moved to '" + s.path() + ".smoother." + moved + "'");
   s.get("min_increment_variance", c.min_increment_variance, positive());
   s.get("odometry_history", c.odometry_history, int_in_range(1, 100000000));
   s.get("coalesce_odometry", c.coalesce_odometry);

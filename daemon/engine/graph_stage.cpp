@@ -42,11 +42,9 @@ Matrix6d residual_information(const Eigen::MatrixXd& tangent) {
 }
 
 graph::IncrementalOptions smoother_options(const GraphConfig& c, bool planar) {
-  graph::IncrementalOptions o;
+  graph::IncrementalOptions o = c.smoother;
   o.kernel = graph::robust_kernel_from_name(c.robust);
   o.kernel_width = kernel_width_for(c, planar);
-  o.relinearize_translation = c.relinearize_translation;
-  o.relinearize_rotation = c.relinearize_rotation;
   return o;
 }
 

@@ -1,4 +1,5 @@
 #pragma once
+#include "estimators/graph/incremental_smoother.hpp"
 #include "estimators/keyframe/keyframe_selector.hpp"
 #include "estimators/keyframe/loop_proposals.hpp"
 
@@ -50,9 +51,12 @@ struct GraphConfig {
   bool coalesce_odometry = true;         // daemon: a body's odometry waiting for the stage is coalesced instead of
                                          // taking one queue slot per message (odometry_coalescer.hpp)
   int odometry_batch_max = 256;          // messages a coalesced batch keeps unmerged (keyframe candidates, sighting times)
-  double relinearize_translation = 0.1;   // m
-  double relinearize_rotation = 0.1;      // rad
   double min_increment_variance = 1e-10;
+  /// The incremental smoother's options (config key `smoother:`): relinearization thresholds and skip, wildfire,
+  /// the rank-update budget, reordering and its spreading over updates.  Their defaults are IncrementalOptions'
+  /// own (one source of truth).  `kernel` and `kernel_width` here are not used: the smoother's kernel is `robust`
+  /// and its width kernel_width_for(), per kind of body.
+  graph::IncrementalOptions smoother;
   int trajectory_max_keyframes = 4096;    // TRAJECTORY carries at most this many (the newest) keyframes
   GraphLandmarkOptions landmarks;
 };

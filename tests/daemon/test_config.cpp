@@ -1,12 +1,15 @@
 // Config parsing: defaults, overrides, and every error naming its file:line.
 #include "assoc/chi_square.hpp"
 #include "daemon/config/daemon_config.hpp"
+#include "daemon/engine/graph_stage.hpp"
 #include "daemon/engine/graph_stage_config.hpp"
 
 #include <doctest/doctest.h>
 
 #include <cmath>
+#include <memory>
 #include <string>
+#include <vector>
 
 using sextant::config::ConfigError;
 using sextant::config::parse_daemon_config;
@@ -122,4 +125,129 @@ TEST_CASE("the loops' kernel width: auto by default (a chi-square quantile of th
     CHECK(e.find("test.yaml:4:21:") == 0);
     CHECK(e.find("expected 'auto' or a positive number") != std::string::npos);
   }
+}
+
+namespace {
+// The options the graph stage gives its planar smoother (created with the first planar body's first odometry).
+sextant::graph::IncrementalOptions planar_smoother_options(const sextant::engine::GraphConfig& config) {
+  sextant::engine::GraphStage stage(config, std::make_shared<sextant::engine::GraphCorrections>());
+  sextant::engine::Odometry o;
+  o.utime = 1'000'000;
+  o.source = "robot";
+  o.planar = true;
+  stage.handle(o, [](sextant::engine::Output) {});
+  REQUIRE(stage.smoother(true) != nullptr);
+  return stage.smoother(true)->options();
+}
+
+// The keys of engine.graph.smoother and the IncrementalOptions field each one sets.
+void check_smoother_options(const sextant::graph::IncrementalOptions& got, const sextant::graph::IncrementalOptions& want) {
+  CHECK(got.relinearize_translation == want.relinearize_translation);
+  CHECK(got.relinearize_rotation == want.relinearize_rotation);
+  CHECK(got.relinearization_passes == want.relinearization_passes);
+  CHECK(got.relinearize_skip == want.relinearize_skip);
+  CHECK(got.wildfire == want.wildfire);
+  CHECK(got.update_fraction == want.update_fraction);
+  CHECK(got.min_update_factors == want.min_update_factors);
+  CHECK(got.max_update_factors == want.max_update_factors);
+  CHECK(got.refill_ratio == want.refill_ratio);
+  CHECK(got.nested_dissection_above == want.nested_dissection_above);
+  CHECK(got.reorder_spread == want.reorder_spread);
+  CHECK(got.reorder_spread_above == want.reorder_spread_above);
+  CHECK(got.reorder_slice_ms == want.reorder_slice_ms);
+  // Not configurable here: they stay the smoother's own.
+  CHECK(got.rebuild_iterations == want.rebuild_iterations);
+  CHECK(got.capacity_growth == want.capacity_growth);
+}
+}  // namespace
+
+TEST_CASE("engine.graph.smoother: defaults are IncrementalOptions' own, every key reaches the graph stage's smoother") {
+  const sextant::graph::IncrementalOptions defaults;
+  // No key: the struct's defaults, and the shipped default.yaml documents the same values.
+  const auto none = parse_daemon_config("", "t").engine.graph;
+  check_smoother_options(planar_smoother_options(none), defaults);
+  const auto shipped = sextant::config::load_daemon_config(std::string(SEXTANT_SOURCE_DIR) + "/config/default.yaml");
+  check_smoother_options(shipped.engine.graph.smoother, defaults);
+  check_smoother_options(planar_smoother_options(shipped.engine.graph), defaults);
+
+  // Every key set to a value that differs from its default: each one arrives in the smoother's options.
+  const auto set = parse_daemon_config(
+      "engine:\n  graph:\n    smoother:\n"
+      "      relinearize_translation: 0.25\n      relinearize_rotation: 0.05\n      relinearization_passes: 3\n"
+      "      relinearize_skip: 4\n      wildfire: 0\n      update_fraction: 0.1\n      min_update_factors: 16\n"
+      "      max_update_factors: 512\n      refill_ratio: 2.5\n      nested_dissection_above: 100\n"
+      "      reorder_spread: 3\n      reorder_spread_above: 0\n      reorder_slice_ms: 1.5\n",
+      "t").engine.graph;
+  sextant::graph::IncrementalOptions want = defaults;
+  want.relinearize_translation = 0.25, want.relinearize_rotation = 0.05, want.relinearization_passes = 3;
+  want.relinearize_skip = 4, want.wildfire = 0, want.update_fraction = 0.1, want.min_update_factors = 16;
+  want.max_update_factors = 512, want.refill_ratio = 2.5, want.nested_dissection_above = 100;
+  want.reorder_spread = 3, want.reorder_spread_above = 0, want.reorder_slice_ms = 1.5;
+  const sextant::graph::IncrementalOptions got = planar_smoother_options(set);
+  check_smoother_options(got, want);
+  // The kernel stays the loops' (DCS, auto width), whatever the smoother section says.
+  CHECK(got.kernel == sextant::graph::RobustKernel::kDcs);
+  CHECK(got.kernel_width == sextant::engine::kernel_width_for(set, true));
+  // Defaults differ from the values set above (else the round trip would prove nothing).
+  CHECK(defaults.relinearize_translation != want.relinearize_translation);
+  CHECK(defaults.relinearize_skip != want.relinearize_skip);
+  CHECK(defaults.wildfire != want.wildfire);
+  CHECK(defaults.max_update_factors != want.max_update_factors);
+  CHECK(defaults.refill_ratio != want.refill_ratio);
+  CHECK(defaults.reorder_spread != want.reorder_spread);
+  CHECK(defaults.reorder_spread_above != want.reorder_spread_above);
+  CHECK(defaults.reorder_slice_ms != want.reorder_slice_ms);
+}
+
+TEST_CASE("engine.graph.smoother: each bad value stops parsing with its line, column and key") {
+  struct Bad {
+    const char* key;
+    const char* value;
+    const char* why;
+  };
+  const std::vector<Bad> bad = {
+      {"relinearize_translation", "0", "must be a positive number"},
+      {"relinearize_rotation", "-0.1", "must be a positive number"},
+      {"relinearize_rotation", "fast", "expected a number"},
+      {"relinearization_passes", "-1", "must be in [0, 100]"},
+      {"relinearize_skip", "0", "must be in [1, "},
+      {"relinearize_skip", "1.5", "expected an integer"},
+      {"wildfire", "-0.001", "must be >= 0"},
+      {"update_fraction", "1.5", "must be in [0, 1]"},
+      {"min_update_factors", "0", "must be in [1, "},
+      {"max_update_factors", "0", "must be in [1, "},
+      {"refill_ratio", "1", "must be a number > 1"},
+      {"refill_ratio", ".inf", "must be a number > 1"},
+      {"nested_dissection_above", "-5", "must be in [0, "},
+      {"reorder_spread", "-1", "must be in [0, 1000]"},
+      {"reorder_spread_above", "many", "expected an integer"},
+      {"reorder_slice_ms", "-4", "must be >= 0"},
+  };
+  for (const Bad& b : bad) {
+    const std::string key = b.key, value = b.value;
+    CAPTURE(key);
+    CAPTURE(value);
+    const std::string e = error_of(std::string("engine:\n  graph:\n    smoother:\n      # latency\n      ") + b.key +
+                                   ": " + b.value + "\n");
+    const std::string place = "test.yaml:5:" + std::to_string(9 + std::string(b.key).size()) + ": ";
+    CAPTURE(e);
+    CHECK(e.find(place) == 0);
+    CHECK(e.find("'engine.graph.smoother." + key + "'") != std::string::npos);
+    CHECK(e.find(b.why) != std::string::npos);
+  }
+  // A cap below the floor names the key that was set.
+  std::string e = error_of("engine:\n  graph:\n    smoother:\n      max_update_factors: 8\n");
+  CHECK(e.find("test.yaml:4:27: 'engine.graph.smoother': max_update_factors (8) must not be smaller than "
+                "min_update_factors (32)") == 0);
+  e = error_of("engine:\n  graph:\n    smoother:\n      min_update_factors: 200\n");
+  CHECK(e.find("test.yaml:4:27: 'engine.graph.smoother': max_update_factors (128) must not be smaller than "
+                "min_update_factors (200)") == 0);
+  // A misspelt key, the smoother section not a mapping, and the thresholds' old place.
+  e = error_of("engine:\n  graph:\n    smoother:\n      reorder_spred: 2\n");
+  CHECK(e.find("test.yaml:4:7: unknown key 'engine.graph.smoother.reorder_spred'") == 0);
+  CHECK(e.find("reorder_spread") != std::string::npos);
+  CHECK(error_of("engine:\n  graph:\n    smoother: 5\n").find("test.yaml:3:15: 'engine.graph.smoother': expected a mapping") == 0);
+  e = error_of("engine:\n  graph:\n    relinearize_translation: 0.2\n");
+  CHECK(e.find("test.yaml:3:5: 'engine.graph.relinearize_translation' has moved to "
+                "'engine.graph.smoother.relinearize_translation'") == 0);
 }
