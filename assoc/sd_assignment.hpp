@@ -22,7 +22,12 @@
 //      point of the packing LP's dual; far fewer iterations than starting at 0);
 //    * multipliers follow Polyak's subgradient step toward the best upper bound, its factor halved after 10
 //      iterations without a better lower bound.  Stops when the relative gap (UB - LB) / |UB| falls below the
-//      tolerance.
+//      tolerance;
+//    * a component still above the tolerance at the iteration limit is solved again with the sensor order rotated
+//      (another sensor relaxed, so the recovery fixes another pair of sensors), up to twice; the best upper and
+//      lower bounds of the runs count.
+//    Components of at most 8 detections are solved exactly (branch and bound) instead: their LP bound is often
+//    fractional (three pairs on three detections: 1/2 each), and no Lagrangian bound can close that gap.
 #include "assoc/tuple_costs.hpp"
 
 #include <vector>
@@ -34,7 +39,7 @@ struct SdSolution {
   double cost = 0;          // upper bound (the solution's cost)
   double lower_bound = 0;   // best dual value (exact: equal to cost)
   double gap = 0;           // (cost - lower_bound) / |cost|, 0 when cost is 0
-  int iterations = 0;       // the most relaxation iterations any component took
+  int iterations = 0;       // the most relaxation iterations any component took (summed over its rotations)
   int components = 0;       // independent components
   int largest_component = 0;  // tuples in the largest one
   bool exact = false;

@@ -1,6 +1,6 @@
 // S-D assignment: the exact branch and bound against exhaustive search over tuple subsets, the Lagrangian
 // relaxation against the exact optimum on random small passive-sensor scans (bounds always bracket it; optimal on
-// >= 99 %), independent components and exchange improvement, gated tuple building against exhaustive enumeration,
+// >= 99 %), a small component whose LP bound is fractional (solved exactly, gap 0), independent components and exchange improvement, gated tuple building against exhaustive enumeration,
 // and the per-sensor clutter density and target-prior terms of the cost against their formulas.
 #include "assoc/sd_assignment.hpp"
 
@@ -110,6 +110,38 @@ TEST_CASE("Lagrangian relaxation brackets the optimum and finds it on at least 9
   MESSAGE("Lagrangian relaxation optimal on " << optimal << " of " << trials);
   CHECK(trials >= 250);
   CHECK(optimal >= 0.99 * trials);
+}
+
+TEST_CASE("a small component with a fractional LP bound is solved exactly, so its gap is 0") {
+  // One detection per sensor; the three pairs cost -4 each and the triple -5.  The packing LP takes each pair at
+  // 1/2 (-6), so no Lagrangian bound gets above -6, while the best assignment is the triple (-5): a 20 % gap that
+  // used to push whole scans over the 1 % tolerance.
+  const std::vector<Tuple> odd_cycle = {{{1, 1, 0}, -4.0}, {{1, 0, 1}, -4.0}, {{0, 1, 1}, -4.0}, {{1, 1, 1}, -5.0}};
+  const auto lr = solve_sd_lagrangian(odd_cycle, {1, 1, 1});
+  CHECK(lr.cost == doctest::Approx(brute_force(odd_cycle)));
+  CHECK(lr.cost == doctest::Approx(-5.0));
+  CHECK(lr.tuples == std::vector<int>{3});
+  CHECK(lr.lower_bound == doctest::Approx(-5.0));
+  CHECK(lr.gap == 0.0);
+  // The same beside a larger component (a 5 x 5 x 5 cube of triples, the diagonal ones -10, the others -1 to -3):
+  // the scan's total gap stays within the tolerance (a bound of -6 on the small component alone would make it
+  // 1/55 = 1.8 %).
+  std::vector<Tuple> scan = odd_cycle;
+  for (auto& t : scan)
+    for (int& k : t.index) k = k > 0 ? 6 : 0;  // detection 6 of each sensor
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> u(-3, -1);
+  for (int a = 1; a <= 5; ++a)
+    for (int b = 1; b <= 5; ++b)
+      for (int c = 1; c <= 5; ++c) scan.push_back({{a, b, c}, a == b && b == c ? -10.0 : u(rng)});
+  std::sort(scan.begin(), scan.end(), [](const Tuple& x, const Tuple& y) { return x.index < y.index; });
+  const auto both = solve_sd_lagrangian(scan, {6, 6, 6});
+  CHECK(both.components == 2);
+  CHECK(both.gap <= 0.01);
+  const auto exact = solve_sd_exact(scan, {6, 6, 6});
+  REQUIRE(exact.exact);
+  CHECK(both.lower_bound <= exact.cost + 1e-9);
+  CHECK(both.cost >= exact.cost - 1e-9);
 }
 
 TEST_CASE("the S-D solvers return disjoint tuples whose costs add up, and reject malformed tuples") {
