@@ -142,7 +142,7 @@ IncrementalSmoother::Contribution IncrementalSmoother::linearize(size_t fi) cons
   return c;
 }
 
-void IncrementalSmoother::apply(const std::vector<Contribution>& cs, bool add) {
+void IncrementalSmoother::apply(const std::vector<Contribution>& cs, bool add, bool within_pattern) {
   // One rank-k modification for all of them: CHOLMOD walks each elimination-tree path once per 8 columns of C
   // instead of once per factor, which is what a loop closure's long path costs.
   size_t r = 0, nz = 0;
@@ -174,7 +174,7 @@ void IncrementalSmoother::apply(const std::vector<Contribution>& cs, bool add) {
       g_[c.cols[j]] += d;
       db[c.cols[j]] -= d;
     }
-  make_room(C);
+  if (!within_pattern) make_room(C);
   const int ok = cholmod_updown_solve(add ? 1 : 0, C, L_, y_, delta_b_, &common_);
   if (ok) {
     // The columns CHOLMOD modified: the elimination-tree paths from each column's first row to the root.
@@ -193,20 +193,32 @@ void IncrementalSmoother::apply(const std::vector<Contribution>& cs, bool add) {
 // modification that could run past the end, the columns are packed in place and the end is moved back to the last
 // column: the holes are reused, and L grows (once, with headroom) only when the packed columns need it.
 void IncrementalSmoother::make_room(const cholmod_sparse* C) {
-  // What the modification can claim at the end: every column on its paths may move there, grown by 1.2 (grow1)
-  // plus grow2, and gain rows from the columns below it.
+  // What the modification can claim at the end: every column j on its paths may move there, and CHOLMOD gives a
+  // moved column grow1 x its new count + grow2, at most n - j (cholmod_reallocate_column).  Its new pattern is its
+  // old one, the rows of C on its path, and the new rows of its child on the path (Davis and Hager 2001); while the
+  // elimination tree keeps its shape those are rows of C, so it gains at most the R distinct rows of C.  That is an
+  // estimate, not a bound (a new parent brings its child's old rows); when it falls short CHOLMOD grows L itself,
+  // which is right, only slower.  Measured on city10000, sphere2500 and M3500: no update used more than the estimate
+  // (bench/RESULTS.md, session 6); the former 2 Lnz + 16 made city10000 grow L 55 times by more than 5 ms each.
   const int* Ci = static_cast<const int*>(C->i);
   const int* Cp = static_cast<const int*>(C->p);
   const int* Lnz = static_cast<const int*>(L_->nz);
+  const size_t n = L_->n;
+  size_t rows = 0;
+  const size_t entries = static_cast<size_t>(Cp[C->ncol]);
+  for (size_t k = 0; k < entries; ++k)
+    if (!on_path_[static_cast<size_t>(Ci[k])]) on_path_[static_cast<size_t>(Ci[k])] = 1, ++rows;
+  for (size_t k = 0; k < entries; ++k) on_path_[static_cast<size_t>(Ci[k])] = 0;
+  const double grow1 = std::max(1.0, common_.grow1);
   size_t need = 0;
   for (size_t k = 0; k < C->ncol; ++k)
     for (int j = Ci[Cp[k]]; j >= 0 && !on_path_[static_cast<size_t>(j)]; j = parent_of(j)) {
       on_path_[static_cast<size_t>(j)] = 1;
-      need += 2 * static_cast<size_t>(Lnz[j]) + 16;
+      const double grown = grow1 * static_cast<double>(static_cast<size_t>(Lnz[j]) + rows) + static_cast<double>(common_.grow2);
+      need += std::min(static_cast<size_t>(grown) + 16, n - static_cast<size_t>(j));
     }
   for (size_t k = 0; k < C->ncol; ++k)
     for (int j = Ci[Cp[k]]; j >= 0 && on_path_[static_cast<size_t>(j)]; j = parent_of(j)) on_path_[static_cast<size_t>(j)] = 0;
-  const size_t n = L_->n;
   int* Lp = static_cast<int*>(L_->p);
   if (static_cast<size_t>(Lp[n]) + need <= L_->nzmax) return;
   if (!cholmod_pack_factor(L_, &common_)) throw std::runtime_error("CHOLMOD could not pack the factor");
@@ -382,8 +394,8 @@ bool IncrementalSmoother::relinearize(const std::vector<int>& moved, Incremental
   }
   for (size_t f : factors) after.push_back(linearize(f));
   // Update with the new linearization before downdating the old one: the matrix stays positive definite throughout.
-  apply(after, true);
-  apply(before, false);
+  apply(after, true, true);
+  apply(before, false, true);
   st.relinearized_variables += static_cast<int>(moved.size());
   st.relinearized_factors += static_cast<int>(factors.size());
   return true;
@@ -464,7 +476,7 @@ IncrementalStatus IncrementalSmoother::update() {
     for (int k = 0; k < d; ++k) id.cols.push_back(p + k);
     identities.push_back(std::move(id));
   }
-  apply(identities, false);
+  apply(identities, false, true);
   bool definite = true;
   const int* Lp = static_cast<const int*>(L_->p);
   const double* Lx = static_cast<const double*>(L_->x);
@@ -489,8 +501,8 @@ IncrementalStatus IncrementalSmoother::update() {
     r.new_variables = st.new_variables, r.new_factors = st.new_factors, r.deferred_variables = st.deferred_variables;
     return r;
   }
-  if (!reordering_ && spread && (filled || 4 * (capacity_ - used_) < reserve_at_order_))
-    begin_reordering();
+  const bool began_reordering = !reordering_ && spread && (filled || 4 * (capacity_ - used_) < reserve_at_order_);
+  if (began_reordering) begin_reordering();
   solve(false);
   ++st.solves;
   ++updates_;
@@ -507,8 +519,17 @@ IncrementalStatus IncrementalSmoother::update() {
     ++st.solves;
   }
   if (reordering_) {
-    const auto deadline = started + std::chrono::duration<double, std::milli>(options_.reorder_slice_ms);
+    // What is left of reorder_slice_ms after this update's own work, and at least this update's share of what the
+    // last spread reordering took (with a quarter to spare, as the graph grows), so that little is left for the
+    // update that installs it: with the first rule alone, city10000's updates during a reordering (4-6 ms each, the
+    // factor being at its fullest) left it nearly all, 40-70 ms.  The update that began it has paid the ordering.
+    const auto now = std::chrono::steady_clock::now();
+    const double own = std::chrono::duration<double, std::milli>(now - started).count();
+    const int64_t left = std::max<int64_t>(1, reorder_due_ - update_calls_);
+    const double share = began_reordering ? 0.0 : std::max(0.0, 1.25 * reorder_work_ms_ - reorder_spent_ms_) / static_cast<double>(left);
+    const auto deadline = now + std::chrono::duration<double, std::milli>(std::max(options_.reorder_slice_ms - own, share));
     advance(*reordering_, [&] { return std::chrono::steady_clock::now() >= deadline; });
+    reorder_spent_ms_ += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - now).count();
   }
   return st;
 }
@@ -520,11 +541,14 @@ void IncrementalSmoother::begin_reordering() {
   for (size_t v = 0; v < pos_.size(); ++v) in[v] = pos_[v] >= 0;
   reordering_ = begin_system(in, false);
   reorder_due_ = update_calls_ + options_.reorder_spread;
+  reorder_spent_ms_ = 0.0;
 }
 
 bool IncrementalSmoother::finish_reordering(IncrementalStatus& st) {
   std::unique_ptr<System> s = std::move(reordering_);
+  const auto started = std::chrono::steady_clock::now();
   advance(*s, Never{});
+  reorder_work_ms_ = reorder_spent_ms_ + std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - started).count();
   if (!s->error.empty()) return false;  // the caller rebuilds, which names the cause
   install(*s);
   st.rebuilt = true;
@@ -862,10 +886,17 @@ void IncrementalSmoother::install(System& s) {
     for (int v : graph_.factors()[f]->variables()) var_factors_[static_cast<size_t>(v)].push_back(f);
   factors_in_system_ = s.factors.size();
 
+  // A spread reordering replaces a factor that grew since its ordering; the new one is packed, and would grow
+  // again at the next updates into fresh pages (on city10000, 30-65 ms of page faults per growth).  So it takes the
+  // old one's storage size at once, while that memory has just been freed.  (A synchronous rebuild has freed the old
+  // factor before building the new one, which then reuses its memory: nothing to do.)
+  const size_t storage = L_ ? L_->nzmax : 0;
   if (L_) cholmod_free_factor(&L_, &common_);
   if (y_) cholmod_free_dense(&y_, &common_);
   if (delta_b_) cholmod_free_dense(&delta_b_, &common_);
   L_ = s.L, s.L = nullptr;
+  if (storage > L_->nzmax && !cholmod_reallocate_factor(storage, L_, &common_))
+    throw std::runtime_error("CHOLMOD could not grow the factor");
   y_ = s.y, s.y = nullptr;
   g_ = std::move(s.g);
   delta_b_ = cholmod_zeros(static_cast<size_t>(capacity_), 1, CHOLMOD_REAL, &common_);

@@ -25,7 +25,8 @@
 // Reordering in the background of the updates (systems of more than `reorder_spread_above` variables).  When the
 // factor has filled in past `refill_ratio` times its size after the last ordering (or the reserved columns are three
 // quarters used), the current factor is still exact, only slower to update; so the new ordering and factorization are built a slice at a time at the end of the next
-// `reorder_spread` updates (each spends on it what is left of `reorder_slice_ms` after its own work), and the new
+// `reorder_spread` updates (each spends on it what is left of `reorder_slice_ms` after its own work, and at least its
+// share of the time the previous reordering took), and the new
 // system replaces the old one at the start of the update `reorder_spread` after the one that began it, whatever the
 // clock said: the estimates after every update are the same on a fast or a slow machine (deterministic replay), only
 // the per-update latency depends on the slices.  The new system is linearized at the estimates of the update that
@@ -76,7 +77,9 @@ struct IncrementalOptions {
   /// Spread reorderings only in systems of more than this many variables: below, a reordering takes a few ms, and
   /// holding two factors at once would cost more memory than it saves time (M3500: +5 MB peak RSS, p99 unchanged).
   int reorder_spread_above = 5000;
-  double reorder_slice_ms = 4.0;          // ms: an update works on a spread reordering until this long after it began
+  /// ms: an update works on a spread reordering until this long after it began, and at least for its share of the
+  /// time the last one took (1.25 x that time / reorder_spread), so that the installing update is left little.
+  double reorder_slice_ms = 4.0;
   /// Wildfire threshold of the back-substitution (as iSAM2's): a change of a step by less than this (m or rad) is not
   /// propagated to the variables that depend on it (they keep a value stale by less than it).  0: exact.
   double wildfire = 1e-3;
@@ -154,7 +157,10 @@ class IncrementalSmoother {
   template <class Deadline>
   bool advance(System& s, const Deadline& deadline);
   void install(System& s);                         // makes `s` the current system (see the file comment)
-  void apply(const std::vector<Contribution>& cs, bool add);
+  /// Adds (or removes) the contributions by one rank-k modification of L.  `within_pattern`: C C' lies in the
+  /// pattern L L' already has (a relinearized factor, a reserved column's identity), so nothing fills in and L needs
+  /// no room (Davis and Hager 2001: the new pattern of a column is its old one and the rows C brings along its path).
+  void apply(const std::vector<Contribution>& cs, bool add, bool within_pattern = false);
   void make_room(const cholmod_sparse* C);  // packs L before an update that could otherwise make CHOLMOD reallocate it
   void determined(const std::vector<int>& new_vars, const std::vector<size_t>& new_factors,
                   std::vector<char>& ready) const;
@@ -201,6 +207,8 @@ class IncrementalSmoother {
   std::vector<char> var_changed_;     // per variable, after a solve: its step changed
   std::unique_ptr<System> reordering_;  // a spread reordering under way
   int64_t reorder_due_ = 0;           // the update (updates_ count) at which it replaces the current system
+  double reorder_spent_ms_ = 0.0;     // time its slices have taken so far
+  double reorder_work_ms_ = 0.0;      // time the last spread reordering took from its first slice to its installation
   int reserve_at_order_ = 0;          // reserved columns right after the last ordering
 };
 
