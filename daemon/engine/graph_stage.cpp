@@ -181,8 +181,9 @@ void GraphStage::on_coalesced(const OdometryCoalescer::Entry& entry, const Emit&
   if (auto it = bodies_.find(entry.message.source); it != bodies_.end()) {
     for (const auto& [utime, pose] : entry.passed)
       if (utime > it->second.last_utime) remember_odometry(it->second, utime, pose, static_cast<size_t>(config_.odometry_history));
-    // The coalescer's selector saw the merged messages too (their run towards re-anchoring): continue from it.
-    it->second.selector = entry.selector;
+    // The coalescer's selector saw the merged messages too (their run towards re-anchoring): continue from it —
+    // unless the stage has dropped a keyframe that selector took (drop_keyframe): it then keeps its own.
+    if (entry.selector.refers_to(it->second.selector.reference())) it->second.selector = entry.selector;
   }
   keyframes_rejected_ += entry.implausible;
   on_odometry(entry.message, emit);
@@ -204,11 +205,12 @@ void GraphStage::on_keyframe_candidate(const Odometry& o, Body& b, const SE3& od
     node.edge_covariance = b.since_keyframe;
     if (reanchored) node.edge_covariance += jump_covariance(node.edge, b.planar);
     // The odometry edge's information; a covariance that cannot be inverted (it can only come from a sender's
-    // malformed covariances) drops the keyframe and keeps accumulating towards the next one.
+    // malformed covariances) drops the keyframe (the selector goes back to the last keyframe in the graph) and keeps
+    // accumulating towards the next one, whose edge spans the dropped pose.
     const Eigen::MatrixXd cov = b.planar ? Eigen::MatrixXd(planar_block(node.edge_covariance)) : Eigen::MatrixXd(node.edge_covariance);
     Eigen::LLT<Eigen::MatrixXd> llt(cov);
     if (llt.info() != Eigen::Success || !cov.allFinite()) {
-      ++bad_edges_;
+      drop_keyframe(o.source, b, odom);
       return;
     }
     information = llt.solve(Eigen::MatrixXd::Identity(cov.rows(), cov.cols()));
@@ -237,7 +239,7 @@ void GraphStage::on_keyframe_candidate(const Odometry& o, Body& b, const SE3& od
                                                                          residual_information(information)), false);
     }
   } catch (const std::invalid_argument&) {
-    ++bad_edges_;  // a non-finite pose or information: never reaches the smoother's system (it stays pending)
+    drop_keyframe(o.source, b, odom);  // a non-finite pose or information: never reaches the smoother's system
     return;
   }
   b.since_keyframe.setZero();
@@ -285,6 +287,13 @@ std::optional<std::pair<size_t, SE3>> GraphStage::resolve(const Body& b, int64_t
                              [](const std::pair<int64_t, SE3>& x, int64_t t) { return x.first < t; });
   if (at == b.odometry.end() || at->first != utime) return std::nullopt;
   return std::make_pair(*best, kf.odom.between(at->second));
+}
+
+void GraphStage::drop_keyframe(const std::string& source, Body& b, const SE3& odom) {
+  ++bad_edges_;
+  const std::optional<SE3> last = b.keyframes.empty() ? std::nullopt : std::optional<SE3>(b.keyframes.back().odom);
+  b.selector.reset_reference(last);
+  coalescer_.keyframe_dropped(source, odom, last);
 }
 
 void GraphStage::on_loop(const LoopClosure& l, const Emit& emit) {

@@ -126,6 +126,11 @@ class GraphStage final : public Stage {
   void on_coalesced(const OdometryCoalescer::Entry& entry, const Emit& emit);
   static void remember_odometry(Body& b, int64_t utime, const SE3& pose, size_t history);
   void on_keyframe_candidate(const Odometry& o, Body& b, const SE3& odom, const Emit& emit);
+  /// A keyframe candidate at `odom` that cannot enter the graph (its odometry edge's covariance cannot be inverted,
+  /// or the smoother refuses it): counted (odometry_edges_rejected); the selector (and the coalescer's mirror of it)
+  /// goes back to the body's last keyframe in the graph, so the next keyframe is measured from that one and its edge,
+  /// which spans the dropped pose, accumulates the odometry covariance from there.
+  void drop_keyframe(const std::string& source, Body& b, const SE3& odom);
   void on_loop(const LoopClosure& l, const Emit& emit);
   /// The keyframe a loop's end refers to, and the odometry motion from that keyframe to the loop's time.
   std::optional<std::pair<size_t, SE3>> resolve(const Body& b, int64_t keyframe_id, int64_t utime) const;

@@ -149,6 +149,12 @@ std::optional<OdometryCoalescer::Batch> OdometryCoalescer::take(const std::strin
   return batch;
 }
 
+void OdometryCoalescer::keyframe_dropped(const std::string& source, const SE3& dropped, const std::optional<SE3>& reference) {
+  std::lock_guard lock(mutex_);
+  auto it = bodies_.find(source);
+  if (it != bodies_.end() && it->second.selector.refers_to(dropped)) it->second.selector.reset_reference(reference);
+}
+
 int64_t OdometryCoalescer::coalesced() const {
   std::lock_guard lock(mutex_);
   return coalesced_;

@@ -16,7 +16,8 @@
 //    pose here: keyframes and re-anchorings are pinned; too-close and implausible decisions leave the reference
 //    unchanged, but implausible ones advance the selector's run towards re-anchoring, so each entry carries the
 //    mirror's selector as it was before its message and the stage continues from that one: it takes the same
-//    decisions at the same poses as from the single messages), and the
+//    decisions at the same poses as from the single messages; when the stage drops a keyframe it cannot weight, it
+//    sends the mirror back to its last keyframe too, keyframe_dropped), and the
 //    first message at or after the time of a sighting or a loop that arrived ahead of the odometry (the stage anchors
 //    the sighting by interpolating between the two messages around it, and tries the loop again at that message,
 //    exactly as without coalescing);
@@ -78,6 +79,14 @@ class OdometryCoalescer {
   /// Stage thread: the oldest batch of `source` (called for each odometry event the stage handles; nullopt when the
   /// event did not come through `offer`, as in replay).
   std::optional<Batch> take(const std::string& source);
+
+  /// Stage thread: the stage could not use the keyframe its selector took at `dropped` (an odometry edge it cannot
+  /// weight) and went back to `reference`, the last keyframe in its graph (KeyframeSelector::reset_reference).  If
+  /// the mirror's reference is still `dropped` (it has taken no keyframe since), the mirror goes back too, so that
+  /// the messages still to come are pinned as the stage will decide them.  Messages already batched were decided
+  /// against `dropped`: the stage keeps its own selector for them (GraphStage::on_coalesced), and at most some of
+  /// them that it would have taken as keyframes reach it merged into a later one (a keyframe a little later).
+  void keyframe_dropped(const std::string& source, const SE3& dropped, const std::optional<SE3>& reference);
 
   int64_t coalesced() const;     // messages merged into a later one
   int64_t out_of_order() const;  // messages at or before their body's newest time, dropped here

@@ -69,6 +69,17 @@ class KeyframeSelector {
   int jump_run() const { return jump_run_; }
   /// The pose of the last keyframe (nullopt before the first one).
   const std::optional<SE3>& reference() const { return reference_; }
+  /// True when the reference is `pose` exactly (both nullopt, or the same numbers: the reference is a copy of a
+  /// decide() argument), e.g. to tell whether two copies of a selector have taken the same keyframes.
+  bool refers_to(const std::optional<SE3>& pose) const;
+  /// Makes `pose` the reference (nullopt: none, the next pose will be the first keyframe) and ends any run towards
+  /// re-anchoring; the counters stay as they are.  For a caller that could not use the keyframe (or re-anchoring)
+  /// this selector has just accepted and goes back to the last keyframe it did use: the graph stage drops a keyframe
+  /// whose odometry edge covariance it cannot invert, and the next keyframe must then be measured from — and its
+  /// odometry edge span from — a pose that is in the graph, not from the dropped one (with k2 = 5 and a dropped
+  /// keyframe 4.9 m out, a pose 5.3 m from the graph's last keyframe would otherwise pass as 0.4 m of motion).
+  /// Throws std::invalid_argument for a pose with a non-finite component.
+  void reset_reference(const std::optional<SE3>& pose);
   const KeyframeSelectorOptions& options() const { return options_; }
 
  private:

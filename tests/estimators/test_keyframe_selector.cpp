@@ -6,6 +6,8 @@
 
 #include <cmath>
 #include <limits>
+#include <optional>
+#include <stdexcept>
 
 using namespace sextant;
 
@@ -150,6 +152,42 @@ TEST_CASE("keyframe selector: spikes are rejected, a persistent jump re-anchors 
   never.decide(SE3());
   for (int k = 0; k < 100; ++k) CHECK(never.decide(translation(50 + 0.1 * k)) == KeyframeDecision::kImplausible);
   CHECK(never.reanchored() == 0);
+}
+
+TEST_CASE("keyframe selector: reset_reference goes back to a keyframe the caller used and ends a jump run") {
+  KeyframeSelectorOptions o;
+  o.k1 = 0.3;
+  o.k2 = 5.0;
+  o.reanchor_after = 3;
+  KeyframeSelector s(o);
+  CHECK(s.decide(translation(0)) == KeyframeDecision::kKeyframe);
+  CHECK(s.decide(translation(4.9)) == KeyframeDecision::kKeyframe);  // the caller cannot use it: back to 0
+  CHECK(s.refers_to(translation(4.9)));
+  s.reset_reference(translation(0));
+  CHECK(s.refers_to(translation(0)));
+  CHECK_FALSE(s.refers_to(translation(4.9)));
+  CHECK_FALSE(s.refers_to(std::nullopt));
+  // Measured from 0 again: 5.3 is a jump (0.4 past the dropped keyframe would have been a keyframe), 0.2 too close.
+  CHECK(s.decide(translation(5.3)) == KeyframeDecision::kImplausible);
+  CHECK(s.last_magnitude() == doctest::Approx(5.3));
+  CHECK(s.decide(translation(0.2)) == KeyframeDecision::kTooClose);
+  // A run towards re-anchoring ends: two implausible poses, a reset, then it takes reanchor_after new ones.
+  CHECK(s.decide(translation(10)) == KeyframeDecision::kImplausible);
+  CHECK(s.decide(translation(10.1)) == KeyframeDecision::kImplausible);
+  CHECK(s.jump_run() == 2);
+  s.reset_reference(translation(0));
+  CHECK(s.jump_run() == 0);
+  CHECK(s.decide(translation(10.2)) == KeyframeDecision::kImplausible);
+  CHECK(s.decide(translation(10.3)) == KeyframeDecision::kImplausible);
+  CHECK(s.decide(translation(10.4)) == KeyframeDecision::kReanchored);
+  // No reference: the next pose is the first keyframe.  Counters are not rewound.
+  const int64_t accepted = s.accepted();
+  s.reset_reference(std::nullopt);
+  CHECK(s.refers_to(std::nullopt));
+  CHECK(s.decide(translation(77)) == KeyframeDecision::kKeyframe);
+  CHECK(s.accepted() == accepted + 1);
+  CHECK_THROWS_AS(s.reset_reference(translation(std::nan(""))), std::invalid_argument);
+  CHECK(s.refers_to(translation(77)));
 }
 
 TEST_CASE("keyframe selector: a non-finite pose is implausible and never becomes the reference") {
