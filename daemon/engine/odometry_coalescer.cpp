@@ -56,6 +56,10 @@ bool OdometryCoalescer::offer(const Event& event, const std::function<bool()>& e
   const auto* o = std::get_if<Odometry>(&event);
   if (o == nullptr) {
     // A loop, a sighting or anything else of a body: its odometry after this event goes into a new batch behind it.
+    // Queued first: an event the queue refuses leaves no trace here (the open batch stays open, so the odometry that
+    // follows still needs no queue slot, and its time pins nothing).  Only this (intake) thread offers, so nothing is
+    // appended to the batch between the two steps; the stage may take the batch meanwhile, which closes it anyway.
+    if (!enqueue()) return false;
     {
       std::lock_guard lock(mutex_);
       auto it = bodies_.find(source_of(event));
@@ -71,7 +75,7 @@ bool OdometryCoalescer::offer(const Event& event, const std::function<bool()>& e
           b.waiting_times.insert(std::upper_bound(b.waiting_times.begin(), b.waiting_times.end(), *waits_for), *waits_for);
       }
     }
-    return enqueue();
+    return true;
   }
 
   std::lock_guard lock(mutex_);

@@ -22,7 +22,8 @@
 //    the sighting by interpolating between the two messages around it, and tries the loop again at that message,
 //    exactly as without coalescing);
 //  - a body's other events (loops, sightings) close its open batch: the next odometry starts a new batch behind them,
-//    so each body's events reach the stage in arrival order;
+//    so each body's events reach the stage in arrival order; one the queue refuses closes nothing and pins nothing
+//    (as if it had never come: the odometry after it still merges into the open batch, which needs no queue slot);
 //  - out-of-order and duplicate stamps are counted and dropped here, as the stage would.
 // Bounds: a batch holds at most `max_entries` messages (pinned or newest) and `max_passed` passed poses per message
 // (the oldest half is forgotten beyond it, as the stage's history does); a full batch is closed and the next message

@@ -1021,6 +1021,53 @@ TEST_CASE("graph stage: a keyframe dropped for its edge covariance leaves the se
   }
 }
 
+TEST_CASE("graph stage (daemon path): a loop the full queue refuses leaves no trace in the coalescer") {
+  // Body "fast" at 10 Hz, a keyframe per metre.  The stage is busy; its queue holds 3 events: the token of the first
+  // batch, a loop, the token of the second batch.  A second loop (about a time the odometry has not reached) is
+  // refused.  The odometry after it must still merge into the open second batch, as if the loop had never come: it
+  // needs no queue slot.  (Before session 6 the refused loop closed the batch, so every later message needed a token
+  // of its own and was dropped with it, and its time pinned a later message for nothing.)
+  const Emit ignore = [](Output) {};
+  const Run run = circle_run(20, 9, 10, "fast");
+  std::map<int64_t, SE3> truth(run.truth.begin(), run.truth.end());
+  auto loop = [&](size_t from, size_t to) {
+    LoopClosure l;
+    l.utime = run.odometry[to].utime;
+    l.source = "fast";
+    l.planar = true;
+    l.utime_from = run.odometry[from].utime;
+    l.utime_to = run.odometry[to].utime;
+    l.relative = to_pose(truth.at(l.utime_from).inverse() * truth.at(l.utime_to));
+    l.information = Matrix6::Identity() * 1e4;
+    return l;
+  };
+  auto feed_run = [&](GraphStage& stage, BlockedStageFeed& feed, bool with_refused_loop) {
+    size_t refused = 0;
+    for (size_t k = 0; k < run.odometry.size(); ++k) {
+      if (k == 50) refused += feed.offer(stage, loop(10, 40)) ? 0 : 1;
+      if (k == 100 && with_refused_loop) refused += feed.offer(stage, loop(20, 120)) ? 0 : 1;
+      refused += feed.offer(stage, run.odometry[k]) ? 0 : 1;
+    }
+    feed.drain(stage, ignore);
+    return refused;
+  };
+  GraphStage busy(burst_config(), std::make_shared<GraphCorrections>());
+  BlockedStageFeed feed;
+  feed.capacity = 3;
+  CHECK(feed_run(busy, feed, true) == 1);  // the second loop only
+  CHECK(feed.dropped == 1);
+  CHECK(feed.peak == 3);
+
+  GraphStage without(burst_config(), std::make_shared<GraphCorrections>());
+  BlockedStageFeed reference;
+  reference.capacity = 3;
+  CHECK(feed_run(without, reference, false) == 0);
+  check_same_graph(busy, without);
+  CHECK(counter(busy, "odometry_coalesced") == counter(without, "odometry_coalesced"));
+  CHECK(counter(busy, "loops_accepted") == 1);
+  CHECK(busy.keyframes("fast").size() >= 18);  // the whole run's, 20 m
+}
+
 TEST_CASE("graph stage (daemon path): its thread behind a 16-event queue takes a 10,000-message burst and two loops as the slow feed does") {
   const Emit ignore = [](Output) {};
   const Run fast = circle_run(10, 8, 1000, "fast");
