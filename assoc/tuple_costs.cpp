@@ -40,11 +40,20 @@ double clutter_density(const CostOptions& o, size_t s) {
   return o.sensor_clutter_density.empty() ? o.clutter_density : o.sensor_clutter_density[s];
 }
 
-bool passes_gate(const Triangulation& t, size_t m, double probability) {
-  if (!t.valid) return false;
-  const int dof = static_cast<int>(2 * m) - 3;
-  return t.residual <= chi2_quantile(std::max(dof, 1), probability);
+// The gate on the residual of a tuple of m detections: the chi-square quantile of its 2m - 3 degrees of freedom (at
+// least 1) at `probability`.  build_tuples computes these once per scan (gates_by_size): the exact quantile is an
+// iterative inversion, far too slow to repeat for each candidate tuple.
+double residual_gate(size_t m, double probability) {
+  return chi2_quantile(std::max(static_cast<int>(2 * m) - 3, 1), probability);
 }
+
+std::vector<double> gates_by_size(size_t sensors, double probability) {
+  std::vector<double> gate(sensors + 1);
+  for (size_t m = 0; m <= sensors; ++m) gate[m] = residual_gate(m, probability);
+  return gate;
+}
+
+bool passes_gate(const Triangulation& t, double gate) { return t.valid && t.residual <= gate; }
 
 }  // namespace
 
@@ -89,7 +98,7 @@ double tuple_cost(const Scan& scan, const std::vector<int>& index, const CostOpt
   const auto obs = observations_of(scan, index, index.size());
   if (obs.size() < 2) return kInf;
   const Triangulation t = triangulate(obs, kReferenceSteps);
-  if (!passes_gate(t, obs.size(), o.gate_probability)) return kInf;
+  if (!passes_gate(t, residual_gate(obs.size(), o.gate_probability))) return kInf;
   if (out) *out = t;
   return cost_at(scan, index, o, t);
 }
@@ -199,6 +208,7 @@ std::vector<Tuple> build_tuples(const Scan& scan, const CostOptions& o) {
   // Depth-first over the sensors: a detection joins a partial tuple only when it is compatible with each of its
   // detections; partial tuples of >= 3 detections pass the residual gate before being extended.
   std::vector<Fit> fit_of(S + 1);  // the current partial tuple's fit, by its number of detections
+  const std::vector<double> gate = gates_by_size(S, o.gate_probability);  // residual gate by number of detections
   // Fits the partial tuple `members` (m >= 3) from its parent's fit into fit_of[m].
   auto extend = [&](size_t m) {
     const Fit& parent = fit_of[m - 1];
@@ -216,7 +226,7 @@ std::vector<Tuple> build_tuples(const Scan& scan, const CostOptions& o) {
     if (real.size() + (S - s) < 2) return;  // cannot reach two detections any more
     if (s == S) {
       const Triangulation& t = fit_of[real.size()].t;
-      if (!passes_gate(t, real.size(), o.gate_probability)) return;
+      if (!passes_gate(t, gate[real.size()])) return;
       const double c = cost_at(scan, index, o, t);
       if (c < 0) out.push_back({index, c, t.position, t.covariance});
       return;
@@ -252,7 +262,7 @@ std::vector<Tuple> build_tuples(const Scan& scan, const CostOptions& o) {
         f.x = pair_positions[static_cast<size_t>(pair)];
         fitted = linearize(f.x, f.at_x) && (f.t = triangulation_at(f.x, f.at_x)).valid;
       } else if (m >= 3) {
-        fitted = extend(m) && passes_gate(fit_of[m].t, m, o.gate_probability);
+        fitted = extend(m) && passes_gate(fit_of[m].t, gate[m]);
       }
       if (fitted) self(self, s + 1);
       real.pop_back();

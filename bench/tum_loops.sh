@@ -6,7 +6,7 @@
 # Usage: bench/tum_loops.sh BUILD [SEQUENCES...]; env: N1 (3), N2 (-1: 2 N1), WRONG (0.05), K1 (0.1), K2 (1.0),
 # FAIL (0.1), SPEED (4), matcher noise SIGMA_T (0.01 m) and SIGMA_R (0.005 rad), DRIFT_YAW (0.002 rad/m), the loops'
 # kernel ROBUST (dcs) and its width PHI (auto, the daemon's default: for these 3-D loops the 6-DOF chi-square 0.999
-# quantile as the gate computes it, 22.68; with phi = 1 a true 6-DOF loop at its median chi2 5.3 keeps a weight of
+# quantile as the gate computes it, 22.46; with phi = 1 a true 6-DOF loop at its median chi2 5.3 keeps a weight of
 # (2 / 6.3)^2 = 0.1, see RESULTS); SEED (1) of the converter's noise and of the matcher; REANCHOR (10, the daemon's
 # default: keyframing restarts after that many consistent implausible poses, e.g. over fr2_desk's 12 s mocap gap;
 # 0: never, as before session 5);

@@ -19,6 +19,14 @@ struct Search {
   int best_pairs = -1;
   double best_d2 = kInf;
   int nodes = 0, max_nodes;
+  std::vector<double> gates{};  // joint gate by dimension, computed on first use (the exact quantile is iterative)
+
+  double gate(int dim) {
+    if (static_cast<size_t>(dim) >= gates.size()) gates.resize(static_cast<size_t>(dim) + 1, -1.0);
+    double& g = gates[static_cast<size_t>(dim)];
+    if (g < 0) g = chi2_quantile(dim, p.joint_gate_probability);
+    return g;
+  }
 
   // Joint D2 of the pairs in `current` (those != -1).
   double joint(int* dim) const { return joint_distance(p, current, dim); }
@@ -38,7 +46,7 @@ struct Search {
       current[static_cast<size_t>(i)] = j;
       int dim = 0;
       const double d2 = joint(&dim);
-      if (d2 < chi2_quantile(dim, p.joint_gate_probability)) recurse(i + 1, pairs + 1);
+      if (d2 < gate(dim)) recurse(i + 1, pairs + 1);
       current[static_cast<size_t>(i)] = -1;
     }
     // Leave sighting i unpaired only if that can still beat the best (branch and bound on the pair count).

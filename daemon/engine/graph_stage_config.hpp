@@ -21,8 +21,8 @@ struct GraphLandmarkOptions {
 
 /// The robust kernel's width for the loops of one kind of body (planar: x, y, yaw residuals, d = 3; spatial: d = 6).
 /// The configured width if there is one; "auto" takes q = chi2_d(loop_gate_probability), the loop gate's quantile
-/// (assoc::chi2_quantile, Wilson-Hilferty: 16.55 for d = 3 and 22.68 for d = 6 at 0.999, 1-2 % above the exact 16.27
-/// and 22.46), so that a true loop keeps its full weight with that probability whatever its dimension:
+/// (assoc::chi2_quantile, the exact inverse of the incomplete gamma function: 16.27 for d = 3 and 22.46 for d = 6 at
+/// 0.999), so that a true loop keeps its full weight with that probability whatever its dimension:
 ///  - DCS phi = q (Agarwal et al., "Robust Map Optimization using Dynamic Covariance Scaling", ICRA 2013): the scale
 ///    min(1, 2 phi / (phi + chi2)) is 1 for chi2 <= phi, a gate that fades instead of cutting;
 ///  - Huber and Cauchy delta = sqrt(q) (their weights are functions of sqrt(chi2) / delta).

@@ -1,5 +1,5 @@
 // Landmark association: JCBB against a brute-force search over every hypothesis on small random problems, a case
-// where nearest neighbour is fooled by a correlated pose error and JCBB is not, and the chi-square quantiles.
+// where nearest neighbour is fooled by a correlated pose error and JCBB is not.
 #include "assoc/landmark/jcbb.hpp"
 
 #include <doctest/doctest.h>
@@ -113,11 +113,4 @@ TEST_CASE("a common pose error fools nearest neighbour, not JCBB") {
   CHECK(nn[0] == 1);  // fooled
   CHECK(jc == Hypothesis{0, 1});
   CHECK(joint_distance(p, jc) < joint_distance(p, Hypothesis{1, -1}) + 1.0);
-}
-
-TEST_CASE("chi-square quantiles") {
-  CHECK(chi2_quantile(2, 0.99) == doctest::Approx(9.210).epsilon(0.01));
-  CHECK(chi2_quantile(4, 0.99) == doctest::Approx(13.277).epsilon(0.01));
-  CHECK(chi2_quantile(10, 0.95) == doctest::Approx(18.307).epsilon(0.01));
-  CHECK(chi2_quantile(1, 0.5) == doctest::Approx(0.455).epsilon(0.05));
 }

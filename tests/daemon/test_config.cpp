@@ -99,14 +99,14 @@ TEST_CASE("a missing file is a config error naming the path") {
 
 TEST_CASE("the loops' kernel width: auto by default (a chi-square quantile of the loop's dimension), or a number") {
   using sextant::engine::kernel_width_for;
-  // Defaults: DCS, gate probability 0.999.  The width is the loop gate's quantile (assoc::chi2_quantile, the
-  // Wilson-Hilferty approximation), which is within 2 % of the tables: 3 dof 16.266, 6 dof 22.458.
+  // Defaults: DCS, gate probability 0.999.  The width is the loop gate's quantile (assoc::chi2_quantile, exact):
+  // the tables' 3 dof 16.266, 6 dof 22.458.
   const auto d = parse_daemon_config("", "t").engine.graph;
   CHECK_FALSE(d.kernel_width.has_value());
   CHECK(kernel_width_for(d, true) == sextant::assoc::chi2_quantile(3, 0.999));
   CHECK(kernel_width_for(d, false) == sextant::assoc::chi2_quantile(6, 0.999));
-  CHECK(kernel_width_for(d, true) == doctest::Approx(16.266).epsilon(0.02));
-  CHECK(kernel_width_for(d, false) == doctest::Approx(22.458).epsilon(0.02));
+  CHECK(kernel_width_for(d, true) == doctest::Approx(16.266).epsilon(1e-4));
+  CHECK(kernel_width_for(d, false) == doctest::Approx(22.458).epsilon(1e-4));
   // The shipped default config says auto too.
   const auto shipped = sextant::config::load_daemon_config(std::string(SEXTANT_SOURCE_DIR) + "/config/default.yaml");
   CHECK_FALSE(shipped.engine.graph.kernel_width.has_value());
