@@ -77,12 +77,21 @@ Matrix6 jump_covariance(const SE3& edge, bool planar) {
   return c;
 }
 
+/// The configured kernel width, or the one "auto" gives a residual of `dimension` gated at `probability`.
+double auto_kernel_width(const GraphConfig& config, int dimension, double probability) {
+  if (config.kernel_width) return *config.kernel_width;
+  const double q = assoc::chi2_quantile(dimension, probability);
+  return graph::robust_kernel_from_name(config.robust) == graph::RobustKernel::kDcs ? q : std::sqrt(q);
+}
+
 }  // namespace
 
 double kernel_width_for(const GraphConfig& config, bool planar) {
-  if (config.kernel_width) return *config.kernel_width;
-  const double q = assoc::chi2_quantile(planar ? 3 : 6, config.loop_gate_probability);
-  return graph::robust_kernel_from_name(config.robust) == graph::RobustKernel::kDcs ? q : std::sqrt(q);
+  return auto_kernel_width(config, planar ? 3 : 6, config.loop_gate_probability);
+}
+
+double sighting_kernel_width_for(const GraphConfig& config, bool planar) {
+  return auto_kernel_width(config, planar ? 2 : 3, config.landmarks.gate_probability);
 }
 
 GraphStage::GraphStage(const GraphConfig& config, std::shared_ptr<GraphCorrections> corrections)
@@ -93,7 +102,9 @@ GraphStage::GraphStage(const GraphConfig& config, std::shared_ptr<GraphCorrectio
       chi2_gate_planar_(assoc::chi2_quantile(3, config.loop_gate_probability)),
       chi2_gate_spatial_(assoc::chi2_quantile(6, config.loop_gate_probability)),
       sighting_gate_planar_(assoc::chi2_quantile(2, config.landmarks.gate_probability)),
-      sighting_gate_spatial_(assoc::chi2_quantile(3, config.landmarks.gate_probability)) {
+      sighting_gate_spatial_(assoc::chi2_quantile(3, config.landmarks.gate_probability)),
+      sighting_width_planar_(sighting_kernel_width_for(config, true)),
+      sighting_width_spatial_(sighting_kernel_width_for(config, false)) {
   KeyframeSelector check(config.keyframes);  // throws std::invalid_argument for bad thresholds
   (void)check;
 }
@@ -499,7 +510,7 @@ void GraphStage::add_sightings(const LandmarkSightings& s, Body& b, const Sighti
         ++landmarks_;
       }
       b.smoother->add_factor(std::make_unique<PointObservationFactor>(kf.variable, lm->second.variable, model, z, information, sensor),
-                           config_.landmarks.robust);
+                             config_.landmarks.robust, b.planar ? sighting_width_planar_ : sighting_width_spatial_);
     } catch (const std::invalid_argument&) {
       ++sightings_malformed_;  // a value the checks above let through but the smoother refuses
       continue;

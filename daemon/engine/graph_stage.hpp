@@ -37,10 +37,10 @@
 //    S = R + k^2 J_D Sigma_D J_D' + J_K P_K J_K' + J_p P_p J_p' (P: marginal covariances of keyframe and landmark,
 //    their correlation ignored, which makes S larger for a landmark mapped from the same poses), chi-square at
 //    gate_probability; rejected sightings are counted.  Accepted ones enter with the smoother's robust kernel, so a
-//    mis-identified landmark that passes the gate is down-weighted rather than bending the map (at the width of the
-//    body's loops: the smoother holds one width for all its factors, so with "auto" a 2-D sighting gets 16.55 rather
-//    than a 2-D quantile's 14.13, a 3-D one 22.68 rather than 16.55 — slightly more tolerant; the gate rejects first).  A landmark's first
-//    sighting initializes it and is not gated: a wrong first id plants a wrong landmark, that later true sightings
+//    mis-identified landmark that passes the gate is down-weighted rather than bending the map, at a width of their
+//    own (sighting_kernel_width_for in graph_stage_config.hpp: with "auto" the sighting gate's chi-square quantile
+//    of the sighting's dimension, 13.82 for a 2-D sighting and 16.27 for a 3-D one, not the loops' 16.27 and 22.46).
+//    A landmark's first sighting initializes it and is not gated: a wrong first id plants a wrong landmark, that later true sightings
 //    are gated against (limitation).  Landmark positions after each update: landmarks(source).
 //  - after every update: a Trajectory of the body, and the map -> odometry correction for GraphPoseStage.
 //  - in the daemon, each body's odometry reaches the stage through an OdometryCoalescer (odometry_coalescer.hpp)
@@ -146,13 +146,14 @@ class GraphStage final : public Stage {
   std::shared_ptr<GraphCorrections> corrections_;
   LoopProposer proposer_;
   /// One smoother per kind of body, [0] 3-D and [1] planar, created with the first such body: the bodies' graphs
-  /// share no variable, and the robust kernel's width depends on the loops' dimension (kernel_width_for), which the
-  /// smoother holds for all its factors.
+  /// share no variable, and the robust kernel's width depends on the loops' dimension (kernel_width_for), which is
+  /// the smoother's own width (the loops take it; sightings bring theirs to add_factor).
   std::unique_ptr<graph::IncrementalSmoother> smoothers_[2];
   OdometryCoalescer coalescer_;
   std::map<std::string, Body> bodies_;
   int64_t next_variable_id_ = 0, next_request_id_ = 0;
   double chi2_gate_planar_ = 0, chi2_gate_spatial_ = 0, sighting_gate_planar_ = 0, sighting_gate_spatial_ = 0;
+  double sighting_width_planar_ = 0, sighting_width_spatial_ = 0;  // sighting_kernel_width_for
   int64_t keyframes_ = 0, keyframes_rejected_ = 0, keyframes_reanchored_ = 0, requests_ = 0, loops_accepted_ = 0, loops_rejected_ = 0,
           loops_unmatched_ = 0, loops_unknown_source_ = 0, optimizer_failures_ = 0, rebuilds_ = 0,
           relinearized_ = 0, out_of_order_ = 0, bad_edges_ = 0;

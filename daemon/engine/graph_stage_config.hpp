@@ -12,7 +12,8 @@ namespace sextant::engine {
 /// observing body and range/bearing factors on its keyframes.
 struct GraphLandmarkOptions {
   bool enabled = true;
-  bool robust = true;                   // the smoother's kernel (GraphConfig::robust, kernel_width) applies to them
+  bool robust = true;                   // the loops' kernel (GraphConfig::robust) applies to them, at their own width
+                                        // (sighting_kernel_width_for)
   double gate_probability = 0.999;      // chi-square gate of a sighting of a known landmark against the estimate
   double gate_odometry_scale = 3.0;     // the odometry's standard deviations are taken this many times larger in the
                                         // gate (the odometry between keyframe and sighting; biases are not in it)
@@ -30,6 +31,13 @@ struct GraphLandmarkOptions {
 /// true 6-DOF loop at its median chi2 (5.35) only (2 / 6.35)^2 = 0.10 of its weight (bench/RESULTS.md, session 4).
 struct GraphConfig;
 double kernel_width_for(const GraphConfig& config, bool planar);
+/// The same for landmark sightings, which the smoother takes with a width of their own (add_factor's kernel_width):
+/// a sighting's residual has d = 2 (range, bearing) on a planar body and d = 3 (range, azimuth, elevation) on a 3-D
+/// one, and its gate is at landmarks.gate_probability, so "auto" takes q = chi2_d(landmarks.gate_probability), the
+/// sighting gate's quantile (13.82 for d = 2 and 16.27 for d = 3 at 0.999; the loops' 16.27 and 22.46 left a wrong
+/// sighting past the gate more weight than a wrong loop of the same probability); a configured width applies to
+/// sightings too.
+double sighting_kernel_width_for(const GraphConfig& config, bool planar);
 
 /// The graph back end (source B): keyframes by motion magnitude, loop proposals on MATCH_REQUESTS, loop closures
 /// from LOOP_CLOSURES, landmark sightings from LANDMARKS, incremental smoothing, TRAJECTORY after each optimization

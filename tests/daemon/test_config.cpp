@@ -251,3 +251,25 @@ TEST_CASE("engine.graph.smoother: each bad value stops parsing with its line, co
   CHECK(e.find("test.yaml:3:5: 'engine.graph.relinearize_translation' has moved to "
                 "'engine.graph.smoother.relinearize_translation'") == 0);
 }
+
+TEST_CASE("landmark sightings' kernel width: auto takes the sighting gate's quantile of the sighting's dimension") {
+  using sextant::engine::sighting_kernel_width_for;
+  using sextant::assoc::chi2_quantile;
+  // Planar sightings have 2 residuals (range, bearing), 3-D ones 3; the gate is landmarks.gate_probability (0.999):
+  // the tables' 13.816 and 16.266.
+  const auto d = parse_daemon_config("", "t").engine.graph;
+  CHECK(sighting_kernel_width_for(d, true) == chi2_quantile(2, 0.999));
+  CHECK(sighting_kernel_width_for(d, false) == chi2_quantile(3, 0.999));
+  CHECK(sighting_kernel_width_for(d, true) == doctest::Approx(13.816).epsilon(1e-4));
+  CHECK(sighting_kernel_width_for(d, false) == doctest::Approx(16.266).epsilon(1e-4));
+  // The sightings' own gate probability, not the loops'; Huber and Cauchy take the square root.
+  const auto huber = parse_daemon_config(
+      "engine:\n  graph:\n    loops: {robust: huber, gate_probability: 0.9}\n    landmarks: {gate_probability: 0.99}\n", "t")
+                         .engine.graph;
+  CHECK(sighting_kernel_width_for(huber, true) == doctest::Approx(std::sqrt(chi2_quantile(2, 0.99))));
+  CHECK(sighting_kernel_width_for(huber, true) == doctest::Approx(std::sqrt(9.2103)).epsilon(1e-4));
+  // A configured number applies to sightings too.
+  const auto five = parse_daemon_config("engine:\n  graph:\n    loops: {kernel_width: 5}\n", "t").engine.graph;
+  CHECK(sighting_kernel_width_for(five, true) == 5.0);
+  CHECK(sighting_kernel_width_for(five, false) == 5.0);
+}

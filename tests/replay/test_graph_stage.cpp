@@ -3,6 +3,7 @@
 // "graph" once per odometry message with strictly increasing times; landmark sightings mapping the landmarks and
 // holding the keyframes near the truth, mis-identified sightings stopped by the gate (and by the robust kernel when
 // the gate is open), a 3-D body mapping 3-D landmarks, and the sightings the stage cannot use counted.
+#include "assoc/chi_square.hpp"
 #include "daemon/engine/engine.hpp"
 #include "daemon/engine/graph_pose_stage.hpp"
 #include "daemon/engine/graph_stage.hpp"
@@ -477,7 +478,8 @@ TEST_CASE("graph stage: sightings of a mis-identified landmark are rejected and 
     }
   }
   REQUIRE(wrong >= 20);
-  auto run_with = [&](const std::vector<LandmarkSightings>& input, double gate_odometry_scale, bool robust, double phi = 1.0) {
+  auto run_with = [&](const std::vector<LandmarkSightings>& input, double gate_odometry_scale, bool robust,
+                      std::optional<double> phi = 1.0) {
     EngineConfig cfg = graph_only_config(false);
     cfg.graph.landmarks.gate_odometry_scale = gate_odometry_scale;
     cfg.graph.landmarks.robust = robust;
@@ -517,6 +519,42 @@ TEST_CASE("graph stage: sightings of a mis-identified landmark are rejected and 
   MESSAGE("map moved by the wrong sightings past an open gate: " << with_kernel << " m with DCS, " << without << " m without");
   CHECK(with_kernel < 0.02);
   CHECK(without > 0.3);
+
+  // With the default width (auto) the sightings bring their own to the smoother: the sighting gate's chi-square
+  // quantile of their dimension (2: range, bearing), not the planar loops' (3 dof).  Every sighting factor's weight is
+  // DCS's at that width, k^2 with k = min(1, 2 phi / (phi + chi2)) at its linearization point; the wrong ones, far out,
+  // would have kept more weight at the loops' width.
+  const auto open_auto = run_with(with_wrong, 1000, true, std::nullopt);
+  const GraphConfig& auto_config = graph_only_config(false).graph;
+  const double phi_sighting = assoc::chi2_quantile(2, auto_config.landmarks.gate_probability);
+  const double phi_loop = assoc::chi2_quantile(3, auto_config.loop_gate_probability);
+  REQUIRE(sighting_kernel_width_for(auto_config, true) == phi_sighting);
+  REQUIRE(kernel_width_for(auto_config, true) == phi_loop);
+  REQUIRE(phi_sighting < phi_loop - 2);
+  const graph::IncrementalSmoother& sm = *graph_stage_of(*open_auto).smoother(true);
+  auto dcs = [](double phi, double chi2) { return std::pow(std::min(1.0, 2 * phi / (phi + chi2)), 2); };
+  int sightings_in_graph = 0, heavier_at_loop_width = 0;
+  for (size_t i = 0; i < sm.graph().factors().size(); ++i) {
+    const graph::Factor& f = *sm.graph().factors()[i];
+    if (dynamic_cast<const graph::PointObservationFactor*>(&f) == nullptr) continue;
+    ++sightings_in_graph;
+    Eigen::VectorXd e(f.residual_dim());
+    f.error(sm.linearization_point(), e);
+    const double chi2 = e.dot(f.information() * e);
+    CHECK(sm.robust_weight_of(i) == doctest::Approx(dcs(phi_sighting, chi2)).epsilon(1e-12));
+    heavier_at_loop_width += dcs(phi_loop, chi2) > 1.2 * dcs(phi_sighting, chi2) ? 1 : 0;  // (16.27 / 13.82)^2 far out
+  }
+  CHECK(sightings_in_graph == counter(graph_stage_of(*open_auto), "sightings_accepted"));
+  MESSAGE(heavier_at_loop_width << " of " << sightings_in_graph << " sightings would weigh more at the loops' width");
+  CHECK(heavier_at_loop_width >= wrong);
+  // And the wrong sightings still leave the map where the clean run (auto) has it.
+  const auto clean_auto = run_with(sightings, 1000, true, std::nullopt);
+  const double with_auto = largest_shift(graph_stage_of(*clean_auto), graph_stage_of(*open_auto));
+  // For comparison, sightings at the loops' width (the behaviour before they had their own; no loops in this run).
+  const auto open_loop_width = run_with(with_wrong, 1000, true, phi_loop), clean_loop_width = run_with(sightings, 1000, true, phi_loop);
+  MESSAGE("map moved by the wrong sightings past an open gate: " << with_auto << " m at the sightings' own width, "
+          << largest_shift(graph_stage_of(*clean_loop_width), graph_stage_of(*open_loop_width)) << " m at the loops'");
+  CHECK(with_auto < 0.02);
 }
 
 TEST_CASE("graph stage: sightings of an unknown body, before the first keyframe, without an id or malformed are counted") {
