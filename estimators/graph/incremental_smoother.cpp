@@ -7,6 +7,7 @@
 #include <Eigen/Eigenvalues>
 
 #include <algorithm>
+#include <limits>
 #include <chrono>
 #include <cmath>
 #include <numeric>
@@ -281,6 +282,26 @@ void IncrementalSmoother::determined(const std::vector<int>& new_vars, const std
   }
 }
 
+double IncrementalSmoother::chi2() const {
+  // Each factor's e' Omega e is kept from the last call and recomputed only for the factors of the variables whose
+  // estimate a solve moved since then (and for new or pending ones): the cost follows what the updates touched.
+  const auto& factors = graph_.factors();
+  const double unknown = std::numeric_limits<double>::quiet_NaN();
+  factor_chi2_.resize(factors.size(), unknown);
+  for (int v : moved_since_chi2_) {
+    estimate_moved_[static_cast<size_t>(v)] = 0;
+    for (size_t f : var_factors_[static_cast<size_t>(v)]) factor_chi2_[f] = unknown;
+  }
+  moved_since_chi2_.clear();
+  for (size_t f : pending_factors_) factor_chi2_[f] = unknown;
+  double sum = 0;
+  for (size_t f = 0; f < factors.size(); ++f) {
+    if (std::isnan(factor_chi2_[f])) factor_chi2_[f] = factors[f]->chi2(graph_.variables());
+    sum += factor_chi2_[f];
+  }
+  return sum;
+}
+
 double IncrementalSmoother::robust_weight_of(size_t fi) const {
   if (kernel_width_[fi] == 0) return 1.0;
   const Factor& f = *graph_.factors()[fi];
@@ -293,18 +314,42 @@ Eigen::MatrixXd IncrementalSmoother::marginal_covariance(int index) const {
   const int p = pos_[static_cast<size_t>(index)];
   if (L_ == nullptr || p < 0) return {};
   const int d = graph_.variables()[static_cast<size_t>(index)].dim();
-  cholmod_common& c = const_cast<cholmod_common&>(common_);
-  cholmod_dense* rhs = cholmod_zeros(static_cast<size_t>(capacity_), static_cast<size_t>(d), CHOLMOD_REAL, &c);
-  double* r = static_cast<double*>(rhs->x);
-  for (int k = 0; k < d; ++k) r[static_cast<size_t>(k) * static_cast<size_t>(capacity_) + static_cast<size_t>(p + k)] = 1.0;
-  cholmod_dense* sol = cholmod_solve(CHOLMOD_LDLt, L_, rhs, &c);
-  cholmod_free_dense(&rhs, &c);
-  if (sol == nullptr) return {};
-  Eigen::MatrixXd out(d, d);
-  const double* x = static_cast<const double*>(sol->x);
-  for (int k = 0; k < d; ++k)
-    for (int i = 0; i < d; ++i) out(i, k) = x[static_cast<size_t>(k) * static_cast<size_t>(capacity_) + static_cast<size_t>(p + i)];
-  cholmod_free_dense(&sol, &c);
+  // H = L D L' (L unit lower triangular, D on L's diagonal), so the block of H^-1 at columns p..p+d-1 is
+  // E' L^-T D^-1 L^-1 E = Y' D^-1 Y with Y = L^-1 E, E = [e_p .. e_p+d-1].  Column k of Y is nonzero only on the
+  // path from p + k to the root of L's elimination tree (the reach of e_p+k; Gilbert 1994), and the columns of one
+  // variable lie on one path, so the forward solve walks that path alone: the cost is the path's nonzeros, not
+  // L's, and the newest variables (ordered last, near the root) cost a few columns however large the graph.
+  const int* Lp = static_cast<const int*>(L_->p);
+  const int* Li = static_cast<const int*>(L_->i);
+  const int* Lnz = static_cast<const int*>(L_->nz);
+  const double* Lx = static_cast<const double*>(L_->x);
+  std::vector<int> path;
+  for (int j = p; j != -1; j = parent_of(j)) path.push_back(j);
+  for (int k = 1; k < d; ++k)  // the variable's other columns: on p's path when its block is dense (always, in L)
+    if (std::find(path.begin(), path.end(), p + k) == path.end()) return {};
+  std::vector<int>& slot = marginal_slot_;
+  if (slot.size() < static_cast<size_t>(capacity_)) slot.assign(static_cast<size_t>(capacity_), -1);
+  for (size_t r = 0; r < path.size(); ++r) slot[static_cast<size_t>(path[r])] = static_cast<int>(r);
+  std::vector<double> Y(path.size() * static_cast<size_t>(d), 0.0);  // row r: Y's row at column path[r]
+  const size_t ud = static_cast<size_t>(d);
+  for (int k = 0; k < d; ++k) Y[static_cast<size_t>(slot[static_cast<size_t>(p + k)]) * ud + static_cast<size_t>(k)] = 1.0;
+  Eigen::MatrixXd out = Eigen::MatrixXd::Zero(d, d);
+  bool ok = true;
+  for (size_t r = 0; r < path.size(); ++r) {
+    const int j = path[r];
+    const double dj = Lx[Lp[j]];
+    if (!(dj > 0)) ok = false;
+    const double* yj = &Y[r * ud];
+    for (int q = Lp[j] + 1; q < Lp[j] + Lnz[j]; ++q) {
+      double* yi = &Y[static_cast<size_t>(slot[static_cast<size_t>(Li[q])]) * ud];
+      for (size_t k = 0; k < ud; ++k) yi[k] -= Lx[q] * yj[k];
+    }
+    for (int a = 0; a < d; ++a)
+      for (int b = 0; b <= a; ++b) out(a, b) += yj[a] * yj[b] / dj;
+  }
+  out.triangularView<Eigen::StrictlyUpper>() = out.transpose();
+  for (int j : path) slot[static_cast<size_t>(j)] = -1;
+  if (!ok || !out.allFinite()) return {};
   // H = sum J' W J is the Fisher information of the estimate (Omega = covariance^-1): its covariance is H^-1.
   return 0.5 * (out + out.transpose());
 }
@@ -342,8 +387,10 @@ void IncrementalSmoother::solve(bool full) {
   }
   std::fill(dirty_.begin(), dirty_.end(), 0);
   auto& vars = graph_.variables();
+  if (estimate_moved_.size() < vars.size()) estimate_moved_.resize(vars.size(), 0);
   for (size_t v = 0; v < vars.size(); ++v) {
     if (!(full || var_changed_[v])) continue;
+    if (!estimate_moved_[v]) estimate_moved_[v] = 1, moved_since_chi2_.push_back(static_cast<int>(v));
     vars[v] = lin_[v];
     if (pos_[v] >= 0) vars[v].retract(dx_.data() + pos_[v]);
   }

@@ -127,9 +127,12 @@ class IncrementalSmoother {
   const FactorGraph& graph() const { return graph_; }
   const std::vector<Variable>& linearization_point() const { return lin_; }
   int index_of(int64_t id) const { return graph_.index_of(id); }
-  /// g2o's chi2 of the current estimate: sum of e' Omega e over all factors (pending ones included).
-  double chi2() const { return graph_.chi2(); }
-  /// Marginal covariance of variable `index` in its tangent space (the block of H^-1, one solve per component);
+  /// g2o's chi2 of the current estimate: sum of e' Omega e over all factors (pending ones included).  Each factor's
+  /// term is cached and recomputed only when a solve moved one of its variables, so a call costs what changed since
+  /// the last one (plus one addition per factor).
+  double chi2() const;
+  /// Marginal covariance of variable `index` in its tangent space (the block of H^-1 of the current factorization,
+  /// from a forward solve along its path to the root of the elimination tree: cheap for recent variables);
   /// empty for a fixed or not yet determined variable.
   Eigen::MatrixXd marginal_covariance(int index) const;
   /// The robust weight of factor `index` at its linearization point (1 without a kernel): a loop closure whose
@@ -205,6 +208,10 @@ class IncrementalSmoother {
   std::vector<double> seen_;          // per column: its step when its subtree was last recomputed
   std::vector<int> col_var_;          // per column: the variable, -1 for a reserved column
   std::vector<char> var_changed_;     // per variable, after a solve: its step changed
+  mutable std::vector<int> marginal_slot_;
+  mutable std::vector<double> factor_chi2_;   // per factor: e' Omega e at the estimate of the last chi2() (NaN: stale)
+  mutable std::vector<char> estimate_moved_;  // per variable: its estimate moved since the last chi2()
+  mutable std::vector<int> moved_since_chi2_; // those variables  // per column, during marginal_covariance (all -1 between calls)
   std::unique_ptr<System> reordering_;  // a spread reordering under way
   int64_t reorder_due_ = 0;           // the update (updates_ count) at which it replaces the current system
   double reorder_spent_ms_ = 0.0;     // time its slices have taken so far

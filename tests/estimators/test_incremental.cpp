@@ -103,6 +103,8 @@ int run_and_compare(const SyntheticGraph& g, const std::vector<size_t>& order, i
     start.add_factor(make_factor(g, e, index[static_cast<size_t>(e.i)], index[static_cast<size_t>(e.j)]));
     const IncrementalStatus st = s.update();
     REQUIRE_MESSAGE(st.ok, st.message);
+    // The smoother's cached chi2 (recomputed only for factors whose variables moved) equals a full evaluation.
+    CHECK(s.chi2() == doctest::Approx(s.graph().chi2()).epsilon(1e-12));
     if (++updates % check_every != 0 && k != order.back()) continue;
     // The batch reference: the same variables from the same start, the same factors (rebuilt from their data).
     FactorGraph b2;
@@ -365,4 +367,58 @@ TEST_CASE("with DCS a wrong loop closure does not bend the incremental map; a fa
   for (const double bad : {0.0, -1.0, std::nan(""), std::numeric_limits<double>::infinity()})
     CHECK_THROWS_WITH_AS(s.add_factor(std::make_unique<RelativePoseFactor>(a, b, SE2(1, 0, 0), Eigen::Matrix3d::Identity()), true, bad),
                          doctest::Contains("factor 0: kernel width"), std::invalid_argument);
+}
+
+TEST_CASE("marginal covariance: the block of the inverse of the dense normal equations, for every variable") {
+  // The reference: H = sum J' Omega J over all factors at the linearization point, assembled densely here from the
+  // factors' own Jacobians (fixed variables left out), inverted by Eigen.  The smoother's marginal walks only one path
+  // of its factor's elimination tree; both must give the same block, old variables (long paths) as well as new ones.
+  for (bool planar : {true, false}) {
+    CAPTURE(planar);
+    const SyntheticGraph g = make_graph(planar, 2, 16, 3);
+    IncrementalSmoother s;
+    std::vector<int> index(g.truth.size(), -1);
+    Variable first = pose_variable(planar, 0, g.truth[0]);
+    first.fixed = true;
+    index[0] = s.add_variable(first);
+    for (const Edge& e : g.edges) {
+      for (int end : {e.i, e.j})
+        if (index[static_cast<size_t>(end)] < 0)
+          index[static_cast<size_t>(end)] = s.add_variable(pose_variable(planar, end, initial_pose(s, index, e, end)));
+      s.add_factor(make_factor(g, e, index[static_cast<size_t>(e.i)], index[static_cast<size_t>(e.j)]), false);
+      REQUIRE(s.update().ok);
+    }
+    const auto& lin = s.linearization_point();
+    std::vector<int> col(lin.size(), -1);
+    int n = 0;
+    for (size_t v = 0; v < lin.size(); ++v)
+      if (!lin[v].fixed) col[v] = n, n += lin[v].dim();
+    Eigen::MatrixXd H = Eigen::MatrixXd::Zero(n, n);
+    for (const auto& f : s.graph().factors()) {
+      Linearization l = f->make_linearization(lin);
+      f->linearize(lin, l);
+      const auto& vs = f->variables();
+      for (size_t a = 0; a < vs.size(); ++a)
+        for (size_t b = 0; b < vs.size(); ++b) {
+          const int ca = col[static_cast<size_t>(vs[a])], cb = col[static_cast<size_t>(vs[b])];
+          if (ca < 0 || cb < 0) continue;
+          H.block(ca, cb, l.jacobians[a].cols(), l.jacobians[b].cols()) +=
+              l.jacobians[a].transpose() * f->information() * l.jacobians[b];
+        }
+    }
+    const Eigen::MatrixXd P = H.inverse();
+    double worst = 0;
+    for (size_t v = 0; v < lin.size(); ++v) {
+      const Eigen::MatrixXd m = s.marginal_covariance(static_cast<int>(v));
+      if (lin[v].fixed) {
+        CHECK(m.size() == 0);
+        continue;
+      }
+      const int d = lin[v].dim();
+      const Eigen::MatrixXd ref = P.block(col[v], col[v], d, d);
+      REQUIRE(m.rows() == d);
+      worst = std::max(worst, (m - ref).norm() / ref.norm());
+    }
+    CHECK(worst < 1e-8);
+  }
 }
