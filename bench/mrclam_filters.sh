@@ -62,14 +62,16 @@ if [ "${GRAPH:-1}" != 0 ]; then
     counts=$(python3 - "$work/graph_out.lcm" "$work/kf.txt" "$work/graph.json" "$root/$build/lcmtypes/python" "$root/tests/e2e" <<'EOP'
 import json, sys
 sys.path.insert(0, sys.argv[4]); sys.path.insert(0, sys.argv[5])
-from lcmlog import read_log
+from lcmlog import read_log, TrajectoryRebuild
 from sextant import trajectory_t
-last = None
+rebuild, source = TrajectoryRebuild(), None
 for _, c, b in read_log(sys.argv[1]):
     if c == "TRAJECTORY":
-        last = b
+        m = trajectory_t.decode(b)
+        rebuild.add(m)
+        source = m.source
 with open(sys.argv[2], "w") as f:
-    for k in trajectory_t.decode(last).keyframes:
+    for k in rebuild.keyframes(source):
         p, q = k.position, k.orientation
         f.write(f"{k.utime * 1e-6:.6f} {p[0]:.9f} {p[1]:.9f} {p[2]:.9f} {q[1]:.9f} {q[2]:.9f} {q[3]:.9f} {q[0]:.9f}\n")
 c = next(s["counters"] for s in json.load(open(sys.argv[3]))["stages"] if s["name"] == "graph")

@@ -23,7 +23,7 @@ import sys
 
 sys.path.insert(0, sys.argv[5])
 sys.path.insert(0, sys.argv[6])
-from lcmlog import read_log  # noqa: E402
+from lcmlog import read_log, TrajectoryRebuild  # noqa: E402
 from sextant import loop_closure_t, odometry_t, trajectory_t, truth_t  # noqa: E402
 
 
@@ -165,13 +165,16 @@ def main():
           f"{j['rpe_rot_rmse_deg']:.2f} deg")
     if bus == "-":
         return
-    last, loops = None, []
+    rebuild, source, loops = TrajectoryRebuild(), None, []
     for _, c, b in read_log(bus):
         if c == "TRAJECTORY":
-            last = trajectory_t.decode(b)
+            m = trajectory_t.decode(b)
+            rebuild.add(m)
+            source = m.source
         elif c == "LOOP_CLOSURES":
             loops.append(loop_closure_t.decode(b))
-    kf = [k.utime for k in last.keyframes]
+    final_keyframes = rebuild.keyframes(source)
+    kf = [k.utime for k in final_keyframes]
     index = {u: i for i, u in enumerate(kf)}
     stamps = sorted(odom)
 
@@ -215,7 +218,7 @@ def main():
 
     print(f"{'variant':58s} loops  ATE [m]")
     print(f"{'odometry at the keyframes':58s} {0:5d}  {ate('odometry', [odom[u] for u in kf]):.4f}")
-    print(f"{'daemon: final TRAJECTORY':58s} {'-':>5s}  {ate('daemon', [pose_of(k) for k in last.keyframes]):.4f}")
+    print(f"{'daemon: final TRAJECTORY':58s} {'-':>5s}  {ate('daemon', [pose_of(k) for k in final_keyframes]):.4f}")
     for true_only in (False, True):
         for convert in (False, True):
             for robust in ("dcs", "none"):

@@ -4,7 +4,7 @@ import sys
 
 sys.path.insert(0, sys.argv[4])  # generated Python types
 sys.path.insert(0, sys.argv[5])  # tests/e2e (lcmlog)
-from lcmlog import read_log  # noqa: E402
+from lcmlog import read_log, TrajectoryRebuild  # noqa: E402
 from sextant import fused_pose_t, trajectory_t  # noqa: E402
 
 
@@ -14,23 +14,25 @@ def tum_line(utime, p, q):
 
 def main():
     bus, kf_out, odo_out = sys.argv[1:4]
-    last = None
+    rebuild, source = TrajectoryRebuild(), None
     odometry = {}
     for _, c, b in read_log(bus):
         if c == "TRAJECTORY":
-            last = trajectory_t.decode(b)
+            m = trajectory_t.decode(b)
+            rebuild.add(m)
+            source = m.source
         elif c == "FUSED_POSE_DEAD_RECKONING":
             m = fused_pose_t.decode(b)
             odometry[m.utime] = m
-    if last is None:
+    if source is None:
         sys.exit("no TRAJECTORY on the bus")
     with open(kf_out, "w") as kf, open(odo_out, "w") as od:
-        for k in last.keyframes:
+        for k in rebuild.keyframes(source):
             kf.write(tum_line(k.utime, k.position, k.orientation))
             if k.utime in odometry:
                 o = odometry[k.utime]
                 od.write(tum_line(o.utime, o.position, o.orientation))
-    print(f"{len(last.keyframes)} keyframes")
+    print(f"{len(rebuild.keyframes(source))} keyframes")
 
 
 if __name__ == "__main__":

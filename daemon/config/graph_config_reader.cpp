@@ -97,7 +97,21 @@ void read_stage_config(Section& s, engine::GraphConfig& c) {
   s.get("odometry_history", c.odometry_history, int_in_range(1, 100000000));
   s.get("coalesce_odometry", c.coalesce_odometry);
   s.get("odometry_batch_max", c.odometry_batch_max, int_in_range(1, 1 << 20));
-  s.get("trajectory_max_keyframes", c.trajectory_max_keyframes, int_in_range(1, 1 << 20));
+  if (s.node().IsMap() && s.node()["trajectory_max_keyframes"])
+    throw s.error_at(s.node()["trajectory_max_keyframes"],
+                     "'" + s.path() + ".trajectory_max_keyframes' is gone: TRAJECTORY now sends new and moved keyframes and a "
+                     "rolling snapshot in bounded messages (see '" + s.path() + ".trajectory')");
+  {
+    Section t = s.child("trajectory");
+    engine::TrajectoryFeedOptions& o = c.trajectory;
+    t.get("rate_hz", o.rate_hz, non_negative());
+    t.get("move_translation", o.move_translation, positive());
+    t.get("move_rotation", o.move_rotation, positive());
+    t.get("max_keyframes_per_message", o.max_keyframes_per_message, int_in_range(1, 850));  // 850 x 72 B < 64 KB
+    t.get("max_keyframes_per_tick", o.max_keyframes_per_tick, int_in_range(1, 1 << 20));
+    t.get("snapshot_chunk", o.snapshot_chunk, int_in_range(0, 850));
+    t.reject_unknown_keys();
+  }
   s.reject_unknown_keys();
 }
 

@@ -139,6 +139,7 @@ void GraphStage::on_odometry(const Odometry& o, const Emit& emit) {
     body.planar = o.planar;
     body.selector = KeyframeSelector(ko);
     body.smoother = &smoother_for(o.planar);
+    body.feed = TrajectoryFeed(config_.trajectory);
     it = bodies_.emplace(o.source, std::move(body)).first;
   } else if (o.utime <= it->second.last_utime) {
     ++out_of_order_;
@@ -526,22 +527,15 @@ void GraphStage::optimize_and_publish(const std::string& source, Body& b, int64_
   const auto t0 = std::chrono::steady_clock::now();
   const graph::IncrementalStatus st = b.smoother->update();
   last_update_ms_ = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  ++updates_;
   rebuilds_ += st.rebuilt ? 1 : 0;
   relinearized_ += st.relinearized_factors;
   if (!st.ok) {
     ++optimizer_failures_;
     return;
   }
-  Trajectory t;
-  t.utime = utime;
-  t.source = source;
-  t.chi2 = b.smoother->chi2();
-  t.iterations = st.solves;
-  t.solve_ms = last_update_ms_;
-  t.keyframes = keyframes(source);
-  if (t.keyframes.size() > static_cast<size_t>(config_.trajectory_max_keyframes))
-    t.keyframes.erase(t.keyframes.begin(), t.keyframes.end() - config_.trajectory_max_keyframes);
-  emit(t);
+  b.newest_utime = utime;
+  if (b.feed.due(utime)) publish_trajectory(source, b, utime, st.solves, false, emit);
 
   const KeyframeNode& newest = b.keyframes.back();
   GraphCorrection c;
@@ -552,6 +546,25 @@ void GraphStage::optimize_and_publish(const std::string& source, Body& b, int64_
   if (marginal.size() > 0) c.keyframe_covariance = b.planar ? embed_planar(marginal) : Matrix6(marginal);
   c.keyframe_odom_covariance = newest.odom_covariance;
   corrections_->set(source, c);
+}
+
+void GraphStage::publish_trajectory(const std::string& source, Body& b, int64_t utime, int solves, bool flush,
+                                    const Emit& emit) {
+  Trajectory header;
+  header.source = source;
+  header.chi2 = b.smoother->chi2();
+  header.iterations = solves;
+  header.solve_ms = last_update_ms_;
+  for (auto& t : b.feed.publish(utime, keyframes(source), header, flush)) {
+    trajectory_bytes_ += static_cast<int64_t>(t.keyframes.size()) * 72 + static_cast<int64_t>(t.removed_ids.size()) * 8;
+    ++trajectory_messages_;
+    emit(std::move(t));
+  }
+}
+
+void GraphStage::finish(const Emit& emit) {
+  for (auto& [source, b] : bodies_)
+    if (!b.keyframes.empty()) publish_trajectory(source, b, b.newest_utime, 0, true, emit);
 }
 
 std::vector<Keyframe> GraphStage::keyframes(const std::string& source) const {
@@ -576,7 +589,8 @@ std::vector<GraphLandmark> GraphStage::landmarks(const std::string& source) cons
 }
 
 Counters GraphStage::counters() const {
-  return {{"keyframes", keyframes_},
+  return {{"updates", updates_},
+          {"keyframes", keyframes_},
           {"keyframes_rejected", keyframes_rejected_},
           {"keyframes_reanchored", keyframes_reanchored_},
           {"match_requests", requests_},
@@ -600,7 +614,9 @@ Counters GraphStage::counters() const {
           {"sightings_unmatched", sightings_unmatched_},
           {"sightings_malformed", sightings_malformed_},
           {"sightings_dropped", sightings_dropped_},
-          {"last_update_us", static_cast<int64_t>(last_update_ms_ * 1000)}};
+          {"last_update_us", static_cast<int64_t>(last_update_ms_ * 1000)},
+          {"trajectory_messages", trajectory_messages_},
+          {"trajectory_keyframe_bytes", trajectory_bytes_}};
 }
 
 }  // namespace sextant::engine

@@ -42,7 +42,8 @@
 //    of the sighting's dimension, 13.82 for a 2-D sighting and 16.27 for a 3-D one, not the loops' 16.27 and 22.46).
 //    A landmark's first sighting initializes it and is not gated: a wrong first id plants a wrong landmark, that later true sightings
 //    are gated against (limitation).  Landmark positions after each update: landmarks(source).
-//  - after every update: a Trajectory of the body, and the map -> odometry correction for GraphPoseStage.
+//  - after every update: the map -> odometry correction for GraphPoseStage; TRAJECTORY at its own rate
+//    (trajectory_feed.hpp: new and moved keyframes, a rolling snapshot, bounded messages).
 //  - in the daemon, each body's odometry reaches the stage through an OdometryCoalescer (odometry_coalescer.hpp)
 //    instead of one queue slot per message: a 1 kHz body cannot fill the queue during a long solve, and the stage's
 //    keyframes, loops and sightings come out as from the single messages (config: coalesce_odometry).
@@ -52,6 +53,7 @@
 #include "daemon/engine/graph_stage_config.hpp"
 #include "daemon/engine/odometry_coalescer.hpp"
 #include "daemon/engine/stage.hpp"
+#include "daemon/engine/trajectory_feed.hpp"
 #include "estimators/graph/incremental_smoother.hpp"
 
 #include <map>
@@ -78,6 +80,8 @@ class GraphStage final : public Stage {
   /// Daemon intake thread: odometry goes to the coalescer (when coalesce_odometry), everything else to the queue.
   bool offer(const Event& e, const std::function<bool()>& enqueue) override;
   void handle(const Event& e, const Emit& emit) override;
+  /// The last TRAJECTORY publication of every body: every keyframe that moved at all since it was published.
+  void finish(const Emit& emit) override;
   Counters counters() const override;
 
   /// The smoother of the planar bodies or of the 3-D ones (nullptr before the first such body).
@@ -114,6 +118,8 @@ class GraphStage final : public Stage {
       int64_t sightings = 0;
     };
     std::map<int64_t, Landmark> landmarks;  // by landmark id
+    TrajectoryFeed feed;                    // what TRAJECTORY carries for this body
+    int64_t newest_utime = 0;               // of the last optimization, for the final publication
   };
   /// Where a sighting is taken from: keyframe K, the odometry D from K to the sighting and D's covariance.
   struct SightingAnchor {
@@ -140,6 +146,8 @@ class GraphStage final : public Stage {
   std::optional<SightingAnchor> anchor_of(const Body& b, int64_t utime) const;
   void add_sightings(const LandmarkSightings& s, Body& b, const SightingAnchor& anchor, const Emit& emit);
   void optimize_and_publish(const std::string& source, Body& b, int64_t utime, const Emit& emit);
+  /// TRAJECTORY messages of a body when its feed is due (or `flush`): chi2 and the keyframe list are computed only then.
+  void publish_trajectory(const std::string& source, Body& b, int64_t utime, int solves, bool flush, const Emit& emit);
   graph::IncrementalSmoother& smoother_for(bool planar);
 
   GraphConfig config_;
@@ -161,6 +169,7 @@ class GraphStage final : public Stage {
           sightings_unknown_source_ = 0, sightings_before_keyframe_ = 0, sightings_unmatched_ = 0,
           sightings_malformed_ = 0, sightings_dropped_ = 0;
   double last_update_ms_ = 0;
+  int64_t trajectory_messages_ = 0, trajectory_bytes_ = 0, updates_ = 0;
 };
 
 }  // namespace sextant::engine

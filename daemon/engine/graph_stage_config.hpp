@@ -1,4 +1,5 @@
 #pragma once
+#include "daemon/engine/trajectory_feed.hpp"
 #include "estimators/graph/incremental_smoother.hpp"
 #include "estimators/keyframe/keyframe_selector.hpp"
 #include "estimators/keyframe/loop_proposals.hpp"
@@ -65,7 +66,7 @@ struct GraphConfig {
   /// own (one source of truth).  `kernel` and `kernel_width` here are not used: the smoother's kernel is `robust`
   /// and its width kernel_width_for(), per kind of body.
   graph::IncrementalOptions smoother;
-  int trajectory_max_keyframes = 4096;    // TRAJECTORY carries at most this many (the newest) keyframes
+  TrajectoryFeedOptions trajectory;       // what TRAJECTORY carries and how often (trajectory_feed.hpp)
   GraphLandmarkOptions landmarks;
 };
 

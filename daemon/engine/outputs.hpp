@@ -20,15 +20,23 @@ struct Keyframe {
   Pose pose;
 };
 
-/// Optimized keyframes after one optimization (trajectory_t).
+/// Optimized keyframes of a body (trajectory_t; the .lcm file says how a subscriber rebuilds the trajectory from
+/// UPDATE and SNAPSHOT messages; TrajectoryFeed decides what each carries).
 struct Trajectory {
+  enum class Kind { kUpdate = 0, kSnapshot = 1 };
   int64_t utime = 0;
   std::string source;
   std::string estimator = "graph";
   double chi2 = 0;
   int iterations = 0;
   double solve_ms = 0;
+  Kind kind = Kind::kUpdate;
+  int64_t snapshot_id = 0;               // kSnapshot: the cycle
+  int chunk = 0, num_chunks = 0;         // kSnapshot: this chunk of the cycle
+  int64_t range_first = 0, range_last = 0;  // kSnapshot: the id range the chunk is authoritative for
+  int total_keyframes = 0;               // the body's keyframes now
   std::vector<Keyframe> keyframes;
+  std::vector<int64_t> removed_ids;      // kUpdate: keyframes that left the graph since the last publication
 };
 
 /// Ask a front end to match keyframe a (new) against keyframe b (match_request_t).

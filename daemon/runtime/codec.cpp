@@ -360,6 +360,15 @@ sextant::trajectory_t to_message(const engine::Trajectory& o, const std::string&
   m.chi2 = o.chi2;
   m.iterations = o.iterations;
   m.solve_ms = o.solve_ms;
+  m.kind = o.kind == engine::Trajectory::Kind::kSnapshot ? sextant::trajectory_t::SNAPSHOT : sextant::trajectory_t::UPDATE;
+  m.snapshot_id = o.snapshot_id;
+  m.chunk = o.chunk;
+  m.num_chunks = o.num_chunks;
+  m.range_first = o.range_first;
+  m.range_last = o.range_last;
+  m.total_keyframes = o.total_keyframes;
+  m.num_removed = static_cast<int32_t>(o.removed_ids.size());
+  m.removed_ids = o.removed_ids;
   m.num_keyframes = static_cast<int32_t>(o.keyframes.size());
   for (const auto& k : o.keyframes) {
     sextant::keyframe_t x{};
@@ -431,6 +440,14 @@ engine::Trajectory to_output(const sextant::trajectory_t& m) {
   o.chi2 = m.chi2;
   o.iterations = m.iterations;
   o.solve_ms = m.solve_ms;
+  o.kind = m.kind == sextant::trajectory_t::SNAPSHOT ? engine::Trajectory::Kind::kSnapshot : engine::Trajectory::Kind::kUpdate;
+  o.snapshot_id = m.snapshot_id;
+  o.chunk = m.chunk;
+  o.num_chunks = m.num_chunks;
+  o.range_first = m.range_first;
+  o.range_last = m.range_last;
+  o.total_keyframes = m.total_keyframes;
+  o.removed_ids = m.removed_ids;
   for (const auto& k : m.keyframes) o.keyframes.push_back({k.id, k.utime, read_pose(k.position, k.orientation)});
   return o;
 }

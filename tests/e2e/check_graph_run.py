@@ -5,7 +5,7 @@ import json
 import math
 import sys
 
-from lcmlog import read_log
+from lcmlog import read_log, rebuild_trajectories
 from sextant import fused_pose_t, match_request_t, loop_closure_t, odometry_t, status_t, trajectory_t, truth_t
 
 
@@ -43,21 +43,27 @@ def main():
     if any(b.utime <= a.utime for a, b in zip(fused, fused[1:])):
         errors.append("FUSED_POSE utimes are not strictly increasing")
 
-    trajectories = [trajectory_t.decode(b) for c, b in bus if c == "TRAJECTORY"]
+    raw_trajectories = [b for c, b in bus if c == "TRAJECTORY"]
+    trajectories = [trajectory_t.decode(b) for b in raw_trajectories]
     if not trajectories:
         errors.append("no TRAJECTORY")
     else:
-        last = trajectories[-1]
+        if max(len(b) for b in raw_trajectories) > 64 * 1024:
+            errors.append(f"a TRAJECTORY message of {max(len(b) for b in raw_trajectories)} bytes (over 64 KB)")
+        # The whole trajectory, rebuilt from the updates and snapshot chunks as any subscriber would.
+        keyframes = rebuild_trajectories(trajectories).keyframes(trajectories[-1].source)
+        if len(keyframes) != trajectories[-1].total_keyframes:
+            errors.append(f"rebuilt {len(keyframes)} keyframes, the last TRAJECTORY says {trajectories[-1].total_keyframes}")
         dr = {d.utime: d.position for d in dead}
         err_graph, err_dr = [], []
-        for k in last.keyframes:
+        for k in keyframes:
             t = truth_at(k.utime)
             err_graph.append(math.dist(k.position[:2], t[:2]) ** 2)
             if k.utime in dr:
                 err_dr.append(math.dist(dr[k.utime][:2], t[:2]) ** 2)
         rms_graph = math.sqrt(sum(err_graph) / len(err_graph))
         rms_dr = math.sqrt(sum(err_dr) / max(1, len(err_dr)))
-        print(f"{len(last.keyframes)} keyframes: RMS error {rms_graph:.3f} m, dead reckoning at the same times {rms_dr:.3f} m")
+        print(f"{len(keyframes)} keyframes: RMS error {rms_graph:.3f} m, dead reckoning at the same times {rms_dr:.3f} m")
         if not rms_graph < 0.5 * rms_dr:
             errors.append(f"the optimized keyframes ({rms_graph:.3f} m) are not far better than dead reckoning ({rms_dr:.3f} m)")
 

@@ -28,3 +28,44 @@ def read_log(path):
 def decode_all(path, channel, msg_type):
     """Every message on `channel` decoded as `msg_type` (an lcm-gen Python class)."""
     return [msg_type.decode(b) for _, c, b in read_log(path) if c == channel]
+
+
+class TrajectoryRebuild:
+    """Rebuilds each body's current trajectory from TRAJECTORY messages (sextant.trajectory_t), by the rule the .lcm
+    file states: feed the messages in seq order; keyframes replace those with their ids, removed_ids are erased, and a
+    SNAPSHOT chunk is authoritative for its id range [range_first, range_last].  `keyframes(source)` gives the
+    keyframe_t objects by increasing id."""
+
+    SNAPSHOT = 1
+
+    def __init__(self):
+        self.bodies = {}
+
+    def add(self, m):
+        body = self.bodies.setdefault((m.sender, m.source), {})
+        if m.kind == self.SNAPSHOT:
+            carried = {k.id for k in m.keyframes}
+            for i in [i for i in body if m.range_first <= i <= m.range_last and i not in carried]:
+                del body[i]
+        for i in m.removed_ids:
+            body.pop(i, None)
+        for k in m.keyframes:
+            body[k.id] = k
+        return self
+
+    def keyframes(self, source, sender=None):
+        for (snd, src), body in self.bodies.items():
+            if src == source and (sender is None or snd == sender):
+                return [body[i] for i in sorted(body)]
+        return []
+
+    def sources(self):
+        return sorted({src for _, src in self.bodies})
+
+
+def rebuild_trajectories(messages):
+    """A TrajectoryRebuild fed with decoded trajectory_t messages (in the order given: a log's order is seq order)."""
+    r = TrajectoryRebuild()
+    for m in messages:
+        r.add(m)
+    return r
