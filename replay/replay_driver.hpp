@@ -40,7 +40,42 @@ struct StageReport {
   std::string name;
   int64_t processed = 0;
   engine::Counters counters;
-  std::vector<double> latency_ms;  // per event processing time (wall clock; not part of the deterministic outputs)
+  /// Per event processing time (wall clock; not part of the deterministic outputs): every event, or with
+  /// ReplayOptions::max_kept an evenly spaced sample of them (the max is latency_max_ms).
+  std::vector<double> latency_ms;
+  double latency_max_ms = 0;
+};
+
+/// What a replay keeps in memory and where it streams the rest.
+struct ReplayOptions {
+  /// Series kept in ReplayResult (each estimator's fused poses, truth poses, stage latencies) hold at most this many
+  /// entries: beyond it every other entry is dropped and only every 2nd, 4th, ... is kept from then on (an evenly
+  /// spaced sample, the same on every run); targets keep the newest this many, trajectories and match requests none,
+  /// published bytes none (stream them with on_publish).  0: everything, as small logs and tests want.
+  size_t max_kept = 0;
+  /// Every published message, as the bus would carry it (channel, encoded bytes, utime), in publish order.
+  std::function<void(const std::string&, const std::vector<uint8_t>&, int64_t)> on_publish;
+  /// Every fused pose, in publish order (for writing a trajectory file as the replay goes).
+  std::function<void(const engine::FusedPose&)> on_fused_pose;
+  /// Every engine output, in publish order.
+  std::function<void(const engine::Output&)> on_output;
+  /// > 0: ReplayResult::segments reports each consecutive stretch of this many seconds of data time.
+  double segment_seconds = 0;
+};
+
+/// One stretch of a replay (ReplayOptions::segment_seconds of data time): how fast it replayed and how long the
+/// stages took per event in it, and the process's resident memory at its end — cost against run length.
+struct SegmentReport {
+  double start_s = 0, data_s = 0;  // data time from the first event, and the stretch's length
+  double wall_s = 0;               // wall-clock time spent replaying it
+  int64_t rss_kb = 0;              // resident set size at its end (0 where /proc is not available)
+  struct Stage {
+    std::string name;
+    int64_t events = 0;
+    double p50_ms = 0, p99_ms = 0, max_ms = 0;  // processing time per event (percentiles: nearest rank)
+  };
+  std::vector<Stage> stages;
+  engine::Counters graph_counters;  // the graph stage's counters at its end (graph size), empty without one
 };
 
 struct ReplayResult {
@@ -58,6 +93,11 @@ struct ReplayResult {
   std::vector<TruthPoint> truth_points;
   std::vector<StageReport> stages;
   double wall_seconds = 0;
+  // Totals (what the series above hold may be a sample or nothing: ReplayOptions::max_kept).
+  std::map<std::string, int64_t> fused_pose_counts;           // by estimator
+  std::map<std::string, engine::FusedPose> last_fused_poses;  // by estimator
+  int64_t trajectory_messages = 0, target_messages = 0, match_request_messages = 0;
+  std::vector<SegmentReport> segments;  // ReplayOptions::segment_seconds
 };
 
 /// Called every few thousand events with (events done, events total).
@@ -65,7 +105,10 @@ using Progress = std::function<void(int64_t, int64_t)>;
 
 /// Replays `log_path` through the engine configured by `config`.  Throws std::runtime_error when the log cannot
 /// be read.
-ReplayResult replay_log(const std::string& log_path, const config::DaemonConfig& config, const Progress& progress = {});
+/// The log is read twice (once for the utime of every record, once to feed them), so memory holds an index of 16
+/// bytes per record and the records that arrive ahead of their turn, not the log.
+ReplayResult replay_log(const std::string& log_path, const config::DaemonConfig& config, const Progress& progress = {},
+                        const ReplayOptions& options = {});
 
 /// The utime of an encoded sextant message: every sextant type starts with `int64_t utime` right after LCM's 8-byte
 /// fingerprint.  nullopt when the buffer is too short.

@@ -10,20 +10,6 @@
 #include <stdexcept>
 
 namespace sextant::replay {
-namespace {
-
-struct FileCloser {
-  void operator()(std::FILE* f) const { std::fclose(f); }
-};
-
-std::unique_ptr<std::FILE, FileCloser> open_for_writing(const std::string& path) {
-  std::unique_ptr<std::FILE, FileCloser> f(std::fopen(path.c_str(), "w"));
-  if (!f) throw std::runtime_error("cannot write " + path + ": " + std::strerror(errno));
-  return f;
-}
-
-}  // namespace
-
 std::vector<StampedPose> read_tum(const std::string& path) {
   std::ifstream in(path);
   if (!in) throw std::runtime_error("cannot read " + path + ": " + std::strerror(errno));
@@ -60,45 +46,74 @@ std::vector<StampedPose> read_tum(const std::string& path) {
   return out;
 }
 
-void write_tum(const std::string& path, const std::vector<StampedPose>& poses) {
-  auto f = open_for_writing(path);
-  for (const auto& s : poses) {
-    const auto& p = s.pose.position;
-    const auto q = s.pose.orientation.normalized();
-    std::fprintf(f.get(), "%.6f %.9f %.9f %.9f %.9f %.9f %.9f %.9f\n", s.t, p.x(), p.y(), p.z(), q.x(), q.y(), q.z(),
-                 q.w());
-  }
+TrajectoryWriter::TrajectoryWriter(const std::string& path, TrajectoryFormat format)
+    : file_(std::fopen(path.c_str(), "w")), format_(format), path_(path) {
+  if (!file_) throw std::runtime_error("cannot write " + path + ": " + std::strerror(errno));
 }
 
-void write_kitti(const std::string& path, const std::vector<StampedPose>& poses) {
-  auto f = open_for_writing(path);
-  for (const auto& s : poses) {
-    const Eigen::Matrix3d R = s.pose.orientation.normalized().toRotationMatrix();
-    const auto& t = s.pose.position;
-    std::fprintf(f.get(), "%.9e %.9e %.9e %.9e %.9e %.9e %.9e %.9e %.9e %.9e %.9e %.9e\n", R(0, 0), R(0, 1), R(0, 2),
-                 t.x(), R(1, 0), R(1, 1), R(1, 2), t.y(), R(2, 0), R(2, 1), R(2, 2), t.z());
+TrajectoryWriter::~TrajectoryWriter() {
+  if (file_) std::fclose(file_);
+}
+
+void TrajectoryWriter::add(const StampedPose& s) {
+  const auto& p = s.pose.position;
+  const auto q = s.pose.orientation.normalized();
+  switch (format_) {
+    case TrajectoryFormat::kTum:
+      std::fprintf(file_, "%.6f %.9f %.9f %.9f %.9f %.9f %.9f %.9f\n", s.t, p.x(), p.y(), p.z(), q.x(), q.y(), q.z(), q.w());
+      break;
+    case TrajectoryFormat::kKitti: {
+      const Eigen::Matrix3d R = q.toRotationMatrix();
+      std::fprintf(file_, "%.9e %.9e %.9e %.9e %.9e %.9e %.9e %.9e %.9e %.9e %.9e %.9e\n", R(0, 0), R(0, 1), R(0, 2),
+                   p.x(), R(1, 0), R(1, 1), R(1, 2), p.y(), R(2, 0), R(2, 1), R(2, 2), p.z());
+      break;
+    }
+    case TrajectoryFormat::kG2o: {
+      std::fprintf(file_, "VERTEX_SE3:QUAT %lld %.9f %.9f %.9f %.9f %.9f %.9f %.9f\n", static_cast<long long>(count_), p.x(),
+                   p.y(), p.z(), q.x(), q.y(), q.z(), q.w());
+      if (count_ > 0) {
+        const Eigen::Isometry3d a = Eigen::Translation3d(previous_.position) * previous_.orientation;
+        const Eigen::Isometry3d b = Eigen::Translation3d(s.pose.position) * s.pose.orientation;
+        const Eigen::Isometry3d d = a.inverse() * b;
+        const Eigen::Quaterniond dq(d.linear());
+        std::fprintf(file_, "EDGE_SE3:QUAT %lld %lld %.9f %.9f %.9f %.9f %.9f %.9f %.9f", static_cast<long long>(count_ - 1),
+                     static_cast<long long>(count_), d.translation().x(), d.translation().y(), d.translation().z(), dq.x(),
+                     dq.y(), dq.z(), dq.w());
+        for (int r = 0; r < 6; ++r)
+          for (int c = r; c < 6; ++c) std::fprintf(file_, " %g", r == c ? 1.0 : 0.0);
+        std::fprintf(file_, "\n");
+      }
+      previous_ = s.pose;
+      break;
+    }
   }
+  ++count_;
+}
+
+void TrajectoryWriter::close() {
+  if (file_ && std::fclose(file_) != 0) {
+    file_ = nullptr;
+    throw std::runtime_error("cannot write " + path_ + ": " + std::strerror(errno));
+  }
+  file_ = nullptr;
+}
+
+namespace {
+void write_all(const std::string& path, const std::vector<StampedPose>& poses, TrajectoryFormat format) {
+  TrajectoryWriter w(path, format);
+  for (const auto& s : poses) w.add(s);
+  w.close();
+}
+}  // namespace
+
+void write_tum(const std::string& path, const std::vector<StampedPose>& poses) { write_all(path, poses, TrajectoryFormat::kTum); }
+
+void write_kitti(const std::string& path, const std::vector<StampedPose>& poses) {
+  write_all(path, poses, TrajectoryFormat::kKitti);
 }
 
 void write_g2o_trajectory(const std::string& path, const std::vector<StampedPose>& poses) {
-  auto f = open_for_writing(path);
-  for (size_t i = 0; i < poses.size(); ++i) {
-    const auto& p = poses[i].pose.position;
-    const auto q = poses[i].pose.orientation.normalized();
-    std::fprintf(f.get(), "VERTEX_SE3:QUAT %zu %.9f %.9f %.9f %.9f %.9f %.9f %.9f\n", i, p.x(), p.y(), p.z(), q.x(),
-                 q.y(), q.z(), q.w());
-  }
-  for (size_t i = 1; i < poses.size(); ++i) {
-    const Eigen::Isometry3d a = Eigen::Translation3d(poses[i - 1].pose.position) * poses[i - 1].pose.orientation;
-    const Eigen::Isometry3d b = Eigen::Translation3d(poses[i].pose.position) * poses[i].pose.orientation;
-    const Eigen::Isometry3d d = a.inverse() * b;
-    const Eigen::Quaterniond q(d.linear());
-    std::fprintf(f.get(), "EDGE_SE3:QUAT %zu %zu %.9f %.9f %.9f %.9f %.9f %.9f %.9f", i - 1, i, d.translation().x(),
-                 d.translation().y(), d.translation().z(), q.x(), q.y(), q.z(), q.w());
-    for (int r = 0; r < 6; ++r)
-      for (int c = r; c < 6; ++c) std::fprintf(f.get(), " %g", r == c ? 1.0 : 0.0);
-    std::fprintf(f.get(), "\n");
-  }
+  write_all(path, poses, TrajectoryFormat::kG2o);
 }
 
 }  // namespace sextant::replay

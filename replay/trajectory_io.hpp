@@ -7,6 +7,8 @@
 // starting with '#' are skipped, and a repeated timestamp replaces the earlier row.
 #include "daemon/engine/events.hpp"
 
+#include <cstdint>
+#include <cstdio>
 #include <map>
 #include <string>
 #include <vector>
@@ -31,5 +33,30 @@ void write_kitti(const std::string& path, const std::vector<StampedPose>& poses)
 /// Writes the poses as a g2o graph of VERTEX_SE3:QUAT lines (ids 0..n-1), consecutive poses joined by
 /// EDGE_SE3:QUAT with identity information, so g2o_viewer shows the path.
 void write_g2o_trajectory(const std::string& path, const std::vector<StampedPose>& poses);
+
+enum class TrajectoryFormat { kTum, kKitti, kG2o };
+
+/// Writes a trajectory file pose by pose, as the poses come (a replay streams its estimate to disk instead of holding
+/// it): TUM, KITTI, or g2o (each vertex followed by the edge from the one before).  The same bytes as the functions
+/// above for the same poses, except that g2o interleaves vertices and edges.  Throws std::runtime_error naming the
+/// path when it cannot be opened or written.
+class TrajectoryWriter {
+ public:
+  TrajectoryWriter(const std::string& path, TrajectoryFormat format);
+  ~TrajectoryWriter();
+  TrajectoryWriter(const TrajectoryWriter&) = delete;
+  TrajectoryWriter& operator=(const TrajectoryWriter&) = delete;
+  void add(const StampedPose& pose);
+  /// Flushes and closes the file (throws when that fails); the destructor closes it silently.
+  void close();
+  int64_t count() const { return count_; }
+
+ private:
+  std::FILE* file_;
+  TrajectoryFormat format_;
+  std::string path_;
+  int64_t count_ = 0;
+  engine::Pose previous_;
+};
 
 }  // namespace sextant::replay

@@ -102,6 +102,15 @@ void read_stage_config(Section& s, engine::GraphConfig& c) {
                      "'" + s.path() + ".trajectory_max_keyframes' is gone: TRAJECTORY now sends new and moved keyframes and a "
                      "rolling snapshot in bounded messages (see '" + s.path() + ".trajectory')");
   {
+    Section l = s.child("lifelong");
+    l.get("enabled", c.lifelong.enabled);
+    l.get("window", c.lifelong.thinning.window, int_in_range(1, 1 << 24));
+    l.get("cell_size", c.lifelong.thinning.cell_size, positive());
+    l.get("heading_sector", c.lifelong.thinning.heading_sector, in_range(1e-3, 2 * M_PI));
+    l.get("max_keyframes", c.lifelong.max_keyframes, int_in_range(2, 1 << 24));
+    l.reject_unknown_keys();
+  }
+  {
     Section t = s.child("trajectory");
     engine::TrajectoryFeedOptions& o = c.trajectory;
     t.get("rate_hz", o.rate_hz, non_negative());

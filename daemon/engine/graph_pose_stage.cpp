@@ -26,6 +26,7 @@ void GraphPoseStage::handle(const Event& e, const Emit& emit) {
     // The odometry's own uncertainty growth since the keyframe: its pose covariance minus the transported one.
     const Matrix6 growth = nearest_psd(o.covariance - compose_covariance(c->keyframe_odom_covariance, delta, Matrix6::Zero()));
     out.pose = to_pose(c->keyframe_map * delta);
+    record_correction_age(o.utime - c->keyframe_utime);
     out.covariance = compose_covariance(c->keyframe_covariance, delta, growth);
   } else {
     ++before_correction_;

@@ -9,6 +9,9 @@
 #include "daemon/engine/graph_correction.hpp"
 #include "daemon/engine/stage.hpp"
 
+#include <algorithm>
+#include <vector>
+
 #include <map>
 #include <memory>
 
@@ -22,13 +25,27 @@ class GraphPoseStage final : public Stage {
   bool accepts(const Event& e) const override { return std::holds_alternative<Odometry>(e); }
   void handle(const Event& e, const Emit& emit) override;
   Counters counters() const override {
-    return {{"published", published_}, {"out_of_order", out_of_order_}, {"before_correction", before_correction_}};
+    int64_t age_max = 0;
+    for (int64_t a : correction_ages_) age_max = std::max(age_max, a);
+    return {{"published", published_},
+            {"out_of_order", out_of_order_},
+            {"before_correction", before_correction_},
+            {"correction_age_us", correction_ages_.empty() ? 0 : correction_ages_[(age_next_ + correction_ages_.size() - 1) % correction_ages_.size()]},
+            {"correction_age_us_max", age_max}};
   }
 
  private:
   std::shared_ptr<const GraphCorrections> corrections_;
   std::map<std::string, int64_t> last_utime_;
   int64_t published_ = 0, out_of_order_ = 0, before_correction_ = 0;
+  /// Data time from the correction's keyframe to the odometry it was applied to (how far the graph lags the fused
+  /// pose): the last value and the largest of the last 1024 (status: correction_age_us, correction_age_us_max).
+  void record_correction_age(int64_t age_us) {
+    if (correction_ages_.size() < 1024) correction_ages_.push_back(age_us), age_next_ = correction_ages_.size() % 1024;
+    else correction_ages_[age_next_] = age_us, age_next_ = (age_next_ + 1) % 1024;
+  }
+  std::vector<int64_t> correction_ages_;
+  size_t age_next_ = 0;
 };
 
 }  // namespace sextant::engine

@@ -115,6 +115,35 @@ graph::IncrementalSmoother& GraphStage::smoother_for(bool planar) {
   return *s;
 }
 
+std::unique_ptr<graph::Factor> GraphStage::odometry_factor(bool planar, int from, int to, const SE3& edge, const Matrix6& covariance) {
+  const Eigen::MatrixXd cov = planar ? Eigen::MatrixXd(planar_block(covariance)) : Eigen::MatrixXd(covariance);
+  Eigen::LLT<Eigen::MatrixXd> llt(cov);
+  if (llt.info() != Eigen::Success || !cov.allFinite()) return nullptr;
+  Eigen::MatrixXd information = llt.solve(Eigen::MatrixXd::Identity(cov.rows(), cov.cols()));
+  information = 0.5 * (information + information.transpose());
+  if (planar) return std::make_unique<graph::RelativePoseFactor>(from, to, SE2::from_se3(edge), Eigen::Matrix3d(information));
+  return std::make_unique<graph::RelativePoseFactor>(from, to, edge, residual_information(information));
+}
+
+Eigen::MatrixXd GraphStage::gate_marginal(const Body& b, int variable) {
+  // A marginal is a forward solve along the variable's path to the root of the factor's elimination tree, which for
+  // a landmark seen from everywhere is long: the sighting gate reuses one for kGateMarginalUpdates updates of the
+  // smoother (deterministic: counted in updates, not time).  The marginal only shrinks as information arrives, so a
+  // reused one makes the gate a little wider, never narrower.
+  auto& cache = gate_marginals_[b.planar ? 1 : 0];
+  auto it = cache.find(variable);
+  if (it != cache.end() && updates_ - it->second.first < kGateMarginalUpdates) return it->second.second;
+  Eigen::MatrixXd m = b.smoother->marginal_covariance(variable);
+  cache[variable] = {updates_, m};
+  return m;
+}
+
+void GraphStage::add_factor(Body& b, std::unique_ptr<graph::Factor> factor, FactorRole role, bool robust,
+                            std::optional<double> width) {
+  b.smoother->add_factor(std::move(factor), robust, width);
+  factor_tags_[b.planar ? 1 : 0].push_back({role, robust, width});
+}
+
 bool GraphStage::offer(const Event& e, const std::function<bool()>& enqueue) {
   return config_.coalesce_odometry ? coalescer_.offer(e, enqueue) : enqueue();
 }
@@ -211,22 +240,18 @@ void GraphStage::on_keyframe_candidate(const Odometry& o, Body& b, const SE3& od
   node.utime = o.utime;
   node.odom = odom;
   node.odom_covariance = o.covariance;
-  Eigen::MatrixXd information;
+  std::unique_ptr<graph::Factor> edge_factor;
   if (!b.keyframes.empty()) {
     node.edge = b.keyframes.back().odom.between(odom);
     node.edge_covariance = b.since_keyframe;
     if (reanchored) node.edge_covariance += jump_covariance(node.edge, b.planar);
-    // The odometry edge's information; a covariance that cannot be inverted (it can only come from a sender's
-    // malformed covariances) drops the keyframe (the selector goes back to the last keyframe in the graph) and keeps
-    // accumulating towards the next one, whose edge spans the dropped pose.
-    const Eigen::MatrixXd cov = b.planar ? Eigen::MatrixXd(planar_block(node.edge_covariance)) : Eigen::MatrixXd(node.edge_covariance);
-    Eigen::LLT<Eigen::MatrixXd> llt(cov);
-    if (llt.info() != Eigen::Success || !cov.allFinite()) {
+    // A covariance that cannot be inverted drops the keyframe (the selector goes back to the last keyframe in the
+    // graph) and keeps accumulating towards the next one, whose edge spans the dropped pose.
+    edge_factor = odometry_factor(b.planar, b.keyframes.back().variable, -1, node.edge, node.edge_covariance);
+    if (!edge_factor) {
       drop_keyframe(o.source, b, odom);
       return;
     }
-    information = llt.solve(Eigen::MatrixXd::Identity(cov.rows(), cov.cols()));
-    information = 0.5 * (information + information.transpose());
   }
   graph::Variable v;
   v.id = next_variable_id_++;
@@ -241,19 +266,13 @@ void GraphStage::on_keyframe_candidate(const Odometry& o, Body& b, const SE3& od
   else v.pose3 = initial;
   try {
     node.variable = b.smoother->add_variable(v);
-    if (!b.keyframes.empty()) {
-      const KeyframeNode& prev = b.keyframes.back();
-      if (b.planar)
-        b.smoother->add_factor(std::make_unique<graph::RelativePoseFactor>(prev.variable, node.variable, SE2::from_se3(node.edge),
-                                                                         Eigen::Matrix3d(information)), false);
-      else
-        b.smoother->add_factor(std::make_unique<graph::RelativePoseFactor>(prev.variable, node.variable, node.edge,
-                                                                         residual_information(information)), false);
-    }
+    if (edge_factor)
+      add_factor(b, edge_factor->rebind({b.keyframes.back().variable, node.variable}), FactorRole::kOdometry, false, std::nullopt);
   } catch (const std::invalid_argument&) {
     drop_keyframe(o.source, b, odom);  // a non-finite pose or information: never reaches the smoother's system
     return;
   }
+  node.id = b.next_keyframe_id++;
   b.since_keyframe.setZero();
   b.by_utime[o.utime] = b.keyframes.size();
   b.keyframes.push_back(node);
@@ -261,27 +280,42 @@ void GraphStage::on_keyframe_candidate(const Odometry& o, Body& b, const SE3& od
   if (reanchored) ++keyframes_reanchored_;
   optimize_and_publish(o.source, b, o.utime, emit);
 
-  if (!config_.propose_loops) return;
-  const int64_t k = static_cast<int64_t>(b.keyframes.size()) - 1;
-  for (const LoopProposal& p : proposer_.propose(k)) {
-    MatchRequest r;
-    r.utime = o.utime;
-    r.source = o.source;
-    r.request_id = next_request_id_++;
-    r.kind = p.random ? "random" : "local";
-    const KeyframeNode& a = b.keyframes[static_cast<size_t>(p.from)];
-    const KeyframeNode& c = b.keyframes[static_cast<size_t>(p.to)];
-    r.a = Keyframe{p.from, a.utime, to_pose(b.smoother->graph().variables()[static_cast<size_t>(a.variable)].as_se3())};
-    r.b = Keyframe{p.to, c.utime, to_pose(b.smoother->graph().variables()[static_cast<size_t>(c.variable)].as_se3())};
-    ++requests_;
-    emit(r);
+  if (config_.propose_loops) {
+    // Candidates among the keyframes in the graph (positions in b.keyframes; with lifelong thinning the places kept
+    // of the older map), named by their keyframe ids.
+    const int64_t k = static_cast<int64_t>(b.keyframes.size()) - 1;
+    for (const LoopProposal& p : proposer_.propose(k)) {
+      MatchRequest r;
+      r.utime = o.utime;
+      r.source = o.source;
+      r.request_id = next_request_id_++;
+      r.kind = p.random ? "random" : "local";
+      const KeyframeNode& a = b.keyframes[static_cast<size_t>(p.from)];
+      const KeyframeNode& c = b.keyframes[static_cast<size_t>(p.to)];
+      r.a = Keyframe{a.id, a.utime, to_pose(b.smoother->graph().variables()[static_cast<size_t>(a.variable)].as_se3())};
+      r.b = Keyframe{c.id, c.utime, to_pose(b.smoother->graph().variables()[static_cast<size_t>(c.variable)].as_se3())};
+      ++requests_;
+      emit(r);
+    }
   }
+  maybe_thin(b.planar);
 }
 
-std::optional<std::pair<size_t, SE3>> GraphStage::resolve(const Body& b, int64_t keyframe_id, int64_t utime) const {
-  if (keyframe_id >= 0 && keyframe_id < static_cast<int64_t>(b.keyframes.size()) &&
-      b.keyframes[static_cast<size_t>(keyframe_id)].utime == utime)
-    return std::make_pair(static_cast<size_t>(keyframe_id), SE3());
+std::optional<GraphStage::LoopEnd> GraphStage::resolve(const Body& b, int64_t keyframe_id, int64_t utime) const {
+  // By id: a keyframe of the graph at exactly that time.
+  const auto by_id = std::lower_bound(b.keyframes.begin(), b.keyframes.end(), keyframe_id,
+                                      [](const KeyframeNode& k, int64_t id) { return k.id < id; });
+  if (keyframe_id >= 0 && by_id != b.keyframes.end() && by_id->id == keyframe_id && by_id->utime == utime)
+    return LoopEnd{static_cast<size_t>(by_id - b.keyframes.begin()), SE3(), Matrix6::Zero()};
+  // The odometry pose at the loop's time (exact stamp, as a front end answers about frames it was given).
+  std::optional<SE3> at_time;
+  auto at = std::lower_bound(b.odometry.begin(), b.odometry.end(), utime,
+                             [](const std::pair<int64_t, SE3>& x, int64_t t) { return x.first < t; });
+  if (at != b.odometry.end() && at->first == utime) at_time = at->second;
+  const auto thinned = std::lower_bound(b.thinned.begin(), b.thinned.end(), utime,
+                                        [](const ThinnedKeyframe& k, int64_t t) { return k.utime < t; });
+  if (!at_time && thinned != b.thinned.end() && thinned->utime == utime) at_time = thinned->odom;
+  // The nearest keyframe of the graph in time, within the tolerance: the odometry bridges the gap.
   const auto tolerance = static_cast<int64_t>(config_.loop_time_tolerance_s * 1e6);
   auto hi = b.by_utime.lower_bound(utime);
   std::optional<size_t> best;
@@ -291,14 +325,19 @@ std::optional<std::pair<size_t, SE3>> GraphStage::resolve(const Body& b, int64_t
     auto lo = std::prev(hi);
     if (utime - lo->first < best_gap) best = lo->second;
   }
-  if (!best) return std::nullopt;
-  const KeyframeNode& kf = b.keyframes[*best];
-  if (kf.utime == utime) return std::make_pair(*best, SE3());
-  // The odometry pose at the loop's time (exact stamp, as a front end answers about frames it was given).
-  auto at = std::lower_bound(b.odometry.begin(), b.odometry.end(), utime,
-                             [](const std::pair<int64_t, SE3>& x, int64_t t) { return x.first < t; });
-  if (at == b.odometry.end() || at->first != utime) return std::nullopt;
-  return std::make_pair(*best, kf.odom.between(at->second));
+  if (best) {
+    const KeyframeNode& kf = b.keyframes[*best];
+    if (kf.utime == utime) return LoopEnd{*best, SE3(), Matrix6::Zero()};
+    if (!at_time) return std::nullopt;
+    return LoopEnd{*best, kf.odom.between(*at_time), Matrix6::Zero()};
+  }
+  // A time whose keyframes were thinned (lifelong): the keyframe of the graph before it on the odometry chain, the
+  // odometry from there, and as that motion's covariance the covariance of the whole (composed) edge from that
+  // keyframe to the next one of the graph, which contains it: an upper bound, so the loop is weakened, not bent.
+  if (!at_time || b.by_utime.empty() || utime < b.by_utime.begin()->first || utime > b.keyframes.back().utime) return std::nullopt;
+  const size_t k = std::prev(b.by_utime.upper_bound(utime))->second;
+  if (k + 1 >= b.keyframes.size()) return std::nullopt;
+  return LoopEnd{k, b.keyframes[k].odom.between(*at_time), b.keyframes[k + 1].edge_covariance};
 }
 
 void GraphStage::drop_keyframe(const std::string& source, Body& b, const SE3& odom) {
@@ -321,11 +360,22 @@ void GraphStage::on_loop(const LoopClosure& l, const Emit& emit) {
     b.early_loops.push_back(l);  // ahead of the odometry: retried when it gets there
     return;
   }
-  if (!end_from || !end_to || end_from->first == end_to->first) {
+  if (!end_from || !end_to || end_from->keyframe == end_to->keyframe) {
     ++loops_unmatched_;
     return;
   }
-  const std::optional<size_t> from = end_from->first, to = end_to->first;
+  const std::optional<size_t> from = end_from->keyframe, to = end_to->keyframe;
+  // The loop's information, with the uncertainty of the odometry that moved an end from a thinned keyframe onto one
+  // of the graph added to the loop's covariance (in the loop's frame; zero for ends on keyframes of the graph).
+  Matrix6 information = l.information;
+  if (!end_from->covariance.isZero() || !end_to->covariance.isZero()) {
+    ++loops_on_thinned_;
+    const Eigen::MatrixXd cov = (b.planar ? Eigen::MatrixXd(planar_block(l.information)) : Eigen::MatrixXd(l.information)).inverse();
+    const Matrix6 extra = end_from->covariance + end_to->covariance;
+    const Eigen::MatrixXd widened = cov + (b.planar ? Eigen::MatrixXd(planar_block(extra)) : Eigen::MatrixXd(extra));
+    const Eigen::MatrixXd info = widened.inverse();
+    information = b.planar ? embed_planar(info) : Matrix6(0.5 * (info + info.transpose()));
+  }
   // Consistency: the loop against the current estimate, with the loop's covariance plus the odometry's between the
   // two keyframes (an upper bound of the estimate's relative uncertainty, so a true loop passes with the gate's
   // probability however far the odometry drifted — as long as the odometry's covariance is honest; it is scaled up
@@ -345,17 +395,17 @@ void GraphStage::on_loop(const LoopClosure& l, const Emit& emit) {
   const SE3 predicted = vars[static_cast<size_t>(b.keyframes[*from].variable)].as_se3().between(
       vars[static_cast<size_t>(b.keyframes[*to].variable)].as_se3());
   // The loop moved onto the keyframes: T_kf_from^-1 T_kf_to = D_from z D_to^-1.
-  const SE3 z = end_from->second * to_se3(l.relative) * end_to->second.inverse();
+  const SE3 z = end_from->motion * to_se3(l.relative) * end_to->motion.inverse();
   double d2;
   if (b.planar) {
-    const Eigen::Matrix3d info = planar_block(l.information);
+    const Eigen::Matrix3d info = planar_block(information);
     const Eigen::Vector3d e = SE2::from_se3(z).between(SE2::from_se3(predicted)).log();
     const double k2 = config_.loop_gate_odometry_scale * config_.loop_gate_odometry_scale;
     const Eigen::Matrix3d S = info.inverse() + k2 * planar_block(path);
     d2 = e.dot(S.ldlt().solve(e));
   } else {
     const Vector6d e = z.between(predicted).log();
-    const Matrix6 S = l.information.inverse() + config_.loop_gate_odometry_scale * config_.loop_gate_odometry_scale * path;
+    const Matrix6 S = information.inverse() + config_.loop_gate_odometry_scale * config_.loop_gate_odometry_scale * path;
     d2 = e.dot(S.ldlt().solve(e));
   }
   if (!(d2 <= (b.planar ? chi2_gate_planar_ : chi2_gate_spatial_))) {
@@ -365,9 +415,11 @@ void GraphStage::on_loop(const LoopClosure& l, const Emit& emit) {
   const int vf = b.keyframes[*from].variable, vt = b.keyframes[*to].variable;
   try {
     if (b.planar)
-      b.smoother->add_factor(std::make_unique<graph::RelativePoseFactor>(vf, vt, SE2::from_se3(z), Eigen::Matrix3d(planar_block(l.information))));
+      add_factor(b, std::make_unique<graph::RelativePoseFactor>(vf, vt, SE2::from_se3(z), Eigen::Matrix3d(planar_block(information))),
+                 FactorRole::kLoop, true, std::nullopt);
     else
-      b.smoother->add_factor(std::make_unique<graph::RelativePoseFactor>(vf, vt, z, residual_information(l.information)));
+      add_factor(b, std::make_unique<graph::RelativePoseFactor>(vf, vt, z, residual_information(information)), FactorRole::kLoop, true,
+                 std::nullopt);
   } catch (const std::invalid_argument&) {
     ++loops_rejected_;  // an information the intake let through but the smoother cannot use (e.g. planar block)
     return;
@@ -484,10 +536,10 @@ void GraphStage::add_sightings(const LandmarkSightings& s, Body& b, const Sighti
     probe.linearize(local, lin);
     const Eigen::MatrixXd odometry_part = lin.jacobians[0] * sigma_d * lin.jacobians[0].transpose();
     if (known) {
-      const Eigen::MatrixXd p_landmark = b.smoother->marginal_covariance(lm->second.variable);
+      const Eigen::MatrixXd p_landmark = gate_marginal(b, lm->second.variable);
       if (p_landmark.size() > 0) {  // determined: gate against the estimate
         Eigen::MatrixXd S = R + k2 * odometry_part + lin.jacobians[1] * p_landmark * lin.jacobians[1].transpose();
-        const Eigen::MatrixXd p_keyframe = b.smoother->marginal_covariance(kf.variable);
+        const Eigen::MatrixXd p_keyframe = gate_marginal(b, kf.variable);
         if (p_keyframe.size() > 0) {
           const Eigen::MatrixXd jk = lin.jacobians[0] * ad;
           S += jk * p_keyframe * jk.transpose();
@@ -510,8 +562,8 @@ void GraphStage::add_sightings(const LandmarkSightings& s, Body& b, const Sighti
         lm = b.landmarks.emplace(ob.id, Body::Landmark{b.smoother->add_variable(v), 0}).first;
         ++landmarks_;
       }
-      b.smoother->add_factor(std::make_unique<PointObservationFactor>(kf.variable, lm->second.variable, model, z, information, sensor),
-                             config_.landmarks.robust, b.planar ? sighting_width_planar_ : sighting_width_spatial_);
+      add_factor(b, std::make_unique<PointObservationFactor>(kf.variable, lm->second.variable, model, z, information, sensor),
+                 FactorRole::kSighting, config_.landmarks.robust, b.planar ? sighting_width_planar_ : sighting_width_spatial_);
     } catch (const std::invalid_argument&) {
       ++sightings_malformed_;  // a value the checks above let through but the smoother refuses
       continue;
@@ -574,7 +626,7 @@ std::vector<Keyframe> GraphStage::keyframes(const std::string& source) const {
   const auto& vars = it->second.smoother->graph().variables();
   for (size_t k = 0; k < it->second.keyframes.size(); ++k) {
     const KeyframeNode& n = it->second.keyframes[k];
-    out.push_back(Keyframe{static_cast<int64_t>(k), n.utime, to_pose(vars[static_cast<size_t>(n.variable)].as_se3())});
+    out.push_back(Keyframe{n.id, n.utime, to_pose(vars[static_cast<size_t>(n.variable)].as_se3())});
   }
   return out;
 }
@@ -616,6 +668,16 @@ Counters GraphStage::counters() const {
           {"sightings_dropped", sightings_dropped_},
           {"last_update_us", static_cast<int64_t>(last_update_ms_ * 1000)},
           {"trajectory_messages", trajectory_messages_},
+          {"thinnings", thinnings_},
+          {"thinning_failures", thinning_failures_},
+          {"keyframes_thinned", keyframes_thinned_},
+          {"loops_thinned", loops_thinned_},
+          {"sightings_thinned", sightings_thinned_},
+          {"landmarks_thinned", landmarks_thinned_},
+          {"loops_on_thinned_keyframes", loops_on_thinned_},
+          {"graph_keyframes", graph_keyframes()},
+          {"graph_landmarks", graph_landmarks()},
+          {"graph_factors", graph_factors()},
           {"trajectory_keyframe_bytes", trajectory_bytes_}};
 }
 

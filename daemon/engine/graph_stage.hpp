@@ -90,15 +90,25 @@ class GraphStage final : public Stage {
   std::vector<Keyframe> keyframes(const std::string& source) const;
   /// The landmarks of a body (optimized positions), by id.
   std::vector<GraphLandmark> landmarks(const std::string& source) const;
+  /// The size of the graphs now (every body): keyframes and landmarks in them, factors in the smoothers.
+  int64_t graph_keyframes() const;
+  int64_t graph_landmarks() const;
+  int64_t graph_factors() const;
 
  private:
   struct KeyframeNode {
+    int64_t id = 0;       // the body's keyframe id: 0, 1, 2, ... in order of creation (MATCH_REQUESTS, TRAJECTORY)
     int64_t utime = 0;
     int variable = -1;
     SE3 odom;
     Matrix6 odom_covariance = Matrix6::Zero();
     Matrix6 edge_covariance = Matrix6::Zero();  // of the odometry from the previous keyframe
-    SE3 edge;                                   // that odometry
+    SE3 edge;                                   // that odometry (composed across thinned keyframes)
+  };
+  /// A keyframe that lifelong thinning took out of the graph: what resolving a loop to its time needs.
+  struct ThinnedKeyframe {
+    int64_t id = 0, utime = 0;
+    SE3 odom;
   };
   struct Body {
     bool planar = false;
@@ -108,8 +118,10 @@ class GraphStage final : public Stage {
     SE3 last_odom;
     Matrix6 last_odom_covariance = Matrix6::Zero();
     Matrix6 since_keyframe = Matrix6::Zero();  // covariance of the odometry since the last keyframe
-    std::vector<KeyframeNode> keyframes;
-    std::map<int64_t, size_t> by_utime;
+    std::vector<KeyframeNode> keyframes;        // in the graph, by id (and time)
+    std::map<int64_t, size_t> by_utime;         // -> position in keyframes
+    std::vector<ThinnedKeyframe> thinned;       // taken out by lifelong thinning, by id (and time)
+    int64_t next_keyframe_id = 0;
     std::vector<std::pair<int64_t, SE3>> odometry;  // recent odometry poses (bounded), for loops between keyframes
     std::vector<LoopClosure> early_loops;  // loops about times this body's odometry has not reached yet (bounded)
     std::vector<LandmarkSightings> early_sightings;  // sightings ahead of the odometry, in time order (bounded)
@@ -138,8 +150,15 @@ class GraphStage final : public Stage {
   /// which spans the dropped pose, accumulates the odometry covariance from there.
   void drop_keyframe(const std::string& source, Body& b, const SE3& odom);
   void on_loop(const LoopClosure& l, const Emit& emit);
-  /// The keyframe a loop's end refers to, and the odometry motion from that keyframe to the loop's time.
-  std::optional<std::pair<size_t, SE3>> resolve(const Body& b, int64_t keyframe_id, int64_t utime) const;
+  /// Where a loop's end lands: a keyframe of the graph (position in Body::keyframes), the odometry motion from it to
+  /// the loop's time, and that motion's covariance (zero when the time is the keyframe's or bridged by recorded
+  /// odometry within the tolerance; an upper bound when the end's keyframe was thinned).
+  struct LoopEnd {
+    size_t keyframe = 0;
+    SE3 motion;
+    Matrix6 covariance = Matrix6::Zero();
+  };
+  std::optional<LoopEnd> resolve(const Body& b, int64_t keyframe_id, int64_t utime) const;
   void on_sightings(const LandmarkSightings& s, const Emit& emit);
   /// The anchor of a sighting at a time the odometry has reached, after the body's first keyframe (nullopt: older
   /// than the odometry history).
@@ -150,6 +169,26 @@ class GraphStage final : public Stage {
   void publish_trajectory(const std::string& source, Body& b, int64_t utime, int solves, bool flush, const Emit& emit);
   graph::IncrementalSmoother& smoother_for(bool planar);
 
+  /// What a factor of a smoother is, kept beside it (FactorTag per factor, in the smoother's order) so that lifelong
+  /// thinning can rebuild the graph: odometry edges are recomposed, loops and sightings carried over.
+  enum class FactorRole { kOdometry, kLoop, kSighting };
+  struct FactorTag {
+    FactorRole role = FactorRole::kOdometry;
+    bool robust = false;
+    std::optional<double> kernel_width;
+  };
+  /// Adds a factor to the body's smoother and its tag (throws what the smoother throws, and then adds no tag).
+  void add_factor(Body& b, std::unique_ptr<graph::Factor> factor, FactorRole role, bool robust, std::optional<double> width);
+  /// Lifelong mode (graph_stage_lifelong.cpp): when the keyframes of a kind of body exceed lifelong.max_keyframes, the
+  /// smoother of that kind is rebuilt with the keyframes keyframes_to_keep() keeps (estimators/keyframe/
+  /// keyframe_thinning.hpp): odometry composed across the thinned ones, loops and sightings of thinned keyframes
+  /// dropped, landmarks left without sightings dropped.
+  void maybe_thin(bool planar);
+  /// The factor of an odometry edge between two keyframe variables, from the edge's covariance over sextant's tangent;
+  /// nullptr when that covariance cannot be inverted (it can only come from a sender's malformed covariances).
+  static std::unique_ptr<graph::Factor> odometry_factor(bool planar, int from, int to, const SE3& edge, const Matrix6& covariance);
+  void thin(bool planar);
+
   GraphConfig config_;
   std::shared_ptr<GraphCorrections> corrections_;
   LoopProposer proposer_;
@@ -157,6 +196,12 @@ class GraphStage final : public Stage {
   /// share no variable, and the robust kernel's width depends on the loops' dimension (kernel_width_for), which is
   /// the smoother's own width (the loops take it; sightings bring theirs to add_factor).
   std::unique_ptr<graph::IncrementalSmoother> smoothers_[2];
+  std::vector<FactorTag> factor_tags_[2];  // per smoother, per factor
+  /// Marginal covariances for the sighting gate, per smoother and variable: (updates_ when computed, marginal).
+  static constexpr int64_t kGateMarginalUpdates = 25;
+  std::map<int, std::pair<int64_t, Eigen::MatrixXd>> gate_marginals_[2];
+  Eigen::MatrixXd gate_marginal(const Body& b, int variable);
+  int64_t keyframes_since_thinning_[2] = {0, 0};
   OdometryCoalescer coalescer_;
   std::map<std::string, Body> bodies_;
   int64_t next_variable_id_ = 0, next_request_id_ = 0;
@@ -170,6 +215,8 @@ class GraphStage final : public Stage {
           sightings_malformed_ = 0, sightings_dropped_ = 0;
   double last_update_ms_ = 0;
   int64_t trajectory_messages_ = 0, trajectory_bytes_ = 0, updates_ = 0;
+  int64_t thinnings_ = 0, thinning_failures_ = 0, keyframes_thinned_ = 0, loops_thinned_ = 0, sightings_thinned_ = 0,
+          landmarks_thinned_ = 0, loops_on_thinned_ = 0;
 };
 
 }  // namespace sextant::engine

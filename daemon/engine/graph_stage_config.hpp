@@ -2,6 +2,7 @@
 #include "daemon/engine/trajectory_feed.hpp"
 #include "estimators/graph/incremental_smoother.hpp"
 #include "estimators/keyframe/keyframe_selector.hpp"
+#include "estimators/keyframe/keyframe_thinning.hpp"
 #include "estimators/keyframe/loop_proposals.hpp"
 
 #include <optional>
@@ -67,6 +68,14 @@ struct GraphConfig {
   /// and its width kernel_width_for(), per kind of body.
   graph::IncrementalOptions smoother;
   TrajectoryFeedOptions trajectory;       // what TRAJECTORY carries and how often (trajectory_feed.hpp)
+  /// Lifelong mode: a keyframe budget.  When the graph of a kind of body holds more than `max_keyframes`, it is
+  /// thinned to the newest keyframes and one keyframe per place (keyframe_thinning.hpp), so its size follows the
+  /// explored space, not the time run; a graph within the budget is never touched.
+  struct Lifelong {
+    bool enabled = true;
+    int max_keyframes = 2000;
+    KeyframeThinningOptions thinning;  // window: the newest keyframes that stay whole
+  } lifelong;
   GraphLandmarkOptions landmarks;
 };
 

@@ -138,7 +138,7 @@ int run_daemon(const config::DaemonConfig& cfg, const std::atomic<bool>& stop) {
       runtime_counters.push_back({"record_dropped", recorder->dropped()});
     }
     publisher.publish(report.build(std::chrono::duration<double>(Clock::now() - started).count(), stats.snapshot(),
-                                   stage_status, runtime_counters, publisher.counts()));
+                                   stage_status, runtime_counters, publisher.counts(), publisher.bytes()));
   };
 
   std::atomic<bool> intake_stopped{false};

@@ -25,6 +25,7 @@ void Publisher::send(const std::string& channel, Msg msg) {
   msg.seq = seq_[channel]++;
   std::vector<uint8_t> bytes(static_cast<size_t>(msg.getEncodedSize()));
   msg.encode(bytes.data(), 0, static_cast<int>(bytes.size()));
+  bytes_[channel] += static_cast<int64_t>(bytes.size());
   raw_(channel, bytes, msg.utime);
 }
 
@@ -63,6 +64,11 @@ void Publisher::publish(const sextant::status_t& status) {
 std::map<std::string, int64_t> Publisher::counts() const {
   std::lock_guard lock(mutex_);
   return seq_;
+}
+
+std::map<std::string, int64_t> Publisher::bytes() const {
+  std::lock_guard lock(mutex_);
+  return bytes_;
 }
 
 int64_t Publisher::not_monotonic() const {

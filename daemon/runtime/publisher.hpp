@@ -33,6 +33,8 @@ class Publisher {
 
   /// Messages published per channel.
   std::map<std::string, int64_t> counts() const;
+  /// Bytes published per channel (LCM payloads).
+  std::map<std::string, int64_t> bytes() const;
   int64_t not_monotonic() const;
   const std::string& sender() const { return sender_; }
   /// The channel a FusedPose of `estimator` is published on.
@@ -48,6 +50,7 @@ class Publisher {
   RawSink raw_;
   mutable std::mutex mutex_;
   std::map<std::string, int64_t> seq_;
+  std::map<std::string, int64_t> bytes_;
   std::map<std::string, int64_t> last_fused_utime_;  // by channel + "/" + source
   int64_t not_monotonic_ = 0;
 };

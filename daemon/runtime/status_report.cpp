@@ -20,7 +20,8 @@ void put_counters(sextant::stage_status_t& s, const engine::Counters& counters) 
 
 sextant::status_t StatusReport::build(double uptime_s, const std::map<std::string, ChannelCounts>& channels,
                                       const std::vector<StageStatus>& stages, const engine::Counters& runtime_counters,
-                                      const std::map<std::string, int64_t>& output_counts) const {
+                                      const std::map<std::string, int64_t>& output_counts,
+                                      const std::map<std::string, int64_t>& output_bytes) {
   sextant::status_t m{};
   m.utime = wall_utime();
   m.sender = sender_;
@@ -61,10 +62,19 @@ sextant::status_t StatusReport::build(double uptime_s, const std::map<std::strin
   m.stages.push_back(runtime);
   m.num_stages = static_cast<int32_t>(m.stages.size());
   m.num_outputs = static_cast<int32_t>(output_counts.size());
+  const double period = uptime_s - previous_uptime_s_;
   for (const auto& [channel, count] : output_counts) {
     m.output_channels.push_back(channel);
     m.output_counts.push_back(count);
+    const auto b = output_bytes.find(channel);
+    const int64_t total = b == output_bytes.end() ? 0 : b->second;
+    m.output_bytes.push_back(total);
+    const auto before = previous_bytes_.find(channel);
+    const int64_t delta = total - (before == previous_bytes_.end() ? 0 : before->second);
+    m.output_bytes_per_s.push_back(period > 0 ? static_cast<double>(delta) / period : 0.0);
   }
+  previous_uptime_s_ = uptime_s;
+  previous_bytes_ = output_bytes;
   return m;
 }
 

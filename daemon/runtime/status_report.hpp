@@ -17,12 +17,16 @@ class StatusReport {
   explicit StatusReport(std::string sender) : sender_(std::move(sender)) {}
 
   /// `runtime_counters` go into an extra stage entry named "runtime" (publisher and recorder counters).
+  /// `output_bytes`: bytes per output channel since start; the report also gives the rate since the previous build.
   sextant::status_t build(double uptime_s, const std::map<std::string, ChannelCounts>& channels,
                           const std::vector<StageStatus>& stages, const engine::Counters& runtime_counters,
-                          const std::map<std::string, int64_t>& output_counts) const;
+                          const std::map<std::string, int64_t>& output_counts,
+                          const std::map<std::string, int64_t>& output_bytes = {});
 
  private:
   std::string sender_;
+  double previous_uptime_s_ = 0;
+  std::map<std::string, int64_t> previous_bytes_;
 };
 
 }  // namespace sextant::runtime

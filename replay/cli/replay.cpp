@@ -1,5 +1,6 @@
 // sextant replay LOG.lcm --config FILE [--tum-out F] [--kitti-out F] [--g2o-out F] [--out-log F] [--json]
 //                                      [--realtime [--speed X] [--lcm-url URL]]
+#include "daemon/engine/engine.hpp"
 #include "daemon/runtime/lcm_log.hpp"
 #include "replay/cli/command.hpp"
 #include "replay/json_writer.hpp"
@@ -21,15 +22,9 @@ struct Options {
   bool json = false;
   bool realtime = false;
   double speed = 1.0;
+  double segment_seconds = 0;
   std::string lcm_url;
 };
-
-std::vector<replay::StampedPose> trajectory_of(const std::vector<engine::FusedPose>& poses) {
-  std::vector<replay::StampedPose> out;
-  out.reserve(poses.size());
-  for (const auto& p : poses) out.push_back({static_cast<double>(p.utime) * 1e-6, p.pose});
-  return out;
-}
 
 // A one-line progress bar with rate and ETA, on a terminal only.
 class ProgressBar {
@@ -80,17 +75,17 @@ void print_json(const Options& o, const replay::ReplayResult& r, const std::stri
     std::vector<double> l = s.latency_ms;
     std::sort(l.begin(), l.end());
     auto pct = [&](double p) { return l.empty() ? 0.0 : l[std::min(l.size() - 1, static_cast<size_t>(p * static_cast<double>(l.size())))]; };
-    j.field("latency_ms_p50", pct(0.5)).field("latency_ms_p99", pct(0.99)).field("latency_ms_max", l.empty() ? 0.0 : l.back());
+    j.field("latency_ms_p50", pct(0.5)).field("latency_ms_p99", pct(0.99)).field("latency_ms_max", s.latency_max_ms);
     j.key("counters").begin_object();
     for (const auto& [name, v] : s.counters) j.field(name, v);
     j.end_object();
     j.end_object();
   }
   j.end_array();
-  const auto it = r.fused_poses.find(estimator);
-  j.field("fused_poses", it == r.fused_poses.end() ? int64_t{0} : static_cast<int64_t>(it->second.size()));
-  if (it != r.fused_poses.end() && !it->second.empty()) {
-    const auto& last = it->second.back();
+  const auto count = r.fused_pose_counts.find(estimator);
+  j.field("fused_poses", count == r.fused_pose_counts.end() ? int64_t{0} : count->second);
+  if (const auto it = r.last_fused_poses.find(estimator); it != r.last_fused_poses.end()) {
+    const auto& last = it->second;
     j.key("final_pose").begin_object();
     j.field("utime", last.utime);
     j.field("position", std::vector<double>{last.pose.position.x(), last.pose.position.y(), last.pose.position.z()});
@@ -98,9 +93,29 @@ void print_json(const Options& o, const replay::ReplayResult& r, const std::stri
     j.field("orientation_wxyz", std::vector<double>{q.w(), q.x(), q.y(), q.z()});
     j.end_object();
   }
-  j.field("trajectories", static_cast<int64_t>(r.trajectories.size()));
-  j.field("targets_messages", static_cast<int64_t>(r.targets.size()));
+  j.field("trajectories", r.trajectory_messages);
+  j.field("targets_messages", r.target_messages);
   j.field("truth_poses", static_cast<int64_t>(r.truth_poses.size()));
+  if (!r.segments.empty()) {
+    j.key("segments").begin_array();
+    for (const auto& seg : r.segments) {
+      j.begin_object();
+      j.field("start_s", seg.start_s).field("data_s", seg.data_s).field("wall_s", seg.wall_s);
+      j.field("realtime_factor", seg.wall_s > 0 ? seg.data_s / seg.wall_s : 0.0).field("rss_kb", seg.rss_kb);
+      j.key("stages").begin_object();
+      for (const auto& st : seg.stages) {
+        j.key(st.name).begin_object();
+        j.field("events", st.events).field("p50_ms", st.p50_ms).field("p99_ms", st.p99_ms).field("max_ms", st.max_ms);
+        j.end_object();
+      }
+      j.end_object();
+      j.key("graph").begin_object();
+      for (const auto& [name, v] : seg.graph_counters) j.field(name, v);
+      j.end_object();
+      j.end_object();
+    }
+    j.end_array();
+  }
   j.end_object();
   std::fputs(j.str().c_str(), stdout);
 }
@@ -117,6 +132,9 @@ sextant::cli::RegisterCommand reg{"replay", [](CLI::App& app) {
   cmd->add_option("--out-log", o->out_log, "write everything the engine published to an LCM log");
   cmd->add_option("--estimator", o->estimator, "which estimator's poses to export (default: the primary)");
   cmd->add_flag("--json", o->json, "print a JSON summary on stdout");
+  cmd->add_option("--segment-seconds", o->segment_seconds,
+                  "with --json: report each stretch of this many seconds of data time (replay speed, stage times, memory)")
+      ->check(CLI::NonNegativeNumber);
   cmd->add_option("--report", o->report, "write an HTML report with plots (and report.json) into this folder");
   cmd->add_flag("--realtime", o->realtime, "republish the log to the live bus at the pace of message utimes");
   cmd->add_option("--speed", o->speed, "playback speed for --realtime (2 = twice as fast)")->check(CLI::PositiveNumber);
@@ -137,18 +155,35 @@ sextant::cli::RegisterCommand reg{"replay", [](CLI::App& app) {
       }
     }
     ProgressBar bar(isatty(STDERR_FILENO) != 0 && !o->json);
-    const auto result = replay::replay_log(o->log, cfg, [&bar](int64_t d, int64_t t) { bar(d, t); });
-    const std::string estimator = o->estimator.empty() ? result.primary_estimator : o->estimator;
-    const auto it = result.fused_poses.find(estimator);
-    const std::vector<engine::FusedPose> none;
-    const auto traj = trajectory_of(it == result.fused_poses.end() ? none : it->second);
-    if (!o->tum_out.empty()) replay::write_tum(o->tum_out, traj);
-    if (!o->kitti_out.empty()) replay::write_kitti(o->kitti_out, traj);
-    if (!o->g2o_out.empty()) replay::write_g2o_trajectory(o->g2o_out, traj);
+    // Outputs stream to their files as the replay goes; memory keeps bounded samples for the report and the summary.
+    replay::ReplayOptions ro;
+    ro.max_kept = 20000;
+    ro.segment_seconds = o->segment_seconds;
+    std::unique_ptr<runtime::LogWriter> out_log;
     if (!o->out_log.empty()) {
-      runtime::LogWriter w(o->out_log);
-      for (const auto& m : result.published) w.write_raw(m.utime, m.channel, m.bytes.data(), m.bytes.size());
+      out_log = std::make_unique<runtime::LogWriter>(o->out_log);
+      ro.on_publish = [&out_log](const std::string& channel, const std::vector<uint8_t>& bytes, int64_t utime) {
+        out_log->write_raw(utime, channel, bytes.data(), bytes.size());
+      };
     }
+    std::vector<std::unique_ptr<replay::TrajectoryWriter>> writers;
+    if (!o->tum_out.empty()) writers.push_back(std::make_unique<replay::TrajectoryWriter>(o->tum_out, replay::TrajectoryFormat::kTum));
+    if (!o->kitti_out.empty()) writers.push_back(std::make_unique<replay::TrajectoryWriter>(o->kitti_out, replay::TrajectoryFormat::kKitti));
+    if (!o->g2o_out.empty()) writers.push_back(std::make_unique<replay::TrajectoryWriter>(o->g2o_out, replay::TrajectoryFormat::kG2o));
+    // The estimator to export is known once the engine is built (the primary one by default): its name is matched
+    // against each pose's.
+    std::string export_estimator = o->estimator;
+    if (export_estimator.empty()) export_estimator = engine::Engine(cfg.engine).primary_estimator();
+    ro.on_fused_pose = [&](const engine::FusedPose& p) {
+      if (p.estimator != export_estimator) return;
+      for (auto& w : writers) w->add({static_cast<double>(p.utime) * 1e-6, p.pose});
+    };
+    const auto result = replay::replay_log(o->log, cfg, [&bar](int64_t d, int64_t t) { bar(d, t); }, ro);
+    const std::string estimator = o->estimator.empty() ? result.primary_estimator : o->estimator;
+    for (auto& w : writers) w->close();
+    if (out_log) out_log->flush();
+    const auto counted = result.fused_pose_counts.find(estimator);
+    const int64_t exported = counted == result.fused_pose_counts.end() ? 0 : counted->second;
     if (!o->report.empty()) {
       const auto n = replay::write_report(o->report, result, o->log, estimator);
       if (!o->json) {
@@ -163,7 +198,7 @@ sextant::cli::RegisterCommand reg{"replay", [](CLI::App& app) {
       for (const auto& [c, counts] : result.channels) rejected += counts.rejected;
       std::printf("replayed %lld log events (%.1f s of data) in %.2f s; %zu %s poses; %lld inputs rejected\n",
                   static_cast<long long>(result.records), static_cast<double>(result.last_utime - result.first_utime) * 1e-6,
-                  result.wall_seconds, traj.size(), estimator.c_str(), static_cast<long long>(rejected));
+                  result.wall_seconds, static_cast<size_t>(exported), estimator.c_str(), static_cast<long long>(rejected));
     }
   });
 }};

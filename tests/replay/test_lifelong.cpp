@@ -1,0 +1,136 @@
+// Lifelong operation, on a simulated run of many laps replayed through the daemon's engine with a small keyframe
+// budget (so that the run is long relative to it and short for CI): the graph's size, the memory and the replay's
+// work stay flat from the first quarter of the run to the last; loops to old places still close; the accuracy stays
+// close to the full-history graph's; TRAJECTORY rebuilt from its messages equals the final keyframes.
+#include "daemon/config/daemon_config.hpp"
+#include "daemon/runtime/lcm_log.hpp"
+#include "replay/replay_driver.hpp"
+#include "replay/simulator.hpp"
+#include "replay/trajectory_eval.hpp"
+
+#include <doctest/doctest.h>
+
+#include <cstdio>
+#include <filesystem>
+#include <map>
+#include <unistd.h>
+
+using namespace sextant;
+
+namespace {
+
+std::string temp_path(const std::string& name) {
+  return (std::filesystem::temp_directory_path() / ("sextant_test_" + std::to_string(::getpid()) + "_" + name)).string();
+}
+
+int64_t counter(const engine::Counters& c, const std::string& name) {
+  for (const auto& [n, v] : c)
+    if (n == name) return v;
+  FAIL("no counter " << name);
+  return 0;
+}
+
+config::DaemonConfig graph_config(bool lifelong) {
+  config::DaemonConfig cfg;
+  cfg.engine.primary_estimator = "graph";
+  cfg.engine.association.enabled = false;  // the graph alone (and dead reckoning)
+  cfg.engine.filter.type = "none";
+  cfg.engine.graph.lifelong.enabled = lifelong;
+  cfg.engine.graph.lifelong.max_keyframes = 400;
+  cfg.engine.graph.lifelong.thinning.window = 200;
+  // The odometry kept to bridge loop times to keyframes is bounded too, at 100000 poses by default (33 minutes at
+  // 50 Hz): 120 s here, so that this run reaches its bound in its first quarter (loops to older times then land only
+  // when their times are keyframes' own).
+  cfg.engine.graph.odometry_history = 6000;
+  return cfg;
+}
+
+double ate_of(const replay::ReplayResult& r) {
+  std::vector<replay::StampedPose> truth, est;
+  for (const auto& t : r.truth_poses) truth.push_back({static_cast<double>(t.utime) * 1e-6, t.pose});
+  for (const auto& p : r.fused_poses.at("graph")) est.push_back({static_cast<double>(p.utime) * 1e-6, p.pose});
+  return replay::absolute_trajectory_error(truth, est).error.rmse;
+}
+
+}  // namespace
+
+TEST_CASE("lifelong: graph size and memory stay flat over a long run, loops still close, accuracy close to full") {
+  // 480 s of laps (a lap of the simulator's 90 m course is 45 s): about 3200 keyframes, eight times the budget.
+  const auto log = temp_path("lifelong.lcm");
+  {
+    replay::SimulationOptions o;
+    o.duration_s = 480;
+    o.seed = 4;
+    o.sensors = 2;
+    o.targets = 1;
+    runtime::LogWriter w(log);
+    replay::simulate(o, w);
+    w.flush();
+  }
+  // Streamed as the command-line replay does: bounded samples in memory, the rest seen once.  A subscriber rebuilds
+  // TRAJECTORY from the messages as they come, and the fused poses are kept compactly for the ATE.
+  replay::ReplayOptions ro;
+  ro.segment_seconds = 120;  // four quarters
+  ro.max_kept = 1000;
+  std::map<int64_t, engine::Keyframe> rebuilt;
+  int total_keyframes = -1;
+  std::vector<replay::StampedPose> life_poses;  // every 10th (the ATE's sample; the memory check is the engine's)
+  int64_t fused_seen = 0;
+  ro.on_output = [&](const engine::Output& o) {
+    if (const auto* p = std::get_if<engine::FusedPose>(&o); p && p->estimator == "graph" && fused_seen++ % 10 == 0)
+      life_poses.push_back({static_cast<double>(p->utime) * 1e-6, p->pose});
+    const auto* t = std::get_if<engine::Trajectory>(&o);
+    if (t == nullptr) return;
+    if (t->kind == engine::Trajectory::Kind::kSnapshot)
+      for (auto it = rebuilt.lower_bound(t->range_first); it != rebuilt.end() && it->first <= t->range_last;) {
+        bool carried = false;
+        for (const auto& k : t->keyframes) carried = carried || k.id == it->first;
+        it = carried ? std::next(it) : rebuilt.erase(it);
+      }
+    for (int64_t id : t->removed_ids) rebuilt.erase(id);
+    for (const auto& k : t->keyframes) rebuilt[k.id] = k;
+    total_keyframes = t->total_keyframes;
+  };
+  const auto life = replay::replay_log(log, graph_config(true), {}, ro);
+  REQUIRE(life.segments.size() == 4);
+  for (const auto& seg : life.segments)
+    MESSAGE("t " << seg.start_s << " s: graph keyframes " << counter(seg.graph_counters, "graph_keyframes") << ", factors "
+                 << counter(seg.graph_counters, "graph_factors") << ", RSS " << seg.rss_kb << " KB");
+  const auto& first = life.segments[0].graph_counters;
+  const auto& last = life.segments[3].graph_counters;
+  CHECK(counter(first, "thinnings") >= 1);
+  CHECK(counter(last, "keyframes") > 3 * counter(first, "keyframes"));  // the run goes on ...
+  // ... but the graph does not grow: within the budget plus the quarter added between two thinnings.
+  for (const auto& seg : life.segments) {
+    CHECK(counter(seg.graph_counters, "graph_keyframes") <= 400 + 100);
+  }
+  CHECK(counter(last, "graph_factors") <= 1.3 * static_cast<double>(counter(first, "graph_factors")));
+  // Memory: flat from the second quarter (the first includes the start-up) to the last.
+  REQUIRE(life.segments[1].rss_kb > 0);
+  CHECK(static_cast<double>(life.segments[3].rss_kb) <= 1.10 * static_cast<double>(life.segments[1].rss_kb));
+
+  // The full-history graph on the same run: loops close as often, and the fused pose is about as accurate.
+  const auto full = replay::replay_log(log, graph_config(false));
+  const auto graph_counters = [](const replay::ReplayResult& r) {
+    for (const auto& s : r.stages)
+      if (s.name == "graph") return s.counters;
+    return engine::Counters{};
+  };
+  const int64_t loops_life = counter(graph_counters(life), "loops_accepted"), loops_full = counter(graph_counters(full), "loops_accepted");
+  MESSAGE("loops accepted: lifelong " << loops_life << ", full " << loops_full);
+  CHECK(loops_full > 50);
+  CHECK(loops_life >= 0.9 * static_cast<double>(loops_full));
+  std::vector<replay::StampedPose> truth;
+  for (const auto& t : full.truth_poses) truth.push_back({static_cast<double>(t.utime) * 1e-6, t.pose});
+  const double ate_life = replay::absolute_trajectory_error(truth, life_poses).error.rmse, ate_full = ate_of(full);
+  MESSAGE("graph fused-pose ATE: lifelong " << ate_life << " m, full history " << ate_full << " m");
+  CHECK(ate_life < 1.5 * ate_full);
+  CHECK(ate_life < 0.1);
+
+  // TRAJECTORY: the subscriber's rebuild equals the final keyframes (the ids the graph kept, their poses).
+  const auto final_counters = graph_counters(life);
+  CHECK(static_cast<int64_t>(rebuilt.size()) == counter(final_counters, "graph_keyframes"));
+  CHECK(total_keyframes == static_cast<int>(rebuilt.size()));
+  CHECK(life.trajectory_messages < 2 * 480 + 10);  // at most 1 Hz: an update and a snapshot chunk per publication
+  std::remove(log.c_str());
+}
