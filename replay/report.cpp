@@ -1,5 +1,7 @@
 #include "replay/report.hpp"
 
+#include "daemon/runtime/version.hpp"
+
 #include "replay/json_writer.hpp"
 #include "replay/svg_plot.hpp"
 #include "replay/trajectory_eval.hpp"
@@ -159,13 +161,14 @@ ReportNumbers write_report(const std::string& dir, const ReplayResult& r, const 
       "<!DOCTYPE html>\n<html><head><meta charset=\"utf-8\"><title>sextant report: " + html_escape(log_name) +
       "</title>\n<style>body{font-family:sans-serif;margin:24px;color:#222} .plot{margin:8px;border:1px solid #ddd}"
       " table{border-collapse:collapse} td,th{border:1px solid #ccc;padding:3px 8px;text-align:right}</style></head>\n"
-      "<body>\n<h1>sextant replay report</h1>\n<p>" + html_escape(log_name) + "</p>\n<p>" + headline + "</p>\n" + ate_line +
+      "<body>\n<h1>sextant replay report</h1>\n<p>" + html_escape(log_name) + " &middot; sextant " + html_escape(sextant::version()) + "</p>\n<p>" + headline + "</p>\n" + ate_line +
       "<div>\n" + top.render() + err.render() + "</div>\n<div>\n" + tg.render() + msgs.render() + "</div>\n" + table +
       "<h2>Latency</h2>\n<div>\n" + latency_svgs + "</div>\n</body></html>\n";
   write_file(dir + "/index.html", html);
 
   JsonWriter j;
   j.begin_object();
+  j.field("version", sextant::version());
   j.field("log", log_name).field("estimator", estimator).field("records", r.records).field("duration_s", duration);
   j.field("poses", numbers.poses).field("have_truth", numbers.have_truth);
   if (numbers.have_truth) j.field("ate_rmse", numbers.ate_rmse).field("ate_max", numbers.ate_max).field("matched", numbers.matched);

@@ -2,6 +2,7 @@
 //                                      [--realtime [--speed X] [--lcm-url URL]]
 #include "daemon/runtime/lcm_log.hpp"
 #include "replay/cli/command.hpp"
+#include "daemon/runtime/version.hpp"
 #include "replay/json_writer.hpp"
 #include "replay/replay_driver.hpp"
 #include "replay/realtime_player.hpp"
@@ -54,6 +55,7 @@ class ProgressBar {
 void print_json(const Options& o, const replay::ReplayResult& r, const std::string& estimator) {
   replay::JsonWriter j;
   j.begin_object();
+  j.field("version", sextant::version());
   j.field("log", o.log);
   j.field("records", r.records);
   j.field("primary_estimator", r.primary_estimator);
