@@ -380,9 +380,7 @@ std::vector<replay::StampedPose> trajectory(const py::object& obj, const char* w
     replay::StampedPose p;
     p.t = v[0];
     p.pose.position = {v[1], v[2], v[3]};
-    const Eigen::Quaterniond q(v[7], v[4], v[5], v[6]);
-    if (!(q.norm() > 0)) throw py::value_error(where + ": zero quaternion");
-    p.pose.orientation = q.normalized();
+    p.pose.orientation = Eigen::Quaterniond(v[7], v[4], v[5], v[6]);  // as read_tum: used as given
     poses.push_back(p);
   }
   // As read_tum: sorted by time, a repeated stamp replaces the earlier row.

@@ -28,7 +28,7 @@ expect_error() {
 expect_error unknown_key "4:" 'daemon:\n  name: a\nengine:\n  filtr:\n    type: ekf\n'
 expect_error wrong_type "3:" 'daemon:\n  name: a\n  queue_capacity: many\n'
 expect_error out_of_range "2:" 'daemon:\n  status_period_s: -1\n'
-expect_error broken_yaml "3:" 'daemon:\n  name: a\n  x: [1, 2\n'
+expect_error broken_yaml "3:" 'daemon:\n  name: a\n   bad: 1\n'
 
 rc=0
 "$d" --check-config "$work/missing.yaml" 2> "$work/err" || rc=$?

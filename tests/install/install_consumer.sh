@@ -44,6 +44,13 @@ unit=$p/lib/systemd/system/sextantd.service
 grep -q "^ExecStart=$p/bin/sextantd --config" "$unit" || fail "the installed unit's ExecStart does not name $p/bin"
 grep -q "^Environment=SEXTANT_CONFIG=$p/share/sextant/config/default.yaml" "$unit" || fail "the unit's config path is not under $p"
 ! grep -q "/usr/local/" "$unit" || fail "the installed unit still names /usr/local"
+# systemd's own parser must accept every line (it only warns, on stderr, about keys or values it ignores).
+if command -v systemd-analyze > /dev/null; then
+  out=$(timeout 60 systemd-analyze verify "$unit" 2>&1) || fail "systemd-analyze verify failed: $out"
+  [ -z "$out" ] || fail "systemd-analyze verify: $out"
+else
+  echo "install_consumer: systemd-analyze not installed; the unit's syntax is not checked"
+fi
 
 # The consumer project, built against the installed package only (the launcher of the main build, if any, is reused).
 launcher=()
