@@ -435,7 +435,7 @@ PYBIND11_MODULE(sextant, m) {
 
   py::class_<PyLogReader>(m, "LogReader", "Iterates over an LCM log: (timestamp_us, channel, data) per event.")
       .def(py::init<const std::string&>(), py::arg("path"))
-      .def("__iter__", [](PyLogReader& r) -> PyLogReader& { return r; })
+      .def("__iter__", [](PyLogReader& r) -> PyLogReader& { return r; }, py::return_value_policy::reference_internal)
       .def("__next__", &PyLogReader::next);
   m.def("read_log", [](const std::string& path) {
     py::list l;
@@ -450,7 +450,7 @@ PYBIND11_MODULE(sextant, m) {
       .def("flush", &PyLogWriter::flush)
       .def("close", &PyLogWriter::close)
       .def_property_readonly("events_written", &PyLogWriter::events_written)
-      .def("__enter__", [](PyLogWriter& w) -> PyLogWriter& { return w; })
+      .def("__enter__", [](PyLogWriter& w) -> PyLogWriter& { return w; }, py::return_value_policy::reference_internal)
       .def("__exit__", [](PyLogWriter& w, py::args) { w.close(); });
 
   py::class_<Bus>(m, "Bus", "A live LCM bus through liblcm; a context manager.  URL '' = LCM's default "
@@ -469,7 +469,7 @@ PYBIND11_MODULE(sextant, m) {
            "A callback's exception is raised here.")
       .def("fileno", &Bus::fileno, "The bus's file descriptor, for select().")
       .def("close", &Bus::close)
-      .def("__enter__", [](Bus& b) -> Bus& { return b; })
+      .def("__enter__", [](Bus& b) -> Bus& { return b; }, py::return_value_policy::reference_internal)
       .def("__exit__", [](Bus& b, py::args) { b.close(); });
 
   m.def("optimize",

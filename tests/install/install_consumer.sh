@@ -1,9 +1,10 @@
 #!/usr/bin/env bash
 # `cmake --install` into a temporary prefix from the finished build (nothing is rebuilt), then what an adopter does
 # with it: the installed tools run and report the build's version, the installed configs validate, the systemd unit
-# names the prefix, the examples/optimize_g2o project configures against the installed CMake package
-# (find_package(sextant), sextant::estimators), builds, and optimizes a shared g2o file to the same chi2, the same
-# iteration count and a byte-identical optimized graph as `sextant optimize`; the installed Python module imports
+# names the prefix, the examples/consumer project configures against the installed CMake package
+# (find_package(sextant)) and builds; its optimize_g2o (sextant::estimators) optimizes a shared g2o file to the same
+# chi2, the same iteration count and a byte-identical optimized graph as `sextant optimize`, its log_summary
+# (sextant::runtime) counts a simulated log's events per channel as an independent reader does; the installed Python module imports
 # from the prefix.  Environment: SEXTANT_BUILD_DIR, SEXTANT_SOURCE_DIR, SEXTANT_SHARED_DIR, SEXTANT_PYTHON (the
 # interpreter the module was built for; empty when it was not built).
 set -euo pipefail
@@ -55,7 +56,7 @@ fi
 # The consumer project, built against the installed package only (the launcher of the main build, if any, is reused).
 launcher=()
 [ -n "${SEXTANT_CXX_LAUNCHER:-}" ] && launcher=(-DCMAKE_CXX_COMPILER_LAUNCHER="$SEXTANT_CXX_LAUNCHER")
-cmake -S "$SEXTANT_SOURCE_DIR/examples/optimize_g2o" -B "$prefix/example" -DCMAKE_PREFIX_PATH="$p" \
+cmake -S "$SEXTANT_SOURCE_DIR/examples/consumer" -B "$prefix/example" -DCMAKE_PREFIX_PATH="$p" \
       "${launcher[@]}" > "$prefix/example.log" 2>&1 || { cat "$prefix/example.log"; fail "the example does not configure against $p"; }
 grep -q "sextant_DIR:PATH=$p/lib/cmake/sextant" "$prefix/example/CMakeCache.txt" || fail "the example found another sextant package"
 cmake --build "$prefix/example" > "$prefix/example.log" 2>&1 || { cat "$prefix/example.log"; fail "the example does not build"; }
@@ -75,6 +76,23 @@ assert ex["final_chi2"] < 0.5 * ex["initial_chi2"], f"nothing was optimized: {ex
 print(f"example: {ex['vertices']} vertices, chi2 {ex['initial_chi2']:.3f} -> {ex['final_chi2']:.6f} in {ex['iterations']} iterations, as sextant optimize")
 PY
 cmp -s "$prefix/example.g2o" "$prefix/cli.g2o" || fail "the example's optimized graph differs from sextant optimize -o"
+
+"$p/bin/sextant" simulate planar -o "$prefix/sim.lcm" --seed 1 --duration 10 > /dev/null
+"$prefix/example/log_summary" "$prefix/sim.lcm" > "$prefix/summary.txt"
+python3 - "$prefix/summary.txt" "$prefix/sim.lcm" "$SEXTANT_SOURCE_DIR/tests/e2e" <<'PY'
+import collections, sys
+sys.path.insert(0, sys.argv[3])
+from lcmlog import read_log
+want = collections.Counter(c for _, c, _ in read_log(sys.argv[2]))
+got = {}
+for line in open(sys.argv[1]):
+    name, events, accepted = line.split()
+    got[name] = (int(events), int(accepted))
+assert {k: v[0] for k, v in got.items()} == dict(want), f"log_summary {got} != {dict(want)}"
+assert got["ODOMETRY"][1] == want["ODOMETRY"] > 0, "every simulated odometry message passes the daemon's checks"
+assert all(v[1] == 0 for k, v in got.items() if k != "ODOMETRY"), "only odometry decodes as odometry"
+print("log_summary:", got)
+PY
 
 # The Python module, from the prefix.
 if [ -n "${SEXTANT_PYTHON:-}" ]; then
