@@ -165,13 +165,17 @@ class Bus {
     publish(channel, to_bytes(type_by_name(type).encode(msg)));
   }
 
-  int subscribe(const std::string& channel, py::function callback, bool raw) {
+  int subscribe(const std::string& channel, py::function callback, bool raw, int queue_capacity) {
+    if (queue_capacity < 1) throw py::value_error("queue_capacity must be at least 1");
     auto s = std::make_unique<Subscription>();
     s->bus = this;
     s->callback = std::move(callback);
     s->raw = raw;
     s->subscription = lcm_subscribe(get(), channel.c_str(), &Bus::on_message, s.get());
     if (s->subscription == nullptr) throw std::runtime_error("cannot subscribe to " + channel);
+    // liblcm keeps 30 undelivered messages per subscription unless told otherwise and silently drops the rest: a
+    // Python loop that falls behind a 50 Hz channel for a second would lose messages without a word.
+    lcm_subscription_set_queue_capacity(s->subscription, queue_capacity);
     const int id = next_id_++;
     subs_[id] = std::move(s);
     return id;
@@ -460,9 +464,11 @@ PYBIND11_MODULE(sextant, m) {
       .def("publish_message", &Bus::publish_message, py::arg("channel"), py::arg("type"), py::arg("message"),
            "Encodes the dict as `type` and publishes it.")
       .def("subscribe", &Bus::subscribe, py::arg("channel"), py::arg("callback"), py::arg("raw") = false,
+           py::arg("queue_capacity") = 10000,
            "Calls callback(channel, type, message) for each message on the channels matching the regex: message is "
            "the decoded dict, or the bytes with type None when it is no sextant message; raw=True: "
-           "callback(channel, data).  Returns an id for unsubscribe().")
+           "callback(channel, data).  Up to queue_capacity messages wait for handle() (liblcm drops beyond that; "
+           "its own default is 30).  Returns an id for unsubscribe().")
       .def("unsubscribe", &Bus::unsubscribe, py::arg("id"))
       .def("handle", &Bus::handle, py::arg("timeout") = py::none(),
            "Waits up to timeout seconds (None: forever) for a message and runs its callbacks; True when one came.  "
