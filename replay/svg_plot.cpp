@@ -147,7 +147,7 @@ std::string SvgPlot::render() const {
   size_t longest_category = 0;
   for (const auto& it : items_) colour_bar = colour_bar || it.kind == Item::kColoredLine;
   for (const auto& c : categories_) longest_category = std::max(longest_category, c.size());
-  const double ml = 70, mr = colour_bar ? 80 : 20, mt = 34;
+  const double ml = 70, mr = colour_bar ? 80 : 20, mt = subtitle_.empty() ? 34 : 48;
   const double mb = categories_.empty() ? 48 : std::min(140.0, 40.0 + 4.2 * static_cast<double>(longest_category));
   const double pw = width_ - ml - mr, ph = height_ - mt - mb;
   double x0 = std::numeric_limits<double>::infinity(), x1 = -x0, y0 = x0, y1 = -x0;
@@ -187,6 +187,9 @@ std::string SvgPlot::render() const {
   s += "<rect x=\"0\" y=\"0\" width=\"100%\" height=\"100%\" fill=\"white\"/>\n";
   s += "<text x=\"" + fmt(width_ / 2.0) + "\" y=\"20\" text-anchor=\"middle\" font-size=\"14\" font-weight=\"bold\">" +
        html_escape(title_) + "</text>\n";
+  if (!subtitle_.empty())
+    s += "<text x=\"" + fmt(width_ / 2.0) + "\" y=\"36\" text-anchor=\"middle\" fill=\"#555\">" + html_escape(subtitle_) +
+         "</text>\n";
   s += "<rect x=\"" + fmt(ml) + "\" y=\"" + fmt(mt) + "\" width=\"" + fmt(pw) + "\" height=\"" + fmt(ph) +
        "\" fill=\"none\" stroke=\"#333\"/>\n";
   const double sx = nice_step(x1 - x0, 6), sy = nice_step(y1 - y0, 5);
@@ -283,9 +286,10 @@ std::string SvgPlot::render() const {
     if (!it.label.empty() && it.kind != Item::kColoredLine) longest = std::max(longest, it.label.size()), ++entries;
   if (entries > 0) {
     const double lw = std::min(pw - 10, 26 + 6.2 * static_cast<double>(longest)), lx = ml + pw - lw - 4;
-    s += "<rect class=\"legend\" x=\"" + fmt(lx) + "\" y=\"" + fmt(mt + 3) + "\" width=\"" + fmt(lw) + "\" height=\"" +
-         fmt(16.0 * static_cast<double>(entries) + 6) + "\" fill=\"white\" fill-opacity=\"0.8\" stroke=\"#ccc\"/>\n";
-    double ly = mt + 17;
+    const double lh = 16.0 * static_cast<double>(entries) + 6, top = legend_bottom_ ? mt + ph - lh - 3 : mt + 3;
+    s += "<rect class=\"legend\" x=\"" + fmt(lx) + "\" y=\"" + fmt(top) + "\" width=\"" + fmt(lw) + "\" height=\"" +
+         fmt(lh) + "\" fill=\"white\" fill-opacity=\"0.8\" stroke=\"#ccc\"/>\n";
+    double ly = top + 14;
     for (const auto& it : items_) {
       if (it.label.empty() || it.kind == Item::kColoredLine) continue;
       s += "<rect x=\"" + fmt(lx + 5) + "\" y=\"" + fmt(ly - 9) + "\" width=\"12\" height=\"" +

@@ -15,6 +15,10 @@ class SvgPlot {
  public:
   SvgPlot(std::string title, std::string x_label, std::string y_label, int width = 640, int height = 420);
 
+  /// A second, smaller title line (the parameters of an experiment).
+  void set_subtitle(std::string subtitle) { subtitle_ = std::move(subtitle); }
+  /// The legend in the bottom right corner instead of the top right (curves that rise to the right).
+  void set_legend_bottom(bool bottom) { legend_bottom_ = bottom; }
   /// Keep x and y on the same scale (maps, top views).
   void set_equal_aspect(bool equal) { equal_aspect_ = equal; }
   void polyline(const std::vector<Eigen::Vector2d>& points, const std::string& color, const std::string& label,
@@ -54,7 +58,8 @@ class SvgPlot {
     double size = 1.5;
     std::vector<double> values;        // coloured line: one per point
   };
-  std::string title_, x_label_, y_label_;
+  std::string title_, x_label_, y_label_, subtitle_;
+  bool legend_bottom_ = false;
   int width_, height_;
   bool equal_aspect_ = false;
   bool has_view_ = false;
