@@ -43,7 +43,7 @@ def test_written_log_replays_like_the_original(simulated_run, tmp_path):
         for ts, channel, data in sextant.read_log(str(simulated_run["log"])):
             w.write_message(ts, channel, sextant.message_type(data), sextant.decode(data))
         n = w.events_written
-    assert n == len(sextant.read_log(str(simulated_run["log"])))
+    assert n == len(sextant.read_log(str(simulated_run["log"]))) == w.events_written  # also after closing
     assert open(copy, "rb").read() == open(simulated_run["log"], "rb").read()
 
 
