@@ -60,7 +60,7 @@ def test_writer_errors(tmp_path):
         sextant.read_log(str(tmp_path / "missing.lcm"))
 
 
-def test_listen_reads_a_module_written_log(tmp_path):
+def test_replay_reads_a_module_written_log(tmp_path):
     """`sextant replay` of a log written from dicts: every odometry message becomes a fused pose."""
     log = tmp_path / "square.lcm"
     cov = [0.0] * 36
