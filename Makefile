@@ -5,7 +5,7 @@ JOBS  ?= $(shell nproc)
 BUILD ?= build
 CMAKE_FLAGS ?=
 
-.PHONY: all deps build test demo bench asan tsan spy clean
+.PHONY: all deps build test demo install bench asan tsan spy clean
 
 all: build
 
@@ -21,6 +21,11 @@ test: build
 
 demo: build
 	@scripts/demo.sh $(BUILD)
+
+# cmake --install (README "Install and link"): PREFIX=/usr/local by default.
+PREFIX ?=
+install: build
+	@cmake --install $(BUILD) $(if $(PREFIX),--prefix $(PREFIX))
 
 bench:
 	@SEXTANT_WITH_BENCH=1 scripts/install-deps.sh

@@ -19,6 +19,9 @@ function(sextant_library name)
     file(WRITE ${srcs} "")
   endif()
   add_library(${name} STATIC ${srcs})
-  target_include_directories(${name} PUBLIC ${CMAKE_SOURCE_DIR})
+  # Headers are included by their path from the project root ("estimators/graph/optimizer.hpp"), in the tree and
+  # installed (under include/sextant/, cmake/install.cmake).
+  target_include_directories(${name} PUBLIC $<BUILD_INTERFACE:${CMAKE_SOURCE_DIR}>
+                             $<INSTALL_INTERFACE:${CMAKE_INSTALL_INCLUDEDIR}/sextant>)
   sextant_warnings(${name})
 endfunction()

@@ -75,7 +75,7 @@ std::string describe(const sextant::truth_t& m) {
              (long long)m.id, m.position[0], m.position[1], m.position[2]);
 }
 std::string describe(const sextant::status_t& m) {
-  std::string s = fmt("status_t %s uptime %.1f s", m.sender.c_str(), m.uptime_s);
+  std::string s = fmt("status_t %s %s uptime %.1f s", m.sender.c_str(), m.version.c_str(), m.uptime_s);
   for (const auto& c : m.channels)
     s += fmt(" | %s rx %lld ok %lld rej %lld drop %lld", c.channel.c_str(), (long long)c.received,
              (long long)c.decoded, (long long)c.rejected, (long long)c.dropped);

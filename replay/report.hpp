@@ -1,8 +1,11 @@
 #pragma once
 // The replay report: one self-contained HTML page (inline SVG, no scripts, no network) and report.json with the
-// same numbers.  Plots: top view of the estimates against ground truth and landmarks; position error over time;
-// associated targets with 2-sigma covariance ellipses against the targets' truth; per-stage latency histograms;
-// message counts, rejections and drops per channel.
+// same numbers, at the level of evo's plots.  Top view of every estimate against ground truth and landmarks; the
+// primary estimate aligned onto the truth and coloured by its ATE; ATE over time of every estimator (TUM/evo: SE(3)
+// alignment) with the primary's rmse, mean, median and mean ± std; RPE over time (translation over 1 s) of every
+// estimator; a table of every estimator's ATE and RPE statistics; associated targets with 2-sigma ellipses against
+// the targets' truth, framed to the truth and the bulk of the estimates (far ghosts are counted, not framed);
+// per-stage latency histograms; messages, rejections and drops per channel, the bars named by channel.
 #include "replay/replay_driver.hpp"
 
 #include <string>

@@ -125,6 +125,9 @@ AteResult absolute_trajectory_error(const std::vector<StampedPose>& gt, const st
     errors[k] = (r.scale * r.rotation * model.col(static_cast<Eigen::Index>(k)) + r.translation -
                  data.col(static_cast<Eigen::Index>(k)))
                     .norm();
+  r.errors = errors;
+  r.stamps.resize(n);
+  for (size_t k = 0; k < n; ++k) r.stamps[k] = est[matches[k].second].t;
   r.error = statistics_of(std::move(errors));
   r.matched = n;
   return r;
@@ -146,7 +149,7 @@ RpeResult relative_pose_error(const std::vector<StampedPose>& gt, const std::vec
   std::vector<double> intervals(gt.size() - 1);
   for (size_t i = 1; i < gt.size(); ++i) intervals[i - 1] = stamps_gt[i] - stamps_gt[i - 1];
   const double gt_interval = median_of(intervals);
-  std::vector<double> trans, rot;
+  std::vector<double> trans, rot, stamps;
   for (const auto& [i, j] : pairs) {
     const size_t g0 = find_closest_index(stamps_gt, stamps_est[i]), g1 = find_closest_index(stamps_gt, stamps_est[j]);
     if (std::abs(stamps_gt[g0] - stamps_est[i]) > 2 * gt_interval || std::abs(stamps_gt[g1] - stamps_est[j]) > 2 * gt_interval)
@@ -158,10 +161,14 @@ RpeResult relative_pose_error(const std::vector<StampedPose>& gt, const std::vec
     trans.push_back(E.topRightCorner<3, 1>().norm());
     const double c = std::clamp((E.topLeftCorner<3, 3>().trace() - 1) / 2, -1.0, 1.0);
     rot.push_back(std::acos(c) * 180.0 / M_PI);
+    stamps.push_back(stamps_est[i]);
   }
   if (trans.empty()) throw std::invalid_argument("RPE: no pose pair has ground truth at both ends");
   RpeResult r;
   r.pairs = trans.size();
+  r.stamps = std::move(stamps);
+  r.translation_errors = trans;
+  r.rotation_errors_deg = rot;
   r.translation = statistics_of(std::move(trans));
   r.rotation_deg = statistics_of(std::move(rot));
   return r;

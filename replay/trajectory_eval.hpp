@@ -33,6 +33,7 @@ struct AteResult {
   Eigen::Vector3d translation = Eigen::Vector3d::Zero();
   double scale = 1.0;
   size_t matched = 0;
+  std::vector<double> stamps, errors;  // per matched pose: the estimate's stamp (s) and its aligned error (m)
 };
 
 /// ATE over associated pairs; `estimate_scale` = Sim(3) alignment.  Throws std::invalid_argument with fewer
@@ -44,6 +45,7 @@ struct RpeResult {
   ErrorStatistics translation;  // metres per delta
   ErrorStatistics rotation_deg; // degrees per delta
   size_t pairs = 0;
+  std::vector<double> stamps, translation_errors, rotation_errors_deg;  // per pair, at the stamp of its first pose
 };
 
 enum class DeltaUnit { kSeconds, kFrames };

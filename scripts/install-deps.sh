@@ -9,6 +9,7 @@ packages=(
   libeigen3-dev libsuitesparse-dev
   libspdlog-dev libyaml-cpp-dev libcli11-dev doctest-dev libbenchmark-dev
   iproute2 util-linux procps python3
+  pybind11-dev python3-dev python3-pytest   # the sextant Python module and its tests
   chromium   # the report test renders the HTML report in headless Chromium
 )
 # Optional extras: installed when asked for (benchmarks against Ceres).

@@ -1,5 +1,7 @@
 #include "daemon/runtime/status_report.hpp"
 
+#include "daemon/runtime/version.hpp"
+
 namespace sextant::runtime {
 namespace {
 
@@ -25,6 +27,7 @@ sextant::status_t StatusReport::build(double uptime_s, const std::map<std::strin
   sextant::status_t m{};
   m.utime = wall_utime();
   m.sender = sender_;
+  m.version = sextant::version();
   m.uptime_s = uptime_s;
   for (const auto& [name, c] : channels) {
     sextant::channel_status_t x{};

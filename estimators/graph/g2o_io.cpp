@@ -81,6 +81,10 @@ struct PendingEdge {
 G2oGraph read_g2o(const std::string& path) {
   std::ifstream in(path);
   if (!in) throw std::runtime_error(path + ": cannot open: " + std::strerror(errno));
+  return read_g2o(in, path);
+}
+
+G2oGraph read_g2o(std::istream& in, const std::string& path) {
   G2oGraph out;
   FactorGraph& g = out.graph;
   std::map<int64_t, SE3> offsets;

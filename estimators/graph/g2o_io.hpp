@@ -10,6 +10,7 @@
 // std::runtime_error "FILE:LINE: message".
 #include "estimators/graph/factor_graph.hpp"
 
+#include <istream>
 #include <string>
 
 namespace sextant::graph {
@@ -21,6 +22,8 @@ struct G2oGraph {
 };
 
 G2oGraph read_g2o(const std::string& path);
+/// The same from a stream (g2o text in memory); `name` stands for the file in error messages.
+G2oGraph read_g2o(std::istream& in, const std::string& name);
 /// Writes vertices (current estimates), FIX lines, and the factors g2o can express (relative poses and point
 /// positions).  Throws std::runtime_error when the file cannot be written.
 void write_g2o(const std::string& path, const FactorGraph& graph);

@@ -46,10 +46,12 @@ void write_plots(const std::string& csv, const std::vector<Point>& points, const
   static const char* kColors[] = {"#1f77b4", "#d62728", "#2ca02c", "#ff7f0e", "#9467bd", "#8c564b"};
   for (double sigma : sigmas) {
     const auto& o = points.front().options;
-    std::ostringstream title;
-    title << "Correct association rate, " << o.sensors << " sensors, " << o.targets << " targets, sigma " << sigma
-          << " mrad, P_D " << o.p_detect << ", " << o.clutter << " false alarms/sensor" << (o.uniform_layout ? ", uniform" : "") << (o.target_prior ? ", target prior" : "");
-    SvgPlot plot(title.str(), "target separation d [km]", "correct rate");
+    std::ostringstream sub;
+    sub << o.sensors << " sensors, " << o.targets << " targets, sigma " << sigma << " mrad, P_D " << o.p_detect << ", "
+        << o.clutter << " false alarms/sensor" << (o.uniform_layout ? ", uniform" : "") << (o.target_prior ? ", target prior" : "");
+    SvgPlot plot("Correct association rate", "target separation d [km]", "correct rate");
+    plot.set_subtitle(sub.str());
+    plot.set_legend_bottom(true);  // the rates rise with the separation: the bottom right is free
     std::vector<std::pair<std::string, std::string>> series;  // (cost, solver) in first-seen order
     for (const auto& p : points)
       if (p.sigma_mrad == sigma && std::find(series.begin(), series.end(), std::make_pair(p.cost, p.solver)) == series.end())
@@ -64,7 +66,9 @@ void write_plots(const std::string& csv, const std::vector<Point>& points, const
       plot.points(line, kColors[color % 6], "");
       ++color;
     }
-    plot.polyline({{0, 0}, {0, 1}}, "none", "");  // keep 0..1 in view
+    double d_max = 0;
+    for (const auto& p : points) d_max = std::max(d_max, p.options.spacing);
+    plot.set_view(-0.03 * std::max(d_max, 1e-3), 1.03 * std::max(d_max, 1e-3), -0.03, 1.05);  // rates in [0, 1]
     std::ofstream f(svg_path(csv, sigma));
     f << "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n" << plot.render() << "\n";
   }

@@ -1,7 +1,6 @@
 // sextant eval --gt GT.txt --est EST.txt [--scale] [--delta D] [--delta-unit s|f] [--max-difference S] [--json]
 #include "replay/cli/command.hpp"
-#include "replay/json_writer.hpp"
-#include "replay/trajectory_eval.hpp"
+#include "replay/trajectory_evaluation.hpp"
 
 #include <cstdio>
 
@@ -34,37 +33,20 @@ sextant::cli::RegisterCommand reg{"eval", [](CLI::App& app) {
       std::fprintf(stderr, "sextant eval: %s\n", e.what());
       throw CLI::RuntimeError(2);
     }
-    AteResult ate;
+    const EvaluationOptions opts{o->scale, o->delta, o->delta_unit == "f" ? DeltaUnit::kFrames : DeltaUnit::kSeconds,
+                                 o->max_difference};
+    Evaluation e;
     try {
-      ate = absolute_trajectory_error(gt, est, o->scale, o->max_difference);
-    } catch (const std::exception& e) {
-      std::fprintf(stderr, "sextant eval: %s\n", e.what());
+      e = evaluate_trajectory(gt, est, opts);
+    } catch (const std::exception& ex) {
+      std::fprintf(stderr, "sextant eval: %s\n", ex.what());
       throw CLI::RuntimeError(1);
     }
-    // RPE uses the same scale as the alignment, so a monocular estimate is compared at metric scale.
-    RpeResult rpe;
-    bool have_rpe = true;
-    try {
-      rpe = relative_pose_error(gt, est, o->delta, o->delta_unit == "f" ? DeltaUnit::kFrames : DeltaUnit::kSeconds, ate.scale);
-    } catch (const std::exception&) {
-      have_rpe = false;
-    }
+    const AteResult& ate = e.ate;
+    const bool have_rpe = e.rpe.has_value();
+    const RpeResult rpe = e.rpe.value_or(RpeResult{});
     if (o->json) {
-      JsonWriter j;
-      j.begin_object();
-      j.field("ate_rmse", ate.error.rmse).field("ate_mean", ate.error.mean).field("ate_median", ate.error.median);
-      j.field("ate_std", ate.error.std).field("ate_min", ate.error.min).field("ate_max", ate.error.max);
-      j.field("matched", ate.matched).field("estimated_poses", est.size()).field("scale", ate.scale);
-      if (have_rpe) {
-        j.field("rpe_trans_rmse", rpe.translation.rmse).field("rpe_trans_mean", rpe.translation.mean);
-        j.field("rpe_rot_rmse_deg", rpe.rotation_deg.rmse).field("rpe_rot_mean_deg", rpe.rotation_deg.mean);
-        j.field("rpe_pairs", rpe.pairs);
-      } else {
-        j.key("rpe_trans_rmse").value(std::nan("")).key("rpe_rot_rmse_deg").value(std::nan("")).field("rpe_pairs", 0);
-      }
-      j.field("rpe_delta", o->delta).field("rpe_delta_unit", o->delta_unit);
-      j.end_object();
-      std::fputs(j.str().c_str(), stdout);
+      std::fputs(e.summary(opts).json().c_str(), stdout);
     } else {
       std::printf("ATE (%s): rmse %.6f m, mean %.6f, median %.6f, std %.6f, min %.6f, max %.6f over %zu of %zu poses%s\n",
                   o->scale ? "Sim(3)" : "SE(3)", ate.error.rmse, ate.error.mean, ate.error.median, ate.error.std,

@@ -1,4 +1,5 @@
 // sextant: offline and debugging tools around the sextant engine (see DESIGN.md for the contracts).
+#include "daemon/runtime/version.hpp"
 #include "replay/cli/command.hpp"
 
 #include <algorithm>
@@ -14,6 +15,7 @@ std::vector<Command>& command_registry() {
 
 int main(int argc, char** argv) {
   CLI::App app{"sextant — state estimation over LCM: optimize, replay, simulate, convert, evaluate"};
+  app.set_version_flag("--version", sextant::version());
   app.require_subcommand(1);
   auto& registry = sextant::cli::command_registry();
   std::sort(registry.begin(), registry.end(), [](const auto& a, const auto& b) { return a.name < b.name; });

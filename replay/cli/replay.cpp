@@ -3,6 +3,7 @@
 #include "daemon/engine/engine.hpp"
 #include "daemon/runtime/lcm_log.hpp"
 #include "replay/cli/command.hpp"
+#include "daemon/runtime/version.hpp"
 #include "replay/json_writer.hpp"
 #include "replay/replay_driver.hpp"
 #include "replay/realtime_player.hpp"
@@ -49,6 +50,7 @@ class ProgressBar {
 void print_json(const Options& o, const replay::ReplayResult& r, const std::string& estimator) {
   replay::JsonWriter j;
   j.begin_object();
+  j.field("version", sextant::version());
   j.field("log", o.log);
   j.field("records", r.records);
   j.field("primary_estimator", r.primary_estimator);

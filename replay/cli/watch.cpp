@@ -47,6 +47,7 @@ struct Watcher {
     } else if (channel == status_channel) {
       sextant::status_t s;
       if (!decode(b, s)) return;
+      if (!have_status) std::printf("%s %s\n", s.sender.c_str(), s.version.c_str());  // which daemon, which build
       print_line(s);
       last_status = s;
       have_status = true;

@@ -1,0 +1,140 @@
+#include "replay/graph_optimization.hpp"
+
+#include "estimators/graph/feed_in_order.hpp"
+#include "estimators/graph/initialization.hpp"
+#include "estimators/graph/optimizer.hpp"
+
+#include <sys/resource.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <numeric>
+#include <stdexcept>
+
+namespace sextant::replay {
+namespace {
+
+double percentile(std::vector<double> v, double q) {
+  if (v.empty()) return 0;
+  std::sort(v.begin(), v.end());
+  const double rank = std::ceil(q * static_cast<double>(v.size())) - 1;
+  return v[static_cast<size_t>(std::clamp(rank, 0.0, static_cast<double>(v.size() - 1)))];
+}
+
+void check_member(const std::string& what, const std::string& value, const std::vector<std::string>& allowed) {
+  if (std::find(allowed.begin(), allowed.end(), value) != allowed.end()) return;
+  std::string list;
+  for (const auto& a : allowed) list += (list.empty() ? "" : ", ") + a;
+  throw std::invalid_argument(what + ": '" + value + "' is not one of " + list);
+}
+
+// The file's factors fed in order to the incremental smoother (feed_in_order.hpp), then a batch Gauss-Newton solve
+// of the same graph from the same start for the final chi2 ratio.
+GraphOptimizationResult run_incremental(const graph::G2oGraph& g, const GraphOptimizationOptions& o,
+                                        const std::string& output) {
+  graph::IncrementalOptions io;
+  io.kernel = graph::robust_kernel_from_name(o.robust);
+  io.kernel_width = o.kernel_width;
+  io.relinearize_translation = o.relin_translation;
+  io.relinearize_rotation = o.relin_rotation;
+  io.relinearize_skip = o.relin_skip;
+  graph::IncrementalSmoother smoother(io);
+  const auto t0 = std::chrono::steady_clock::now();
+  graph::FeedResult r = graph::feed_in_order(g.graph, smoother);
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  rusage ru{};
+  getrusage(RUSAGE_SELF, &ru);
+  const double peak_mb = static_cast<double>(ru.ru_maxrss) / 1024.0;  // before the batch reference runs
+  const double initial_chi2 = r.start.chi2();
+  const double final_chi2 = smoother.chi2();
+  graph::OptimizerOptions bo;
+  bo.kernel = io.kernel;
+  bo.kernel_width = io.kernel_width;
+  bo.max_iterations = o.max_iters;
+  bo.relative_tolerance = o.tolerance;
+  const auto batch = graph::optimize(r.start, bo);
+  const double mean = r.step_ms.empty() ? 0
+                      : std::accumulate(r.step_ms.begin(), r.step_ms.end(), 0.0) / static_cast<double>(r.step_ms.size());
+  const double ratio = batch.usable() && batch.final_chi2 > 0 ? final_chi2 / batch.final_chi2 : 0;
+  if (!output.empty()) graph::write_g2o(output, smoother.graph());
+
+  GraphOptimizationResult res;
+  auto& s = res.summary;
+  s.add("vertices", smoother.graph().variables().size()).add("edges", smoother.graph().factors().size());
+  s.add("dimension", g.dimension).add("iterations", r.step_ms.size());
+  s.add("initial_chi2", initial_chi2).add("final_chi2", final_chi2);
+  s.add("solve_seconds", seconds).add("converged", r.ok);
+  s.add("step_ms_mean", mean).add("step_ms_p50", percentile(r.step_ms, 0.5));
+  s.add("step_ms_p99", percentile(r.step_ms, 0.99)).add("step_ms_max", percentile(r.step_ms, 1.0));
+  s.add("final_chi2_batch_ratio", ratio).add("batch_final_chi2", batch.final_chi2);
+  s.add("updates", r.step_ms.size()).add("rebuilds", r.rebuilds).add("relinearize_skip", o.relin_skip);
+  s.add("relinearized_factors", r.relinearized_factors);
+  s.add("factor_nonzeros", static_cast<int64_t>(smoother.factor_nonzeros())).add("peak_rss_mb", peak_mb);
+  s.add("robust", o.robust);
+  if (!r.ok) s.add("termination", r.message);
+  res.ok = r.ok;
+  res.message = r.ok ? "" : r.message;
+  res.variables = smoother.graph().variables();
+  return res;
+}
+
+}  // namespace
+
+GraphOptimizationResult optimize_graph(graph::G2oGraph& g, const GraphOptimizationOptions& o,
+                                       const std::string& output) {
+  check_member("solver", o.solver, {"gn", "lm"});
+  check_member("init", o.init, {"file", "odometry", "chordal", "sgd"});
+  check_member("robust", o.robust, {"none", "huber", "cauchy", "dcs"});
+  check_member("ordering", o.ordering, {"block-amd", "amd", "colamd", "metis", "auto"});
+  if (o.max_iters < 1) throw std::invalid_argument("max_iters must be at least 1");
+  if (!(o.kernel_width > 0) || !(o.tolerance > 0)) throw std::invalid_argument("kernel_width and tolerance must be > 0");
+  if (o.incremental) {
+    if (o.init != "file" || o.solver != "gn")
+      throw std::invalid_argument("incremental initializes each pose from its first edge; init and solver do not apply");
+    if (!(o.relin_translation > 0) || !(o.relin_rotation > 0) || o.relin_skip < 1)
+      throw std::invalid_argument("relinearization thresholds must be > 0 and relin_skip at least 1");
+    return run_incremental(g, o, output);
+  }
+
+  const auto t0 = std::chrono::steady_clock::now();
+  if (o.init == "odometry") {
+    graph::initialize_by_odometry(g.graph);
+  } else if (o.init == "chordal" || o.init == "sgd") {
+    if (o.init == "sgd") graph::initialize_by_odometry(g.graph);
+    if (auto why = o.init == "sgd" ? graph::initialize_sgd(g.graph) : graph::initialize_chordal(g.graph); !why.empty())
+      throw std::runtime_error(why);
+  }
+  graph::OptimizerOptions opt;
+  opt.method = o.solver == "lm" ? graph::Method::kLevenbergMarquardt : graph::Method::kGaussNewton;
+  opt.max_iterations = o.max_iters;
+  opt.relative_tolerance = o.tolerance;
+  opt.kernel = graph::robust_kernel_from_name(o.robust);
+  opt.kernel_width = o.kernel_width;
+  opt.ordering = o.ordering == "block-amd" ? graph::Ordering::kBlockAmd
+                 : o.ordering == "colamd"  ? graph::Ordering::kColamd
+                 : o.ordering == "metis"   ? graph::Ordering::kMetis
+                 : o.ordering == "auto"    ? graph::Ordering::kAuto
+                                           : graph::Ordering::kAmd;
+  const auto st = graph::optimize(g.graph, opt);
+  const double solve_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  if (!output.empty()) graph::write_g2o(output, g.graph);
+
+  GraphOptimizationResult res;
+  auto& s = res.summary;
+  s.add("vertices", g.graph.variables().size()).add("edges", g.graph.factors().size());
+  s.add("dimension", g.dimension).add("iterations", st.iterations);
+  s.add("initial_chi2", st.initial_chi2).add("final_chi2", st.final_chi2);
+  s.add("solve_seconds", solve_seconds).add("converged", st.converged());
+  s.add("solver", o.solver).add("init", o.init).add("robust", o.robust);
+  s.add("termination", st.message);
+  s.add("linearize_seconds", st.linearize_seconds).add("factorize_seconds", st.factorize_seconds);
+  s.add("linear_solve_seconds", st.solve_seconds);
+  if (o.robust != "none") s.add("final_robust_cost", st.final_cost);
+  res.ok = st.usable();
+  res.message = st.usable() ? "" : st.message;
+  res.variables = g.graph.variables();
+  return res;
+}
+
+}  // namespace sextant::replay

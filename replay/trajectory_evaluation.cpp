@@ -1,0 +1,38 @@
+#include "replay/trajectory_evaluation.hpp"
+
+#include <cmath>
+#include <stdexcept>
+
+namespace sextant::replay {
+
+Evaluation evaluate_trajectory(const std::vector<StampedPose>& gt, const std::vector<StampedPose>& est,
+                               const EvaluationOptions& o) {
+  Evaluation e;
+  e.estimated_poses = est.size();
+  e.ate = absolute_trajectory_error(gt, est, o.scale, o.max_difference);
+  // RPE uses the same scale as the alignment, so a monocular estimate is compared at metric scale.
+  try {
+    e.rpe = relative_pose_error(gt, est, o.delta, o.delta_unit, e.ate.scale);
+  } catch (const std::invalid_argument&) {
+    e.rpe.reset();
+  }
+  return e;
+}
+
+Summary Evaluation::summary(const EvaluationOptions& o) const {
+  Summary s;
+  s.add("ate_rmse", ate.error.rmse).add("ate_mean", ate.error.mean).add("ate_median", ate.error.median);
+  s.add("ate_std", ate.error.std).add("ate_min", ate.error.min).add("ate_max", ate.error.max);
+  s.add("matched", ate.matched).add("estimated_poses", estimated_poses).add("scale", ate.scale);
+  if (rpe) {
+    s.add("rpe_trans_rmse", rpe->translation.rmse).add("rpe_trans_mean", rpe->translation.mean);
+    s.add("rpe_rot_rmse_deg", rpe->rotation_deg.rmse).add("rpe_rot_mean_deg", rpe->rotation_deg.mean);
+    s.add("rpe_pairs", rpe->pairs);
+  } else {
+    s.add("rpe_trans_rmse", std::nan("")).add("rpe_rot_rmse_deg", std::nan("")).add("rpe_pairs", 0);
+  }
+  s.add("rpe_delta", o.delta).add("rpe_delta_unit", o.delta_unit == DeltaUnit::kFrames ? "f" : "s");
+  return s;
+}
+
+}  // namespace sextant::replay
