@@ -159,7 +159,7 @@ sextant::cli::RegisterCommand reg{"replay", [](CLI::App& app) {
     ProgressBar bar(isatty(STDERR_FILENO) != 0 && !o->json);
     // Outputs stream to their files as the replay goes; memory keeps bounded samples for the report and the summary.
     replay::ReplayOptions ro;
-    ro.max_kept = 20000;
+    ro.max_kept = 8192;
     ro.segment_seconds = o->segment_seconds;
     std::unique_ptr<runtime::LogWriter> out_log;
     if (!o->out_log.empty()) {

@@ -1,7 +1,9 @@
 // TrajectoryFeed: a subscriber applying the rebuild rule of trajectory_t.lcm holds the current trajectory; updates
 // carry only new and moved keyframes within the budget, the rest follows; removed keyframes are announced; the rolling
-// snapshot repairs a subscriber that missed messages; every message stays under the byte budget.
+// snapshot repairs a subscriber that missed messages; every message stays under the byte budget.  The subscriber is
+// TrajectoryRebuild, checked against the feed's input.
 #include "daemon/engine/trajectory_feed.hpp"
+#include "daemon/engine/trajectory_rebuild.hpp"
 
 #include <doctest/doctest.h>
 
@@ -12,21 +14,14 @@ using namespace sextant::engine;
 
 namespace {
 
-// The subscriber's side, written from the .lcm file's rule.
+// The subscriber's side (TrajectoryRebuild), and how far what it holds is from the truth.
 struct Subscriber {
-  std::map<int64_t, Keyframe> held;
-  void apply(const Trajectory& t) {
-    if (t.kind == Trajectory::Kind::kSnapshot)
-      for (auto it = held.lower_bound(t.range_first); it != held.end() && it->first <= t.range_last;) {
-        bool carried = false;
-        for (const auto& k : t.keyframes) carried = carried || k.id == it->first;
-        it = carried ? std::next(it) : held.erase(it);
-      }
-    for (int64_t id : t.removed_ids) held.erase(id);
-    for (const auto& k : t.keyframes) held[k.id] = k;
-  }
-  // The largest distance between what is held and `truth` (infinite when the id sets differ).
+  TrajectoryRebuild rebuild;
+  void apply(const Trajectory& t) { rebuild.add(t); }
+  size_t size() const { return rebuild.keyframes().size(); }
+  // The largest distance between what is held and `truth` (1e9 when the id sets differ).
   double worst(const std::vector<Keyframe>& truth) const {
+    const auto& held = rebuild.keyframes();
     if (held.size() != truth.size()) return 1e9;
     double w = 0;
     for (const auto& k : truth) {
@@ -93,7 +88,7 @@ TEST_CASE("trajectory feed: rate, budget, moved keyframes, removals and the fina
   size_t removed = 0;
   for (const auto& m : msgs) removed += m.removed_ids.size(), sub.apply(m);
   CHECK(removed == 30);
-  CHECK(sub.held.size() == current.size());
+  CHECK(sub.size() == current.size());
 
   // The final flush: everything that differs at all, no budget.
   for (auto& k : current) k.pose.position.x() += 1e-6;

@@ -151,9 +151,10 @@ def test_encode_errors_in_nested_and_sized_arrays():
     with pytest.raises(ValueError, match=r"status_t.channels\[1\]: unknown field 'bogus'"):
         sextant.encode("status_t", {"channels": [{}, {"bogus": 1}]})
     with pytest.raises(ValueError, match=r"status_t.num_outputs: 3 but output_channels has 1 entries"):
-        sextant.encode("status_t", {"num_outputs": 3, "output_channels": ["A"], "output_counts": [1]})
+        sextant.encode("status_t", {"num_outputs": 3, "output_channels": ["A"], "output_counts": [1], "output_bytes": [1],
+                                    "output_bytes_per_s": [1.0]})
     with pytest.raises(ValueError, match=r"output_channels has 1 entries but output_counts has 2"):
-        sextant.encode("status_t", {"output_channels": ["A"], "output_counts": [1, 2]})
+        sextant.encode("status_t", {"output_channels": ["A"], "output_counts": [1, 2], "output_bytes": [1], "output_bytes_per_s": [1.0]})
     with pytest.raises(ValueError, match=r"status_t.stages\[0\].counter_values\[0\]: expected an integer"):
         sextant.encode("status_t", {"stages": [{"counter_names": ["a"], "counter_values": [0.5]}]})
 

@@ -8,6 +8,7 @@
 #include "daemon/engine/graph_pose_stage.hpp"
 #include "daemon/engine/graph_stage.hpp"
 #include "daemon/engine/pose_conversion.hpp"
+#include "daemon/engine/trajectory_rebuild.hpp"
 #include "daemon/runtime/stage_runner.hpp"
 #include "replay/simulated_matcher.hpp"
 #include "replay/trajectory_eval.hpp"
@@ -265,26 +266,22 @@ TEST_CASE("graph stage: keyframes by motion, proposals, loops from the simulated
   // publications are at most 1 Hz of data time and every message is small.
   engine.finish(emit);
   REQUIRE(!trajectories.empty());
-  std::map<int64_t, Keyframe> rebuilt;
+  TrajectoryRebuild rebuild;
   std::set<int64_t> publication_times;
   for (const Trajectory& t : trajectories) {
     CHECK(t.keyframes.size() <= 512);
     publication_times.insert(t.utime);
-    if (t.kind == Trajectory::Kind::kSnapshot)
-      for (auto it = rebuilt.lower_bound(t.range_first); it != rebuilt.end() && it->first <= t.range_last;)
-        it = std::any_of(t.keyframes.begin(), t.keyframes.end(), [&](const Keyframe& k) { return k.id == it->first; })
-                 ? std::next(it) : rebuilt.erase(it);
-    for (int64_t id : t.removed_ids) rebuilt.erase(id);
-    for (const Keyframe& k : t.keyframes) rebuilt[k.id] = k;
+    rebuild.add(t);
   }
   const auto final_keyframes = graph->keyframes("robot");
+  const auto& rebuilt = rebuild.keyframes();
   REQUIRE(rebuilt.size() == final_keyframes.size());
-  CHECK(trajectories.back().total_keyframes == static_cast<int>(final_keyframes.size()));
+  CHECK(rebuild.total_keyframes() == static_cast<int>(final_keyframes.size()));
   for (const Keyframe& k : final_keyframes) {
     REQUIRE(rebuilt.count(k.id) == 1);
-    CHECK(rebuilt[k.id].utime == k.utime);
-    CHECK(rebuilt[k.id].pose.position == k.pose.position);
-    CHECK(rebuilt[k.id].pose.orientation.coeffs() == k.pose.orientation.coeffs());
+    CHECK(rebuilt.at(k.id).utime == k.utime);
+    CHECK(rebuilt.at(k.id).pose.position == k.pose.position);
+    CHECK(rebuilt.at(k.id).pose.orientation.coeffs() == k.pose.orientation.coeffs());
   }
   // 120 s of data at 1 Hz, and the final flush (at the last publication's time or later).
   CHECK(publication_times.size() <= 122);

@@ -3,6 +3,7 @@
 // work stay flat from the first quarter of the run to the last; loops to old places still close; the accuracy stays
 // close to the full-history graph's; TRAJECTORY rebuilt from its messages equals the final keyframes.
 #include "daemon/config/daemon_config.hpp"
+#include "daemon/engine/trajectory_rebuild.hpp"
 #include "daemon/runtime/lcm_log.hpp"
 #include "replay/replay_driver.hpp"
 #include "replay/simulator.hpp"
@@ -72,24 +73,13 @@ TEST_CASE("lifelong: graph size and memory stay flat over a long run, loops stil
   replay::ReplayOptions ro;
   ro.segment_seconds = 120;  // four quarters
   ro.max_kept = 1000;
-  std::map<int64_t, engine::Keyframe> rebuilt;
-  int total_keyframes = -1;
+  engine::TrajectoryRebuild rebuild;
   std::vector<replay::StampedPose> life_poses;  // every 10th (the ATE's sample; the memory check is the engine's)
   int64_t fused_seen = 0;
   ro.on_output = [&](const engine::Output& o) {
     if (const auto* p = std::get_if<engine::FusedPose>(&o); p && p->estimator == "graph" && fused_seen++ % 10 == 0)
       life_poses.push_back({static_cast<double>(p->utime) * 1e-6, p->pose});
-    const auto* t = std::get_if<engine::Trajectory>(&o);
-    if (t == nullptr) return;
-    if (t->kind == engine::Trajectory::Kind::kSnapshot)
-      for (auto it = rebuilt.lower_bound(t->range_first); it != rebuilt.end() && it->first <= t->range_last;) {
-        bool carried = false;
-        for (const auto& k : t->keyframes) carried = carried || k.id == it->first;
-        it = carried ? std::next(it) : rebuilt.erase(it);
-      }
-    for (int64_t id : t->removed_ids) rebuilt.erase(id);
-    for (const auto& k : t->keyframes) rebuilt[k.id] = k;
-    total_keyframes = t->total_keyframes;
+    if (const auto* t = std::get_if<engine::Trajectory>(&o)) rebuild.add(*t);
   };
   const auto life = replay::replay_log(log, graph_config(true), {}, ro);
   REQUIRE(life.segments.size() == 4);
@@ -129,8 +119,8 @@ TEST_CASE("lifelong: graph size and memory stay flat over a long run, loops stil
 
   // TRAJECTORY: the subscriber's rebuild equals the final keyframes (the ids the graph kept, their poses).
   const auto final_counters = graph_counters(life);
-  CHECK(static_cast<int64_t>(rebuilt.size()) == counter(final_counters, "graph_keyframes"));
-  CHECK(total_keyframes == static_cast<int>(rebuilt.size()));
+  CHECK(static_cast<int64_t>(rebuild.keyframes().size()) == counter(final_counters, "graph_keyframes"));
+  CHECK(rebuild.total_keyframes() == static_cast<int>(rebuild.keyframes().size()));
   CHECK(life.trajectory_messages < 2 * 480 + 10);  // at most 1 Hz: an update and a snapshot chunk per publication
   std::remove(log.c_str());
 }
