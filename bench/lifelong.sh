@@ -8,7 +8,8 @@
 # 2. Live: sextantd on a private bus fed the longest planar run at 10x by `sextant replay --realtime`, lcm-logger
 #    recording the bus, sextantd's RSS sampled every 5 s: graph queue, drops, correction age, TRAJECTORY bytes per
 #    second and largest message (bench/lifelong_summary.py reads everything).
-# Runs take long (the 60-minute live run alone is 6 minutes): a benchmark, not a test.  LIVE=0 skips part 2.
+# Runs take long (the 60-minute live run alone is 6 minutes): a benchmark, not a test.  LIVE=0 skips part 2;
+# SEEDS="1" runs one seed.
 set -euo pipefail
 build=${1:?usage: bench/lifelong.sh BUILD OUT [MINUTES ...]}
 out=${2:?usage: bench/lifelong.sh BUILD OUT [MINUTES ...]}
@@ -30,7 +31,7 @@ EOP
 
 for scenario in planar spatial; do
   for m in "${minutes[@]}"; do
-    for seed in 1 2; do
+    for seed in ${SEEDS:-1 2}; do
       run="$out/${scenario}_${m}min_seed${seed}"
       [ -f "$run.lcm" ] || "$bin/sextant" simulate "$scenario" -o "$run.lcm" --seed "$seed" --duration $((m * 60)) \
           --tum-out "$run.gt.txt" > /dev/null

@@ -217,6 +217,7 @@ class GraphStage final : public Stage {
   int64_t trajectory_messages_ = 0, trajectory_bytes_ = 0, updates_ = 0;
   int64_t thinnings_ = 0, thinning_failures_ = 0, keyframes_thinned_ = 0, loops_thinned_ = 0, sightings_thinned_ = 0,
           landmarks_thinned_ = 0, loops_on_thinned_ = 0;
+  int64_t thinning_us_ = 0, thinning_us_max_ = 0, thinning_solve_us_ = 0;  // wall clock of the last / longest thinning
 };
 
 }  // namespace sextant::engine

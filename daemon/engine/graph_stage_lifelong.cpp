@@ -3,6 +3,7 @@
 #include "daemon/engine/pose_covariance.hpp"
 
 #include <algorithm>
+#include <chrono>
 
 namespace sextant::engine {
 
@@ -40,6 +41,7 @@ void GraphStage::maybe_thin(bool planar) {
 }
 
 void GraphStage::thin(bool planar) {
+  const auto started = std::chrono::steady_clock::now();
   const int kind = planar ? 1 : 0;
   graph::IncrementalSmoother& old = *smoothers_[kind];
   const auto& vars = old.graph().variables();
@@ -143,7 +145,9 @@ void GraphStage::thin(bool planar) {
     ++thinning_failures_;
     return;
   }
+  const auto solve_started = std::chrono::steady_clock::now();
   const graph::IncrementalStatus st = fresh->update();
+  thinning_solve_us_ = std::chrono::duration_cast<std::chrono::microseconds>(std::chrono::steady_clock::now() - solve_started).count();
   if (!st.ok) {
     ++thinning_failures_;  // the old graph stays
     return;
@@ -183,6 +187,8 @@ void GraphStage::thin(bool planar) {
   ++thinnings_;
   smoothers_[kind] = std::move(fresh);
   gate_marginals_[kind].clear();  // the variables' indices changed
+  thinning_us_ = std::chrono::duration_cast<std::chrono::microseconds>(std::chrono::steady_clock::now() - started).count();
+  thinning_us_max_ = std::max(thinning_us_max_, thinning_us_);
   factor_tags_[kind] = std::move(fresh_tags);
 }
 
