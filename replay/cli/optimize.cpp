@@ -1,5 +1,6 @@
-// sextant optimize IN.g2o [-o OUT.g2o] [--solver gn|lm] [--init file|odometry|chordal] [--robust none|huber|cauchy|dcs]
-//                         [--max-iters N] [--incremental] [--json]
+// sextant optimize IN.g2o [-o OUT.g2o] [--solver gn|lm] [--init auto|file|odometry|chordal|sgd]
+//                         [--robust none|huber|cauchy|dcs] [--information reject|repair|diagonal] [--max-iters N]
+//                         [--incremental] [--json]
 #include "estimators/graph/feed_in_order.hpp"
 #include "estimators/graph/g2o_io.hpp"
 #include "estimators/graph/initialization.hpp"
@@ -19,7 +20,7 @@ namespace {
 using namespace sextant;
 
 struct Options {
-  std::string input, output, solver = "gn", init = "file", robust = "none", ordering = "block-amd";
+  std::string input, output, solver = "gn", init = "auto", robust = "none", ordering = "block-amd", information = "reject";
   int max_iters = 100;
   double kernel_width = 1.0;
   double tolerance = 1e-6;
@@ -98,9 +99,14 @@ sextant::cli::RegisterCommand reg{"optimize", [](CLI::App& app) {
   cmd->add_option("input", o->input, "g2o file")->required()->check(CLI::ExistingFile);
   cmd->add_option("-o,--output", o->output, "write the optimized graph (g2o format)");
   cmd->add_option("--solver", o->solver, "gn or lm")->check(CLI::IsMember({"gn", "lm"}));
-  cmd->add_option("--init", o->init, "initial estimate: file (the file's vertices), odometry (spanning tree), chordal (rotation relaxation), "
+  cmd->add_option("--init", o->init, "initial estimate: auto (the default: chordal when its chi2 is below the file's, else the "
+                  "file's), file (the file's vertices), odometry (spanning tree), chordal (rotation relaxation), "
                   "sgd (Olson's SGD from odometry, planar graphs)")
-      ->check(CLI::IsMember({"file", "odometry", "chordal", "sgd"}));
+      ->check(CLI::IsMember({"auto", "file", "odometry", "chordal", "sgd"}));
+  cmd->add_option("--information", o->information, "information matrices that are not positive definite: reject (the default: "
+                  "an error listing them), repair (nearest positive definite, eigenvalues floored at 1e-6 of the largest) or "
+                  "diagonal (their diagonal, floored the same way)")
+      ->check(CLI::IsMember({"reject", "repair", "diagonal"}));
   cmd->add_option("--robust", o->robust, "robust kernel")->check(CLI::IsMember({"none", "huber", "cauchy", "dcs"}));
   cmd->add_option("--kernel-width", o->kernel_width, "Huber/Cauchy delta or DCS phi")->check(CLI::PositiveNumber);
   cmd->add_option("--max-iters", o->max_iters, "maximum iterations")->check(CLI::PositiveNumber);
@@ -116,13 +122,25 @@ sextant::cli::RegisterCommand reg{"optimize", [](CLI::App& app) {
                   "batch optimum)")->check(CLI::PositiveNumber);
   cmd->callback([o] {
     graph::G2oGraph g;
+    graph::G2oReadOptions read_options;
+    read_options.information = o->information == "repair"     ? graph::InformationPolicy::kRepair
+                               : o->information == "diagonal" ? graph::InformationPolicy::kDiagonal
+                                                              : graph::InformationPolicy::kReject;
     try {
-      g = graph::read_g2o(o->input);
+      g = graph::read_g2o(o->input, read_options);
+    } catch (const graph::IndefiniteInformationError& e) {
+      std::fprintf(stderr, "sextant optimize: %s\n  (--information repair uses the nearest positive definite matrices, "
+                   "--information diagonal their diagonals)\n", e.what());
+      throw CLI::RuntimeError(2);
     } catch (const std::exception& e) {
       std::fprintf(stderr, "sextant optimize: %s\n", e.what());
       throw CLI::RuntimeError(2);
     }
+    if (g.repaired_information > 0 && !o->json)
+      std::printf("%s: %d information matrices were not positive definite; used %s\n", o->input.c_str(), g.repaired_information,
+                  o->information == "repair" ? "the nearest positive definite ones" : "their diagonals");
     if (o->incremental) {
+      if (o->init == "auto") o->init = "file";  // the default: the incremental smoother starts each pose from its edges
       if (o->init != "file" || o->solver != "gn") {
         std::fprintf(stderr, "sextant optimize: --incremental initializes each pose from its first edge; --init and --solver do not apply\n");
         throw CLI::RuntimeError(2);
@@ -131,7 +149,10 @@ sextant::cli::RegisterCommand reg{"optimize", [](CLI::App& app) {
       return;
     }
     const auto t0 = std::chrono::steady_clock::now();
-    if (o->init == "odometry") {
+    std::string init_used = o->init;
+    if (o->init == "auto") {
+      init_used = graph::initialize_auto(g.graph) ? "chordal" : "file";
+    } else if (o->init == "odometry") {
       graph::initialize_by_odometry(g.graph);
     } else if (o->init == "chordal" || o->init == "sgd") {
       if (o->init == "sgd") graph::initialize_by_odometry(g.graph);
@@ -160,7 +181,8 @@ sextant::cli::RegisterCommand reg{"optimize", [](CLI::App& app) {
       j.field("dimension", g.dimension).field("iterations", s.iterations);
       j.field("initial_chi2", s.initial_chi2).field("final_chi2", s.final_chi2);
       j.field("solve_seconds", solve_seconds).field("converged", s.converged());
-      j.field("solver", o->solver).field("init", o->init).field("robust", o->robust);
+      j.field("solver", o->solver).field("init", o->init).field("init_used", init_used).field("robust", o->robust);
+      j.field("repaired_information", g.repaired_information);
       j.field("termination", s.message);
       j.field("linearize_seconds", s.linearize_seconds).field("factorize_seconds", s.factorize_seconds);
       j.field("linear_solve_seconds", s.solve_seconds);
@@ -170,7 +192,7 @@ sextant::cli::RegisterCommand reg{"optimize", [](CLI::App& app) {
     } else {
       std::printf("%s: %zu vertices, %zu edges (%dD); %s from %s: chi2 %.6f -> %.6f in %d iterations, %.3f s (%s)\n",
                   o->input.c_str(), g.graph.variables().size(), g.graph.factors().size(), g.dimension,
-                  o->solver.c_str(), o->init.c_str(), s.initial_chi2, s.final_chi2, s.iterations, solve_seconds,
+                  o->solver.c_str(), (o->init == "auto" ? "auto: " + init_used : init_used).c_str(), s.initial_chi2, s.final_chi2, s.iterations, solve_seconds,
                   s.message.c_str());
     }
     if (!s.usable()) {

@@ -5,6 +5,8 @@
 // cuts ghosts under clutter, and the sensor layouts are assoc.md's.
 #include "replay/assoc_experiment.hpp"
 
+#include "assoc/sd_assignment.hpp"
+
 #include <doctest/doctest.h>
 
 using namespace sextant::replay;
@@ -97,4 +99,23 @@ TEST_CASE("sensor layouts and the uniform target layout") {
   CHECK(r.observable_targets == 100);  // 7 sensors at P_D 0.9: every target is seen by >= 2 of them (P ~ 1 - 6e-6)
   CHECK(r.correct_rate > 0.8);
   CHECK(r.gap_max <= 0.01);
+}
+
+TEST_CASE("coplanar grid, 3 x 20, P_D 1: the default relaxation reaches the optimum of its cost where a loose gap did not") {
+  // d = 0.5 km, 12 scans.  The old rule stopped at a relative gap of 1 % of |UB|, about 6.3 cost units on these
+  // scans (|UB| ~ 635, nearly all of it the constant per-detection term); an absolute gap of 6.3 reproduces it.  The
+  // default (0.01 units, then the branch and bound) finds the optimum on every scan, proven by the exact solver.
+  auto o = scenario(20, 0.5, 1.0, 0.0, 12);
+  o.compare_exact = true;
+  o.gap_tolerance = 6.3;
+  const auto loose = run_assoc_experiment(o);
+  o.gap_tolerance = sextant::assoc::kDefaultGapTolerance;
+  const auto tight = run_assoc_experiment(o);
+  MESSAGE("optimal on " << loose.lr_optimal << " of " << loose.exact_compared << " at a 6.3 gap, " << tight.lr_optimal
+                        << " at the default");
+  CHECK(tight.exact_unproven == 0);
+  CHECK(tight.exact_compared == 12);
+  CHECK(tight.lr_optimal == 12);
+  CHECK(loose.lr_optimal <= 8);
+  CHECK(tight.absolute_gap_mean <= 0.01);
 }
