@@ -44,6 +44,9 @@ constexpr size_t kExtraRotations = 2;
 constexpr long kFallbackNodes = 2000;
 // solve_sd_exact: relaxation iterations for the incumbent and the multipliers of the branch and bound's bound.
 constexpr int kExactIterations = 300;
+// ... stopping when its gap is below this (cost units): the branch and bound then proves the rest.  With 0 the
+// bounds, which meet only up to rounding, kept it running to the limit on every component.
+constexpr double kExactGap = 1e-9;
 
 // Clamped at 0: when the bounds meet, rounding can put the lower one a few ulps above the upper one.
 double relative_gap(double ub, double lb) { return std::abs(ub) > 1e-12 ? std::max(0.0, (ub - lb) / std::abs(ub)) : 0.0; }
@@ -578,7 +581,7 @@ SdSolution solve_sd_exact(const std::vector<Tuple>& tuples, const std::vector<in
   for (const auto& group : independent_components(all)) {
     // The relaxation run to its limit for an incumbent and multipliers, then the branch and bound proves the
     // optimum (or runs out: not proven).
-    const auto r = solve_component(tuples, group, n, all, kExactIterations, 0.0, max_nodes);
+    const auto r = solve_component(tuples, group, n, all, kExactIterations, kExactGap, max_nodes);
     add_component(out, group, r.chosen);
     out.cost += r.ub;
     out.lower_bound += r.lb;
