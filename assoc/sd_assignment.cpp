@@ -39,8 +39,7 @@ constexpr size_t kExtraRotations = 2;
 // A component whose gap is still open after the rotations goes to the branch and bound
 // (packing_branch_and_bound.hpp) from the relaxation's best solution, bounded by the relaxation at its best
 // multipliers (RelaxationBound below), within this many nodes.  Coplanar grid, P_D 1, 100 scans per spacing: the
-// optimum on 100/100 at d = 0.5, 1.0 and 1.5 km with 2000 or 20000 nodes alike (RESULTS, passive association
-// session 7).
+// optimum on 100/100 at d = 0.5, 1.0 and 1.5 km with 2000 or 20000 nodes alike (RESULTS, "Correct by default").
 constexpr long kFallbackNodes = 2000;
 // solve_sd_exact: relaxation iterations for the incumbent and the multipliers of the branch and bound's bound.
 constexpr int kExactIterations = 300;

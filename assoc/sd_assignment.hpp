@@ -3,8 +3,10 @@
 // one tuple; the missed index 0 may repeat) minimizing the summed cost; detections in no tuple are false alarms
 // (cost 0).  Both solvers first split the tuples into independent components (tuple_packing.hpp) and solve each
 // on its own; the reported cost, bound and gap are the sums over the components.
-//  - Exact: branch and bound over the detections (each is in one of its tuples or a false alarm) on the Lagrangian
-//    bound of the packing LP (packing_branch_and_bound.hpp), within a node budget.  `exact` is true only when every
+//  - Exact: per component, the relaxation below (for an incumbent and multipliers), then branch and bound over the
+//    detections (each is in one of its tuples or a false alarm; packing_branch_and_bound.hpp) cut by the packing's
+//    Lagrangian bound and, with 3 or more sensors, by the relaxation's own bound at its best multipliers on each
+//    node's sub-problem, within a node budget.  `exact` is true only when every
 //    component's search finished: the cost is then the optimum.  When the budget runs out the solution is the best
 //    found, `exact` is false and `lower_bound` is a valid bound (never a non-optimal answer marked exact).
 //  - Lagrangian relaxation (Pattipati et al. 1992; Deb et al. 1997; assoc.md §1.5), per component with S' >= 3
@@ -28,7 +30,7 @@
 //      constant -ln(P_D / (lambda 2 pi sigma^2)) per detection (about -33 per tuple on the passive grid), the same
 //      for every assignment of the same detections, while competing assignments differ by a few units of the
 //      variable part (1/2 chi2); a gap relative to |UB| let the relaxation stop anywhere within ~6 units of a
-//      scan's optimum (RESULTS, passive association session 7);
+//      scan's optimum (RESULTS, "Correct by default");
 //    * a component still above the tolerance at the iteration limit is solved again with the sensor order rotated
 //      (another sensor relaxed, so the recovery fixes another pair of sensors), up to twice; the best upper and
 //      lower bounds of the runs count;
