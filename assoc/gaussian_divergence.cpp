@@ -40,6 +40,11 @@ double kl_divergence(const Eigen::VectorXd& mu1, const Eigen::MatrixXd& S1, cons
   return 0.5 * ((llt.solve(S1)).trace() + d.dot(llt.solve(d)) - static_cast<double>(mu1.size()) + l2 - l1);
 }
 
+double symmetric_kl_divergence(const Eigen::VectorXd& mu1, const Eigen::MatrixXd& S1, const Eigen::VectorXd& mu2,
+                                const Eigen::MatrixXd& S2) {
+  return 0.5 * (kl_divergence(mu1, S1, mu2, S2) + kl_divergence(mu2, S2, mu1, S1));
+}
+
 double symmetric_renyi_divergence(const Eigen::VectorXd& mu1, const Eigen::MatrixXd& S1, const Eigen::VectorXd& mu2,
                                   const Eigen::MatrixXd& S2, double alpha) {
   return 0.5 * (renyi_divergence(mu1, S1, mu2, S2, alpha) + renyi_divergence(mu2, S2, mu1, S1, alpha));

@@ -1,6 +1,7 @@
 #include "assoc/sd_assignment.hpp"
 
 #include "assoc/assignment_with_missed.hpp"
+#include "assoc/packing_branch_and_bound.hpp"
 #include "assoc/sensor_reassignment.hpp"
 #include "assoc/tuple_packing.hpp"
 
@@ -35,6 +36,16 @@ constexpr long kSmallComponentNodes = 100'000;
 // target prior, the stalled scans' upper bounds were 0.8-1.7 % above the optimum while the lower bound sat at the
 // LP bound).  Only the stalled components pay for it.
 constexpr size_t kExtraRotations = 2;
+// A component whose gap is still open after the rotations goes to the branch and bound
+// (packing_branch_and_bound.hpp) from the relaxation's best solution, bounded by the relaxation at its best
+// multipliers (RelaxationBound below), within this many nodes.  Coplanar grid, P_D 1, 100 scans per spacing: the
+// optimum on 100/100 at d = 0.5, 1.0 and 1.5 km with 2000 or 20000 nodes alike (RESULTS, "Correct by default").
+constexpr long kFallbackNodes = 2000;
+// solve_sd_exact: relaxation iterations for the incumbent and the multipliers of the branch and bound's bound.
+constexpr int kExactIterations = 300;
+// ... stopping when its gap is below this (cost units): the branch and bound then proves the rest.  With 0 the
+// bounds, which meet only up to rounding, kept it running to the limit on every component.
+constexpr double kExactGap = 1e-9;
 
 // Clamped at 0: when the bounds meet, rounding can put the lower one a few ulps above the upper one.
 double relative_gap(double ub, double lb) { return std::abs(ub) > 1e-12 ? std::max(0.0, (ub - lb) / std::abs(ub)) : 0.0; }
@@ -78,49 +89,28 @@ TuplePacking restrict_to(const TuplePacking& all, const std::vector<int>& group)
   return p;
 }
 
-// Branch and bound on one component; `nodes` counts against the caller's budget.  Returns the chosen tuples.
-std::vector<int> branch_and_bound(const TuplePacking& p, long max_nodes, long& nodes, double& best_cost) {
-  const size_t D = static_cast<size_t>(p.detections);
-  std::vector<std::vector<int>> of_detection(D);
-  for (size_t t = 0; t < p.size(); ++t)
-    for (int d : p.members(t)) of_detection[static_cast<size_t>(d)].push_back(static_cast<int>(t));
-  for (auto& v : of_detection)
-    std::sort(v.begin(), v.end(), [&](int a, int b) { return p.cost[static_cast<size_t>(a)] < p.cost[static_cast<size_t>(b)]; });
-  // Per detection, the best share of a tuple's cost it can carry.
-  std::vector<double> share(D, 0.0);
-  for (size_t t = 0; t < p.size(); ++t)
-    for (int d : p.members(t))
-      share[static_cast<size_t>(d)] = std::min(share[static_cast<size_t>(d)], p.cost[t] / static_cast<double>(p.members(t).size()));
-  std::vector<bool> covered(D, false);
-  std::vector<int> chosen, best;
-  best_cost = 0;  // all false alarms
-  auto recurse = [&](auto&& self, size_t d, double cost, double bound_rest) -> void {
-    if (++nodes > max_nodes) return;
-    while (d < D && covered[d]) ++d;  // its share left the bound when it was covered
-    if (d == D) {
-      if (cost < best_cost) best_cost = cost, best = chosen;
-      return;
-    }
-    if (cost + bound_rest >= best_cost - 1e-12) return;
-    const double rest = bound_rest - share[d];
-    for (int t : of_detection[d]) {
+// One component exactly (packing_branch_and_bound.hpp): the incumbent is `start` (or, when empty, the greedy
+// cheapest-first packing) improved by exchange moves; the multipliers are the equal shares raised by
+// `dual_iterations` subgradient steps on the packing's Lagrangian.  `nodes` counts against the caller's budget.
+PackingSolution solve_exactly(const TuplePacking& p, std::vector<int> start, long max_nodes, long& nodes, int dual_iterations) {
+  if (start.empty()) {
+    std::vector<int> order(p.size());
+    for (size_t t = 0; t < p.size(); ++t) order[t] = static_cast<int>(t);
+    std::sort(order.begin(), order.end(), [&](int a, int b) { return p.cost[static_cast<size_t>(a)] < p.cost[static_cast<size_t>(b)]; });
+    std::vector<char> used(static_cast<size_t>(p.detections), 0);
+    for (int t : order) {
       const auto m = p.members(static_cast<size_t>(t));
-      if (!std::all_of(m.begin(), m.end(), [&](int x) { return !covered[static_cast<size_t>(x)]; })) continue;
-      double r = rest;
-      for (int x : m)
-        if (static_cast<size_t>(x) != d) covered[static_cast<size_t>(x)] = true, r -= share[static_cast<size_t>(x)];
-      covered[d] = true;
-      chosen.push_back(t);
-      self(self, d + 1, cost + p.cost[static_cast<size_t>(t)], r);
-      chosen.pop_back();
-      for (int x : m) covered[static_cast<size_t>(x)] = false;
+      if (p.cost[static_cast<size_t>(t)] >= 0 || std::any_of(m.begin(), m.end(), [&](int d) { return used[static_cast<size_t>(d)]; })) continue;
+      for (int d : m) used[static_cast<size_t>(d)] = 1;
+      start.push_back(t);
     }
-    self(self, d + 1, cost, rest);  // d is a false alarm
-  };
-  double bound = 0;
-  for (double s : share) bound += s;
-  recurse(recurse, 0, 0.0, bound);
-  return best;
+  }
+  const double ub = improve_by_exchange(p, start, 20);
+  std::vector<double> v = equal_share_multipliers(p);
+  maximize_packing_lagrangian(p, v, ub, dual_iterations);
+  auto sol = solve_packing_exactly(p, start, v, std::max(0L, max_nodes - nodes));
+  nodes += sol.nodes;
+  return sol;
 }
 
 // One component restated for the relaxation: only the sensors that have detections in it, ordered by decreasing
@@ -218,6 +208,8 @@ struct ComponentResult {
   std::vector<int> chosen;  // positions in the component's group
   double ub = 0, lb = 0;
   int iterations = 0;
+  std::vector<std::vector<double>> u;  // the relaxation's multipliers at its best lower bound
+  bool proven = false;                 // lb == ub proven by an exact method
 };
 
 // Two sensors: an exact 2-D assignment (a tuple with one detection is that detection's cost of staying unpaired).
@@ -384,6 +376,7 @@ ComponentResult solve_relaxation(const RelaxationProblem& P, int max_iterations,
       for (int k = 1; k <= P.n[s]; ++k) lb += std::min(0.0, u[s][static_cast<size_t>(k)]);  // u, or 0 when the singleton (reduced cost -u) is taken
     if (lb > best_lb) stalled = 0;
     else if (++stalled >= kStallLimit) factor *= 0.5, stalled = 0;
+    if (lb > best_lb) out.u = u;
     best_lb = std::max(best_lb, lb);
     // The relaxed solution's tuples.
     pair_of_row.assign(static_cast<size_t>(n1), -1);
@@ -438,13 +431,13 @@ ComponentResult solve_relaxation(const RelaxationProblem& P, int max_iterations,
       for (int t : relaxed) c += P.cost[static_cast<size_t>(t)];
       if (c < best_ub) best_ub = c, best = relaxed, std::sort(best.begin(), best.end());
     }
-    if (relative_gap(best_ub, best_lb) <= gap_tolerance || g2 == 0) break;
+    if (best_ub - best_lb <= gap_tolerance || g2 == 0) break;
     const double step = factor * std::max(best_ub - lb, 1e-9 * std::abs(best_ub)) / g2;
     for (size_t s = 2; s < S; ++s)
       for (int k = 1; k <= P.n[s]; ++k) u[s][static_cast<size_t>(k)] += step * g[s][static_cast<size_t>(k)];
   }
   // Gap still open: a last, more thorough exchange pass over the best solution (more refill candidates, more sweeps).
-  if (relative_gap(best_ub, best_lb) > gap_tolerance) {
+  if (best_ub - best_lb > gap_tolerance) {
     ExchangeImprover thorough(P.packing, 64);
     std::vector<int> polished = best;
     const double c = thorough.improve(polished, 20);
@@ -458,26 +451,110 @@ ComponentResult solve_relaxation(const RelaxationProblem& P, int max_iterations,
 
 // A component of at least two tuples by the relaxation (three or more sensors; again with other sensors relaxed
 // while its gap stays above the tolerance), the 2-D assignment (two sensors) or the branch and bound (one detection).
+// The relaxation's lower bound at fixed multipliers u, on the sub-problem a branch and bound node leaves (the
+// available tuples, the uncovered detections): the relaxed sensors' uncovered detections each add min(0, u), the
+// (1, 2) pairs are a 2-D assignment over the available tuples' least reduced costs, the all-missed pair takes every
+// negative reduced cost.  Valid for any u; with the relaxation's best u it is close to the packing LP's optimum,
+// far tighter than the per-detection bound of packing_branch_and_bound.hpp (which relaxes sensors 1 and 2 too).
+// Tuple t of P.packing is P's tuple t; detection (q, k) of P's sensor q has id offset[q] + k - 1.
+class RelaxationBound {
+ public:
+  RelaxationBound(const RelaxationProblem& P, const std::vector<std::vector<double>>& u) : P_(P), u_(u), reduced_(P.size()) {
+    const size_t S = P.sensors();
+    for (int c : P.n) offset_.push_back(detections_), detections_ += c;
+    for (size_t t = 0; t < P.size(); ++t) {
+      double r = P.cost[t];
+      for (size_t s = 2; s < S; ++s) r -= u[s][static_cast<size_t>(P.at(t, s))];
+      reduced_[t] = r;
+    }
+    for (int t = 0; t < static_cast<int>(P.size());) {
+      const int a = P.at(static_cast<size_t>(t), 0), b = P.at(static_cast<size_t>(t), 1), lo = t;
+      while (t < static_cast<int>(P.size()) && P.at(static_cast<size_t>(t), 0) == a && P.at(static_cast<size_t>(t), 1) == b) ++t;
+      groups_.push_back({a, b, lo, t});
+    }
+  }
+
+  double operator()(const std::vector<char>& covered, const std::vector<int>& blocked) {
+    double lb = 0;
+    for (size_t s = 2; s < P_.sensors(); ++s)
+      for (int k = 1; k <= P_.n[s]; ++k)
+        if (!covered[static_cast<size_t>(offset_[s] + k - 1)]) lb += std::min(0.0, u_[s][static_cast<size_t>(k)]);
+    row_missed_.assign(static_cast<size_t>(P_.n[0]), 0.0), column_missed_.assign(static_cast<size_t>(P_.n[1]), 0.0);
+    pairs_.clear();
+    for (const auto& g : groups_) {
+      double best = kInf;
+      for (int t = g.lo; t < g.hi; ++t) {
+        if (blocked[static_cast<size_t>(t)]) continue;
+        const double r = reduced_[static_cast<size_t>(t)];
+        if (g.a == 0 && g.b == 0) lb += std::min(0.0, r);
+        best = std::min(best, r);
+      }
+      if (best == kInf || (g.a == 0 && g.b == 0)) continue;
+      if (g.b == 0) row_missed_[static_cast<size_t>(g.a - 1)] = std::min(row_missed_[static_cast<size_t>(g.a - 1)], best);
+      else if (g.a == 0) column_missed_[static_cast<size_t>(g.b - 1)] = std::min(column_missed_[static_cast<size_t>(g.b - 1)], best);
+      else pairs_.push_back({g.a - 1, g.b - 1, best});
+    }
+    return lb + solver_.solve(row_missed_, column_missed_, pairs_).value;
+  }
+
+ private:
+  struct Group { int a, b, lo, hi; };
+  const RelaxationProblem& P_;
+  const std::vector<std::vector<double>>& u_;
+  std::vector<double> reduced_;
+  std::vector<int> offset_;
+  int detections_ = 0;
+  std::vector<Group> groups_;
+  std::vector<double> row_missed_, column_missed_;
+  std::vector<PairCost> pairs_;
+  MissedAssignmentSolver solver_;
+};
+
+// The branch and bound on one relaxation problem from the relaxation's result `r` (its best solution as the
+// incumbent, its multipliers for the stronger bound), within `max_nodes`.  Updates r.
+void close_gap(const RelaxationProblem& P, ComponentResult& r, long max_nodes) {
+  std::vector<int> position(P.size());  // group position -> P's tuple
+  for (size_t t = 0; t < P.size(); ++t) position[static_cast<size_t>(P.original[t])] = static_cast<int>(t);
+  std::vector<int> incumbent;
+  for (int c : r.chosen) incumbent.push_back(position[static_cast<size_t>(c)]);
+  RelaxationBound bound(P, r.u);
+  const auto sol = solve_packing_exactly(P.packing, incumbent, equal_share_multipliers(P.packing), max_nodes,
+                                         [&](const std::vector<char>& c, const std::vector<int>& b) { return bound(c, b); });
+  if (sol.cost < r.ub) {
+    r.ub = sol.cost;
+    r.chosen.clear();
+    for (int t : sol.chosen) r.chosen.push_back(P.original[static_cast<size_t>(t)]);
+  }
+  r.lb = std::max(r.lb, sol.lower_bound);
+  r.proven = sol.proven;
+}
+
+// A component of at least two tuples by the relaxation (three or more sensors; again with other sensors relaxed
+// while its gap stays above the tolerance, then the branch and bound within `max_nodes` while it is still open),
+// the 2-D assignment (two sensors) or the branch and bound (one detection).
 ComponentResult solve_component(const std::vector<Tuple>& tuples, const std::vector<int>& group, const std::vector<int>& n,
-                                const TuplePacking& all, int max_iterations, double gap_tolerance) {
+                                const TuplePacking& all, int max_iterations, double gap_tolerance, long max_nodes) {
   ComponentResult r;
   const RelaxationProblem P(tuples, group, n);
   if (P.sensors() >= 3) {
     r = solve_relaxation(P, max_iterations, gap_tolerance);
-    for (size_t rotation = 1; rotation <= kExtraRotations && rotation < P.sensors() && relative_gap(r.ub, r.lb) > gap_tolerance;
+    for (size_t rotation = 1; rotation <= kExtraRotations && rotation < P.sensors() && r.ub - r.lb > gap_tolerance;
          ++rotation) {
       const auto q = solve_relaxation(RelaxationProblem(tuples, group, n, rotation), max_iterations, gap_tolerance);
       r.lb = std::max(r.lb, q.lb);  // both bound the same component from below
       r.iterations += q.iterations;
       if (q.ub < r.ub) r.ub = q.ub, r.chosen = q.chosen;
     }
+    if (r.ub - r.lb > gap_tolerance && max_nodes > 0) close_gap(P, r, max_nodes);
   } else if (P.sensors() == 2) {
     r = solve_two_sensors(P);
+    r.proven = true;
   } else {  // one detection, several single-detection tuples
     long nodes = 0;
-    r.chosen = branch_and_bound(restrict_to(all, group), 1'000'000, nodes, r.ub);
-    r.lb = r.ub;
+    const auto sol = solve_exactly(restrict_to(all, group), {}, 1'000'000, nodes, 0);
+    r.chosen = sol.chosen, r.ub = sol.cost, r.lb = sol.lower_bound, r.proven = sol.proven;
   }
+  if (r.ub - r.lb <= 1e-9 * std::max(1.0, std::abs(r.ub))) r.proven = true;
   return r;
 }
 
@@ -487,21 +564,30 @@ void add_component(SdSolution& out, const std::vector<int>& group, const std::ve
   out.largest_component = std::max(out.largest_component, static_cast<int>(group.size()));
 }
 
+void finish(SdSolution& out) {
+  std::sort(out.tuples.begin(), out.tuples.end());
+  out.lower_bound = std::min(out.lower_bound, out.cost);
+  out.absolute_gap = out.cost - out.lower_bound;
+  out.gap = relative_gap(out.cost, out.lower_bound);
+}
+
 }  // namespace
 
 SdSolution solve_sd_exact(const std::vector<Tuple>& tuples, const std::vector<int>& n, long max_nodes) {
   const TuplePacking all = packing_of(tuples, n);
   SdSolution out;
-  long nodes = 0;
+  bool proven = true;
   for (const auto& group : independent_components(all)) {
-    double cost = 0;
-    const auto chosen = branch_and_bound(restrict_to(all, group), max_nodes, nodes, cost);
-    add_component(out, group, chosen);
-    out.cost += cost;
+    // The relaxation run to its limit for an incumbent and multipliers, then the branch and bound proves the
+    // optimum (or runs out: not proven).
+    const auto r = solve_component(tuples, group, n, all, kExactIterations, kExactGap, max_nodes);
+    add_component(out, group, r.chosen);
+    out.cost += r.ub;
+    out.lower_bound += r.lb;
+    proven = proven && r.proven;
   }
-  std::sort(out.tuples.begin(), out.tuples.end());
-  out.lower_bound = out.cost;
-  out.exact = nodes <= max_nodes;
+  out.exact = proven;
+  finish(out);
   return out;
 }
 
@@ -515,21 +601,25 @@ SdSolution solve_sd_lagrangian(const std::vector<Tuple>& tuples, const std::vect
       if (all.cost[static_cast<size_t>(group[0])] < 0) r.chosen = {0}, r.ub = all.cost[static_cast<size_t>(group[0])];
       r.lb = r.ub;
     } else {
-      // A small component is tried exactly first (k detections hold fewer than 2^k distinct tuples).
-      long nodes = kSmallComponentNodes + 1;
+      // A small component is solved exactly first (k detections hold fewer than 2^k distinct tuples).
+      bool solved = false;
       if (group.size() < (1u << kSmallComponentDetections)) {
         const TuplePacking sub = restrict_to(all, group);
-        if (sub.detections <= kSmallComponentDetections) nodes = 0, r.chosen = branch_and_bound(sub, kSmallComponentNodes, nodes, r.ub), r.lb = r.ub;
+        if (sub.detections <= kSmallComponentDetections) {
+          long nodes = 0;
+          const auto sol = solve_exactly(sub, {}, kSmallComponentNodes, nodes, 0);
+          r.chosen = sol.chosen, r.ub = sol.cost, r.lb = sol.lower_bound, solved = sol.proven;
+        }
       }
-      if (nodes > kSmallComponentNodes) r = solve_component(tuples, group, n, all, max_iterations, gap_tolerance);
+      if (!solved) r = solve_component(tuples, group, n, all, max_iterations, gap_tolerance, kFallbackNodes);
     }
     add_component(out, group, r.chosen);
     out.cost += r.ub;
     out.lower_bound += r.lb;
     out.iterations = std::max(out.iterations, r.iterations);
   }
-  std::sort(out.tuples.begin(), out.tuples.end());
-  out.gap = relative_gap(out.cost, out.lower_bound);
+  finish(out);
+  out.exact = out.absolute_gap <= 1e-9 * std::max(1.0, std::abs(out.cost));
   return out;
 }
 

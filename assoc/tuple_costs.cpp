@@ -85,7 +85,7 @@ double cost_at(const Scan& scan, const std::vector<int>& index, const CostOption
     const Eigen::Vector2d z(d.azimuth, d.elevation);
     const Eigen::Vector2d zh(d.azimuth - wrap(d.azimuth - (*h)[0]), (*h)[1]);  // h with its azimuth unwrapped next to z
     const Eigen::Matrix2d Sh = J * t.covariance * J.transpose();
-    c += o.kind == CostKind::kKl ? kl_divergence(z, R, zh, Sh) : symmetric_renyi_divergence(z, R, zh, Sh, o.alpha) / o.alpha;
+    c += o.kind == CostKind::kKl ? symmetric_kl_divergence(z, R, zh, Sh) : symmetric_renyi_divergence(z, R, zh, Sh, o.alpha) / o.alpha;
   }
   if (o.kind == CostKind::kClassic) c += 0.5 * t.residual;
   if (o.target_density > 0) c -= std::log(o.target_density * std::sqrt((2 * M_PI * t.covariance).determinant()));

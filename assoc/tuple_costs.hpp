@@ -3,7 +3,10 @@
 // §1.3, §1.6, §1.7).  A tuple takes one detection per sensor or none (index 0 = missed); it needs at least two
 // real detections.  A tuple whose cost is not negative is dropped (declaring its detections false alarms costs 0).
 //   classic:  sum_real [ -ln(P_D / (lambda_s sqrt|2 pi R|)) + 1/2 nu' R^-1 nu ] - sum_missed ln(1 - P_D)
-//   kl:       the 1/2 nu' R^-1 nu term replaced by KL(N(z, R) || N(z_hat, J P J'))
+//   kl:       the 1/2 nu' R^-1 nu term replaced by the symmetric KL divergence
+//             1/2 [KL(N(z, R) || N(z_hat, J P J')) + KL(N(z_hat, J P J') || N(z, R))] (the paper's symmetrization,
+//             source C eq. 19-21, at alpha -> 1; equal to 1/2 nu' R^-1 nu when the covariances are equal).  It was
+//             one-sided KL(N(z, R) || N(z_hat, J P J')) before, which is not the paper's divergence.
 //   renyi:    replaced by SD_alpha(N(z, R), N(z_hat, J P J')) / alpha  (equal to 1/2 nu' R^-1 nu when the two
 //             covariances are equal; the symmetric Renyi divergence of source C eq. 19-21)
 //   + target prior (optional, every kind):  - ln(mu_T sqrt|2 pi P|)

@@ -19,7 +19,9 @@
 //  - Correct: a target detected by >= 2 sensors (observable) whose exact tuple of detections is in the output;
 //    ghost: an output tuple that is no target's exact tuple.
 //  - With `compare_exact` every scan is also solved exactly (branch and bound) on the same tuples, and the
-//    relaxation's optimality (cost equal to the exact optimum) is counted.
+//    relaxation's optimality (cost equal to the exact optimum) is counted over the scans whose optimum was proven.
+//  - With `exact`, a scan whose optimum the branch and bound cannot prove within its budget is counted
+//    (`exact_unproven`) and not scored; the rates are over the proven scans.
 #include "assoc/tuple_costs.hpp"
 
 #include <cstdint>
@@ -43,7 +45,7 @@ struct AssocExperimentOptions {
   double p_detect = 1.0;
   double clutter = 0.0;     // mean false alarms per sensor per scan
   int max_iterations = 100;
-  double gap_tolerance = 0.01;
+  double gap_tolerance = 0.01;  // absolute, cost units (assoc/sd_assignment.hpp)
   uint64_t seed = 1;
 };
 
@@ -55,10 +57,14 @@ struct AssocExperimentResult {
   double mean_ms = 0, median_ms = 0, p95_ms = 0;  // wall time per scan, tuple building + assignment
   double median_cpu_ms = 0;    // the same in thread CPU time (what the algorithm costs on a loaded machine)
   double build_median_ms = 0;  // thread CPU time per scan of tuple building (gating and costs) alone
-  double gap_mean = 0, gap_max = 0;
+  double gap_mean = 0, gap_max = 0;  // relative duality gap (UB - LB) / |UB|
+  double absolute_gap_mean = 0;      // UB - LB in cost units
   double tuples_mean = 0;
   double iterations_mean = 0;
   int64_t exact_compared = 0, lr_optimal = 0;  // with compare_exact: scans compared, scans where LR was optimal
+  // Scans the exact solver could not prove optimal within its node budget: with `exact` they are left out of every
+  // figure above (not scored), with `compare_exact` they are not compared.
+  int64_t exact_unproven = 0;
 };
 
 /// The sensor positions of the experiment (km), see above.

@@ -84,13 +84,14 @@ GraphOptimizationResult run_incremental(const graph::G2oGraph& g, const GraphOpt
 GraphOptimizationResult optimize_graph(graph::G2oGraph& g, const GraphOptimizationOptions& o,
                                        const std::string& output) {
   check_member("solver", o.solver, {"gn", "lm"});
-  check_member("init", o.init, {"file", "odometry", "chordal", "sgd"});
+  check_member("init", o.init, {"auto", "file", "odometry", "chordal", "sgd"});
   check_member("robust", o.robust, {"none", "huber", "cauchy", "dcs"});
   check_member("ordering", o.ordering, {"block-amd", "amd", "colamd", "metis", "auto"});
   if (o.max_iters < 1) throw std::invalid_argument("max_iters must be at least 1");
   if (!(o.kernel_width > 0) || !(o.tolerance > 0)) throw std::invalid_argument("kernel_width and tolerance must be > 0");
   if (o.incremental) {
-    if (o.init != "file" || o.solver != "gn")
+    // auto, the default, means the file here: the incremental smoother starts each pose from its edges.
+    if ((o.init != "file" && o.init != "auto") || o.solver != "gn")
       throw std::invalid_argument("incremental initializes each pose from its first edge; init and solver do not apply");
     if (!(o.relin_translation > 0) || !(o.relin_rotation > 0) || o.relin_skip < 1)
       throw std::invalid_argument("relinearization thresholds must be > 0 and relin_skip at least 1");
@@ -98,7 +99,10 @@ GraphOptimizationResult optimize_graph(graph::G2oGraph& g, const GraphOptimizati
   }
 
   const auto t0 = std::chrono::steady_clock::now();
-  if (o.init == "odometry") {
+  std::string init_used = o.init;
+  if (o.init == "auto") {
+    init_used = graph::initialize_auto(g.graph) ? "chordal" : "file";
+  } else if (o.init == "odometry") {
     graph::initialize_by_odometry(g.graph);
   } else if (o.init == "chordal" || o.init == "sgd") {
     if (o.init == "sgd") graph::initialize_by_odometry(g.graph);
@@ -126,7 +130,8 @@ GraphOptimizationResult optimize_graph(graph::G2oGraph& g, const GraphOptimizati
   s.add("dimension", g.dimension).add("iterations", st.iterations);
   s.add("initial_chi2", st.initial_chi2).add("final_chi2", st.final_chi2);
   s.add("solve_seconds", solve_seconds).add("converged", st.converged());
-  s.add("solver", o.solver).add("init", o.init).add("robust", o.robust);
+  s.add("solver", o.solver).add("init", o.init).add("init_used", init_used).add("robust", o.robust);
+  s.add("repaired_information", g.repaired_information);
   s.add("termination", st.message);
   s.add("linearize_seconds", st.linearize_seconds).add("factorize_seconds", st.factorize_seconds);
   s.add("linear_solve_seconds", st.solve_seconds);

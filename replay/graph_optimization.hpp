@@ -14,7 +14,7 @@ namespace sextant::replay {
 
 struct GraphOptimizationOptions {
   std::string solver = "gn";            // gn | lm
-  std::string init = "file";            // file | odometry | chordal | sgd
+  std::string init = "auto";            // auto (chordal when it lowers chi2, else file) | file | odometry | chordal | sgd
   std::string robust = "none";          // none | huber | cauchy | dcs
   std::string ordering = "block-amd";   // block-amd | amd | colamd | metis | auto
   int max_iters = 100;

@@ -22,7 +22,7 @@ struct AssociationConfig {
   double gate_probability = 0.9999;
   std::string solver = "lr";       // lr (Lagrangian relaxation) | exact (branch and bound; small scans only)
   int max_iterations = 100;
-  double gap_tolerance = 0.01;
+  double gap_tolerance = 0.01;  // absolute duality gap, cost units (assoc/sd_assignment.hpp)
   int expected_sensors = 0;        // associate a scan_id as soon as this many sensors reported (0: when the next scan_id arrives)
   int max_pending_scans = 16;      // scan_ids waiting for sensors; beyond this the oldest is associated as it is
 };

@@ -108,6 +108,8 @@ class PointObservationFactor final : public Factor {
   void linearize(const std::vector<Variable>& vars, Linearization& out) const override;
   Model model() const { return model_; }
   const Eigen::VectorXd& measurement() const { return z_; }
+  /// The sensor's pose in the body frame (g2o's PARAMS_SE3OFFSET; the identity by default).
+  const SE3& sensor_offset() const { return offset_; }
 
  private:
   void evaluate(const std::vector<Variable>& vars, Eigen::VectorXd& e, Linearization* out) const;

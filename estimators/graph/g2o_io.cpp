@@ -2,6 +2,9 @@
 
 #include "estimators/graph/initialization.hpp"
 
+#include <Eigen/Cholesky>
+#include <Eigen/Eigenvalues>
+
 #include <cerrno>
 #include <cstdio>
 #include <cstdlib>
@@ -76,15 +79,39 @@ struct PendingEdge {
   std::function<std::unique_ptr<Factor>(int, int)> make;
 };
 
-}  // namespace
-
-G2oGraph read_g2o(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw std::runtime_error(path + ": cannot open: " + std::strerror(errno));
-  return read_g2o(in, path);
+double smallest_eigenvalue(const Eigen::MatrixXd& I) {
+  return Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(I, Eigen::EigenvaluesOnly).eigenvalues().minCoeff();
 }
 
-G2oGraph read_g2o(std::istream& in, const std::string& path) {
+bool positive_definite(const Eigen::MatrixXd& I) {
+  return I.allFinite() && Eigen::LLT<Eigen::MatrixXd>(I).info() == Eigen::Success && smallest_eigenvalue(I) > 0;
+}
+
+// Edges shown by name in the error about bad information matrices (the rest are counted).
+constexpr size_t kBadEdgesShown = 5;
+
+}  // namespace
+
+Eigen::MatrixXd repair_information(const Eigen::MatrixXd& I, InformationPolicy policy) {
+  if (policy == InformationPolicy::kReject) return I;
+  const Eigen::MatrixXd S = 0.5 * (I + I.transpose());
+  if (policy == InformationPolicy::kDiagonal) {
+    const double floor = 1e-6 * std::max(S.diagonal().cwiseAbs().maxCoeff(), 1e-300);
+    return S.diagonal().cwiseMax(floor).asDiagonal();
+  }
+  Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(S);
+  const double floor = 1e-6 * std::max(eig.eigenvalues().cwiseAbs().maxCoeff(), 1e-300);
+  const Eigen::MatrixXd R = eig.eigenvectors() * eig.eigenvalues().cwiseMax(floor).asDiagonal() * eig.eigenvectors().transpose();
+  return 0.5 * (R + R.transpose());
+}
+
+G2oGraph read_g2o(const std::string& path, const G2oReadOptions& options) {
+  std::ifstream in(path);
+  if (!in) throw std::runtime_error(path + ": cannot open: " + std::strerror(errno));
+  return read_g2o(in, path, options);
+}
+
+G2oGraph read_g2o(std::istream& in, const std::string& path, const G2oReadOptions& options) {
   G2oGraph out;
   FactorGraph& g = out.graph;
   std::map<int64_t, SE3> offsets;
@@ -92,6 +119,20 @@ G2oGraph read_g2o(std::istream& in, const std::string& path) {
   std::vector<std::pair<int, int64_t>> fixes;
   bool saw2 = false, saw3 = false;
   LineReader r{path, 0, {}, 1};
+  // Information matrices that are not positive definite: repaired, or listed for the error.
+  std::vector<std::string> bad;
+  auto information = [&](const Eigen::MatrixXd& I, int64_t a, int64_t b) -> Eigen::MatrixXd {
+    if (positive_definite(I)) return I;
+    if (!I.allFinite()) r.fail(r.tokens[0] + " " + std::to_string(a) + " " + std::to_string(b) + ": information matrix has a NaN or infinite entry");
+    if (options.information != InformationPolicy::kReject) {
+      ++out.repaired_information;
+      return repair_information(I, options.information);
+    }
+    std::ostringstream m;
+    m << path << ":" << r.line << " (" << r.tokens[0] << " " << a << " " << b << ", smallest eigenvalue " << smallest_eigenvalue(I) << ")";
+    bad.push_back(m.str());
+    return I;
+  };
   std::string text;
   while (std::getline(in, text)) {
     ++r.line;
@@ -126,27 +167,27 @@ G2oGraph read_g2o(std::istream& in, const std::string& path) {
     } else if (tag == "EDGE_SE2") {
       const int64_t a = r.integer(), b = r.integer();
       const SE2 z = r.se2();
-      const Eigen::Matrix3d I = r.upper_information(3);
+      const Eigen::Matrix3d I = information(r.upper_information(3), a, b);
       saw2 = true;
       edges.push_back({r.line, tag, a, b, [z, I](int i, int j) { return std::make_unique<RelativePoseFactor>(i, j, z, I); }});
     } else if (tag == "EDGE_SE3:QUAT") {
       const int64_t a = r.integer(), b = r.integer();
       const Eigen::Vector3d t = r.vector3();
       const SE3 z(r.quaternion_xyzw(), t);
-      const Matrix6d I = r.upper_information(6);
+      const Matrix6d I = information(r.upper_information(6), a, b);
       saw3 = true;
       edges.push_back({r.line, tag, a, b, [z, I](int i, int j) { return std::make_unique<RelativePoseFactor>(i, j, z, I); }});
     } else if (tag == "EDGE_SE2_XY") {
       const int64_t a = r.integer(), b = r.integer();
       const Eigen::VectorXd z = r.numbers(2);
-      const Eigen::MatrixXd I = r.upper_information(2);
+      const Eigen::MatrixXd I = information(r.upper_information(2), a, b);
       edges.push_back({r.line, tag, a, b, [z, I](int i, int j) {
                          return std::make_unique<PointObservationFactor>(i, j, PointObservationFactor::Model::kPosition, z, I);
                        }});
     } else if (tag == "EDGE_SE3_TRACKXYZ") {
       const int64_t a = r.integer(), b = r.integer(), param = r.integer();
       const Eigen::VectorXd z = r.numbers(3);
-      const Eigen::MatrixXd I = r.upper_information(3);
+      const Eigen::MatrixXd I = information(r.upper_information(3), a, b);
       if (!offsets.count(param)) r.fail("EDGE_SE3_TRACKXYZ: unknown parameter id " + std::to_string(param) + " (PARAMS_SE3OFFSET must come first)");
       const SE3 offset = offsets.at(param);
       edges.push_back({r.line, tag, a, b, [z, I, offset](int i, int j) {
@@ -167,6 +208,16 @@ G2oGraph read_g2o(std::istream& in, const std::string& path) {
       g.add_variable(v);
       out.had_vertices = true;
     }
+  }
+  if (!bad.empty()) {
+    std::ostringstream m;
+    m << path << ": " << bad.size() << " edge" << (bad.size() > 1 ? "s have information matrices" : " has an information matrix")
+      << " that " << (bad.size() > 1 ? "are" : "is") << " not positive definite: ";
+    for (size_t i = 0; i < std::min(bad.size(), kBadEdgesShown); ++i) m << (i ? "; " : "") << bad[i];
+    if (bad.size() > kBadEdgesShown) m << "; and " << bad.size() - kBadEdgesShown << " more";
+    IndefiniteInformationError e(m.str());
+    e.edges = static_cast<int>(bad.size());
+    throw e;
   }
   if (saw2 && saw3) throw std::runtime_error(path + ": mixes 2-D and 3-D poses");
   out.dimension = saw3 ? 3 : 2;
@@ -234,7 +285,18 @@ void write_g2o(const std::string& path, const FactorGraph& g) {
       for (int c = r; c < I.cols(); ++c) std::fprintf(f.get(), " %.17g", I(r, c));
     std::fprintf(f.get(), "\n");
   };
-  bool wrote_offset = false;
+  std::vector<SE3> offsets;  // written so far; PARAMS_SE3OFFSET id = position
+  auto offset_id = [&](const SE3& o) {
+    for (size_t k = 0; k < offsets.size(); ++k)
+      if (offsets[k].translation() == o.translation() && offsets[k].rotation().quaternion().coeffs() == o.rotation().quaternion().coeffs())
+        return static_cast<long long>(k);
+    offsets.push_back(o);
+    const auto& t = o.translation();
+    const auto& q = o.rotation().quaternion();
+    std::fprintf(f.get(), "PARAMS_SE3OFFSET %zu %.17g %.17g %.17g %.17g %.17g %.17g %.17g\n", offsets.size() - 1, t.x(), t.y(), t.z(),
+                 q.x(), q.y(), q.z(), q.w());
+    return static_cast<long long>(offsets.size() - 1);
+  };
   for (const auto& fac : g.factors()) {
     const long long a = vars[static_cast<size_t>(fac->variables()[0])].id;
     if (const auto* rp = dynamic_cast<const RelativePoseFactor*>(fac.get())) {
@@ -257,8 +319,8 @@ void write_g2o(const std::string& path, const FactorGraph& g) {
       if (z.size() == 2) {
         std::fprintf(f.get(), "EDGE_SE2_XY %lld %lld %.17g %.17g", a, b, z[0], z[1]);
       } else {
-        if (!wrote_offset) std::fprintf(f.get(), "PARAMS_SE3OFFSET 0 0 0 0 0 0 0 1\n"), wrote_offset = true;
-        std::fprintf(f.get(), "EDGE_SE3_TRACKXYZ %lld %lld 0 %.17g %.17g %.17g", a, b, z[0], z[1], z[2]);
+        const long long param = offset_id(po->sensor_offset());
+        std::fprintf(f.get(), "EDGE_SE3_TRACKXYZ %lld %lld %lld %.17g %.17g %.17g", a, b, param, z[0], z[1], z[2]);
       }
       info(fac->information());
     }

@@ -4,6 +4,7 @@
 #include <Eigen/SparseCholesky>
 
 #include <algorithm>
+#include <cmath>
 #include <queue>
 #include <tuple>
 #include <map>
@@ -190,6 +191,16 @@ class RampTree {
 };
 
 }  // namespace
+
+bool initialize_auto(FactorGraph& g) {
+  const double before = g.chi2();
+  const std::vector<Variable> saved = g.variables();
+  if (!initialize_chordal(g).empty()) return false;  // left as it was
+  const double after = g.chi2();
+  if (std::isfinite(after) && after < before) return true;
+  g.variables() = saved;
+  return false;
+}
 
 std::string initialize_sgd(FactorGraph& g, int sweeps, uint64_t seed) {
   auto& vars = g.variables();

@@ -1,7 +1,9 @@
-// optimize_g2o INPUT.g2o [OUTPUT.g2o]: reads a pose graph, optimizes it from the file's initial estimate with
-// Gauss-Newton (sextant's defaults, as `sextant optimize`), prints a JSON summary and writes the optimized graph.
+// optimize_g2o INPUT.g2o [OUTPUT.g2o]: reads a pose graph, initializes it as `sextant optimize` does by default (the
+// chordal estimate when its chi2 is below the file's), optimizes it with Gauss-Newton (sextant's defaults), prints a
+// JSON summary and writes the optimized graph.
 // Only sextant::estimators is linked: no daemon, no LCM.
 #include "estimators/graph/g2o_io.hpp"
+#include "estimators/graph/initialization.hpp"
 #include "estimators/graph/optimizer.hpp"
 
 #include <cstdio>
@@ -19,6 +21,7 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "%s\n", e.what());
     return 2;
   }
+  sextant::graph::initialize_auto(g.graph);
   const sextant::graph::OptimizerOptions options;  // Gauss-Newton, at most 100 iterations, relative tolerance 1e-6
   const sextant::graph::OptimizerSummary s = sextant::graph::optimize(g.graph, options);
   std::printf("{\"vertices\": %zu, \"edges\": %zu, \"dimension\": %d, \"iterations\": %d, \"initial_chi2\": %.17g, "

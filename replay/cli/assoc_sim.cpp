@@ -32,7 +32,9 @@ void put(JsonWriter& j, const Point& p) {
   j.field("position_rmse", r.position_rmse).field("mean_ms", r.mean_ms).field("median_ms", r.median_ms);
   j.field("p95_ms", r.p95_ms).field("median_cpu_ms", r.median_cpu_ms).field("build_median_ms", r.build_median_ms).field("gap_mean", r.gap_mean);
   j.field("gap_max", r.gap_max).field("tuples_mean", r.tuples_mean).field("iterations_mean", r.iterations_mean);
+  j.field("absolute_gap_mean", r.absolute_gap_mean);
   if (p.options.compare_exact) j.field("exact_compared", r.exact_compared).field("lr_optimal", r.lr_optimal);
+  if (p.options.compare_exact || p.options.exact) j.field("exact_unproven", r.exact_unproven);
 }
 
 std::string svg_path(const std::string& csv, double sigma_mrad) {
@@ -97,7 +99,7 @@ sextant::cli::RegisterCommand reg{"assoc-sim", [](CLI::App& app) {
   cmd->add_flag("--target-prior", o->target_prior, "add the target-prior term to the cost");
   cmd->add_flag("--compare-exact", o->compare_exact, "also solve every scan exactly and count LR optimality");
   cmd->add_option("--max-iterations", o->max_iterations, "Lagrangian relaxation iterations")->check(CLI::PositiveNumber);
-  cmd->add_option("--gap", o->gap_tolerance, "Lagrangian relaxation gap tolerance")->check(CLI::NonNegativeNumber);
+  cmd->add_option("--gap", o->gap_tolerance, "Lagrangian relaxation: stop when the duality gap UB - LB is below this, in cost units (nats)")->check(CLI::NonNegativeNumber);
   cmd->add_option("--seed", o->seed, "random seed");
   cmd->add_option("--sweep-to", *sweep_to, "also run spacings from --spacing to this value");
   cmd->add_option("--step", *step, "spacing step of the sweep")->check(CLI::PositiveNumber);
@@ -135,6 +137,9 @@ sextant::cli::RegisterCommand reg{"assoc-sim", [](CLI::App& app) {
                           sigma, c.c_str(), sv.c_str(), p.spacing, r.correct_rate, r.correct_rate_stderr, r.ghosts_per_scan,
                           r.position_rmse, r.median_ms, r.median_cpu_ms, r.build_median_ms, r.gap_mean, r.gap_max, r.tuples_mean);
               if (p.compare_exact) std::printf(", LR optimal %lld/%lld", static_cast<long long>(r.lr_optimal), static_cast<long long>(r.exact_compared));
+              if (p.compare_exact || p.exact)
+                std::printf(", %lld scan%s not proven optimal within the budget%s", static_cast<long long>(r.exact_unproven),
+                            r.exact_unproven == 1 ? "" : "s", p.exact ? " (not scored)" : " (not compared)");
               std::printf("\n");
               std::fflush(stdout);
             }
@@ -142,13 +147,13 @@ sextant::cli::RegisterCommand reg{"assoc-sim", [](CLI::App& app) {
     if (!csv->empty()) {
       std::ofstream f(*csv);
       f << "sigma_mrad,cost,solver,spacing,correct_rate,correct_rate_stderr,ghosts_per_scan,position_rmse,mean_ms,median_ms,"
-           "median_cpu_ms,gap_mean,gap_max,tuples_mean,lr_optimal,exact_compared\n";
+           "median_cpu_ms,gap_mean,gap_max,tuples_mean,lr_optimal,exact_compared,exact_unproven,absolute_gap_mean\n";
       for (const auto& p : points) {
         const auto& r = p.result;
         f << p.sigma_mrad << "," << p.cost << "," << p.solver << "," << p.options.spacing << "," << r.correct_rate << ","
           << r.correct_rate_stderr << "," << r.ghosts_per_scan << "," << r.position_rmse << "," << r.mean_ms << ","
           << r.median_ms << "," << r.median_cpu_ms << "," << r.gap_mean << "," << r.gap_max << "," << r.tuples_mean << "," << r.lr_optimal << ","
-          << r.exact_compared << "\n";
+          << r.exact_compared << "," << r.exact_unproven << "," << r.absolute_gap_mean << "\n";
       }
       write_plots(*csv, points, *sigmas);
     }

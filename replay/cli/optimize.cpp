@@ -1,5 +1,6 @@
-// sextant optimize IN.g2o [-o OUT.g2o] [--solver gn|lm] [--init file|odometry|chordal] [--robust none|huber|cauchy|dcs]
-//                         [--max-iters N] [--incremental] [--json]
+// sextant optimize IN.g2o [-o OUT.g2o] [--solver gn|lm] [--init auto|file|odometry|chordal|sgd]
+//                         [--robust none|huber|cauchy|dcs] [--information reject|repair|diagonal] [--max-iters N]
+//                         [--incremental] [--json]
 #include "replay/cli/command.hpp"
 #include "replay/graph_optimization.hpp"
 
@@ -34,9 +35,15 @@ sextant::cli::RegisterCommand reg{"optimize", [](CLI::App& app) {
   cmd->add_option("input", *input, "g2o file")->required()->check(CLI::ExistingFile);
   cmd->add_option("-o,--output", *output, "write the optimized graph (g2o format)");
   cmd->add_option("--solver", o->solver, "gn or lm")->check(CLI::IsMember({"gn", "lm"}));
-  cmd->add_option("--init", o->init, "initial estimate: file (the file's vertices), odometry (spanning tree), chordal (rotation relaxation), "
+  cmd->add_option("--init", o->init, "initial estimate: auto (the default: chordal when its chi2 is below the file's, else the "
+                  "file's), file (the file's vertices), odometry (spanning tree), chordal (rotation relaxation), "
                   "sgd (Olson's SGD from odometry, planar graphs)")
-      ->check(CLI::IsMember({"file", "odometry", "chordal", "sgd"}));
+      ->check(CLI::IsMember({"auto", "file", "odometry", "chordal", "sgd"}));
+  auto information = std::make_shared<std::string>("reject");
+  cmd->add_option("--information", *information, "information matrices that are not positive definite: reject (the default: "
+                  "an error listing them), repair (nearest positive definite, eigenvalues floored at 1e-6 of the largest) or "
+                  "diagonal (their diagonal, floored the same way)")
+      ->check(CLI::IsMember({"reject", "repair", "diagonal"}));
   cmd->add_option("--robust", o->robust, "robust kernel")->check(CLI::IsMember({"none", "huber", "cauchy", "dcs"}));
   cmd->add_option("--kernel-width", o->kernel_width, "Huber/Cauchy delta or DCS phi")->check(CLI::PositiveNumber);
   cmd->add_option("--max-iters", o->max_iters, "maximum iterations")->check(CLI::PositiveNumber);
@@ -50,14 +57,25 @@ sextant::cli::RegisterCommand reg{"optimize", [](CLI::App& app) {
   cmd->add_option("--relin-skip", o->relin_skip, "incremental: look for variables to relinearize every this many updates "
                   "(iSAM2's relinearizeSkip, 10 by its default; 1, the default here, keeps every update's estimate at the "
                   "batch optimum)")->check(CLI::PositiveNumber);
-  cmd->callback([o, input, output, json] {
+  cmd->callback([o, input, output, json, information] {
     graph::G2oGraph g;
+    graph::G2oReadOptions read_options;
+    read_options.information = *information == "repair"     ? graph::InformationPolicy::kRepair
+                               : *information == "diagonal" ? graph::InformationPolicy::kDiagonal
+                                                            : graph::InformationPolicy::kReject;
     try {
-      g = graph::read_g2o(*input);
+      g = graph::read_g2o(*input, read_options);
+    } catch (const graph::IndefiniteInformationError& e) {
+      std::fprintf(stderr, "sextant optimize: %s\n  (--information repair uses the nearest positive definite matrices, "
+                   "--information diagonal their diagonals)\n", e.what());
+      throw CLI::RuntimeError(2);
     } catch (const std::exception& e) {
       std::fprintf(stderr, "sextant optimize: %s\n", e.what());
       throw CLI::RuntimeError(2);
     }
+    if (g.repaired_information > 0 && !*json)
+      std::printf("%s: %d information matrices were not positive definite; used %s\n", input->c_str(), g.repaired_information,
+                  *information == "repair" ? "the nearest positive definite ones" : "their diagonals");
     replay::GraphOptimizationResult r;
     try {
       r = replay::optimize_graph(g, *o, *output);
@@ -81,7 +99,7 @@ sextant::cli::RegisterCommand reg{"optimize", [](CLI::App& app) {
     } else {
       std::printf("%s: %.0f vertices, %.0f edges (%.0fD); %s from %s: chi2 %.6f -> %.6f in %.0f iterations, %.3f s (%s)\n",
                   input->c_str(), number(s, "vertices"), number(s, "edges"), number(s, "dimension"), o->solver.c_str(),
-                  o->init.c_str(), number(s, "initial_chi2"), number(s, "final_chi2"), number(s, "iterations"),
+                  (o->init == "auto" ? "auto: " + text(s, "init_used") : text(s, "init_used")).c_str(), number(s, "initial_chi2"), number(s, "final_chi2"), number(s, "iterations"),
                   number(s, "solve_seconds"), text(s, "termination").c_str());
     }
     if (!r.ok) {

@@ -90,6 +90,47 @@ TEST_CASE("exact S-D branch and bound equals exhaustive search") {
   CHECK(checked >= 20);
 }
 
+TEST_CASE("exact never reports a non-optimal solution as exact: a dynamic program on every scan, and small budgets") {
+  // Scans of 3 sensors with up to ~20 detections: the optimum by dynamic programming over the subsets of detections
+  // (independent of the branch and bound and of the relaxation).
+  std::mt19937 rng(31);
+  int checked = 0;
+  for (int trial = 0; trial < 80 && checked < 40; ++trial) {
+    const Scan scan = random_scan(rng, 4 + trial % 3, 3, 0.9, 1.0);
+    const auto n = sizes(scan);
+    const int D = n[0] + n[1] + n[2];
+    if (D > 20) continue;
+    const auto tuples = build_tuples(scan, CostOptions{});
+    std::vector<std::vector<std::pair<unsigned, double>>> by_lowest(static_cast<size_t>(D));
+    for (const auto& t : tuples) {
+      unsigned mask = 0;
+      for (int s = 0, offset = 0; s < 3; offset += n[static_cast<size_t>(s)], ++s)
+        if (t.index[static_cast<size_t>(s)] > 0) mask |= 1u << (offset + t.index[static_cast<size_t>(s)] - 1);
+      by_lowest[static_cast<size_t>(__builtin_ctz(mask))].push_back({mask, t.cost});
+    }
+    std::vector<double> best(1u << D, 0.0);
+    for (unsigned S = 1; S < (1u << D); ++S) {
+      double b = best[S & (S - 1)];
+      for (const auto& [mask, c] : by_lowest[static_cast<size_t>(__builtin_ctz(S))])
+        if ((mask & S) == mask) b = std::min(b, c + best[S & ~mask]);
+      best[S] = b;
+    }
+    const double optimum = best[(1u << D) - 1];
+    ++checked;
+    CAPTURE(trial);
+    const auto exact = solve_sd_exact(tuples, n);
+    REQUIRE(exact.exact);
+    CHECK(exact.cost == doctest::Approx(optimum).epsilon(1e-12));
+    for (long budget : {1L, 3L, 30L}) {
+      const auto cut = solve_sd_exact(tuples, n, budget);
+      if (cut.exact) CHECK(cut.cost == doctest::Approx(optimum).epsilon(1e-12));
+      CHECK(cut.cost >= optimum - 1e-9);
+      CHECK(cut.lower_bound <= optimum + 1e-9);
+    }
+  }
+  CHECK(checked >= 30);
+}
+
 TEST_CASE("Lagrangian relaxation brackets the optimum and finds it on at least 99 percent of small instances") {
   std::mt19937 rng(13);
   int trials = 0, optimal = 0;

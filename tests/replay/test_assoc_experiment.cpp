@@ -5,6 +5,8 @@
 // cuts ghosts under clutter, and the sensor layouts are assoc.md's.
 #include "replay/assoc_experiment.hpp"
 
+#include "assoc/sd_assignment.hpp"
+
 #include <doctest/doctest.h>
 
 using namespace sextant::replay;
@@ -41,14 +43,14 @@ TEST_CASE("Lagrangian relaxation matches the exact solver on 6-target scans") {
   const auto lr = run_assoc_experiment(o);
   CHECK(lr.exact_compared == 30);
   CHECK(lr.gap_max <= 0.01);
-  // At the default 1 % gap tolerance the relaxation may stop short of the optimum (bench/RESULTS.md: 83 % of such
-  // coplanar-grid scans); run to 100 iterations it finds it on nearly all (98 %).
+  // The default gap (0.01 cost units, then the branch and bound) finds the optimum on every scan, and so does a
+  // gap of 0.
   o.gap_tolerance = 0;
   const auto full = run_assoc_experiment(o);
-  MESSAGE("LR optimal on " << lr.lr_optimal << " of 30 at a 1 % gap tolerance, " << full.lr_optimal << " of 30 at 0");
-  CHECK(full.lr_optimal >= 28);
-  CHECK(full.lr_optimal >= lr.lr_optimal);
-  o.gap_tolerance = 0.01;
+  MESSAGE("LR optimal on " << lr.lr_optimal << " of 30 at the default gap, " << full.lr_optimal << " of 30 at 0");
+  CHECK(lr.lr_optimal == 30);
+  CHECK(full.lr_optimal == 30);
+  o.gap_tolerance = sextant::assoc::kDefaultGapTolerance;
   o.compare_exact = false;
   o.exact = true;
   const auto exact = run_assoc_experiment(o);
@@ -97,4 +99,23 @@ TEST_CASE("sensor layouts and the uniform target layout") {
   CHECK(r.observable_targets == 100);  // 7 sensors at P_D 0.9: every target is seen by >= 2 of them (P ~ 1 - 6e-6)
   CHECK(r.correct_rate > 0.8);
   CHECK(r.gap_max <= 0.01);
+}
+
+TEST_CASE("coplanar grid, 3 x 20, P_D 1: the default relaxation reaches the optimum of its cost where a loose gap did not") {
+  // d = 0.5 km, 12 scans.  The old rule stopped at a relative gap of 1 % of |UB|, about 6.3 cost units on these
+  // scans (|UB| ~ 635, nearly all of it the constant per-detection term); an absolute gap of 6.3 reproduces it.  The
+  // default (0.01 units, then the branch and bound) finds the optimum on every scan, proven by the exact solver.
+  auto o = scenario(20, 0.5, 1.0, 0.0, 12);
+  o.compare_exact = true;
+  o.gap_tolerance = 6.3;
+  const auto loose = run_assoc_experiment(o);
+  o.gap_tolerance = sextant::assoc::kDefaultGapTolerance;
+  const auto tight = run_assoc_experiment(o);
+  MESSAGE("optimal on " << loose.lr_optimal << " of " << loose.exact_compared << " at a 6.3 gap, " << tight.lr_optimal
+                        << " at the default");
+  CHECK(tight.exact_unproven == 0);
+  CHECK(tight.exact_compared == 12);
+  CHECK(tight.lr_optimal == 12);
+  CHECK(loose.lr_optimal <= 8);
+  CHECK(tight.absolute_gap_mean <= 0.01);
 }
