@@ -9,7 +9,8 @@
 #    recording the bus, sextantd's RSS sampled every 5 s: graph queue, drops, correction age, TRAJECTORY bytes per
 #    second and largest message (bench/lifelong_summary.py reads everything).
 # Runs take long (the 60-minute live run alone is 6 minutes): a benchmark, not a test.  LIVE=0 skips part 2;
-# SEEDS="1" runs one seed.
+# SEEDS="1" runs one seed, SCENARIOS="planar" one scenario, FULL_MINUTES="5" the full-history graph on 5-minute runs
+# only (a 60-minute full-history replay takes about 10 minutes).
 set -euo pipefail
 build=${1:?usage: bench/lifelong.sh BUILD OUT [MINUTES ...]}
 out=${2:?usage: bench/lifelong.sh BUILD OUT [MINUTES ...]}
@@ -29,14 +30,14 @@ if on not in s:
 open(sys.argv[2], "w").write(s.replace(on, on.replace("true", "false")))
 EOP
 
-for scenario in planar spatial; do
+for scenario in ${SCENARIOS:-planar spatial}; do
   for m in "${minutes[@]}"; do
     for seed in ${SEEDS:-1 2}; do
       run="$out/${scenario}_${m}min_seed${seed}"
       [ -f "$run.lcm" ] || "$bin/sextant" simulate "$scenario" -o "$run.lcm" --seed "$seed" --duration $((m * 60)) \
           --tum-out "$run.gt.txt" > /dev/null
       modes=(lifelong)
-      if [ "$m" = 5 ] || [ "$m" = 60 ]; then modes+=(full); fi
+      for f in ${FULL_MINUTES:-5 60}; do [ "$m" = "$f" ] && modes+=(full); done
       for mode in "${modes[@]}"; do
         cfg="$root/config/default.yaml"; [ "$mode" = full ] && cfg="$full"
         /usr/bin/time -f "%M" -o "$run.$mode.maxrss" "$bin/sextant" replay "$run.lcm" --config "$cfg" --estimator graph \

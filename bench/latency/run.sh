@@ -13,7 +13,7 @@
 # Needs root (or user namespaces) for `unshare --net`; takes DURATION + about 10 s.
 # env: DURATION (60 s), RATE (1000 Hz), WINDOW (4 poses ahead of the optimizer), FEED_RATE (1000 poses/s),
 #      GRAPH (city10000.g2o in ../shared/data/posegraph), CONFIG (bench/latency/daemon.yaml),
-#      TRAJECTORY_KEYFRAMES (the config's trajectory_max_keyframes: keyframes per TRAJECTORY message),
+#      TRAJECTORY_RATE (the config's trajectory.rate_hz: TRAJECTORY publications per second, 0 = every update),
 #      COALESCE=0 (the graph stage takes every odometry message through its queue, as before session 4),
 #      SAMPLES (a CSV file: every message's latencies), IDLE=1 (the baseline: no background graph, optimizer idle),
 #      KEEP=1 (keep the work folder with the daemon's log).
@@ -40,7 +40,7 @@ graph=${GRAPH:-$root/../shared/data/posegraph/city10000.g2o}
 work=$(mktemp -d)
 trap '[ -n "${KEEP:-}" ] || rm -rf "$work"' EXIT
 config="$work/daemon.yaml"
-sed -e "${TRAJECTORY_KEYFRAMES:+s/trajectory_max_keyframes: [0-9]*/trajectory_max_keyframes: $TRAJECTORY_KEYFRAMES/}" \
+sed -e "${TRAJECTORY_RATE:+s/rate_hz: [0-9.]*/rate_hz: $TRAJECTORY_RATE/}" \
     -e "${COALESCE:+s/coalesce_odometry: [a-z]*/coalesce_odometry: $([ "$COALESCE" = 0 ] && echo false || echo true)/}" \
     "${CONFIG:-$root/bench/latency/daemon.yaml}" > "$config"
 
