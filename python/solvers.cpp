@@ -32,7 +32,7 @@ bool is_path(const py::handle& obj) {
 // An in-memory graph: records that are g2o lines as sequences, ("VERTEX_SE2", 0, 0.0, 0.0, 0.0),
 // ("EDGE_SE2", 0, 1, dx, dy, dtheta, I11, I12, ...), ("FIX", 0); parsed by the g2o reader itself, so the
 // checks and messages are the file's, with "graph[K]" naming record K.
-graph::G2oGraph graph_from_records(const py::handle& records) {
+graph::G2oGraph graph_from_records(const py::handle& records, const graph::G2oReadOptions& read) {
   std::ostringstream text;
   size_t k = 0;
   for (const py::handle rec : records) {
@@ -61,7 +61,7 @@ graph::G2oGraph graph_from_records(const py::handle& records) {
   }
   std::istringstream in(text.str());
   try {
-    return graph::read_g2o(in, "graph");
+    return graph::read_g2o(in, "graph", read);
   } catch (const std::runtime_error& e) {
     // "graph:LINE: message" -> "graph[LINE-1]: message"
     std::string msg = e.what();
@@ -100,10 +100,14 @@ py::list variable_values(const graph::Variable& v) {
 }
 
 py::dict optimize(const py::object& graph_or_path, const std::optional<std::string>& output,
-                  const replay::GraphOptimizationOptions& options) {
+                  const replay::GraphOptimizationOptions& options, const std::string& information) {
+  graph::G2oReadOptions read;
+  if (information == "repair") read.information = graph::InformationPolicy::kRepair;
+  else if (information == "diagonal") read.information = graph::InformationPolicy::kDiagonal;
+  else if (information != "reject") throw py::value_error("information: 'reject', 'repair' or 'diagonal'");
   graph::G2oGraph g = is_path(graph_or_path)
-                          ? graph::read_g2o(py::cast<std::string>(py::str(graph_or_path)))
-                          : graph_from_records(graph_or_path);
+                          ? graph::read_g2o(py::cast<std::string>(py::str(graph_or_path)), read)
+                          : graph_from_records(graph_or_path, read);
   replay::GraphOptimizationResult r;
   {
     py::gil_scoped_release release;
@@ -162,21 +166,23 @@ void register_solvers(py::module_& m) {
         [](const py::object& graph, const std::optional<std::string>& output, const std::string& solver,
            const std::string& init, const std::string& robust, double kernel_width, int max_iters, double tolerance,
            const std::string& ordering, bool incremental, double relin_translation, double relin_rotation,
-           int relin_skip) {
+           int relin_skip, const std::string& information) {
           replay::GraphOptimizationOptions o;
           o.solver = solver, o.init = init, o.robust = robust, o.kernel_width = kernel_width;
           o.max_iters = max_iters, o.tolerance = tolerance, o.ordering = ordering, o.incremental = incremental;
           o.relin_translation = relin_translation, o.relin_rotation = relin_rotation, o.relin_skip = relin_skip;
-          return optimize(graph, output, o);
+          return optimize(graph, output, o, information);
         },
-        py::arg("graph"), py::arg("output") = py::none(), py::arg("solver") = "gn", py::arg("init") = "file",
+        py::arg("graph"), py::arg("output") = py::none(), py::arg("solver") = "gn", py::arg("init") = "auto",
         py::arg("robust") = "none", py::arg("kernel_width") = 1.0, py::arg("max_iters") = 100,
         py::arg("tolerance") = 1e-6, py::arg("ordering") = "block-amd", py::arg("incremental") = false,
         py::arg("relin_translation") = 0.1, py::arg("relin_rotation") = 0.1, py::arg("relin_skip") = 1,
+        py::arg("information") = "reject",
         "`sextant optimize`: graph is a g2o file's path or a list of g2o records such as ('VERTEX_SE2', 0, x, y, "
         "theta), ('EDGE_SE2', 0, 1, dx, dy, dtheta, *information_upper_triangle), ('FIX', 0).  Returns {'summary': "
         "the keys of `sextant optimize --json`, 'poses': {id: values in g2o's vertex order}, 'ok', 'message'}; "
-        "output= also writes the optimized graph as g2o.");
+        "output= also writes the optimized graph as g2o; information= 'reject' (the default), 'repair' or 'diagonal' "
+        "as `sextant optimize --information`.");
   m.def("eval", &evaluate, py::arg("gt"), py::arg("est"), py::arg("scale") = false, py::arg("delta") = 1.0,
         py::arg("delta_unit") = "s", py::arg("max_difference") = 0.02,
         "`sextant eval`: ATE and RPE (TUM benchmark semantics) of est against gt, each a TUM file's path or rows "
