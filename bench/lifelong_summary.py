@@ -105,7 +105,8 @@ if os.path.exists(bus):
     rss = [int(line.split()[1]) for line in open(os.path.join(out, "live_rss.txt")) if len(line.split()) == 2]
     print(f"- graph queue: at most {queue_max} of {queue_cap}; events dropped by stages {dropped}, at intake {drops_in}")
     print(f"- correction age: at most {age_max / 1e6:.3f} s (data time)")
-    print(f"- TRAJECTORY: {rate / 1024:.1f} KB/s over {wall:.0f} s of wall time, largest message {sizes.get('TRAJECTORY', 0) / 1024:.1f} KB")
+    print(f"- TRAJECTORY: {rate / 1024:.1f} KB/s over {wall:.0f} s of wall time at 10x, i.e. {rate / 10 / 1024:.1f} KB per "
+          f"second of data (what a robot running in real time sends); largest message {sizes.get('TRAJECTORY', 0) / 1024:.1f} KB")
     print(f"- largest message on any channel: {max(sizes.values()) / 1024:.1f} KB ({max(sizes, key=sizes.get)})")
     if rss:
         n = len(rss)
@@ -116,7 +117,8 @@ if os.path.exists(bus):
     targets.append(("daemon at 10x: graph queue never full", f"{queue_max} / {queue_cap}", queue_max < queue_cap))
     targets.append(("daemon at 10x: no event dropped", f"{dropped + drops_in}", dropped + drops_in == 0))
     targets.append(("daemon at 10x: correction age <= 1 s", f"{age_max / 1e6:.3f} s", age_max <= 1e6))
-    targets.append(("TRAJECTORY <= 100 KB/s", f"{rate / 1024:.1f} KB/s", rate <= 100 * 1024))
+    targets.append(("TRAJECTORY <= 100 KB/s per second of data (real time)", f"{rate / 10 / 1024:.1f} KB/s", rate / 10 <= 100 * 1024))
+    targets.append(("TRAJECTORY <= 100 KB/s of wall time while fed at 10x", f"{rate / 1024:.1f} KB/s", rate <= 100 * 1024))
     targets.append(("no message over 64 KB", f"{max(sizes.values()) / 1024:.1f} KB", max(sizes.values()) <= 64 * 1024))
 
 print("\n## Targets\n")

@@ -20,6 +20,9 @@ namespace sextant::replay {
 
 namespace {
 
+/// Targets messages a bounded replay keeps (the newest): what the report plots (the last 20 scans) and a margin.
+constexpr size_t kNewestTargetsKept = 64;
+
 /// The process's resident set size in KB (VmRSS of /proc/self/status), 0 where unavailable.
 int64_t resident_kb() {
   std::ifstream f("/proc/self/status");
@@ -101,7 +104,7 @@ ReplayResult replay_log(const std::string& log_path, const config::DaemonConfig&
           } else if constexpr (std::is_same_v<T, engine::Targets>) {
             ++result.target_messages;
             result.targets.push_back(x);
-            if (!keep_all && result.targets.size() > options.max_kept) result.targets.erase(result.targets.begin());
+            if (!keep_all && result.targets.size() > kNewestTargetsKept) result.targets.erase(result.targets.begin());
           } else {
             ++result.match_request_messages;
             if (keep_all) result.match_requests.push_back(x);

@@ -50,7 +50,7 @@ struct StageReport {
 struct ReplayOptions {
   /// Series kept in ReplayResult (each estimator's fused poses, truth poses, stage latencies) hold at most this many
   /// entries: beyond it every other entry is dropped and only every 2nd, 4th, ... is kept from then on (an evenly
-  /// spaced sample, the same on every run); targets keep the newest this many, trajectories and match requests none,
+  /// spaced sample, the same on every run); targets keep the newest 64, trajectories and match requests none,
   /// published bytes none (stream them with on_publish).  0: everything, as small logs and tests want.
   size_t max_kept = 0;
   /// Every published message, as the bus would carry it (channel, encoded bytes, utime), in publish order.

@@ -39,7 +39,7 @@ config::DaemonConfig graph_config(bool lifelong) {
   cfg.engine.graph.lifelong.enabled = lifelong;
   cfg.engine.graph.lifelong.max_keyframes = 400;
   cfg.engine.graph.lifelong.thinning.window = 200;
-  // The odometry kept to bridge loop times to keyframes is bounded too, at 100000 poses by default (33 minutes at
+  // The odometry kept to bridge loop times to keyframes is bounded too, at 30000 poses by default (10 minutes at
   // 50 Hz): 120 s here, so that this run reaches its bound in its first quarter (loops to older times then land only
   // when their times are keyframes' own).
   cfg.engine.graph.odometry_history = 6000;
