@@ -25,7 +25,10 @@ struct TrajectoryFeedOptions {
   double move_rotation = 0.005;        // rad: ... or turned more than this
   int max_keyframes_per_message = 512; // ~37 KB per message
   int max_keyframes_per_tick = 1024;   // UPDATE keyframes per publication (new and moved); the rest wait
-  int snapshot_chunk = 256;            // keyframes of the rolling snapshot per publication; 0: no snapshot
+  /// Keyframes of the rolling snapshot per publication; 0: no snapshot.  The snapshot is most of the traffic of a
+  /// steady trajectory (64: 4.6 KB per publication; 256 made 15.6 KB/s on the planar 60-minute run, 92 % of it the
+  /// snapshot); a late subscriber has the whole trajectory after keyframes / snapshot_chunk publications.
+  int snapshot_chunk = 64;
 };
 
 class TrajectoryFeed {

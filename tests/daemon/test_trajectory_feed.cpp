@@ -100,7 +100,7 @@ TEST_CASE("trajectory feed: rate, budget, moved keyframes, removals and the fina
 }
 
 TEST_CASE("trajectory feed: a late subscriber converges within one snapshot cycle, and messages stay small") {
-  TrajectoryFeedOptions o;  // the defaults: 512 keyframes per message at most, snapshot chunks of 256
+  TrajectoryFeedOptions o;  // the defaults: 512 keyframes per message at most, snapshot chunks of 64
   TrajectoryFeed feed(o);
   std::mt19937 rng(3);
   std::uniform_real_distribution<double> u(-0.002, 0.002);
@@ -110,8 +110,8 @@ TEST_CASE("trajectory feed: a late subscriber converges within one snapshot cycl
   int chunks_seen = 0, cycles_done = 0;
   bool joined = false;
   int64_t next_id = 0;
-  for (int tick = 0; tick < 40; ++tick, t += 1'000'000) {
-    for (int k = 0; k < 100; ++k, ++next_id) current.push_back(keyframe(next_id, next_id * 0.3, 0));
+  for (int tick = 0; tick < 200; ++tick, t += 1'000'000) {
+    for (int k = 0; k < 20; ++k, ++next_id) current.push_back(keyframe(next_id, next_id * 0.3, 0));
     for (auto& k : current) k.pose.position.y() += u(rng);  // small moves below the threshold pile up
     if (tick == 7) current.erase(current.begin() + 5, current.begin() + 25);
     const auto msgs = feed.publish(t, current, Trajectory{});
