@@ -23,15 +23,17 @@ std::optional<int64_t> peek_utime(const std::vector<uint8_t>& b) {
 
 ReplayResult replay_log(const std::string& log_path, const config::DaemonConfig& cfg, const Progress& progress) {
   const auto wall_start = std::chrono::steady_clock::now();
-  std::vector<runtime::LogRecord> records = runtime::LogReader::read_all(log_path);
+  runtime::LogDamage damage;
+  std::vector<runtime::LogRecord> records = runtime::LogReader::read_all(log_path, &damage);
 
   ReplayResult result;
+  result.log_damage = std::move(damage);
   result.records = static_cast<int64_t>(records.size());
   engine::Engine engine(cfg.engine);
   result.primary_estimator = engine.primary_estimator();
 
   runtime::ChannelStats stats;
-  runtime::Intake intake(stats);
+  runtime::Intake intake(stats, {}, runtime::intake_options(cfg, /*live=*/false));
   const auto& ch = cfg.channels;
   intake.add_channel(ch.full(ch.odometry), runtime::InputKind::kOdometry);
   intake.add_channel(ch.full(ch.landmarks), runtime::InputKind::kLandmarks);

@@ -78,6 +78,11 @@ class GraphStage final : public Stage {
   /// Daemon intake thread: odometry goes to the coalescer (when coalesce_odometry), everything else to the queue.
   bool offer(const Event& e, const std::function<bool()>& enqueue) override;
   void handle(const Event& e, const Emit& emit) override;
+  /// Refactorizes the smoothers from their graphs (a failed update can leave a factor out of step with the graph).
+  void recover(const Event& /*failed*/) override {
+    for (auto& s : smoothers_)
+      if (s) s->rebuild();
+  }
   Counters counters() const override;
 
   /// The smoother of the planar bodies or of the 3-D ones (nullptr before the first such body).
