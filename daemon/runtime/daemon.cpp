@@ -7,6 +7,7 @@
 #include "daemon/runtime/recorder.hpp"
 #include "daemon/runtime/stage_runner.hpp"
 #include "daemon/runtime/status_report.hpp"
+#include "daemon/runtime/udp_drops.hpp"
 
 #include <lcm/lcm-cpp.hpp>
 #include <spdlog/spdlog.h>
@@ -151,6 +152,7 @@ int run_daemon(const config::DaemonConfig& cfg, const std::atomic<bool>& stop) {
                primary.empty() ? "none" : primary);
 
   const auto started = Clock::now();
+  const int64_t drops_at_start = udp_receive_drops().value_or(0);
   StatusReport report(cfg.name);
   auto publish_status = [&] {
     std::vector<StageStatus> stage_status;
@@ -159,6 +161,7 @@ int run_daemon(const config::DaemonConfig& cfg, const std::atomic<bool>& stop) {
                                       {"time_resyncs", intake_counters.resyncs.load()},
                                       {"sources", intake_counters.sources.load()},
                                       {"sources_expired", intake_counters.expired.load()}};
+    if (const auto drops = udp_receive_drops()) runtime_counters.push_back({"udp_receive_drops", *drops - drops_at_start});
     if (recorder) {
       runtime_counters.push_back({"recorded", recorder->written()});
       runtime_counters.push_back({"record_dropped", recorder->dropped()});

@@ -300,3 +300,34 @@ TEST_CASE("filter stage: two replays of a log give identical EKF poses") {
            pa[i].pose.orientation.coeffs() == pb[i].pose.orientation.coeffs() && pa[i].covariance == pb[i].covariance;
   CHECK(same);
 }
+
+TEST_CASE("filter stage: recover after a failed event forgets that body only, which restarts from its next odometry") {
+  replay::SimulationOptions o;
+  o.duration_s = 2;
+  o.seed = 9;
+  const auto events = simulated_events(o);
+  engine::FilterStage stage(engine::FilterConfig{});
+  const engine::Event* first_odometry = nullptr;
+  for (const auto& e : events) {
+    stage.handle(e, [](engine::Output) {});
+    if (first_odometry == nullptr && std::holds_alternative<engine::Odometry>(e)) first_odometry = &e;
+  }
+  REQUIRE(first_odometry != nullptr);
+  REQUIRE(stage.ekf(o.source) != nullptr);
+  engine::Odometry other = std::get<engine::Odometry>(*first_odometry);
+  other.source = "other";
+  stage.handle(other, [](engine::Output) {});
+  REQUIRE(stage.ekf("other") != nullptr);
+  stage.recover(*first_odometry);  // as the stage runner does after handle threw on it
+  CHECK(stage.ekf(o.source) == nullptr);
+  CHECK(stage.ekf("other") != nullptr);
+  // The body's next odometry message starts a fresh filter and publishes again.
+  auto next = std::get<engine::Odometry>(*first_odometry);
+  next.utime = engine::event_utime(events.back()) + 1'000'000;
+  int published = 0;
+  stage.handle(next, [&](engine::Output) { ++published; });
+  next.utime += 20'000;
+  stage.handle(next, [&](engine::Output) { ++published; });
+  REQUIRE(stage.ekf(o.source) != nullptr);
+  CHECK(published >= 1);
+}
