@@ -79,8 +79,9 @@ std::optional<engine::Event> Intake::accept_unguarded(const std::string& channel
   }
   engine::Event event = std::get<engine::Event>(std::move(d));
   const StreamKey key = stream_of(channel, event);
-  const std::optional<int64_t> wall = options_.live ? std::optional<int64_t>(wall_utime()) : std::nullopt;
-  if (auto why = order_.check(key.stream, engine::event_utime(event), key.strict, key.signature, wall)) {
+  std::optional<TimeOrderGuard::LiveClock> live;
+  if (options_.live) live = TimeOrderGuard::LiveClock{wall_utime(), std::chrono::steady_clock::now()};
+  if (auto why = order_.check(key.stream, engine::event_utime(event), key.strict, key.signature, live)) {
     reject(channel, why->reason, channel + ": " + why->message);
     return std::nullopt;
   }

@@ -39,11 +39,12 @@ void TimeOrderGuard::expire(SteadyTime now) {
 }
 
 std::optional<TimeOrderGuard::Refusal> TimeOrderGuard::check(const std::string& stream, int64_t utime, bool strict,
-                                                             uint64_t signature, std::optional<int64_t> wall_utime,
-                                                             SteadyTime now) {
+                                                             uint64_t signature, std::optional<LiveClock> live) {
+  const SteadyTime now = live ? live->now : std::chrono::steady_clock::now();
   const auto max_ahead = static_cast<int64_t>(options_.max_ahead_s * 1e6);
-  if (wall_utime && utime > *wall_utime && utime - *wall_utime > static_cast<int64_t>(options_.max_ahead_of_wall_s * 1e6))
-    return Refusal{"time_future", "utime " + std::to_string(utime) + " is " + seconds(utime - *wall_utime) +
+  if (live && utime > live->wall_utime &&
+      utime - live->wall_utime > static_cast<int64_t>(options_.max_ahead_of_wall_s * 1e6))
+    return Refusal{"time_future", "utime " + std::to_string(utime) + " is " + seconds(utime - live->wall_utime) +
                                       " s ahead of the wall clock for " + stream};
   // Idle streams are looked for at most once a second, and when the table is full.
   if (options_.idle_s > 0 && now - last_expiry_ > std::chrono::seconds(1)) expire(now);
@@ -58,7 +59,7 @@ std::optional<TimeOrderGuard::Refusal> TimeOrderGuard::check(const std::string& 
     Stream s;
     s.clock = utime;
     s.recent.push_back(mix(utime, signature));
-    s.seen = now;
+    s.seen = s.moved = now;
     streams_.emplace(stream, std::move(s));
     return std::nullopt;
   }
@@ -67,11 +68,14 @@ std::optional<TimeOrderGuard::Refusal> TimeOrderGuard::check(const std::string& 
   const uint64_t sig = mix(utime, signature);
   if ((strict && utime == s.clock) || (!strict && std::find(s.recent.begin(), s.recent.end(), sig) != s.recent.end()))
     return Refusal{"time_order", "duplicate utime " + std::to_string(utime) + " for " + stream};
-  const bool ahead = utime > s.clock && utime - s.clock > max_ahead;
+  // Live, the slack grows with the real time since the clock moved (a paused sender resumes later in data time too).
+  const int64_t elapsed_us =
+      live ? std::chrono::duration_cast<std::chrono::microseconds>(now - s.moved).count() : int64_t{0};
+  const bool ahead = live && utime > s.clock && utime - s.clock > max_ahead + std::max<int64_t>(elapsed_us, 0);
   const bool behind = strict && utime < s.clock;
   if (!ahead && !behind) {
     s.candidates = 0;
-    s.clock = std::max(s.clock, utime);
+    if (utime > s.clock) s.clock = utime, s.moved = now;
     s.recent.push_back(sig);
     if (s.recent.size() > kRecentSignatures) s.recent.pop_front();
     return std::nullopt;
@@ -84,6 +88,7 @@ std::optional<TimeOrderGuard::Refusal> TimeOrderGuard::check(const std::string& 
     last_resync_ = stream + ": clock re-synchronised from " + std::to_string(s.clock) + " to " + std::to_string(utime) +
                    " after " + std::to_string(s.candidates) + " consistent messages";
     s.clock = utime;
+    s.moved = now;
     s.candidates = 0;
     s.recent.assign(1, sig);
     ++resyncs_;

@@ -4,9 +4,12 @@
 //  - Backwards and duplicate stamps: odometry and bearing scans must strictly increase per stream; landmarks and
 //    loop closures may arrive late (the stages place them) but an exact repeat of one of the stream's last 16 is a
 //    duplicate.  Reason "time_order".
-//  - Far-future stamps: more than `max_ahead_s` ahead of the stream's clock, or (live, when the caller passes the
-//    wall clock) more than `max_ahead_of_wall_s` ahead of it, are refused without moving the clock.  Reason
-//    "time_future".  One odometry message dated 2100 used to move the clock and cut its body off until restart.
+//  - Far-future stamps (live only, when the caller passes the clocks): more than `max_ahead_of_wall_s` ahead of the
+//    wall clock, or ahead of the stream's clock by more than `max_ahead_s` plus the real time elapsed since that
+//    clock last moved (a sender that paused for a minute may resume a minute later; a stamp cannot run ahead of real
+//    time by more than `max_ahead_s` in one step), are refused without moving the clock.  Reason "time_future".
+//    One odometry message dated 2100 used to move the clock and cut its body off until restart.  Replay needs no
+//    such check: it feeds messages in utime order, so a far-future stamp comes last.
 //  - True jumps: a stream whose clock really jumped (a robot restarted with another clock, a simulator reset) sends
 //    `resync_after` consecutive messages that agree with each other (strictly increasing, each within `max_ahead_s`
 //    of the one before) but not with the clock: the last of them is accepted and becomes the clock ("resync",
@@ -24,7 +27,7 @@
 namespace sextant::runtime {
 
 struct TimeGuardOptions {
-  double max_ahead_s = 10.0;           // a message further ahead of its stream's clock is refused
+  double max_ahead_s = 60.0;           // live: further ahead of its stream's clock (beyond real time) is refused
   int resync_after = 5;                // consecutive consistent messages that move a jumped clock
   double max_ahead_of_wall_s = 60.0;   // live only: a message further ahead of the wall clock is refused
   int max_streams = 256;               // bodies and sensors tracked (per input side)
@@ -38,15 +41,19 @@ class TimeOrderGuard {
     std::string message;
   };
   using SteadyTime = std::chrono::steady_clock::time_point;
+  /// The clocks of a live run: the wall clock (microseconds since the epoch) and the monotonic one.
+  struct LiveClock {
+    int64_t wall_utime = 0;
+    SteadyTime now{};
+  };
 
   explicit TimeOrderGuard(TimeGuardOptions options = {}) : options_(options) {}
 
   /// nullopt when `utime` is acceptable for `stream` (and records it), else why not.  `signature` tells apart
-  /// messages of one stream that may share a stamp (a loop closure's from/to); `wall_utime` is the wall clock when
-  /// live (nullopt in replay); `now` drives idle expiry.
+  /// messages of one stream that may share a stamp (a loop closure's from/to); `live` gives the clocks of a live
+  /// run (nullopt in replay: no far-future check, idle expiry by the steady clock).
   std::optional<Refusal> check(const std::string& stream, int64_t utime, bool strictly_increasing,
-                               uint64_t signature = 0, std::optional<int64_t> wall_utime = std::nullopt,
-                               SteadyTime now = std::chrono::steady_clock::now());
+                               uint64_t signature = 0, std::optional<LiveClock> live = std::nullopt);
 
   int64_t resyncs() const { return resyncs_; }
   int64_t expired() const { return expired_; }
@@ -60,7 +67,8 @@ class TimeOrderGuard {
     int64_t candidate = 0;      // last refused utime of a possible jump
     int candidates = 0;         // consecutive consistent refused ones
     std::deque<uint64_t> recent;  // signatures of the last accepted messages (duplicates)
-    SteadyTime seen{};
+    SteadyTime seen{};            // last message of any kind (idle expiry)
+    SteadyTime moved{};           // when `clock` last moved
   };
   void expire(SteadyTime now);
 
