@@ -5,7 +5,8 @@ sensor's scans (30), interleaved with what used to kill or cut off the daemon: a
 sender has length 0 (lcm-gen threw std::length_error: exit 134), landmarks whose count is 0x7fffffff (bad_alloc)
 and 20,000,000 (2 GB), zero- and negative-length strings in every input type, one odometry message dated 2100
 and one at INT64_MAX (every later message of the body was rejected as "before the previous"), and a scan dated
-2100 (it blocked its sensor's next 60 scans).
+2100 (it blocked its sensor's next 60 scans); and 1000 new body names, one message each (state per name grew
+without bound: 60k names took 326 MB).
 check BUS.lcm: the daemon's last SEXTANT_STATUS and its FUSED_POSE output on the bus.
 """
 import struct
@@ -20,6 +21,8 @@ INT64_MAX = 2**63 - 1
 ODOMETRY = 300
 SCANS = 30
 GAPS = 10
+NAMES = 1000       # odometry of as many distinct bodies (one message each): beyond daemon.max_sources, refused
+MAX_SOURCES = 256
 
 
 def ident(n, s):
@@ -95,6 +98,11 @@ def make(path):
             seq += 1
         if k < len(hostile):
             events.append((t + 2, hostile[k][0], hostile[k][1]))
+        if 50 <= k < 50 + NAMES // 100:
+            for n in range(100):
+                m = odometry(t + 5 + n, 100 * (k - 50) + n, 0.0)
+                m.sender, m.source = "namer", f"name{100 * (k - 50) + n}"
+                events.append((t + 5 + n, "ODOMETRY", m.encode()))
         if k % 10 == 0:
             s = k // 10
             events.append((t + 3, "BEARINGS", scan(t, s).encode()))
@@ -115,7 +123,7 @@ def check(bus):
     reasons = {name: dict(zip(c.reasons, c.reason_counts)) for name, c in ch.items()}
     errors = []
     odo, lm, br, lc = ch["ODOMETRY"], ch["LANDMARKS"], ch["BEARINGS"], ch["LOOP_CLOSURES"]
-    sent_odometry = ODOMETRY + 3
+    sent_odometry = ODOMETRY + 3 + NAMES
     # What UDP lost on the way is counted too: lost = the 10 gaps + what never arrived of this sender's messages.
     never_arrived = sent_odometry - odo.received
     if odo.lost != GAPS + never_arrived:
@@ -126,8 +134,11 @@ def check(bus):
         errors.append(f"ODOMETRY time_future rejections {reasons['ODOMETRY']}")
     if "time_order" in reasons["ODOMETRY"]:
         errors.append(f"normal odometry refused after the future stamps: {reasons['ODOMETRY']}")
-    if odo.decoded != odo.received - 3:
-        errors.append(f"ODOMETRY decoded {odo.decoded} of {odo.received} (3 hostile)")
+    refused_names = NAMES - (MAX_SOURCES - 2)  # the robot and the bearing sensor hold a place each
+    if reasons["ODOMETRY"].get("too_many_sources") != refused_names:
+        errors.append(f"too_many_sources {reasons['ODOMETRY'].get('too_many_sources')}, expected {refused_names}")
+    if odo.decoded != odo.received - 3 - refused_names:
+        errors.append(f"ODOMETRY decoded {odo.decoded} of {odo.received} (3 hostile, {refused_names} names refused)")
     if reasons["LANDMARKS"].get("too_large") != 2:
         errors.append(f"LANDMARKS rejections {reasons['LANDMARKS']}")
     if reasons["BEARINGS"].get("decode") != 1 or reasons["BEARINGS"].get("time_future") != 1:
@@ -136,13 +147,14 @@ def check(bus):
         errors.append(f"BEARINGS decoded {br.decoded} of {br.received} (2 hostile)")
     if reasons["LOOP_CLOSURES"].get("decode") != 1:
         errors.append(f"LOOP_CLOSURES rejections {reasons['LOOP_CLOSURES']}")
-    if len(fused) < odo.decoded - 5:
-        errors.append(f"{len(fused)} FUSED_POSE for {odo.decoded} odometry messages")
+    robot = [f for f in fused if f.source == "robot"]
+    if len(robot) < ODOMETRY - never_arrived - 5:
+        errors.append(f"{len(robot)} FUSED_POSE of the robot for {ODOMETRY} odometry messages")
     for e in errors:
         print("FAIL:", e)
     print(f"ODOMETRY received {odo.received} decoded {odo.decoded} lost {odo.lost} reasons {reasons['ODOMETRY']}; "
           f"LANDMARKS {reasons['LANDMARKS']}; BEARINGS decoded {br.decoded} {reasons['BEARINGS']}; "
-          f"LOOP_CLOSURES {reasons['LOOP_CLOSURES']}; FUSED_POSE {len(fused)}")
+          f"LOOP_CLOSURES {reasons['LOOP_CLOSURES']}; FUSED_POSE of the robot {len(robot)}")
     return 1 if errors else 0
 
 
