@@ -24,10 +24,11 @@ class Walker {
  public:
   Walker(const uint8_t* data, size_t size) : data_(data), size_(size) {}
 
-  std::optional<WireError> walk(const WireLayout& layout, const std::string& prefix) {
+  // Field names in errors are relative to `layout`; callers prepend their own (no string is built unless one fails).
+  std::optional<WireError> walk(const WireLayout& layout) {
     int64_t pending_count = -1;
     for (const auto& f : layout.fields) {
-      const std::string name = prefix + f.name;
+      const std::string& name = f.name;
       switch (f.kind) {
         case Kind::kFixed:
           if (f.bytes > left()) return truncated(name, f.bytes);
@@ -69,7 +70,10 @@ class Walker {
                                            std::to_string(min) + " bytes exceed the " + std::to_string(left()) +
                                            " bytes left"};
           for (size_t i = 0; i < n; ++i)
-            if (auto e = walk(*f.element, name + "[" + std::to_string(i) + "].")) return e;
+            if (auto e = walk(*f.element)) {
+              e->message = name + "[" + std::to_string(i) + "]." + e->message;
+              return e;
+            }
           pending_count = -1;
           break;
         }
@@ -105,7 +109,9 @@ size_t WireLayout::min_size() const {
 std::optional<WireError> wire_error(const WireLayout& layout, const void* data, size_t size) {
   if (size < 8) return WireError{"decode", layout.type + ": shorter than an LCM fingerprint"};
   Walker w(static_cast<const uint8_t*>(data), size);
-  return w.walk(layout, layout.type + ".");
+  auto e = w.walk(layout);
+  if (e) e->message = layout.type + "." + e->message;
+  return e;
 }
 
 template <>
