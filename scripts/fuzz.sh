@@ -3,7 +3,8 @@
 # starting from the seed corpus and the past crash inputs in tests/fuzz/.  New corpus entries stay in
 # BUILD/fuzz-corpus/<name>/; a crash leaves its input in BUILD/fuzz-crashes/<name>/ (copy it into
 # tests/fuzz/crashes/<name>/ with the fix, so that `make test` replays it for ever) and makes this script fail.
-# Prints one line per harness: executions, executions per second, corpus size.
+# Prints one line per harness: executions, executions per second, corpus size.  FUZZ_ONLY="codec lcm_log" runs
+# those harnesses only.
 set -euo pipefail
 build=${1:-build-fuzz}
 seconds=${FUZZ_SECONDS:-${2:-60}}
@@ -11,6 +12,7 @@ src=$(cd "$(dirname "$0")/.." && pwd)/tests/fuzz
 failed=0
 for bin in "$build"/bin/fuzz_*; do
   name=$(basename "$bin"); name=${name#fuzz_}
+  if [ -n "${FUZZ_ONLY:-}" ] && ! [[ " $FUZZ_ONLY " == *" $name "* ]]; then continue; fi
   corpus="$build/fuzz-corpus/$name"; crashes="$build/fuzz-crashes/$name"
   mkdir -p "$corpus" "$crashes"
   log="$build/fuzz-$name.log"

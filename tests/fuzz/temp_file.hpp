@@ -6,17 +6,29 @@
 #include <cstdio>
 #include <filesystem>
 #include <string>
+#include <system_error>
 
 namespace sextant::fuzz {
 
-/// A folder of this process under the temporary directory (created once).
+/// A folder of this process in memory (/dev/shm) when there is one, else under the temporary directory (created
+/// once).  On a disk, truncating and writing the input file took 2.5 ms per run here, 200 times the harness's work.
 inline std::string temp_dir() {
-  static const std::string dir = [] {
-    const auto d = std::filesystem::temp_directory_path() / ("sextant_fuzz_" + std::to_string(::getpid()));
+  // Removed when the process exits (libFuzzer and the replay driver both leave through exit()).
+  struct Dir {
+    std::string path;
+    ~Dir() {
+      std::error_code ec;
+      std::filesystem::remove_all(path, ec);
+    }
+  };
+  static const Dir dir{[] {
+    const std::filesystem::path base =
+        std::filesystem::is_directory("/dev/shm") ? std::filesystem::path("/dev/shm") : std::filesystem::temp_directory_path();
+    const auto d = base / ("sextant_fuzz_" + std::to_string(::getpid()));
     std::filesystem::create_directories(d);
     return d.string();
-  }();
-  return dir;
+  }()};
+  return dir.path;
 }
 
 /// Writes `size` bytes to `name` in temp_dir(); returns the path.
