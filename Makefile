@@ -5,7 +5,7 @@ JOBS  ?= $(shell nproc)
 BUILD ?= build
 CMAKE_FLAGS ?=
 
-.PHONY: all deps build test demo install bench asan tsan spy clean
+.PHONY: all deps build test demo install bench asan tsan fuzz spy clean
 
 all: build
 
@@ -52,6 +52,16 @@ tsan: deps
 	@TSAN_OPTIONS=halt_on_error=1:second_deadlock_stack=1:suppressions=$(CURDIR)/tests/tsan.supp \
 	  ctest --test-dir build-tsan -R '$(SAN_TESTS)' --output-on-failure -j $(JOBS) --timeout 1200
 
+# Fuzz harnesses (tests/fuzz/) as libFuzzer binaries under ASan/UBSan, built with clang in build-fuzz, each run for
+# FUZZ_SECONDS (default 60); `make test` replays their corpora and past crash inputs without clang.
+FUZZ_SECONDS ?= 60
+fuzz:
+	@SEXTANT_WITH_FUZZ=1 scripts/install-deps.sh
+	@CC=clang CXX=clang++ cmake -S . -B build-fuzz -DCMAKE_BUILD_TYPE=RelWithDebInfo -DSEXTANT_FUZZ=ON \
+	  -DSEXTANT_SANITIZE=address,undefined $(CMAKE_FLAGS) >/dev/null
+	@cmake --build build-fuzz -j $(JOBS) --target fuzz_all
+	@FUZZ_SECONDS=$(FUZZ_SECONDS) scripts/fuzz.sh build-fuzz
+
 # lcm-spy with sextant's message types on the classpath (Debian's lcm-spy wrapper passes a JVM flag
 # that Java 17 no longer accepts, so the JVM is started directly).
 spy: build
@@ -59,4 +69,4 @@ spy: build
 	  java -Djava.net.preferIPv4Stack=true -Xmx256m lcm.spy.Spy $(SPY_ARGS)
 
 clean:
-	rm -rf $(BUILD) build-asan build-tsan
+	rm -rf $(BUILD) build-asan build-tsan build-fuzz

@@ -1,5 +1,7 @@
 #include "replay/message_printer.hpp"
 
+#include "daemon/runtime/wire_layout.hpp"
+
 #include <sextant/bearing_scan_t.hpp>
 #include <sextant/fused_pose_t.hpp>
 #include <sextant/landmarks_t.hpp>
@@ -92,7 +94,7 @@ bool try_describe(const void* data, size_t size, std::string& out) {
   __int64_t_decode_array(data, 0, static_cast<int>(size), &hash, 1);
   if (hash != Msg::getHash()) return false;
   Msg m;
-  if (m.decode(data, 0, static_cast<int>(size)) < 0) {
+  if (runtime::safe_decode(data, size, m)) {
     out = std::string(Msg::getTypeName()) + " (truncated or corrupt)";
     return true;
   }

@@ -47,7 +47,18 @@ std::vector<std::pair<int, std::vector<double>>> read_rows(const std::string& pa
   return rows;
 }
 
-int64_t utime_of(double t) { return static_cast<int64_t>(std::llround(t * 1e6)); }
+int64_t utime_of(double t) {
+  if (!(std::abs(t) <= 9.2e12)) throw std::runtime_error("MRCLAM time " + std::to_string(t) + " s out of range");
+  return static_cast<int64_t>(std::llround(t * 1e6));
+}
+
+// An integer column (a barcode, a subject number): casting anything else to int is undefined behaviour (a barcode of
+// 1e11 silently became landmark 6).
+int integer_at(const std::string& path, int line, double v) {
+  if (!(v >= -2147483648.0 && v <= 2147483647.0) || v != std::floor(v))
+    throw std::runtime_error(path + ":" + std::to_string(line) + ": not an integer in int's range: " + std::to_string(v));
+  return static_cast<int>(v);
+}
 
 engine::Pose pose_of(const SE2& x) { return {x.to_se3().translation(), x.to_se3().rotation().quaternion()}; }
 
@@ -64,7 +75,8 @@ MrclamConversion convert_mrclam(const std::string& dir, int robot, const std::st
   const auto measurements = read_rows(r + "_Measurement.dat", 4);
   if (truth.empty() || odometry.size() < 2) throw std::runtime_error(r + ": no ground truth or odometry rows");
   std::map<int, int> subject_of_barcode;
-  for (const auto& [line, v] : barcodes) subject_of_barcode[static_cast<int>(v[1])] = static_cast<int>(v[0]);
+  for (const auto& [line, v] : barcodes)
+    subject_of_barcode[integer_at(dir + "/Barcodes.dat", line, v[1])] = integer_at(dir + "/Barcodes.dat", line, v[0]);
 
   const std::string source = "robot" + std::to_string(robot);
   struct Record {
@@ -105,7 +117,7 @@ MrclamConversion convert_mrclam(const std::string& dir, int robot, const std::st
     t.sender = "sextant-convert";
     t.seq = seq_truth++;
     t.kind = "landmark";
-    t.id = static_cast<int64_t>(v[0]);
+    t.id = integer_at(dir + "/Landmark_Groundtruth.dat", line, v[0]);
     t.position[0] = v[1], t.position[1] = v[2];
     t.orientation[0] = 1;
     add(t.utime, 0, "GROUND_TRUTH", t);
@@ -164,7 +176,7 @@ MrclamConversion convert_mrclam(const std::string& dir, int robot, const std::st
     s.planar = true;
     for (; k < measurements.size() && measurements[k].second[0] == t; ++k) {
       const auto& v = measurements[k].second;
-      const auto it = subject_of_barcode.find(static_cast<int>(v[1]));
+      const auto it = subject_of_barcode.find(integer_at(r + "_Measurement.dat", measurements[k].first, v[1]));
       if (it == subject_of_barcode.end()) {
         ++result.unknown_barcodes;
         continue;

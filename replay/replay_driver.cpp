@@ -52,11 +52,14 @@ ReplayResult replay_log(const std::string& log_path, const config::DaemonConfig&
                         const ReplayOptions& options) {
   const auto wall_start = std::chrono::steady_clock::now();
   // Pass 1: the order.  By message utime, ties in file order; records that are not ours (or too short to carry a
-  // utime) keep their log stamp so that they still get counted.  rank[i]: the turn of the file's i-th record.
+  // utime) keep their log stamp so that they still get counted.  rank[i]: the turn of the file's i-th record.  The
+  // reader skips damaged events (and reports them) the same way in both passes.
   std::vector<std::pair<int64_t, uint32_t>> keys;
+  runtime::LogDamage damage;
   {
     runtime::LogReader reader(log_path);
     while (auto r = reader.next()) keys.emplace_back(peek_utime(r->data).value_or(r->timestamp), static_cast<uint32_t>(keys.size()));
+    damage = reader.damage();
   }
   std::stable_sort(keys.begin(), keys.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
   std::vector<uint32_t> rank(keys.size());
@@ -64,12 +67,13 @@ ReplayResult replay_log(const std::string& log_path, const config::DaemonConfig&
   keys = {};
 
   ReplayResult result;
+  result.log_damage = std::move(damage);
   result.records = static_cast<int64_t>(rank.size());
   engine::Engine engine(cfg.engine);
   result.primary_estimator = engine.primary_estimator();
 
   runtime::ChannelStats stats;
-  runtime::Intake intake(stats);
+  runtime::Intake intake(stats, {}, runtime::intake_options(cfg, /*live=*/false));
   const auto& ch = cfg.channels;
   intake.add_channel(ch.full(ch.odometry), runtime::InputKind::kOdometry);
   intake.add_channel(ch.full(ch.landmarks), runtime::InputKind::kLandmarks);

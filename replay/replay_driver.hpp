@@ -5,6 +5,7 @@
 #include "daemon/config/daemon_config.hpp"
 #include "daemon/engine/stage.hpp"
 #include "daemon/runtime/channel_stats.hpp"
+#include "daemon/runtime/lcm_log.hpp"
 
 #include <cstdint>
 #include <functional>
@@ -81,6 +82,7 @@ struct SegmentReport {
 struct ReplayResult {
   std::string primary_estimator;
   int64_t records = 0;                 // log events read
+  runtime::LogDamage log_damage;       // corrupt events the reader skipped (resynchronising on the next one)
   int64_t first_utime = 0, last_utime = 0;
   std::map<std::string, runtime::ChannelCounts> channels;  // per input channel
   std::vector<PublishedMessage> published;                 // in publish order

@@ -1,6 +1,7 @@
 #include "replay/trajectory_io.hpp"
 
 #include <cerrno>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -35,6 +36,13 @@ std::vector<StampedPose> read_tum(const std::string& path) {
     if (v.size() < 8)
       throw std::runtime_error(path + ":" + std::to_string(number) + ": expected 8 values (t tx ty tz qx qy qz qw), got " +
                                std::to_string(v.size()));
+    for (size_t i = 0; i < 8; ++i)
+      if (!std::isfinite(v[i]))
+        throw std::runtime_error(path + ":" + std::to_string(number) + ": value " + std::to_string(i + 1) + " is not finite");
+    // Stamps become int64 microseconds: beyond +-9.2e12 s they cannot.
+    if (std::abs(v[0]) > 9.2e12)
+      throw std::runtime_error(path + ":" + std::to_string(number) + ": timestamp " + std::to_string(v[0]) +
+                               " s out of range (|t| <= 9.2e12 s)");
     engine::Pose p;
     p.position = {v[1], v[2], v[3]};
     p.orientation = Eigen::Quaterniond(v[7], v[4], v[5], v[6]);

@@ -47,7 +47,8 @@ TumConversion convert_tum(const std::string& gt_tum, const std::string& out_lcm,
       continue;
     }
     next_frame = (k == 0 ? utime : next_frame) + frame_period_us;
-    while (frame_period_us > 0 && next_frame <= utime) next_frame += frame_period_us;
+    // The first frame time after `utime`, in one step (a gap of 9e12 s used to take 10^14 iterations).
+    if (frame_period_us > 0 && next_frame <= utime) next_frame += ((utime - next_frame) / frame_period_us + 1) * frame_period_us;
     engine::Matrix6 q = engine::Matrix6::Zero();
     if (k == 0) {
       odom = truth;

@@ -14,6 +14,8 @@ packages=(
 )
 # Optional extras: installed when asked for (benchmarks against Ceres).
 if [[ "${SEXTANT_WITH_BENCH:-0}" == 1 ]]; then packages+=(libceres-dev libopenblas0 time); fi
+# `make fuzz`: clang with libFuzzer and the sanitizer runtimes.
+if [[ "${SEXTANT_WITH_FUZZ:-0}" == 1 ]]; then packages+=(clang libclang-rt-dev); fi
 
 missing=()
 for p in "${packages[@]}"; do

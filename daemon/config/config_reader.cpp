@@ -19,7 +19,10 @@ Section Section::child(const std::string& key) {
 void Section::reject_unknown_keys() const {
   if (!node_.IsMap()) return;
   for (const auto& kv : node_) {
-    const auto key = kv.first.as<std::string>();
+    if (!kv.first.IsScalar())
+      throw error_at(kv.first, "'" + (path_.empty() ? std::string("<top>") : path_) + "': a key must be a plain name, got " +
+                                   scalar_text(kv.first));
+    const auto key = kv.first.Scalar();
     if (known_.count(key)) continue;
     std::ostringstream known;
     for (const auto& k : known_) known << (known.tellp() > 0 ? ", " : "") << k;

@@ -2,6 +2,7 @@
 
 #include "daemon/config/stage_config_readers.hpp"
 
+#include <filesystem>
 #include <fstream>
 #include <sstream>
 
@@ -18,6 +19,52 @@ Check<std::string> channel_name() {
   };
 }
 
+// Channels that cannot work: a name (with the prefix) longer than LCM allows is neither sent nor received; two
+// inputs on one channel feed one kind's decoder with the other's messages; an output named like an input comes
+// back to the daemon as input.  Each is an error at the key that makes it so.
+void check_channels(Section& s, const Channels& c) {
+  constexpr size_t kLcmMaxChannel = 63;  // LCM_MAX_CHANNEL_NAME_LENGTH
+  const auto at = [&](const std::string& key) {
+    const YAML::Node n = s.node().IsMap() ? s.node()[key] : YAML::Node();
+    return n.IsDefined() ? n : s.node();
+  };
+  using Named = std::vector<std::pair<std::string, std::string>>;
+  Named inputs{
+      {"odometry", c.odometry}, {"landmarks", c.landmarks}, {"bearings", c.bearings}, {"loop_closures", c.loop_closures}};
+  Named outputs{{"fused_pose", c.fused_pose},
+                                                           {"trajectory", c.trajectory},
+                                                           {"targets", c.targets},
+                                                           {"match_requests", c.match_requests},
+                                                           {"status", c.status}};
+  // The estimators that are not primary publish on FUSED_POSE_<ESTIMATOR> (publisher.hpp).
+  for (const char* e : {"_DEAD_RECKONING", "_EKF", "_PF", "_GRAPH"}) outputs.push_back({"fused_pose", c.fused_pose + e});
+  for (const Named* list : {&inputs, &outputs})
+    for (const auto& [key, name] : *list)
+      if (c.full(name).size() > kLcmMaxChannel)
+        throw s.error_at(c.prefix.size() > name.size() ? at("prefix") : at(key),
+                         "'" + s.path() + "." + key + "': channel '" + c.full(name) + "' is " +
+                             std::to_string(c.full(name).size()) + " characters with the prefix; LCM allows " +
+                             std::to_string(kLcmMaxChannel));
+  for (size_t i = 0; i < inputs.size(); ++i)
+    for (size_t j = 0; j < i; ++j)
+      if (inputs[i].second == inputs[j].second)
+        throw s.error_at(at(inputs[i].first), "'" + s.path() + "." + inputs[i].first + "': the same channel as " +
+                                                  s.path() + "." + inputs[j].first + " ('" + c.full(inputs[i].second) +
+                                                  "'); every input needs a channel of its own");
+  for (const auto& [okey, oname] : outputs)
+    for (const auto& [ikey, iname] : inputs)
+      if (oname == iname)
+        throw s.error_at(at(okey), "'" + s.path() + "." + okey + "': output channel '" + c.full(oname) +
+                                       "' is also the input " + s.path() + "." + ikey +
+                                       " (the daemon would read its own output)");
+  for (size_t i = 0; i < outputs.size(); ++i)
+    for (size_t j = 0; j < i; ++j)
+      if (outputs[i].second == outputs[j].second)
+        throw s.error_at(at(outputs[i].first), "'" + s.path() + "." + outputs[i].first + "': the same channel as " +
+                                                   s.path() + "." + outputs[j].first + " ('" +
+                                                   c.full(outputs[i].second) + "')");
+}
+
 void read_channels(Section s, Channels& c) {
   s.get("prefix", c.prefix);
   for (auto [key, field] : {std::pair{"odometry", &c.odometry}, {"landmarks", &c.landmarks}, {"bearings", &c.bearings},
@@ -26,6 +73,7 @@ void read_channels(Section s, Channels& c) {
                             {"match_requests", &c.match_requests}, {"status", &c.status}})
     s.get(key, *field, channel_name());
   s.reject_unknown_keys();
+  check_channels(s, c);
 }
 
 }  // namespace
@@ -51,16 +99,7 @@ void read_engine_config(Section& s, engine::EngineConfig& c) {
   s.reject_unknown_keys();
 }
 
-DaemonConfig parse_daemon_config(const std::string& yaml_text, const std::string& file) {
-  YAML::Node root;
-  try {
-    root = YAML::Load(yaml_text);
-  } catch (const YAML::ParserException& e) {
-    std::ostringstream s;
-    s << file << ":" << e.mark.line + 1 << ":" << e.mark.column + 1 << ": YAML syntax error: " << e.msg;
-    throw ConfigError(s.str());
-  }
-  DaemonConfig c;
+static void read_daemon_config(const YAML::Node& root, const std::string& file, DaemonConfig& c) {
   Section top(root, "", file);
   {
     Section d = top.child("daemon");
@@ -74,6 +113,12 @@ DaemonConfig parse_daemon_config(const std::string& yaml_text, const std::string
     d.get("publish_queue_capacity", c.publish_queue_capacity, int_in_range(1, 1 << 20));
     d.get("record", c.record);
     d.get("log_rate_limit_s", c.log_rate_limit_s, non_negative());
+    d.get("max_ahead_s", c.max_ahead_s, positive());
+    d.get("time_resync_messages", c.time_resync_messages, int_in_range(1, 1000000));
+    d.get("max_ahead_of_wall_s", c.max_ahead_of_wall_s, positive());
+    d.get("max_sources", c.max_sources, int_in_range(1, 1 << 20));
+    d.get("source_idle_s", c.source_idle_s, non_negative());
+    d.get("drain_timeout_s", c.drain_timeout_s, non_negative());
     d.reject_unknown_keys();
   }
   read_channels(top.child("channels"), c.channels);
@@ -82,12 +127,36 @@ DaemonConfig parse_daemon_config(const std::string& yaml_text, const std::string
     read_engine_config(e, c.engine);
   }
   top.reject_unknown_keys();
+}
+
+DaemonConfig parse_daemon_config(const std::string& yaml_text, const std::string& file) {
+  YAML::Node root;
+  try {
+    root = YAML::Load(yaml_text);
+  } catch (const YAML::Exception& e) {
+    std::ostringstream s;
+    s << file << ":" << e.mark.line + 1 << ":" << e.mark.column + 1 << ": YAML syntax error: " << e.msg;
+    throw ConfigError(s.str());
+  }
+  DaemonConfig c;
+  try {
+    read_daemon_config(root, file, c);
+  } catch (const YAML::Exception& e) {
+    // A YAML construct no reader expected (a key that is a list, a tag yaml-cpp cannot convert): still the file's
+    // error, with the place yaml-cpp knows.
+    std::ostringstream s;
+    s << file;
+    if (e.mark.line >= 0) s << ":" << e.mark.line + 1 << ":" << e.mark.column + 1;
+    s << ": " << e.msg;
+    throw ConfigError(s.str());
+  }
   return c;
 }
 
 DaemonConfig load_daemon_config(const std::string& path) {
   std::ifstream in(path);
   if (!in) throw ConfigError(path + ": cannot open config file");
+  if (std::filesystem::is_directory(path)) throw ConfigError(path + ": a directory, not a config file");
   std::stringstream buf;
   buf << in.rdbuf();
   return parse_daemon_config(buf.str(), path);

@@ -32,6 +32,12 @@ struct DaemonConfig {
   int publish_queue_capacity = 4096;    // outputs waiting for the publisher thread
   std::string record;                   // record every received message to this LCM log ("" = off)
   double log_rate_limit_s = 1.0;        // at most one warning per channel and reason per this many seconds
+  double max_ahead_s = 60.0;            // the time guard (daemon/runtime/time_order_guard.hpp)
+  int time_resync_messages = 5;
+  double max_ahead_of_wall_s = 60.0;
+  int max_sources = 256;                // bodies and sensors tracked
+  double source_idle_s = 0;             // forget a silent source after this long (0: never)
+  double drain_timeout_s = 5.0;         // SIGTERM: how long stage queues may drain
   Channels channels;
   engine::EngineConfig engine;
 };

@@ -23,6 +23,8 @@ class DeadReckoningStage final : public Stage {
   std::string_view estimator() const override { return "dead_reckoning"; }
   bool accepts(const Event& e) const override { return std::holds_alternative<Odometry>(e); }
   void handle(const Event& e, const Emit& emit) override;
+  /// Forgets the failed event's source (it restarts from its next odometry message).
+  void recover(const Event& failed) override { tracks_.erase(event_source(failed)); }
   Counters counters() const override;
 
   /// One step of the propagation above, exposed for tests: returns P(k).

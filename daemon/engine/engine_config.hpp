@@ -12,8 +12,9 @@ namespace sextant::engine {
 
 struct EngineConfig {
   /// Which estimator's fused pose goes on FUSED_POSE: "auto" picks the most capable enabled stage
-  /// (graph > filter > dead reckoning); the others are published on FUSED_POSE_<ESTIMATOR>.
-  std::string primary_estimator = "auto";
+  /// (graph > filter > dead reckoning); the others are published on FUSED_POSE_<ESTIMATOR>.  An estimator whose
+  /// stage does not run falls back to "auto".  The default is config/default.yaml's (the EKF).
+  std::string primary_estimator = "ekf";
   DeadReckoningConfig dead_reckoning;
   FilterConfig filter;
   GraphConfig graph;

@@ -9,6 +9,7 @@
 #include <Eigen/Geometry>
 
 #include <cstdint>
+#include <type_traits>
 #include <optional>
 #include <string>
 #include <variant>
@@ -88,6 +89,16 @@ using Event = std::variant<Odometry, LandmarkSightings, BearingScan, LoopClosure
 /// The utime every event carries.
 inline int64_t event_utime(const Event& e) {
   return std::visit([](const auto& x) { return x.utime; }, e);
+}
+
+/// Whom an event is about: the source (body) of odometry, sightings and loop closures; "sensor N" for a bearing scan.
+inline std::string event_source(const Event& e) {
+  return std::visit(
+      [](const auto& x) -> std::string {
+        if constexpr (std::is_same_v<std::decay_t<decltype(x)>, BearingScan>) return "sensor " + std::to_string(x.sensor_id);
+        else return x.source;
+      },
+      e);
 }
 
 }  // namespace sextant::engine

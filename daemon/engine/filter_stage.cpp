@@ -66,6 +66,12 @@ FilterStage::Track FilterStage::new_track(const std::string& body) const {
   return t;
 }
 
+void FilterStage::recover(const Event& failed) {
+  const std::string body = body_of(event_source(failed));
+  histories_.erase(body);
+  spatial_.erase(body);
+}
+
 void FilterStage::handle(const Event& e, const Emit& emit) {
   std::string body;
   int64_t utime = 0;

@@ -42,6 +42,8 @@ class FilterStage final : public Stage {
     return std::holds_alternative<Odometry>(e) || std::holds_alternative<LandmarkSightings>(e);
   }
   void handle(const Event& e, const Emit& emit) override;
+  /// Forgets the failed event's body (its filter restarts from its next odometry message).
+  void recover(const Event& failed) override;
   Counters counters() const override;
 
   /// The landmark estimates of a body's filter (known map and SLAM landmarks).

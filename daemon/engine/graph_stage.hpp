@@ -82,6 +82,11 @@ class GraphStage final : public Stage {
   void handle(const Event& e, const Emit& emit) override;
   /// The last TRAJECTORY publication of every body: every keyframe that moved at all since it was published.
   void finish(const Emit& emit) override;
+  /// Refactorizes the smoothers from their graphs (a failed update can leave a factor out of step with the graph).
+  void recover(const Event& /*failed*/) override {
+    for (auto& s : smoothers_)
+      if (s) s->rebuild();
+  }
   Counters counters() const override;
 
   /// The smoother of the planar bodies or of the 3-D ones (nullptr before the first such body).

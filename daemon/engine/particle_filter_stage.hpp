@@ -24,6 +24,8 @@ class ParticleFilterStage final : public Stage {
     return std::holds_alternative<Odometry>(e) || std::holds_alternative<LandmarkSightings>(e);
   }
   void handle(const Event& e, const Emit& emit) override;
+  /// Forgets the failed event's source (its filter restarts from its next odometry message).
+  void recover(const Event& failed) override { tracks_.erase(event_source(failed)); }
   Counters counters() const override;
 
   /// The landmark estimates of a source's filter (its particle of largest weight, plus the known map).

@@ -30,6 +30,10 @@ class Stage {
   /// stage coalesces each body's odometry, odometry_coalescer.hpp).  False: the event was dropped.  Replay never calls
   /// it (it calls `handle` for every event).
   virtual bool offer(const Event& /*event*/, const std::function<bool()>& enqueue) { return enqueue(); }
+  /// After `handle(event)` threw (a solver failure, an allocation): bring the stage back to a consistent state
+  /// before the next event, e.g. forget the body the event belongs to (it restarts from its next message) or
+  /// rebuild a factorization from the graph.  The runtime counts the failure; the default keeps the state as is.
+  virtual void recover(const Event& /*failed*/) {}
   /// End of input (replay end, daemon shutdown): emit what is still pending.
   virtual void finish(const Emit& /*emit*/) {}
   virtual Counters counters() const { return {}; }

@@ -48,6 +48,14 @@ class BoundedQueue {
     cv_.notify_all();
   }
 
+  /// Removes every queued item (a bounded shutdown gives up on them); returns how many.
+  size_t discard() {
+    std::lock_guard lock(mutex_);
+    const size_t n = items_.size();
+    items_.clear();
+    return n;
+  }
+
   size_t size() const {
     std::lock_guard lock(mutex_);
     return items_.size();

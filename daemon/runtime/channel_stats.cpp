@@ -30,6 +30,11 @@ void ChannelStats::dropped(const std::string& channel, int64_t n) {
   channels_[channel].dropped += n;
 }
 
+void ChannelStats::lost(const std::string& channel, int64_t n) {
+  std::lock_guard lock(mutex_);
+  channels_[channel].lost += n;
+}
+
 std::map<std::string, ChannelCounts> ChannelStats::snapshot() const {
   std::lock_guard lock(mutex_);
   return channels_;

@@ -1,5 +1,5 @@
 #pragma once
-// Per-input-channel counters for the status channel: received, decoded, rejected by reason, dropped.
+// Per-input-channel counters for the status channel: received, decoded, rejected by reason, dropped, lost.
 // Thread-safe; the LCM thread writes, the status thread reads.
 #include <cstdint>
 #include <map>
@@ -13,6 +13,7 @@ struct ChannelCounts {
   int64_t decoded = 0;
   int64_t rejected = 0;
   int64_t dropped = 0;
+  int64_t lost = 0;  // gaps in the senders' sequence numbers (sequence_gaps.hpp)
   std::map<std::string, int64_t> reasons;
   std::string last_error;
 };
@@ -25,6 +26,7 @@ class ChannelStats {
   void decoded(const std::string& channel);
   void rejected(const std::string& channel, const std::string& reason, const std::string& message);
   void dropped(const std::string& channel, int64_t n = 1);
+  void lost(const std::string& channel, int64_t n);
   std::map<std::string, ChannelCounts> snapshot() const;
 
  private:

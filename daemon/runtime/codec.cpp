@@ -1,5 +1,7 @@
 #include "daemon/runtime/codec.hpp"
 
+#include "daemon/runtime/wire_layout.hpp"
+
 #include <Eigen/Eigenvalues>
 
 #include <cmath>
@@ -112,16 +114,11 @@ Eigen::Matrix<double, N, N> read_matrix(const double* v) {
 }
 
 template <class Msg>
-Decoded decode_as(const void* data, size_t size) {
+Decoded decode_as(const void* data, size_t size, MessageOrigin* origin) {
   Msg msg;
-  // LCM's decode returns -1 both for a fingerprint mismatch and for truncated data; tell them apart by the
-  // leading 8-byte fingerprint.
-  if (size < 8) return Rejection{"decode", "message shorter than an LCM fingerprint (" + std::to_string(size) + " bytes)"};
-  int64_t hash = 0;
-  if (__int64_t_decode_array(data, 0, static_cast<int>(size), &hash, 1) != 8 || hash != Msg::getHash())
-    return Rejection{"fingerprint", std::string("fingerprint does not match ") + Msg::getTypeName()};
-  if (msg.decode(data, 0, static_cast<int>(size)) < 0)
-    return Rejection{"decode", std::string("cannot decode ") + Msg::getTypeName() + " (truncated or corrupt)"};
+  // The layout walk refuses lengths and counts that do not fit before lcm-gen's decode trusts them.
+  if (auto e = safe_decode(data, size, msg)) return Rejection{e->reason, e->message};
+  if (origin != nullptr) *origin = MessageOrigin{msg.sender, msg.seq};
   return to_event(msg);
 }
 
@@ -131,17 +128,25 @@ Decoded guarded(F&& f) {
     return f();
   } catch (const Invalid& e) {
     return Rejection{e.reason, e.message};
+  } catch (const std::exception& e) {
+    // Validation itself must never take the daemon down (an allocation failing, an Eigen assertion turned
+    // exception): the message is refused like any invalid one.
+    return Rejection{"invalid", e.what()};
   }
 }
 
 }  // namespace
 
-Decoded decode_event(InputKind kind, const void* data, size_t size) {
-  switch (kind) {
-    case InputKind::kOdometry: return decode_as<sextant::odometry_t>(data, size);
-    case InputKind::kLandmarks: return decode_as<sextant::landmarks_t>(data, size);
-    case InputKind::kBearings: return decode_as<sextant::bearing_scan_t>(data, size);
-    case InputKind::kLoopClosures: return decode_as<sextant::loop_closure_t>(data, size);
+Decoded decode_event(InputKind kind, const void* data, size_t size, MessageOrigin* origin) {
+  try {
+    switch (kind) {
+      case InputKind::kOdometry: return decode_as<sextant::odometry_t>(data, size, origin);
+      case InputKind::kLandmarks: return decode_as<sextant::landmarks_t>(data, size, origin);
+      case InputKind::kBearings: return decode_as<sextant::bearing_scan_t>(data, size, origin);
+      case InputKind::kLoopClosures: return decode_as<sextant::loop_closure_t>(data, size, origin);
+    }
+  } catch (const std::exception& e) {
+    return Rejection{"decode", std::string("cannot decode: ") + e.what()};
   }
   return Rejection{"invalid", "unknown input kind"};
 }

@@ -37,8 +37,16 @@ enum class InputKind { kOdometry, kLandmarks, kBearings, kLoopClosures };
 
 using Decoded = std::variant<engine::Event, Rejection>;
 
-/// Decodes raw bytes received on an input channel of the given kind, then validates (see `to_event`).
-Decoded decode_event(InputKind kind, const void* data, size_t size);
+/// Who sent a message: every sextant message carries the sender's name and a per-sender sequence number.
+struct MessageOrigin {
+  std::string sender;
+  int64_t seq = 0;
+};
+
+/// Decodes raw bytes received on an input channel of the given kind, then validates (see `to_event`).  Never
+/// throws: lengths and counts are checked against the bytes before lcm-gen's decode runs (wire_layout.hpp).
+/// When the bytes decode, `origin` (if given) receives the sender and sequence number, even if validation fails.
+Decoded decode_event(InputKind kind, const void* data, size_t size, MessageOrigin* origin = nullptr);
 
 /// Validated conversions message -> event.
 Decoded to_event(const sextant::odometry_t& msg);

@@ -7,6 +7,7 @@
 #include "daemon/runtime/recorder.hpp"
 #include "daemon/runtime/stage_runner.hpp"
 #include "daemon/runtime/status_report.hpp"
+#include "daemon/runtime/udp_drops.hpp"
 
 #include <lcm/lcm-cpp.hpp>
 #include <spdlog/spdlog.h>
@@ -82,7 +83,8 @@ int run_daemon(const config::DaemonConfig& cfg, const std::atomic<bool>& stop) {
 
   ChannelStats stats;
   RateLimitedLog log(cfg.log_rate_limit_s);
-  Intake intake(stats, [&log](const std::string& c, const std::string& r, const std::string& m) { log.warn(c, r, m); });
+  Intake intake(stats, [&log](const std::string& c, const std::string& r, const std::string& m) { log.warn(c, r, m); },
+                intake_options(cfg, /*live=*/true));
   const auto& ch = cfg.channels;
   intake.add_channel(ch.full(ch.odometry), InputKind::kOdometry);
   intake.add_channel(ch.full(ch.landmarks), InputKind::kLandmarks);
@@ -97,7 +99,14 @@ int run_daemon(const config::DaemonConfig& cfg, const std::atomic<bool>& stop) {
       spdlog::error("--record: {}", e.what());
       return kExitRuntime;
     }
+    if (recorder->path() != cfg.record)
+      spdlog::warn("--record: {} exists and is kept; recording to {}", cfg.record, recorder->path());
   }
+
+  // The intake's own counters, copied out by the LCM thread for the status thread (the intake is not thread-safe).
+  struct IntakeCounters {
+    std::atomic<int64_t> resyncs{0}, sources{0}, expired{0};
+  } intake_counters;
 
   // The LCM thread: every message on the bus is recorded (when asked) and, on an input channel, decoded and routed.
   struct Handler {
@@ -105,19 +114,34 @@ int run_daemon(const config::DaemonConfig& cfg, const std::atomic<bool>& stop) {
     std::vector<std::unique_ptr<StageRunner>>& runners;
     ChannelStats& stats;
     Recorder* recorder;
+    IntakeCounters& counters;
+    // Nothing a message does may end the LCM thread: what escapes below is counted as an "internal" rejection.
     void on_message(const lcm_recv_buf_t& rbuf, const std::string& channel) {
+      try {
+        route(rbuf, channel);
+      } catch (const std::exception& e) {
+        stats.rejected(channel, "internal", channel + ": " + e.what());
+      }
+    }
+    void route(const lcm_recv_buf_t& rbuf, const std::string& channel) {
       const auto received = Clock::now();
       if (recorder != nullptr) {
         const auto* b = static_cast<const uint8_t*>(rbuf.data);
         recorder->record(LogRecord{rbuf.recv_utime, channel, std::vector<uint8_t>(b, b + rbuf.data_size)});
       }
       auto event = intake.accept(channel, rbuf.data, rbuf.data_size);
+      if (intake.time_resyncs() != counters.resyncs.load()) {
+        counters.resyncs = intake.time_resyncs();
+        spdlog::warn("{} (time_resyncs: {})", intake.last_resync(), intake.time_resyncs());
+      }
+      counters.sources = static_cast<int64_t>(intake.sources());
+      counters.expired = intake.sources_expired();
       if (!event) return;
       const QueuedEvent queued{std::move(*event), received};
       for (auto& r : runners)
         if (r->accepts(queued.event) && !r->offer(queued)) stats.dropped(channel);
     }
-  } handler{intake, runners, stats, recorder.get()};
+  } handler{intake, runners, stats, recorder.get(), intake_counters};
   // LCM keeps 30 undelivered messages per subscription by default and silently drops beyond that; our own
   // bounded queues do the counting, so give LCM's queue room for bursts.
   lcm_subscription_set_queue_capacity(subscribe_raw(lcm, ".*", &handler), cfg.queue_capacity * 8);
@@ -128,14 +152,20 @@ int run_daemon(const config::DaemonConfig& cfg, const std::atomic<bool>& stop) {
                primary.empty() ? "none" : primary);
 
   const auto started = Clock::now();
+  const int64_t drops_at_start = udp_receive_drops().value_or(0);
   StatusReport report(cfg.name);
   auto publish_status = [&] {
     std::vector<StageStatus> stage_status;
     for (auto& r : runners) stage_status.push_back(r->status());
-    engine::Counters runtime_counters{{"fused_pose_not_monotonic", publisher.not_monotonic()}};
+    engine::Counters runtime_counters{{"fused_pose_not_monotonic", publisher.not_monotonic()},
+                                      {"time_resyncs", intake_counters.resyncs.load()},
+                                      {"sources", intake_counters.sources.load()},
+                                      {"sources_expired", intake_counters.expired.load()}};
+    if (const auto drops = udp_receive_drops()) runtime_counters.push_back({"udp_receive_drops", *drops - drops_at_start});
     if (recorder) {
       runtime_counters.push_back({"recorded", recorder->written()});
       runtime_counters.push_back({"record_dropped", recorder->dropped()});
+      runtime_counters.push_back({"record_failed", recorder->failed() ? 1 : 0});
     }
     publisher.publish(report.build(std::chrono::duration<double>(Clock::now() - started).count(), stats.snapshot(),
                                    stage_status, runtime_counters, publisher.counts(), publisher.bytes()));
@@ -148,7 +178,13 @@ int run_daemon(const config::DaemonConfig& cfg, const std::atomic<bool>& stop) {
     while (!intake_stopped.load()) {
       next += period;
       while (!intake_stopped.load() && Clock::now() < next) std::this_thread::sleep_for(std::chrono::milliseconds(20));
-      if (!intake_stopped.load()) publish_status();
+      if (!intake_stopped.load()) {
+        try {
+          publish_status();
+        } catch (const std::exception& e) {
+          spdlog::error("status: {}", e.what());
+        }
+      }
     }
   });
 
@@ -162,14 +198,24 @@ int run_daemon(const config::DaemonConfig& cfg, const std::atomic<bool>& stop) {
     }
   }
   intake_stopped = true;
-  spdlog::info("shutting down: draining {} stage queue(s)", runners.size());
-  for (auto& r : runners) r->drain_and_stop();
+  spdlog::info("shutting down: draining {} stage queue(s) (at most {} s)", runners.size(), cfg.drain_timeout_s);
+  for (auto& r : runners) r->stop_intake();
+  const auto deadline =
+      Clock::now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(cfg.drain_timeout_s));
+  for (auto& r : runners)
+    if (const int64_t left = r->drain_and_stop(deadline); left > 0)
+      spdlog::warn("stage '{}': {} queued event(s) discarded at the drain timeout ({} s)", r->status().name, left,
+                   cfg.drain_timeout_s);
   status_thread.join();
   if (recorder) {
     recorder->close();
-    spdlog::info("recording closed: {} messages in {}", recorder->written(), cfg.record);
+    spdlog::info("recording closed: {} messages in {}", recorder->written(), recorder->path());
   }
-  publish_status();
+  try {
+    publish_status();
+  } catch (const std::exception& e) {
+    spdlog::error("status: {}", e.what());
+  }
   return rc;
 }
 

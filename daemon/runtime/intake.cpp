@@ -1,28 +1,51 @@
 #include "daemon/runtime/intake.hpp"
 
+#include <chrono>
+
 namespace sextant::runtime {
 namespace {
 
-// The stream a message's time order is checked in, and whether it must strictly increase.
-std::pair<std::string, bool> stream_of(const std::string& channel, const engine::Event& e) {
+struct StreamKey {
+  std::string stream;      // whose clock the stamp is checked against
+  bool strict = false;     // must strictly increase
+  uint64_t signature = 0;  // tells apart messages of one stream that may share a stamp
+};
+
+StreamKey stream_of(const std::string& channel, const engine::Event& e) {
   return std::visit(
-      [&](const auto& x) -> std::pair<std::string, bool> {
+      [&](const auto& x) -> StreamKey {
         using T = std::decay_t<decltype(x)>;
-        if constexpr (std::is_same_v<T, engine::Odometry>) return {channel + "/" + x.source, true};
+        if constexpr (std::is_same_v<T, engine::Odometry>) return {channel + "/" + x.source, true, 0};
         else if constexpr (std::is_same_v<T, engine::BearingScan>)
-          return {channel + "/sensor " + std::to_string(x.sensor_id), true};
-        else if constexpr (std::is_same_v<T, engine::LandmarkSightings>) return {channel + "/" + x.source, false};
-        else return {channel + "/" + x.source + "/" + std::to_string(x.utime_from) + "-" + std::to_string(x.utime_to), false};
+          return {channel + "/sensor " + std::to_string(x.sensor_id), true, 0};
+        else if constexpr (std::is_same_v<T, engine::LandmarkSightings>) return {channel + "/" + x.source, false, 0};
+        else
+          return {channel + "/" + x.source, false,
+                  static_cast<uint64_t>(x.utime_from) * 0x9e3779b97f4a7c15ULL ^ static_cast<uint64_t>(x.utime_to)};
       },
       e);
 }
 
+int64_t wall_utime() {
+  return std::chrono::duration_cast<std::chrono::microseconds>(std::chrono::system_clock::now().time_since_epoch())
+      .count();
+}
+
 }  // namespace
 
-Intake::Intake(ChannelStats& stats, RejectHook on_reject) : stats_(stats), on_reject_(std::move(on_reject)) {}
+IntakeOptions intake_options(const config::DaemonConfig& c, bool live) {
+  IntakeOptions o;
+  o.live = live;
+  o.time = TimeGuardOptions{c.max_ahead_s, c.time_resync_messages, c.max_ahead_of_wall_s, c.max_sources, c.source_idle_s};
+  return o;
+}
+
+Intake::Intake(ChannelStats& stats, RejectHook on_reject, IntakeOptions options)
+    : stats_(stats), on_reject_(std::move(on_reject)), options_(options), order_(options.time) {}
 
 void Intake::add_channel(const std::string& channel, InputKind kind) {
   channels_[channel] = kind;
+  sequences_.try_emplace(channel, static_cast<size_t>(std::max(options_.time.max_streams, 0)) * 4);
   stats_.add(channel);
 }
 
@@ -35,15 +58,31 @@ std::optional<engine::Event> Intake::accept(const std::string& channel, const vo
   auto it = channels_.find(channel);
   if (it == channels_.end()) return std::nullopt;
   stats_.received(channel);
-  Decoded d = decode_event(it->second, data, size);
+  try {
+    return accept_unguarded(channel, it->second, data, size);
+  } catch (const std::exception& e) {
+    reject(channel, "internal", channel + ": " + e.what());
+    return std::nullopt;
+  }
+}
+
+std::optional<engine::Event> Intake::accept_unguarded(const std::string& channel, InputKind kind, const void* data,
+                                                      size_t size) {
+  MessageOrigin origin{{}, -1};
+  Decoded d = decode_event(kind, data, size, &origin);
+  // When the message decoded, its sender's sequence number tells what was lost before it (even if it is invalid).
+  if (origin.seq >= 0)
+    if (const int64_t lost = sequences_.at(channel).observe(origin.sender, origin.seq); lost > 0) stats_.lost(channel, lost);
   if (auto* r = std::get_if<Rejection>(&d)) {
     reject(channel, r->reason, channel + ": " + r->message);
     return std::nullopt;
   }
   engine::Event event = std::get<engine::Event>(std::move(d));
-  const auto [stream, strict] = stream_of(channel, event);
-  if (auto why = order_.check(stream, engine::event_utime(event), strict)) {
-    reject(channel, "time_order", channel + ": " + *why);
+  const StreamKey key = stream_of(channel, event);
+  std::optional<TimeOrderGuard::LiveClock> live;
+  if (options_.live) live = TimeOrderGuard::LiveClock{wall_utime(), std::chrono::steady_clock::now()};
+  if (auto why = order_.check(key.stream, engine::event_utime(event), key.strict, key.signature, live)) {
+    reject(channel, why->reason, channel + ": " + why->message);
     return std::nullopt;
   }
   stats_.decoded(channel);

@@ -1,9 +1,12 @@
 #pragma once
 // The input side shared by sextantd and `sextant replay`: raw bytes on a known channel -> a validated event, or a
 // counted rejection.  One instance per input stream; not thread-safe (the daemon calls it from its LCM thread,
-// replay from its loop).
+// replay from its loop).  Nothing it is given can make it throw: an unexpected exception is a rejection
+// ("internal") like any other.
+#include "daemon/config/daemon_config.hpp"
 #include "daemon/runtime/channel_stats.hpp"
 #include "daemon/runtime/codec.hpp"
+#include "daemon/runtime/sequence_gaps.hpp"
 #include "daemon/runtime/time_order_guard.hpp"
 
 #include <functional>
@@ -13,12 +16,20 @@
 
 namespace sextant::runtime {
 
+struct IntakeOptions {
+  TimeGuardOptions time;  // time_order_guard.hpp (its max_streams bounds bodies and sensors, idle_s expires them)
+  bool live = false;      // check stamps against the wall clock too (sextantd; not replay)
+};
+
+/// The intake options of a daemon config (daemon.max_ahead_s, time_resync_messages, ...).
+IntakeOptions intake_options(const config::DaemonConfig& config, bool live);
+
 class Intake {
  public:
   /// `on_reject(channel, reason, message)` is told about every rejection (for rate-limited logging).
   using RejectHook = std::function<void(const std::string&, const std::string&, const std::string&)>;
 
-  explicit Intake(ChannelStats& stats, RejectHook on_reject = {});
+  explicit Intake(ChannelStats& stats, RejectHook on_reject = {}, IntakeOptions options = {});
 
   void add_channel(const std::string& channel, InputKind kind);
   const std::map<std::string, InputKind>& channels() const { return channels_; }
@@ -26,13 +37,23 @@ class Intake {
   /// Decodes, validates and time-checks one message; nullopt when it was rejected (and counted).
   std::optional<engine::Event> accept(const std::string& channel, const void* data, size_t size);
 
+  /// Streams whose clock jumped and was re-synchronised, and the last such event's description.
+  int64_t time_resyncs() const { return order_.resyncs(); }
+  const std::string& last_resync() const { return order_.last_resync(); }
+  /// Bodies and sensors tracked now, and those forgotten after idling.
+  size_t sources() const { return order_.streams(); }
+  int64_t sources_expired() const { return order_.expired(); }
+
  private:
+  std::optional<engine::Event> accept_unguarded(const std::string& channel, InputKind kind, const void* data, size_t size);
   void reject(const std::string& channel, const std::string& reason, const std::string& message);
 
   ChannelStats& stats_;
   RejectHook on_reject_;
+  IntakeOptions options_;
   std::map<std::string, InputKind> channels_;
   TimeOrderGuard order_;
+  std::map<std::string, SequenceGaps> sequences_;  // per channel
 };
 
 }  // namespace sextant::runtime

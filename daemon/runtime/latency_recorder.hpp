@@ -1,6 +1,9 @@
 #pragma once
-// Latency percentiles over a sliding window of the most recent samples (fixed memory).
+// Latency percentiles over the recent past: the most recent `capacity` samples (fixed memory) that are also at most
+// `window_s` old.  The time window keeps a status report from quoting a flood's latencies long after the queue
+// emptied (a window of the last 4096 events alone showed a 5.9 s p50 for 30 s after the graph caught up).
 #include <algorithm>
+#include <chrono>
 #include <cstddef>
 #include <mutex>
 #include <vector>
@@ -14,22 +17,22 @@ struct LatencySummary {
 
 class LatencyRecorder {
  public:
-  explicit LatencyRecorder(size_t window = 4096) : ring_(window) {}
+  using Clock = std::chrono::steady_clock;
 
-  void add(double ms) {
+  /// `window_s` 0: no age limit (the last `capacity` samples).
+  explicit LatencyRecorder(size_t capacity = 4096, double window_s = 0)
+      : ring_(capacity == 0 ? 1 : capacity),
+        window_(std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(window_s))) {}
+
+  void add(double ms, Clock::time_point now = Clock::now()) {
     std::lock_guard lock(mutex_);
-    ring_[next_ % ring_.size()] = ms;
+    ring_[next_ % ring_.size()] = {now, ms};
     ++next_;
   }
 
-  /// Percentiles by the nearest-rank method over the window.
-  LatencySummary summary() const {
-    std::vector<double> v;
-    {
-      std::lock_guard lock(mutex_);
-      const size_t n = std::min(next_, ring_.size());
-      v.assign(ring_.begin(), ring_.begin() + static_cast<std::ptrdiff_t>(n));
-    }
+  /// Percentiles by the nearest-rank method over the window as of `now`.
+  LatencySummary summary(Clock::time_point now = Clock::now()) const {
+    std::vector<double> v = recent(now);
     LatencySummary s;
     s.samples = v.size();
     if (v.empty()) return s;
@@ -42,16 +45,27 @@ class LatencyRecorder {
     return s;
   }
 
-  /// The raw window (oldest first is not guaranteed), for histograms in reports.
-  std::vector<double> samples() const {
-    std::lock_guard lock(mutex_);
-    const size_t n = std::min(next_, ring_.size());
-    return {ring_.begin(), ring_.begin() + static_cast<std::ptrdiff_t>(n)};
-  }
+  /// The samples of the window (oldest first is not guaranteed), for histograms in reports.
+  std::vector<double> samples(Clock::time_point now = Clock::now()) const { return recent(now); }
 
  private:
+  struct Sample {
+    Clock::time_point at;
+    double ms = 0;
+  };
+  std::vector<double> recent(Clock::time_point now) const {
+    std::lock_guard lock(mutex_);
+    const size_t n = std::min(next_, ring_.size());
+    std::vector<double> v;
+    v.reserve(n);
+    for (size_t i = 0; i < n; ++i)
+      if (window_.count() == 0 || now - ring_[i].at <= window_) v.push_back(ring_[i].ms);
+    return v;
+  }
+
   mutable std::mutex mutex_;
-  std::vector<double> ring_;
+  std::vector<Sample> ring_;
+  Clock::duration window_;
   size_t next_ = 0;
 };
 

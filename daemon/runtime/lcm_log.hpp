@@ -2,6 +2,16 @@
 // LCM log files (lcm-logger's format) for recording, simulation, conversion and replay.
 // Each event has a channel, a timestamp and the encoded bytes; `timestamp` is whatever the writer chose:
 // lcm-logger stores wall-clock receive time, sextant's own writers store the message utime.
+//
+// The format (LCM's eventlog.c; every integer big-endian), one event after another:
+//   int32 sync word 0xEDA1DA01, int64 event number, int64 timestamp, int32 channel length, int32 data length,
+//   channel bytes (no NUL), data bytes.
+// The reader is our own over that format: liblcm 1.3.1's callocs `datalen + 1` (a datalen of 0x7fffffff overflows
+// and it freads into NULL) and stops silently at the first corrupt header.  Ours checks every length against the
+// bytes left in the file, accepts an event only when the next sync word (or the end of the file) follows it, and
+// otherwise resynchronises on the next sync word, counting what it skipped (LogDamage).
+#include "daemon/runtime/wire_layout.hpp"
+
 #include <lcm/lcm-cpp.hpp>
 
 #include <cstdint>
@@ -19,10 +29,24 @@ struct LogRecord {
   std::vector<uint8_t> data;
 };
 
+/// What a reader found wrong in a log.  A damaged log had corrupt events (resynchronised over); a truncated tail
+/// alone (the last event cut short, as a killed recorder leaves it) is not damage.
+struct LogDamage {
+  int64_t bad_events = 0;            // event headers found corrupt (each followed by a resynchronisation)
+  int64_t skipped_bytes = 0;         // bytes skipped while resynchronising (not part of any good event)
+  int64_t missing_event_numbers = 0; // gaps in the event numbers of the good events (events lost in damage)
+  int64_t truncated_tail_bytes = 0;  // an incomplete last event
+  std::vector<std::string> first_problems;  // the first few, each "byte OFFSET: what"
+  bool damaged() const { return bad_events > 0 || skipped_bytes > 0; }
+  /// One line: "3 corrupt events, 1234 bytes skipped, ... (first: byte 52: data length ...)"; empty when clean.
+  std::string summary() const;
+};
+
 class LogWriter {
  public:
-  /// Opens (truncates) `path`; throws std::runtime_error naming the path when it cannot.
-  explicit LogWriter(const std::string& path);
+  /// Opens `path` (truncating it; with `exclusive`, failing when it exists); throws std::runtime_error naming the
+  /// path when it cannot.
+  explicit LogWriter(const std::string& path, bool exclusive = false);
   void write_raw(int64_t timestamp, const std::string& channel, const void* data, size_t size);
   /// Encodes an lcm-gen message and writes it with `timestamp` (normally the message's utime).
   template <class Msg>
@@ -43,24 +67,41 @@ class LogWriter {
   int64_t written_ = 0;
 };
 
+/// Reads events from bytes in memory or from a file, checking every size (see the top of this file).
 class LogReader {
  public:
   /// Opens `path` for reading; throws std::runtime_error naming the path when it cannot.
   explicit LogReader(const std::string& path);
-  /// The next record, or nullopt at the end of the file.
+  /// Reads from a copy of `bytes` (fuzzing, tests).
+  static LogReader from_bytes(std::vector<uint8_t> bytes);
+  ~LogReader();
+  LogReader(LogReader&&) noexcept;
+  LogReader& operator=(LogReader&&) noexcept;
+
+  /// The next good event, or nullopt at the end of the file.  Corrupt events are skipped and counted in `damage`.
   std::optional<LogRecord> next();
-  /// Every record of the file, in file order.
-  static std::vector<LogRecord> read_all(const std::string& path);
+  const LogDamage& damage() const { return damage_; }
+
+  /// Every good event of the file, in file order; what was skipped goes into `damage` when given.
+  static std::vector<LogRecord> read_all(const std::string& path, LogDamage* damage = nullptr);
 
  private:
-  std::string path_;
-  std::unique_ptr<lcm::LogFile> log_;
+  struct Source;
+  explicit LogReader(std::unique_ptr<Source> source);
+  std::optional<int64_t> find_sync(int64_t from);
+  void problem(int64_t at, const std::string& what);
+
+  std::unique_ptr<Source> source_;
+  int64_t pos_ = 0;
+  std::optional<int64_t> last_event_number_;
+  LogDamage damage_;
 };
 
-/// Decodes `data` as `Msg`; false when the bytes are not a valid Msg (wrong fingerprint or truncated).
+/// Decodes `data` as `Msg`; false when the bytes are not a valid Msg (wrong fingerprint, truncated, or lengths that
+/// do not fit: see safe_decode).  Never throws.
 template <class Msg>
 bool decode_message(const std::vector<uint8_t>& data, Msg& msg) {
-  return msg.decode(data.data(), 0, static_cast<int>(data.size())) >= 0;
+  return !safe_decode(data.data(), data.size(), msg);
 }
 
 }  // namespace sextant::runtime

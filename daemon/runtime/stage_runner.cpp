@@ -1,9 +1,12 @@
 #include "daemon/runtime/stage_runner.hpp"
 
+#include <spdlog/spdlog.h>
+
 namespace sextant::runtime {
 
 StageRunner::StageRunner(engine::Stage& stage, size_t queue_capacity, engine::Emit emit)
-    : stage_(stage), emit_(std::move(emit)), queue_(queue_capacity), counters_(stage.counters()) {}
+    : stage_(stage), emit_(std::move(emit)), queue_(queue_capacity), latency_(4096, kLatencyWindowS),
+      counters_(stage.counters()) {}
 
 StageRunner::~StageRunner() { drain_and_stop(); }
 
@@ -20,20 +23,56 @@ void StageRunner::drain_and_stop() {
   if (thread_.joinable()) thread_.join();
 }
 
+int64_t StageRunner::drain_and_stop(std::chrono::steady_clock::time_point deadline) {
+  queue_.close();
+  while (thread_.joinable() && queue_.size() > 0 && std::chrono::steady_clock::now() < deadline)
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  const auto left = static_cast<int64_t>(queue_.discard());
+  drain_discarded_ += left;
+  if (thread_.joinable()) thread_.join();
+  return left;
+}
+
+template <class F>
+bool StageRunner::guarded(const char* what, F&& f) {
+  std::string message;
+  try {
+    f();
+    return true;
+  } catch (const std::exception& e) {
+    message = e.what();
+  } catch (...) {
+    message = "an exception that is not a std::exception";
+  }
+  const int64_t n = ++failures_;
+  // Every failure is counted; the log gets the first ten and then every power of two.
+  if (n <= 10 || (n & (n - 1)) == 0)
+    spdlog::error("stage '{}': {} threw ({} failure(s) so far): {}", stage_.name(), what, n, message);
+  std::lock_guard lock(counters_mutex_);
+  last_failure_ = std::string(what) + ": " + message;
+  return false;
+}
+
 void StageRunner::loop() {
   while (auto item = queue_.pop()) {
-    stage_.handle(item->event, emit_);
+    if (!guarded("handle", [&] { stage_.handle(item->event, emit_); }) &&
+        guarded("recover", [&] { stage_.recover(item->event); }))
+      ++recoveries_;
     const auto done = std::chrono::steady_clock::now();
     latency_.add(std::chrono::duration<double, std::milli>(done - item->received).count());
     ++processed_;
-    auto counters = stage_.counters();
+    engine::Counters counters;
+    if (guarded("counters", [&] { counters = stage_.counters(); })) {
+      std::lock_guard lock(counters_mutex_);
+      counters_ = std::move(counters);
+    }
+  }
+  guarded("finish", [&] { stage_.finish(emit_); });
+  engine::Counters counters;
+  if (guarded("counters", [&] { counters = stage_.counters(); })) {
     std::lock_guard lock(counters_mutex_);
     counters_ = std::move(counters);
   }
-  stage_.finish(emit_);
-  auto counters = stage_.counters();
-  std::lock_guard lock(counters_mutex_);
-  counters_ = std::move(counters);
 }
 
 StageStatus StageRunner::status() const {
@@ -46,6 +85,10 @@ StageStatus StageRunner::status() const {
   s.latency = latency_.summary();
   std::lock_guard lock(counters_mutex_);
   s.counters = counters_;
+  s.counters.push_back({"stage_failures", failures_.load()});
+  s.counters.push_back({"stage_recoveries", recoveries_.load()});
+  if (const int64_t d = drain_discarded_.load(); d > 0) s.counters.push_back({"drain_discarded", d});
+  s.last_failure = last_failure_;
   return s;
 }
 

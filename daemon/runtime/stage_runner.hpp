@@ -1,6 +1,9 @@
 #pragma once
 // Runs one engine stage on its own thread, fed by a bounded queue.  The producer never blocks: a full queue drops
 // the event and counts it.  Latency is measured from the moment the event was received to the end of `handle`.
+// Nothing leaves the thread: an exception from the stage (a CHOLMOD failure in the smoother, an allocation) is
+// caught, counted ("stage_failures", the message kept as `last_failure` and logged), and the stage is asked to
+// recover (Stage::recover: reset the body, rebuild a factorization) before the next event.
 #include "daemon/engine/stage.hpp"
 #include "daemon/runtime/bounded_queue.hpp"
 #include "daemon/runtime/latency_recorder.hpp"
@@ -22,11 +25,15 @@ struct StageStatus {
   size_t queue_depth = 0, queue_capacity = 0;
   int64_t processed = 0, dropped = 0;
   LatencySummary latency;
-  engine::Counters counters;
+  engine::Counters counters;  // the stage's own, then "stage_failures" and "stage_recoveries"
+  std::string last_failure;   // what the last exception said ("" when none)
 };
 
 class StageRunner {
  public:
+  /// Status latencies cover the last 4096 events of at most this many seconds.
+  static constexpr double kLatencyWindowS = 10.0;
+
   /// `emit` must be thread-safe (the publisher is).
   StageRunner(engine::Stage& stage, size_t queue_capacity, engine::Emit emit);
   ~StageRunner();
@@ -38,14 +45,22 @@ class StageRunner {
   bool accepts(const engine::Event& event) const { return stage_.accepts(event); }
 
   void start();
+  /// Refuses further events (what is queued stays).
+  void stop_intake() { queue_.close(); }
   /// Stops intake, processes what is queued, calls the stage's `finish`, joins the thread.
   void drain_and_stop();
+  /// The same, bounded: what is still queued at `deadline` is discarded (counted in `drain_discarded`, returned).
+  /// The event being handled and the stage's `finish` still run to their end.
+  int64_t drain_and_stop(std::chrono::steady_clock::time_point deadline);
 
   StageStatus status() const;
   const LatencyRecorder& latency() const { return latency_; }
 
  private:
   void loop();
+  // Runs `f` (a call into the stage); false when it threw (counted, logged, kept as the last failure).
+  template <class F>
+  bool guarded(const char* what, F&& f);
 
   engine::Stage& stage_;
   engine::Emit emit_;
@@ -53,8 +68,10 @@ class StageRunner {
   LatencyRecorder latency_;
   std::thread thread_;
   std::atomic<int64_t> processed_{0};
+  std::atomic<int64_t> failures_{0}, recoveries_{0}, drain_discarded_{0};
   mutable std::mutex counters_mutex_;
   engine::Counters counters_;  // copied from the stage after each event (the stage is not thread-safe)
+  std::string last_failure_;   // under counters_mutex_
 };
 
 }  // namespace sextant::runtime

@@ -36,6 +36,7 @@ sextant::status_t StatusReport::build(double uptime_s, const std::map<std::strin
     x.decoded = c.decoded;
     x.rejected = c.rejected;
     x.dropped = c.dropped;
+    x.lost = c.lost;
     x.num_reasons = static_cast<int32_t>(c.reasons.size());
     for (const auto& [reason, count] : c.reasons) {
       x.reasons.push_back(reason);
@@ -57,6 +58,7 @@ sextant::status_t StatusReport::build(double uptime_s, const std::map<std::strin
     x.latency_ms_p99 = s.latency.p99_ms;
     x.latency_ms_max = s.latency.max_ms;
     put_counters(x, s.counters);
+    x.last_failure = s.last_failure;
     m.stages.push_back(x);
   }
   sextant::stage_status_t runtime{};

@@ -1,17 +1,104 @@
 #include "daemon/runtime/time_order_guard.hpp"
 
-namespace sextant::runtime {
+#include <algorithm>
+#include <cstdio>
 
-std::optional<std::string> TimeOrderGuard::check(const std::string& stream, int64_t utime, bool strictly_increasing) {
-  auto it = last_.find(stream);
-  if (it != last_.end()) {
-    if (utime == it->second)
-      return "duplicate utime " + std::to_string(utime) + " for " + stream;
-    if (strictly_increasing && utime < it->second)
-      return "utime " + std::to_string(utime) + " before the previous " + std::to_string(it->second) + " for " + stream;
+namespace sextant::runtime {
+namespace {
+
+constexpr size_t kRecentSignatures = 16;
+
+std::string seconds(int64_t us) {
+  char b[32];
+  std::snprintf(b, sizeof b, "%.3g", static_cast<double>(us) * 1e-6);
+  return b;
+}
+
+uint64_t mix(int64_t utime, uint64_t signature) {
+  // splitmix64 of the stamp, combined with the caller's signature.
+  uint64_t z = static_cast<uint64_t>(utime) + 0x9e3779b97f4a7c15ULL + signature * 0xbf58476d1ce4e5b9ULL;
+  z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
+  z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
+  return z ^ (z >> 31);
+}
+
+}  // namespace
+
+void TimeOrderGuard::expire(SteadyTime now) {
+  if (options_.idle_s <= 0) return;
+  const auto idle = std::chrono::duration_cast<SteadyTime::duration>(std::chrono::duration<double>(options_.idle_s));
+  for (auto it = streams_.begin(); it != streams_.end();) {
+    if (now - it->second.seen > idle) {
+      it = streams_.erase(it);
+      ++expired_;
+    } else {
+      ++it;
+    }
   }
-  if (it == last_.end() || utime > it->second) last_[stream] = utime;
-  return std::nullopt;
+  last_expiry_ = now;
+}
+
+std::optional<TimeOrderGuard::Refusal> TimeOrderGuard::check(const std::string& stream, int64_t utime, bool strict,
+                                                             uint64_t signature, std::optional<LiveClock> live) {
+  const SteadyTime now = live ? live->now : std::chrono::steady_clock::now();
+  const auto max_ahead = static_cast<int64_t>(options_.max_ahead_s * 1e6);
+  if (live && utime > live->wall_utime &&
+      utime - live->wall_utime > static_cast<int64_t>(options_.max_ahead_of_wall_s * 1e6))
+    return Refusal{"time_future", "utime " + std::to_string(utime) + " is " + seconds(utime - live->wall_utime) +
+                                      " s ahead of the wall clock for " + stream};
+  // Idle streams are looked for at most once a second, and when the table is full.
+  if (options_.idle_s > 0 && now - last_expiry_ > std::chrono::seconds(1)) expire(now);
+  auto it = streams_.find(stream);
+  if (it == streams_.end()) {
+    if (streams_.size() >= static_cast<size_t>(std::max(options_.max_streams, 0))) {
+      expire(now);
+      if (streams_.size() >= static_cast<size_t>(std::max(options_.max_streams, 0)))
+        return Refusal{"too_many_sources", "a new source " + stream + " beyond the " +
+                                               std::to_string(options_.max_streams) + " tracked (daemon.max_sources)"};
+    }
+    Stream s;
+    s.clock = utime;
+    s.recent.push_back(mix(utime, signature));
+    s.seen = s.moved = now;
+    streams_.emplace(stream, std::move(s));
+    return std::nullopt;
+  }
+  Stream& s = it->second;
+  s.seen = now;
+  const uint64_t sig = mix(utime, signature);
+  if ((strict && utime == s.clock) || (!strict && std::find(s.recent.begin(), s.recent.end(), sig) != s.recent.end()))
+    return Refusal{"time_order", "duplicate utime " + std::to_string(utime) + " for " + stream};
+  // Live, the slack grows with the real time since the clock moved (a paused sender resumes later in data time too).
+  const int64_t elapsed_us =
+      live ? std::chrono::duration_cast<std::chrono::microseconds>(now - s.moved).count() : int64_t{0};
+  const bool ahead = live && utime > s.clock && utime - s.clock > max_ahead + std::max<int64_t>(elapsed_us, 0);
+  const bool behind = strict && utime < s.clock;
+  if (!ahead && !behind) {
+    s.candidates = 0;
+    if (utime > s.clock) s.clock = utime, s.moved = now;
+    s.recent.push_back(sig);
+    if (s.recent.size() > kRecentSignatures) s.recent.pop_front();
+    return std::nullopt;
+  }
+  // A possible jump: consistent with the previous refused message?
+  if (s.candidates > 0 && utime > s.candidate && utime - s.candidate <= max_ahead) ++s.candidates;
+  else s.candidates = 1;
+  s.candidate = utime;
+  if (s.candidates >= std::max(options_.resync_after, 1)) {
+    last_resync_ = stream + ": clock re-synchronised from " + std::to_string(s.clock) + " to " + std::to_string(utime) +
+                   " after " + std::to_string(s.candidates) + " consistent messages";
+    s.clock = utime;
+    s.moved = now;
+    s.candidates = 0;
+    s.recent.assign(1, sig);
+    ++resyncs_;
+    return std::nullopt;
+  }
+  if (ahead)
+    return Refusal{"time_future", "utime " + std::to_string(utime) + " is " + seconds(utime - s.clock) +
+                                      " s ahead of the previous " + std::to_string(s.clock) + " for " + stream};
+  return Refusal{"time_order",
+                 "utime " + std::to_string(utime) + " before the previous " + std::to_string(s.clock) + " for " + stream};
 }
 
 }  // namespace sextant::runtime

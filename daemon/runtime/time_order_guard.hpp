@@ -1,20 +1,82 @@
 #pragma once
-// Rejects duplicate and backwards timestamps per stream (a channel and a source or sensor).  Odometry must be
-// strictly increasing per source; other inputs only refuse exact duplicates (the stages accept late data).
+// The time guard of the input side: per stream (a channel and a body, or a bearing sensor) it keeps the stream's
+// recent clock and refuses what would corrupt it.
+//  - Backwards and duplicate stamps: odometry and bearing scans must strictly increase per stream; landmarks and
+//    loop closures may arrive late (the stages place them) but an exact repeat of one of the stream's last 16 is a
+//    duplicate.  Reason "time_order".
+//  - Far-future stamps (live only, when the caller passes the clocks): more than `max_ahead_of_wall_s` ahead of the
+//    wall clock, or ahead of the stream's clock by more than `max_ahead_s` plus the real time elapsed since that
+//    clock last moved (a sender that paused for a minute may resume a minute later; a stamp cannot run ahead of real
+//    time by more than `max_ahead_s` in one step), are refused without moving the clock.  Reason "time_future".
+//    One odometry message dated 2100 used to move the clock and cut its body off until restart.  Replay needs no
+//    such check: it feeds messages in utime order, so a far-future stamp comes last.
+//  - True jumps: a stream whose clock really jumped (a robot restarted with another clock, a simulator reset) sends
+//    `resync_after` consecutive messages that agree with each other (strictly increasing, each within `max_ahead_s`
+//    of the one before) but not with the clock: the last of them is accepted and becomes the clock ("resync",
+//    counted in `resyncs`).  Forward and backward jumps alike.
+//  - Bounded state: at most `max_streams` streams; a new stream beyond that is refused (reason "too_many_sources")
+//    and known streams are not slowed.  With `idle_s` > 0 a stream silent for that long (by the caller's monotonic
+//    clock) is forgotten, which frees its place.
+#include <chrono>
 #include <cstdint>
-#include <map>
+#include <deque>
 #include <optional>
 #include <string>
+#include <unordered_map>
 
 namespace sextant::runtime {
 
+struct TimeGuardOptions {
+  double max_ahead_s = 60.0;           // live: further ahead of its stream's clock (beyond real time) is refused
+  int resync_after = 5;                // consecutive consistent messages that move a jumped clock
+  double max_ahead_of_wall_s = 60.0;   // live only: a message further ahead of the wall clock is refused
+  int max_streams = 256;               // bodies and sensors tracked (per input side)
+  double idle_s = 0;                   // forget a stream silent this long (0: never; the stages keep their state)
+};
+
 class TimeOrderGuard {
  public:
-  /// nullopt when `utime` is acceptable for `stream` (and records it), else the reason text.
-  std::optional<std::string> check(const std::string& stream, int64_t utime, bool strictly_increasing);
+  struct Refusal {
+    std::string reason;   // "time_order", "time_future", "too_many_sources"
+    std::string message;
+  };
+  using SteadyTime = std::chrono::steady_clock::time_point;
+  /// The clocks of a live run: the wall clock (microseconds since the epoch) and the monotonic one.
+  struct LiveClock {
+    int64_t wall_utime = 0;
+    SteadyTime now{};
+  };
+
+  explicit TimeOrderGuard(TimeGuardOptions options = {}) : options_(options) {}
+
+  /// nullopt when `utime` is acceptable for `stream` (and records it), else why not.  `signature` tells apart
+  /// messages of one stream that may share a stamp (a loop closure's from/to); `live` gives the clocks of a live
+  /// run (nullopt in replay: no far-future check, idle expiry by the steady clock).
+  std::optional<Refusal> check(const std::string& stream, int64_t utime, bool strictly_increasing,
+                               uint64_t signature = 0, std::optional<LiveClock> live = std::nullopt);
+
+  int64_t resyncs() const { return resyncs_; }
+  int64_t expired() const { return expired_; }
+  size_t streams() const { return streams_.size(); }
+  /// The message of the last re-synchronisation (for the log), empty before the first.
+  const std::string& last_resync() const { return last_resync_; }
 
  private:
-  std::map<std::string, int64_t> last_;
+  struct Stream {
+    int64_t clock = 0;          // newest accepted utime
+    int64_t candidate = 0;      // last refused utime of a possible jump
+    int candidates = 0;         // consecutive consistent refused ones
+    std::deque<uint64_t> recent;  // signatures of the last accepted messages (duplicates)
+    SteadyTime seen{};            // last message of any kind (idle expiry)
+    SteadyTime moved{};           // when `clock` last moved
+  };
+  void expire(SteadyTime now);
+
+  TimeGuardOptions options_;
+  std::unordered_map<std::string, Stream> streams_;
+  SteadyTime last_expiry_{};
+  int64_t resyncs_ = 0, expired_ = 0;
+  std::string last_resync_;
 };
 
 }  // namespace sextant::runtime

@@ -37,6 +37,8 @@ struct LineReader {
   }
   int64_t integer() {
     const double v = number();
+    // The range first: casting a double outside int64's range is undefined behaviour.
+    if (!(v >= -0x1p63 && v < 0x1p63)) fail(tokens[0] + ": id out of range: '" + tokens[next - 1] + "'");
     if (v != static_cast<double>(static_cast<int64_t>(v))) fail(tokens[0] + ": not an integer id: '" + tokens[next - 1] + "'");
     return static_cast<int64_t>(v);
   }

@@ -3,6 +3,7 @@
 // A simulated loop-closure front end: answers MATCH_REQUESTS on LOOP_CLOSURES from the log's ground truth with
 // noise, failures and wrong matches (replay/simulated_matcher.hpp has the model), until SIGINT/SIGTERM.
 #include "daemon/runtime/codec.hpp"
+#include "daemon/runtime/wire_layout.hpp"
 #include "daemon/runtime/raw_subscription.hpp"
 #include "replay/cli/command.hpp"
 #include "replay/cli/handle_until_stopped.hpp"
@@ -33,7 +34,7 @@ struct MatcherNode {
 
   void on_message(const lcm_recv_buf_t& b, const std::string&) {
     sextant::match_request_t m;
-    if (m.decode(b.data, 0, static_cast<int>(b.data_size)) < 0) {
+    if (sextant::runtime::safe_decode(b.data, b.data_size, m)) {
       ++undecodable;
       return;
     }

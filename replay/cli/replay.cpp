@@ -22,6 +22,7 @@ struct Options {
   std::string log, config, tum_out, kitti_out, g2o_out, out_log, estimator, report;
   bool json = false;
   bool realtime = false;
+  bool tolerate_damage = false;
   double speed = 1.0;
   double segment_seconds = 0;
   std::string lcm_url;
@@ -53,6 +54,11 @@ void print_json(const Options& o, const replay::ReplayResult& r, const std::stri
   j.field("version", sextant::version());
   j.field("log", o.log);
   j.field("records", r.records);
+  j.key("log_damage").begin_object();
+  j.field("corrupt_events", r.log_damage.bad_events).field("skipped_bytes", r.log_damage.skipped_bytes);
+  j.field("missing_event_numbers", r.log_damage.missing_event_numbers);
+  j.field("truncated_tail_bytes", r.log_damage.truncated_tail_bytes);
+  j.end_object();
   j.field("primary_estimator", r.primary_estimator);
   j.field("duration_s", static_cast<double>(r.last_utime - r.first_utime) * 1e-6);
   j.field("wall_seconds", r.wall_seconds);
@@ -60,7 +66,7 @@ void print_json(const Options& o, const replay::ReplayResult& r, const std::stri
   j.key("inputs").begin_object();
   for (const auto& [channel, c] : r.channels) {
     j.key(channel).begin_object();
-    j.field("received", c.received).field("decoded", c.decoded).field("rejected", c.rejected);
+    j.field("received", c.received).field("decoded", c.decoded).field("rejected", c.rejected).field("lost", c.lost);
     j.key("reasons").begin_object();
     for (const auto& [reason, n] : c.reasons) j.field(reason, n);
     j.end_object();
@@ -141,6 +147,9 @@ sextant::cli::RegisterCommand reg{"replay", [](CLI::App& app) {
   cmd->add_flag("--realtime", o->realtime, "republish the log to the live bus at the pace of message utimes");
   cmd->add_option("--speed", o->speed, "playback speed for --realtime (2 = twice as fast)")->check(CLI::PositiveNumber);
   cmd->add_option("--lcm-url", o->lcm_url, "LCM URL for --realtime");
+  cmd->add_flag("--tolerate-damage", o->tolerate_damage,
+                "exit 0 on a damaged log (corrupt events are skipped and counted either way; without this flag a "
+                "damaged log makes the exit code 4)");
   cmd->callback([o] {
     if (o->realtime) {
       const auto n = replay::play_realtime(o->log, o->speed, o->lcm_url);
@@ -152,7 +161,7 @@ sextant::cli::RegisterCommand reg{"replay", [](CLI::App& app) {
       try {
         cfg = config::load_daemon_config(o->config);
       } catch (const config::ConfigError& e) {
-        std::fprintf(stderr, "sextant replay: bad configuration: %s\n", e.what());
+        std::fprintf(stderr, "sextant replay: bad configuration (--config %s): %s\n", o->config.c_str(), e.what());
         throw CLI::RuntimeError(2);
       }
     }
@@ -201,6 +210,13 @@ sextant::cli::RegisterCommand reg{"replay", [](CLI::App& app) {
       std::printf("replayed %lld log events (%.1f s of data) in %.2f s; %zu %s poses; %lld inputs rejected\n",
                   static_cast<long long>(result.records), static_cast<double>(result.last_utime - result.first_utime) * 1e-6,
                   result.wall_seconds, static_cast<size_t>(exported), estimator.c_str(), static_cast<long long>(rejected));
+    }
+    if (const std::string d = result.log_damage.summary(); !d.empty())
+      std::fprintf(stderr, "sextant replay: %s: %s\n", o->log.c_str(), d.c_str());
+    if (result.log_damage.damaged() && !o->tolerate_damage) {
+      std::fprintf(stderr, "sextant replay: the log is damaged (the good events were replayed); --tolerate-damage "
+                           "accepts it\n");
+      throw CLI::RuntimeError(4);
     }
   });
 }};

@@ -1,6 +1,7 @@
 // sextant watch: one live line per SEXTANT_STATUS report (message rates, the latest fused pose, targets, drops),
 // and a summary when it stops.
 #include "daemon/runtime/raw_subscription.hpp"
+#include "daemon/runtime/wire_layout.hpp"
 #include "replay/cli/command.hpp"
 #include "replay/cli/handle_until_stopped.hpp"
 
@@ -31,7 +32,7 @@ struct Watcher {
 
   template <class Msg>
   static bool decode(const lcm_recv_buf_t& b, Msg& m) {
-    return m.decode(b.data, 0, static_cast<int>(b.data_size)) >= 0;
+    return !sextant::runtime::safe_decode(b.data, b.data_size, m);
   }
 
   void on_message(const lcm_recv_buf_t& b, const std::string& channel) {

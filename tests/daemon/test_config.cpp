@@ -1,6 +1,7 @@
 // Config parsing: defaults, overrides, and every error naming its file:line.
 #include "assoc/chi_square.hpp"
 #include "daemon/config/daemon_config.hpp"
+#include "daemon/engine/engine.hpp"
 #include "daemon/engine/graph_stage.hpp"
 #include "daemon/engine/graph_stage_config.hpp"
 
@@ -272,4 +273,70 @@ TEST_CASE("landmark sightings' kernel width: auto takes the sighting gate's quan
   const auto five = parse_daemon_config("engine:\n  graph:\n    loops: {kernel_width: 5}\n", "t").engine.graph;
   CHECK(sighting_kernel_width_for(five, true) == 5.0);
   CHECK(sighting_kernel_width_for(five, false) == 5.0);
+}
+
+TEST_CASE("a key that is not a plain name is a ConfigError with file:line, not a YAML exception") {
+  std::string e;
+  CHECK_NOTHROW(e = error_of("daemon:\n  [a]: 1\n"));
+  CHECK(e.find("test.yaml:2:3:") == 0);
+  CHECK(e.find("a key must be a plain name") != std::string::npos);
+  CHECK(error_of("{a: 1}: 2\n").find("test.yaml") == 0);
+}
+
+TEST_CASE("load_daemon_config names the file in every error") {
+  const std::string dir = std::string(SEXTANT_SOURCE_DIR) + "/config";
+  try {
+    sextant::config::load_daemon_config(dir);
+    FAIL("a directory parsed");
+  } catch (const ConfigError& e) {
+    CHECK(std::string(e.what()).find(dir) == 0);
+  }
+}
+
+TEST_CASE("channels that cannot work are refused: LCM's 63-character limit with the prefix, shared inputs, outputs "
+          "named like inputs") {
+  const std::string prefix(70, 'P');
+  std::string e = error_of("channels:\n  prefix: " + prefix + "\n");
+  CHECK(e.find("test.yaml:2:") == 0);
+  CHECK(e.find("LCM allows 63") != std::string::npos);
+  // 50 + "FUSED_POSE_DEAD_RECKONING" (25) is over; the inputs alone would fit.
+  e = error_of("channels:\n  prefix: " + std::string(40, 'P') + "\n");
+  CHECK(e.find("channels.fused_pose': channel '" + std::string(40, 'P') + "FUSED_POSE_DEAD_RECKONING' is 65") !=
+        std::string::npos);
+  CHECK(error_of("channels:\n  prefix: " + std::string(30, 'P') + "\n").empty());
+  e = error_of("channels:\n  odometry: SENSORS\n  landmarks: SENSORS\n");
+  CHECK(e.find("test.yaml:3:") == 0);
+  CHECK(e.find("channels.landmarks': the same channel as channels.odometry") != std::string::npos);
+  e = error_of("channels:\n  fused_pose: ODOMETRY\n");
+  CHECK(e.find("test.yaml:2:") == 0);
+  CHECK(e.find("is also the input channels.odometry") != std::string::npos);
+  CHECK(error_of("channels:\n  status: TRAJECTORY\n").find("the same channel as channels.trajectory") != std::string::npos);
+}
+
+TEST_CASE("a config without primary_estimator puts the same estimator on FUSED_POSE as config/default.yaml") {
+  const auto d = sextant::config::load_daemon_config(std::string(SEXTANT_SOURCE_DIR) + "/config/default.yaml");
+  const auto empty = parse_daemon_config("", "empty.yaml");
+  CHECK(d.engine.primary_estimator == "ekf");
+  CHECK(empty.engine.primary_estimator == d.engine.primary_estimator);
+  CHECK(sextant::engine::Engine(empty.engine).primary_estimator() == "ekf");
+  // Without the EKF, the named estimator falls back to "auto" (here dead reckoning) instead of publishing nothing.
+  const auto dr = parse_daemon_config("engine:\n  filter:\n    type: none\n  graph:\n    enabled: false\n", "dr.yaml");
+  CHECK(sextant::engine::Engine(dr.engine).primary_estimator() == "dead_reckoning");
+}
+
+TEST_CASE("the guard and bound keys of the daemon section: defaults as documented, bad values refused") {
+  const auto d = sextant::config::load_daemon_config(std::string(SEXTANT_SOURCE_DIR) + "/config/default.yaml");
+  const auto empty = parse_daemon_config("", "empty.yaml");
+  CHECK(d.max_ahead_s == empty.max_ahead_s);
+  CHECK(d.time_resync_messages == empty.time_resync_messages);
+  CHECK(d.max_ahead_of_wall_s == empty.max_ahead_of_wall_s);
+  CHECK(d.max_sources == empty.max_sources);
+  CHECK(d.source_idle_s == empty.source_idle_s);
+  CHECK(d.drain_timeout_s == empty.drain_timeout_s);
+  const auto c = parse_daemon_config("daemon:\n  max_sources: 7\n  drain_timeout_s: 0.5\n  time_resync_messages: 3\n", "t.yaml");
+  CHECK(c.max_sources == 7);
+  CHECK(c.drain_timeout_s == 0.5);
+  CHECK(c.time_resync_messages == 3);
+  CHECK(error_of("daemon:\n  max_sources: 0\n").find("test.yaml:2:") == 0);
+  CHECK(error_of("daemon:\n  max_ahead_s: -1\n").find("test.yaml:2:") == 0);
 }

@@ -14,7 +14,8 @@ fi
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 "$SEXTANT_BIN/sextant" simulate planar -o "$work/run.lcm" --seed 2 --duration 20 --clutter 1 > /dev/null
-"$SEXTANT_BIN/sextant" replay "$work/run.lcm" --report "$work/report" > /dev/null
+printf 'engine:\n  primary_estimator: graph\n' > "$work/graph.yaml"  # the report's primary: the graph back end
+"$SEXTANT_BIN/sextant" replay "$work/run.lcm" --config "$work/graph.yaml" --report "$work/report" > /dev/null
 test -s "$work/report/index.html" && test -s "$work/report/report.json"
 flags=(--headless --no-sandbox --disable-gpu --disable-quic --no-first-run --disable-background-networking
        --disable-component-update --disable-sync --user-data-dir="$work/profile" --window-size=1400,2000)

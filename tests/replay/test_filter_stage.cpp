@@ -1,6 +1,7 @@
 // The filter stage on a simulated run: one EKF pose per odometry message, and a far smaller error against the
 // ground truth than dead reckoning (landmark sightings correct the drift).
 #include "daemon/engine/filter_stage.hpp"
+#include "daemon/engine/graph_stage.hpp"
 #include "daemon/runtime/codec.hpp"
 #include "daemon/runtime/lcm_log.hpp"
 #include "replay/replay_driver.hpp"
@@ -299,4 +300,64 @@ TEST_CASE("filter stage: two replays of a log give identical EKF poses") {
     same = same && pa[i].utime == pb[i].utime && pa[i].pose.position == pb[i].pose.position &&
            pa[i].pose.orientation.coeffs() == pb[i].pose.orientation.coeffs() && pa[i].covariance == pb[i].covariance;
   CHECK(same);
+}
+
+TEST_CASE("filter stage: recover after a failed event forgets that body only, which restarts from its next odometry") {
+  replay::SimulationOptions o;
+  o.duration_s = 2;
+  o.seed = 9;
+  const auto events = simulated_events(o);
+  engine::FilterStage stage(engine::FilterConfig{});
+  const engine::Event* first_odometry = nullptr;
+  for (const auto& e : events) {
+    stage.handle(e, [](engine::Output) {});
+    if (first_odometry == nullptr && std::holds_alternative<engine::Odometry>(e)) first_odometry = &e;
+  }
+  REQUIRE(first_odometry != nullptr);
+  REQUIRE(stage.ekf(o.source) != nullptr);
+  engine::Odometry other = std::get<engine::Odometry>(*first_odometry);
+  other.source = "other";
+  stage.handle(other, [](engine::Output) {});
+  REQUIRE(stage.ekf("other") != nullptr);
+  stage.recover(*first_odometry);  // as the stage runner does after handle threw on it
+  CHECK(stage.ekf(o.source) == nullptr);
+  CHECK(stage.ekf("other") != nullptr);
+  // The body's next odometry message starts a fresh filter and publishes again.
+  auto next = std::get<engine::Odometry>(*first_odometry);
+  next.utime = engine::event_utime(events.back()) + 1'000'000;
+  int published = 0;
+  stage.handle(next, [&](engine::Output) { ++published; });
+  next.utime += 20'000;
+  stage.handle(next, [&](engine::Output) { ++published; });
+  REQUIRE(stage.ekf(o.source) != nullptr);
+  CHECK(published >= 1);
+}
+
+TEST_CASE("graph stage: recover refactorizes from the graph and keeps every keyframe, and the stage goes on") {
+  replay::SimulationOptions o;
+  o.duration_s = 20;
+  o.seed = 3;
+  const auto events = simulated_events(o);
+  engine::GraphStage stage(engine::GraphConfig{}, std::make_shared<engine::GraphCorrections>());
+  engine::GraphStage reference(engine::GraphConfig{}, std::make_shared<engine::GraphCorrections>());
+  const size_t half = events.size() / 2;
+  for (size_t i = 0; i < half; ++i) {
+    stage.handle(events[i], [](engine::Output) {});
+    reference.handle(events[i], [](engine::Output) {});
+  }
+  const auto before = stage.keyframes(o.source);
+  REQUIRE(before.size() > 3);
+  CHECK_NOTHROW(stage.recover(events[half - 1]));  // as the stage runner does after handle threw
+  const auto after = stage.keyframes(o.source);
+  REQUIRE(after.size() == before.size());
+  // A rebuild re-solves from the graph (Gauss-Newton from the current estimate): the keyframes move by at most a
+  // fraction of a millimetre.
+  for (size_t k = 0; k < after.size(); ++k) CHECK((after[k].pose.position - before[k].pose.position).norm() < 1e-3);
+  for (size_t i = half; i < events.size(); ++i) {
+    stage.handle(events[i], [](engine::Output) {});
+    reference.handle(events[i], [](engine::Output) {});
+  }
+  const auto end = stage.keyframes(o.source), ref = reference.keyframes(o.source);
+  REQUIRE(end.size() == ref.size());
+  CHECK((end.back().pose.position - ref.back().pose.position).norm() < 1e-3);
 }

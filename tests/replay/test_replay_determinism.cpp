@@ -62,7 +62,7 @@ TEST_CASE("replaying a log twice publishes the same bytes, and the ground truth 
   for (size_t i = 0; i < r1.published.size(); ++i)
     same = same && r1.published[i].bytes == r2.published[i].bytes && r1.published[i].channel == r2.published[i].channel;
   CHECK(same);
-  CHECK(r1.primary_estimator == "graph");  // built-in defaults: every stage, "auto" ranks the graph back end first
+  CHECK(r1.primary_estimator == "ekf");  // built-in defaults: every stage, the EKF on FUSED_POSE as config/default.yaml
   CHECK(r1.trajectories.size() > 10);
   CHECK(r1.match_requests.size() > 10);
   CHECK(r1.fused_poses.at("dead_reckoning").size() == static_cast<size_t>(sim.odometry));

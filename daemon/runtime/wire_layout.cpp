@@ -1,0 +1,189 @@
+#include "daemon/runtime/wire_layout.hpp"
+
+#include "daemon/runtime/codec.hpp"
+
+namespace sextant::runtime {
+namespace {
+
+using Kind = WireField::Kind;
+
+WireField fixed(std::string name, size_t bytes) { return {std::move(name), Kind::kFixed, bytes, 0, nullptr}; }
+WireField i64(std::string name) { return fixed(std::move(name), 8); }
+WireField i32(std::string name) { return fixed(std::move(name), 4); }
+WireField boolean(std::string name) { return fixed(std::move(name), 1); }
+WireField doubles(std::string name, size_t n) { return fixed(std::move(name), 8 * n); }
+WireField str(std::string name) { return {std::move(name), Kind::kString, 0, 0, nullptr}; }
+WireField count(std::string name, int32_t max) { return {std::move(name), Kind::kCount, 4, max, nullptr}; }
+WireField array(std::string name, const WireLayout& element) { return {std::move(name), Kind::kArray, 0, 0, &element}; }
+
+int32_t read_i32(const uint8_t* p) {
+  return static_cast<int32_t>((uint32_t{p[0]} << 24) | (uint32_t{p[1]} << 16) | (uint32_t{p[2]} << 8) | uint32_t{p[3]});
+}
+
+class Walker {
+ public:
+  Walker(const uint8_t* data, size_t size) : data_(data), size_(size) {}
+
+  // Field names in errors are relative to `layout`; callers prepend their own (no string is built unless one fails).
+  std::optional<WireError> walk(const WireLayout& layout) {
+    int64_t pending_count = -1;
+    for (const auto& f : layout.fields) {
+      const std::string& name = f.name;
+      switch (f.kind) {
+        case Kind::kFixed:
+          if (f.bytes > left()) return truncated(name, f.bytes);
+          pos_ += f.bytes;
+          break;
+        case Kind::kString: {
+          if (4 > left()) return truncated(name, 4);
+          const int32_t n = read_i32(data_ + pos_);
+          const size_t at = pos_;
+          pos_ += 4;
+          if (n < 1)
+            return WireError{"decode", name + ": string length " + std::to_string(n) + " at byte " +
+                                           std::to_string(at) + " (the length counts the terminating NUL: at least 1)"};
+          if (static_cast<size_t>(n) > left())
+            return WireError{"decode", name + ": string length " + std::to_string(n) + " at byte " +
+                                           std::to_string(at) + " exceeds the " + std::to_string(left()) +
+                                           " bytes left"};
+          if (data_[pos_ + static_cast<size_t>(n) - 1] != 0)
+            return WireError{"decode", name + ": string at byte " + std::to_string(at) + " does not end in NUL"};
+          pos_ += static_cast<size_t>(n);
+          break;
+        }
+        case Kind::kCount: {
+          if (4 > left()) return truncated(name, 4);
+          const int32_t n = read_i32(data_ + pos_);
+          if (n < 0 || n > f.max_count)
+            return WireError{n < 0 ? "decode" : "too_large", name + ": " + std::to_string(n) + " at byte " +
+                                                                 std::to_string(pos_) + " outside [0, " +
+                                                                 std::to_string(f.max_count) + "]"};
+          pending_count = n;
+          pos_ += 4;
+          break;
+        }
+        case Kind::kArray: {
+          const size_t n = pending_count < 0 ? 0 : static_cast<size_t>(pending_count);
+          const size_t min = f.element->min_size();
+          if (min > 0 && n > left() / min)
+            return WireError{"decode", name + ": " + std::to_string(n) + " elements of at least " +
+                                           std::to_string(min) + " bytes exceed the " + std::to_string(left()) +
+                                           " bytes left"};
+          for (size_t i = 0; i < n; ++i)
+            if (auto e = walk(*f.element)) {
+              e->message = name + "[" + std::to_string(i) + "]." + e->message;
+              return e;
+            }
+          pending_count = -1;
+          break;
+        }
+      }
+    }
+    return std::nullopt;
+  }
+
+  size_t pos_ = 8;  // after the fingerprint
+
+ private:
+  size_t left() const { return size_ - pos_; }
+  WireError truncated(const std::string& name, size_t need) const {
+    return WireError{"decode", name + ": truncated at byte " + std::to_string(pos_) + " (" + std::to_string(need) +
+                                   " bytes needed, " + std::to_string(left()) + " left)"};
+  }
+
+  const uint8_t* data_;
+  size_t size_;
+};
+
+}  // namespace
+
+size_t WireLayout::min_size() const {
+  size_t n = 0;
+  for (const auto& f : fields) {
+    if (f.kind == Kind::kFixed || f.kind == Kind::kCount) n += f.bytes;
+    else if (f.kind == Kind::kString) n += 5;
+  }
+  return n;
+}
+
+std::optional<WireError> wire_error(const WireLayout& layout, const void* data, size_t size) {
+  if (size < 8) return WireError{"decode", layout.type + ": shorter than an LCM fingerprint"};
+  Walker w(static_cast<const uint8_t*>(data), size);
+  auto e = w.walk(layout);
+  if (e) e->message = layout.type + "." + e->message;
+  return e;
+}
+
+template <>
+const WireLayout& wire_layout<sextant::odometry_t>() {
+  static const WireLayout l{"odometry_t",
+                            {i64("utime"), str("sender"), i64("seq"), str("source"), boolean("planar"),
+                             doubles("position", 3), doubles("orientation", 4), doubles("covariance", 36),
+                             boolean("has_increment_covariance"), doubles("increment_covariance", 36),
+                             boolean("has_twist"), doubles("linear_velocity", 3), doubles("angular_velocity", 3),
+                             doubles("twist_covariance", 36)}};
+  return l;
+}
+
+template <>
+const WireLayout& wire_layout<sextant::landmarks_t>() {
+  static const WireLayout observation{
+      "landmark_observation_t",
+      {i64("id"), doubles("range", 1), doubles("azimuth", 1), doubles("elevation", 1), doubles("covariance", 9)}};
+  static const WireLayout l{"landmarks_t",
+                            {i64("utime"), str("sender"), i64("seq"), str("source"), boolean("planar"),
+                             doubles("sensor_position", 3), doubles("sensor_orientation", 4),
+                             count("num_observations", kMaxObservationsPerMessage), array("observations", observation)}};
+  return l;
+}
+
+template <>
+const WireLayout& wire_layout<sextant::bearing_scan_t>() {
+  static const WireLayout detection{
+      "bearing_detection_t",
+      {doubles("azimuth", 1), doubles("elevation", 1), doubles("sigma_azimuth", 1), doubles("sigma_elevation", 1)}};
+  static const WireLayout l{"bearing_scan_t",
+                            {i64("utime"), str("sender"), i64("seq"), i32("sensor_id"), doubles("sensor_position", 3),
+                             i64("scan_id"), count("num_detections", kMaxDetectionsPerScan),
+                             array("detections", detection)}};
+  return l;
+}
+
+template <>
+const WireLayout& wire_layout<sextant::loop_closure_t>() {
+  static const WireLayout l{"loop_closure_t",
+                            {i64("utime"), str("sender"), i64("seq"), str("source"), boolean("planar"),
+                             i64("utime_from"), i64("utime_to"), i64("keyframe_from"), i64("keyframe_to"),
+                             i64("request_id"), doubles("position", 3), doubles("orientation", 4),
+                             doubles("information", 36), str("matcher"), doubles("score", 1)}};
+  return l;
+}
+
+template <>
+const WireLayout& wire_layout<sextant::truth_t>() {
+  static const WireLayout l{"truth_t",
+                            {i64("utime"), str("sender"), i64("seq"), str("kind"), str("source"), i64("id"),
+                             doubles("position", 3), doubles("orientation", 4)}};
+  return l;
+}
+
+template <>
+const WireLayout& wire_layout<sextant::match_request_t>() {
+  static const WireLayout l{"match_request_t",
+                            {i64("utime"), str("sender"), i64("seq"), str("source"), i64("request_id"), str("kind"),
+                             i64("keyframe_a"), i64("utime_a"), doubles("position_a", 3), doubles("orientation_a", 4),
+                             i64("keyframe_b"), i64("utime_b"), doubles("position_b", 3),
+                             doubles("orientation_b", 4)}};
+  return l;
+}
+
+template <>
+const WireLayout& wire_layout<sextant::fused_pose_t>() {
+  static const WireLayout l{"fused_pose_t",
+                            {i64("utime"), str("sender"), i64("seq"), str("source"), str("estimator"),
+                             boolean("planar"), doubles("position", 3), doubles("orientation", 4),
+                             doubles("covariance", 36)}};
+  return l;
+}
+
+}  // namespace sextant::runtime
