@@ -112,8 +112,12 @@ if os.path.exists(bus):
         n = len(rss)
         print(f"- sextantd RSS: {rss[0] / 1024:.0f} MB at start, {rss[n // 3] / 1024:.0f} MB at a third, {rss[-1] / 1024:.0f} MB at the end")
         targets.append(("daemon RSS after the run <= 200 MB", f"{rss[-1] / 1024:.0f} MB", rss[-1] <= 200 * 1024))
-        growth = rss[-1] / rss[n // 3] - 1
-        targets.append(("daemon RSS flat from a third of the run to the end (within 10 %)", f"{100 * growth:+.1f} %", abs(growth) <= 0.10))
+        # The RSS swings by several MB as thinnings allocate a new graph and free the old one: compare the peaks of the
+        # middle and the last third (from minute 20 of a 60-minute run on).
+        middle, last = max(rss[n // 3:2 * n // 3]), max(rss[2 * n // 3:])
+        growth = last / middle - 1
+        print(f"- sextantd RSS peak: {middle / 1024:.1f} MB in the middle third, {last / 1024:.1f} MB in the last")
+        targets.append(("daemon RSS flat from a third of the run to the end (peaks, within 10 %)", f"{100 * growth:+.1f} %", abs(growth) <= 0.10))
     targets.append(("daemon at 10x: graph queue never full", f"{queue_max} / {queue_cap}", queue_max < queue_cap))
     targets.append(("daemon at 10x: no event dropped", f"{dropped + drops_in}", dropped + drops_in == 0))
     targets.append(("daemon at 10x: correction age <= 1 s", f"{age_max / 1e6:.3f} s", age_max <= 1e6))
