@@ -2,6 +2,8 @@
 
 #include "assoc/chi_square.hpp"
 #include "daemon/engine/dead_reckoning_stage.hpp"
+#include "daemon/engine/planar_axes.hpp"
+#include "daemon/engine/planar_pose_covariance.hpp"
 #include "estimators/filter/interpolated_prediction.hpp"
 
 #include <Eigen/Eigenvalues>
@@ -13,15 +15,7 @@ namespace sextant::engine {
 namespace {
 
 constexpr int kPredictRank = 0, kMeasureRank = 1, kSightingsRank = 2;  // order at equal stamps
-constexpr int kPlanar[3] = {0, 1, 5};                                   // x, y, yaw in sextant's 6-D tangent order
 constexpr size_t kMaxPending = 64;  // sighting batches waiting for the next prediction
-
-Eigen::Matrix3d planar_block(const Matrix6& m) {
-  Eigen::Matrix3d out;
-  for (int r = 0; r < 3; ++r)
-    for (int c = 0; c < 3; ++c) out(r, c) = m(kPlanar[r], kPlanar[c]);
-  return out;
-}
 
 filter::PlanarOdometry planar_odometry(const Odometry& o) {
   filter::PlanarOdometry m;
@@ -166,12 +160,7 @@ void FilterStage::publish(const std::string& body, const Track& t, const Emit& e
   const SE3 p3 = pose.to_se3();
   out.pose.position = p3.translation();
   out.pose.orientation = p3.rotation().quaternion();
-  // (x, y, theta) covariance -> right perturbation in the body frame: delta_body = blockdiag(R^T, 1) delta_global.
-  Eigen::Matrix3d J = Eigen::Matrix3d::Identity();
-  J.topLeftCorner<2, 2>() = pose.rotation().matrix().transpose();
-  const Eigen::Matrix3d Pb = J * ekf.pose_covariance() * J.transpose();
-  for (int r = 0; r < 3; ++r)
-    for (int c = 0; c < 3; ++c) out.covariance(kPlanar[r], kPlanar[c]) = Pb(r, c);
+  out.covariance = planar_covariance_in_body_frame(pose, ekf.pose_covariance());
   emit(out);
 }
 

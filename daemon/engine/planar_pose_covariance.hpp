@@ -8,6 +8,7 @@
 // Also the other direction, for a planar filter's motion noise: the 3x3 increment covariance of an odometry message.
 #include "daemon/engine/dead_reckoning_stage.hpp"
 #include "daemon/engine/events.hpp"
+#include "daemon/engine/planar_axes.hpp"
 #include "estimators/lie/se2.hpp"
 
 #include <Eigen/Eigenvalues>
@@ -17,12 +18,7 @@ namespace sextant::engine {
 inline Matrix6 planar_covariance_in_body_frame(const SE2& pose, const Eigen::Matrix3d& global_xy_theta) {
   Eigen::Matrix3d J = Eigen::Matrix3d::Identity();
   J.topLeftCorner<2, 2>() = pose.rotation().matrix().transpose();
-  const Eigen::Matrix3d Pb = J * global_xy_theta * J.transpose();
-  Matrix6 out = Matrix6::Zero();
-  const int idx[3] = {0, 1, 5};
-  for (int r = 0; r < 3; ++r)
-    for (int c = 0; c < 3; ++c) out(idx[r], idx[c]) = Pb(r, c);
-  return out;
+  return embed_planar(Eigen::Matrix3d(J * global_xy_theta * J.transpose()));
 }
 
 /// The covariance Q (3x3 over [dx, dy, dtheta], body frame after the motion) of the planar increment `delta` that
@@ -34,10 +30,7 @@ inline Eigen::Matrix3d planar_increment_covariance(const Odometry& o, const Matr
   const Matrix6 q6 = o.increment_covariance
                          ? *o.increment_covariance
                          : Matrix6(o.covariance - DeadReckoningStage::propagate(previous_covariance, delta.to_se3(), Matrix6::Zero()));
-  Eigen::Matrix3d Q;
-  const int idx[3] = {0, 1, 5};
-  for (int r = 0; r < 3; ++r)
-    for (int c = 0; c < 3; ++c) Q(r, c) = q6(idx[r], idx[c]);
+  Eigen::Matrix3d Q = planar_block(q6);
   Q = (0.5 * (Q + Q.transpose())).eval();
   const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(Q);
   return eig.eigenvectors() * eig.eigenvalues().cwiseMax(min_variance).asDiagonal() * eig.eigenvectors().transpose();
