@@ -1,6 +1,8 @@
 // Codec: event -> LCM bytes -> event round trips, and every rejection naming its field.
 #include "daemon/runtime/codec.hpp"
 
+#include "daemon/encode_message.hpp"
+
 #include <doctest/doctest.h>
 
 #include <cmath>
@@ -13,13 +15,6 @@ using runtime::InputKind;
 using runtime::Rejection;
 
 namespace {
-
-template <class Msg>
-std::vector<uint8_t> encode(const Msg& m) {
-  std::vector<uint8_t> b(static_cast<size_t>(m.getEncodedSize()));
-  REQUIRE(m.encode(b.data(), 0, static_cast<int>(b.size())) == static_cast<int>(b.size()));
-  return b;
-}
 
 engine::Matrix6 spd6(double scale) {
   engine::Matrix6 a;

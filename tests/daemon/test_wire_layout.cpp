@@ -4,6 +4,8 @@
 #include "daemon/runtime/codec.hpp"
 #include "daemon/runtime/wire_layout.hpp"
 
+#include "daemon/encode_message.hpp"
+
 #include <doctest/doctest.h>
 #include <sextant/status_t.hpp>
 
@@ -17,13 +19,6 @@ using runtime::InputKind;
 using runtime::Rejection;
 
 namespace {
-
-template <class Msg>
-std::vector<uint8_t> encode(const Msg& m) {
-  std::vector<uint8_t> b(static_cast<size_t>(m.getEncodedSize()));
-  REQUIRE(m.encode(b.data(), 0, static_cast<int>(b.size())) == static_cast<int>(b.size()));
-  return b;
-}
 
 std::string random_string(std::mt19937& rng) {
   std::uniform_int_distribution<int> len(0, 12), ch('a', 'z');
