@@ -78,7 +78,7 @@ if os.path.exists(bus):
     from sextant import status_t
     print("\n## Live: sextantd fed at 10x\n")
     sizes, first_t, last_t, traj_bytes = {}, None, None, 0
-    queue_max, queue_cap, dropped, age_max, statuses = 0, 0, 0, 0, 0
+    queue_max, queue_cap, dropped, age_max = 0, 0, 0, 0
     for ts, channel, data in read_log(bus):
         sizes[channel] = max(sizes.get(channel, 0), len(data))
         if channel == "TRAJECTORY":
@@ -87,12 +87,10 @@ if os.path.exists(bus):
             last_t = ts
         if channel == "SEXTANT_STATUS":
             s = status_t.decode(data)
-            statuses += 1
             for st in s.stages:
                 if st.name == "graph":
                     queue_max = max(queue_max, st.queue_depth)
                     queue_cap = st.queue_capacity
-                dropped += 0
                 if st.name == "graph_pose":
                     c = dict(zip(st.counter_names, st.counter_values))
                     age_max = max(age_max, c.get("correction_age_us_max", 0))

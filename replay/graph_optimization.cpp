@@ -3,6 +3,7 @@
 #include "estimators/graph/feed_in_order.hpp"
 #include "estimators/graph/initialization.hpp"
 #include "estimators/graph/optimizer.hpp"
+#include "replay/nearest_rank_percentile.hpp"
 
 #include <sys/resource.h>
 
@@ -16,10 +17,8 @@ namespace sextant::replay {
 namespace {
 
 double percentile(std::vector<double> v, double q) {
-  if (v.empty()) return 0;
   std::sort(v.begin(), v.end());
-  const double rank = std::ceil(q * static_cast<double>(v.size())) - 1;
-  return v[static_cast<size_t>(std::clamp(rank, 0.0, static_cast<double>(v.size() - 1)))];
+  return nearest_rank_percentile(v, q);
 }
 
 void check_member(const std::string& what, const std::string& value, const std::vector<std::string>& allowed) {

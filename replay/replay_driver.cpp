@@ -6,11 +6,11 @@
 #include "daemon/runtime/lcm_log.hpp"
 #include "daemon/runtime/publisher.hpp"
 #include "replay/even_sample.hpp"
+#include "replay/nearest_rank_percentile.hpp"
 
 #include <sextant/truth_t.hpp>
 
 #include <algorithm>
-#include <cmath>
 #include <cstdlib>
 #include <fstream>
 #include <chrono>
@@ -30,13 +30,6 @@ int64_t resident_kb() {
   while (std::getline(f, line))
     if (line.rfind("VmRSS:", 0) == 0) return std::atoll(line.c_str() + 6);
   return 0;
-}
-
-/// Nearest-rank percentile of a sorted, non-empty sample: the smallest value with at least p of the sample at or
-/// below it.
-double percentile_of_sorted(const std::vector<double>& sorted, double p) {
-  const auto rank = static_cast<size_t>(std::ceil(p * static_cast<double>(sorted.size())));
-  return sorted[std::min(sorted.size() - 1, rank == 0 ? 0 : rank - 1)];
 }
 
 }  // namespace
@@ -143,7 +136,7 @@ ReplayResult replay_log(const std::string& log_path, const config::DaemonConfig&
       SegmentReport::Stage st;
       st.name = stage_reports[i].name;
       st.events = static_cast<int64_t>(l.size());
-      if (!l.empty()) st.p50_ms = percentile_of_sorted(l, 0.5), st.p99_ms = percentile_of_sorted(l, 0.99), st.max_ms = l.back();
+      if (!l.empty()) st.p50_ms = nearest_rank_percentile(l, 0.5), st.p99_ms = nearest_rank_percentile(l, 0.99), st.max_ms = l.back();
       seg.stages.push_back(st);
       l.clear();
       if (st.name == "graph") seg.graph_counters = engine.stages()[i]->counters();

@@ -51,7 +51,7 @@ void GraphStage::thin(bool planar) {
 
   // 1. Which keyframes stay, per body of this kind.
   std::vector<char> keep_var(vars.size(), 1);
-  std::map<const Body*, std::vector<char>> keep_of;
+  std::map<Body*, std::vector<char>> keep_of;
   bool any = false;
   for (auto& [source, b] : bodies_) {
     if (b.planar != planar || b.keyframes.empty()) continue;
@@ -101,7 +101,7 @@ void GraphStage::thin(bool planar) {
   int64_t thinned_count = 0;
   try {
     for (auto& [b, keep] : keep_of) {
-      BodyPlan plan{const_cast<Body*>(b), {}, {}};
+      BodyPlan plan{b, {}, {}};
       SE3 edge;
       Matrix6 covariance = Matrix6::Zero();
       bool spanning = false;  // thinned keyframes since the last kept one
