@@ -47,7 +47,9 @@ struct IncrementalSmoother::System {
   std::vector<Variable> lin;    // the linearization point: every variable's estimate when the system was begun
   std::vector<int> pos;         // per variable: first column, -1 when not in the system
   std::vector<int> col_var;     // per column: the variable, -1 for a reserved column
-  int used = 0, capacity = 0;
+  // Columns [0, used): variables; [used, reserve_end): reserved for new variables (identity); [reserve_end,
+  // capacity): the hub variables (landmarks), kept after the reserved columns (order_blocks says why).
+  int used = 0, reserve_end = 0, capacity = 0;
   // H's column pattern by variable: the variables before it in the ordering that share a factor with it, by position
   // (flat: before[first[v] .. first[v] + count[v])); its own block comes last in each of its columns.
   std::vector<int> first, count, before;
@@ -370,7 +372,7 @@ void IncrementalSmoother::solve(bool full) {
   std::fill(changed_.begin(), changed_.end(), 0);
   var_changed_.assign(graph_.variables().size(), 0);
   const double threshold = full ? -1.0 : options_.wildfire;
-  for (int j = used_ - 1; j >= 0; --j) {
+  for (int j = capacity_ - 1; j >= 0; --j) {
     const size_t ju = static_cast<size_t>(j);
     const int first = Lp[j] + 1, end = Lp[j] + Lnz[j], parent = parent_of(j);
     if (parent >= 0 && !recomputed_[static_cast<size_t>(parent)]) continue;
@@ -494,7 +496,7 @@ IncrementalStatus IncrementalSmoother::update() {
     (ok ? factors_in : factors_wait).push_back(f);
   }
   if (factors_in.size() > update_limit()) return rebuild();  // a batch of new factors: iterate as a batch solve would
-  if (used_ + new_dim > capacity_) return rebuild_with(1);  // only room is needed
+  if (used_ + new_dim > reserve_end_) return rebuild_with(1);  // only room is needed
 
   for (int v : vars_in) {
     if (graph_.variables()[static_cast<size_t>(v)].fixed) continue;
@@ -548,7 +550,7 @@ IncrementalStatus IncrementalSmoother::update() {
     r.new_variables = st.new_variables, r.new_factors = st.new_factors, r.deferred_variables = st.deferred_variables;
     return r;
   }
-  const bool began_reordering = !reordering_ && spread && (filled || 4 * (capacity_ - used_) < reserve_at_order_);
+  const bool began_reordering = !reordering_ && spread && (filled || 4 * (reserve_end_ - used_) < reserve_at_order_);
   if (began_reordering) begin_reordering();
   solve(false);
   ++st.solves;
@@ -679,23 +681,50 @@ void IncrementalSmoother::order_blocks(const std::vector<char>& in, System& s) c
     std::sort(r.begin(), r.end());
     r.erase(std::unique(r.begin(), r.end()), r.end());
   }
+  // Hubs: landmarks (point variables), which a landmark-heavy map ties to most keyframes.  They are ordered last and
+  // placed after the reserved columns, so that the keyframes added until the next ordering take columns before them.
+  // Had the new keyframes come after the landmarks, every landmark's column would gain the rows of every new keyframe
+  // that sees it (fill along the chain), and each sighting's rank update would walk all those columns: on a 3-D run
+  // with 40 landmarks in view that cost grew with every keyframe since the last ordering.  Before them, a sighting's
+  // update walks the new keyframe's column and the landmarks' dense block only.
+  std::vector<char> hub(nb, 0);
+  for (size_t b = 0; b < nb; ++b) hub[b] = !graph_.variables()[static_cast<size_t>(block_var[b])].is_pose();
   std::vector<int> order;
   if (static_cast<int>(nb) > options_.nested_dissection_above) {
     order = block_nested_dissection_order(upper, common_);
+    std::stable_partition(order.begin(), order.end(), [&](int b) { return !hub[static_cast<size_t>(b)]; });
   } else {
-    const size_t newest = std::min<size_t>(nb / 10, 100);
+    size_t poses = 0;
+    for (size_t b = 0; b < nb; ++b) poses += hub[b] ? 0 : 1;
+    const size_t newest = std::min<size_t>(poses / 10, 100);
     std::vector<int> group(nb, 0);
-    for (size_t b = nb - newest; b < nb; ++b) group[b] = 1;
-    order = block_amd_order(upper, common_, newest > 0 ? &group : nullptr);
+    for (size_t b = nb, seen = 0; b-- > 0 && seen < newest;)
+      if (!hub[b]) group[b] = 1, ++seen;
+    bool any_hub = false;
+    for (size_t b = 0; b < nb; ++b)
+      if (hub[b]) group[b] = 2, any_hub = true;
+    order = block_amd_order(upper, common_, newest > 0 || any_hub ? &group : nullptr);
   }
   s.pos.assign(graph_.variables().size(), -1);
   s.used = 0;
+  int hub_dim = 0;
   for (int b : order) {
     const size_t v = static_cast<size_t>(block_var[static_cast<size_t>(b)]);
+    if (hub[static_cast<size_t>(b)]) {
+      hub_dim += graph_.variables()[v].dim();
+      continue;
+    }
     s.pos[v] = s.used;
     s.used += graph_.variables()[v].dim();
   }
-  s.capacity = s.used + std::max(64, static_cast<int>(options_.capacity_growth * s.used));
+  s.reserve_end = s.used + std::max(64, static_cast<int>(options_.capacity_growth * (s.used + hub_dim)));
+  s.capacity = s.reserve_end;
+  for (int b : order) {
+    const size_t v = static_cast<size_t>(block_var[static_cast<size_t>(b)]);
+    if (!hub[static_cast<size_t>(b)]) continue;
+    s.pos[v] = s.capacity;
+    s.capacity += graph_.variables()[v].dim();
+  }
   s.col_var.assign(static_cast<size_t>(s.capacity), -1);
   for (size_t v = 0; v < s.pos.size(); ++v)
     for (int k = 0; s.pos[v] >= 0 && k < graph_.variables()[v].dim(); ++k) s.col_var[static_cast<size_t>(s.pos[v] + k)] = static_cast<int>(v);
@@ -709,7 +738,7 @@ std::unique_ptr<IncrementalSmoother::System> IncrementalSmoother::begin_system(c
   for (size_t f = 0; f < weight_.size(); ++f)
     if (weight_[f] > 0) s->factors.push_back(f);
   if (keep_ordering) {
-    s->pos = pos_, s->col_var = col_var_, s->used = used_, s->capacity = capacity_;
+    s->pos = pos_, s->col_var = col_var_, s->used = used_, s->reserve_end = reserve_end_, s->capacity = capacity_;
   } else {
     order_blocks(in, *s);
   }
@@ -736,7 +765,7 @@ void IncrementalSmoother::assemble_pattern(System& s) const {
   for (size_t v = 0; v < nv; ++v) s.first[v + 1] += s.first[v];
   s.before.assign(static_cast<size_t>(s.first[nv]), 0);
   each_pair([&](int a, int b) { s.before[static_cast<size_t>(s.first[static_cast<size_t>(b)] + s.count[static_cast<size_t>(b)]++)] = a; });
-  size_t nnz = static_cast<size_t>(s.capacity - s.used);
+  size_t nnz = static_cast<size_t>(s.reserve_end - s.used);
   for (size_t v = 0; v < nv; ++v) {
     int* r = s.before.data() + s.first[v];
     std::sort(r, r + s.count[v], [&](int a, int b) { return s.pos[static_cast<size_t>(a)] < s.pos[static_cast<size_t>(b)]; });
@@ -757,7 +786,7 @@ void IncrementalSmoother::assemble_pattern(System& s) const {
   size_t at = 0;
   for (int c = 0; c < s.capacity; ++c) {
     Hp[c] = static_cast<int>(at);
-    if (c >= s.used) {
+    if (c >= s.used && c < s.reserve_end) {
       Hi[at] = c, Hx[at] = 1.0, ++at;
       continue;
     }
@@ -927,6 +956,7 @@ void IncrementalSmoother::install(System& s) {
   pos_.resize(nv, -1);
   col_var_ = std::move(s.col_var);
   used_ = s.used;
+  reserve_end_ = s.reserve_end;
   capacity_ = s.capacity;
   for (auto& fs : var_factors_) fs.clear();
   for (size_t f : s.factors)
@@ -955,7 +985,7 @@ void IncrementalSmoother::install(System& s) {
   on_path_.assign(static_cast<size_t>(capacity_), 0);
   changed_.assign(static_cast<size_t>(capacity_), 0);
   ordered_nnz_ = factor_nonzeros();
-  reserve_at_order_ = capacity_ - used_;
+  reserve_at_order_ = reserve_end_ - used_;
   solve(true);
 }
 

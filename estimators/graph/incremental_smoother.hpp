@@ -140,7 +140,7 @@ class IncrementalSmoother {
   double robust_weight_of(size_t index) const;
 
   /// Scalar unknowns in the factorized system, the nonzeros of L, and how many rebuilds happened.
-  int dimension() const { return used_; }
+  int dimension() const { return used_ + capacity_ - reserve_end_; }
   size_t factor_nonzeros() const;
   int rebuilds() const { return rebuilds_; }
   /// True while a spread reordering is being built.
@@ -187,7 +187,7 @@ class IncrementalSmoother {
   std::vector<std::vector<size_t>> var_factors_;  // per variable: the factors in the system that touch it
   std::vector<int> pending_vars_;
   std::vector<size_t> pending_factors_;
-  int used_ = 0, capacity_ = 0;
+  int used_ = 0, reserve_end_ = 0, capacity_ = 0;  // as System's: variables, reserved, hubs
   size_t ordered_nnz_ = 0;
   int rebuilds_ = 0;
   size_t factors_in_system_ = 0;
