@@ -104,10 +104,18 @@ void read_stage_config(Section& s, engine::GraphConfig& c) {
   {
     Section l = s.child("lifelong");
     l.get("enabled", c.lifelong.enabled);
-    l.get("window", c.lifelong.thinning.window, int_in_range(1, 1 << 24));
+    for (const char* gone : {"max_keyframes", "window"})
+      if (l.node().IsMap() && l.node()[gone])
+        throw l.error_at(l.node()[gone], "'" + l.path() + "." + gone + "' is now per kind of body: '" + l.path() +
+                                             ".planar." + gone + "' and '" + l.path() + ".spatial." + gone + "'");
     l.get("cell_size", c.lifelong.thinning.cell_size, positive());
     l.get("heading_sector", c.lifelong.thinning.heading_sector, in_range(1e-3, 2 * M_PI));
-    l.get("max_keyframes", c.lifelong.max_keyframes, int_in_range(2, 1 << 24));
+    for (auto [key, budget] : {std::pair{"planar", &c.lifelong.planar}, std::pair{"spatial", &c.lifelong.spatial}}) {
+      Section b = l.child(key);
+      b.get("max_keyframes", budget->max_keyframes, int_in_range(2, 1 << 24));
+      b.get("window", budget->window, int_in_range(1, 1 << 24));
+      b.reject_unknown_keys();
+    }
     l.reject_unknown_keys();
   }
   {

@@ -184,7 +184,7 @@ class GraphStage final : public Stage {
   };
   /// Adds a factor to the body's smoother and its tag (throws what the smoother throws, and then adds no tag).
   void add_factor(Body& b, std::unique_ptr<graph::Factor> factor, FactorRole role, bool robust, std::optional<double> width);
-  /// Lifelong mode (graph_stage_lifelong.cpp): when the keyframes of a kind of body exceed lifelong.max_keyframes, the
+  /// Lifelong mode (graph_stage_lifelong.cpp): when the keyframes of a kind of body exceed its lifelong budget (max_keyframes), the
   /// smoother of that kind is rebuilt with the keyframes keyframes_to_keep() keeps (estimators/keyframe/
   /// keyframe_thinning.hpp): odometry composed across the thinned ones, loops and sightings of thinned keyframes
   /// dropped, landmarks left without sightings dropped.

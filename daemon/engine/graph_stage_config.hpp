@@ -73,13 +73,22 @@ struct GraphConfig {
   /// and its width kernel_width_for(), per kind of body.
   graph::IncrementalOptions smoother;
   TrajectoryFeedOptions trajectory;       // what TRAJECTORY carries and how often (trajectory_feed.hpp)
-  /// Lifelong mode: a keyframe budget.  When the graph of a kind of body holds more than `max_keyframes`, it is
-  /// thinned to the newest keyframes and one keyframe per place (keyframe_thinning.hpp), so its size follows the
-  /// explored space, not the time run; a graph within the budget is never touched.
+  /// Lifelong mode: a keyframe budget per kind of body.  When the graph of a kind of body holds more than its
+  /// `max_keyframes`, it is thinned to its `window` newest keyframes and one keyframe per place
+  /// (keyframe_thinning.hpp), so its size follows the explored space, not the time run; a graph within the budget is
+  /// never touched.  The 3-D budget is smaller: a 3-D keyframe has twice the unknowns of a planar one and its
+  /// sightings three rows instead of two, and a rank update costs about the square of that (bench/RESULTS.md,
+  /// "Lifelong": the 3-D graph at 2000 keyframes replayed at 30x, at 1000 at 80x).
   struct Lifelong {
+    struct Budget {
+      int max_keyframes = 2000;
+      int window = 1000;  // the newest keyframes that stay whole
+    };
     bool enabled = true;
-    int max_keyframes = 2000;
-    KeyframeThinningOptions thinning;  // window: the newest keyframes that stay whole
+    Budget planar{2000, 1000};
+    Budget spatial{1000, 500};
+    KeyframeThinningOptions thinning;  // cell_size and heading_sector; its window is the budget's of the kind
+    const Budget& budget(bool planar_kind) const { return planar_kind ? planar : spatial; }
   } lifelong;
   GraphLandmarkOptions landmarks;
 };

@@ -35,7 +35,8 @@ void GraphStage::maybe_thin(bool planar) {
   int64_t in_graph = 0;
   for (const auto& [source, b] : bodies_)
     if (b.planar == planar) in_graph += static_cast<int64_t>(b.keyframes.size());
-  if (in_graph <= config_.lifelong.max_keyframes || since < std::max(1, config_.lifelong.max_keyframes / 4)) return;
+  const int budget = config_.lifelong.budget(planar).max_keyframes;
+  if (in_graph <= budget || since < std::max(1, budget / 4)) return;
   since = 0;
   thin(planar);
 }
@@ -58,7 +59,9 @@ void GraphStage::thin(bool planar) {
     std::vector<ThinningCandidate> candidates;
     candidates.reserve(b.keyframes.size());
     for (const auto& k : b.keyframes) candidates.push_back({k.id, vars[static_cast<size_t>(k.variable)].as_se3()});
-    auto keep = keyframes_to_keep(candidates, planar, config_.lifelong.thinning);
+    KeyframeThinningOptions thinning = config_.lifelong.thinning;
+    thinning.window = config_.lifelong.budget(planar).window;
+    auto keep = keyframes_to_keep(candidates, planar, thinning);
     for (size_t i = 0; i < keep.size(); ++i)
       if (!keep[i]) keep_var[static_cast<size_t>(b.keyframes[i].variable)] = 0, any = true;
     keep_of.emplace(&b, std::move(keep));

@@ -340,3 +340,25 @@ TEST_CASE("the guard and bound keys of the daemon section: defaults as documente
   CHECK(error_of("daemon:\n  max_sources: 0\n").find("test.yaml:2:") == 0);
   CHECK(error_of("daemon:\n  max_ahead_s: -1\n").find("test.yaml:2:") == 0);
 }
+
+TEST_CASE("engine.graph.lifelong: a budget per kind of body, the old shared keys refused with their replacement") {
+  const auto d = parse_daemon_config("", "t").engine.graph.lifelong;
+  CHECK(d.enabled);
+  CHECK(d.budget(true).max_keyframes == 2000);
+  CHECK(d.budget(true).window == 1000);
+  CHECK(d.budget(false).max_keyframes == 1000);
+  CHECK(d.budget(false).window == 500);
+  const auto set = parse_daemon_config(
+      "engine:\n  graph:\n    lifelong:\n      planar: {max_keyframes: 300, window: 100}\n      spatial: {max_keyframes: 40}\n",
+      "t").engine.graph.lifelong;
+  CHECK(set.planar.max_keyframes == 300);
+  CHECK(set.planar.window == 100);
+  CHECK(set.spatial.max_keyframes == 40);
+  CHECK(set.spatial.window == 500);
+  const std::string gone = error_of("engine:\n  graph:\n    lifelong:\n      max_keyframes: 300\n");
+  CHECK(gone.find("test.yaml:4:") == 0);
+  CHECK(gone.find("'engine.graph.lifelong.planar.max_keyframes'") != std::string::npos);
+  const std::string bad = error_of("engine:\n  graph:\n    lifelong:\n      spatial: {window: 0}\n");
+  CHECK(bad.find("test.yaml:4:") == 0);
+  CHECK(bad.find("engine.graph.lifelong.spatial.window") != std::string::npos);
+}

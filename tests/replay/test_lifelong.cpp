@@ -37,8 +37,8 @@ config::DaemonConfig graph_config(bool lifelong) {
   cfg.engine.association.enabled = false;  // the graph alone (and dead reckoning)
   cfg.engine.filter.type = "none";
   cfg.engine.graph.lifelong.enabled = lifelong;
-  cfg.engine.graph.lifelong.max_keyframes = 400;
-  cfg.engine.graph.lifelong.thinning.window = 200;
+  cfg.engine.graph.lifelong.planar.max_keyframes = 400;
+  cfg.engine.graph.lifelong.planar.window = 200;
   // The odometry kept to bridge loop times to keyframes is bounded too, at 30000 poses by default (10 minutes at
   // 50 Hz): 120 s here, so that this run reaches its bound in its first quarter (loops to older times then land only
   // when their times are keyframes' own).
