@@ -1,6 +1,7 @@
 #include "replay/replay_driver.hpp"
 
 #include "daemon/engine/engine.hpp"
+#include "daemon/engine/guarded_handle.hpp"
 #include "daemon/runtime/codec.hpp"
 #include "daemon/runtime/intake.hpp"
 #include "daemon/runtime/lcm_log.hpp"
@@ -114,7 +115,9 @@ ReplayResult replay_log(const std::string& log_path, const config::DaemonConfig&
   std::vector<StageReport> stage_reports;
   std::vector<EvenSample> latency_samples;
   for (const auto& s : engine.stages()) {
-    stage_reports.push_back({std::string(s->name()), 0, {}, {}, 0.0});
+    StageReport report;
+    report.name = std::string(s->name());
+    stage_reports.push_back(std::move(report));
     latency_samples.emplace_back(options.max_kept);
   }
 
@@ -170,7 +173,13 @@ ReplayResult replay_log(const std::string& log_path, const config::DaemonConfig&
       for (size_t i = 0; i < stages.size(); ++i) {
         if (!stages[i]->accepts(*event)) continue;
         const auto t0 = std::chrono::steady_clock::now();
-        stages[i]->handle(*event, emit);
+        if (auto failure = engine::handle_guarded(*stages[i], *event, emit)) {
+          // As the daemon's stage thread: counted, and the stage recovered before the next event.
+          StageReport& report = stage_reports[i];
+          ++report.failures;
+          report.recoveries += failure->recovered ? 1 : 0;
+          report.last_failure = failure->recovered ? failure->message : failure->recover_message;
+        }
         const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
         latency_samples[i].push(stage_reports[i].latency_ms, ms);
         if (segment_us > 0) segment_latency[i].push_back(ms);
@@ -206,7 +215,12 @@ ReplayResult replay_log(const std::string& log_path, const config::DaemonConfig&
   if (segment_us > 0 && result.last_utime > segment_start_utime) close_segment(result.last_utime);
   if (progress) progress(result.records, result.records);
 
-  for (size_t i = 0; i < stage_reports.size(); ++i) stage_reports[i].counters = engine.stages()[i]->counters();
+  for (size_t i = 0; i < stage_reports.size(); ++i) {
+    StageReport& report = stage_reports[i];
+    report.counters = engine.stages()[i]->counters();
+    report.counters.push_back({"stage_failures", report.failures});  // named as on the daemon's status
+    report.counters.push_back({"stage_recoveries", report.recoveries});
+  }
   result.stages = std::move(stage_reports);
   result.channels = stats.snapshot();
   result.published_counts = publisher.counts();

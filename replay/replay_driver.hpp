@@ -45,6 +45,10 @@ struct StageReport {
   /// ReplayOptions::max_kept an evenly spaced sample of them (the max is latency_max_ms).
   std::vector<double> latency_ms;
   double latency_max_ms = 0;
+  /// Events whose handling threw (the replay goes on, as the daemon does: engine/guarded_handle.hpp), how many of
+  /// them the stage recovered from, and what the last one said.  Also in `counters` as stage_failures/_recoveries.
+  int64_t failures = 0, recoveries = 0;
+  std::string last_failure;
 };
 
 /// What a replay keeps in memory and where it streams the rest.

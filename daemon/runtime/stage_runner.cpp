@@ -1,5 +1,7 @@
 #include "daemon/runtime/stage_runner.hpp"
 
+#include "daemon/engine/guarded_handle.hpp"
+
 #include <spdlog/spdlog.h>
 
 namespace sextant::runtime {
@@ -33,43 +35,37 @@ int64_t StageRunner::drain_and_stop(std::chrono::steady_clock::time_point deadli
   return left;
 }
 
-template <class F>
-bool StageRunner::guarded(const char* what, F&& f) {
-  std::string message;
-  try {
-    f();
-    return true;
-  } catch (const std::exception& e) {
-    message = e.what();
-  } catch (...) {
-    message = "an exception that is not a std::exception";
-  }
+void StageRunner::count_failure(const std::string& message) {
   const int64_t n = ++failures_;
   // Every failure is counted; the log gets the first ten and then every power of two.
-  if (n <= 10 || (n & (n - 1)) == 0)
-    spdlog::error("stage '{}': {} threw ({} failure(s) so far): {}", stage_.name(), what, n, message);
+  if (n <= 10 || (n & (n - 1)) == 0) spdlog::error("stage '{}': {} ({} failure(s) so far)", stage_.name(), message, n);
   std::lock_guard lock(counters_mutex_);
-  last_failure_ = std::string(what) + ": " + message;
-  return false;
+  last_failure_ = message;
 }
 
 void StageRunner::loop() {
   while (auto item = queue_.pop()) {
-    if (!guarded("handle", [&] { stage_.handle(item->event, emit_); }) &&
-        guarded("recover", [&] { stage_.recover(item->event); }))
-      ++recoveries_;
+    if (auto failure = engine::handle_guarded(stage_, item->event, emit_)) {
+      count_failure(failure->message);
+      if (failure->recovered) ++recoveries_;
+      else count_failure(failure->recover_message);
+    }
     const auto done = std::chrono::steady_clock::now();
     latency_.add(std::chrono::duration<double, std::milli>(done - item->received).count());
     ++processed_;
     engine::Counters counters;
-    if (guarded("counters", [&] { counters = stage_.counters(); })) {
+    if (auto thrown = engine::call_guarded([&] { counters = stage_.counters(); })) {
+      count_failure("counters: " + *thrown);
+    } else {
       std::lock_guard lock(counters_mutex_);
       counters_ = std::move(counters);
     }
   }
-  guarded("finish", [&] { stage_.finish(emit_); });
+  if (auto thrown = engine::call_guarded([&] { stage_.finish(emit_); })) count_failure("finish: " + *thrown);
   engine::Counters counters;
-  if (guarded("counters", [&] { counters = stage_.counters(); })) {
+  if (auto thrown = engine::call_guarded([&] { counters = stage_.counters(); })) {
+    count_failure("counters: " + *thrown);
+  } else {
     std::lock_guard lock(counters_mutex_);
     counters_ = std::move(counters);
   }

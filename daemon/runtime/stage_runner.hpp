@@ -58,9 +58,8 @@ class StageRunner {
 
  private:
   void loop();
-  // Runs `f` (a call into the stage); false when it threw (counted, logged, kept as the last failure).
-  template <class F>
-  bool guarded(const char* what, F&& f);
+  // A call into the stage threw: counted, logged (the first ten, then every power of two), kept as the last failure.
+  void count_failure(const std::string& message);
 
   engine::Stage& stage_;
   engine::Emit emit_;

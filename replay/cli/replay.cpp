@@ -211,6 +211,11 @@ sextant::cli::RegisterCommand reg{"replay", [](CLI::App& app) {
                   static_cast<long long>(result.records), static_cast<double>(result.last_utime - result.first_utime) * 1e-6,
                   result.wall_seconds, static_cast<size_t>(exported), estimator.c_str(), static_cast<long long>(rejected));
     }
+    for (const auto& s : result.stages)
+      if (s.failures > 0)
+        std::fprintf(stderr, "sextant replay: stage '%s' failed on %lld event(s) and recovered from %lld (the replay went on); "
+                             "last: %s\n", s.name.c_str(), static_cast<long long>(s.failures),
+                     static_cast<long long>(s.recoveries), s.last_failure.c_str());
     if (const std::string d = result.log_damage.summary(); !d.empty())
       std::fprintf(stderr, "sextant replay: %s: %s\n", o->log.c_str(), d.c_str());
     if (result.log_damage.damaged() && !o->tolerate_damage) {
