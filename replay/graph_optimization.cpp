@@ -3,7 +3,7 @@
 #include "estimators/graph/feed_in_order.hpp"
 #include "estimators/graph/initialization.hpp"
 #include "estimators/graph/optimizer.hpp"
-#include "replay/nearest_rank_percentile.hpp"
+#include "daemon/runtime/nearest_rank_percentile.hpp"
 
 #include <sys/resource.h>
 
@@ -18,7 +18,7 @@ namespace {
 
 double percentile(std::vector<double> v, double q) {
   std::sort(v.begin(), v.end());
-  return nearest_rank_percentile(v, q);
+  return runtime::nearest_rank_percentile(v, q);
 }
 
 void check_member(const std::string& what, const std::string& value, const std::vector<std::string>& allowed) {

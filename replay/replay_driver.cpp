@@ -7,7 +7,7 @@
 #include "daemon/runtime/lcm_log.hpp"
 #include "daemon/runtime/publisher.hpp"
 #include "replay/even_sample.hpp"
-#include "replay/nearest_rank_percentile.hpp"
+#include "daemon/runtime/nearest_rank_percentile.hpp"
 
 #include <sextant/truth_t.hpp>
 
@@ -139,7 +139,7 @@ ReplayResult replay_log(const std::string& log_path, const config::DaemonConfig&
       SegmentReport::Stage st;
       st.name = stage_reports[i].name;
       st.events = static_cast<int64_t>(l.size());
-      if (!l.empty()) st.p50_ms = nearest_rank_percentile(l, 0.5), st.p99_ms = nearest_rank_percentile(l, 0.99), st.max_ms = l.back();
+      if (!l.empty()) st.p50_ms = runtime::nearest_rank_percentile(l, 0.5), st.p99_ms = runtime::nearest_rank_percentile(l, 0.99), st.max_ms = l.back();
       seg.stages.push_back(st);
       l.clear();
       if (st.name == "graph") seg.graph_counters = engine.stages()[i]->counters();

@@ -2,6 +2,8 @@
 // Latency percentiles over the recent past: the most recent `capacity` samples (fixed memory) that are also at most
 // `window_s` old.  The time window keeps a status report from quoting a flood's latencies long after the queue
 // emptied (a window of the last 4096 events alone showed a 5.9 s p50 for 30 s after the graph caught up).
+#include "daemon/runtime/nearest_rank_percentile.hpp"
+
 #include <algorithm>
 #include <chrono>
 #include <cstddef>
@@ -37,10 +39,9 @@ class LatencyRecorder {
     s.samples = v.size();
     if (v.empty()) return s;
     std::sort(v.begin(), v.end());
-    auto rank = [&](double p) { return v[std::min(v.size() - 1, static_cast<size_t>(p * static_cast<double>(v.size())))]; };
-    s.p50_ms = rank(0.50);
-    s.p90_ms = rank(0.90);
-    s.p99_ms = rank(0.99);
+    s.p50_ms = nearest_rank_percentile(v, 0.50);
+    s.p90_ms = nearest_rank_percentile(v, 0.90);
+    s.p99_ms = nearest_rank_percentile(v, 0.99);
     s.max_ms = v.back();
     return s;
   }

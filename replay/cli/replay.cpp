@@ -2,6 +2,7 @@
 //                                      [--realtime [--speed X] [--lcm-url URL]]
 #include "daemon/engine/engine.hpp"
 #include "daemon/runtime/lcm_log.hpp"
+#include "daemon/runtime/nearest_rank_percentile.hpp"
 #include "replay/cli/command.hpp"
 #include "daemon/runtime/version.hpp"
 #include "replay/json_writer.hpp"
@@ -82,7 +83,7 @@ void print_json(const Options& o, const replay::ReplayResult& r, const std::stri
     j.field("name", s.name).field("processed", s.processed);
     std::vector<double> l = s.latency_ms;
     std::sort(l.begin(), l.end());
-    auto pct = [&](double p) { return l.empty() ? 0.0 : l[std::min(l.size() - 1, static_cast<size_t>(p * static_cast<double>(l.size())))]; };
+    auto pct = [&](double p) { return runtime::nearest_rank_percentile(l, p); };
     j.field("latency_ms_p50", pct(0.5)).field("latency_ms_p99", pct(0.99)).field("latency_ms_max", s.latency_max_ms);
     j.key("counters").begin_object();
     for (const auto& [name, v] : s.counters) j.field(name, v);

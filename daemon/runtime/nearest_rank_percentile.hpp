@@ -1,11 +1,12 @@
 #pragma once
 // The nearest-rank percentile of a sample: the smallest value with at least a fraction p of the sample at or below
-// it, element ceil(p n) of the sorted sample (1-based; p = 0 gives the minimum, p = 1 the maximum).
+// it, element ceil(p n) of the sorted sample (1-based; p = 0 gives the minimum, p = 1 the maximum).  The one
+// definition of a percentile in sextant: the daemon's status, the replay's summaries and `optimize --json` use it.
 #include <algorithm>
 #include <cmath>
 #include <vector>
 
-namespace sextant::replay {
+namespace sextant::runtime {
 
 /// `sorted` ascending; 0 for an empty sample.
 inline double nearest_rank_percentile(const std::vector<double>& sorted, double p) {
@@ -14,4 +15,4 @@ inline double nearest_rank_percentile(const std::vector<double>& sorted, double 
   return sorted[static_cast<size_t>(std::clamp(rank, 0.0, static_cast<double>(sorted.size() - 1)))];
 }
 
-}  // namespace sextant::replay
+}  // namespace sextant::runtime
