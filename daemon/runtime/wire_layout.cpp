@@ -16,6 +16,16 @@ WireField str(std::string name) { return {std::move(name), Kind::kString, 0, 0, 
 WireField count(std::string name, int32_t max) { return {std::move(name), Kind::kCount, 4, max, nullptr}; }
 WireField array(std::string name, const WireLayout& element) { return {std::move(name), Kind::kArray, 0, 0, &element}; }
 
+// Elements of primitive arrays (`string names[n]`, `int64_t values[n]`): one unnamed field.
+const WireLayout kStringElement{"string", {str("")}};
+const WireLayout kInt64Element{"int64_t", {i64("")}};
+const WireLayout kInt32Element{"int32_t", {i32("")}};
+const WireLayout kDoubleElement{"double", {doubles("", 1)}};
+// The outputs' counts are bounded by the bytes (an element takes at least min_size() of them) more than by these
+// maxima, which only keep a claimed count within what any sender of these messages produces.
+constexpr int32_t kMaxListed = 1 << 16;  // channels, stages, counters, outputs, sensors
+constexpr int32_t kMaxItems = 1 << 22;   // keyframes, removed ids, targets
+
 int32_t read_i32(const uint8_t* p) {
   return static_cast<int32_t>((uint32_t{p[0]} << 24) | (uint32_t{p[1]} << 16) | (uint32_t{p[2]} << 8) | uint32_t{p[3]});
 }
@@ -71,11 +81,11 @@ class Walker {
                                            " bytes left"};
           for (size_t i = 0; i < n; ++i)
             if (auto e = walk(*f.element)) {
-              e->message = name + "[" + std::to_string(i) + "]." + e->message;
+              // An element that is a struct names its field ("[2].name: ..."), a primitive element does not ("[2]: ...").
+              e->message = name + "[" + std::to_string(i) + "]" + (e->message[0] == ':' ? "" : ".") + e->message;
               return e;
             }
-          pending_count = -1;
-          break;
+          break;  // the count stays: several arrays can share one (status_t's outputs)
         }
       }
     }
@@ -183,6 +193,54 @@ const WireLayout& wire_layout<sextant::fused_pose_t>() {
                             {i64("utime"), str("sender"), i64("seq"), str("source"), str("estimator"),
                              boolean("planar"), doubles("position", 3), doubles("orientation", 4),
                              doubles("covariance", 36)}};
+  return l;
+}
+
+template <>
+const WireLayout& wire_layout<sextant::status_t>() {
+  static const WireLayout channel{"channel_status_t",
+                                  {str("channel"), i64("received"), i64("decoded"), i64("rejected"), i64("dropped"),
+                                   i64("lost"), count("num_reasons", kMaxListed), array("reasons", kStringElement),
+                                   array("reason_counts", kInt64Element), str("last_error")}};
+  static const WireLayout stage{"stage_status_t",
+                                {str("name"), i32("queue_depth"), i32("queue_capacity"), i64("processed"),
+                                 i64("dropped"), doubles("latency_ms_p50", 1), doubles("latency_ms_p90", 1),
+                                 doubles("latency_ms_p99", 1), doubles("latency_ms_max", 1),
+                                 count("num_counters", kMaxListed), array("counter_names", kStringElement),
+                                 array("counter_values", kInt64Element), str("last_failure")}};
+  static const WireLayout l{"status_t",
+                            {i64("utime"), str("sender"), i64("seq"), str("version"), doubles("uptime_s", 1),
+                             count("num_channels", kMaxListed), array("channels", channel),
+                             count("num_stages", kMaxListed), array("stages", stage),
+                             count("num_outputs", kMaxListed), array("output_channels", kStringElement),
+                             array("output_counts", kInt64Element), array("output_bytes", kInt64Element),
+                             array("output_bytes_per_s", kDoubleElement)}};
+  return l;
+}
+
+template <>
+const WireLayout& wire_layout<sextant::trajectory_t>() {
+  static const WireLayout keyframe{"keyframe_t", {i64("id"), i64("utime"), doubles("position", 3), doubles("orientation", 4)}};
+  static const WireLayout l{"trajectory_t",
+                            {i64("utime"), str("sender"), i64("seq"), str("source"), str("estimator"),
+                             doubles("chi2", 1), i32("iterations"), doubles("solve_ms", 1), fixed("kind", 1),
+                             i64("snapshot_id"), i32("chunk"), i32("num_chunks"), i64("range_first"),
+                             i64("range_last"), i32("total_keyframes"), count("num_keyframes", kMaxItems),
+                             array("keyframes", keyframe), count("num_removed", kMaxItems),
+                             array("removed_ids", kInt64Element)}};
+  return l;
+}
+
+template <>
+const WireLayout& wire_layout<sextant::targets_t>() {
+  static const WireLayout target{"target_t",
+                                 {doubles("position", 3), doubles("covariance", 9), count("num_sensors", kMaxListed),
+                                  array("detection_indices", kInt32Element), doubles("cost", 1)}};
+  static const WireLayout l{"targets_t",
+                            {i64("utime"), str("sender"), i64("seq"), i64("scan_id"), str("cost_kind"),
+                             doubles("total_cost", 1), doubles("duality_gap", 1), count("num_sensors", kMaxListed),
+                             array("sensor_ids", kInt32Element), count("num_targets", kMaxItems),
+                             array("targets", target)}};
   return l;
 }
 

@@ -16,6 +16,9 @@
 #include <sextant/loop_closure_t.hpp>
 #include <sextant/match_request_t.hpp>
 #include <sextant/odometry_t.hpp>
+#include <sextant/status_t.hpp>
+#include <sextant/targets_t.hpp>
+#include <sextant/trajectory_t.hpp>
 #include <sextant/truth_t.hpp>
 
 #include <cstddef>
@@ -61,8 +64,9 @@ struct WireError {
 /// length fits.  Trailing bytes after the last field are allowed (as LCM allows them).
 std::optional<WireError> wire_error(const WireLayout& layout, const void* data, size_t size);
 
-/// The layout of each message type that arrives from outside (the daemon's inputs; ground truth and match requests
-/// in logs and on the bus).  Array maxima are the codec's (kMaxObservationsPerMessage, kMaxDetectionsPerScan).
+/// The layout of each message type that arrives from outside: the daemon's inputs, ground truth and match requests
+/// in logs and on the bus, and the daemon's outputs as tools read them (`sextant watch`, logs, the Python module).
+/// Input array maxima are the codec's (kMaxObservationsPerMessage, kMaxDetectionsPerScan).
 template <class Msg>
 const WireLayout& wire_layout();
 template <> const WireLayout& wire_layout<sextant::odometry_t>();
@@ -72,6 +76,9 @@ template <> const WireLayout& wire_layout<sextant::loop_closure_t>();
 template <> const WireLayout& wire_layout<sextant::truth_t>();
 template <> const WireLayout& wire_layout<sextant::match_request_t>();
 template <> const WireLayout& wire_layout<sextant::fused_pose_t>();
+template <> const WireLayout& wire_layout<sextant::status_t>();
+template <> const WireLayout& wire_layout<sextant::trajectory_t>();
+template <> const WireLayout& wire_layout<sextant::targets_t>();
 
 /// Whether `wire_layout<Msg>()` exists (safe_decode needs it).
 template <class Msg>
@@ -83,6 +90,9 @@ template <> inline constexpr bool kHasWireLayout<sextant::loop_closure_t> = true
 template <> inline constexpr bool kHasWireLayout<sextant::truth_t> = true;
 template <> inline constexpr bool kHasWireLayout<sextant::match_request_t> = true;
 template <> inline constexpr bool kHasWireLayout<sextant::fused_pose_t> = true;
+template <> inline constexpr bool kHasWireLayout<sextant::status_t> = true;
+template <> inline constexpr bool kHasWireLayout<sextant::trajectory_t> = true;
+template <> inline constexpr bool kHasWireLayout<sextant::targets_t> = true;
 
 /// Decodes untrusted bytes as `Msg`: the fingerprint, then the layout walk (for the types that have one), then
 /// lcm-gen's decode with anything it throws caught.  nullopt on success, else what is wrong ("fingerprint", "decode" or "too_large").

@@ -8,6 +8,8 @@
 
 #include <doctest/doctest.h>
 #include <sextant/status_t.hpp>
+#include <sextant/targets_t.hpp>
+#include <sextant/trajectory_t.hpp>
 
 #include <random>
 #include <string>
@@ -100,6 +102,65 @@ sextant::fused_pose_t random_fused(std::mt19937& rng) {
   return m;
 }
 
+sextant::status_t random_status(std::mt19937& rng) {
+  sextant::status_t m{};
+  m.utime = static_cast<int64_t>(rng()), m.sender = random_string(rng), m.seq = rng(), m.version = random_string(rng);
+  m.num_channels = static_cast<int32_t>(rng() % 3);
+  for (int i = 0; i < m.num_channels; ++i) {
+    sextant::channel_status_t c{};
+    c.channel = random_string(rng), c.last_error = random_string(rng), c.lost = rng();
+    c.num_reasons = static_cast<int32_t>(rng() % 3);
+    for (int k = 0; k < c.num_reasons; ++k) c.reasons.push_back(random_string(rng)), c.reason_counts.push_back(rng());
+    m.channels.push_back(c);
+  }
+  m.num_stages = static_cast<int32_t>(rng() % 3);
+  for (int i = 0; i < m.num_stages; ++i) {
+    sextant::stage_status_t st{};
+    st.name = random_string(rng), st.last_failure = random_string(rng);
+    st.num_counters = static_cast<int32_t>(rng() % 4);
+    for (int k = 0; k < st.num_counters; ++k) st.counter_names.push_back(random_string(rng)), st.counter_values.push_back(rng());
+    m.stages.push_back(st);
+  }
+  m.num_outputs = static_cast<int32_t>(rng() % 4);
+  for (int k = 0; k < m.num_outputs; ++k) {
+    m.output_channels.push_back(random_string(rng));
+    m.output_counts.push_back(rng()), m.output_bytes.push_back(rng()), m.output_bytes_per_s.push_back(rng() * 0.5);
+  }
+  return m;
+}
+
+sextant::trajectory_t random_trajectory(std::mt19937& rng) {
+  sextant::trajectory_t m{};
+  m.sender = random_string(rng), m.source = random_string(rng), m.estimator = random_string(rng);
+  m.kind = static_cast<int8_t>(rng() % 2), m.chunk = 3, m.total_keyframes = 9;
+  m.num_keyframes = static_cast<int32_t>(rng() % 4);
+  for (int i = 0; i < m.num_keyframes; ++i) {
+    sextant::keyframe_t k{};
+    k.id = i;
+    fill(k.position, rng), fill(k.orientation, rng);
+    m.keyframes.push_back(k);
+  }
+  m.num_removed = static_cast<int32_t>(rng() % 3);
+  for (int i = 0; i < m.num_removed; ++i) m.removed_ids.push_back(rng());
+  return m;
+}
+
+sextant::targets_t random_targets(std::mt19937& rng) {
+  sextant::targets_t m{};
+  m.sender = random_string(rng), m.cost_kind = random_string(rng);
+  m.num_sensors = static_cast<int32_t>(rng() % 4);
+  for (int i = 0; i < m.num_sensors; ++i) m.sensor_ids.push_back(static_cast<int32_t>(rng() % 10));
+  m.num_targets = static_cast<int32_t>(rng() % 4);
+  for (int i = 0; i < m.num_targets; ++i) {
+    sextant::target_t t{};
+    fill(t.position, rng), fill(t.covariance, rng);
+    t.num_sensors = m.num_sensors;
+    t.detection_indices.assign(static_cast<size_t>(m.num_sensors), -1);
+    m.targets.push_back(t);
+  }
+  return m;
+}
+
 // The layout accepts the whole encoding and refuses every proper prefix of it: it ends exactly where lcm-gen's
 // encoding ends, field by field (a field the layout missed or invented would shift the end).
 template <class Msg>
@@ -135,6 +196,9 @@ TEST_CASE("wire layouts end where lcm-gen's encodings end, for random messages o
     check_layout_matches(random_truth(rng));
     check_layout_matches(random_request(rng));
     check_layout_matches(random_fused(rng));
+    check_layout_matches(random_status(rng));
+    check_layout_matches(random_trajectory(rng));
+    check_layout_matches(random_targets(rng));
   }
 }
 
@@ -243,7 +307,39 @@ TEST_CASE("decoding mutated messages of every input type never throws") {
   CHECK(refused > total / 4);  // the mutations do reach the checks
 }
 
-TEST_CASE("safe_decode of types without a layout catches what lcm-gen throws") {
+TEST_CASE("the outputs as tools read them: a count the bytes cannot hold is refused before anything is allocated") {
+  std::mt19937 rng(6);
+  auto t = random_trajectory(rng);
+  t.num_removed = 0, t.removed_ids.clear();
+  const auto tb = encode(t);
+  sextant::trajectory_t tout;
+  for (int32_t n : {0x7fffffff, 20'000'000}) {
+    const auto big = with_i32_at(tb, tb.size() - 4, n);
+    std::optional<runtime::WireError> e;
+    CHECK_NOTHROW(e = runtime::safe_decode(big.data(), big.size(), tout));
+    REQUIRE(e.has_value());
+    CHECK(e->message.find("trajectory_t.") == 0);
+  }
+  // A status whose outputs count claims more than its four parallel arrays hold.
+  sextant::status_t s{};
+  s.sender = "d", s.version = "v";
+  s.num_outputs = 1;
+  s.output_channels = {"POSE"}, s.output_counts = {1}, s.output_bytes = {2}, s.output_bytes_per_s = {3};
+  const auto sb = encode(s);
+  // From the end: output_bytes_per_s, output_bytes, output_counts (8 bytes each), "POSE" (4 + 5), num_outputs.
+  const size_t num_outputs_at = sb.size() - (8 + 8 + 8 + 4 + 5 + 4);
+  CHECK(sb[num_outputs_at + 3] == 1);
+  const auto claimed = with_i32_at(sb, num_outputs_at, 2);  // num_outputs: 1 -> 2
+  sextant::status_t sout;
+  std::optional<runtime::WireError> e;
+  CHECK_NOTHROW(e = runtime::safe_decode(claimed.data(), claimed.size(), sout));
+  REQUIRE(e.has_value());
+  CHECK(e->message.find("status_t.output_channels[1]") != std::string::npos);
+  CHECK_FALSE(runtime::safe_decode(sb.data(), sb.size(), sout).has_value());
+  CHECK(sout.output_bytes_per_s.at(0) == 3.0);
+}
+
+TEST_CASE("safe_decode of an output type refuses a zero-length string and catches what lcm-gen throws") {
   sextant::status_t s{};
   s.sender = "x";
   auto b = encode(s);
