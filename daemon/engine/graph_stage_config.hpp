@@ -1,6 +1,6 @@
 #pragma once
 #include "daemon/engine/trajectory_feed.hpp"
-#include "estimators/graph/incremental_smoother.hpp"
+#include "estimators/graph/incremental_options.hpp"
 #include "estimators/keyframe/keyframe_selector.hpp"
 #include "estimators/keyframe/keyframe_thinning.hpp"
 #include "estimators/keyframe/loop_proposals.hpp"
