@@ -60,8 +60,7 @@ enum class SmootherFailure {
   kNone,
   /// The normal equations are not positive definite: a variable no factor determines (under-constrained, or
   /// disconnected from the gauge); the message names it.  The factorization is dropped and the next update rebuilds
-  /// it without the variables that entered in the failed one: they keep their values from then on, and factors on
-  /// them wait.
+  /// it (and fails the same way while the variable is in the system and undetermined).
   kUnderdetermined,
   /// CHOLMOD failed (it ran out of memory, or a fault was injected): the factorization is dropped and the next
   /// update() or rebuild() builds it afresh from the graph; the estimates are those of the last good update.
