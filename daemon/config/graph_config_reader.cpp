@@ -58,7 +58,7 @@ void read_stage_config(Section& s, engine::GraphConfig& c) {
     l.reject_unknown_keys();
   }
   {
-    // The incremental smoother's options (estimators/graph/incremental_smoother.hpp says what each does); an absent
+    // The incremental smoother's options (estimators/graph/incremental_options.hpp says what each does); an absent
     // key keeps IncrementalOptions' default.
     Section m = s.child("smoother");
     graph::IncrementalOptions& o = c.smoother;

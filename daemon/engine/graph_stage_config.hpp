@@ -1,6 +1,6 @@
 #pragma once
 #include "daemon/engine/trajectory_feed.hpp"
-#include "estimators/graph/incremental_smoother.hpp"
+#include "estimators/graph/incremental_options.hpp"
 #include "estimators/keyframe/keyframe_selector.hpp"
 #include "estimators/keyframe/keyframe_thinning.hpp"
 #include "estimators/keyframe/loop_proposals.hpp"
@@ -30,7 +30,7 @@ struct GraphLandmarkOptions {
 ///    min(1, 2 phi / (phi + chi2)) is 1 for chi2 <= phi, a gate that fades instead of cutting;
 ///  - Huber and Cauchy delta = sqrt(q) (their weights are functions of sqrt(chi2) / delta).
 /// A fixed phi cannot serve both kinds: a 6-DOF residual's chi2 is on average twice a 3-DOF one's, and phi = 1 keeps a
-/// true 6-DOF loop at its median chi2 (5.35) only (2 / 6.35)^2 = 0.10 of its weight (bench/RESULTS.md, session 4).
+/// true 6-DOF loop at its median chi2 (5.35) only (2 / 6.35)^2 = 0.10 of its weight (bench/RESULTS.md).
 struct GraphConfig;
 double kernel_width_for(const GraphConfig& config, bool planar);
 /// The same for landmark sightings, which the smoother takes with a width of their own (add_factor's kernel_width):
@@ -41,7 +41,7 @@ double kernel_width_for(const GraphConfig& config, bool planar);
 /// sightings too.
 double sighting_kernel_width_for(const GraphConfig& config, bool planar);
 
-/// The graph back end (source B): keyframes by motion magnitude, loop proposals on MATCH_REQUESTS, loop closures
+/// The graph back end: keyframes by motion magnitude, loop proposals on MATCH_REQUESTS, loop closures
 /// from LOOP_CLOSURES, landmark sightings from LANDMARKS, incremental smoothing, TRAJECTORY after each optimization
 /// and FUSED_POSE "graph" at the odometry rate.
 struct GraphConfig {

@@ -29,6 +29,9 @@ class Factor {
   int residual_dim() const { return static_cast<int>(information_.rows()); }
   /// A short name for messages ("EDGE_SE2", "prior", ...).
   virtual std::string type() const = 0;
+  /// True for a factor that ties its variables to the map frame itself (a prior), not only to each other: with one,
+  /// chi2 changes when the whole map moves, so the problem has no gauge freedom left to fix.
+  virtual bool fixes_gauge() const { return false; }
 
   /// The residual only (for chi2).
   virtual void error(const std::vector<Variable>& vars, Eigen::VectorXd& e) const = 0;
@@ -81,6 +84,7 @@ class PosePriorFactor final : public Factor {
   PosePriorFactor(int i, const SE2& z, Eigen::Matrix3d information);
   PosePriorFactor(int i, const SE3& z, Matrix6d information);
   std::string type() const override { return "prior"; }
+  bool fixes_gauge() const override { return true; }
   void error(const std::vector<Variable>& vars, Eigen::VectorXd& e) const override;
   void linearize(const std::vector<Variable>& vars, Linearization& out) const override;
 

@@ -32,4 +32,11 @@ bool FactorGraph::has_fixed_variable() const {
   return false;
 }
 
+bool FactorGraph::has_gauge() const {
+  if (has_fixed_variable()) return true;
+  for (const auto& f : factors_)
+    if (f->fixes_gauge()) return true;
+  return false;
+}
+
 }  // namespace sextant::graph

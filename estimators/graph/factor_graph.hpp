@@ -23,6 +23,9 @@ class FactorGraph {
   /// chi2 = sum e' Omega e over all factors (g2o's definition).
   double chi2() const;
   bool has_fixed_variable() const;
+  /// Whether the map frame is fixed: a fixed variable or a factor that fixes the gauge (a prior).  Without either, the
+  /// solution is determined only up to a rigid motion of the whole map, and the solvers hold the first pose fixed.
+  bool has_gauge() const;
 
  private:
   std::vector<Variable> variables_;

@@ -74,10 +74,7 @@ OptimizerSummary optimize(FactorGraph& graph, const OptimizerOptions& o) {
   auto& vars = graph.variables();
   if (vars.empty()) return fail("the graph has no variables");
 
-  bool has_gauge = graph.has_fixed_variable();
-  for (const auto& f : graph.factors())
-    if (f->type() == "prior") has_gauge = true;
-  if (!has_gauge && o.fix_first_pose_if_no_gauge) {
+  if (!graph.has_gauge() && o.fix_first_pose_if_no_gauge) {
     for (auto& v : vars)
       if (v.is_pose()) {
         v.fixed = true;

@@ -1,0 +1,82 @@
+#pragma once
+// The incremental smoother's options and the status of one update (incremental_smoother.hpp says what the smoother
+// computes).  No CHOLMOD here: configuration, runtime and replay headers include this one.
+//
+// Units: a variable's step is compared component-wise: translation components (metres, point coordinates) against
+// `relinearize_translation`, rotation components (radians) against `relinearize_rotation`; times are milliseconds.
+#include "estimators/graph/robust_kernel.hpp"
+
+#include <cstdint>
+#include <string>
+
+namespace sextant::graph {
+
+struct IncrementalOptions {
+  double relinearize_translation = 0.1;   // m: relinearize a variable whose step exceeds this in a translation component
+  double relinearize_rotation = 0.1;      // rad: ... or this in a rotation component
+  int relinearization_passes = 2;         // relinearize + re-solve rounds per update
+  int relinearize_skip = 1;               // look for variables to relinearize every this many updates (iSAM2's relinearizeSkip)
+  /// Factors changed by rank updates in one round (new ones or relinearized ones) beyond which a rebuild is cheaper:
+  /// max(min_update_factors, update_fraction x factors in the system), at most max_update_factors.  The cap matters on
+  /// large graphs, where each factor's path to the root is long: on city10000 relinearizing 158 factors by rank
+  /// updates took 80-90 ms, more than a rebuild; below 6400 factors it changes nothing (bench/RESULTS.md).
+  double update_fraction = 0.02;
+  int min_update_factors = 32;
+  int max_update_factors = 128;
+  int rebuild_iterations = 10;            // Gauss-Newton iterations of a rebuild for new factors that would cost more as
+                                          // rank updates (until no variable moves past the thresholds); a rebuild for
+                                          // relinearization or reordering takes one
+  double refill_ratio = 1.5;              // rebuild (reorder) when nnz(L) exceeds this multiple of its size after ordering
+                                          // (city10000: 1.5 takes 0.68 of the CPU time of 2.5, 1.25 0.62 with more rebuilds)
+  /// Orderings at rebuilds: constrained AMD with the newest variables last up to this many variables, METIS nested
+  /// dissection above (city10000: half the factorization flops; M3500: its ordering time outweighs the gain).
+  int nested_dissection_above = 5000;
+  double capacity_growth = 1.0;           // reserved columns at a rebuild: this fraction of the used ones (and >= 64)
+  /// Updates over which a fill-triggered reordering is spread (incremental_smoother.hpp); 0: reorder within the update.
+  int reorder_spread = 8;
+  /// Spread reorderings only in systems of more than this many variables: below, a reordering takes a few ms, and
+  /// holding two factors at once would cost more memory than it saves time (M3500: +5 MB peak RSS, p99 unchanged).
+  int reorder_spread_above = 5000;
+  /// ms: an update works on a spread reordering until this long after it began, and at least for its share of the
+  /// time the last one took (1.25 x that time / reorder_spread), so that the installing update is left little.
+  double reorder_slice_ms = 4.0;
+  /// Wildfire threshold of the back-substitution (as iSAM2's): a change of a step by less than this (m or rad) is not
+  /// propagated to the variables that depend on it (they keep a value stale by less than it).  0: exact.
+  double wildfire = 1e-3;
+  RobustKernel kernel = RobustKernel::kNone;
+  double kernel_width = 1.0;
+  /// Fault injection, for tests of the callers' recovery: the first factorization (a rank update or a numeric
+  /// factorization) at or after update() call number N (1, 2, ...) fails as CHOLMOD does when it runs out of memory.
+  /// 0: never.
+  int64_t fail_factorization_at_update = 0;
+};
+
+/// Empty when every option is within its range, else the first option that is not, with its value and the range
+/// ("relinearize_translation = -1: must be a positive number").  The smoother's constructor refuses such options.
+std::string invalid_option(const IncrementalOptions& options);
+
+/// Why an update's estimate is not the answer (as Ceres' Solver::Summary says whether its solution is usable).
+enum class SmootherFailure {
+  kNone,
+  /// The normal equations are not positive definite: a variable no factor determines (under-constrained, or
+  /// disconnected from the gauge); the message names it.  The factorization is dropped and the next update rebuilds
+  /// it (and fails the same way while the variable is in the system and undetermined).
+  kUnderdetermined,
+  /// CHOLMOD failed (it ran out of memory, or a fault was injected): the factorization is dropped and the next
+  /// update() or rebuild() builds it afresh from the graph; the estimates are those of the last good update.
+  kFactorization,
+};
+
+struct IncrementalStatus {
+  bool ok = true;                    // failure == kNone: the estimates are this update's solution
+  SmootherFailure failure = SmootherFailure::kNone;
+  std::string message;               // why !ok
+  int new_variables = 0, new_factors = 0;
+  int deferred_variables = 0;        // new variables not yet determined by their factors (kept pending)
+  int relinearized_variables = 0, relinearized_factors = 0;
+  bool rebuilt = false;              // the system was reordered and refactorized in this update (or a spread
+                                     // reordering was put in place)
+  int solves = 0;
+};
+
+}  // namespace sextant::graph

@@ -1,0 +1,49 @@
+#include "estimators/graph/smoother/back_substitution.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace sextant::graph::smoother {
+
+void back_substitute(SmootherState& s, bool full) {
+  Factorization& fx = s.fx;
+  if (fx.L == nullptr || fx.capacity == 0) return;
+  const int* Lp = static_cast<const int*>(fx.L->p);
+  const int* Li = static_cast<const int*>(fx.L->i);
+  const int* Lnz = static_cast<const int*>(fx.L->nz);
+  const double* Lx = static_cast<const double*>(fx.L->x);
+  const double* y = static_cast<const double*>(fx.y->x);
+  // From the root down (a parent's column index exceeds its children's).  A column that is not recomputed cuts off
+  // its subtree: a descendant's structure above it lies in its own structure (the row-subtree property of L), and no
+  // descendant of an unmodified column is modified.
+  std::fill(fx.recomputed.begin(), fx.recomputed.end(), 0);
+  std::fill(fx.changed.begin(), fx.changed.end(), 0);
+  s.var_changed.assign(s.graph.variables().size(), 0);
+  const double threshold = full ? -1.0 : s.options.wildfire;
+  for (int j = fx.capacity - 1; j >= 0; --j) {  // the hubs' columns too, after the reserved ones
+    const size_t ju = static_cast<size_t>(j);
+    const int first = Lp[j] + 1, end = Lp[j] + Lnz[j], parent = fx.parent_of(j);
+    if (parent >= 0 && !fx.recomputed[static_cast<size_t>(parent)]) continue;
+    bool need = full || fx.dirty[ju];
+    for (int k = first; !need && k < end; ++k) need = fx.changed[static_cast<size_t>(Li[k])] != 0;
+    if (!need) continue;
+    double x = y[j] / Lx[Lp[j]];
+    for (int k = first; k < end; ++k) x -= Lx[k] * fx.dx[Li[k]];
+    fx.recomputed[ju] = 1;
+    if (x != fx.dx[j] && fx.col_var[ju] >= 0) s.var_changed[static_cast<size_t>(fx.col_var[ju])] = 1;
+    fx.dx[j] = x;
+    // Compared with the value its dependants last saw, so that small changes cannot accumulate unseen.
+    if (std::abs(x - fx.seen[ju]) > threshold) fx.changed[ju] = 1, fx.seen[ju] = x;
+  }
+  std::fill(fx.dirty.begin(), fx.dirty.end(), 0);
+  auto& vars = s.graph.variables();
+  if (s.estimate_moved.size() < vars.size()) s.estimate_moved.resize(vars.size(), 0);
+  for (size_t v = 0; v < vars.size(); ++v) {
+    if (!(full || s.var_changed[v])) continue;
+    if (!s.estimate_moved[v]) s.estimate_moved[v] = 1, s.moved_since_chi2.push_back(static_cast<int>(v));
+    vars[v] = s.lin[v];
+    if (s.pos[v] >= 0) vars[v].retract(fx.dx.data() + s.pos[v]);
+  }
+}
+
+}  // namespace sextant::graph::smoother

@@ -1,0 +1,48 @@
+#include "estimators/graph/smoother/reorder_scheduler.hpp"
+
+#include "estimators/graph/smoother/smoother_state.hpp"
+
+#include <algorithm>
+
+namespace sextant::graph::smoother {
+
+namespace {
+using Clock = std::chrono::steady_clock;
+double ms_since(Clock::time_point t) { return std::chrono::duration<double, std::milli>(Clock::now() - t).count(); }
+}  // namespace
+
+void ReorderScheduler::begin(SmootherState& s) {
+  std::vector<char> in(s.graph.variables().size(), 0);
+  for (size_t v = 0; v < s.pos.size(); ++v) in[v] = s.pos[v] >= 0;
+  system_ = begin_system(s, in, false);
+  due_ = s.update_calls + s.options.reorder_spread;
+  spent_ms_ = 0.0;
+}
+
+ReorderScheduler::Finished ReorderScheduler::finish(SmootherState& s) {
+  std::unique_ptr<System> sys = std::move(system_);
+  const auto started = Clock::now();
+  advance(s, *sys, {});
+  work_ms_ = spent_ms_ + ms_since(started);
+  if (!sys->error.empty()) return Finished::kFailed;
+  if (!install(s, *sys)) return Finished::kCholmodFailed;
+  ++s.rebuilds;
+  return Finished::kInstalled;
+}
+
+void ReorderScheduler::work(SmootherState& s, bool began_now) {
+  if (!system_) return;
+  // What is left of reorder_slice_ms after this update's own work, and at least this update's share of what the
+  // last spread reordering took (with a quarter to spare, as the graph grows), so that little is left for the
+  // update that installs it: with the first rule alone, city10000's updates during a reordering (4-6 ms each, the
+  // factor being at its fullest) left it nearly all, 40-70 ms.  The update that began it has paid the ordering.
+  const auto now = Clock::now();
+  const double own = std::chrono::duration<double, std::milli>(now - update_started_).count();
+  const int64_t left = std::max<int64_t>(1, due_ - s.update_calls);
+  const double share = began_now ? 0.0 : std::max(0.0, 1.25 * work_ms_ - spent_ms_) / static_cast<double>(left);
+  const auto deadline = now + std::chrono::duration<double, std::milli>(std::max(s.options.reorder_slice_ms - own, share));
+  advance(s, *system_, [&] { return Clock::now() >= deadline; });
+  spent_ms_ += ms_since(now);
+}
+
+}  // namespace sextant::graph::smoother
