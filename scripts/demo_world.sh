@@ -2,8 +2,7 @@
 # (the simulator's 1 per sensor and scan) in their fields of view over the targets' region, and the 4 targets.  The
 # daemon runs config/default.yaml told the same: the region, that rate (per-sensor false-alarm densities) and the
 # target prior, as tests/e2e/daemon_bus.sh does.  With the default's scalar density and no prior, in-view false alarms
-# pass as targets (offline replay of this run: 119 ghost TARGETS of 514 estimates instead of 18 of 412;
-# bench/history/2026-11-22_to_2026-11-25.md, passive association session 6).
+# pass as targets (offline replay of this run at b7308dc: 119 ghost TARGETS of 514 estimates instead of 18 of 412).
 region_min=(-30 -20 4) region_max=(30 20 16) false_alarms=1 targets=4
 
 # demo_config DEFAULT_YAML OUT_YAML: a copy of config/default.yaml with the demo's association settings.
