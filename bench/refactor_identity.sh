@@ -38,10 +38,11 @@ row() {  # row ITEM RESULT DETAIL
   [ "$2" = identical ] || differences=$((differences + 1))
 }
 digest() { sha256sum "$1" | cut -c1-12; }
+size() { case "$1" in *.tum) echo "$(wc -l < "$1") poses" ;; *) echo "$(stat -c %s "$1") bytes" ;; esac; }
 compare_files() {  # compare_files ITEM OLD_FILE NEW_FILE
   if [ ! -s "$2" ] && [ ! -s "$3" ]; then row "$1" DIFFERENT "both empty or missing: nothing compared"
-  elif cmp -s "$2" "$3"; then row "$1" identical "sha256 $(digest "$2"), $(wc -l < "$2") lines"
-  else row "$1" DIFFERENT "old $(digest "$2") ($(wc -l < "$2") lines), new $(digest "$3") ($(wc -l < "$3") lines)"
+  elif cmp -s "$2" "$3"; then row "$1" identical "sha256 $(digest "$2"), $(size "$2")"
+  else row "$1" DIFFERENT "old $(digest "$2") ($(size "$2")), new $(digest "$3") ($(size "$3")), first difference: $(cmp "$2" "$3" 2>&1 | head -1)"
   fi
 }
 
