@@ -1,5 +1,5 @@
 // EKF-SLAM update time against the number of landmarks in the state (Google Benchmark).
-// Issue 5's targets: <= 20 us with 15 landmarks, <= 2 ms with 500.
+// Targets: <= 20 us with 15 landmarks, <= 2 ms with 500.
 #include "estimators/filter/planar_ekf.hpp"
 
 #include <benchmark/benchmark.h>

@@ -1,5 +1,5 @@
 #!/bin/bash
-# Incremental smoother benchmark of issue 4: `sextant optimize --incremental` on M3500, sphere2500, city10000 (RUNS
+# Incremental smoother benchmark: `sextant optimize --incremental` on M3500, sphere2500, city10000 (RUNS
 # runs each, default 3) and torus3D (TORUS_RUNS, default 1), with --relin-skip in SKIPS (default "1 10": ours and
 # iSAM2's), one JSON per run in OUT, then a markdown table of the medians.
 # With a second build directory BASE, every run of BUILD is followed by the same run of BASE (interleaved, so that

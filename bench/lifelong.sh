@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
-# Lifelong real time: cost per update, memory and bus traffic against run length (bench/RESULTS.md, "Lifelong").
+# Lifelong real time: cost per update, memory and bus traffic against run length (bench/RESULTS.md,
+# "Lifelong operation").
 #   bench/lifelong.sh BUILD OUT [MINUTES ...]      (default minutes: 5 20 60)
 # 1. Offline: simulated planar and spatial runs of each length (seeds 1 and 2) replayed with config/default.yaml
 #    (lifelong on) and, for 5 and 60 minutes, with lifelong off (the full-history graph); per 5-minute segment: the

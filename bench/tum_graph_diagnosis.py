@@ -1,4 +1,4 @@
-"""Source B's experiment, offline check of the daemon's keyframe graph (issue 4, session 4).
+"""The TUM loop-closure experiment, offline check of the daemon's keyframe graph.
 
 From the converted log (vo.lcm: ODOMETRY with increment covariances, GROUND_TRUTH) and an lcm-logger recording of
 the daemon's run (bus.lcm: the final TRAJECTORY's keyframes and the matcher's LOOP_CLOSURES), rebuilds the keyframe

@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
-# Source B's experiment without a camera: TUM RGB-D ground truths -> simulated visual odometry with drift
+# The Kinect visual-odometry paper's experiment without a camera: TUM RGB-D ground truths -> simulated visual
+# odometry with drift
 # (`sextant convert tum`), played over a real LCM bus (private network namespace) into sextantd's graph back end,
 # with `sextant matcher` answering its loop proposals from the ground truth.  Reports ATE (TUM semantics, `sextant
 # eval`) of the raw odometry and of the optimized keyframes, at the keyframe times.
@@ -9,7 +10,7 @@
 # quantile as the gate computes it, 22.46; with phi = 1 a true 6-DOF loop at its median chi2 5.3 keeps a weight of
 # (2 / 6.3)^2 = 0.1, see RESULTS); SEED (1) of the converter's noise and of the matcher; REANCHOR (10, the daemon's
 # default: keyframing restarts after that many consistent implausible poses, e.g. over fr2_desk's 12 s mocap gap;
-# 0: never, as before session 5);
+# 0: never);
 # KEEP=DIR keeps each sequence's vo.lcm, gt.txt and bus.lcm in DIR/SEQUENCE (for bench/tum_graph_diagnosis.py);
 # VO_FROM=DIR plays DIR/SEQUENCE/vo.lcm and gt.txt (kept by an earlier KEEP run) instead of converting anew.
 set -euo pipefail

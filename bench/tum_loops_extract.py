@@ -1,4 +1,5 @@
-"""Source B's experiment, evaluation side: from an lcm-logger recording of a sextantd run, writes the final
+"""The TUM loop-closure experiment (the Kinect visual-odometry paper's set-up), evaluation side: from an
+lcm-logger recording of a sextantd run, writes the final
 TRAJECTORY (optimized keyframes) and the dead-reckoning poses (raw odometry) at the keyframe times as TUM files."""
 import sys
 

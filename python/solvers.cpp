@@ -168,8 +168,13 @@ void register_solvers(py::module_& m) {
            const std::string& ordering, bool incremental, double relin_translation, double relin_rotation,
            int relin_skip, const std::string& information) {
           replay::GraphOptimizationOptions o;
-          o.solver = solver, o.init = init, o.robust = robust, o.kernel_width = kernel_width;
-          o.max_iters = max_iters, o.tolerance = tolerance, o.ordering = ordering, o.incremental = incremental;
+          try {
+            o.solver = replay::solver_from_name(solver), o.init = replay::initial_estimate_from_name(init);
+            o.robust = replay::robust_kernel_from_option(robust), o.ordering = replay::ordering_from_name(ordering);
+          } catch (const std::invalid_argument& e) {
+            throw py::value_error(e.what());
+          }
+          o.kernel_width = kernel_width, o.max_iters = max_iters, o.tolerance = tolerance, o.incremental = incremental;
           o.relin_translation = relin_translation, o.relin_rotation = relin_rotation, o.relin_skip = relin_skip;
           return optimize(graph, output, o, information);
         },

@@ -21,19 +21,51 @@ double percentile(std::vector<double> v, double q) {
   return runtime::nearest_rank_percentile(v, q);
 }
 
-void check_member(const std::string& what, const std::string& value, const std::vector<std::string>& allowed) {
-  if (std::find(allowed.begin(), allowed.end(), value) != allowed.end()) return;
+template <class Kind, size_t N>
+using Names = std::pair<Kind, const char*>[N];
+
+template <class Kind, size_t N>
+Kind from_name(const Names<Kind, N>& names, const std::string& name, const char* what) {
   std::string list;
-  for (const auto& a : allowed) list += (list.empty() ? "" : ", ") + a;
-  throw std::invalid_argument(what + ": '" + value + "' is not one of " + list);
+  for (const auto& [kind, spelling] : names) {
+    if (name == spelling) return kind;
+    list += (list.empty() ? "" : ", ") + std::string(spelling);
+  }
+  throw std::invalid_argument(std::string(what) + ": '" + name + "' is not one of " + list);
 }
+
+template <class Kind, size_t N>
+const char* spelling_of(const Names<Kind, N>& names, Kind kind) {
+  for (const auto& [k, spelling] : names)
+    if (k == kind) return spelling;
+  return "?";
+}
+
+template <class Kind, size_t N>
+std::vector<std::string> spellings(const Names<Kind, N>& names) {
+  std::vector<std::string> out;
+  for (const auto& [kind, spelling] : names) out.emplace_back(spelling);
+  return out;
+}
+
+constexpr std::pair<graph::Method, const char*> kSolvers[] = {{graph::Method::kGaussNewton, "gn"},
+                                                             {graph::Method::kLevenbergMarquardt, "lm"}};
+constexpr std::pair<InitialEstimate, const char*> kInits[] = {
+    {InitialEstimate::kAuto, "auto"}, {InitialEstimate::kFile, "file"}, {InitialEstimate::kOdometry, "odometry"},
+    {InitialEstimate::kChordal, "chordal"}, {InitialEstimate::kSgd, "sgd"}};
+constexpr std::pair<graph::RobustKernel, const char*> kKernels[] = {
+    {graph::RobustKernel::kNone, "none"}, {graph::RobustKernel::kHuber, "huber"},
+    {graph::RobustKernel::kCauchy, "cauchy"}, {graph::RobustKernel::kDcs, "dcs"}};
+constexpr std::pair<graph::Ordering, const char*> kOrderings[] = {
+    {graph::Ordering::kBlockAmd, "block-amd"}, {graph::Ordering::kAmd, "amd"}, {graph::Ordering::kColamd, "colamd"},
+    {graph::Ordering::kMetis, "metis"}, {graph::Ordering::kAuto, "auto"}};
 
 // The file's factors fed in order to the incremental smoother (feed_in_order.hpp), then a batch Gauss-Newton solve
 // of the same graph from the same start for the final chi2 ratio.
 GraphOptimizationResult run_incremental(const graph::G2oGraph& g, const GraphOptimizationOptions& o,
                                         const std::string& output) {
   graph::IncrementalOptions io;
-  io.kernel = graph::robust_kernel_from_name(o.robust);
+  io.kernel = o.robust;
   io.kernel_width = o.kernel_width;
   io.relinearize_translation = o.relin_translation;
   io.relinearize_rotation = o.relin_rotation;
@@ -70,7 +102,7 @@ GraphOptimizationResult run_incremental(const graph::G2oGraph& g, const GraphOpt
   s.add("updates", r.step_ms.size()).add("rebuilds", r.rebuilds).add("relinearize_skip", o.relin_skip);
   s.add("relinearized_factors", r.relinearized_factors);
   s.add("factor_nonzeros", static_cast<int64_t>(smoother.factor_nonzeros())).add("peak_rss_mb", peak_mb);
-  s.add("robust", o.robust);
+  s.add("robust", name_of(o.robust));
   if (!r.ok) s.add("termination", r.message);
   res.ok = r.ok;
   res.message = r.ok ? "" : r.message;
@@ -80,17 +112,27 @@ GraphOptimizationResult run_incremental(const graph::G2oGraph& g, const GraphOpt
 
 }  // namespace
 
+graph::Method solver_from_name(const std::string& name) { return from_name(kSolvers, name, "solver"); }
+InitialEstimate initial_estimate_from_name(const std::string& name) { return from_name(kInits, name, "init"); }
+graph::RobustKernel robust_kernel_from_option(const std::string& name) { return from_name(kKernels, name, "robust"); }
+graph::Ordering ordering_from_name(const std::string& name) { return from_name(kOrderings, name, "ordering"); }
+const char* name_of(graph::Method solver) { return spelling_of(kSolvers, solver); }
+const char* name_of(InitialEstimate init) { return spelling_of(kInits, init); }
+const char* name_of(graph::RobustKernel kernel) { return spelling_of(kKernels, kernel); }
+const char* name_of(graph::Ordering ordering) { return spelling_of(kOrderings, ordering); }
+std::vector<std::string> solver_names() { return spellings(kSolvers); }
+std::vector<std::string> initial_estimate_names() { return spellings(kInits); }
+std::vector<std::string> robust_kernel_names() { return spellings(kKernels); }
+std::vector<std::string> ordering_names() { return spellings(kOrderings); }
+
 GraphOptimizationResult optimize_graph(graph::G2oGraph& g, const GraphOptimizationOptions& o,
                                        const std::string& output) {
-  check_member("solver", o.solver, {"gn", "lm"});
-  check_member("init", o.init, {"auto", "file", "odometry", "chordal", "sgd"});
-  check_member("robust", o.robust, {"none", "huber", "cauchy", "dcs"});
-  check_member("ordering", o.ordering, {"block-amd", "amd", "colamd", "metis", "auto"});
   if (o.max_iters < 1) throw std::invalid_argument("max_iters must be at least 1");
   if (!(o.kernel_width > 0) || !(o.tolerance > 0)) throw std::invalid_argument("kernel_width and tolerance must be > 0");
   if (o.incremental) {
     // auto, the default, means the file here: the incremental smoother starts each pose from its edges.
-    if ((o.init != "file" && o.init != "auto") || o.solver != "gn")
+    const bool file_start = o.init == InitialEstimate::kFile || o.init == InitialEstimate::kAuto;
+    if (!file_start || o.solver != graph::Method::kGaussNewton)
       throw std::invalid_argument("incremental initializes each pose from its first edge; init and solver do not apply");
     if (!(o.relin_translation > 0) || !(o.relin_rotation > 0) || o.relin_skip < 1)
       throw std::invalid_argument("relinearization thresholds must be > 0 and relin_skip at least 1");
@@ -98,27 +140,24 @@ GraphOptimizationResult optimize_graph(graph::G2oGraph& g, const GraphOptimizati
   }
 
   const auto t0 = std::chrono::steady_clock::now();
-  std::string init_used = o.init;
-  if (o.init == "auto") {
-    init_used = graph::initialize_auto(g.graph) ? "chordal" : "file";
-  } else if (o.init == "odometry") {
+  InitialEstimate init_used = o.init;
+  if (o.init == InitialEstimate::kAuto) {
+    init_used = graph::initialize_auto(g.graph) ? InitialEstimate::kChordal : InitialEstimate::kFile;
+  } else if (o.init == InitialEstimate::kOdometry) {
     graph::initialize_by_odometry(g.graph);
-  } else if (o.init == "chordal" || o.init == "sgd") {
-    if (o.init == "sgd") graph::initialize_by_odometry(g.graph);
-    if (auto why = o.init == "sgd" ? graph::initialize_sgd(g.graph) : graph::initialize_chordal(g.graph); !why.empty())
+  } else if (o.init == InitialEstimate::kChordal || o.init == InitialEstimate::kSgd) {
+    const bool sgd = o.init == InitialEstimate::kSgd;
+    if (sgd) graph::initialize_by_odometry(g.graph);
+    if (auto why = sgd ? graph::initialize_sgd(g.graph) : graph::initialize_chordal(g.graph); !why.empty())
       throw std::runtime_error(why);
   }
   graph::OptimizerOptions opt;
-  opt.method = o.solver == "lm" ? graph::Method::kLevenbergMarquardt : graph::Method::kGaussNewton;
+  opt.method = o.solver;
   opt.max_iterations = o.max_iters;
   opt.relative_tolerance = o.tolerance;
-  opt.kernel = graph::robust_kernel_from_name(o.robust);
+  opt.kernel = o.robust;
   opt.kernel_width = o.kernel_width;
-  opt.ordering = o.ordering == "block-amd" ? graph::Ordering::kBlockAmd
-                 : o.ordering == "colamd"  ? graph::Ordering::kColamd
-                 : o.ordering == "metis"   ? graph::Ordering::kMetis
-                 : o.ordering == "auto"    ? graph::Ordering::kAuto
-                                           : graph::Ordering::kAmd;
+  opt.ordering = o.ordering;
   const auto st = graph::optimize(g.graph, opt);
   const double solve_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   if (!output.empty()) graph::write_g2o(output, g.graph);
@@ -129,12 +168,13 @@ GraphOptimizationResult optimize_graph(graph::G2oGraph& g, const GraphOptimizati
   s.add("dimension", g.dimension).add("iterations", st.iterations);
   s.add("initial_chi2", st.initial_chi2).add("final_chi2", st.final_chi2);
   s.add("solve_seconds", solve_seconds).add("converged", st.converged());
-  s.add("solver", o.solver).add("init", o.init).add("init_used", init_used).add("robust", o.robust);
+  s.add("solver", name_of(o.solver)).add("init", name_of(o.init)).add("init_used", name_of(init_used));
+  s.add("robust", name_of(o.robust));
   s.add("repaired_information", g.repaired_information);
   s.add("termination", st.message);
   s.add("linearize_seconds", st.linearize_seconds).add("factorize_seconds", st.factorize_seconds);
   s.add("linear_solve_seconds", st.solve_seconds);
-  if (o.robust != "none") s.add("final_robust_cost", st.final_cost);
+  if (o.robust != graph::RobustKernel::kNone) s.add("final_robust_cost", st.final_cost);
   res.ok = st.usable();
   res.message = st.usable() ? "" : st.message;
   res.variables = g.graph.variables();

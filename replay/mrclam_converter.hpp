@@ -1,5 +1,5 @@
 #pragma once
-// The UTIAS MRCLAM data set (Leung et al., IJRR 2011; format in ../shared/data/landmarks/SOURCES.md) as an LCM log
+// The UTIAS MRCLAM data set (Leung et al., IJRR 2011, and the data set's own format description) as an LCM log
 // for one robot:
 //  - ODOMETRY: the velocity commands (v, omega) of each row integrated exactly over the time to the next row,
 //    shifted later by the robots' command delay (MrclamOptions::command_delay_s),
@@ -24,8 +24,8 @@ struct MrclamOptions {
   double rot_var_per_metre = 0.05;     // rad^2 per metre travelled
   double min_sigma = 1e-4;
   // The robots carry out a velocity command about this long after its stamp: the Vicon heading rate matches the
-  // commanded omega best 0.15-0.2 s later on all five robots of Dataset 7 (bench/RESULTS.md, "MRCLAM SLAM -
-  // session 3").  Each command's motion is stamped this much later, so that the odometry pose at a sighting's stamp
+  // commanded omega best 0.15-0.2 s later on all five robots of Dataset 7 (bench/history/2026-11-22_to_2026-11-25.md,
+  // "MRCLAM SLAM").  Each command's motion is stamped this much later, so that the odometry pose at a sighting's stamp
   // is where the robot was when the camera saw it.
   double command_delay_s = 0.175;
   // Sighting noise for a filter that takes successive sightings as independent.  Against the Vicon truth (all five
@@ -34,8 +34,8 @@ struct MrclamOptions {
   // correlated from one sighting of a landmark to the next (0.24 s apart: 0.94 for range, 0.71 for bearing; a
   // stationary robot reads the same quantized range again and again).  An AR(1) error with correlation rho
   // carries the information of white noise with variance sigma^2 (1 + rho) / (1 - rho), hence 0.044 * 5.7 and
-  // 0.015 * 2.4 (bench/RESULTS.md, "MRCLAM SLAM - session 3").  With the uncorrelated 0.15 m / 0.05 rad the
-  // EKF double-counted the repeated readings and became overconfident.
+  // 0.015 * 2.4 (bench/history/2026-11-22_to_2026-11-25.md, "MRCLAM SLAM").  With the uncorrelated 0.15 m /
+  // 0.05 rad the EKF double-counted the repeated readings and became overconfident.
   double range_sigma_per_metre = 0.26;  // range sigma = this * range
   double bearing_sigma = 0.037;         // rad
 };

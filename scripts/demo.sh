@@ -9,22 +9,9 @@ out="$root/out/demo"
 mkdir -p "$out"
 rm -f "$out"/*.lcm
 
-# The demo's world: the passive sensors see false alarms (the simulator's 1 per sensor and scan) in their fields of
-# view over the targets' region, and the 4 targets.  The daemon runs config/default.yaml told the same: the region,
-# that rate (per-sensor false-alarm densities) and the target prior, as tests/e2e/daemon_bus.sh does.  With the
-# default's scalar density and no prior, in-view false alarms pass as targets (offline replay of this run: 119 ghost
-# TARGETS of 514 estimates instead of 18 of 412; bench/RESULTS.md, passive association session 6).
-region_min=(-30 -20 4) region_max=(30 20 16) false_alarms=1 targets=4
+. "$root/scripts/demo_world.sh"
 config="$out/config.yaml"
-join() { local IFS=,; echo "$*"; }
-sed -e "s/^\(    region_min: \)\[\]/\1[$(join "${region_min[@]}")]/" -e "s/^\(    region_max: \)\[\]/\1[$(join "${region_max[@]}")]/" \
-    -e "s/^\(    false_alarms_per_scan: \)0\b/\1$false_alarms/" -e "s/^\(    target_prior: \)false\b/\1true/" \
-    -e "s/^\(    expected_targets: \)1\b/\1$targets/" "$root/config/default.yaml" > "$config"
-if [ "$(diff "$root/config/default.yaml" "$config" | grep -c '^>')" != 5 ]; then
-  echo "demo: could not set association.region_min/region_max/false_alarms_per_scan/target_prior/expected_targets" >&2
-  echo "      in a copy of config/default.yaml ($config); has the file's layout changed?" >&2
-  exit 1
-fi
+demo_config "$root/config/default.yaml" "$config"
 
 echo "== 1. simulating a planar run: robot laps, landmarks, 4 passive sensors watching 4 targets (with false alarms"
 echo "      in their fields of view over the targets' region), loop closures"

@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
-# Time per scan of the passive association at two commits on the same scans (RESULTS: "Passive association —
-# session 3").  Usage: bench/assoc/compare_timing.sh OLD_COMMIT NEW_COMMIT [ROUNDS]
+# Time per scan of the passive association at two commits on the same scans (bench/RESULTS.md,
+# "Time per scan").  Usage: bench/assoc/compare_timing.sh OLD_COMMIT NEW_COMMIT [ROUNDS]
 # Each commit's assoc/*.cpp and replay/assoc_experiment.cpp are compiled with the project's Release flags into
 # bench/assoc/timing_driver.cpp (run_assoc_experiment with assoc-sim's options: spacing 1, P_D 0.9, classic cost,
 # LR at 1 % gap); the two binaries then run alternately per seed.  Output lines: case seed old|new median_cpu_ms

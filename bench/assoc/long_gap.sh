@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
-# The duality gap over long runs of the 3-sensor timing scenarios (issue 6: gap <= 1 % on every scan), at two commits
-# on the same scans (RESULTS: "Passive association — session 6").  Usage: bench/assoc/long_gap.sh OLD NEW [SEEDS]
+# The duality gap over long runs of the 3-sensor timing scenarios (target: gap <= 1 % on every scan), at two commits
+# on the same scans (bench/history/2026-11-22_to_2026-11-25.md, "Passive association").
+# Usage: bench/assoc/long_gap.sh OLD NEW [SEEDS]
 # Builds timing_driver.cpp against each commit's assoc/ as compare_timing.sh does, then runs 200 scans per seed
 # (3 x 20 + 5 false alarms, grid and uniform, with and without the target prior), old and new alternately.
 # Output lines: case seed old|new median_cpu_ms build_median_ms correct_rate gap_mean gap_max tuples_mean.

@@ -1,6 +1,6 @@
 // daemon_latency: sextantd's latency from an odometry message in to its FUSED_POSE out, over LCM, while the graph
-// back end works through a pose graph in the background — next to the raw LCM round trip measured in the same run
-// (issue 4).  bench/latency/run.sh runs it all in a private network namespace.
+// back end works through a pose graph in the background — next to the raw LCM round trip measured in the same run.
+// bench/latency/run.sh runs it all in a private network namespace.
 //
 //   daemon_latency echo [--lcm-url URL] [--ping CH] [--pong CH]
 //       The trivial peer of the raw round trip: republishes every message of CH, byte for byte, on PONG, until
@@ -513,7 +513,7 @@ int run_measure(const MeasureOptions& o) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  CLI::App app{"sextantd latency under optimizer load, next to the raw LCM round trip (issue 4)"};
+  CLI::App app{"sextantd latency under optimizer load, next to the raw LCM round trip"};
   app.require_subcommand(1);
   std::string url;
   app.add_option("--lcm-url", url, "LCM URL (default: LCM's, or $LCM_DEFAULT_URL)");

@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # sextantd's latency from an odometry message in to its FUSED_POSE out, over a real LCM bus (private network
 # namespace), at 1 kHz while the graph back end works through city10000 in the background, next to the raw LCM
-# round trip to a trivial echo measured in the same run (issue 4).  city10000 is converted with `sextant convert g2o`
+# round trip to a trivial echo measured in the same run.  city10000 is converted with `sextant convert g2o`
 # (its chain as the odometry of body 'robot1', its other edges as LOOP_CLOSURES) and fed by daemon_latency under flow
 # control; the daemon runs bench/latency/daemon.yaml (every city10000 pose a keyframe).
 #
@@ -14,7 +14,7 @@
 # env: DURATION (60 s), RATE (1000 Hz), WINDOW (4 poses ahead of the optimizer), FEED_RATE (1000 poses/s),
 #      GRAPH (city10000.g2o in ../shared/data/posegraph), CONFIG (bench/latency/daemon.yaml),
 #      TRAJECTORY_RATE (the config's trajectory.rate_hz: TRAJECTORY publications per second, 0 = every update),
-#      COALESCE=0 (the graph stage takes every odometry message through its queue, as before session 4),
+#      COALESCE=0 (the graph stage takes every odometry message through its queue),
 #      SAMPLES (a CSV file: every message's latencies), IDLE=1 (the baseline: no background graph, optimizer idle),
 #      KEEP=1 (keep the work folder with the daemon's log).
 # Prints: the 1-minute load average before and after; per channel (FUSED_POSE = the EKF, FUSED_POSE_GRAPH = the

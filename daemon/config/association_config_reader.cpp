@@ -17,7 +17,7 @@ void read_stage_config(Section& s, engine::AssociationConfig& c) {
         }));
   s.get("clutter_density", c.clutter_density, positive());
   s.get("gate_probability", c.gate_probability, in_range(0.5, 0.999999999));
-  s.get("solver", c.solver, one_of({"lr", "exact"}));
+  s.get_parsed("solver", c.solver, engine::association_solver_from_name);
   s.get("max_iterations", c.max_iterations, int_in_range(1, 100000));
   s.get("gap_tolerance", c.gap_tolerance, non_negative());
   s.get("expected_sensors", c.expected_sensors, int_in_range(0, 64));

@@ -47,6 +47,24 @@ class Section {
     out = value;
   }
 
+  /// Reads `key` as a name and turns it into a kind with `parse` (a function of the kind's own header that throws
+  /// std::invalid_argument for a name it does not know, listing those it does), so that a kind is parsed once, here,
+  /// and its spellings live beside its enum.  An unknown name is a ConfigError at the value's file:line:column.
+  template <class T>
+  void get_parsed(const std::string& key, T& out, T (*parse)(const std::string&)) {
+    known_.insert(key);
+    if (!node_.IsMap()) return;
+    const YAML::Node v = node_[key];
+    if (!v.IsDefined() || v.IsNull()) return;
+    std::string name;
+    get(key, name);
+    try {
+      out = parse(name);
+    } catch (const std::invalid_argument& e) {
+      throw error_at(v, "'" + qualified(key) + "': " + e.what());
+    }
+  }
+
   /// A nested section (possibly missing).
   Section child(const std::string& key);
 

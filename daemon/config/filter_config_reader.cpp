@@ -55,7 +55,7 @@ void read_odometry_sources(Section& s, engine::FilterConfig& c) {
 }  // namespace
 
 void read_stage_config(Section& s, engine::FilterConfig& c) {
-  s.get("type", c.type, one_of({"ekf", "pf", "none"}));
+  s.get_parsed("type", c.type, engine::filter_type_from_name);
   s.get("slam", c.slam);
   s.get("gate", c.gate, positive());
   s.get("initial_sigma_xy", c.initial_sigma_xy, positive());

@@ -87,7 +87,7 @@ void read_stage_config(Section& s, engine::GraphConfig& c) {
     }
     m.reject_unknown_keys();
   }
-  // The relinearization thresholds were keys of this section before session 6: say where they went.
+  // The relinearization thresholds were keys of this section in earlier versions: say where they went.
   if (s.node().IsMap())
     for (const auto& kv : s.node())
       for (const char* moved : {"relinearize_translation", "relinearize_rotation"})

@@ -72,7 +72,7 @@ void AssociationStage::associate(int64_t scan_id, const Emit& emit) {
   }
   const auto tuples = assoc::build_tuples(scan, o);
   tuples_ += static_cast<int64_t>(tuples.size());
-  const auto solution = config_.solver == "exact"
+  const auto solution = config_.solver == AssociationSolver::kExact
                             ? assoc::solve_sd_exact(tuples, sizes)
                             : assoc::solve_sd_lagrangian(tuples, sizes, config_.max_iterations, config_.gap_tolerance);
   out.total_cost = solution.cost;

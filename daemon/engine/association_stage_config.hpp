@@ -4,6 +4,15 @@
 
 namespace sextant::engine {
 
+/// The S-D assignment solver of the association stage (config key `engine.association.solver`).
+enum class AssociationSolver {
+  kLagrangian,  // "lr": Lagrangian relaxation (assoc::solve_sd_lagrangian)
+  kExact,       // "exact": branch and bound (assoc::solve_sd_exact; small scans only)
+};
+/// The kind of a config spelling; throws std::invalid_argument naming the spellings for any other name.
+AssociationSolver association_solver_from_name(const std::string& name);
+const char* association_solver_name(AssociationSolver solver);
+
 /// Multi-sensor passive association: bearing scans grouped by scan_id, associated by S-D assignment, triangulated.
 struct AssociationConfig {
   bool enabled = true;
@@ -20,7 +29,7 @@ struct AssociationConfig {
   bool target_prior = false;         // add the target-prior term (assoc/tuple_costs.hpp); needs the region
   double expected_targets = 1;       // targets expected in the region (mu_T = this / region volume)
   double gate_probability = 0.9999;
-  std::string solver = "lr";       // lr (Lagrangian relaxation) | exact (branch and bound; small scans only)
+  AssociationSolver solver = AssociationSolver::kLagrangian;
   int max_iterations = 100;
   double gap_tolerance = 0.01;  // absolute duality gap, cost units (assoc/sd_assignment.hpp)
   int expected_sensors = 0;        // associate a scan_id as soon as this many sensors reported (0: when the next scan_id arrives)

@@ -12,8 +12,8 @@ namespace sextant::engine {
 std::vector<std::unique_ptr<Stage>> make_stages(const EngineConfig& config) {
   std::vector<std::unique_ptr<Stage>> stages;
   if (config.dead_reckoning.enabled) stages.push_back(std::make_unique<DeadReckoningStage>(config.dead_reckoning));
-  if (config.filter.type == "ekf") stages.push_back(std::make_unique<FilterStage>(config.filter));
-  if (config.filter.type == "pf") stages.push_back(std::make_unique<ParticleFilterStage>(config.filter));
+  if (config.filter.type == FilterType::kEkf) stages.push_back(std::make_unique<FilterStage>(config.filter));
+  if (config.filter.type == FilterType::kPf) stages.push_back(std::make_unique<ParticleFilterStage>(config.filter));
   if (config.graph.enabled) {
     // Two stages around one shared correction: the back end (keyframes, loops, solves) and the fused-pose path that
     // must never wait for a solve (graph_correction.hpp).

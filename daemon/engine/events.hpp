@@ -57,7 +57,7 @@ struct LandmarkSightings {
 };
 
 struct BearingDetection {
-  double azimuth = 0, elevation = 0;              // rad, world frame (source C eq. 1-2)
+  double azimuth = 0, elevation = 0;              // rad, world frame (passive-association paper, eq. 1-2)
   double sigma_azimuth = 0, sigma_elevation = 0;  // rad, > 0
 };
 

@@ -1,12 +1,10 @@
 #include "daemon/engine/filter_stage.hpp"
 
 #include "assoc/chi_square.hpp"
-#include "daemon/engine/dead_reckoning_stage.hpp"
 #include "daemon/engine/planar_axes.hpp"
 #include "daemon/engine/planar_pose_covariance.hpp"
 #include "estimators/filter/interpolated_prediction.hpp"
 
-#include <Eigen/Eigenvalues>
 
 #include <algorithm>
 #include <type_traits>
@@ -247,11 +245,7 @@ void FilterStage::apply(SpatialTrack& t, const Input& in) const {
       return;
     }
     const SE3 delta = t.last_odom.between(odom);
-    Matrix6 Q = o.increment_covariance ? *o.increment_covariance
-                                       : Matrix6(o.covariance - DeadReckoningStage::propagate(t.last_covariance, delta, Matrix6::Zero()));
-    Q = (0.5 * (Q + Q.transpose())).eval();
-    Eigen::SelfAdjointEigenSolver<Matrix6> eig(Q);
-    Q = eig.eigenvectors() * eig.eigenvalues().cwiseMax(config_.min_increment_variance).asDiagonal() * eig.eigenvectors().transpose();
+    const Matrix6 Q = filter_increment_covariance(o, delta, t.last_covariance, config_.min_increment_variance);
     std::vector<int64_t> stops;
     for (const auto& p : t.pending) stops.push_back(p.utime);
     std::vector<LandmarkSightings> waiting;

@@ -16,11 +16,21 @@ struct ParticleFilterConfig {
   int tentative_lifetime = 50;      // sighting batches after which an unconfirmed one is dropped
 };
 
+/// Which online filter runs (config key `engine.filter.type`).
+enum class FilterType {
+  kEkf,   // "ekf": an EKF per body, planar or 3-D (filter_stage.hpp)
+  kPf,    // "pf": FastSLAM 2.0 per odometry source, planar only (particle_filter_stage.hpp)
+  kNone,  // "none": no filter stage
+};
+/// The kind of a config spelling; throws std::invalid_argument naming the spellings for any other name.
+FilterType filter_type_from_name(const std::string& name);
+const char* filter_type_name(FilterType type);
+
 /// The online filter: a planar EKF per odometry source, fusing odometry increments and range-bearing landmark
 /// sightings (localization against `map`, EKF-SLAM for landmarks not in it); or, with type "pf", FastSLAM 2.0 with
 /// the same slam/gate/initial sigma/map settings and the `pf` ones.
 struct FilterConfig {
-  std::string type = "ekf";  // "ekf", "pf" or "none"
+  FilterType type = FilterType::kEkf;
   bool slam = true;          // add landmarks that are not in `map` to the state
   double gate = 9.21;        // chi-square threshold (2 dof) on the normalized innovation; 9.21 = 99 %
   double initial_sigma_xy = 0.01;     // m, first pose (the first odometry pose anchors the map frame)

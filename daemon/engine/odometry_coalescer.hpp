@@ -1,5 +1,5 @@
 #pragma once
-// Per-body odometry coalescing in front of the graph stage's bounded queue (issue 4).
+// Per-body odometry coalescing in front of the graph stage's bounded queue.
 //
 // In the daemon every stage has one bounded event queue.  A body publishing odometry at 1 kHz fills the graph
 // stage's queue while a long solve runs, and the queue then drops whatever comes next: another body's keyframes,

@@ -6,12 +6,11 @@
 //   delta_body = J delta_global,  J = blockdiag(R(theta)^T, 1),  P_body = J P J^T,
 // placed on the x, y and yaw rows/columns (0, 1, 5); z, roll and pitch are left at zero.
 // Also the other direction, for a planar filter's motion noise: the 3x3 increment covariance of an odometry message.
-#include "daemon/engine/dead_reckoning_stage.hpp"
 #include "daemon/engine/events.hpp"
 #include "daemon/engine/planar_axes.hpp"
+#include "daemon/engine/pose_covariance.hpp"
+#include "estimators/filter/eigenvalue_floor.hpp"
 #include "estimators/lie/se2.hpp"
-
-#include <Eigen/Eigenvalues>
 
 namespace sextant::engine {
 
@@ -24,16 +23,12 @@ inline Matrix6 planar_covariance_in_body_frame(const SE2& pose, const Eigen::Mat
 /// The covariance Q (3x3 over [dx, dy, dtheta], body frame after the motion) of the planar increment `delta` that
 /// odometry message `o` brings after a message with pose covariance `previous_covariance`: the message's increment
 /// covariance, or, without one, the growth of its pose covariance (differential mode, as dead reckoning does it).
-/// Symmetrized, with eigenvalues floored at `min_variance` so the filter's prediction stays positive definite.
+/// Symmetrized, with eigenvalues floored at `min_variance` so the filter's prediction stays positive definite (the
+/// planar block of filter_increment_covariance's, pose_covariance.hpp).
 inline Eigen::Matrix3d planar_increment_covariance(const Odometry& o, const Matrix6& previous_covariance, const SE2& delta,
                                                    double min_variance) {
-  const Matrix6 q6 = o.increment_covariance
-                         ? *o.increment_covariance
-                         : Matrix6(o.covariance - DeadReckoningStage::propagate(previous_covariance, delta.to_se3(), Matrix6::Zero()));
-  Eigen::Matrix3d Q = planar_block(q6);
-  Q = (0.5 * (Q + Q.transpose())).eval();
-  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(Q);
-  return eig.eigenvectors() * eig.eigenvalues().cwiseMax(min_variance).asDiagonal() * eig.eigenvectors().transpose();
+  const Eigen::Matrix3d q = planar_block(stated_increment_covariance(o, delta.to_se3(), previous_covariance));
+  return filter::floor_eigenvalues<3>(q, min_variance);
 }
 
 }  // namespace sextant::engine

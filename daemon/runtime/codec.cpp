@@ -261,11 +261,22 @@ Decoded to_event(const sextant::loop_closure_t& m) {
   });
 }
 
-sextant::odometry_t to_message(const engine::Odometry& e, const std::string& sender, int64_t seq) {
-  sextant::odometry_t m{};
-  m.utime = e.utime;
+namespace {
+
+// Every message starts the same way (DESIGN.md): its time, the sender's name and the sender's sequence number.
+template <class Message>
+Message message_header(int64_t utime, const std::string& sender, int64_t seq) {
+  Message m{};
+  m.utime = utime;
   m.sender = sender;
   m.seq = seq;
+  return m;
+}
+
+}  // namespace
+
+sextant::odometry_t to_message(const engine::Odometry& e, const std::string& sender, int64_t seq) {
+  auto m = message_header<sextant::odometry_t>(e.utime, sender, seq);
   m.source = e.source;
   m.planar = e.planar;
   copy_pose(e.pose, m.position, m.orientation);
@@ -283,10 +294,7 @@ sextant::odometry_t to_message(const engine::Odometry& e, const std::string& sen
 }
 
 sextant::landmarks_t to_message(const engine::LandmarkSightings& e, const std::string& sender, int64_t seq) {
-  sextant::landmarks_t m{};
-  m.utime = e.utime;
-  m.sender = sender;
-  m.seq = seq;
+  auto m = message_header<sextant::landmarks_t>(e.utime, sender, seq);
   m.source = e.source;
   m.planar = e.planar;
   copy_pose(e.sensor_in_body, m.sensor_position, m.sensor_orientation);
@@ -304,10 +312,7 @@ sextant::landmarks_t to_message(const engine::LandmarkSightings& e, const std::s
 }
 
 sextant::bearing_scan_t to_message(const engine::BearingScan& e, const std::string& sender, int64_t seq) {
-  sextant::bearing_scan_t m{};
-  m.utime = e.utime;
-  m.sender = sender;
-  m.seq = seq;
+  auto m = message_header<sextant::bearing_scan_t>(e.utime, sender, seq);
   m.sensor_id = e.sensor_id;
   for (int i = 0; i < 3; ++i) m.sensor_position[i] = e.sensor_position[i];
   m.scan_id = e.scan_id;
@@ -324,10 +329,7 @@ sextant::bearing_scan_t to_message(const engine::BearingScan& e, const std::stri
 }
 
 sextant::loop_closure_t to_message(const engine::LoopClosure& e, const std::string& sender, int64_t seq) {
-  sextant::loop_closure_t m{};
-  m.utime = e.utime;
-  m.sender = sender;
-  m.seq = seq;
+  auto m = message_header<sextant::loop_closure_t>(e.utime, sender, seq);
   m.source = e.source;
   m.planar = e.planar;
   m.utime_from = e.utime_from;
@@ -343,10 +345,7 @@ sextant::loop_closure_t to_message(const engine::LoopClosure& e, const std::stri
 }
 
 sextant::fused_pose_t to_message(const engine::FusedPose& o, const std::string& sender, int64_t seq) {
-  sextant::fused_pose_t m{};
-  m.utime = o.utime;
-  m.sender = sender;
-  m.seq = seq;
+  auto m = message_header<sextant::fused_pose_t>(o.utime, sender, seq);
   m.source = o.source;
   m.estimator = o.estimator;
   m.planar = o.planar;
@@ -356,10 +355,7 @@ sextant::fused_pose_t to_message(const engine::FusedPose& o, const std::string& 
 }
 
 sextant::trajectory_t to_message(const engine::Trajectory& o, const std::string& sender, int64_t seq) {
-  sextant::trajectory_t m{};
-  m.utime = o.utime;
-  m.sender = sender;
-  m.seq = seq;
+  auto m = message_header<sextant::trajectory_t>(o.utime, sender, seq);
   m.source = o.source;
   m.estimator = o.estimator;
   m.chi2 = o.chi2;
@@ -386,10 +382,7 @@ sextant::trajectory_t to_message(const engine::Trajectory& o, const std::string&
 }
 
 sextant::match_request_t to_message(const engine::MatchRequest& o, const std::string& sender, int64_t seq) {
-  sextant::match_request_t m{};
-  m.utime = o.utime;
-  m.sender = sender;
-  m.seq = seq;
+  auto m = message_header<sextant::match_request_t>(o.utime, sender, seq);
   m.source = o.source;
   m.request_id = o.request_id;
   m.kind = o.kind;
@@ -403,10 +396,7 @@ sextant::match_request_t to_message(const engine::MatchRequest& o, const std::st
 }
 
 sextant::targets_t to_message(const engine::Targets& o, const std::string& sender, int64_t seq) {
-  sextant::targets_t m{};
-  m.utime = o.utime;
-  m.sender = sender;
-  m.seq = seq;
+  auto m = message_header<sextant::targets_t>(o.utime, sender, seq);
   m.scan_id = o.scan_id;
   m.cost_kind = o.cost_kind;
   m.total_cost = o.total_cost;

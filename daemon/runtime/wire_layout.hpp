@@ -8,7 +8,7 @@
 // terminating NUL, then the bytes and the NUL; a variable array's count is an earlier int32 field; nested structs
 // follow each other without fingerprints) and refuses, naming the field and byte offset, any length that does not
 // fit in the bytes that are left, any string without its NUL and any count outside [0, the field's maximum].
-// The layouts mirror lcmtypes/sextant/*.lcm; tests/daemon/test_wire_layout.cpp checks each against lcm-gen's
+// The layouts mirror lcmtypes/sextant/*.lcm; tests/daemon/runtime/test_wire_layout.cpp checks each against lcm-gen's
 // encoder (the encoded size of random messages, and every truncation refused).
 #include <sextant/bearing_scan_t.hpp>
 #include <sextant/fused_pose_t.hpp>

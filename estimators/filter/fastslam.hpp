@@ -2,8 +2,8 @@
 // FastSLAM 2.0 for a planar robot with range-bearing landmark sightings (Montemerlo, Thrun, Koller & Wegbreit,
 // "FastSLAM 2.0: An improved particle filtering algorithm for simultaneous localization and mapping that provably
 // converges", IJCAI 2003; Thrun, Burgard & Fox, Probabilistic Robotics, 2005, §13.4 and Table 13.2).  A
-// Rao-Blackwellized particle filter (source A, eq. 8-17): each particle is a robot pose plus one 2x2 EKF per
-// landmark, its map held in a copy-on-write tree (landmark_map_tree.hpp) so that resampling shares maps.
+// Rao-Blackwellized particle filter (Doucet, de Freitas, Murphy & Russell, UAI 2000): each particle is a robot pose
+// plus one 2x2 EKF per landmark, its map held in a copy-on-write tree (landmark_map_tree.hpp) so that resampling shares maps.
 //
 // Frames and units: poses s = (x, y, theta) of the body in the map frame (metres, radians, theta in (-pi, pi]);
 // landmarks (x, y) in the map frame; a sighting z = (range [m], bearing [rad] from the body's x axis, counter-

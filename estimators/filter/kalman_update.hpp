@@ -1,5 +1,5 @@
 #pragma once
-// The measurement update shared by every Kalman-type filter in sextant (source A, eq. 3-7, with the EKF's
+// The measurement update shared by every Kalman-type filter in sextant (Probabilistic Robotics, Table 3.1, with the EKF's
 // Jacobian in place of C):
 //   S = H P H' + R,  K = P H' S^-1,  x <- x + K r,  P <- (I - K H) P (I - K H)' + K R K'   (Joseph form)
 // where r = z - h(x) is the innovation.  The Joseph form keeps P symmetric positive definite under rounding; it is

@@ -1,6 +1,6 @@
 #pragma once
 // Particle weights and low-variance (systematic) resampling (Thrun, Burgard & Fox, Probabilistic Robotics, 2005,
-// Table 4.4; source A eq. 8-17 for the role of resampling in a particle filter).
+// Table 4.4; Doucet, de Freitas & Gordon 2001 for the role of resampling in a particle filter).
 #include <vector>
 
 namespace sextant::filter {

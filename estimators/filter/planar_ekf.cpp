@@ -1,6 +1,7 @@
 #include "estimators/filter/planar_ekf.hpp"
 
 #include "assoc/landmark/jcbb.hpp"
+#include "estimators/filter/landmark_admission.hpp"
 #include "estimators/filter/state_augmentation.hpp"
 
 #include <cmath>
@@ -74,18 +75,8 @@ UpdateResult PlanarEkf::observe(int64_t id, double range, double bearing, const 
     PHt = P_.leftCols<3>() * Hx.transpose() + P_.middleCols<2>(s->second) * Hl.transpose();
     HPHt = Hx * PHt.topRows<3>() + Hl * PHt.middleRows<2>(s->second);
   } else {
-    if (!options_.slam || id < 0) {
-      out.reason = "unknown_landmark";
-      return out;
-    }
-    if (static_cast<int>(slot_.size()) >= options_.max_landmarks) {
-      out.reason = "map_full";
-      return out;
-    }
-    augment(id, range, bearing, R);
-    out.accepted = true;
-    out.reason = "new_landmark";
-    return out;
+    return admit_new_landmark(options_.slam, id, slot_.size(), options_.max_landmarks,
+                              [&] { augment(id, range, bearing, R); });
   }
   if (predicted[0] < 1e-6) {
     out.reason = "singular";

@@ -1,7 +1,7 @@
 #pragma once
 // A planar extended Kalman filter for a robot with range-bearing landmark observations: localization against a
-// known map, and EKF-SLAM (state augmentation) for landmarks not in the map (source A, eq. 3-7; Thrun, Burgard &
-// Fox, Probabilistic Robotics, ch. 10).
+// known map, and EKF-SLAM (state augmentation) for landmarks not in the map (Thrun,
+// Burgard & Fox, Probabilistic Robotics, ch. 10).
 // State: [x, y, theta, l1x, l1y, l2x, l2y, ...] in the map frame; P its covariance in that parameterization.
 //  - Motion: x' = x (+) Delta with Delta an SE(2) odometry increment whose noise Q (3x3, [dx dy dtheta]) is given
 //    on the right of Delta (in the body frame after the motion):  F = d x'/d x,  G = d x'/d w = blockdiag(R(theta'), 1).

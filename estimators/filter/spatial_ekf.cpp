@@ -1,5 +1,6 @@
 #include "estimators/filter/spatial_ekf.hpp"
 
+#include "estimators/filter/landmark_admission.hpp"
 #include "estimators/filter/state_augmentation.hpp"
 #include "estimators/lie/so2.hpp"
 
@@ -69,20 +70,8 @@ UpdateResult SpatialEkf::observe(int64_t id, const Eigen::Vector3d& z, const Eig
     return out;
   }
   auto s = slot_.find(id);
-  if (s == slot_.end()) {
-    if (!options_.slam || id < 0) {
-      out.reason = "unknown_landmark";
-      return out;
-    }
-    if (static_cast<int>(slot_.size()) >= options_.max_landmarks) {
-      out.reason = "map_full";
-      return out;
-    }
-    augment(id, z, R);
-    out.accepted = true;
-    out.reason = "new_landmark";
-    return out;
-  }
+  if (s == slot_.end())
+    return admit_new_landmark(options_.slam, id, slot_.size(), options_.max_landmarks, [&] { augment(id, z, R); });
   const int k = s->second;
   Eigen::Matrix<double, 3, 6> Hx;
   Eigen::Matrix3d Hl;

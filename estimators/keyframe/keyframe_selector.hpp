@@ -1,5 +1,6 @@
 #pragma once
-// Keyframe selection by motion magnitude (source B, "Graph-optimisation-based 3D visual odometry with Kinect").
+// Keyframe selection by motion magnitude ("Graph-optimisation-based 3D visual odometry with Kinect",
+// Sensors and Microsystems 2019).
 //
 // The motion from the last keyframe to the current odometry pose is the tangent vector
 //     mu = Log(T_kf^-1 T) = [rho; phi]        (SE(3), translation first; or SE(2) [x, y; yaw] when planar)
@@ -11,17 +12,17 @@
 //     k1 <= L <= k2  kKeyframe      a new keyframe: it becomes the reference
 //     L >  k2        kImplausible   an implausible jump (a wrong odometry estimate): rejected, counted, the
 //                                   reference stays
-// Re-anchoring (sextant's addition; source B keeps the reference for good): a jump can be real — the odometry lost
+// Re-anchoring (sextant's addition; the paper keeps the reference for good): a jump can be real — the odometry lost
 // track and resumed somewhere else, or the body was carried — and then every later pose is implausible against the
 // old reference and keyframing would stop forever.  A jump is taken as real when `reanchor_after` poses in a row are
 // implausible *and* consistent with each other (each within k2 of the implausible pose before it, by the same L):
 // the last of them becomes the reference and the decision is kReanchored (counted).  A spurious spike — one pose, or
 // a few, off and then back — is still rejected; so is a run of wild poses that do not agree with each other (a
 // pose farther than k2 from the previous implausible one starts a new run).  Any too-close or keyframe decision ends
-// the run.  reanchor_after = 0 never re-anchors (source B's behaviour).
+// the run.  reanchor_after = 0 never re-anchors (the paper's behaviour).
 // The first pose is always a keyframe.  A pose with a non-finite component (or whose motion magnitude is not
 // finite) is kImplausible and counted, never becomes the reference and ends a run towards re-anchoring.
-// Source B's own run used k1 = 0.8, k2 = 2 in its units; sextant's defaults are for metres and radians.
+// The paper's own run used k1 = 0.8, k2 = 2 in its units; sextant's defaults are for metres and radians.
 #include "estimators/lie/se2.hpp"
 #include "estimators/lie/se3.hpp"
 

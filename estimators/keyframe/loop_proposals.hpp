@@ -1,10 +1,11 @@
 #pragma once
-// Loop-closure candidates for a new keyframe (source B, "Graph-optimisation-based 3D visual odometry with Kinect"):
+// Loop-closure candidates for a new keyframe ("Graph-optimisation-based 3D visual odometry with Kinect",
+// Sensors and Microsystems 2019):
 // the new keyframe k (keyframes numbered 0, 1, 2, ... in order) is to be matched against
 //   - "local" loops: each of the last n1 keyframes, k-1, k-2, ..., max(0, k-n1), in that order;
 //   - "random" loops: n2 keyframes drawn uniformly at random without replacement from the earlier ones that are
 //     not local, 0 .. k-n1-1 (all of them when there are at most n2), listed in increasing index.
-// n2 = 2 n1 by default, as in source B (they ran n1 = 3 / n2 = 6 and n1 = 4 / n2 = 8).
+// n2 = 2 n1 by default, as in that paper (they ran n1 = 3 / n2 = 6 and n1 = 4 / n2 = 8).
 //
 // Reproducibility: the random set of keyframe k is a pure function of (seed, k), the same on every platform and
 // whatever the order of calls.  Draw, exactly:

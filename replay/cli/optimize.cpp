@@ -30,25 +30,30 @@ std::string text(const replay::Summary& s, const std::string& key) {
 sextant::cli::RegisterCommand reg{"optimize", [](CLI::App& app) {
   auto* cmd = app.add_subcommand("optimize", "optimize a g2o pose graph (Gauss-Newton or Levenberg-Marquardt on CHOLMOD)");
   auto o = std::make_shared<Options>();
+  // The kinds' spellings, parsed once into o by the callback (replay/graph_optimization.hpp holds the tables).
+  struct Kinds {
+    std::string solver = "gn", init = "auto", robust = "none", ordering = "block-amd";
+  };
+  auto kinds = std::make_shared<Kinds>();
   auto input = std::make_shared<std::string>(), output = std::make_shared<std::string>();
   auto json = std::make_shared<bool>(false);
   cmd->add_option("input", *input, "g2o file")->required()->check(CLI::ExistingFile);
   cmd->add_option("-o,--output", *output, "write the optimized graph (g2o format)");
-  cmd->add_option("--solver", o->solver, "gn or lm")->check(CLI::IsMember({"gn", "lm"}));
-  cmd->add_option("--init", o->init, "initial estimate: auto (the default: chordal when its chi2 is below the file's, else the "
+  cmd->add_option("--solver", kinds->solver, "gn or lm")->check(CLI::IsMember(replay::solver_names()));
+  cmd->add_option("--init", kinds->init, "initial estimate: auto (the default: chordal when its chi2 is below the file's, else the "
                   "file's), file (the file's vertices), odometry (spanning tree), chordal (rotation relaxation), "
                   "sgd (Olson's SGD from odometry, planar graphs)")
-      ->check(CLI::IsMember({"auto", "file", "odometry", "chordal", "sgd"}));
+      ->check(CLI::IsMember(replay::initial_estimate_names()));
   auto information = std::make_shared<std::string>("reject");
   cmd->add_option("--information", *information, "information matrices that are not positive definite: reject (the default: "
                   "an error listing them), repair (nearest positive definite, eigenvalues floored at 1e-6 of the largest) or "
                   "diagonal (their diagonal, floored the same way)")
       ->check(CLI::IsMember({"reject", "repair", "diagonal"}));
-  cmd->add_option("--robust", o->robust, "robust kernel")->check(CLI::IsMember({"none", "huber", "cauchy", "dcs"}));
+  cmd->add_option("--robust", kinds->robust, "robust kernel")->check(CLI::IsMember(replay::robust_kernel_names()));
   cmd->add_option("--kernel-width", o->kernel_width, "Huber/Cauchy delta or DCS phi")->check(CLI::PositiveNumber);
   cmd->add_option("--max-iters", o->max_iters, "maximum iterations")->check(CLI::PositiveNumber);
   cmd->add_option("--tolerance", o->tolerance, "stop when chi2 decreases by less than this fraction")->check(CLI::PositiveNumber);
-  cmd->add_option("--ordering", o->ordering, "fill-reducing ordering")->check(CLI::IsMember({"block-amd", "amd", "colamd", "metis", "auto"}));
+  cmd->add_option("--ordering", kinds->ordering, "fill-reducing ordering")->check(CLI::IsMember(replay::ordering_names()));
   cmd->add_flag("--json", *json, "print a JSON summary");
   cmd->add_flag("--incremental", o->incremental, "feed the edges in file order to the incremental smoother, one update per new pose; "
                 "reports per-step latency and the final chi2 against a batch solve from the same start");
@@ -57,7 +62,11 @@ sextant::cli::RegisterCommand reg{"optimize", [](CLI::App& app) {
   cmd->add_option("--relin-skip", o->relin_skip, "incremental: look for variables to relinearize every this many updates "
                   "(iSAM2's relinearizeSkip, 10 by its default; 1, the default here, keeps every update's estimate at the "
                   "batch optimum)")->check(CLI::PositiveNumber);
-  cmd->callback([o, input, output, json, information] {
+  cmd->callback([o, kinds, input, output, json, information] {
+    o->solver = replay::solver_from_name(kinds->solver);
+    o->init = replay::initial_estimate_from_name(kinds->init);
+    o->robust = replay::robust_kernel_from_option(kinds->robust);
+    o->ordering = replay::ordering_from_name(kinds->ordering);
     graph::G2oGraph g;
     graph::G2oReadOptions read_options;
     read_options.information = *information == "repair"     ? graph::InformationPolicy::kRepair
@@ -98,8 +107,8 @@ sextant::cli::RegisterCommand reg{"optimize", [](CLI::App& app) {
                   number(s, "final_chi2_batch_ratio"), number(s, "rebuilds"), number(s, "solve_seconds"));
     } else {
       std::printf("%s: %.0f vertices, %.0f edges (%.0fD); %s from %s: chi2 %.6f -> %.6f in %.0f iterations, %.3f s (%s)\n",
-                  input->c_str(), number(s, "vertices"), number(s, "edges"), number(s, "dimension"), o->solver.c_str(),
-                  (o->init == "auto" ? "auto: " + text(s, "init_used") : text(s, "init_used")).c_str(), number(s, "initial_chi2"), number(s, "final_chi2"), number(s, "iterations"),
+                  input->c_str(), number(s, "vertices"), number(s, "edges"), number(s, "dimension"), kinds->solver.c_str(),
+                  (o->init == replay::InitialEstimate::kAuto ? "auto: " + text(s, "init_used") : text(s, "init_used")).c_str(), number(s, "initial_chi2"), number(s, "final_chi2"), number(s, "iterations"),
                   number(s, "solve_seconds"), text(s, "termination").c_str());
     }
     if (!r.ok) {

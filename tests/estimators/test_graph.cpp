@@ -458,7 +458,8 @@ TEST_CASE("sensor offsets (PARAMS_SE3OFFSET) survive a write and a read") {
 
 TEST_CASE("--init auto takes the chordal estimate where it lowers chi2 and keeps a file already at the optimum") {
   // torus3D: from the file Gauss-Newton ends in a local minimum (19972.36, as Ceres' 19972.38 from the same start);
-  // the chordal estimate reaches the basin of 14574.75 (bench/RESULTS.md, "Correct by default").  About 1.5 s.
+  // the chordal estimate reaches the basin of 14574.75 (bench/RESULTS.md, "Batch optimization against Ceres").
+  // About 1.5 s.
   auto g = read_g2o(data("torus3D.g2o"));
   CHECK(initialize_auto(g.graph));
   const auto s = optimize(g.graph, OptimizerOptions{});

@@ -116,7 +116,7 @@ TEST_CASE("TUM ground truth -> odometry: exact without noise, drifting with it, 
   std::remove(log.c_str());
 }
 
-TEST_CASE("MRCLAM: landmark, robot and unknown-barcode sightings as in SOURCES.md, and odometry starts on the truth") {
+TEST_CASE("MRCLAM: landmark, robot and unknown-barcode sightings as the data set defines them, and odometry starts on the truth") {
   const std::string dir = std::string(SEXTANT_SHARED_DIR) + "/data/landmarks/MRCLAM_Dataset7";
   const auto log = temp("mrclam.lcm"), gt = temp("mrclam_gt.txt");
   const auto r3 = replay::convert_mrclam(dir, 3, log, gt);

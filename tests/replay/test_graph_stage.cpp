@@ -169,7 +169,7 @@ std::map<std::string, replay::MatcherTruth> matcher_truth(const Run& r) {
 // An engine with dead reckoning and the graph back end only (keyframes every metre).
 EngineConfig graph_only_config(bool propose_loops) {
   EngineConfig cfg;
-  cfg.filter.type = "none";
+  cfg.filter.type = FilterType::kNone;
   cfg.association.enabled = false;
   cfg.graph.keyframes.k1 = 1.0;  // a keyframe per metre
   cfg.graph.propose_loops = propose_loops;

@@ -35,7 +35,7 @@ config::DaemonConfig graph_config(bool lifelong) {
   config::DaemonConfig cfg;
   cfg.engine.primary_estimator = "graph";
   cfg.engine.association.enabled = false;  // the graph alone (and dead reckoning)
-  cfg.engine.filter.type = "none";
+  cfg.engine.filter.type = engine::FilterType::kNone;
   cfg.engine.graph.lifelong.enabled = lifelong;
   cfg.engine.graph.lifelong.planar.max_keyframes = 400;
   cfg.engine.graph.lifelong.planar.window = 200;

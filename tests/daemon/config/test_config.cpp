@@ -9,6 +9,7 @@
 
 #include <cmath>
 #include <memory>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -77,6 +78,36 @@ TEST_CASE("enumerations list the allowed values") {
   const std::string e = error_of("engine:\n  primary_estimator: kalman\n");
   CHECK(e.find("test.yaml:2:22:") == 0);
   CHECK(e.find("auto, dead_reckoning, ekf, pf, graph") != std::string::npos);
+}
+
+TEST_CASE("kinds are parsed once into enums: every spelling maps to its kind, an unknown name names its file:line") {
+  using sextant::engine::AssociationSolver;
+  using sextant::engine::FilterType;
+  CHECK(parse_daemon_config("", "t").engine.filter.type == FilterType::kEkf);
+  CHECK(parse_daemon_config("engine:\n  filter:\n    type: pf\n", "t").engine.filter.type == FilterType::kPf);
+  CHECK(parse_daemon_config("engine:\n  filter:\n    type: none\n", "t").engine.filter.type == FilterType::kNone);
+  CHECK(parse_daemon_config("", "t").engine.association.solver == AssociationSolver::kLagrangian);
+  CHECK(parse_daemon_config("engine:\n  association:\n    solver: exact\n", "t").engine.association.solver ==
+        AssociationSolver::kExact);
+  // Round trips through the names, and the names are the YAML spellings.
+  for (auto t : {FilterType::kEkf, FilterType::kPf, FilterType::kNone})
+    CHECK(sextant::engine::filter_type_from_name(sextant::engine::filter_type_name(t)) == t);
+  for (auto a : {AssociationSolver::kLagrangian, AssociationSolver::kExact})
+    CHECK(sextant::engine::association_solver_from_name(sextant::engine::association_solver_name(a)) == a);
+  CHECK(std::string(sextant::engine::filter_type_name(FilterType::kPf)) == "pf");
+  CHECK(std::string(sextant::engine::association_solver_name(AssociationSolver::kLagrangian)) == "lr");
+
+  // Unknown names: the file, line and column of the value, the key, the name and the spellings.
+  const std::string f = error_of("engine:\n  filter:\n    type: EKF\n");
+  CHECK(f.find("test.yaml:3:11:") == 0);
+  CHECK(f.find("'engine.filter.type': unknown filter type 'EKF' (ekf, pf or none)") != std::string::npos);
+  const std::string a = error_of("engine:\n  association:\n\n    solver: lagrangian\n");
+  CHECK(a.find("test.yaml:4:13:") == 0);
+  CHECK(a.find("'engine.association.solver': unknown association solver 'lagrangian' (lr or exact)") !=
+        std::string::npos);
+  // A name that is not a string is refused as such, at its line.
+  CHECK(error_of("engine:\n  filter:\n    type: [ekf]\n").find("test.yaml:3:11:") == 0);
+  CHECK_THROWS_AS(sextant::engine::filter_type_from_name("kalman"), std::invalid_argument);
 }
 
 TEST_CASE("a bad channel name is refused") {

@@ -13,7 +13,8 @@ using namespace sextant;
 using namespace sextant::filter;
 
 TEST_CASE("Joseph-form update equals an independent linear Kalman filter on a linear system") {
-  // x_k = A x + B u + w, z = C x + v (source A, eq. 3-7), 4 states, 2 measurements, 50 steps.
+  // x_k = A x + B u + w, z = C x + v (the Kalman filter: Thrun, Burgard & Fox, Probabilistic Robotics, Table 3.1),
+  // 4 states, 2 measurements, 50 steps.
   std::mt19937 rng(3);
   std::normal_distribution<double> n(0, 1);
   Eigen::Matrix4d A;

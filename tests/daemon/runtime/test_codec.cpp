@@ -1,7 +1,7 @@
 // Codec: event -> LCM bytes -> event round trips, and every rejection naming its field.
 #include "daemon/runtime/codec.hpp"
 
-#include "daemon/encode_message.hpp"
+#include "daemon/runtime/encode_message.hpp"
 
 #include <doctest/doctest.h>
 

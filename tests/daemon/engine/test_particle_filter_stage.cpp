@@ -38,7 +38,7 @@ double ate(const replay::ReplayResult& r, const std::string& estimator) {
 TEST_CASE("particle filter stage: FastSLAM 2.0 poses at the odometry rate, far below dead reckoning, deterministic") {
   const auto log = simulated_log("sextant_pf_", 4, false);
   config::DaemonConfig cfg;
-  cfg.engine.filter.type = "pf";
+  cfg.engine.filter.type = engine::FilterType::kPf;
   cfg.engine.filter.pf.particles = 30;
   cfg.engine.filter.pf.seed = 5;
   const auto r = replay::replay_log(log, cfg);
@@ -72,7 +72,7 @@ TEST_CASE("particle filter stage: FastSLAM 2.0 poses at the odometry rate, far b
 TEST_CASE("particle filter stage: landmarks without ids are associated per particle") {
   const auto log = simulated_log("sextant_pf_unk_", 6, true);
   config::DaemonConfig cfg;
-  cfg.engine.filter.type = "pf";
+  cfg.engine.filter.type = engine::FilterType::kPf;
   cfg.engine.filter.pf.particles = 20;
   const auto r = replay::replay_log(log, cfg);
   std::map<std::string, int64_t> c;
@@ -88,7 +88,7 @@ TEST_CASE("particle filter stage: landmarks without ids are associated per parti
 TEST_CASE("particle filter config: filter.pf keys are read and checked with file and line") {
   const auto cfg = config::parse_daemon_config(
       "engine:\n  filter:\n    type: pf\n    pf:\n      particles: 250\n      resample_threshold: 0.3\n      seed: 12\n", "t.yaml");
-  CHECK(cfg.engine.filter.type == "pf");
+  CHECK(cfg.engine.filter.type == engine::FilterType::kPf);
   CHECK(cfg.engine.filter.pf.particles == 250);
   CHECK(cfg.engine.filter.pf.resample_threshold == 0.3);
   CHECK(cfg.engine.filter.pf.seed == 12);

@@ -4,7 +4,7 @@
 #include "daemon/runtime/codec.hpp"
 #include "daemon/runtime/wire_layout.hpp"
 
-#include "daemon/encode_message.hpp"
+#include "daemon/runtime/encode_message.hpp"
 
 #include <doctest/doctest.h>
 #include <sextant/status_t.hpp>

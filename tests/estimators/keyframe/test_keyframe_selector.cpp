@@ -1,5 +1,5 @@
-// Source B's keyframe rule: thresholds k1/k2 at their edges, the weights, rejection keeping the reference, the
-// planar mode, bad poses and bad options.
+// The keyframe rule of the Kinect visual-odometry paper (Sensors and Microsystems 2019): thresholds k1/k2 at
+// their edges, the weights, rejection keeping the reference, the planar mode, bad poses and bad options.
 #include "estimators/keyframe/keyframe_selector.hpp"
 
 #include <doctest/doctest.h>

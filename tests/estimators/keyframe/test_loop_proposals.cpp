@@ -1,6 +1,6 @@
-// Source B's loop proposals: local and random sets, checked against an independent reimplementation of the
-// documented draw, a fixed golden case, and the structural rules (no duplicates, never itself or the future,
-// fewer candidates than n2, uniform choice).
+// Loop proposals of the Kinect visual-odometry paper (Sensors and Microsystems 2019): local and random sets,
+// checked against an independent reimplementation of the documented draw, a fixed golden case, and the structural
+// rules (no duplicates, never itself or the future, fewer candidates than n2, uniform choice).
 #include "estimators/keyframe/loop_proposals.hpp"
 #include "estimators/random/portable_random.hpp"
 
