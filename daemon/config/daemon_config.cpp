@@ -79,7 +79,7 @@ void read_channels(Section s, Channels& c) {
 }  // namespace
 
 void read_engine_config(Section& s, engine::EngineConfig& c) {
-  s.get("primary_estimator", c.primary_estimator, one_of({"auto", "dead_reckoning", "ekf", "pf", "graph"}));
+  s.get_parsed("primary_estimator", c.primary_estimator, engine::primary_estimator_from_name);
   {
     Section dr = s.child("dead_reckoning");
     read_stage_config(dr, c.dead_reckoning);

@@ -28,9 +28,11 @@ std::vector<std::unique_ptr<Stage>> make_stages(const EngineConfig& config) {
 Engine::Engine(const EngineConfig& config) : config_(config), stages_(make_stages(config)) {}
 
 std::string Engine::primary_estimator() const {
-  for (const auto& stage : stages_)
-    if (config_.primary_estimator != "auto" && stage->estimator() == config_.primary_estimator)
-      return config_.primary_estimator;
+  if (config_.primary_estimator != PrimaryEstimator::kAuto) {
+    const std::string wanted = primary_estimator_name(config_.primary_estimator);
+    for (const auto& stage : stages_)
+      if (stage->estimator() == wanted) return wanted;
+  }
   std::string best;
   int best_rank = -1;
   for (const auto& stage : stages_) {

@@ -1,6 +1,8 @@
-// The config spellings of the engine's kinds (filter_stage_config.hpp, association_stage_config.hpp): each kind's
-// names in one table, parsed once where the config is read, so a misspelt name is an error, never a default.
+// The config spellings of the engine's kinds (engine_config.hpp, filter_stage_config.hpp,
+// association_stage_config.hpp): each kind's names in one table, parsed once where the config is read, so a misspelt
+// name is an error, never a default.
 #include "daemon/engine/association_stage_config.hpp"
+#include "daemon/engine/engine_config.hpp"
 #include "daemon/engine/filter_stage_config.hpp"
 
 #include <stdexcept>
@@ -27,12 +29,20 @@ const char* name_of(const std::pair<Kind, const char*> (&names)[N], Kind kind) {
   return "?";
 }
 
+constexpr std::pair<PrimaryEstimator, const char*> kPrimaryEstimators[] = {
+    {PrimaryEstimator::kAuto, "auto"}, {PrimaryEstimator::kDeadReckoning, "dead_reckoning"},
+    {PrimaryEstimator::kEkf, "ekf"}, {PrimaryEstimator::kPf, "pf"}, {PrimaryEstimator::kGraph, "graph"}};
 constexpr std::pair<FilterType, const char*> kFilterTypes[] = {
     {FilterType::kEkf, "ekf"}, {FilterType::kPf, "pf"}, {FilterType::kNone, "none"}};
 constexpr std::pair<AssociationSolver, const char*> kAssociationSolvers[] = {
     {AssociationSolver::kLagrangian, "lr"}, {AssociationSolver::kExact, "exact"}};
 
 }  // namespace
+
+PrimaryEstimator primary_estimator_from_name(const std::string& name) {
+  return from_name(kPrimaryEstimators, name, "estimator");
+}
+const char* primary_estimator_name(PrimaryEstimator estimator) { return name_of(kPrimaryEstimators, estimator); }
 
 FilterType filter_type_from_name(const std::string& name) { return from_name(kFilterTypes, name, "filter type"); }
 const char* filter_type_name(FilterType type) { return name_of(kFilterTypes, type); }

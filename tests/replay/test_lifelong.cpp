@@ -33,7 +33,7 @@ int64_t counter(const engine::Counters& c, const std::string& name) {
 
 config::DaemonConfig graph_config(bool lifelong) {
   config::DaemonConfig cfg;
-  cfg.engine.primary_estimator = "graph";
+  cfg.engine.primary_estimator = engine::PrimaryEstimator::kGraph;
   cfg.engine.association.enabled = false;  // the graph alone (and dead reckoning)
   cfg.engine.filter.type = engine::FilterType::kNone;
   cfg.engine.graph.lifelong.enabled = lifelong;

@@ -77,7 +77,8 @@ TEST_CASE("a value out of range names its line and the bound") {
 TEST_CASE("enumerations list the allowed values") {
   const std::string e = error_of("engine:\n  primary_estimator: kalman\n");
   CHECK(e.find("test.yaml:2:22:") == 0);
-  CHECK(e.find("auto, dead_reckoning, ekf, pf, graph") != std::string::npos);
+  CHECK(e.find("'engine.primary_estimator': unknown estimator 'kalman' (auto, dead_reckoning, ekf, pf or graph)") !=
+        std::string::npos);
 }
 
 TEST_CASE("kinds are parsed once into enums: every spelling maps to its kind, an unknown name names its file:line") {
@@ -96,6 +97,19 @@ TEST_CASE("kinds are parsed once into enums: every spelling maps to its kind, an
     CHECK(sextant::engine::association_solver_from_name(sextant::engine::association_solver_name(a)) == a);
   CHECK(std::string(sextant::engine::filter_type_name(FilterType::kPf)) == "pf");
   CHECK(std::string(sextant::engine::association_solver_name(AssociationSolver::kLagrangian)) == "lr");
+  using sextant::engine::PrimaryEstimator;
+  for (auto e : {PrimaryEstimator::kAuto, PrimaryEstimator::kDeadReckoning, PrimaryEstimator::kEkf, PrimaryEstimator::kPf,
+                 PrimaryEstimator::kGraph})
+    CHECK(sextant::engine::primary_estimator_from_name(sextant::engine::primary_estimator_name(e)) == e);
+  CHECK(parse_daemon_config("engine:\n  primary_estimator: dead_reckoning\n", "t").engine.primary_estimator ==
+        PrimaryEstimator::kDeadReckoning);
+  // The spellings are the stages' estimator names: the chosen one is what goes on FUSED_POSE.
+  auto cfg = parse_daemon_config("engine:\n  primary_estimator: graph\n", "t").engine;
+  CHECK(sextant::engine::Engine(cfg).primary_estimator() == "graph");
+  cfg.primary_estimator = PrimaryEstimator::kDeadReckoning;
+  CHECK(sextant::engine::Engine(cfg).primary_estimator() == "dead_reckoning");
+  cfg.primary_estimator = PrimaryEstimator::kPf;  // its stage does not run (filter type ekf): auto, the graph
+  CHECK(sextant::engine::Engine(cfg).primary_estimator() == "graph");
 
   // Unknown names: the file, line and column of the value, the key, the name and the spellings.
   const std::string f = error_of("engine:\n  filter:\n    type: EKF\n");
@@ -347,7 +361,7 @@ TEST_CASE("channels that cannot work are refused: LCM's 63-character limit with 
 TEST_CASE("a config without primary_estimator puts the same estimator on FUSED_POSE as config/default.yaml") {
   const auto d = sextant::config::load_daemon_config(std::string(SEXTANT_SOURCE_DIR) + "/config/default.yaml");
   const auto empty = parse_daemon_config("", "empty.yaml");
-  CHECK(d.engine.primary_estimator == "ekf");
+  CHECK(d.engine.primary_estimator == sextant::engine::PrimaryEstimator::kEkf);
   CHECK(empty.engine.primary_estimator == d.engine.primary_estimator);
   CHECK(sextant::engine::Engine(empty.engine).primary_estimator() == "ekf");
   // Without the EKF, the named estimator falls back to "auto" (here dead reckoning) instead of publishing nothing.
