@@ -41,6 +41,8 @@ const MissedAssignment& MissedAssignmentSolver::solve(const std::vector<double>&
     const double w = p.cost - row_missed[static_cast<size_t>(p.row)] - column_missed[static_cast<size_t>(p.column)];
     if (w < 0) gains.push_back({p.row, p.column, w});
   }
+  // The duals start at the unpaired costs (right for rows and columns no improving pairing touches).
+  out.row_dual = row_missed, out.column_dual = column_missed;
   if (gains.empty()) return out;
   const auto by_row = [](const PairCost& a, const PairCost& b) {
     return a.row != b.row ? a.row < b.row : a.column != b.column ? a.column < b.column : a.cost < b.cost;
@@ -133,6 +135,13 @@ const MissedAssignment& MissedAssignmentSolver::solve(const std::vector<double>&
     out.row_of_column[static_cast<size_t>(k)] = r;
     out.value += w;
   }
+  // The duals of the gains problem, mapped back: for the gains w = cost - missed(r) - missed(k) the potentials
+  // satisfy u_r + v_k <= w (equality on matched pairs), u_r + v_{C+r} <= 0 (the row's own slot) and v_k <= 0
+  // (v stays 0 on columns no search matched, so on every free column).  row_dual = missed(r) + u_r + v_{C+r}
+  // and column_dual = missed(k) + v_k are then feasible for the original problem, and their sum equals `value`
+  // by complementary slackness (a row's slot column is matched to it or untouched).
+  for (int r = 0; r < R; ++r) out.row_dual[static_cast<size_t>(r)] += u[static_cast<size_t>(r)] + v[static_cast<size_t>(C + r)];
+  for (int k = 0; k < C; ++k) out.column_dual[static_cast<size_t>(k)] += v[static_cast<size_t>(k)];
   return out;
 }
 

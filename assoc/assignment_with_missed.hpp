@@ -21,6 +21,12 @@ struct MissedAssignment {
   std::vector<int> column_of_row;  // -1: the row stays unpaired
   std::vector<int> row_of_column;  // -1: the column stays unpaired
   double value = 0;                // summed cost of the pairs and of the unpaired rows and columns
+  // An optimal LP dual, the certificate of `value`: row_dual[r] + column_dual[k] <= cost(r, k) for every pairing,
+  // row_dual[r] <= row_missed[r], column_dual[k] <= column_missed[k], and the duals sum to `value`.  So forcing
+  // pairing (r, k) costs at least cost(r, k) - row_dual[r] - column_dual[k] more than `value`, and leaving row r
+  // unpaired at cost c instead of row_missed[r] at least c - row_dual[r] more (what the S-D relaxation's
+  // reduced-cost fixing uses, relaxation_bound.hpp).
+  std::vector<double> row_dual, column_dual;
 };
 
 /// `row_missed[r]`, `column_missed[k]`: finite costs of leaving row r / column k unpaired.  Throws

@@ -50,7 +50,11 @@ struct PackingSolution {
 
 /// A stronger lower bound on the cost of a node's remaining sub-problem, given which detections are covered and,
 /// per tuple, how many of its detections are (0: available).  Called only where the bound above does not cut.
-using NodeBound = std::function<double(const std::vector<char>& covered, const std::vector<int>& blocked)>;
+/// When `increase` is not null it is filled (one entry per tuple) with, for each available tuple t, a lower bound
+/// on how much more the bound is once t is chosen: the search then skips every child whose node bound plus its
+/// increase already reaches the incumbent, without evaluating it (reduced-cost fixing at the node).
+using NodeBound = std::function<double(const std::vector<char>& covered, const std::vector<int>& blocked,
+                                       std::vector<double>* increase)>;
 
 /// Branch and bound from the feasible solution `incumbent` (pairwise disjoint tuples; may be empty) with the
 /// multipliers `v` (<= 0, one per detection) and, when given, `stronger` as a second bound.
