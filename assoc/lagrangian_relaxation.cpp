@@ -56,7 +56,7 @@ ComponentResult solve_relaxation(const RelaxationProblem& P, int max_iterations,
   std::vector<std::vector<int>> pairings;   // relaxed pairings already recovered (three sensors only, see below)
   std::vector<double> reduced, row_missed, column_missed;
   std::vector<PairCost> pairs;
-  std::vector<int> pair_tuple, row_tuple, column_tuple, relaxed, pair_of_row, feasible;
+  std::vector<int> pair_tuple, row_tuple, column_tuple, relaxed, pair_of_row, feasible, survivors;
   bool fixing_due = false;  // a bound improved since the tuples were last counted
   size_t fixing_failed = kFixingTuples + 1;  // survivors when the branch and bound last ran out of nodes
   for (int it = 0; it < max_iterations; ++it) {
@@ -157,20 +157,18 @@ ComponentResult solve_relaxation(const RelaxationProblem& P, int max_iterations,
       if (c < best_ub) best_ub = c, best = relaxed, std::sort(best.begin(), best.end()), fixing_due = true;
     }
     if (best_ub - best_lb <= gap_tolerance || g2 == 0) break;
-    // Reduced-cost fixing at the best multipliers; the branch and bound once few tuples remain (again only when
-    // fewer remain than at its last failure).
-    if (fixing_due) {
-      fixing_due = false;
-      const auto survivors = reduced_cost_survivors(groups, out.dual, best_ub, best);
-      if (survivors.size() < fixing_failed) {
-        const auto sol = solve_on_survivors(P, out.u, survivors, best, kFixingNodes);
-        if (sol.cost < best_ub) best_ub = sol.cost, best = sol.chosen;
-        if (sol.proven) {
-          best_lb = best_ub;
-          break;
-        }
-        fixing_failed = survivors.size();
+    // Reduced-cost fixing at the best multipliers (recounted when a bound improved); the branch and bound once
+    // few tuples remain (again only when fewer remain than at its last failure).
+    if (fixing_due) survivors = reduced_cost_survivors(groups, out.dual, best_ub, best), fixing_due = false;
+    const size_t limit = std::min(kFixingTuples, kFixingTuplesStart + kFixingTuplesPerIteration * static_cast<size_t>(it));
+    if (!survivors.empty() && survivors.size() <= limit && survivors.size() < fixing_failed) {
+      const auto sol = solve_on_survivors(P, out.u, survivors, best, kFixingNodes);
+      if (sol.cost < best_ub) best_ub = sol.cost, best = sol.chosen;
+      if (sol.proven) {
+        best_lb = best_ub;
+        break;
       }
+      fixing_failed = survivors.size();
     }
     // Deflected direction (Camerini, Fratta & Maffioli): only when the new subgradient turns back against the last
     // direction; kept when the two cancel exactly.
