@@ -1,6 +1,6 @@
 #pragma once
 // The 2-D assignment in which any row or column may stay unpaired (the building block of the S-D Lagrangian
-// relaxation, assoc.md §1.5): rows r and columns k, a sparse list of allowed pairings with their costs, and the
+// relaxation, Pattipati et al., IEEE TAC 37(2) 1992): rows r and columns k, a sparse list of allowed pairings with their costs, and the
 // cost of leaving each row or column unpaired.  Minimizes the total cost.
 //
 // A pairing that does not beat leaving both unpaired (cost(r, k) >= missed(r) + missed(k)) is never needed, so

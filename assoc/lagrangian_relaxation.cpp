@@ -161,7 +161,7 @@ ComponentResult solve_relaxation(const RelaxationProblem& P, int max_iterations,
     // few tuples remain (again only when fewer remain than at its last failure).
     if (fixing_due) survivors = reduced_cost_survivors(groups, out.dual, best_ub, best), fixing_due = false;
     const size_t limit = std::min(kFixingTuples, kFixingTuplesStart + kFixingTuplesPerIteration * static_cast<size_t>(it));
-    if (!survivors.empty() && survivors.size() <= limit && survivors.size() < fixing_failed) {
+    if (it >= kFixingFirstIteration && !survivors.empty() && survivors.size() <= limit && survivors.size() < fixing_failed) {
       const auto sol = solve_on_survivors(P, out.u, survivors, best, kFixingNodes);
       if (sol.cost < best_ub) best_ub = sol.cost, best = sol.chosen;
       if (sol.proven) {

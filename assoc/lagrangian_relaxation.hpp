@@ -29,14 +29,18 @@
 
 namespace sextant::assoc {
 
-/// Reduced-cost fixing hands the component to the branch and bound once at most
-/// min(kFixingTuples, kFixingTuplesStart + kFixingTuplesPerIteration x iteration) tuples remain: the search's cost
-/// grows steeply with the tuples, so early on only a small remainder is worth it, later a larger one beats more
-/// iterations.  On the 3 x 20 + 5 grid scans (60 scans, seeds 1-3) the solver's median went 1.65 -> 1.53 ms
-/// against a fixed 150; fixed limits of 40, 80 and 250 gave 1.60, 1.51 (with a mean 20 % higher) and 3.28 ms.
+/// Reduced-cost fixing hands the component to the branch and bound from iteration kFixingFirstIteration on, once
+/// at most min(kFixingTuples, kFixingTuplesStart + kFixingTuplesPerIteration x iteration) tuples remain: the
+/// search's cost grows steeply with the tuples, so early on only a small remainder is worth it, later a larger one
+/// beats more iterations; and on small easy components a few more iterations close the gap for less than any
+/// search.  Solver time on 60 scans each (seeds 1-3, bench/assoc/timing_driver.cpp's scenarios): grid 3 x 20 + 5
+/// median 1.65 -> 1.53 ms against a fixed 150 tuples from the start (fixed 40, 80, 250: 1.60, 1.51 with a 20 %
+/// higher mean, 3.28); uniform 3 x 20 + 5 with the target prior 0.11 -> 0.05 ms with the first iteration at 20
+/// instead of 0 (the relaxation before fixing: 0.05).
 inline constexpr size_t kFixingTuples = 150;
 inline constexpr size_t kFixingTuplesStart = 60;
 inline constexpr size_t kFixingTuplesPerIteration = 2;
+inline constexpr int kFixingFirstIteration = 20;
 /// The node budget of that branch and bound.
 inline constexpr long kFixingNodes = 20'000;
 

@@ -14,7 +14,8 @@
 //   cost + sum over uncovered detections that some available tuple holds of v_d + sum over available t of min(0, r_t),
 // which is L(v) of the remaining sub-problem (a detection no available tuple holds is a false alarm, and its v_d
 // <= 0 would only loosen the bound), kept up to date incrementally as detections are covered and uncovered.  It
-// branches on the uncovered detection held by the fewest available tuples: each of those tuples (least reduced cost
+// branches on the uncovered detection held by the fewest available tuples (with a stronger bound, the fewest that
+// its increases do not cut): each of those tuples (least reduced cost
 // first: with multipliers near the LP optimum that follows the LP solution, so good incumbents come early), then the
 // detection as a false alarm.  A node whose bound is not below the incumbent by more than 1e-9 (relative) is cut.
 //
