@@ -48,8 +48,7 @@ ComponentResult solve_relaxation(const RelaxationProblem& P, int max_iterations,
   double best_ub = 0, best_lb = -kInf, factor = 1;
   int stalled = 0;
   std::vector<int> best;  // empty: every detection a false alarm, cost 0
-  ExchangeImprover exchange(P.packing, 4);
-  std::optional<SensorReassignment> reassignment;  // built at the second promising recovery
+  std::optional<SensorReassignment> reassignment;  // built at the first promising recovery
   RelaxationRecovery recovery(P);
   MissedAssignmentSolver relaxed_solver;
   std::vector<std::vector<int>> recovered;  // recoveries already improved (the same one recurs across iterations)
@@ -132,20 +131,19 @@ ComponentResult solve_relaxation(const RelaxationProblem& P, int max_iterations,
       recovery.recover(u, a, feasible);
       double ub = 0;
       for (int t : feasible) ub += P.cost[static_cast<size_t>(t)];
-      // Local search on promising recoveries only (already as good as the best improved one: the first, and any
-      // that ties or beats it), each distinct one once: the first by exchange moves, the later ones by
-      // re-assigning one sensor at a time (built only when needed, so a component whose gap closes at the first
-      // recovery does not pay for it).  Later recoveries differ from the earlier ones mostly by detections traded
-      // among the same tuples, which the re-assignment covers (several tuples at once) at a fraction of the
-      // exchange's cost.
+      // Local search on promising recoveries only (already as good as the best one: the first, and any that ties
+      // or beats it), each distinct one once, by re-assigning one sensor at a time (sensor_reassignment.hpp):
+      // recoveries differ from the optimum mostly by detections traded among the same tuples, which the
+      // re-assignment covers (several tuples at once) at a fraction of the exchange moves' cost.  The exchange
+      // moves (tuple_packing.hpp) only polish a solution whose gap stays open at the end: with reduced-cost fixing
+      // proving most components, running them on the first recovery too cost time for no scan reaching its
+      // optimum that did not otherwise (solver time without them, 60 scans each of bench/assoc/timing_driver.cpp's
+      // scenarios: grid 3 x 20 + 5 median 1.17 -> 1.06 ms, mean 1.66 -> 1.36 ms, 60/60 optimal either way; with
+      // the target prior 0.85 -> 0.73 ms; uniform 3 x 20 + 5 0.16 -> 0.12 ms).
       if (ub <= best_ub && std::find(recovered.begin(), recovered.end(), feasible) == recovered.end()) {
         recovered.push_back(feasible);
-        if (recovered.size() == 1) {
-          ub = exchange.improve(feasible, 3);
-        } else {
-          if (!reassignment) reassignment.emplace(S, P.n, P.index, P.cost);
-          ub = reassignment->improve(feasible);
-        }
+        if (!reassignment) reassignment.emplace(S, P.n, P.index, P.cost);
+        ub = reassignment->improve(feasible);
       }
       if (ub < best_ub) best_ub = ub, best = feasible, fixing_due = true;
     }
@@ -159,9 +157,9 @@ ComponentResult solve_relaxation(const RelaxationProblem& P, int max_iterations,
     if (best_ub - best_lb <= gap_tolerance || g2 == 0) break;
     // Reduced-cost fixing at the best multipliers (recounted when a bound improved); the branch and bound once
     // few tuples remain (again only when fewer remain than at its last failure).
-    if (fixing_due) survivors = reduced_cost_survivors(groups, out.dual, best_ub, best), fixing_due = false;
+    if (fixing_due && it >= kFixingFirstIteration) survivors = reduced_cost_survivors(groups, out.dual, best_ub, best), fixing_due = false;
     const size_t limit = std::min(kFixingTuples, kFixingTuplesStart + kFixingTuplesPerIteration * static_cast<size_t>(it));
-    if (it >= kFixingFirstIteration && !survivors.empty() && survivors.size() <= limit && survivors.size() < fixing_failed) {
+    if (!survivors.empty() && survivors.size() <= limit && survivors.size() < fixing_failed) {
       const auto sol = solve_on_survivors(P, out.u, survivors, best, kFixingNodes);
       if (sol.cost < best_ub) best_ub = sol.cost, best = sol.chosen;
       if (sol.proven) {
