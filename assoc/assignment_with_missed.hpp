@@ -1,7 +1,7 @@
 #pragma once
 // The 2-D assignment in which any row or column may stay unpaired (the building block of the S-D Lagrangian
-// relaxation, Pattipati et al., IEEE TAC 37(2) 1992): rows r and columns k, a sparse list of allowed pairings with their costs, and the
-// cost of leaving each row or column unpaired.  Minimizes the total cost.
+// relaxation, Pattipati et al., IEEE TAC 37(2) 1992): rows r and columns k, a sparse list of allowed pairings with
+// their costs, and the cost of leaving each row or column unpaired.  Minimizes the total cost.
 //
 // A pairing that does not beat leaving both unpaired (cost(r, k) >= missed(r) + missed(k)) is never needed, so
 // only the improving pairings are kept, as gains; the rest is a maximum-gain bipartite matching, solved by

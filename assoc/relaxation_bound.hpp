@@ -49,7 +49,8 @@ class RelaxationBound {
 
   /// `covered`: per detection of P.packing; `blocked`: per tuple of the subset (0: available).  `increase`, when
   /// not null: per tuple of the subset, forcing_increase at this node (0 for blocked ones).
-  double operator()(const std::vector<char>& covered, const std::vector<int>& blocked, std::vector<double>* increase = nullptr);
+  double operator()(const std::vector<char>& covered, const std::vector<int>& blocked,
+                    std::vector<double>* increase = nullptr);
 
  private:
   const RelaxationProblem& P_;
