@@ -41,6 +41,8 @@ const MissedAssignment& MissedAssignmentSolver::solve(const std::vector<double>&
     const double w = p.cost - row_missed[static_cast<size_t>(p.row)] - column_missed[static_cast<size_t>(p.column)];
     if (w < 0) gains.push_back({p.row, p.column, w});
   }
+  // The duals start at the unpaired costs (right for rows and columns no improving pairing touches).
+  out.row_dual = row_missed, out.column_dual = column_missed;
   if (gains.empty()) return out;
   const auto by_row = [](const PairCost& a, const PairCost& b) {
     return a.row != b.row ? a.row < b.row : a.column != b.column ? a.column < b.column : a.cost < b.cost;
@@ -66,37 +68,38 @@ const MissedAssignment& MissedAssignmentSolver::solve(const std::vector<double>&
   auto &u = u_, &v = v_, &d = d_;
   auto &row_of = row_of_, &column_of = column_of_, &way = way_, &seen = seen_, &scanned = scanned_;
   auto& final = final_;
-  auto& heap = heap_;
   u.assign(static_cast<size_t>(R), 0.0), v.assign(static_cast<size_t>(N), 0.0), d.assign(static_cast<size_t>(N), 0.0);
   row_of.assign(static_cast<size_t>(N), -1), column_of.assign(static_cast<size_t>(R), -1), way.assign(static_cast<size_t>(N), -1);
   seen.assign(static_cast<size_t>(N), -1);  // the search (row) that last reached the column
   final.assign(static_cast<size_t>(N), 0);
-  const auto later = std::greater<std::pair<double, int>>();  // heap order: smallest distance on top
+  auto& frontier = frontier_;  // the columns the search reached and has not finalized
   for (int r = 0; r < R; ++r) {
     const int b = begin[static_cast<size_t>(r)], e = begin[static_cast<size_t>(r) + 1];
     if (b == e) continue;  // no improving pairing: stays unpaired
     auto relax = [&](int i, int j, double w, double base) {
       const double nd = base + w - u[static_cast<size_t>(i)] - v[static_cast<size_t>(j)];
-      if (seen[static_cast<size_t>(j)] != r) seen[static_cast<size_t>(j)] = r, final[static_cast<size_t>(j)] = 0;
+      bool seen_now = false;
+      if (seen[static_cast<size_t>(j)] != r) seen[static_cast<size_t>(j)] = r, final[static_cast<size_t>(j)] = 0, seen_now = true;
       else if (final[static_cast<size_t>(j)] || !(nd < d[static_cast<size_t>(j)])) return;
+      if (seen_now) frontier.push_back(j);
       d[static_cast<size_t>(j)] = nd, way[static_cast<size_t>(j)] = i;
-      heap.push_back({nd, j});
-      std::push_heap(heap.begin(), heap.end(), later);
     };
     double ur = -v[static_cast<size_t>(C + r)];
     for (int k = b; k < e; ++k) ur = std::min(ur, gain[static_cast<size_t>(k)] - v[static_cast<size_t>(column[static_cast<size_t>(k)])]);
     u[static_cast<size_t>(r)] = ur;
     scanned.clear();
-    heap.clear();
+    frontier.clear();
     relax(r, C + r, 0.0, 0.0);
     for (int k = b; k < e; ++k) relax(r, column[static_cast<size_t>(k)], gain[static_cast<size_t>(k)], 0.0);
     int end = -1;
     double delta = 0;
-    while (!heap.empty()) {
-      std::pop_heap(heap.begin(), heap.end(), later);
-      const auto [dj, j] = heap.back();
-      heap.pop_back();
-      if (final[static_cast<size_t>(j)] || dj > d[static_cast<size_t>(j)]) continue;
+    while (!frontier.empty()) {
+      size_t at = 0;
+      for (size_t f = 1; f < frontier.size(); ++f)
+        if (d[static_cast<size_t>(frontier[f])] < d[static_cast<size_t>(frontier[at])]) at = f;
+      const int j = frontier[at];
+      const double dj = d[static_cast<size_t>(j)];
+      frontier[at] = frontier.back(), frontier.pop_back();
       final[static_cast<size_t>(j)] = 1;
       const int i = row_of[static_cast<size_t>(j)];
       if (i < 0) {
@@ -133,6 +136,13 @@ const MissedAssignment& MissedAssignmentSolver::solve(const std::vector<double>&
     out.row_of_column[static_cast<size_t>(k)] = r;
     out.value += w;
   }
+  // The duals of the gains problem, mapped back: for the gains w = cost - missed(r) - missed(k) the potentials
+  // satisfy u_r + v_k <= w (equality on matched pairs), u_r + v_{C+r} <= 0 (the row's own slot) and v_k <= 0
+  // (v stays 0 on columns no search matched, so on every free column).  row_dual = missed(r) + u_r + v_{C+r}
+  // and column_dual = missed(k) + v_k are then feasible for the original problem, and their sum equals `value`
+  // by complementary slackness (a row's slot column is matched to it or untouched).
+  for (int r = 0; r < R; ++r) out.row_dual[static_cast<size_t>(r)] += u[static_cast<size_t>(r)] + v[static_cast<size_t>(C + r)];
+  for (int k = 0; k < C; ++k) out.column_dual[static_cast<size_t>(k)] += v[static_cast<size_t>(k)];
   return out;
 }
 

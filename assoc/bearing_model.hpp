@@ -1,5 +1,6 @@
 #pragma once
-// The passive-sensor measurement model (source C eq. 1-2; assoc.md §1.1): a sensor at p sees a target at x as
+// The passive-sensor measurement model (the passive-association paper's eq. 1-2, see tuple_costs.hpp): a sensor at
+// p sees a target at x as
 //   azimuth   = atan2(dy, dx)
 //   elevation = atan2(dz, rho),   d = x - p,  rho = sqrt(dx^2 + dy^2),  r = |d|
 // with Jacobian  d az/dx = [-dy/rho^2, dx/rho^2, 0],  d el/dx = [-dx dz/(r^2 rho), -dy dz/(r^2 rho), rho/r^2].

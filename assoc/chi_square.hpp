@@ -13,7 +13,7 @@
 // precision: 1 - p is exact in floating point there) by Halley's method (Numerical Recipes §6.2.1), started from
 // the Wilson-Hilferty approximation (k >= 2) or from the small-a form of P (k = 1).  Relative accuracy about 1e-12
 // for 1 <= k <= 100 000 and 0 <= p <= 1 - 1e-15 (tested against closed forms: Q(1/2, x) = erfc(sqrt x) and its
-// recurrence for odd k, the Poisson sum for even k).  Before session 6 the quantile was Wilson-Hilferty alone,
+// recurrence for odd k, the Poisson sum for even k).  Wilson-Hilferty alone, used before, is
 // 1-2 % high at the gates' 0.999 (16.55 instead of 16.27 for 3 degrees of freedom, 22.68 instead of 22.46 for 6).
 
 namespace sextant::assoc {

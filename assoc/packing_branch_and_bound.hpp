@@ -14,7 +14,8 @@
 //   cost + sum over uncovered detections that some available tuple holds of v_d + sum over available t of min(0, r_t),
 // which is L(v) of the remaining sub-problem (a detection no available tuple holds is a false alarm, and its v_d
 // <= 0 would only loosen the bound), kept up to date incrementally as detections are covered and uncovered.  It
-// branches on the uncovered detection held by the fewest available tuples: each of those tuples (least reduced cost
+// branches on the uncovered detection held by the fewest available tuples (with a stronger bound, the fewest that
+// its increases do not cut): each of those tuples (least reduced cost
 // first: with multipliers near the LP optimum that follows the LP solution, so good incumbents come early), then the
 // detection as a false alarm.  A node whose bound is not below the incumbent by more than 1e-9 (relative) is cut.
 //
@@ -50,7 +51,11 @@ struct PackingSolution {
 
 /// A stronger lower bound on the cost of a node's remaining sub-problem, given which detections are covered and,
 /// per tuple, how many of its detections are (0: available).  Called only where the bound above does not cut.
-using NodeBound = std::function<double(const std::vector<char>& covered, const std::vector<int>& blocked)>;
+/// When `increase` is not null it is filled (one entry per tuple) with, for each available tuple t, a lower bound
+/// on how much more the bound is once t is chosen: the search then skips every child whose node bound plus its
+/// increase already reaches the incumbent, without evaluating it (reduced-cost fixing at the node).
+using NodeBound = std::function<double(const std::vector<char>& covered, const std::vector<int>& blocked,
+                                       std::vector<double>* increase)>;
 
 /// Branch and bound from the feasible solution `incumbent` (pairwise disjoint tuples; may be empty) with the
 /// multipliers `v` (<= 0, one per detection) and, when given, `stronger` as a second bound.

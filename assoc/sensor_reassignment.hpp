@@ -14,7 +14,7 @@
 // Why: the exchange moves (tuple_packing.hpp) bring in one tuple at a time and refill greedily, so they miss moves
 // in which several tuples swap detections of the same sensor at once (e.g. three tuples rotating their third
 // sensor's detections).  Those were the Lagrangian relaxation's misses against the exact optimum on the coplanar
-// grid (RESULTS, passive association session 5).  One re-assignment is a sparse 2-D assignment of about as many
+// grid (bench/RESULTS.md, "Passive association", LR optimality).  One re-assignment is a sparse 2-D assignment of about as many
 // rows as chosen tuples plus free detections: cheap next to a relaxation iteration.
 #include "assoc/assignment_with_missed.hpp"
 

@@ -22,7 +22,7 @@ double residual_angle(double y, double x) {
 PreparedBearing::PreparedBearing(const BearingObservation& o, const Eigen::Matrix2d& inverse_covariance)
     : sensor(o.sensor), sin_azimuth(std::sin(o.azimuth)), cos_azimuth(std::cos(o.azimuth)),
       sin_elevation(std::sin(o.elevation)), cos_elevation(std::cos(o.elevation)), information(inverse_covariance) {
-  // Step 1's two rows (source C eq. 9-12).
+  // Step 1's two rows (the passive-association paper's eq. 9-12).
   const Eigen::Vector3d rows[2] = {{sin_azimuth, -cos_azimuth, 0},
                                    {cos_azimuth * sin_elevation, sin_azimuth * sin_elevation, -cos_elevation}};
   for (const auto& h : rows) {

@@ -1,6 +1,7 @@
 #pragma once
-// Target position from the bearings of two or more passive sensors (assoc.md §1.2).
-//  1. Linear least squares (source C eq. 9-12): each sensor gives two equations linear in x,
+// Target position from the bearings of two or more passive sensors.
+//  1. Linear least squares (the passive-association paper's eq. 9-12, see tuple_costs.hpp): each sensor gives two
+//     equations linear in x,
 //       sin(az) x - cos(az) y = sin(az) xs - cos(az) ys
 //       cos(az) sin(el) x + sin(az) sin(el) y - cos(el) z = cos(az) sin(el) xs + sin(az) sin(el) ys - cos(el) zs
 //     stacked as H x = Y and solved, x = (H'H)^-1 H'Y.

@@ -1,17 +1,18 @@
 #pragma once
-// Candidate tuples of an S-sensor passive scan and their association costs (source C eq. 7 and 19-21; assoc.md
-// §1.3, §1.6, §1.7).  A tuple takes one detection per sensor or none (index 0 = missed); it needs at least two
+// Candidate tuples of an S-sensor passive scan and their association costs (the passive-association paper, "Data
+// association algorithm for passive sensor based on position estimation uncertainty", Computer Measurement &
+// Control 2015, eq. 7 and 19-21; the likelihood ratio of Pattipati et al., IEEE TAC 37(2) 1992).  A tuple takes one detection per sensor or none (index 0 = missed); it needs at least two
 // real detections.  A tuple whose cost is not negative is dropped (declaring its detections false alarms costs 0).
 //   classic:  sum_real [ -ln(P_D / (lambda_s sqrt|2 pi R|)) + 1/2 nu' R^-1 nu ] - sum_missed ln(1 - P_D)
 //   kl:       the 1/2 nu' R^-1 nu term replaced by the symmetric KL divergence
 //             1/2 [KL(N(z, R) || N(z_hat, J P J')) + KL(N(z_hat, J P J') || N(z, R))] (the paper's symmetrization,
-//             source C eq. 19-21, at alpha -> 1; equal to 1/2 nu' R^-1 nu when the covariances are equal).  It was
+//             eq. 19-21, at alpha -> 1; equal to 1/2 nu' R^-1 nu when the covariances are equal).  It was
 //             one-sided KL(N(z, R) || N(z_hat, J P J')) before, which is not the paper's divergence.
 //   renyi:    replaced by SD_alpha(N(z, R), N(z_hat, J P J')) / alpha  (equal to 1/2 nu' R^-1 nu when the two
-//             covariances are equal; the symmetric Renyi divergence of source C eq. 19-21)
+//             covariances are equal; the symmetric Renyi divergence of eq. 19-21)
 //   + target prior (optional, every kind):  - ln(mu_T sqrt|2 pi P|)
 // lambda_s is sensor s's false-alarm density per rad^2 of azimuth x elevation (expected false alarms per scan
-// divided by the area of its field of view, assoc.md §4 B0b), z_hat = h(x_hat) the pseudo-measurement, P the
+// divided by the area of its field of view, field_of_view.hpp), z_hat = h(x_hat) the pseudo-measurement, P the
 // triangulation covariance.
 //
 // The target-prior term.  The classic cost compares "one target at x_hat" with "all false alarms", plugging in the
@@ -23,7 +24,7 @@
 // detections of different targets whose lines of sight happen to meet) no longer gets a free fit, which cuts
 // ghost tuples under clutter.  mu_T = 0 leaves the term out (the classic generalized likelihood ratio).
 //
-// Gating (assoc.md §1.6), cheapest first: every pair of detections of two sensors is tested once (lines of sight
+// Gating, cheapest first: every pair of detections of two sensors is tested once (lines of sight
 // meeting in front of both sensors within a noise-scaled miss distance, then the chi-square gate on the pair's
 // triangulation residual); a partial tuple is only extended by detections compatible with each of its detections
 // (a clique across the lists), and partial tuples of 3 or more detections must pass the triangulation residual

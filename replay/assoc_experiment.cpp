@@ -3,6 +3,7 @@
 #include "assoc/bearing_model.hpp"
 #include "assoc/field_of_view.hpp"
 #include "assoc/sd_assignment.hpp"
+#include "replay/nearest_rank_percentile.hpp"
 
 #include <algorithm>
 #include <chrono>
@@ -30,11 +31,10 @@ double thread_cpu_ms() {
   return 1e3 * static_cast<double>(t.tv_sec) + 1e-6 * static_cast<double>(t.tv_nsec);
 }
 
-double percentile(std::vector<double> v, double q) {
-  if (v.empty()) return 0;
-  const size_t k = std::min(v.size() - 1, static_cast<size_t>(q * static_cast<double>(v.size())));
-  std::nth_element(v.begin(), v.begin() + static_cast<long>(k), v.end());
-  return v[k];
+// The nearest-rank percentile (replay/nearest_rank_percentile.hpp) of an unsorted sample.
+double percentile(std::vector<double> v, double p) {
+  std::sort(v.begin(), v.end());
+  return nearest_rank_percentile(v, p);
 }
 
 }  // namespace

@@ -1,16 +1,17 @@
 #pragma once
-// Source C's passive-association experiment (issue 6; assoc.md §4 B0-B2): S static sensors, targets placed at a
+// The passive-association paper's experiment (Computer Measurement & Control 2015, see assoc/tuple_costs.hpp),
+// extended to more sensors and targets: S static sensors, targets placed at a
 // given separation, bearings with Gaussian noise, detection probability and Poisson clutter; each Monte Carlo run
 // builds the tuples, solves the S-D assignment and scores it.  Deterministic for a seed.
-//  - Sensors (km): the paper's (30, 0, 0.1), (0, 30, 0.1), (0, 0, 0); then assoc.md B1's (30, 30, 0.1),
+//  - Sensors (km): the paper's (30, 0, 0.1), (0, 30, 0.1), (0, 0, 0); then sextant's (30, 30, 0.1),
 //    (15, -10, 0), (-10, 15, 0.05), (40, 15, 0.05) (5 sensors: the first five, 7: all seven); beyond 7 on a circle
 //    of radius 30 around (15, 15) at height 0.1.  Angles in rad.
 //  - 2 targets: at c and c + (d, 0, 0), c uniform in [5, 25] x [5, 25] x [2, 8].  More targets, layout "grid": a
-//    horizontal grid of spacing d at z = 5 centred at (15, 15) (assoc.md Layout A: coplanar, the hardest for
+//    horizontal grid of spacing d at z = 5 centred at (15, 15) (coplanar, the hardest for
 //    ghosts: with the sensors near z = 0, two targets whose difference is parallel to the baseline of two sensors
 //    give lines of sight that meet exactly); layout "uniform": uniform in [5, 25] x [5, 25] x [2, 8] with minimum
-//    separation d (assoc.md Layout B, rejection sampling).
-//  - Field of view of a sensor (assoc.md §4 B0b): the azimuth-elevation bounding box of the target region
+//    separation d (rejection sampling).
+//  - Field of view of a sensor (assoc/field_of_view.hpp): the azimuth-elevation bounding box of the target region
 //    ([5, 25 + d] x [5, 25] x [2, 8], grown to hold the grid) seen from the sensor, padded by 5 sigma; its area psi_s
 //    in rad^2.  Clutter: Poisson(clutter) false alarms per sensor and scan, uniform in that box.  The cost's
 //    false-alarm density of sensor s is lambda_s = clutter / psi_s (with clutter 0: a nominal 0.1 / psi_s, since

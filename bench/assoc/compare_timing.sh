@@ -3,7 +3,7 @@
 # "Time per scan").  Usage: bench/assoc/compare_timing.sh OLD_COMMIT NEW_COMMIT [ROUNDS]
 # Each commit's assoc/*.cpp and replay/assoc_experiment.cpp are compiled with the project's Release flags into
 # bench/assoc/timing_driver.cpp (run_assoc_experiment with assoc-sim's options: spacing 1, P_D 0.9, classic cost,
-# LR at 1 % gap); the two binaries then run alternately per seed.  Output lines: case seed old|new median_cpu_ms
+# LR at its default gap); the two binaries then run alternately per seed.  Output lines: case seed old|new median_cpu_ms
 # build_median_ms correct_rate gap_mean gap_max tuples_mean.
 set -euo pipefail
 old=$1 new=$2 rounds=${3:-1}
@@ -13,7 +13,7 @@ trap 'rm -rf "$work"' EXIT
 for v in old new; do
   commit=${!v}
   mkdir -p "$work/$v"
-  git -C "$repo" archive "$commit" assoc replay/assoc_experiment.cpp replay/assoc_experiment.hpp | tar -x -C "$work/$v"
+  git -C "$repo" archive "$commit" assoc replay | tar -x -C "$work/$v"  # replay/: assoc_experiment and its headers
   g++ -O2 -DNDEBUG -std=c++20 -I"$work/$v" -isystem /usr/include/eigen3 "$work/$v"/assoc/*.cpp \
     "$work/$v/replay/assoc_experiment.cpp" "$repo/bench/assoc/timing_driver.cpp" -o "$work/$v/driver"
 done

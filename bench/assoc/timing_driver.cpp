@@ -1,5 +1,5 @@
 // Timing driver of bench/assoc/compare_timing.sh: run_assoc_experiment with the options of `sextant assoc-sim`
-// (spacing 1, P_D 0.9, classic cost, LR at 1 % gap); prints median CPU ms per scan, build ms, correct rate, gap
+// (spacing 1, P_D 0.9, classic cost, LR at its default gap); prints median CPU ms per scan, build ms, correct rate, gap
 // mean and max, mean tuple count.
 #include "replay/assoc_experiment.hpp"
 #include <cstdio>

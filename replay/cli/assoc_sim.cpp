@@ -77,7 +77,7 @@ void write_plots(const std::string& csv, const std::vector<Point>& points, const
 }
 
 sextant::cli::RegisterCommand reg{"assoc-sim", [](CLI::App& app) {
-  auto* cmd = app.add_subcommand("assoc-sim", "Monte Carlo of multi-sensor passive association (source C's experiment)");
+  auto* cmd = app.add_subcommand("assoc-sim", "Monte Carlo of multi-sensor passive association (the passive-association paper's experiment)");
   auto o = std::make_shared<AssocExperimentOptions>();
   auto sigmas = std::make_shared<std::vector<double>>(std::vector<double>{5});
   auto sweep_to = std::make_shared<double>(-1), step = std::make_shared<double>(0.1);

@@ -1,5 +1,6 @@
 // 2-D assignment against brute force on random matrices, square and rectangular, with forbidden entries, and
-// infeasible matrices reported without hanging; the assignment with unpaired rows and columns against brute force.
+// infeasible matrices reported without hanging; the assignment with unpaired rows and columns against brute force,
+// and its LP dual (feasible, summing to the optimum).
 #include "assoc/assignment_2d.hpp"
 #include "assoc/assignment_with_missed.hpp"
 
@@ -186,5 +187,37 @@ TEST_CASE("assignment with unpaired rows and columns equals the dense 2-D assign
     CAPTURE(trial);
     CHECK(a.value == doctest::Approx(all_unpaired + reference.cost).epsilon(1e-12));
     CHECK(reused.solve(rm, cm, pairs).value == doctest::Approx(a.value).epsilon(1e-12));
+  }
+}
+
+TEST_CASE("the unpaired assignment's dual is feasible and sums to its value") {
+  std::mt19937 rng(23);
+  std::uniform_real_distribution<double> u(-6, 3);
+  std::bernoulli_distribution allowed(0.35);
+  MissedAssignmentSolver solver;
+  for (int trial = 0; trial < 300; ++trial) {
+    const int R = 1 + trial % 9, C = 1 + (trial / 9) % 9;
+    std::vector<double> rm(static_cast<size_t>(R)), cm(static_cast<size_t>(C));
+    for (auto& x : rm) x = trial % 3 == 0 ? 0.0 : std::min(0.0, u(rng));
+    for (auto& x : cm) x = trial % 3 == 0 ? 0.0 : std::min(0.0, u(rng));
+    std::vector<PairCost> pairs;
+    for (int r = 0; r < R; ++r)
+      for (int k = 0; k < C; ++k)
+        if (allowed(rng)) pairs.push_back({r, k, u(rng) - 3});
+    const auto& a = solver.solve(rm, cm, pairs);
+    CAPTURE(trial);
+    REQUIRE(a.row_dual.size() == rm.size());
+    REQUIRE(a.column_dual.size() == cm.size());
+    double sum = 0;
+    for (int r = 0; r < R; ++r) {
+      CHECK(a.row_dual[static_cast<size_t>(r)] <= rm[static_cast<size_t>(r)] + 1e-12);
+      sum += a.row_dual[static_cast<size_t>(r)];
+    }
+    for (int k = 0; k < C; ++k) {
+      CHECK(a.column_dual[static_cast<size_t>(k)] <= cm[static_cast<size_t>(k)] + 1e-12);
+      sum += a.column_dual[static_cast<size_t>(k)];
+    }
+    for (const auto& p : pairs) CHECK(a.row_dual[static_cast<size_t>(p.row)] + a.column_dual[static_cast<size_t>(p.column)] <= p.cost + 1e-12);
+    CHECK(sum == doctest::Approx(a.value).epsilon(1e-12));
   }
 }

@@ -1,8 +1,8 @@
-// Source C's experiment reproduces the sanity anchors of issue 6: two targets at d = 0 are associated correctly
+// The passive-association paper's experiment reproduces its sanity anchors: two targets at d = 0 are associated correctly
 // exactly a quarter of the time (the two tuples are indistinguishable; each of the 4 detection pairings of the
 // second and third sensors is equally likely), and at d = 2 km with 5 mrad almost always.  The relaxation matches
 // the exact solver, the duality gap stays within 1 % on scans that once stalled above it, the target-prior term
-// cuts ghosts under clutter, and the sensor layouts are assoc.md's.
+// cuts ghosts under clutter, and the sensor layouts are replay/assoc_experiment.hpp's.
 #include "replay/assoc_experiment.hpp"
 
 #include "assoc/sd_assignment.hpp"
@@ -57,8 +57,8 @@ TEST_CASE("Lagrangian relaxation matches the exact solver on 6-target scans") {
   CHECK(std::abs(lr.correct_rate - exact.correct_rate) <= 2 * exact.correct_rate_stderr + 0.01);
 }
 
-TEST_CASE("the duality gap stays within 1 % on the grid scans that stalled above it before session 6") {
-  // Grid 3 x 20 + 5 false alarms, the timing scenario of issue 6 (bench/assoc/timing_driver.cpp's options), seed 1:
+TEST_CASE("the duality gap stays within 1 % on the grid scans that once stalled above it") {
+  // Grid 3 x 20 + 5 false alarms, the timing scenario (bench/assoc/timing_driver.cpp's options), seed 1:
   // scan 80 (0-based) ended at 1.18 % (a three-tuple component with a fractional LP bound) and, with the target
   // prior, scan 159 at 1.87 % (an upper bound 1.7 % above the optimum that only a relaxation of another sensor
   // recovers).  The generator is sequential, so the runs up to those scans are replayed.
