@@ -3,7 +3,7 @@
 #include "assoc/bearing_model.hpp"
 #include "assoc/field_of_view.hpp"
 #include "assoc/sd_assignment.hpp"
-#include "replay/nearest_rank_percentile.hpp"
+#include "daemon/runtime/nearest_rank_percentile.hpp"
 
 #include <algorithm>
 #include <chrono>
@@ -31,10 +31,10 @@ double thread_cpu_ms() {
   return 1e3 * static_cast<double>(t.tv_sec) + 1e-6 * static_cast<double>(t.tv_nsec);
 }
 
-// The nearest-rank percentile (replay/nearest_rank_percentile.hpp) of an unsorted sample.
+// The nearest-rank percentile (daemon/runtime/nearest_rank_percentile.hpp) of an unsorted sample.
 double percentile(std::vector<double> v, double p) {
   std::sort(v.begin(), v.end());
-  return nearest_rank_percentile(v, p);
+  return runtime::nearest_rank_percentile(v, p);
 }
 
 }  // namespace

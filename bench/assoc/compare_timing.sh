@@ -13,7 +13,7 @@ trap 'rm -rf "$work"' EXIT
 for v in old new; do
   commit=${!v}
   mkdir -p "$work/$v"
-  git -C "$repo" archive "$commit" assoc replay | tar -x -C "$work/$v"  # replay/: assoc_experiment and its headers
+  git -C "$repo" archive "$commit" assoc replay daemon/runtime | tar -x -C "$work/$v"  # assoc_experiment and its headers
   g++ -O2 -DNDEBUG -std=c++20 -I"$work/$v" -isystem /usr/include/eigen3 "$work/$v"/assoc/*.cpp \
     "$work/$v/replay/assoc_experiment.cpp" "$repo/bench/assoc/timing_driver.cpp" -o "$work/$v/driver"
 done
