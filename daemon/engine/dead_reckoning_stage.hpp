@@ -26,6 +26,9 @@ class DeadReckoningStage final : public Stage {
   /// Forgets the failed event's source (it restarts from its next odometry message).
   void recover(const Event& failed) override { tracks_.erase(event_source(failed)); }
   Counters counters() const override;
+  /// The state directory: every source's track and the counters.
+  void save(archive::ArchiveWriter& w) override;
+  void load(archive::ArchiveReader& r) override;
 
   /// One step of the propagation above, exposed for tests: returns P(k).
   static Matrix6 propagate(const Matrix6& previous, const SE3& increment, const Matrix6& increment_covariance);

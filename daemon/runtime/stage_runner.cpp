@@ -55,6 +55,7 @@ bool StageRunner::guarded(const char* what, F&& f) {
 
 void StageRunner::loop() {
   while (auto item = queue_.pop()) {
+    std::unique_lock stage_lock(stage_mutex_);
     if (!guarded("handle", [&] { stage_.handle(item->event, emit_); }) &&
         guarded("recover", [&] { stage_.recover(item->event); }))
       ++recoveries_;
@@ -67,6 +68,7 @@ void StageRunner::loop() {
       counters_ = std::move(counters);
     }
   }
+  std::lock_guard stage_lock(stage_mutex_);
   guarded("finish", [&] { stage_.finish(emit_); });
   engine::Counters counters;
   if (guarded("counters", [&] { counters = stage_.counters(); })) {

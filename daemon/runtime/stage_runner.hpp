@@ -54,6 +54,13 @@ class StageRunner {
   int64_t drain_and_stop(std::chrono::steady_clock::time_point deadline);
 
   StageStatus status() const;
+  /// Runs `f(stage)` between two events (the stage's thread waits meanwhile): how the state directory saves a
+  /// running stage (Stage::save).  Also safe before start and after drain_and_stop.
+  template <class F>
+  void with_stage(F&& f) {
+    std::lock_guard lock(stage_mutex_);
+    f(stage_);
+  }
   const LatencyRecorder& latency() const { return latency_; }
 
  private:
@@ -63,6 +70,7 @@ class StageRunner {
   bool guarded(const char* what, F&& f);
 
   engine::Stage& stage_;
+  std::mutex stage_mutex_;  // held while the stage works on an event (and by with_stage)
   engine::Emit emit_;
   BoundedQueue<QueuedEvent> queue_;
   LatencyRecorder latency_;

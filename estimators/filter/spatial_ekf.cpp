@@ -1,5 +1,7 @@
 #include "estimators/filter/spatial_ekf.hpp"
 
+#include "estimators/lie/lie_archive.hpp"
+
 #include "estimators/filter/state_augmentation.hpp"
 #include "estimators/lie/so2.hpp"
 
@@ -120,6 +122,16 @@ std::map<int64_t, Eigen::Vector3d> SpatialEkf::landmarks() const {
   std::map<int64_t, Eigen::Vector3d> out;
   for (const auto& [id, k] : slot_) out[id] = landmarks_.segment<3>(k - 6);
   return out;
+}
+
+void SpatialEkf::save(archive::ArchiveWriter& w) const { w(initialized_)(pose_)(landmarks_)(P_)(slot_); }
+
+void SpatialEkf::load(archive::ArchiveReader& r) {
+  r(initialized_)(pose_)(landmarks_)(P_)(slot_);
+  if (landmarks_.size() % 3 != 0 || P_.rows() != 6 + landmarks_.size() || P_.cols() != P_.rows())
+    r.fail("a 3-D EKF state whose covariance does not match it");
+  for (const auto& [id, slot] : slot_)
+    if (slot < 0 || slot + 3 > landmarks_.size()) r.fail("a 3-D EKF landmark slot outside the state");
 }
 
 }  // namespace sextant::filter
