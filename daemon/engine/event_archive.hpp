@@ -46,6 +46,20 @@ inline void load(archive::ArchiveReader& r, LoopClosure& l) {
       l.information)(l.matcher)(l.score);
 }
 
+inline void save(archive::ArchiveWriter& w, const BearingDetection& d) {
+  w(d.azimuth)(d.elevation)(d.sigma_azimuth)(d.sigma_elevation);
+}
+inline void load(archive::ArchiveReader& r, BearingDetection& d) {
+  r(d.azimuth)(d.elevation)(d.sigma_azimuth)(d.sigma_elevation);
+}
+
+inline void save(archive::ArchiveWriter& w, const BearingScan& s) {
+  w(s.utime)(s.sensor_id)(s.sensor_position)(s.scan_id)(s.detections);
+}
+inline void load(archive::ArchiveReader& r, BearingScan& s) {
+  r(s.utime)(s.sensor_id)(s.sensor_position)(s.scan_id)(s.detections);
+}
+
 inline void save(archive::ArchiveWriter& w, const GraphCorrection& c) {
   w(c.keyframe_utime)(c.keyframe_odom)(c.keyframe_map)(c.keyframe_covariance)(c.keyframe_odom_covariance);
 }

@@ -131,7 +131,7 @@ void SpatialEkf::load(archive::ArchiveReader& r) {
   if (landmarks_.size() % 3 != 0 || P_.rows() != 6 + landmarks_.size() || P_.cols() != P_.rows())
     r.fail("a 3-D EKF state whose covariance does not match it");
   for (const auto& [id, slot] : slot_)
-    if (slot < 0 || slot + 3 > landmarks_.size()) r.fail("a 3-D EKF landmark slot outside the state");
+    if (slot < 6 || slot + 3 > 6 + landmarks_.size()) r.fail("a 3-D EKF landmark slot outside the state");
 }
 
 }  // namespace sextant::filter
