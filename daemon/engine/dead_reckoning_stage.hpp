@@ -25,6 +25,7 @@ class DeadReckoningStage final : public Stage {
   void handle(const Event& e, const Emit& emit) override;
   /// Forgets the failed event's source (it restarts from its next odometry message).
   void recover(const Event& failed) override { tracks_.erase(event_source(failed)); }
+  void forget(const std::string& source) override { tracks_.erase(source); }
   Counters counters() const override;
   /// The state directory: every source's track and the counters.
   void save(archive::ArchiveWriter& w) override;

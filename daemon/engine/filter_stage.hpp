@@ -44,6 +44,13 @@ class FilterStage final : public Stage {
   void handle(const Event& e, const Emit& emit) override;
   /// Forgets the failed event's body (its filter restarts from its next odometry message).
   void recover(const Event& failed) override;
+  /// A body of its own (a source `sources` does not list) is forgotten; the configured bodies stay.
+  void forget(const std::string& source) override {
+    if (config_.sources.contains(source)) return;
+    histories_.erase(source);
+    spatial_.erase(source);
+    published_.erase(source);
+  }
   Counters counters() const override;
   /// The state directory (filter_stage_state.cpp): every body's filter with its window of recent inputs and
   /// checkpoints (late inputs are re-applied after a restart as before it), what was published, the counters.

@@ -95,6 +95,10 @@ class GraphStage final : public Stage {
   /// stage restored from the file does the same from the same graph, so both continue identically.
   void save(archive::ArchiveWriter& w) override;
   void load(archive::ArchiveReader& r) override;
+  /// Drops the body with its map: its keyframes, landmarks and their factors leave the smoother of its kind (rebuilt
+  /// from the other bodies' variables and factors, graph_stage_state.cpp), its waiting loops and sightings, feed and
+  /// correction go.
+  void forget(const std::string& source) override;
 
   /// The smoother of the planar bodies or of the 3-D ones (nullptr before the first such body).
   const graph::IncrementalSmoother* smoother(bool planar) const { return smoothers_[planar ? 1 : 0].get(); }

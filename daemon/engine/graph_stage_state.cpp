@@ -1,8 +1,10 @@
-// The graph stage's state in the state directory (graph_stage.hpp, save/load; README "State directory").
+// The graph stage's state: saved to and restored from the state directory (graph_stage.hpp, save/load; README "State
+// directory"), and a body forgotten with its map (forget).
 #include "daemon/engine/event_archive.hpp"
 #include "daemon/engine/graph_stage.hpp"
 #include "estimators/graph/graph_archive.hpp"
 
+#include <algorithm>
 #include <stdexcept>
 
 namespace sextant::engine {
@@ -123,6 +125,53 @@ void GraphStage::load(archive::ArchiveReader& r) {
     coalescer_.resume(source, b.selector, b.last_utime, b.last_odom, b.last_odom_covariance);
     if (!bodies_.emplace(source, std::move(b)).second) r.fail("body '" + source + "' twice");
   }
+}
+
+void GraphStage::forget(const std::string& source) {
+  auto it = bodies_.find(source);
+  if (it == bodies_.end()) return;
+  const bool planar = it->second.planar;
+  const int kind = planar ? 1 : 0;
+  const graph::IncrementalSmoother& old = *smoothers_[kind];
+  const auto& vars = old.graph().variables();
+  const auto& factors = old.graph().factors();
+  std::vector<char> drop(vars.size(), 0);
+  for (const auto& k : it->second.keyframes) drop[static_cast<size_t>(k.variable)] = 1;
+  for (const auto& [id, l] : it->second.landmarks) drop[static_cast<size_t>(l.variable)] = 1;
+  // Bodies share no variable: the other bodies' variables and factors make the new smoother, in their old order.
+  auto fresh = std::make_unique<graph::IncrementalSmoother>(old.options());
+  std::vector<FactorTag> fresh_tags;
+  std::vector<int> remap(vars.size(), -1);
+  for (size_t v = 0; v < vars.size(); ++v)
+    if (!drop[v]) remap[v] = fresh->add_variable(vars[v]);
+  for (size_t f = 0; f < factors.size(); ++f) {
+    std::vector<int> vs;
+    for (int v : factors[f]->variables()) vs.push_back(remap[static_cast<size_t>(v)]);
+    if (std::find(vs.begin(), vs.end(), -1) != vs.end()) continue;
+    const FactorTag& t = factor_tags_[kind][f];
+    fresh->add_factor(factors[f]->rebind(vs), t.robust, t.kernel_width);
+    fresh_tags.push_back(t);
+  }
+  coalescer_.forget(source);
+  corrections_->erase(source);
+  bodies_.erase(it);
+  bool others = false;
+  for (auto& [name, b] : bodies_) {
+    if (b.planar != planar) continue;
+    others = true;
+    for (auto& k : b.keyframes) k.variable = remap[static_cast<size_t>(k.variable)];
+    for (auto& [id, l] : b.landmarks) l.variable = remap[static_cast<size_t>(l.variable)];
+    b.smoother = fresh.get();
+  }
+  gate_marginals_[kind].clear();
+  if (!others) {
+    smoothers_[kind].reset();
+    factor_tags_[kind].clear();
+    return;
+  }
+  if (!fresh->update().ok) ++optimizer_failures_;
+  smoothers_[kind] = std::move(fresh);
+  factor_tags_[kind] = std::move(fresh_tags);
 }
 
 }  // namespace sextant::engine

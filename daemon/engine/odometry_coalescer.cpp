@@ -185,4 +185,9 @@ void OdometryCoalescer::resume(const std::string& source, const KeyframeSelector
   b.last_covariance = last_covariance;
 }
 
+void OdometryCoalescer::forget(const std::string& source) {
+  std::lock_guard lock(mutex_);
+  if (auto it = bodies_.find(source); it != bodies_.end() && it->second.batches.empty()) bodies_.erase(it);
+}
+
 }  // namespace sextant::engine

@@ -95,6 +95,9 @@ class OdometryCoalescer {
   void resume(const std::string& source, const KeyframeSelector& selector, int64_t last_utime, const SE3& last_pose,
               const Matrix6& last_covariance);
 
+  /// Stage thread: a forgotten body (GraphStage::forget) starts afresh.
+  void forget(const std::string& source);
+
   int64_t coalesced() const;     // messages merged into a later one
   int64_t out_of_order() const;  // messages at or before their body's newest time, dropped here
   int64_t waiting() const;       // messages in batches the stage has not taken yet (after merging)

@@ -35,6 +35,9 @@ class Stage {
   /// before the next event, e.g. forget the body the event belongs to (it restarts from its next message) or
   /// rebuild a factorization from the graph.  The runtime counts the failure; the default keeps the state as is.
   virtual void recover(const Event& /*failed*/) {}
+  /// The body `source` (an odometry source) went silent and the daemon forgot it (daemon.source_idle_s): free every
+  /// per-body structure; if it speaks again it starts as a new body.  The default keeps nothing per body.
+  virtual void forget(const std::string& /*source*/) {}
   /// End of input (replay end, daemon shutdown): emit what is still pending.
   virtual void finish(const Emit& /*emit*/) {}
   virtual Counters counters() const { return {}; }

@@ -168,6 +168,8 @@ int run_daemon(const config::DaemonConfig& cfg, const std::atomic<bool>& stop) {
         counters.resyncs = intake.time_resyncs();
         spdlog::warn("{} (time_resyncs: {})", intake.last_resync(), intake.time_resyncs());
       }
+      for (const std::string& body : intake.take_expired_bodies())
+        for (auto& r : runners) r->forget(body);
       counters.sources = static_cast<int64_t>(intake.sources());
       counters.expired = intake.sources_expired();
       if (!event) return;

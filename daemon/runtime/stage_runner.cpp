@@ -56,6 +56,12 @@ bool StageRunner::guarded(const char* what, F&& f) {
 void StageRunner::loop() {
   while (auto item = queue_.pop()) {
     std::unique_lock stage_lock(stage_mutex_);
+    std::vector<std::string> forget;
+    {
+      std::lock_guard lock(forget_mutex_);
+      forget.swap(forget_);
+    }
+    for (const auto& source : forget) guarded("forget", [&] { stage_.forget(source); });
     if (!guarded("handle", [&] { stage_.handle(item->event, emit_); }) &&
         guarded("recover", [&] { stage_.recover(item->event); }))
       ++recoveries_;

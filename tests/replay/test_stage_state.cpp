@@ -2,7 +2,7 @@
 // half way; a fresh engine of the same config restored from those bytes and fed the rest publishes exactly what the
 // saved engine publishes when it goes on (every number bit for bit): the graph (keyframes, loops, landmarks, lifelong
 // thinning, MATCH_REQUESTS, TRAJECTORY and FUSED_POSE "graph"), the EKF and the 3-D EKF with their windows of late
-// inputs, dead reckoning.  A fresh engine fed the same rest publishes something else (the test can fail), and a
+// inputs, the particle filter, dead reckoning, the association's waiting scans.  A fresh engine fed the same rest publishes something else (the test can fail), and a
 // damaged section is refused.
 #include "daemon/engine/engine.hpp"
 #include "daemon/runtime/codec.hpp"
@@ -165,6 +165,16 @@ TEST_CASE("state: the graph restored after lifelong thinning continues identical
 TEST_CASE("state: a 3-D engine (3-D EKF, 3-D graph) restored half way publishes what the saved one does") {
   const auto events = simulated_events("spatial", 60, 5);
   round_trip(EngineConfig{}, events, 50000);
+}
+
+TEST_CASE("state: the particle filter (FastSLAM, its maps and random generator) restored half way continues identically") {
+  const auto events = simulated_events("planar", 60, 7);
+  EngineConfig c;
+  c.filter.type = "pf";
+  c.filter.pf.particles = 30;
+  c.graph.enabled = false;
+  c.association.enabled = false;
+  round_trip(c, events, 20000);
 }
 
 TEST_CASE("state: a damaged or truncated section is refused with the archive's name and offset") {
