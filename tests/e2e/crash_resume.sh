@@ -66,6 +66,7 @@ rc=0
 timeout 20 "$SEXTANT_BIN/sextantd" --config "$work/config.yaml" --state-dir "$work/state_b" > "$work/bad.log" 2>&1 || rc=\$?
 [ \$rc -eq 4 ] || { echo "a damaged state file: exit \$rc, expected 4"; cat "$work/bad.log"; exit 1; }
 grep -q "sextantd.state: checksum mismatch" "$work/bad.log" || { echo "the error does not name the file and the damage"; cat "$work/bad.log"; exit 1; }
+: > "$work/discard.log"
 "$SEXTANT_BIN/sextantd" --config "$work/config.yaml" --state-dir "$work/state_b" --discard-bad-state > "$work/discard.log" 2>&1 &
 daemon=\$!
 wait_running \$daemon "$work/discard.log"
