@@ -50,7 +50,17 @@ int main(int argc, char** argv) {
   app.add_option("--check-config", check_path, "validate this configuration and exit: 0, or 2 with FILE:LINE on stderr")
       ->excludes(config_opt);
   auto* url_opt = app.add_option("--lcm-url", lcm_url, "LCM URL (overrides daemon.lcm_url)");
-  auto* rec_opt = app.add_option("--record", record, "record every received message to this LCM log file");
+  auto* rec_opt = app.add_option("--record", record,
+                                 "record every received message to this LCM log file (an existing file is kept: the "
+                                 "recording then goes to STEM-1.EXT, STEM-2.EXT, ...)");
+  std::string state_dir;
+  bool discard_bad_state = false;
+  auto* state_opt = app.add_option("--state-dir", state_dir,
+                                   "save the estimators' state in this directory and resume from it at start "
+                                   "(overrides daemon.state_dir; README, \"State directory\")");
+  app.add_flag("--discard-bad-state", discard_bad_state,
+               "a state file that cannot be used (damaged, other version or config) is renamed aside and the daemon "
+               "starts fresh, instead of exiting with 4");
   app.add_option("--log-level", log_level, "trace, debug, info, warn, error")
       ->check(CLI::IsMember({"trace", "debug", "info", "warn", "error"}));
   CLI11_PARSE(app, argc, argv);
@@ -71,6 +81,8 @@ int main(int argc, char** argv) {
   }
   if (*url_opt) config.lcm_url = lcm_url;
   if (*rec_opt) config.record = record;
+  if (*state_opt) config.state_dir = state_dir;
+  config.discard_bad_state = discard_bad_state;
 
   std::signal(SIGINT, on_signal);
   std::signal(SIGTERM, on_signal);

@@ -78,6 +78,19 @@ void read_channels(Section s, Channels& c) {
 
 }  // namespace
 
+uint64_t engine_fingerprint(const YAML::Node& root) {
+  // FNV-1a over the engine section as yaml-cpp writes it back: comments and layout do not count, values and
+  // written keys do.
+  std::string text;
+  if (root.IsMap()) {
+    const YAML::Node& r = root;
+    if (const YAML::Node e = r["engine"]; e.IsDefined()) text = YAML::Dump(e);
+  }
+  uint64_t h = 1469598103934665603ull;
+  for (unsigned char ch : text) h = (h ^ ch) * 1099511628211ull;
+  return h;
+}
+
 void read_engine_config(Section& s, engine::EngineConfig& c) {
   s.get_parsed("primary_estimator", c.primary_estimator, engine::primary_estimator_from_name);
   {
@@ -119,6 +132,8 @@ static void read_daemon_config(const YAML::Node& root, const std::string& file, 
     d.get("max_sources", c.max_sources, int_in_range(1, 1 << 20));
     d.get("source_idle_s", c.source_idle_s, non_negative());
     d.get("drain_timeout_s", c.drain_timeout_s, non_negative());
+    d.get("state_dir", c.state_dir);
+    d.get("state_period_s", c.state_period_s, in_range(0.1, 86400));
     d.reject_unknown_keys();
   }
   read_channels(top.child("channels"), c.channels);
@@ -127,6 +142,7 @@ static void read_daemon_config(const YAML::Node& root, const std::string& file, 
     read_engine_config(e, c.engine);
   }
   top.reject_unknown_keys();
+  c.engine_fingerprint = engine_fingerprint(root);
 }
 
 DaemonConfig parse_daemon_config(const std::string& yaml_text, const std::string& file) {

@@ -38,10 +38,16 @@ struct DaemonConfig {
   int max_sources = 256;                // bodies and sensors tracked
   double source_idle_s = 0;             // forget a silent source after this long (0: never)
   double drain_timeout_s = 5.0;         // SIGTERM: how long stage queues may drain
+  std::string state_dir;                // state directory (README "State directory"; "" = off); --state-dir overrides
+  double state_period_s = 10.0;         // wall-clock seconds between two saves of the state (and one at shutdown)
+  bool discard_bad_state = false;       // --discard-bad-state: set a bad state file aside and start fresh
+  uint64_t engine_fingerprint = 0;      // of the config's engine section (state files of another config are refused)
   Channels channels;
   engine::EngineConfig engine;
 };
 
+/// The fingerprint of a config's engine section (the state directory refuses another config's state).
+uint64_t engine_fingerprint(const YAML::Node& root);
 /// Parses and validates a YAML config file.
 DaemonConfig load_daemon_config(const std::string& path);
 /// The same from YAML text (`file` names it in errors).

@@ -1,5 +1,7 @@
 #include "daemon/engine/association_stage.hpp"
 
+#include "daemon/engine/event_archive.hpp"
+
 #include "assoc/field_of_view.hpp"
 #include "assoc/sd_assignment.hpp"
 
@@ -95,6 +97,16 @@ Counters AssociationStage::counters() const {
           {"targets", targets_},       {"tuples", tuples_},
           {"too_few_sensors", too_few_sensors_}, {"late_scans", late_scans_},
           {"forced_groups", forced_},  {"duplicate_sensor_scans", duplicate_sensor_}};
+}
+
+void AssociationStage::save(archive::ArchiveWriter& w) {
+  w(pending_)(last_associated_)(scans_)(groups_)(targets_)(tuples_)(too_few_sensors_)(late_scans_)(forced_)(
+      duplicate_sensor_);
+}
+
+void AssociationStage::load(archive::ArchiveReader& r) {
+  r(pending_)(last_associated_)(scans_)(groups_)(targets_)(tuples_)(too_few_sensors_)(late_scans_)(forced_)(
+      duplicate_sensor_);
 }
 
 }  // namespace sextant::engine

@@ -19,6 +19,9 @@ class AssociationStage final : public Stage {
   void handle(const Event& e, const Emit& emit) override;
   void finish(const Emit& emit) override;
   Counters counters() const override;
+  /// The state directory: the scans waiting for their group, the last associated scan, the counters.
+  void save(archive::ArchiveWriter& w) override;
+  void load(archive::ArchiveReader& r) override;
 
  private:
   void associate(int64_t scan_id, const Emit& emit);

@@ -1,5 +1,7 @@
 #include "daemon/engine/dead_reckoning_stage.hpp"
 
+#include "daemon/engine/event_archive.hpp"
+
 #include "daemon/engine/pose_conversion.hpp"
 #include "daemon/engine/pose_covariance.hpp"
 
@@ -43,6 +45,22 @@ void DeadReckoningStage::handle(const Event& e, const Emit& emit) {
 Counters DeadReckoningStage::counters() const {
   return {{"odometry_processed", processed_}, {"odometry_gaps", gaps_},
           {"sources", static_cast<int64_t>(tracks_.size())}};
+}
+
+void DeadReckoningStage::save(archive::ArchiveWriter& w) {
+  w(static_cast<uint64_t>(tracks_.size()));
+  for (const auto& [source, t] : tracks_) w(source)(t.utime)(t.last_odom)(t.last_odom_covariance)(t.map_pose)(t.covariance);
+  w(gaps_)(processed_);
+}
+
+void DeadReckoningStage::load(archive::ArchiveReader& r) {
+  tracks_.clear();
+  const uint64_t n = r.count(1, "the dead-reckoning tracks");
+  for (uint64_t i = 0; i < n; ++i) {
+    Track& t = tracks_[r.get<std::string>()];
+    r(t.utime)(t.last_odom)(t.last_odom_covariance)(t.map_pose)(t.covariance);
+  }
+  r(gaps_)(processed_);
 }
 
 }  // namespace sextant::engine

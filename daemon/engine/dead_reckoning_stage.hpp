@@ -25,7 +25,11 @@ class DeadReckoningStage final : public Stage {
   void handle(const Event& e, const Emit& emit) override;
   /// Forgets the failed event's source (it restarts from its next odometry message).
   void recover(const Event& failed) override { tracks_.erase(event_source(failed)); }
+  void forget(const std::string& source) override { tracks_.erase(source); }
   Counters counters() const override;
+  /// The state directory: every source's track and the counters.
+  void save(archive::ArchiveWriter& w) override;
+  void load(archive::ArchiveReader& r) override;
 
   /// One step of the propagation above, exposed for tests: returns P(k).
   static Matrix6 propagate(const Matrix6& previous, const SE3& increment, const Matrix6& increment_covariance);

@@ -44,7 +44,18 @@ class FilterStage final : public Stage {
   void handle(const Event& e, const Emit& emit) override;
   /// Forgets the failed event's body (its filter restarts from its next odometry message).
   void recover(const Event& failed) override;
+  /// A body of its own (a source `sources` does not list) is forgotten; the configured bodies stay.
+  void forget(const std::string& source) override {
+    if (config_.sources.contains(source)) return;
+    histories_.erase(source);
+    spatial_.erase(source);
+    published_.erase(source);
+  }
   Counters counters() const override;
+  /// The state directory (filter_stage_state.cpp): every body's filter with its window of recent inputs and
+  /// checkpoints (late inputs are re-applied after a restart as before it), what was published, the counters.
+  void save(archive::ArchiveWriter& w) override;
+  void load(archive::ArchiveReader& r) override;
 
   /// The landmark estimates of a body's filter (known map and SLAM landmarks).
   std::map<int64_t, Eigen::Vector2d> landmarks(const std::string& body) const;
@@ -63,6 +74,8 @@ class FilterStage final : public Stage {
     int64_t predictions = 0, updates = 0, gated = 0, new_landmarks = 0, unknown = 0, rejected = 0,
             before_odometry = 0, associated = 0, tentative = 0, duplicates = 0, unknown_sources = 0,
             stale_sightings = 0;
+    void save(archive::ArchiveWriter& w) const;
+    void load(archive::ArchiveReader& r);
   };
   using Input = std::variant<Odometry, LandmarkSightings>;
   using History = filter::MeasurementHistory<Track, Input>;
@@ -76,6 +89,8 @@ class FilterStage final : public Stage {
     std::vector<LandmarkSightings> pending;
     int64_t predictions = 0, updates = 0, gated = 0, new_landmarks = 0, rejected = 0, before_odometry = 0,
             duplicates = 0, unidentified = 0, unfused = 0, stale_sightings = 0;
+    void save(archive::ArchiveWriter& w) const;
+    void load(archive::ArchiveReader& r);
   };
   using SpatialHistory = filter::MeasurementHistory<SpatialTrack, Input>;
 

@@ -29,6 +29,10 @@ class GraphCorrections {
     std::lock_guard<std::mutex> lock(mutex_);
     corrections_[source] = c;
   }
+  void erase(const std::string& source) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    corrections_.erase(source);
+  }
   std::optional<GraphCorrection> get(const std::string& source) const {
     std::lock_guard<std::mutex> lock(mutex_);
     auto it = corrections_.find(source);

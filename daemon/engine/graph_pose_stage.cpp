@@ -1,5 +1,7 @@
 #include "daemon/engine/graph_pose_stage.hpp"
 
+#include "daemon/engine/event_archive.hpp"
+
 #include "daemon/engine/pose_conversion.hpp"
 #include "daemon/engine/pose_covariance.hpp"
 
@@ -35,6 +37,18 @@ void GraphPoseStage::handle(const Event& e, const Emit& emit) {
   }
   ++published_;
   emit(out);
+}
+
+void GraphPoseStage::save(archive::ArchiveWriter& w) {
+  w(last_utime_)(published_)(out_of_order_)(before_correction_)(correction_ages_)(static_cast<uint64_t>(age_next_));
+}
+
+void GraphPoseStage::load(archive::ArchiveReader& r) {
+  r(last_utime_)(published_)(out_of_order_)(before_correction_)(correction_ages_);
+  age_next_ = static_cast<size_t>(r.get<uint64_t>());
+  if (correction_ages_.size() > 1024 || (!correction_ages_.empty() && age_next_ >= correction_ages_.size()) ||
+      (correction_ages_.empty() && age_next_ != 0))
+    r.fail("graph_pose: correction ages out of range");
 }
 
 }  // namespace sextant::engine

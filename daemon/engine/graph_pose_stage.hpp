@@ -24,6 +24,10 @@ class GraphPoseStage final : public Stage {
   std::string_view estimator() const override { return "graph"; }
   bool accepts(const Event& e) const override { return std::holds_alternative<Odometry>(e); }
   void handle(const Event& e, const Emit& emit) override;
+  void forget(const std::string& source) override { last_utime_.erase(source); }
+  /// The state directory: each body's last published time (the correction itself is the graph stage's), counters.
+  void save(archive::ArchiveWriter& w) override;
+  void load(archive::ArchiveReader& r) override;
   Counters counters() const override {
     int64_t age_max = 0;
     for (int64_t a : correction_ages_) age_max = std::max(age_max, a);

@@ -88,6 +88,17 @@ class GraphStage final : public Stage {
       if (s) s->rebuild();
   }
   Counters counters() const override;
+  /// The state directory (graph_stage_state.cpp): both graphs (variables at their estimates, factors with their
+  /// kernels), every body's keyframes, thinned keyframes, odometry history, waiting loops and sightings, landmarks,
+  /// selector and TRAJECTORY feed, the map -> odometry corrections, next ids and counters.  Saving refactorizes each
+  /// smoother from its graph (rebuild) right after writing it, and forgets the sighting gate's cached marginals: a
+  /// stage restored from the file does the same from the same graph, so both continue identically.
+  void save(archive::ArchiveWriter& w) override;
+  void load(archive::ArchiveReader& r) override;
+  /// Drops the body with its map: its keyframes, landmarks and their factors leave the smoother of its kind (rebuilt
+  /// from the other bodies' variables and factors, graph_stage_state.cpp), its waiting loops and sightings, feed and
+  /// correction go.
+  void forget(const std::string& source) override;
 
   /// The smoother of the planar bodies or of the 3-D ones (nullptr before the first such body).
   const graph::IncrementalSmoother* smoother(bool planar) const { return smoothers_[planar ? 1 : 0].get(); }
@@ -193,6 +204,8 @@ class GraphStage final : public Stage {
   /// nullptr when that covariance cannot be inverted (it can only come from a sender's malformed covariances).
   static std::unique_ptr<graph::Factor> odometry_factor(bool planar, int from, int to, const SE3& edge, const Matrix6& covariance);
   void thin(bool planar);
+  /// The counters the state directory keeps (graph_stage_state.cpp).
+  std::vector<int64_t*> saved_counters();
 
   GraphConfig config_;
   std::shared_ptr<GraphCorrections> corrections_;

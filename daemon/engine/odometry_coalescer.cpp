@@ -174,4 +174,20 @@ int64_t OdometryCoalescer::waiting() const {
   return waiting_;
 }
 
+void OdometryCoalescer::resume(const std::string& source, const KeyframeSelector& selector, int64_t last_utime,
+                               const SE3& last_pose, const Matrix6& last_covariance) {
+  std::lock_guard lock(mutex_);
+  Body& b = bodies_[source];
+  b.selector = selector;
+  b.has_last = true;
+  b.last_utime = last_utime;
+  b.last_pose = last_pose;
+  b.last_covariance = last_covariance;
+}
+
+void OdometryCoalescer::forget(const std::string& source) {
+  std::lock_guard lock(mutex_);
+  if (auto it = bodies_.find(source); it != bodies_.end() && it->second.batches.empty()) bodies_.erase(it);
+}
+
 }  // namespace sextant::engine

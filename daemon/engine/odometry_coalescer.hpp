@@ -89,6 +89,15 @@ class OdometryCoalescer {
   /// them that it would have taken as keyframes reach it merged into a later one (a keyframe a little later).
   void keyframe_dropped(const std::string& source, const SE3& dropped, const std::optional<SE3>& reference);
 
+  /// Stage thread, before any event: a restored graph stage (its state directory) hands each body's last odometry
+  /// message and keyframe selector to the mirror, so that the next messages are pinned and merged as the stage will
+  /// decide them, exactly as if the daemon had not stopped.
+  void resume(const std::string& source, const KeyframeSelector& selector, int64_t last_utime, const SE3& last_pose,
+              const Matrix6& last_covariance);
+
+  /// Stage thread: a forgotten body (GraphStage::forget) starts afresh.
+  void forget(const std::string& source);
+
   int64_t coalesced() const;     // messages merged into a later one
   int64_t out_of_order() const;  // messages at or before their body's newest time, dropped here
   int64_t waiting() const;       // messages in batches the stage has not taken yet (after merging)

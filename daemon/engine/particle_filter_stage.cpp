@@ -1,5 +1,7 @@
 #include "daemon/engine/particle_filter_stage.hpp"
 
+#include "daemon/engine/event_archive.hpp"
+
 #include "daemon/engine/planar_pose_covariance.hpp"
 
 namespace sextant::engine {
@@ -21,16 +23,7 @@ void ParticleFilterStage::on_odometry(const Odometry& o, const Emit& emit) {
   }
   auto it = tracks_.find(o.source);
   if (it == tracks_.end()) {
-    filter::FastSlamOptions opt;
-    opt.particles = config_.pf.particles;
-    opt.resample_threshold = config_.pf.resample_threshold;
-    opt.seed = config_.pf.seed;
-    opt.slam = config_.slam;
-    opt.gate = config_.gate;
-    opt.max_landmarks = config_.max_landmarks;
-    opt.confirmations = config_.pf.confirmations;
-    opt.tentative_lifetime = config_.pf.tentative_lifetime;
-    it = tracks_.emplace(o.source, Track{filter::FastSlam(opt), odom, o.covariance, o.utime}).first;
+    it = tracks_.emplace(o.source, Track{filter::FastSlam(fastslam_options()), odom, o.covariance, o.utime}).first;
     Track& t = it->second;
     for (const auto& l : config_.map) t.pf.set_known_landmark(l.id, {l.x, l.y});
     const double sxy = config_.initial_sigma_xy, sth = config_.initial_sigma_theta;
@@ -109,6 +102,39 @@ std::map<int64_t, Eigen::Vector2d> ParticleFilterStage::landmarks(const std::str
 const filter::FastSlam* ParticleFilterStage::filter(const std::string& source) const {
   auto it = tracks_.find(source);
   return it == tracks_.end() ? nullptr : &it->second.pf;
+}
+
+filter::FastSlamOptions ParticleFilterStage::fastslam_options() const {
+  filter::FastSlamOptions opt;
+  opt.particles = config_.pf.particles;
+  opt.resample_threshold = config_.pf.resample_threshold;
+  opt.seed = config_.pf.seed;
+  opt.slam = config_.slam;
+  opt.gate = config_.gate;
+  opt.max_landmarks = config_.max_landmarks;
+  opt.confirmations = config_.pf.confirmations;
+  opt.tentative_lifetime = config_.pf.tentative_lifetime;
+  return opt;
+}
+
+void ParticleFilterStage::save(archive::ArchiveWriter& w) {
+  w(static_cast<uint64_t>(tracks_.size()));
+  for (const auto& [source, t] : tracks_) w(source)(t.pf)(t.last_odom)(t.last_covariance)(t.utime);
+  w(predictions_)(bad_odometry_)(out_of_order_)(updates_)(new_landmarks_)(associated_)(gated_)(rejected_)(unknown_)(
+      removed_)(resamplings_)(not_planar_)(before_odometry_);
+}
+
+void ParticleFilterStage::load(archive::ArchiveReader& r) {
+  tracks_.clear();
+  const uint64_t n = r.count(1, "the particle filters");
+  for (uint64_t i = 0; i < n; ++i) {
+    const auto source = r.get<std::string>();
+    Track t{filter::FastSlam(fastslam_options()), SE2(), Matrix6::Zero(), 0};
+    r(t.pf)(t.last_odom)(t.last_covariance)(t.utime);
+    tracks_.emplace(source, std::move(t));
+  }
+  r(predictions_)(bad_odometry_)(out_of_order_)(updates_)(new_landmarks_)(associated_)(gated_)(rejected_)(unknown_)(
+      removed_)(resamplings_)(not_planar_)(before_odometry_);
 }
 
 }  // namespace sextant::engine

@@ -26,7 +26,11 @@ class ParticleFilterStage final : public Stage {
   void handle(const Event& e, const Emit& emit) override;
   /// Forgets the failed event's source (its filter restarts from its next odometry message).
   void recover(const Event& failed) override { tracks_.erase(event_source(failed)); }
+  void forget(const std::string& source) override { tracks_.erase(source); }
   Counters counters() const override;
+  /// The state directory: every source's particle filter (particles, maps, random generator) and the counters.
+  void save(archive::ArchiveWriter& w) override;
+  void load(archive::ArchiveReader& r) override;
 
   /// The landmark estimates of a source's filter (its particle of largest weight, plus the known map).
   std::map<int64_t, Eigen::Vector2d> landmarks(const std::string& source) const;
@@ -41,6 +45,7 @@ class ParticleFilterStage final : public Stage {
     int64_t utime = 0;
   };
   void on_odometry(const Odometry& o, const Emit& emit);
+  filter::FastSlamOptions fastslam_options() const;
   void on_landmarks(const LandmarkSightings& s);
 
   FilterConfig config_;

@@ -3,6 +3,7 @@
 // driven from one thread at a time (the daemon gives each stage its own thread and bounded queue; replay calls
 // stages synchronously in utime order).  A stage must not throw for bad data: it counts and drops it.
 #include "daemon/engine/outputs.hpp"
+#include "estimators/archive/binary_archive.hpp"
 
 #include <functional>
 #include <string>
@@ -34,9 +35,21 @@ class Stage {
   /// before the next event, e.g. forget the body the event belongs to (it restarts from its next message) or
   /// rebuild a factorization from the graph.  The runtime counts the failure; the default keeps the state as is.
   virtual void recover(const Event& /*failed*/) {}
+  /// The body `source` (an odometry source) went silent and the daemon forgot it (daemon.source_idle_s): free every
+  /// per-body structure; if it speaks again it starts as a new body.  The default keeps nothing per body.
+  virtual void forget(const std::string& /*source*/) {}
   /// End of input (replay end, daemon shutdown): emit what is still pending.
   virtual void finish(const Emit& /*emit*/) {}
   virtual Counters counters() const { return {}; }
+  /// The state directory (README, "State directory"): everything the stage needs to continue after a restart as if
+  /// it had not stopped (estimates, per-body bookkeeping, counters), written between two events.  A stage may first
+  /// bring its state to a canonical form (the graph stage refactorizes its smoothers), so that `load` into a fresh
+  /// stage of the same config continues with the same outputs as this one.  The default keeps nothing: the stage
+  /// restarts empty.
+  virtual void save(archive::ArchiveWriter& /*w*/) {}
+  /// Restores what `save` wrote, into a stage just constructed with the same config and not yet fed; throws
+  /// archive::ArchiveError for anything that does not fit (the caller names the file).
+  virtual void load(archive::ArchiveReader& /*r*/) {}
   /// The estimator name of the FusedPose outputs this stage emits ("dead_reckoning", "ekf", "pf", "graph"),
   /// empty when it emits none.
   virtual std::string_view estimator() const { return {}; }

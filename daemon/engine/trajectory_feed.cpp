@@ -1,5 +1,7 @@
 #include "daemon/engine/trajectory_feed.hpp"
 
+#include "daemon/engine/event_archive.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -106,6 +108,14 @@ std::vector<Trajectory> TrajectoryFeed::publish(int64_t utime, const std::vector
     }
   }
   return out;
+}
+
+void TrajectoryFeed::save(archive::ArchiveWriter& w) const {
+  w(started_)(next_utime_)(published_)(snapshot_cursor_)(snapshot_id_)(snapshot_next_chunk_)(snapshot_chunks_);
+}
+
+void TrajectoryFeed::load(archive::ArchiveReader& r) {
+  r(started_)(next_utime_)(published_)(snapshot_cursor_)(snapshot_id_)(snapshot_next_chunk_)(snapshot_chunks_);
 }
 
 }  // namespace sextant::engine

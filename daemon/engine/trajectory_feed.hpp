@@ -12,6 +12,7 @@
 // every keyframe that differs at all from what was published, however many: the end of a replay or a shutdown.
 // The cost of a publication is one pass over the body's keyframes; between publications there is none.
 #include "daemon/engine/outputs.hpp"
+#include "estimators/archive/binary_archive.hpp"
 
 #include <cstdint>
 #include <map>
@@ -45,6 +46,9 @@ class TrajectoryFeed {
                                   bool flush = false);
 
   const TrajectoryFeedOptions& options() const { return options_; }
+  /// What has been published and where the snapshot is (the options are the constructor's).
+  void save(archive::ArchiveWriter& w) const;
+  void load(archive::ArchiveReader& r);
 
  private:
   TrajectoryFeedOptions options_;

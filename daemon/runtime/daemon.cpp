@@ -6,6 +6,7 @@
 #include "daemon/runtime/raw_subscription.hpp"
 #include "daemon/runtime/recorder.hpp"
 #include "daemon/runtime/stage_runner.hpp"
+#include "daemon/runtime/state_directory.hpp"
 #include "daemon/runtime/status_report.hpp"
 #include "daemon/runtime/udp_drops.hpp"
 
@@ -13,6 +14,7 @@
 #include <spdlog/spdlog.h>
 
 #include <chrono>
+#include <filesystem>
 #include <map>
 #include <memory>
 #include <thread>
@@ -69,8 +71,40 @@ int run_daemon(const config::DaemonConfig& cfg, const std::atomic<bool>& stop) {
     return kExitBus;
   }
 
-  engine::Engine engine(cfg.engine);
-  const std::string primary = engine.primary_estimator();
+  auto engine = std::make_unique<engine::Engine>(cfg.engine);
+  // The state directory: the stages continue from the saved state (state_directory.hpp).
+  const std::string state_path = cfg.state_dir.empty() ? std::string() : state_file_path(cfg.state_dir);
+  if (!state_path.empty()) {
+    std::error_code ec;
+    std::filesystem::create_directories(cfg.state_dir, ec);
+    if (ec) {
+      spdlog::error("--state-dir {}: cannot create it: {}", cfg.state_dir, ec.message());
+      return kExitState;
+    }
+    std::vector<engine::Stage*> stages;
+    for (auto& s : engine->stages()) stages.push_back(s.get());
+    try {
+      if (restore_stages(state_path, cfg.engine_fingerprint, stages))
+        spdlog::info("state restored from {}", state_path);
+      else
+        spdlog::info("no state in {}: starting fresh; state is saved there every {} s", cfg.state_dir, cfg.state_period_s);
+    } catch (const StateFileError& e) {
+      if (!cfg.discard_bad_state) {
+        spdlog::error("bad state file: {}\n  Move it away, or start with --discard-bad-state to set it aside and start "
+                      "fresh.", e.what());
+        return kExitState;
+      }
+      try {
+        const std::string aside = set_state_file_aside(state_path);
+        spdlog::warn("bad state file: {}; set aside as {} (--discard-bad-state): starting fresh", e.what(), aside);
+      } catch (const StateFileError& e2) {
+        spdlog::error("{}", e2.what());
+        return kExitState;
+      }
+      engine = std::make_unique<engine::Engine>(cfg.engine);  // the stages may have been partly restored
+    }
+  }
+  const std::string primary = engine->primary_estimator();
   Publisher publisher(cfg.channels, cfg.name, primary,
                       [&lcm](const std::string& channel, const std::vector<uint8_t>& bytes, int64_t) {
                         lcm.publish(channel, bytes.data(), static_cast<unsigned>(bytes.size()));
@@ -78,7 +112,7 @@ int run_daemon(const config::DaemonConfig& cfg, const std::atomic<bool>& stop) {
   const engine::Emit emit = [&publisher](engine::Output o) { publisher.publish(o); };
 
   std::vector<std::unique_ptr<StageRunner>> runners;
-  for (auto& stage : engine.stages())
+  for (auto& stage : engine->stages())
     runners.push_back(std::make_unique<StageRunner>(*stage, static_cast<size_t>(cfg.queue_capacity), emit));
 
   ChannelStats stats;
@@ -134,6 +168,8 @@ int run_daemon(const config::DaemonConfig& cfg, const std::atomic<bool>& stop) {
         counters.resyncs = intake.time_resyncs();
         spdlog::warn("{} (time_resyncs: {})", intake.last_resync(), intake.time_resyncs());
       }
+      for (const std::string& body : intake.take_expired_bodies())
+        for (auto& r : runners) r->forget(body);
       counters.sources = static_cast<int64_t>(intake.sources());
       counters.expired = intake.sources_expired();
       if (!event) return;
@@ -151,6 +187,23 @@ int run_daemon(const config::DaemonConfig& cfg, const std::atomic<bool>& stop) {
                cfg.lcm_url.empty() ? "the default LCM URL" : cfg.lcm_url, runners.size(),
                primary.empty() ? "none" : primary);
 
+  struct StateCounters {
+    std::atomic<int64_t> saves{0}, failures{0}, bytes{0}, save_us{0};
+  } state_counters;
+  auto save_state = [&] {
+    try {
+      const StateSave s = save_stages(state_path, cfg.engine_fingerprint, runners);
+      if (state_counters.saves.fetch_add(1) == 0)
+        spdlog::info("state saved to {}: {} bytes, {:.1f} ms from the stages, {:.1f} ms to write", state_path, s.bytes,
+                     s.collect_ms, s.write_ms);
+      state_counters.bytes = static_cast<int64_t>(s.bytes);
+      state_counters.save_us = static_cast<int64_t>(1000 * (s.collect_ms + s.write_ms));
+    } catch (const std::exception& e) {
+      const int64_t n = ++state_counters.failures;
+      if (n <= 10 || (n & (n - 1)) == 0) spdlog::error("state not saved ({} failure(s) so far): {}", n, e.what());
+    }
+  };
+
   const auto started = Clock::now();
   const int64_t drops_at_start = udp_receive_drops().value_or(0);
   StatusReport report(cfg.name);
@@ -162,6 +215,12 @@ int run_daemon(const config::DaemonConfig& cfg, const std::atomic<bool>& stop) {
                                       {"sources", intake_counters.sources.load()},
                                       {"sources_expired", intake_counters.expired.load()}};
     if (const auto drops = udp_receive_drops()) runtime_counters.push_back({"udp_receive_drops", *drops - drops_at_start});
+    if (!state_path.empty()) {
+      runtime_counters.push_back({"state_saves", state_counters.saves.load()});
+      runtime_counters.push_back({"state_save_failures", state_counters.failures.load()});
+      runtime_counters.push_back({"state_bytes", state_counters.bytes.load()});
+      runtime_counters.push_back({"state_save_us", state_counters.save_us.load()});
+    }
     if (recorder) {
       runtime_counters.push_back({"recorded", recorder->written()});
       runtime_counters.push_back({"record_dropped", recorder->dropped()});
@@ -188,6 +247,19 @@ int run_daemon(const config::DaemonConfig& cfg, const std::atomic<bool>& stop) {
     }
   });
 
+  // Periodic saves on a thread of their own: each stage is saved between two of its events (with_stage).
+  std::thread state_thread;
+  if (!state_path.empty())
+    state_thread = std::thread([&] {
+      auto next = Clock::now();
+      const auto period = std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(cfg.state_period_s));
+      while (!intake_stopped.load()) {
+        next += period;
+        while (!intake_stopped.load() && Clock::now() < next) std::this_thread::sleep_for(std::chrono::milliseconds(20));
+        if (!intake_stopped.load()) save_state();
+      }
+    });
+
   int rc = kExitOk;
   while (!stop.load()) {
     // A signal interrupts the poll (EINTR) and makes handleTimeout return -1: that is a shutdown, not a failure.
@@ -207,6 +279,11 @@ int run_daemon(const config::DaemonConfig& cfg, const std::atomic<bool>& stop) {
       spdlog::warn("stage '{}': {} queued event(s) discarded at the drain timeout ({} s)", r->status().name, left,
                    cfg.drain_timeout_s);
   status_thread.join();
+  if (state_thread.joinable()) state_thread.join();
+  if (!state_path.empty()) {
+    save_state();  // every stage drained and finished: the state a restart continues from
+    spdlog::info("state saved to {} at shutdown ({} bytes)", state_path, state_counters.bytes.load());
+  }
   if (recorder) {
     recorder->close();
     spdlog::info("recording closed: {} messages in {}", recorder->written(), recorder->path());

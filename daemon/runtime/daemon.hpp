@@ -11,7 +11,7 @@
 namespace sextant::runtime {
 
 /// Exit codes of sextantd.
-enum ExitCode : int { kExitOk = 0, kExitRuntime = 1, kExitConfig = 2, kExitBus = 3 };
+enum ExitCode : int { kExitOk = 0, kExitRuntime = 1, kExitConfig = 2, kExitBus = 3, kExitState = 4 };
 
 /// The message printed when LCM cannot start on `url`, with how to fix it.
 std::string bus_failure_help(const std::string& url);

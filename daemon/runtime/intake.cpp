@@ -89,4 +89,14 @@ std::optional<engine::Event> Intake::accept_unguarded(const std::string& channel
   return event;
 }
 
+std::vector<std::string> Intake::take_expired_bodies() {
+  std::vector<std::string> bodies;
+  for (const std::string& stream : order_.take_expired())
+    for (const auto& [channel, kind] : channels_)
+      if (kind == InputKind::kOdometry && stream.size() > channel.size() && stream.compare(0, channel.size(), channel) == 0 &&
+          stream[channel.size()] == '/')
+        bodies.push_back(stream.substr(channel.size() + 1));
+  return bodies;
+}
+
 }  // namespace sextant::runtime

@@ -43,6 +43,9 @@ class Intake {
   /// Bodies and sensors tracked now, and those forgotten after idling.
   size_t sources() const { return order_.streams(); }
   int64_t sources_expired() const { return order_.expired(); }
+  /// The bodies whose odometry stream was forgotten after idling since the last call (their odometry source names):
+  /// the daemon has the stages forget them too (Stage::forget), so that expiry frees all their per-body state.
+  std::vector<std::string> take_expired_bodies();
 
  private:
   std::optional<engine::Event> accept_unguarded(const std::string& channel, InputKind kind, const void* data, size_t size);

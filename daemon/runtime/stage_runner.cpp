@@ -45,6 +45,14 @@ void StageRunner::count_failure(const std::string& message) {
 
 void StageRunner::loop() {
   while (auto item = queue_.pop()) {
+    std::unique_lock stage_lock(stage_mutex_);
+    std::vector<std::string> forget;
+    {
+      std::lock_guard lock(forget_mutex_);
+      forget.swap(forget_);
+    }
+    for (const auto& source : forget)
+      if (auto thrown = engine::call_guarded([&] { stage_.forget(source); })) count_failure("forget: " + *thrown);
     if (auto failure = engine::handle_guarded(stage_, item->event, emit_)) {
       count_failure(failure->message);
       if (failure->recovered) ++recoveries_;
@@ -61,6 +69,7 @@ void StageRunner::loop() {
       counters_ = std::move(counters);
     }
   }
+  std::lock_guard stage_lock(stage_mutex_);
   if (auto thrown = engine::call_guarded([&] { stage_.finish(emit_); })) count_failure("finish: " + *thrown);
   engine::Counters counters;
   if (auto thrown = engine::call_guarded([&] { counters = stage_.counters(); })) {

@@ -43,6 +43,11 @@ class StageRunner {
   /// Offers an event if the stage accepts it; false when the stage accepted it but the queue was full (dropped).
   bool offer(const QueuedEvent& event);
   bool accepts(const engine::Event& event) const { return stage_.accepts(event); }
+  /// Has the stage forget a body (Stage::forget) on its own thread, before it handles its next event (any thread).
+  void forget(const std::string& source) {
+    std::lock_guard lock(forget_mutex_);
+    if (forget_.size() < 4096) forget_.push_back(source);
+  }
 
   void start();
   /// Refuses further events (what is queued stays).
@@ -54,6 +59,13 @@ class StageRunner {
   int64_t drain_and_stop(std::chrono::steady_clock::time_point deadline);
 
   StageStatus status() const;
+  /// Runs `f(stage)` between two events (the stage's thread waits meanwhile): how the state directory saves a
+  /// running stage (Stage::save).  Also safe before start and after drain_and_stop.
+  template <class F>
+  void with_stage(F&& f) {
+    std::lock_guard lock(stage_mutex_);
+    f(stage_);
+  }
   const LatencyRecorder& latency() const { return latency_; }
 
  private:
@@ -62,6 +74,7 @@ class StageRunner {
   void count_failure(const std::string& message);
 
   engine::Stage& stage_;
+  std::mutex stage_mutex_;  // held while the stage works on an event (and by with_stage)
   engine::Emit emit_;
   BoundedQueue<QueuedEvent> queue_;
   LatencyRecorder latency_;
@@ -71,6 +84,8 @@ class StageRunner {
   mutable std::mutex counters_mutex_;
   engine::Counters counters_;  // copied from the stage after each event (the stage is not thread-safe)
   std::string last_failure_;   // under counters_mutex_
+  std::mutex forget_mutex_;
+  std::vector<std::string> forget_;  // bodies to forget before the next event (under forget_mutex_)
 };
 
 }  // namespace sextant::runtime

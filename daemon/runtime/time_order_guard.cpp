@@ -29,6 +29,7 @@ void TimeOrderGuard::expire(SteadyTime now) {
   const auto idle = std::chrono::duration_cast<SteadyTime::duration>(std::chrono::duration<double>(options_.idle_s));
   for (auto it = streams_.begin(); it != streams_.end();) {
     if (now - it->second.seen > idle) {
+      if (expired_names_.size() < 4096) expired_names_.push_back(it->first);
       it = streams_.erase(it);
       ++expired_;
     } else {

@@ -23,6 +23,8 @@
 #include <optional>
 #include <string>
 #include <unordered_map>
+#include <utility>
+#include <vector>
 
 namespace sextant::runtime {
 
@@ -57,6 +59,9 @@ class TimeOrderGuard {
 
   int64_t resyncs() const { return resyncs_; }
   int64_t expired() const { return expired_; }
+  /// The streams forgotten since the last call (at most 4096 kept between calls), for the caller to free what it
+  /// keeps per stream.
+  std::vector<std::string> take_expired() { return std::exchange(expired_names_, {}); }
   size_t streams() const { return streams_.size(); }
   /// The message of the last re-synchronisation (for the log), empty before the first.
   const std::string& last_resync() const { return last_resync_; }
@@ -76,6 +81,7 @@ class TimeOrderGuard {
   std::unordered_map<std::string, Stream> streams_;
   SteadyTime last_expiry_{};
   int64_t resyncs_ = 0, expired_ = 0;
+  std::vector<std::string> expired_names_;
   std::string last_resync_;
 };
 

@@ -1,5 +1,9 @@
 #include "estimators/filter/fastslam.hpp"
 
+#include "estimators/lie/lie_archive.hpp"
+
+#include <sstream>
+
 #include "estimators/filter/low_variance_resampling.hpp"
 #include "estimators/filter/planar_ekf.hpp"
 
@@ -395,6 +399,29 @@ std::map<int64_t, Eigen::Vector2d> FastSlam::landmarks() const {
     if (lm.observations >= options_.confirmations) out[lm.id] = lm.mean;
   });
   return out;
+}
+
+void FastSlam::save(archive::ArchiveWriter& w) const {
+  w(initialized_)(static_cast<uint64_t>(particles_.size()));
+  for (const Particle& p : particles_) w(p.pose.mean)(p.pose.covariance)(p.log_weight)(p.identified)(p.unidentified);
+  w(known_)(std::map<int64_t, int32_t>(identified_slot_.begin(), identified_slot_.end()))(batches_)(resamplings_);
+  std::ostringstream rng, normal;
+  rng << rng_;
+  normal << normal_;
+  w(rng.str())(normal.str());
+}
+
+void FastSlam::load(archive::ArchiveReader& r) {
+  r(initialized_);
+  particles_.resize(r.count(1, "the particles"));
+  for (Particle& p : particles_) r(p.pose.mean)(p.pose.covariance)(p.log_weight)(p.identified)(p.unidentified);
+  std::map<int64_t, int32_t> slots;
+  r(known_)(slots)(batches_)(resamplings_);
+  identified_slot_ = std::unordered_map<int64_t, int32_t>(slots.begin(), slots.end());
+  std::istringstream rng(r.get<std::string>()), normal(r.get<std::string>());
+  rng >> rng_;
+  normal >> normal_;
+  if (rng.fail() || normal.fail()) r.fail("a particle filter whose random generator state does not read back");
 }
 
 }  // namespace sextant::filter

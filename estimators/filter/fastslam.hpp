@@ -141,6 +141,12 @@ class FastSlam {
   /// Low-variance resampling of the particles by their weights (shares the maps); exposed for tests.
   void resample();
 
+  /// The filter's state (particles with their maps, the id table, the random generator's state, counters) in the
+  /// binary archive; a loaded filter draws the same numbers as the saved one would.  The options are the
+  /// constructor's.
+  void save(archive::ArchiveWriter& w) const;
+  void load(archive::ArchiveReader& r);
+
  private:
   struct Pending;
   bool valid(const RangeBearing& s) const;

@@ -1,5 +1,6 @@
 #include "estimators/filter/landmark_map_tree.hpp"
 
+
 #include <stdexcept>
 
 namespace sextant::filter {
@@ -79,6 +80,28 @@ int64_t LandmarkMapTree::node_count() const {
     return n == nullptr ? 0 : 1 + count(n->child[0].get()) + count(n->child[1].get());
   };
   return count(root_.get());
+}
+
+void LandmarkMapTree::save(archive::ArchiveWriter& w) const {
+  int64_t n = 0;
+  for_each([&](int32_t, const MapLandmark&) { ++n; });
+  w(slots_)(n);
+  for_each([&](int32_t slot, const MapLandmark& l) { w(slot)(l.mean)(l.covariance)(l.id)(l.observations)(l.last_seen); });
+}
+
+void LandmarkMapTree::load(archive::ArchiveReader& r) {
+  *this = LandmarkMapTree{};
+  const auto slots = r.get<int32_t>();
+  const auto n = r.get<int64_t>();
+  if (slots < 0 || n < 0 || n > slots || static_cast<uint64_t>(n) > r.remaining() / 64) r.fail("a landmark map of bad size");
+  for (int64_t k = 0; k < n; ++k) {
+    const auto slot = r.get<int32_t>();
+    if (slot < 0 || slot >= slots) r.fail("a landmark map slot out of range");
+    MapLandmark l;
+    r(l.mean)(l.covariance)(l.id)(l.observations)(l.last_seen);
+    set(slot, l);
+  }
+  slots_ = slots;
 }
 
 }  // namespace sextant::filter

@@ -10,6 +10,8 @@
 // landmark.  Nodes are immutable once built and reference counted (std::shared_ptr): a subtree lives as long as one
 // map uses it.  Not thread-safe for concurrent writers of one map; different maps may share nodes across threads
 // (the reference counts are atomic).
+#include "estimators/archive/binary_archive.hpp"
+
 #include <Eigen/Core>
 
 #include <cstdint>
@@ -47,6 +49,11 @@ class LandmarkMapTree {
   bool shares_slot_with(const LandmarkMapTree& other, int32_t slot) const;
   /// Nodes reachable from this map (internal and leaves), counting shared ones once per map.
   int64_t node_count() const;
+
+  /// The stored landmarks by slot and the slot count in the binary archive.  A loaded map holds the same landmarks
+  /// in the same slots, in nodes of its own (shared with no other map until copied).
+  void save(archive::ArchiveWriter& w) const;
+  void load(archive::ArchiveReader& r);
 
  private:
   struct Node;

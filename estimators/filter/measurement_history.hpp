@@ -15,6 +15,8 @@
 //    the inputs between the checkpoint and now (at most window + interval of them).
 // `State` must be copyable; `apply(State&, const Input&)` must be deterministic and must not have effects outside
 // the state (counters belong in the state, so that re-application does not count twice).
+#include "estimators/archive/binary_archive.hpp"
+
 #include <algorithm>
 #include <cstdint>
 #include <deque>
@@ -76,6 +78,38 @@ class MeasurementHistory {
   int64_t newest() const { return newest_; }
   size_t inputs() const { return inputs_.size(); }
   size_t checkpoints() const { return checkpoints_.size(); }
+
+  /// The whole history in the binary archive: the state, the inputs of the window with their keys and the
+  /// checkpoints, so that a restored history re-applies a late input exactly as this one would.  State and Input
+  /// must be archivable (binary_archive.hpp); the window is the constructor's.  `fresh` is a state as the caller
+  /// constructs it before any input (its configured parts): each restored state is loaded into a copy of it.
+  void save(archive::ArchiveWriter& w) const {
+    w(state_)(newest_)(arrivals_);
+    w(static_cast<uint64_t>(inputs_.size()));
+    for (const Entry& e : inputs_) w(e.key.utime)(e.key.rank)(e.key.arrival)(e.input);
+    w(static_cast<uint64_t>(checkpoints_.size()));
+    for (const Checkpoint& c : checkpoints_) w(c.last.utime)(c.last.rank)(c.last.arrival)(c.state);
+  }
+  void load(archive::ArchiveReader& r, const State& fresh) {
+    state_ = fresh;
+    r(state_)(newest_)(arrivals_);
+    inputs_.clear();
+    const uint64_t n = r.count(1, "the history's inputs");
+    for (uint64_t i = 0; i < n; ++i) {
+      Entry e{kBeforeAll, Input{}};
+      r(e.key.utime)(e.key.rank)(e.key.arrival)(e.input);
+      if (!inputs_.empty() && !(inputs_.back().key < e.key)) r.fail("a history whose inputs are not in order");
+      inputs_.push_back(std::move(e));
+    }
+    checkpoints_.clear();
+    const uint64_t c = r.count(1, "the history's checkpoints");
+    if (c == 0) r.fail("a history without its first checkpoint");
+    for (uint64_t i = 0; i < c; ++i) {
+      Checkpoint k{kBeforeAll, fresh};
+      r(k.last.utime)(k.last.rank)(k.last.arrival)(k.state);
+      checkpoints_.push_back(std::move(k));
+    }
+  }
 
  private:
   struct Key {

@@ -1,6 +1,8 @@
 #include "estimators/filter/multi_source_ekf.hpp"
 
 #include "estimators/filter/eigenvalue_floor.hpp"
+#include "estimators/lie/lie_archive.hpp"
+
 #include "estimators/filter/interpolated_prediction.hpp"
 
 #include <stdexcept>
@@ -147,6 +149,52 @@ OdometryOutcome MultiSourceEkf::measure(Source& s, SourceCounters& c, const Plan
   }
   ++c.rejected;
   return OdometryOutcome::rejected;
+}
+
+namespace {
+void save_odometry(archive::ArchiveWriter& w, const PlanarOdometry& m) {
+  w(m.utime)(m.pose)(m.covariance)(m.increment_covariance)(m.twist)(m.twist_covariance);
+}
+void load_odometry(archive::ArchiveReader& r, PlanarOdometry& m) {
+  r(m.utime)(m.pose)(m.covariance)(m.increment_covariance)(m.twist)(m.twist_covariance);
+}
+}  // namespace
+
+void MultiSourceEkf::save(archive::ArchiveWriter& w) const {
+  w(ekf_)(started_)(utime_)(clock_);
+  w(static_cast<uint64_t>(sources_.size()));
+  for (const auto& [name, s] : sources_) {
+    w(name)(s.last.has_value());
+    if (s.last) save_odometry(w, *s.last);
+    w(s.last_seen)(s.clone)(s.frame);
+  }
+  w(static_cast<uint64_t>(counters_.size()));
+  for (const auto& [name, c] : counters_) w(name)(c.messages)(c.fused)(c.gated)(c.rejected)(c.timeouts)(c.silent);
+}
+
+void MultiSourceEkf::load(archive::ArchiveReader& r) {
+  r(ekf_)(started_)(utime_)(clock_);
+  const uint64_t n = r.count(1, "the odometry sources");
+  for (uint64_t i = 0; i < n; ++i) {
+    const auto name = r.get<std::string>();
+    auto it = sources_.find(name);
+    if (it == sources_.end()) r.fail("odometry source '" + name + "' is not in this configuration");
+    Source& s = it->second;
+    if (r.get<bool>()) {
+      PlanarOdometry m;
+      load_odometry(r, m);
+      s.last = m;
+    } else {
+      s.last.reset();
+    }
+    r(s.last_seen)(s.clone)(s.frame);
+  }
+  const uint64_t c = r.count(1, "the source counters");
+  counters_.clear();
+  for (uint64_t i = 0; i < c; ++i) {
+    SourceCounters& k = counters_[r.get<std::string>()];
+    r(k.messages)(k.fused)(k.gated)(k.rejected)(k.timeouts)(k.silent);
+  }
 }
 
 }  // namespace sextant::filter

@@ -105,6 +105,11 @@ class MultiSourceEkf {
   /// symmetrized with eigenvalues at least `min_variance`.
   static Eigen::Matrix3d increment_noise(const PlanarOdometry& previous, const PlanarOdometry& current, double min_variance);
 
+  /// The fusion's state (the EKF, each source's last message, clone and frame, the counters) in the binary archive;
+  /// the options and the sources' settings are the constructor's (a saved source it does not have is an error).
+  void save(archive::ArchiveWriter& w) const;
+  void load(archive::ArchiveReader& r);
+
  private:
   struct Source {
     OdometrySourceOptions options;

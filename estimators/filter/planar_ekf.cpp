@@ -1,5 +1,7 @@
 #include "estimators/filter/planar_ekf.hpp"
 
+#include "estimators/lie/lie_archive.hpp"
+
 #include "assoc/landmark/jcbb.hpp"
 #include "estimators/filter/landmark_admission.hpp"
 #include "estimators/filter/state_augmentation.hpp"
@@ -280,6 +282,21 @@ std::map<int64_t, Eigen::Vector2d> PlanarEkf::landmarks() const {
   std::map<int64_t, Eigen::Vector2d> out = known_;
   for (const auto& [id, k] : slot_) out[id] = x_.segment<2>(k);
   return out;
+}
+
+void PlanarEkf::save(archive::ArchiveWriter& w) const {
+  w(initialized_)(x_)(P_)(known_)(slot_)(next_id_);
+  w(static_cast<uint64_t>(tentative_.size()));
+  for (const Tentative& t : tentative_) w(t.position)(t.seen)(t.idle)(t.last.range)(t.last.bearing)(t.last.covariance);
+}
+
+void PlanarEkf::load(archive::ArchiveReader& r) {
+  r(initialized_)(x_)(P_)(known_)(slot_)(next_id_);
+  if (x_.size() < 3 || P_.rows() != x_.size() || P_.cols() != x_.size()) r.fail("an EKF state whose covariance does not match it");
+  for (const auto& [id, slot] : slot_)
+    if (slot < 3 || slot + 2 > x_.size()) r.fail("an EKF landmark slot outside the state");
+  tentative_.resize(r.count(1, "the tentative landmarks"));
+  for (Tentative& t : tentative_) r(t.position)(t.seen)(t.idle)(t.last.range)(t.last.bearing)(t.last.covariance);
 }
 
 }  // namespace sextant::filter

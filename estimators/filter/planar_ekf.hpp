@@ -12,6 +12,7 @@
 //    since a clone of an earlier pose, h = C^-1 X (relative; the clone is a copy of the robot pose kept in the
 //    state, "stochastic cloning", Roumeliotis & Burdick, ICRA 2002).  Innovation r = Log(h^-1 Z), on any subset
 //    of its [x, y, theta] rows.
+#include "estimators/archive/binary_archive.hpp"
 #include "estimators/filter/kalman_update.hpp"
 #include "estimators/lie/se2.hpp"
 
@@ -88,6 +89,11 @@ class PlanarEkf {
                                                   Eigen::Matrix3d* H_clone, Eigen::Matrix3d* H_robot);
   /// The innovation of an absolute pose measurement Z of F^-1 X, with H_robot = -dr/dX.
   static Eigen::Vector3d pose_innovation(const SE2& frame, const Eigen::Vector3d& robot, const SE2& z, Eigen::Matrix3d* H_robot);
+
+  /// The filter's state (estimate, covariance, landmarks) in the binary archive (the daemon's state directory); the
+  /// options are the constructor's.
+  void save(archive::ArchiveWriter& w) const;
+  void load(archive::ArchiveReader& r);
 
  private:
   void augment(int64_t id, double range, double bearing, const Eigen::Matrix2d& R);

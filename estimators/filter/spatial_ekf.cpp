@@ -1,6 +1,8 @@
 #include "estimators/filter/spatial_ekf.hpp"
 
 #include "estimators/filter/landmark_admission.hpp"
+#include "estimators/lie/lie_archive.hpp"
+
 #include "estimators/filter/state_augmentation.hpp"
 #include "estimators/lie/so2.hpp"
 
@@ -109,6 +111,16 @@ std::map<int64_t, Eigen::Vector3d> SpatialEkf::landmarks() const {
   std::map<int64_t, Eigen::Vector3d> out;
   for (const auto& [id, k] : slot_) out[id] = landmarks_.segment<3>(k - 6);
   return out;
+}
+
+void SpatialEkf::save(archive::ArchiveWriter& w) const { w(initialized_)(pose_)(landmarks_)(P_)(slot_); }
+
+void SpatialEkf::load(archive::ArchiveReader& r) {
+  r(initialized_)(pose_)(landmarks_)(P_)(slot_);
+  if (landmarks_.size() % 3 != 0 || P_.rows() != 6 + landmarks_.size() || P_.cols() != P_.rows())
+    r.fail("a 3-D EKF state whose covariance does not match it");
+  for (const auto& [id, slot] : slot_)
+    if (slot < 6 || slot + 3 > 6 + landmarks_.size()) r.fail("a 3-D EKF landmark slot outside the state");
 }
 
 }  // namespace sextant::filter

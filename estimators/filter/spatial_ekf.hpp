@@ -12,6 +12,7 @@
 //  - New landmark: l = t + R q(z), q(z) = r [cos(el) cos(az), cos(el) sin(az), sin(el)].
 // The sensor is taken at the body origin (landmarks_t.sensor_in_body is not applied, as in the planar filter).
 // Update: the error state dx = K r is applied as X <- X Exp(dxi), l <- l + dl (the error state is reset to 0).
+#include "estimators/archive/binary_archive.hpp"
 #include "estimators/filter/kalman_update.hpp"
 #include "estimators/lie/se3.hpp"
 
@@ -51,6 +52,11 @@ class SpatialEkf {
   /// The landmark seen at z from `pose`, with J_pose = dl/dxi and J_z = dl/dz.
   static Eigen::Vector3d inverse_observation(const SE3& pose, const Eigen::Vector3d& z, Eigen::Matrix<double, 3, 6>* J_pose,
                                              Eigen::Matrix3d* J_z);
+
+  /// The filter's state (estimate, covariance, landmarks) in the binary archive (the daemon's state directory); the
+  /// options are the constructor's.
+  void save(archive::ArchiveWriter& w) const;
+  void load(archive::ArchiveReader& r);
 
  private:
   void augment(int64_t id, const Eigen::Vector3d& z, const Eigen::Matrix3d& R);

@@ -1,5 +1,7 @@
 #include "estimators/keyframe/keyframe_selector.hpp"
 
+#include "estimators/lie/lie_archive.hpp"
+
 #include <cmath>
 #include <limits>
 #include <sstream>
@@ -105,6 +107,14 @@ KeyframeDecision KeyframeSelector::decide(const SE3& pose) {
   reference_ = pose;
   ++accepted_;
   return KeyframeDecision::kKeyframe;
+}
+
+void KeyframeSelector::save(archive::ArchiveWriter& w) const {
+  w(reference_)(jump_last_)(jump_run_)(last_magnitude_)(accepted_)(rejected_)(too_close_)(reanchored_);
+}
+
+void KeyframeSelector::load(archive::ArchiveReader& r) {
+  r(reference_)(jump_last_)(jump_run_)(last_magnitude_)(accepted_)(rejected_)(too_close_)(reanchored_);
 }
 
 }  // namespace sextant

@@ -23,6 +23,7 @@
 // The first pose is always a keyframe.  A pose with a non-finite component (or whose motion magnitude is not
 // finite) is kImplausible and counted, never becomes the reference and ends a run towards re-anchoring.
 // The paper's own run used k1 = 0.8, k2 = 2 in its units; sextant's defaults are for metres and radians.
+#include "estimators/archive/binary_archive.hpp"
 #include "estimators/lie/se2.hpp"
 #include "estimators/lie/se3.hpp"
 
@@ -82,6 +83,10 @@ class KeyframeSelector {
   /// Throws std::invalid_argument for a pose with a non-finite component.
   void reset_reference(const std::optional<SE3>& pose);
   const KeyframeSelectorOptions& options() const { return options_; }
+  /// The decision state (reference, run towards re-anchoring, counters) in the binary archive; the options are the
+  /// constructor's (load keeps this selector's own).
+  void save(archive::ArchiveWriter& w) const;
+  void load(archive::ArchiveReader& r);
 
  private:
   KeyframeSelectorOptions options_;

@@ -15,6 +15,13 @@ class SO3 {
   /// Normalizes `q`.  The sign of q is kept (q and -q are the same rotation).
   explicit SO3(const Eigen::Quaterniond& q) : q_(q.normalized()) {}
   explicit SO3(const Eigen::Matrix3d& R) : q_(Eigen::Quaterniond(R).normalized()) {}
+  /// `q` as it is, not normalized again: for a quaternion that is already one of an SO3's (a restored state), so that
+  /// it comes back bit for bit.
+  static SO3 from_unit_quaternion(const Eigen::Quaterniond& q) {
+    SO3 r;
+    r.q_ = q;
+    return r;
+  }
 
   /// Exp: rotation vector (axis * angle, rad) -> rotation (eq. 132); J_right = Jr(w) (eq. 143).
   static SO3 exp(const Eigen::Vector3d& w, Eigen::Matrix3d* J_right = nullptr);

@@ -4,6 +4,9 @@
 
 #include <doctest/doctest.h>
 
+#include <algorithm>
+#include <thread>
+
 #include <cstdint>
 #include <chrono>
 #include <limits>
@@ -163,6 +166,32 @@ TEST_CASE("state per name is bounded: new names beyond the cap are refused, idle
   CHECK_FALSE(g.check("newcomer", kT0, true, 0, live_at(40)));
   CHECK(g.expired() == 99);
   CHECK(g.streams() == 2);
+  // The names forgotten, for the daemon to free the stages' state of those bodies (Stage::forget), once.
+  auto names = g.take_expired();
+  CHECK(names.size() == 99);
+  CHECK(std::find(names.begin(), names.end(), "body5") == names.end());
+  CHECK(std::find(names.begin(), names.end(), "body7") != names.end());
+  CHECK(g.take_expired().empty());
+}
+
+TEST_CASE("the intake names the bodies whose odometry stream expired (not sensors, not other channels)") {
+  runtime::ChannelStats stats;
+  runtime::IntakeOptions o;
+  o.time.idle_s = 0.05;
+  runtime::Intake intake(stats, {}, o);
+  intake.add_channel("R/ODOMETRY", runtime::InputKind::kOdometry);
+  const auto a = odometry(kT0, "robot/a", 0, "robot/a");
+  const auto b = odometry(kT0, "b", 0, "b");
+  REQUIRE(intake.accept("R/ODOMETRY", a.data(), a.size()));
+  REQUIRE(intake.accept("R/ODOMETRY", b.data(), b.size()));
+  CHECK(intake.take_expired_bodies().empty());
+  std::this_thread::sleep_for(std::chrono::milliseconds(1100));  // idle, and past the once-a-second sweep
+  const auto c = odometry(kT0 + 1, "b", 1, "b");
+  REQUIRE(intake.accept("R/ODOMETRY", c.data(), c.size()));
+  const auto gone = intake.take_expired_bodies();
+  REQUIRE(gone.size() == 2);  // both were idle at the sweep (b came back after it)
+  CHECK(std::find(gone.begin(), gone.end(), "robot/a") != gone.end());
+  CHECK(std::find(gone.begin(), gone.end(), "b") != gone.end());
 }
 
 TEST_CASE("the intake counts sequence gaps per channel and sender as lost") {

@@ -1,0 +1,105 @@
+// The state file (daemon/runtime/state_file.hpp): sections round-trip through the file; every kind of damage (a
+// flipped byte anywhere, truncation, another magic, version or config fingerprint) is refused with the file named;
+// the atomic write leaves no temporary file; CRC-32 is zlib's.  And the archive's own checks on counts and sizes.
+#include "daemon/runtime/state_file.hpp"
+#include "estimators/archive/binary_archive.hpp"
+
+#include <doctest/doctest.h>
+
+#include <filesystem>
+#include <string>
+#include <unistd.h>
+
+using namespace sextant;
+using namespace sextant::runtime;
+
+namespace {
+
+std::string error_of(const std::string& bytes, uint64_t fingerprint) {
+  try {
+    decode_state(bytes, fingerprint, "/some/dir/sextantd.state");
+  } catch (const StateFileError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+}  // namespace
+
+TEST_CASE("state file: CRC-32 is zlib's (IEEE 802.3)") {
+  CHECK(crc32("123456789", 9) == 0xCBF43926u);  // the standard check value
+  CHECK(crc32("", 0) == 0u);
+}
+
+TEST_CASE("state file: sections round-trip; every flipped byte and every truncation is refused, naming the file") {
+  const std::vector<StateSection> sections{{"dead_reckoning", std::string("\x01\x02\x03", 3)}, {"graph", std::string(300, 'g')}};
+  const std::string bytes = encode_state(42, sections);
+  const auto back = decode_state(bytes, 42, "f");
+  REQUIRE(back.size() == 2);
+  CHECK(back[0].name == "dead_reckoning");
+  CHECK(back[0].bytes == sections[0].bytes);
+  CHECK(back[1].bytes == sections[1].bytes);
+
+  for (size_t i = 0; i < bytes.size(); ++i) {
+    std::string bad = bytes;
+    bad[i] = static_cast<char>(bad[i] ^ 0x10);
+    const std::string e = error_of(bad, 42);
+    CHECK_MESSAGE(e.rfind("/some/dir/sextantd.state: ", 0) == 0, "byte " << i << ": '" << e << "'");
+  }
+  for (size_t n = 0; n < bytes.size(); ++n) CHECK_FALSE(error_of(bytes.substr(0, n), 42).empty());
+  CHECK(error_of(bytes + "x", 42).find("truncated or extended") != std::string::npos);
+  CHECK(error_of(bytes, 43).find("another engine configuration") != std::string::npos);
+  CHECK(error_of("hello", 42).find("too short") != std::string::npos);
+  std::string other_version = bytes;
+  other_version[16] = 2;
+  CHECK(error_of(other_version, 42).find("state format version 2") != std::string::npos);
+}
+
+TEST_CASE("state file: written atomically, replacing the previous one, no temporary left") {
+  const auto dir = std::filesystem::temp_directory_path() / ("sextant_state_file_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  const std::string path = (dir / kStateFileName).string();
+  write_file_atomically(path, encode_state(1, {{"a", "first"}}));
+  write_file_atomically(path, encode_state(1, {{"a", "second"}}));
+  CHECK(decode_state(read_whole_file(path), 1, path)[0].bytes == "second");
+  CHECK_FALSE(std::filesystem::exists(path + ".tmp"));
+  CHECK_THROWS_AS(write_file_atomically((dir / "missing" / "x").string(), "y"), StateFileError);
+  CHECK_THROWS_AS(read_whole_file((dir / "missing").string()), StateFileError);
+  std::filesystem::remove_all(dir);
+}
+
+TEST_CASE("archive: values round-trip exactly; counts and sizes beyond the bytes left are refused before allocating") {
+  archive::ArchiveWriter w;
+  const Eigen::Matrix3d m = Eigen::Matrix3d::Random();
+  const Eigen::VectorXd v = Eigen::VectorXd::Random(5);
+  std::map<int64_t, std::string> map{{-1, "a"}, {7, "bc"}};
+  std::optional<double> some = 0.1, none;
+  std::variant<int, std::string> var = std::string("x");
+  w(int64_t{-5})(true)(0.1)(m)(v)(map)(some)(none)(var)(std::vector<double>{1.5, -2.5});
+  const std::string b = w.take();
+  archive::ArchiveReader r(b.data(), b.size(), "t");
+  CHECK(r.get<int64_t>() == -5);
+  CHECK(r.get<bool>());
+  CHECK(r.get<double>() == 0.1);
+  CHECK(r.get<Eigen::Matrix3d>() == m);
+  CHECK(r.get<Eigen::VectorXd>() == v);
+  CHECK(r.get<std::map<int64_t, std::string>>() == map);
+  CHECK(r.get<std::optional<double>>() == some);
+  CHECK_FALSE(r.get<std::optional<double>>().has_value());
+  CHECK(std::get<std::string>(r.get<std::variant<int, std::string>>()) == "x");
+  CHECK(r.get<std::vector<double>>() == std::vector<double>{1.5, -2.5});
+  CHECK_NOTHROW(r.expect_end());
+
+  // A count of 2^62 elements in a 12-byte archive, a matrix of the wrong fixed size, a bool of 2.
+  archive::ArchiveWriter huge;
+  huge(uint64_t{1} << 62)(uint32_t{0});
+  archive::ArchiveReader hr(huge.data().data(), huge.data().size(), "huge");
+  CHECK_THROWS_WITH_AS(hr.get<std::vector<double>>(), doctest::Contains("huge: at byte 8: a sequence of"), archive::ArchiveError);
+  archive::ArchiveWriter wrong;
+  wrong(Eigen::Matrix2d::Identity().eval());
+  archive::ArchiveReader wr(wrong.data().data(), wrong.data().size(), "wrong");
+  CHECK_THROWS_AS(wr.get<Eigen::Matrix3d>(), archive::ArchiveError);
+  const char two = 2;
+  archive::ArchiveReader br(&two, 1, "flag");
+  CHECK_THROWS_AS(br.get<bool>(), archive::ArchiveError);
+}
