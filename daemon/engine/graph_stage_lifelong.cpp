@@ -174,6 +174,9 @@ void GraphStage::thin(bool planar) {
     std::merge(b.thinned.begin(), b.thinned.end(), plan.thinned.begin(), plan.thinned.end(), std::back_inserter(merged),
                [](const ThinnedKeyframe& x, const ThinnedKeyframe& y) { return x.utime < y.utime; });
     b.thinned = std::move(merged);
+    // Bounded for unbounded time: the oldest records go first (a loop about such a time is then counted unmatched).
+    if (b.thinned.size() > kMaxThinnedRecords)
+      b.thinned.erase(b.thinned.begin(), b.thinned.end() - static_cast<std::ptrdiff_t>(kMaxThinnedRecords));
     for (auto it = b.landmarks.begin(); it != b.landmarks.end();) {
       const int v = remap[static_cast<size_t>(it->second.variable)];
       if (v < 0) {

@@ -4,9 +4,7 @@
 #include "daemon/engine/engine.hpp"
 #include "daemon/engine/filter_stage.hpp"
 #include "daemon/engine/graph_stage.hpp"
-#include "daemon/runtime/codec.hpp"
-#include "daemon/runtime/lcm_log.hpp"
-#include "replay/simulator.hpp"
+#include "simulated_events.hpp"
 
 #include <doctest/doctest.h>
 
@@ -25,24 +23,7 @@ std::vector<Event> run_of(const std::string& source, uint64_t seed, double secon
   sim.seed = seed;
   sim.duration_s = seconds;
   sim.source = source;
-  const auto log = (std::filesystem::temp_directory_path() /
-                    ("sextant_forget_" + std::to_string(::getpid()) + "_" + source + ".lcm")).string();
-  {
-    runtime::LogWriter w(log);
-    replay::simulate(sim, w);
-  }
-  std::vector<Event> events;
-  for (const auto& r : runtime::LogReader::read_all(log)) {
-    const auto kind = r.channel == "ODOMETRY"        ? runtime::InputKind::kOdometry
-                      : r.channel == "LANDMARKS"     ? runtime::InputKind::kLandmarks
-                      : r.channel == "LOOP_CLOSURES" ? runtime::InputKind::kLoopClosures
-                                                     : runtime::InputKind::kBearings;
-    if (kind == runtime::InputKind::kBearings) continue;
-    auto d = runtime::decode_event(kind, r.data.data(), r.data.size());
-    if (auto* e = std::get_if<Event>(&d)) events.push_back(*e);
-  }
-  std::remove(log.c_str());
-  return events;
+  return test::simulated_events(sim, false);
 }
 
 }  // namespace

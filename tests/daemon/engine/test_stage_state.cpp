@@ -5,9 +5,7 @@
 // inputs, the particle filter, dead reckoning, the association's waiting scans.  A fresh engine fed the same rest publishes something else (the test can fail), and a
 // damaged section is refused.
 #include "daemon/engine/engine.hpp"
-#include "daemon/runtime/codec.hpp"
-#include "daemon/runtime/lcm_log.hpp"
-#include "replay/simulator.hpp"
+#include "simulated_events.hpp"
 
 #include <doctest/doctest.h>
 
@@ -27,26 +25,7 @@ std::vector<Event> simulated_events(const std::string& scenario, double seconds,
   sim.scenario = scenario;
   sim.seed = seed;
   sim.duration_s = seconds;
-  const auto log = (std::filesystem::temp_directory_path() /
-                    ("sextant_state_" + std::to_string(::getpid()) + "_" + scenario + ".lcm")).string();
-  {
-    runtime::LogWriter w(log);
-    replay::simulate(sim, w);
-  }
-  const auto records = runtime::LogReader::read_all(log);
-  std::remove(log.c_str());
-  std::vector<Event> events;
-  for (const auto& r : records) {
-    runtime::InputKind kind;
-    if (r.channel == "ODOMETRY") kind = runtime::InputKind::kOdometry;
-    else if (r.channel == "LANDMARKS") kind = runtime::InputKind::kLandmarks;
-    else if (r.channel == "LOOP_CLOSURES") kind = runtime::InputKind::kLoopClosures;
-    else if (r.channel == "BEARINGS") kind = runtime::InputKind::kBearings;
-    else continue;
-    auto d = runtime::decode_event(kind, r.data.data(), r.data.size());
-    if (auto* e = std::get_if<Event>(&d)) events.push_back(*e);
-  }
-  return events;
+  return test::simulated_events(sim);
 }
 
 // Every number and name of an output, in order: two output streams are the same when these are equal.
