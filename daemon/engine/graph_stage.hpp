@@ -1,5 +1,6 @@
 #pragma once
-// The graph back end (source B on the incremental smoother, estimators/graph/incremental_smoother.hpp).
+// The graph back end: keyframe pose-graph SLAM with landmarks on the incremental smoother
+// (estimators/graph/incremental_smoother.hpp).
 // Per body (odometry source):
 //  - keyframes: each odometry pose is classified by KeyframeSelector (too close / keyframe / implausible jump,
 //    counted); a keyframe becomes a pose variable linked to the previous keyframe by the odometry between them, with

@@ -1091,8 +1091,8 @@ TEST_CASE("graph stage (daemon path): a loop the full queue refuses leaves no tr
   // Body "fast" at 10 Hz, a keyframe per metre.  The stage is busy; its queue holds 3 events: the token of the first
   // batch, a loop, the token of the second batch.  A second loop (about a time the odometry has not reached) is
   // refused.  The odometry after it must still merge into the open second batch, as if the loop had never come: it
-  // needs no queue slot.  (Before session 6 the refused loop closed the batch, so every later message needed a token
-  // of its own and was dropped with it, and its time pinned a later message for nothing.)
+  // needs no queue slot.  (Were the refused loop to close the batch, every later message would need a token of its
+  // own and be dropped with it, and its time would pin a later message for nothing.)
   const Emit ignore = [](Output) {};
   const Run run = circle_run(20, 9, 10, "fast");
   std::map<int64_t, SE3> truth(run.truth.begin(), run.truth.end());
