@@ -5,6 +5,8 @@
 #include "daemon/engine/graph_stage.hpp"
 #include "daemon/engine/graph_stage_config.hpp"
 
+#include "config_error_of.hpp"
+
 #include <doctest/doctest.h>
 
 #include <cmath>
@@ -17,15 +19,7 @@ using sextant::config::ConfigError;
 using sextant::config::parse_daemon_config;
 
 namespace {
-// The message of the ConfigError thrown by parsing `yaml`, or "" when it parses.
-std::string error_of(const std::string& yaml) {
-  try {
-    parse_daemon_config(yaml, "test.yaml");
-  } catch (const ConfigError& e) {
-    return e.what();
-  }
-  return "";
-}
+const auto error_of = sextant::test::config_error_of;
 }  // namespace
 
 TEST_CASE("the shipped configs parse: default enables dead reckoning, mrclam fits the data set") {

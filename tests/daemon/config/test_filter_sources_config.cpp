@@ -1,6 +1,8 @@
 // The filter's per-source odometry settings in YAML: parsed into FilterConfig, bad settings refused with the place.
 #include "daemon/config/daemon_config.hpp"
 
+#include "config_error_of.hpp"
+
 #include <doctest/doctest.h>
 
 #include <string>
@@ -9,14 +11,7 @@ using sextant::config::ConfigError;
 using sextant::config::parse_daemon_config;
 
 namespace {
-std::string error_of(const std::string& yaml) {
-  try {
-    parse_daemon_config(yaml, "test.yaml");
-  } catch (const ConfigError& e) {
-    return e.what();
-  }
-  return "";
-}
+const auto error_of = sextant::test::config_error_of;
 }  // namespace
 
 TEST_CASE("filter sources: mapping to bodies, masks, modes, gates, timeouts") {
