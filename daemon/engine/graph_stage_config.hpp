@@ -1,96 +1,23 @@
 #pragma once
 #include "daemon/engine/trajectory_feed.hpp"
-#include "estimators/graph/incremental_options.hpp"
-#include "estimators/keyframe/keyframe_selector.hpp"
-#include "estimators/keyframe/keyframe_thinning.hpp"
-#include "estimators/keyframe/loop_proposals.hpp"
-
-#include <optional>
-#include <string>
+#include "estimators/slam/slam_options.hpp"
 
 namespace sextant::engine {
 
-/// Landmark sightings in the graph back end (graph_stage.hpp): sightings with an id become point landmarks of the
-/// observing body and range/bearing factors on its keyframes.
-struct GraphLandmarkOptions {
-  bool enabled = true;
-  bool robust = true;                   // the loops' kernel (GraphConfig::robust) applies to them, at their own width
-                                        // (sighting_kernel_width_for)
-  double gate_probability = 0.999;      // chi-square gate of a sighting of a known landmark against the estimate
-  double gate_odometry_scale = 3.0;     // the odometry's standard deviations are taken this many times larger in the
-                                        // gate (the odometry between keyframe and sighting; biases are not in it)
-  int max_waiting = 256;                // sighting messages per body ahead of its odometry, kept until it gets there
-};
-
-/// The robust kernel's width for the loops of one kind of body (planar: x, y, yaw residuals, d = 3; spatial: d = 6).
-/// The configured width if there is one; "auto" takes q = chi2_d(loop_gate_probability), the loop gate's quantile
-/// (assoc::chi2_quantile, the exact inverse of the incomplete gamma function: 16.27 for d = 3 and 22.46 for d = 6 at
-/// 0.999), so that a true loop keeps its full weight with that probability whatever its dimension:
-///  - DCS phi = q (Agarwal et al., "Robust Map Optimization using Dynamic Covariance Scaling", ICRA 2013): the scale
-///    min(1, 2 phi / (phi + chi2)) is 1 for chi2 <= phi, a gate that fades instead of cutting;
-///  - Huber and Cauchy delta = sqrt(q) (their weights are functions of sqrt(chi2) / delta).
-/// A fixed phi cannot serve both kinds: a 6-DOF residual's chi2 is on average twice a 3-DOF one's, and phi = 1 keeps a
-/// true 6-DOF loop at its median chi2 (5.35) only (2 / 6.35)^2 = 0.10 of its weight (bench/RESULTS.md).
-struct GraphConfig;
-double kernel_width_for(const GraphConfig& config, bool planar);
-/// The same for landmark sightings, which the smoother takes with a width of their own (add_factor's kernel_width):
-/// a sighting's residual has d = 2 (range, bearing) on a planar body and d = 3 (range, azimuth, elevation) on a 3-D
-/// one, and its gate is at landmarks.gate_probability, so "auto" takes q = chi2_d(landmarks.gate_probability), the
-/// sighting gate's quantile (13.82 for d = 2 and 16.27 for d = 3 at 0.999; the loops' 16.27 and 22.46 left a wrong
-/// sighting past the gate more weight than a wrong loop of the same probability); a configured width applies to
-/// sightings too.
-double sighting_kernel_width_for(const GraphConfig& config, bool planar);
+/// The robust kernels' widths per kind of body, for loops and for sightings (estimators/slam/slam_options.hpp).
+using slam::kernel_width_for;
+using slam::sighting_kernel_width_for;
 
 /// The graph back end: keyframes by motion magnitude, loop proposals on MATCH_REQUESTS, loop closures
 /// from LOOP_CLOSURES, landmark sightings from LANDMARKS, incremental smoothing, TRAJECTORY after each optimization
-/// and FUSED_POSE "graph" at the odometry rate.
-struct GraphConfig {
+/// and FUSED_POSE "graph" at the odometry rate.  The SLAM layer's options (estimators/slam/slam_options.hpp: keyframes,
+/// loop proposals and gating, the odometry history, landmarks, the smoother, lifelong) and the stage's own.
+struct GraphConfig : slam::SlamOptions {
   bool enabled = true;
-  KeyframeSelectorOptions keyframes;   // k1, k2 (motion magnitude, metres/radians combined) and the weights
-  bool propose_loops = true;           // publish MATCH_REQUESTS for each new keyframe
-  LoopProposalOptions proposals;       // n1 local, n2 random (-1: 2 n1), seed
-  std::string robust = "dcs";          // kernel on loop closures (and landmark sightings): none | huber | cauchy | dcs
-  /// Huber/Cauchy delta or DCS phi.  nullopt ("auto"): per body kind, from the chi-square quantile of the loop
-  /// residual's dimension at loop_gate_probability, q = chi2_d(p), d = 3 planar / 6 spatial (kernel_width_for).
-  std::optional<double> kernel_width;
-  double loop_gate_probability = 0.999;  // chi-square consistency gate of a loop against the current estimate
-  double loop_gate_odometry_scale = 3.0; // the odometry's standard deviations are taken this many times larger in the
-                                         // gate (odometry covariances are optimistic: biases are not in them)
-  double loop_time_tolerance_s = 1.0;    // a loop's times must be this close to keyframes' times (odometry bridges the gap)
-  /// Odometry poses kept per body to bridge loop times to keyframes (10 minutes at 50 Hz): memory per body is bounded
-  /// at 64 bytes each.  A loop about an older time that is not a keyframe's own is counted as unmatched; with lifelong
-  /// thinning such a loop would land on a thinned keyframe's anchor, weakened to little (planar 60-minute run:
-  /// 30000 against 100000 left 1480 of 3556 loops unmatched and moved the graph's ATE from 14.3 to 13.8 mm, and the
-  /// daemon's memory stops growing after 10 minutes instead of 33; bench/RESULTS.md, "Lifelong").
-  int odometry_history = 30000;
   bool coalesce_odometry = true;         // daemon: a body's odometry waiting for the stage is coalesced instead of
                                          // taking one queue slot per message (odometry_coalescer.hpp)
   int odometry_batch_max = 256;          // messages a coalesced batch keeps unmerged (keyframe candidates, sighting times)
-  double min_increment_variance = 1e-10;
-  /// The incremental smoother's options (config key `smoother:`): relinearization thresholds and skip, wildfire,
-  /// the rank-update budget, reordering and its spreading over updates.  Their defaults are IncrementalOptions'
-  /// own (one source of truth).  `kernel` and `kernel_width` here are not used: the smoother's kernel is `robust`
-  /// and its width kernel_width_for(), per kind of body.
-  graph::IncrementalOptions smoother;
   TrajectoryFeedOptions trajectory;       // what TRAJECTORY carries and how often (trajectory_feed.hpp)
-  /// Lifelong mode: a keyframe budget per kind of body.  When the graph of a kind of body holds more than its
-  /// `max_keyframes`, it is thinned to its `window` newest keyframes and one keyframe per place
-  /// (keyframe_thinning.hpp), so its size follows the explored space, not the time run; a graph within the budget is
-  /// never touched.  The 3-D budget is smaller: a 3-D keyframe has twice the unknowns of a planar one and its
-  /// sightings three rows instead of two, and a rank update costs about the square of that (bench/RESULTS.md,
-  /// "Lifelong": the 3-D graph at 2000 keyframes replayed at 30x, at 1000 at 80x).
-  struct Lifelong {
-    struct Budget {
-      int max_keyframes = 2000;
-      int window = 1000;  // the newest keyframes that stay whole
-    };
-    bool enabled = true;
-    Budget planar{2000, 1000};
-    Budget spatial{1000, 500};
-    KeyframeThinningOptions thinning;  // cell_size and heading_sector; its window is the budget's of the kind
-    const Budget& budget(bool planar_kind) const { return planar_kind ? planar : spatial; }
-  } lifelong;
-  GraphLandmarkOptions landmarks;
 };
 
 }  // namespace sextant::engine

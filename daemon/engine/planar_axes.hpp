@@ -1,28 +1,5 @@
 #pragma once
-// Planar bodies in sextant's 6-D tangent order [x y z | roll pitch yaw]: their three axes are x, y and yaw, rows and
-// columns 0, 1 and 5 of a 6x6 covariance or information.  The one home of that mapping.
+// Planar axes (x, y, yaw) of sextant's 6-D tangent: defined in estimators/lie/planar_axes.hpp (the engine's namespace
+// is inside sextant's, so kPlanarAxes, planar_block and embed_planar are found from here unqualified).
 #include "daemon/engine/events.hpp"
-
-#include <Eigen/Core>
-
-namespace sextant::engine {
-
-inline constexpr int kPlanarAxes[3] = {0, 1, 5};
-
-/// The 3x3 block over (x, y, yaw) of a 6x6 matrix.
-inline Eigen::Matrix3d planar_block(const Matrix6& m) {
-  Eigen::Matrix3d out;
-  for (int r = 0; r < 3; ++r)
-    for (int c = 0; c < 3; ++c) out(r, c) = m(kPlanarAxes[r], kPlanarAxes[c]);
-  return out;
-}
-
-/// A 3x3 matrix over (x, y, yaw) placed in a 6x6 one, zero elsewhere.
-inline Matrix6 embed_planar(const Eigen::Matrix3d& m3) {
-  Matrix6 out = Matrix6::Zero();
-  for (int r = 0; r < 3; ++r)
-    for (int c = 0; c < 3; ++c) out(kPlanarAxes[r], kPlanarAxes[c]) = m3(r, c);
-  return out;
-}
-
-}  // namespace sextant::engine
+#include "estimators/lie/planar_axes.hpp"

@@ -26,7 +26,9 @@ struct StateSection {
   std::string bytes;  // what Stage::save wrote
 };
 
-inline constexpr uint32_t kStateFormatVersion = 1;
+/// Version 2: the graph stage's section is the SLAM layer's state (estimators/slam/slam_graph.hpp) between the stage's
+/// counters and its per-body TRAJECTORY feeds; version 1 files are refused (another format version).
+inline constexpr uint32_t kStateFormatVersion = 2;
 /// The state file inside a state directory.
 inline constexpr const char* kStateFileName = "sextantd.state";
 

@@ -219,6 +219,15 @@ auto fields_of(T& t) {
   else static_assert(n >= 1 && n <= 40, "fields_of: not an aggregate of 1 to 40 fields");
 }
 
+/// An aggregate with a base class cannot be decomposed by structured bindings: such a type lists its parts (the base
+/// first, then its own fields) in a specialization `static auto of(const T& t) { return std::tie(...); }`; their
+/// number is checked against the number of fields brace-initialization finds, so a field added and not listed fails
+/// to compile.
+template <class T>
+struct aggregate_parts;
+template <class T>
+concept has_aggregate_parts = requires(const T& t) { aggregate_parts<T>::of(t); };
+
 /// Empty when `a` and `b` are equal field by field; else the path of the first difference.
 template <class T>
 std::string first_difference(const T& a, const T& b, const std::string& path = "") {
@@ -241,8 +250,15 @@ std::string first_difference(const T& a, const T& b, const std::string& path = "
     if (a.has_value() != b.has_value()) return path + " (set or not)";
     return a ? first_difference(*a, *b, path) : "";
   } else if constexpr (std::is_aggregate_v<T>) {
-    const auto fa = fields_of(a);
-    const auto fb = fields_of(b);
+    const auto fa = [](const T& x) {
+      if constexpr (has_aggregate_parts<T>) return aggregate_parts<T>::of(x);
+      else return fields_of(x);
+    }(a);
+    const auto fb = [](const T& x) {
+      if constexpr (has_aggregate_parts<T>) return aggregate_parts<T>::of(x);
+      else return fields_of(x);
+    }(b);
+    static_assert(std::tuple_size_v<std::remove_const_t<decltype(fa)>> == field_count<T>(), "aggregate_parts: a field is not listed");
     std::string d;
     [&]<size_t... I>(std::index_sequence<I...>) {
       ((d.empty() ? (void)(d = first_difference(std::get<I>(fa), std::get<I>(fb), at(I))) : (void)0), ...);

@@ -14,6 +14,15 @@
 
 using namespace sextant;
 
+/// The graph stage's config is the SLAM layer's options (its base) and the stage's own fields.
+template <>
+struct sextant::testing::aggregate_parts<engine::GraphConfig> {
+  static auto of(const engine::GraphConfig& c) {
+    return std::tie(static_cast<const slam::SlamOptions&>(c), c.enabled, c.coalesce_odometry, c.odometry_batch_max,
+                    c.trajectory);
+  }
+};
+
 namespace {
 
 // Every key path of `node` (maps only), blocks before their keys.

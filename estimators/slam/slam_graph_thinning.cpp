@@ -1,47 +1,32 @@
-// Lifelong mode of the graph stage: thinning the graph to the places it needs (graph_stage.hpp, maybe_thin/thin).
-#include "daemon/engine/graph_stage.hpp"
-#include "daemon/engine/pose_covariance.hpp"
+// The SLAM layer's lifelong mode: thinning the graph of a kind of body to the places it needs (slam_graph.hpp,
+// maybe_thin / thin; the choice of keyframes is estimators/keyframe/keyframe_thinning.hpp).
+#include "estimators/slam/slam_graph.hpp"
+
+#include "estimators/keyframe/keyframe_thinning.hpp"
+#include "estimators/lie/pose_covariance.hpp"
+#include "estimators/slam/pose_factors.hpp"
 
 #include <algorithm>
 #include <chrono>
 
-namespace sextant::engine {
+namespace sextant::slam {
 
-int64_t GraphStage::graph_keyframes() const {
-  int64_t n = 0;
-  for (const auto& [source, b] : bodies_) n += static_cast<int64_t>(b.keyframes.size());
-  return n;
-}
-
-int64_t GraphStage::graph_landmarks() const {
-  int64_t n = 0;
-  for (const auto& [source, b] : bodies_) n += static_cast<int64_t>(b.landmarks.size());
-  return n;
-}
-
-int64_t GraphStage::graph_factors() const {
-  int64_t n = 0;
-  for (const auto& s : smoothers_)
-    if (s) n += static_cast<int64_t>(s->graph().factors().size());
-  return n;
-}
-
-void GraphStage::maybe_thin(bool planar) {
-  if (!config_.lifelong.enabled) return;
+void SlamGraph::maybe_thin(bool planar) {
+  if (!options_.lifelong.enabled) return;
   // Over the budget, and a quarter of it added since the last thinning (a map whose places alone exceed the budget
   // is thinned at that pace rather than at every keyframe).
   int64_t& since = keyframes_since_thinning_[planar ? 1 : 0];
   ++since;
   int64_t in_graph = 0;
-  for (const auto& [source, b] : bodies_)
-    if (b.planar == planar) in_graph += static_cast<int64_t>(b.keyframes.size());
-  const int budget = config_.lifelong.budget(planar).max_keyframes;
+  for (const auto& [name, b] : bodies_)
+    if (b.planar == planar) in_graph += static_cast<int64_t>(b.track.keyframes().size());
+  const int budget = options_.lifelong.budget(planar).max_keyframes;
   if (in_graph <= budget || since < std::max(1, budget / 4)) return;
   since = 0;
   thin(planar);
 }
 
-void GraphStage::thin(bool planar) {
+void SlamGraph::thin(bool planar) {
   const auto started = std::chrono::steady_clock::now();
   const int kind = planar ? 1 : 0;
   graph::IncrementalSmoother& old = *smoothers_[kind];
@@ -54,16 +39,16 @@ void GraphStage::thin(bool planar) {
   std::vector<char> keep_var(vars.size(), 1);
   std::map<Body*, std::vector<char>> keep_of;
   bool any = false;
-  for (auto& [source, b] : bodies_) {
-    if (b.planar != planar || b.keyframes.empty()) continue;
+  for (auto& [name, b] : bodies_) {
+    if (b.planar != planar || b.track.empty()) continue;
     std::vector<ThinningCandidate> candidates;
-    candidates.reserve(b.keyframes.size());
-    for (const auto& k : b.keyframes) candidates.push_back({k.id, vars[static_cast<size_t>(k.variable)].as_se3()});
-    KeyframeThinningOptions thinning = config_.lifelong.thinning;
-    thinning.window = config_.lifelong.budget(planar).window;
+    candidates.reserve(b.track.keyframes().size());
+    for (const auto& k : b.track.keyframes()) candidates.push_back({k.id, vars[static_cast<size_t>(k.variable)].as_se3()});
+    KeyframeThinningOptions thinning = options_.lifelong.thinning;
+    thinning.window = options_.lifelong.budget(planar).window;
     auto keep = keyframes_to_keep(candidates, planar, thinning);
     for (size_t i = 0; i < keep.size(); ++i)
-      if (!keep[i]) keep_var[static_cast<size_t>(b.keyframes[i].variable)] = 0, any = true;
+      if (!keep[i]) keep_var[static_cast<size_t>(b.track.keyframes()[i].variable)] = 0, any = true;
     keep_of.emplace(&b, std::move(keep));
   }
   if (!any) return;
@@ -80,15 +65,14 @@ void GraphStage::thin(bool planar) {
     if (all && tags[f].role == FactorRole::kSighting) ++sightings_left[static_cast<size_t>(factors[f]->variables()[1])];
   }
   std::vector<char> is_landmark(vars.size(), 0);
-  for (auto& [source, b] : bodies_)
+  for (auto& [name, b] : bodies_)
     if (b.planar == planar)
       for (const auto& [id, l] : b.landmarks) is_landmark[static_cast<size_t>(l.variable)] = 1;
   for (size_t v = 0; v < vars.size(); ++v)
     if (is_landmark[v] && sightings_left[v] == 0) keep_var[v] = 0;
 
   // 3. The new smoother: the variables that stay at their current estimates, in the old order.
-  graph::IncrementalOptions options = old.options();
-  auto fresh = std::make_unique<graph::IncrementalSmoother>(options);
+  auto fresh = std::make_unique<graph::IncrementalSmoother>(old.options());
   std::vector<FactorTag> fresh_tags;
   std::vector<int> remap(vars.size(), -1);
   for (size_t v = 0; v < vars.size(); ++v)
@@ -97,7 +81,7 @@ void GraphStage::thin(bool planar) {
   // 4. Per body: the kept keyframes, their odometry edges composed across the thinned ones, and the thinned records.
   struct BodyPlan {
     Body* body;
-    std::vector<KeyframeNode> keyframes;
+    std::vector<TrackKeyframe> keyframes;
     std::vector<ThinnedKeyframe> thinned;
   };
   std::vector<BodyPlan> plans;
@@ -106,10 +90,11 @@ void GraphStage::thin(bool planar) {
     for (auto& [b, keep] : keep_of) {
       BodyPlan plan{b, {}, {}};
       SE3 edge;
-      Matrix6 covariance = Matrix6::Zero();
+      Matrix6d covariance = Matrix6d::Zero();
       bool spanning = false;  // thinned keyframes since the last kept one
-      for (size_t i = 0; i < b->keyframes.size(); ++i) {
-        const KeyframeNode& k = b->keyframes[i];
+      const auto& keyframes = b->track.keyframes();
+      for (size_t i = 0; i < keyframes.size(); ++i) {
+        const TrackKeyframe& k = keyframes[i];
         if (i > 0) {
           covariance = compose_covariance(covariance, k.edge, k.edge_covariance);
           edge = edge * k.edge;
@@ -119,7 +104,7 @@ void GraphStage::thin(bool planar) {
           spanning = true;
           continue;
         }
-        KeyframeNode node = k;
+        TrackKeyframe node = k;
         node.variable = remap[static_cast<size_t>(k.variable)];
         if (i > 0) {
           if (spanning) node.edge = edge, node.edge_covariance = covariance;
@@ -145,42 +130,31 @@ void GraphStage::thin(bool planar) {
       fresh_tags.push_back(tags[f]);
     }
   } catch (const std::invalid_argument&) {
-    ++thinning_failures_;
+    ++counters_.thinning_failures;
     return;
   }
   const auto solve_started = std::chrono::steady_clock::now();
   const graph::IncrementalStatus st = fresh->update();
-  thinning_solve_us_ = std::chrono::duration_cast<std::chrono::microseconds>(std::chrono::steady_clock::now() - solve_started).count();
+  counters_.thinning_solve_us_last =
+      std::chrono::duration_cast<std::chrono::microseconds>(std::chrono::steady_clock::now() - solve_started).count();
   if (!st.ok) {
-    ++thinning_failures_;  // the old graph stays
+    ++counters_.thinning_failures;  // the old graph stays
     return;
   }
 
   // 6. Commit.
   for (size_t f = 0; f < factors.size(); ++f) {
     if (keep_factor[f] || tags[f].role == FactorRole::kOdometry) continue;
-    if (tags[f].role == FactorRole::kLoop) ++loops_thinned_;
-    else ++sightings_thinned_;
+    if (tags[f].role == FactorRole::kLoop) ++counters_.loops_thinned;
+    else ++counters_.sightings_thinned;
   }
   for (auto& plan : plans) {
     Body& b = *plan.body;
-    b.keyframes = std::move(plan.keyframes);
-    b.by_utime.clear();
-    for (size_t i = 0; i < b.keyframes.size(); ++i) b.by_utime[b.keyframes[i].utime] = i;
-    // Thinned keyframes stay in time order (they were thinned from older to newer, and each thinning's are newer
-    // than the previous one's oldest survivors, so merge).
-    std::vector<ThinnedKeyframe> merged;
-    merged.reserve(b.thinned.size() + plan.thinned.size());
-    std::merge(b.thinned.begin(), b.thinned.end(), plan.thinned.begin(), plan.thinned.end(), std::back_inserter(merged),
-               [](const ThinnedKeyframe& x, const ThinnedKeyframe& y) { return x.utime < y.utime; });
-    b.thinned = std::move(merged);
-    // Bounded for unbounded time: the oldest records go first (a loop about such a time is then counted unmatched).
-    if (b.thinned.size() > kMaxThinnedRecords)
-      b.thinned.erase(b.thinned.begin(), b.thinned.end() - static_cast<std::ptrdiff_t>(kMaxThinnedRecords));
+    b.track.replace_keyframes(std::move(plan.keyframes), plan.thinned);
     for (auto it = b.landmarks.begin(); it != b.landmarks.end();) {
       const int v = remap[static_cast<size_t>(it->second.variable)];
       if (v < 0) {
-        ++landmarks_thinned_;
+        ++counters_.landmarks_thinned;
         it = b.landmarks.erase(it);
       } else {
         it->second.variable = v;
@@ -189,13 +163,14 @@ void GraphStage::thin(bool planar) {
     }
     b.smoother = fresh.get();
   }
-  keyframes_thinned_ += thinned_count;
-  ++thinnings_;
+  counters_.keyframes_thinned += thinned_count;
+  ++counters_.thinnings;
   smoothers_[kind] = std::move(fresh);
   gate_marginals_[kind].clear();  // the variables' indices changed
-  thinning_us_ = std::chrono::duration_cast<std::chrono::microseconds>(std::chrono::steady_clock::now() - started).count();
-  thinning_us_max_ = std::max(thinning_us_max_, thinning_us_);
+  counters_.thinning_us_last =
+      std::chrono::duration_cast<std::chrono::microseconds>(std::chrono::steady_clock::now() - started).count();
+  counters_.thinning_us_max = std::max(counters_.thinning_us_max, counters_.thinning_us_last);
   factor_tags_[kind] = std::move(fresh_tags);
 }
 
-}  // namespace sextant::engine
+}  // namespace sextant::slam

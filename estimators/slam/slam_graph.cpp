@@ -1,0 +1,330 @@
+// The SLAM layer's odometry path, loops and updates (slam_graph.hpp); sightings in slam_graph_sightings.cpp, lifelong
+// thinning in slam_graph_thinning.cpp, state and forgetting in slam_graph_state.cpp.
+#include "estimators/slam/slam_graph.hpp"
+
+#include "assoc/chi_square.hpp"
+#include "estimators/lie/planar_axes.hpp"
+#include "estimators/lie/pose_covariance.hpp"
+#include "estimators/slam/jump_covariance.hpp"
+#include "estimators/slam/loop_gate.hpp"
+#include "estimators/slam/pose_factors.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+
+namespace sextant::slam {
+namespace {
+
+graph::IncrementalOptions smoother_options(const SlamOptions& o, bool planar) {
+  graph::IncrementalOptions s = o.smoother;
+  s.kernel = graph::robust_kernel_from_name(o.robust);
+  s.kernel_width = kernel_width_for(o, planar);
+  return s;
+}
+
+/// The configured kernel width, or the one "auto" gives a residual of `dimension` gated at `probability`.
+double auto_kernel_width(const SlamOptions& options, int dimension, double probability) {
+  if (options.kernel_width) return *options.kernel_width;
+  const double q = assoc::chi2_quantile(dimension, probability);
+  return graph::robust_kernel_from_name(options.robust) == graph::RobustKernel::kDcs ? q : std::sqrt(q);
+}
+
+}  // namespace
+
+double kernel_width_for(const SlamOptions& options, bool planar) {
+  return auto_kernel_width(options, planar ? 3 : 6, options.loop_gate_probability);
+}
+
+double sighting_kernel_width_for(const SlamOptions& options, bool planar) {
+  return auto_kernel_width(options, planar ? 2 : 3, options.landmarks.gate_probability);
+}
+
+SlamGraph::SlamGraph(const SlamOptions& options) : options_(options), proposer_(options.proposals) {
+  KeyframeSelector check(options.keyframes);  // throws std::invalid_argument for bad thresholds
+  (void)check;
+  for (const bool planar : {false, true}) {
+    const int kind = planar ? 1 : 0;
+    loop_gate_[kind] = assoc::chi2_quantile(planar ? 3 : 6, options.loop_gate_probability);
+    sighting_gate_[kind] = assoc::chi2_quantile(planar ? 2 : 3, options.landmarks.gate_probability);
+    sighting_width_[kind] = sighting_kernel_width_for(options, planar);
+  }
+}
+
+graph::IncrementalSmoother& SlamGraph::smoother_for(bool planar) {
+  auto& s = smoothers_[planar ? 1 : 0];
+  if (!s) s = std::make_unique<graph::IncrementalSmoother>(smoother_options(options_, planar));
+  return *s;
+}
+
+SlamGraph::Body& SlamGraph::body_for(const std::string& name, bool planar) {
+  auto it = bodies_.find(name);
+  if (it != bodies_.end()) return it->second;
+  KeyframeSelectorOptions ko = options_.keyframes;
+  ko.planar = planar;
+  Body body;
+  body.planar = planar;
+  body.selector = KeyframeSelector(ko);
+  body.smoother = &smoother_for(planar);
+  return bodies_.emplace(name, std::move(body)).first->second;
+}
+
+SE3 SlamGraph::estimate(const Body& b, int variable) const {
+  return b.smoother->graph().variables()[static_cast<size_t>(variable)].as_se3();
+}
+
+void SlamGraph::add_factor(Body& b, std::unique_ptr<graph::Factor> factor, FactorRole role, bool robust,
+                           std::optional<double> width) {
+  b.smoother->add_factor(std::move(factor), robust, width);
+  factor_tags_[b.planar ? 1 : 0].push_back({role, robust, width});
+}
+
+void SlamGraph::add_odometry(const std::string& name, const OdometryInput& o, SlamListener& listener) {
+  const bool known = bodies_.count(name) > 0;
+  Body& b = body_for(name, o.planar);
+  if (known && o.utime <= b.track.last_utime()) {
+    ++counters_.odometry_out_of_order;
+    return;
+  }
+  const SE3& odom = o.pose;
+  // Sightings that waited for this message (taken after the previous one): anchored on the newest keyframe, their
+  // part of the increment interpolated on the group, Delta_a = Exp(a Log Delta) with covariance a Q.
+  std::vector<std::pair<SightingsInput, TrackPoint>> due_sightings;
+  if (!b.track.empty()) {
+    const SE3 delta = b.track.last_odom().between(odom);
+    const Matrix6d q = regularized_increment_covariance(o.covariance, o.increment_covariance, o.planar, delta,
+                                                        b.track.last_odom_covariance(), options_.min_increment_variance);
+    const SE3 keyframe_to_last = b.track.newest().odom.between(b.track.last_odom());
+    while (!b.early_sightings.empty() && b.early_sightings.front().utime <= o.utime) {
+      const double a = static_cast<double>(b.early_sightings.front().utime - b.track.last_utime()) /
+                       static_cast<double>(o.utime - b.track.last_utime());
+      const SE3 part = SE3::exp(a * delta.log());
+      TrackPoint anchor{b.track.keyframes().size() - 1, keyframe_to_last * part,
+                        compose_covariance(b.track.since_keyframe(), part, a * q)};
+      due_sightings.emplace_back(std::move(b.early_sightings.front()), anchor);
+      b.early_sightings.erase(b.early_sightings.begin());
+    }
+    b.track.extend_since_keyframe(delta, q);
+  }
+  while (!b.early_sightings.empty() && b.early_sightings.front().utime <= o.utime) {  // a body without keyframes
+    counters_.sightings_before_keyframe += static_cast<int64_t>(b.early_sightings.front().sightings.size());
+    b.early_sightings.erase(b.early_sightings.begin());
+  }
+  b.track.advance(o.utime, odom, o.covariance, static_cast<size_t>(options_.odometry_history));
+
+  for (const auto& [sightings, anchor] : due_sightings) add_anchored_sightings(name, b, sightings, anchor, listener);
+  on_keyframe_candidate(name, b, o, listener);
+  // Loops that arrived before the odometry of their times: try them now that the odometry has reached them.
+  if (!b.early_loops.empty()) {
+    std::vector<LoopInput> due, later;
+    for (auto& l : b.early_loops)
+      (std::max(l.utime_from, l.utime_to) <= b.track.last_utime() ? due : later).push_back(std::move(l));
+    b.early_loops = std::move(later);
+    for (const auto& l : due) add_loop(name, l, listener);
+  }
+}
+
+void SlamGraph::remember_odometry(const std::string& name, int64_t utime, const SE3& pose) {
+  auto it = bodies_.find(name);
+  if (it != bodies_.end() && utime > it->second.track.last_utime())
+    it->second.track.remember(utime, pose, static_cast<size_t>(options_.odometry_history));
+}
+
+void SlamGraph::on_keyframe_candidate(const std::string& name, Body& b, const OdometryInput& o, SlamListener& listener) {
+  const SE3& odom = o.pose;
+  const KeyframeDecision d = b.selector.decide(odom);
+  if (d == KeyframeDecision::kImplausible) ++counters_.keyframes_rejected;
+  if (d != KeyframeDecision::kKeyframe && d != KeyframeDecision::kReanchored) return;
+  const bool reanchored = d == KeyframeDecision::kReanchored && !b.track.empty();
+
+  TrackKeyframe node;
+  node.utime = o.utime;
+  node.odom = odom;
+  node.odom_covariance = o.covariance;
+  std::unique_ptr<graph::Factor> edge_factor;
+  if (!b.track.empty()) {
+    node.edge = b.track.newest().odom.between(odom);
+    node.edge_covariance = b.track.since_keyframe();
+    if (reanchored) node.edge_covariance += jump_covariance(node.edge, b.planar);
+    // A covariance that cannot be inverted drops the keyframe (the selector goes back to the last keyframe in the
+    // graph) and keeps accumulating towards the next one, whose edge spans the dropped pose.
+    edge_factor = odometry_factor(b.planar, b.track.newest().variable, -1, node.edge, node.edge_covariance);
+    if (!edge_factor) {
+      drop_keyframe(name, b, odom, listener);
+      return;
+    }
+  }
+  graph::Variable v;
+  v.id = next_variable_id_++;
+  v.kind = b.planar ? graph::VariableKind::kPose2 : graph::VariableKind::kPose3;
+  SE3 initial = odom;
+  if (b.track.empty()) {
+    v.fixed = true;  // the body's map frame: its odometry frame at the first keyframe
+  } else {
+    initial = estimate(b, b.track.newest().variable) * node.edge;
+  }
+  if (b.planar) v.pose2 = SE2::from_se3(initial);
+  else v.pose3 = initial;
+  try {
+    node.variable = b.smoother->add_variable(v);
+    if (edge_factor)
+      add_factor(b, edge_factor->rebind({b.track.newest().variable, node.variable}), FactorRole::kOdometry, false,
+                 std::nullopt);
+  } catch (const std::invalid_argument&) {
+    drop_keyframe(name, b, odom, listener);  // a non-finite pose or information: never reaches the smoother's system
+    return;
+  }
+  b.track.add_keyframe(std::move(node));
+  ++counters_.keyframes;
+  if (reanchored) ++counters_.keyframes_reanchored;
+  update(name, b, o.utime, listener);
+  if (options_.propose_loops) propose_loops(name, b, o.utime, listener);
+  maybe_thin(b.planar);
+}
+
+void SlamGraph::propose_loops(const std::string& name, const Body& b, int64_t utime, SlamListener& listener) {
+  // Candidates among the keyframes in the graph (positions in the track; with lifelong thinning the places kept of
+  // the older map), named by their keyframe ids.
+  const auto& keyframes = b.track.keyframes();
+  const int64_t k = static_cast<int64_t>(keyframes.size()) - 1;
+  for (const LoopProposal& p : proposer_.propose(k)) {
+    const TrackKeyframe& a = keyframes[static_cast<size_t>(p.from)];
+    const TrackKeyframe& c = keyframes[static_cast<size_t>(p.to)];
+    listener.loop_proposed(name, utime, KeyframeEstimate{a.id, a.utime, estimate(b, a.variable)},
+                           KeyframeEstimate{c.id, c.utime, estimate(b, c.variable)}, p.random);
+  }
+}
+
+void SlamGraph::drop_keyframe(const std::string& name, Body& b, const SE3& pose, SlamListener& listener) {
+  ++counters_.odometry_edges_rejected;
+  const std::optional<SE3> last = b.track.empty() ? std::nullopt : std::optional<SE3>(b.track.newest().odom);
+  b.selector.reset_reference(last);
+  listener.keyframe_dropped(name, pose, last);
+}
+
+void SlamGraph::add_loop(const std::string& name, const LoopInput& l, SlamListener& listener) {
+  auto it = bodies_.find(name);
+  if (it == bodies_.end()) {
+    ++counters_.loops_unknown_source;
+    return;
+  }
+  Body& b = it->second;
+  const auto tolerance = static_cast<int64_t>(options_.loop_time_tolerance_s * 1e6);
+  const auto end_from = b.track.resolve(l.keyframe_from, l.utime_from, tolerance);
+  const auto end_to = b.track.resolve(l.keyframe_to, l.utime_to, tolerance);
+  if ((!end_from || !end_to) && std::max(l.utime_from, l.utime_to) > b.track.last_utime() && b.early_loops.size() < 256) {
+    b.early_loops.push_back(l);  // ahead of the odometry: retried when it gets there
+    return;
+  }
+  if (!end_from || !end_to || end_from->keyframe == end_to->keyframe) {
+    ++counters_.loops_unmatched;
+    return;
+  }
+  const KeyframeLoop loop = loop_on_keyframes(b.planar, l.relative, l.information, *end_from, *end_to);
+  if (loop.widened) ++counters_.loops_on_thinned;
+  const TrackKeyframe& from = b.track.keyframes()[end_from->keyframe];
+  const TrackKeyframe& to = b.track.keyframes()[end_to->keyframe];
+  const Matrix6d path = b.track.odometry_path(end_from->keyframe, end_to->keyframe).second;
+  const SE3 predicted = estimate(b, from.variable).between(estimate(b, to.variable));
+  const double d2 = loop_mahalanobis(b.planar, loop, predicted, path, options_.loop_gate_odometry_scale);
+  if (!(d2 <= loop_gate_[b.planar ? 1 : 0])) {
+    ++counters_.loops_rejected;
+    return;
+  }
+  try {
+    add_factor(b, loop_factor(b.planar, from.variable, to.variable, loop.z, loop.information), FactorRole::kLoop, true,
+               std::nullopt);
+  } catch (const std::invalid_argument&) {
+    ++counters_.loops_rejected;  // an information the caller let through but the smoother cannot use
+    return;
+  }
+  ++counters_.loops_accepted;
+  update(name, b, b.track.newest().utime, listener);
+}
+
+void SlamGraph::update(const std::string& name, Body& b, int64_t utime, SlamListener& listener) {
+  const auto t0 = std::chrono::steady_clock::now();
+  const graph::IncrementalStatus st = b.smoother->update();
+  counters_.last_update_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  ++counters_.updates;
+  counters_.rebuilds += st.rebuilt ? 1 : 0;
+  counters_.relinearized_factors += st.relinearized_factors;
+  if (!st.ok) {
+    ++counters_.optimizer_failures;
+    return;
+  }
+  listener.updated(name, utime, st);
+}
+
+void SlamGraph::rebuild() {
+  for (auto& s : smoothers_)
+    if (s) s->rebuild();
+}
+
+KeyframeSelector* SlamGraph::selector(const std::string& name) {
+  auto it = bodies_.find(name);
+  return it == bodies_.end() ? nullptr : &it->second.selector;
+}
+
+const KeyframeTrack* SlamGraph::track(const std::string& name) const {
+  auto it = bodies_.find(name);
+  return it == bodies_.end() ? nullptr : &it->second.track;
+}
+
+std::vector<std::string> SlamGraph::bodies() const {
+  std::vector<std::string> out;
+  for (const auto& [name, b] : bodies_) out.push_back(name);
+  return out;
+}
+
+std::vector<KeyframeEstimate> SlamGraph::keyframes(const std::string& name) const {
+  std::vector<KeyframeEstimate> out;
+  auto it = bodies_.find(name);
+  if (it == bodies_.end()) return out;
+  out.reserve(it->second.track.keyframes().size());
+  for (const TrackKeyframe& k : it->second.track.keyframes())
+    out.push_back(KeyframeEstimate{k.id, k.utime, estimate(it->second, k.variable)});
+  return out;
+}
+
+std::vector<SlamLandmark> SlamGraph::landmarks(const std::string& name) const {
+  std::vector<SlamLandmark> out;
+  auto it = bodies_.find(name);
+  if (it == bodies_.end()) return out;
+  for (const auto& [id, l] : it->second.landmarks)
+    out.push_back(SlamLandmark{id, it->second.smoother->graph().variables()[static_cast<size_t>(l.variable)].point, l.sightings});
+  return out;
+}
+
+SlamGraph::NewestKeyframe SlamGraph::newest_keyframe(const std::string& name) const {
+  const Body& b = bodies_.at(name);
+  NewestKeyframe out;
+  out.keyframe = &b.track.newest();
+  out.estimate = estimate(b, out.keyframe->variable);
+  const Eigen::MatrixXd marginal = b.smoother->marginal_covariance(out.keyframe->variable);
+  if (marginal.size() > 0) out.covariance = b.planar ? embed_planar(marginal) : Matrix6d(marginal);
+  return out;
+}
+
+double SlamGraph::chi2(const std::string& name) const { return bodies_.at(name).smoother->chi2(); }
+
+int64_t SlamGraph::graph_keyframes() const {
+  int64_t n = 0;
+  for (const auto& [name, b] : bodies_) n += static_cast<int64_t>(b.track.keyframes().size());
+  return n;
+}
+
+int64_t SlamGraph::graph_landmarks() const {
+  int64_t n = 0;
+  for (const auto& [name, b] : bodies_) n += static_cast<int64_t>(b.landmarks.size());
+  return n;
+}
+
+int64_t SlamGraph::graph_factors() const {
+  int64_t n = 0;
+  for (const auto& s : smoothers_)
+    if (s) n += static_cast<int64_t>(s->graph().factors().size());
+  return n;
+}
+
+}  // namespace sextant::slam

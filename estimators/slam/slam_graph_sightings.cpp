@@ -1,0 +1,121 @@
+// The SLAM layer's landmark sightings (slam_graph.hpp): waiting for the odometry, anchoring on the keyframe before
+// them, gating against the current estimate and adding their range/bearing factors (sighting_model.hpp).
+#include "estimators/slam/slam_graph.hpp"
+
+#include "estimators/slam/sighting_model.hpp"
+
+#include <algorithm>
+
+namespace sextant::slam {
+
+Eigen::MatrixXd SlamGraph::gate_marginal(const Body& b, int variable) {
+  // A marginal is a forward solve along the variable's path to the root of the factor's elimination tree, which for
+  // a landmark seen from everywhere is long: the sighting gate reuses one for kGateMarginalUpdates updates of the
+  // smoother (deterministic: counted in updates, not time).  The marginal only shrinks as information arrives, so a
+  // reused one makes the gate a little wider, never narrower.
+  auto& cache = gate_marginals_[b.planar ? 1 : 0];
+  auto it = cache.find(variable);
+  if (it != cache.end() && counters_.updates - it->second.first < kGateMarginalUpdates) return it->second.second;
+  Eigen::MatrixXd m = b.smoother->marginal_covariance(variable);
+  cache[variable] = {counters_.updates, m};
+  return m;
+}
+
+void SlamGraph::add_sightings(const std::string& name, const SightingsInput& s, SlamListener& listener) {
+  if (!options_.landmarks.enabled) return;
+  const auto n = static_cast<int64_t>(s.sightings.size());
+  auto it = bodies_.find(name);
+  if (it == bodies_.end()) {
+    counters_.sightings_unknown_source += n;
+    return;
+  }
+  Body& b = it->second;
+  if (s.planar != b.planar) {
+    counters_.sightings_malformed += n;  // a planar body's sightings must be planar, and a 3-D body's 3-D
+    return;
+  }
+  if (s.utime > b.track.last_utime()) {  // ahead of the odometry: anchored when the odometry passes it (add_odometry)
+    if (options_.landmarks.max_waiting <= 0) {
+      counters_.sightings_dropped += n;
+      return;
+    }
+    if (b.early_sightings.size() >= static_cast<size_t>(options_.landmarks.max_waiting)) {
+      counters_.sightings_dropped += static_cast<int64_t>(b.early_sightings.front().sightings.size());
+      b.early_sightings.erase(b.early_sightings.begin());
+    }
+    const auto at = std::upper_bound(b.early_sightings.begin(), b.early_sightings.end(), s.utime,
+                                     [](int64_t t, const SightingsInput& x) { return t < x.utime; });
+    b.early_sightings.insert(at, s);
+    return;
+  }
+  if (!b.track.keyframe_at_or_before(s.utime)) {
+    counters_.sightings_before_keyframe += n;
+    return;
+  }
+  const auto anchor = b.track.anchor_at(s.utime);
+  if (!anchor) {
+    counters_.sightings_unmatched += n;
+    return;
+  }
+  add_anchored_sightings(name, b, s, *anchor, listener);
+}
+
+void SlamGraph::add_anchored_sightings(const std::string& name, Body& b, const SightingsInput& s, const TrackPoint& anchor,
+                                       SlamListener& listener) {
+  const TrackKeyframe& kf = b.track.keyframes()[anchor.keyframe];
+  const SightingModel model(b.planar, estimate(b, kf.variable), anchor, s.sensor_in_body);
+  const int kind = b.planar ? 1 : 0;
+  bool added = false;
+  Eigen::VectorXd z;
+  Eigen::MatrixXd R;
+  for (const LandmarkSighting& ob : s.sightings) {
+    if (ob.id < 0) {
+      ++counters_.sightings_without_id;
+      continue;
+    }
+    if (!model.measurement(ob, z, R)) {
+      ++counters_.sightings_malformed;
+      continue;
+    }
+    auto lm = b.landmarks.find(ob.id);
+    const bool known = lm != b.landmarks.end();
+    const Eigen::Vector3d position =
+        known ? b.smoother->graph().variables()[static_cast<size_t>(lm->second.variable)].point : model.landmark_from(ob);
+    const SightingModel::Evaluation ev = model.evaluate(z, position);
+    if (known) {
+      const Eigen::MatrixXd p_landmark = gate_marginal(b, lm->second.variable);
+      if (p_landmark.size() > 0) {  // determined: gate against the estimate
+        const double d2 = model.mahalanobis(ev, R, options_.landmarks.gate_odometry_scale, p_landmark,
+                                            gate_marginal(b, kf.variable));
+        if (!(d2 <= sighting_gate_[kind])) {
+          ++counters_.sightings_rejected;
+          continue;
+        }
+      }
+    }
+    const Eigen::MatrixXd information = model.information(ev, R);
+    try {
+      if (!known) {
+        graph::Variable v;
+        v.kind = b.planar ? graph::VariableKind::kPoint2 : graph::VariableKind::kPoint3;
+        v.point = position;
+        v.id = next_variable_id_++;
+        lm = b.landmarks.emplace(ob.id, Landmark{b.smoother->add_variable(v), 0}).first;
+        ++counters_.landmarks;
+      }
+      add_factor(b,
+                 std::make_unique<graph::PointObservationFactor>(kf.variable, lm->second.variable, model.model(), z,
+                                                                 information, model.sensor_in_keyframe()),
+                 FactorRole::kSighting, options_.landmarks.robust, sighting_width_[kind]);
+    } catch (const std::invalid_argument&) {
+      ++counters_.sightings_malformed;  // a value the checks above let through but the smoother refuses
+      continue;
+    }
+    ++lm->second.sightings;
+    ++counters_.sightings_accepted;
+    added = true;
+  }
+  if (added) update(name, b, b.track.newest().utime, listener);
+}
+
+}  // namespace sextant::slam
