@@ -16,10 +16,12 @@ for bin in "$build"/bin/fuzz_*; do
   corpus="$build/fuzz-corpus/$name"; crashes="$build/fuzz-crashes/$name"
   mkdir -p "$corpus" "$crashes"
   log="$build/fuzz-$name.log"
+  seeds=()  # libFuzzer refuses a folder that does not exist (a harness with no past crash has none)
+  for d in "$src/corpus/$name" "$src/crashes/$name"; do [ -d "$d" ] && seeds+=("$d"); done
   rc=0
   ASAN_OPTIONS=detect_leaks=1:allocator_may_return_null=1 UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1 \
     "$bin" -max_total_time="$seconds" -rss_limit_mb=2048 -malloc_limit_mb=1024 -timeout=10 -print_final_stats=1 \
-    -artifact_prefix="$crashes/" "$corpus" "$src/corpus/$name" "$src/crashes/$name" > "$log" 2>&1 || rc=$?
+    -artifact_prefix="$crashes/" "$corpus" "${seeds[@]}" > "$log" 2>&1 || rc=$?
   runs=$(grep -o 'stat::number_of_executed_units: *[0-9]*' "$log" | grep -o '[0-9]*$' || echo "?")
   rate=$(grep -o 'exec/s: *[0-9]*' "$log" | tail -1 | grep -o '[0-9]*$' || echo "?")
   if [ "$rc" -ne 0 ]; then
