@@ -175,7 +175,7 @@ void register_solvers(py::module_& m) {
           replay::GraphOptimizationOptions o;
           try {
             o.solver = replay::solver_from_name(solver), o.init = replay::initial_estimate_from_name(init);
-            o.robust = replay::robust_kernel_from_option(robust), o.ordering = replay::ordering_from_name(ordering);
+            o.robust = graph::robust_kernel_from_name(robust), o.ordering = replay::ordering_from_name(ordering);
           } catch (const std::invalid_argument& e) {
             throw py::value_error(e.what());
           }

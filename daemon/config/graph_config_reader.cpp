@@ -30,7 +30,7 @@ void read_stage_config(Section& s, engine::GraphConfig& c) {
     int seed = static_cast<int>(c.proposals.seed);
     p.get("seed", seed, int_in_range(0, 2147483647));
     c.proposals.seed = static_cast<uint64_t>(seed);
-    p.get("robust", c.robust, one_of({"none", "huber", "cauchy", "dcs"}));
+    p.get_parsed("robust", c.robust, graph::robust_kernel_from_name);
     // "auto" (a chi-square quantile of the loops' dimension, kernel_width_for in graph_stage_config.hpp) or a number.
     std::string width;  // stays empty when the key is absent (the default stays)
     p.get("kernel_width", width, Check<std::string>([](const std::string& v) -> std::optional<std::string> {

@@ -28,7 +28,7 @@ Matrix6d residual_information(const Eigen::MatrixXd& tangent) {
 
 graph::IncrementalOptions smoother_options(const GraphConfig& c, bool planar) {
   graph::IncrementalOptions o = c.smoother;
-  o.kernel = graph::robust_kernel_from_name(c.robust);
+  o.kernel = c.robust;
   o.kernel_width = kernel_width_for(c, planar);
   return o;
 }
@@ -66,7 +66,7 @@ Matrix6 jump_covariance(const SE3& edge, bool planar) {
 double auto_kernel_width(const GraphConfig& config, int dimension, double probability) {
   if (config.kernel_width) return *config.kernel_width;
   const double q = assoc::chi2_quantile(dimension, probability);
-  return graph::robust_kernel_from_name(config.robust) == graph::RobustKernel::kDcs ? q : std::sqrt(q);
+  return config.robust == graph::RobustKernel::kDcs ? q : std::sqrt(q);
 }
 
 }  // namespace
