@@ -7,7 +7,7 @@
 #include "estimators/graph/g2o_io.hpp"
 #include "estimators/graph/optimizer.hpp"
 #include "estimators/graph/robust_kernel.hpp"
-#include "estimators/graph/sparse_normal_equations.hpp"
+#include "estimators/graph/ordering.hpp"
 #include "replay/summary.hpp"
 
 #include <string>
