@@ -97,6 +97,8 @@ void read_stage_config(Section& s, engine::GraphConfig& c) {
   s.get("odometry_history", c.odometry_history, int_in_range(1, 100000000));
   s.get("coalesce_odometry", c.coalesce_odometry);
   s.get("odometry_batch_max", c.odometry_batch_max, int_in_range(1, 1 << 20));
+  s.get("odometry_waiting_max", c.odometry_waiting_max, int_in_range(1, 1 << 24));
+  s.get("odometry_waiting_total_max", c.odometry_waiting_total_max, int_in_range(1, 1 << 24));
   if (s.node().IsMap() && s.node()["trajectory_max_keyframes"])
     throw s.error_at(s.node()["trajectory_max_keyframes"],
                      "'" + s.path() + ".trajectory_max_keyframes' is gone: TRAJECTORY now sends new and moved keyframes and a "

@@ -33,15 +33,6 @@ graph::IncrementalOptions smoother_options(const GraphConfig& c, bool planar) {
   return o;
 }
 
-OdometryCoalescerOptions coalescer_options(const GraphConfig& c) {
-  OdometryCoalescerOptions o;
-  o.keyframes = c.keyframes;
-  o.min_increment_variance = c.min_increment_variance;
-  o.max_entries = static_cast<size_t>(std::max(1, c.odometry_batch_max));
-  o.max_passed = static_cast<size_t>(std::max(1, c.odometry_history));
-  return o;
-}
-
 /// The covariance added to the odometry edge of a keyframe re-anchored after a jump (KeyframeSelector's kReanchored):
 /// the odometry across the jump is what made it implausible, so the edge only says "somewhere around there": each
 /// translation axis gets the variance |rho|^2 and each rotation axis |phi|^2, mu = Log(edge) = [rho; phi] (planar:
@@ -79,11 +70,10 @@ double sighting_kernel_width_for(const GraphConfig& config, bool planar) {
   return auto_kernel_width(config, planar ? 2 : 3, config.landmarks.gate_probability);
 }
 
-GraphStage::GraphStage(const GraphConfig& config, std::shared_ptr<GraphCorrections> corrections)
+GraphStage::GraphStage(const GraphConfig& config, std::shared_ptr<GraphCorrectionBoard> corrections)
     : config_(config),
       corrections_(std::move(corrections)),
       proposer_(config.proposals),
-      coalescer_(coalescer_options(config)),
       chi2_gate_planar_(assoc::chi2_quantile(3, config.loop_gate_probability)),
       chi2_gate_spatial_(assoc::chi2_quantile(6, config.loop_gate_probability)),
       sighting_gate_planar_(assoc::chi2_quantile(2, config.landmarks.gate_probability)),
@@ -116,17 +106,8 @@ void GraphStage::add_factor(Body& b, std::unique_ptr<graph::Factor> factor, Fact
   factor_tags_[b.planar ? 1 : 0].push_back({role, robust, width});
 }
 
-bool GraphStage::offer(const Event& e, const std::function<bool()>& enqueue) {
-  return config_.coalesce_odometry ? coalescer_.offer(e, enqueue) : enqueue();
-}
-
 void GraphStage::handle(const Event& e, const Emit& emit) {
-  if (const auto* o = std::get_if<Odometry>(&e)) {
-    if (auto batch = coalescer_.take(o->source))  // a token: the body's odometry since it was queued
-      for (const auto& entry : *batch) on_coalesced(entry, emit);
-    else
-      on_odometry(*o, emit);
-  }
+  if (const auto* o = std::get_if<Odometry>(&e)) on_odometry(*o, emit);
   else if (const auto* l = std::get_if<LoopClosure>(&e)) on_loop(*l, emit);
   else if (const auto* s = std::get_if<LandmarkSightings>(&e); s && config_.landmarks.enabled) on_sightings(*s, emit);
 }
@@ -190,18 +171,6 @@ void GraphStage::remember_odometry(Body& b, int64_t utime, const SE3& pose, size
   b.odometry.emplace_back(utime, pose);
 }
 
-void GraphStage::on_coalesced(const OdometryCoalescer::Entry& entry, const Emit& emit) {
-  if (auto it = bodies_.find(entry.message.source); it != bodies_.end()) {
-    for (const auto& [utime, pose] : entry.passed)
-      if (utime > it->second.last_utime) remember_odometry(it->second, utime, pose, static_cast<size_t>(config_.odometry_history));
-    // The coalescer's selector saw the merged messages too (their run towards re-anchoring): continue from it —
-    // unless the stage has dropped a keyframe that selector took (drop_keyframe): it then keeps its own.
-    if (entry.selector.refers_to(it->second.selector.reference())) it->second.selector = entry.selector;
-  }
-  keyframes_rejected_ += entry.implausible;
-  on_odometry(entry.message, emit);
-}
-
 void GraphStage::on_keyframe_candidate(const Odometry& o, Body& b, const SE3& odom, const Emit& emit) {
   const KeyframeDecision d = b.selector.decide(odom);
   if (d == KeyframeDecision::kImplausible) ++keyframes_rejected_;
@@ -221,7 +190,7 @@ void GraphStage::on_keyframe_candidate(const Odometry& o, Body& b, const SE3& od
     // graph) and keeps accumulating towards the next one, whose edge spans the dropped pose.
     edge_factor = odometry_factor(b.planar, b.keyframes.back().variable, -1, node.edge, node.edge_covariance);
     if (!edge_factor) {
-      drop_keyframe(o.source, b, odom);
+      drop_keyframe(b);
       return;
     }
   }
@@ -241,7 +210,7 @@ void GraphStage::on_keyframe_candidate(const Odometry& o, Body& b, const SE3& od
     if (edge_factor)
       add_factor(b, edge_factor->rebind({b.keyframes.back().variable, node.variable}), FactorRole::kOdometry, false, std::nullopt);
   } catch (const std::invalid_argument&) {
-    drop_keyframe(o.source, b, odom);  // a non-finite pose or information: never reaches the smoother's system
+    drop_keyframe(b);  // a non-finite pose or information: never reaches the smoother's system
     return;
   }
   node.id = b.next_keyframe_id++;
@@ -312,11 +281,9 @@ std::optional<GraphStage::LoopEnd> GraphStage::resolve(const Body& b, int64_t ke
   return LoopEnd{k, b.keyframes[k].odom.between(*at_time), b.keyframes[k + 1].edge_covariance};
 }
 
-void GraphStage::drop_keyframe(const std::string& source, Body& b, const SE3& odom) {
+void GraphStage::drop_keyframe(Body& b) {
   ++bad_edges_;
-  const std::optional<SE3> last = b.keyframes.empty() ? std::nullopt : std::optional<SE3>(b.keyframes.back().odom);
-  b.selector.reset_reference(last);
-  coalescer_.keyframe_dropped(source, odom, last);
+  b.selector.reset_reference(b.keyframes.empty() ? std::nullopt : std::optional<SE3>(b.keyframes.back().odom));
 }
 
 void GraphStage::on_loop(const LoopClosure& l, const Emit& emit) {
@@ -478,9 +445,7 @@ Counters GraphStage::counters() const {
           {"optimizer_failures", optimizer_failures_},
           {"rebuilds", rebuilds_},
           {"relinearized_factors", relinearized_},
-          {"odometry_out_of_order", out_of_order_ + coalescer_.out_of_order()},
-          {"odometry_coalesced", coalescer_.coalesced()},
-          {"odometry_waiting", coalescer_.waiting()},
+          {"odometry_out_of_order", out_of_order_},
           {"odometry_edges_rejected", bad_edges_},
           {"landmarks", landmarks_},
           {"sightings_accepted", sightings_accepted_},

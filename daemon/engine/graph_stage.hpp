@@ -45,14 +45,12 @@
 //    are gated against (limitation).  Landmark positions after each update: landmarks(source).
 //  - after every update: the map -> odometry correction for GraphPoseStage; TRAJECTORY at its own rate
 //    (trajectory_feed.hpp: new and moved keyframes, a rolling snapshot, bounded messages).
-//  - in the daemon, each body's odometry reaches the stage through an OdometryCoalescer (odometry_coalescer.hpp)
-//    instead of one queue slot per message: a 1 kHz body cannot fill the queue during a long solve, and the stage's
-//    keyframes, loops and sightings come out as from the single messages (config: coalesce_odometry).
+//  - the stage handles one event at a time and knows no threads: in the daemon a body's odometry may reach it in
+//    batches (daemon/runtime/odometry_batcher.hpp), handed to `handle` one message at a time as replay does.
 // The first keyframe of a body is held fixed at its odometry pose: the map frame is the odometry frame at the
 // body's first keyframe, as for dead reckoning.
 #include "daemon/engine/graph_correction.hpp"
 #include "daemon/engine/graph_stage_config.hpp"
-#include "daemon/engine/odometry_coalescer.hpp"
 #include "daemon/engine/stage.hpp"
 #include "daemon/engine/trajectory_feed.hpp"
 #include "estimators/graph/incremental_smoother.hpp"
@@ -72,14 +70,12 @@ struct GraphLandmark {
 
 class GraphStage final : public Stage {
  public:
-  GraphStage(const GraphConfig& config, std::shared_ptr<GraphCorrections> corrections);
+  GraphStage(const GraphConfig& config, std::shared_ptr<GraphCorrectionBoard> corrections);
   std::string_view name() const override { return "graph"; }
   bool accepts(const Event& e) const override {
     return std::holds_alternative<Odometry>(e) || std::holds_alternative<LoopClosure>(e) ||
            (config_.landmarks.enabled && std::holds_alternative<LandmarkSightings>(e));
   }
-  /// Daemon intake thread: odometry goes to the coalescer (when coalesce_odometry), everything else to the queue.
-  bool offer(const Event& e, const std::function<bool()>& enqueue) override;
   void handle(const Event& e, const Emit& emit) override;
   /// The last TRAJECTORY publication of every body: every keyframe that moved at all since it was published.
   void finish(const Emit& emit) override;
@@ -161,15 +157,13 @@ class GraphStage final : public Stage {
     Matrix6 covariance = Matrix6::Zero();
   };
   void on_odometry(const Odometry& o, const Emit& emit);
-  /// A coalesced message: the poses merged into it go to the odometry history first.
-  void on_coalesced(const OdometryCoalescer::Entry& entry, const Emit& emit);
   static void remember_odometry(Body& b, int64_t utime, const SE3& pose, size_t history);
   void on_keyframe_candidate(const Odometry& o, Body& b, const SE3& odom, const Emit& emit);
   /// A keyframe candidate at `odom` that cannot enter the graph (its odometry edge's covariance cannot be inverted,
-  /// or the smoother refuses it): counted (odometry_edges_rejected); the selector (and the coalescer's mirror of it)
-  /// goes back to the body's last keyframe in the graph, so the next keyframe is measured from that one and its edge,
-  /// which spans the dropped pose, accumulates the odometry covariance from there.
-  void drop_keyframe(const std::string& source, Body& b, const SE3& odom);
+  /// or the smoother refuses it): counted (odometry_edges_rejected); the selector goes back to the body's last keyframe
+  /// in the graph, so the next keyframe is measured from that one and its edge, which spans the dropped pose,
+  /// accumulates the odometry covariance from there.
+  void drop_keyframe(Body& b);
   void on_loop(const LoopClosure& l, const Emit& emit);
   /// Where a loop's end lands: a keyframe of the graph (position in Body::keyframes), the odometry motion from it to
   /// the loop's time, and that motion's covariance (zero when the time is the keyframe's or bridged by recorded
@@ -213,7 +207,7 @@ class GraphStage final : public Stage {
   std::vector<int64_t*> saved_counters();
 
   GraphConfig config_;
-  std::shared_ptr<GraphCorrections> corrections_;
+  std::shared_ptr<GraphCorrectionBoard> corrections_;
   LoopProposer proposer_;
   /// One smoother per kind of body, [0] 3-D and [1] planar, created with the first such body: the bodies' graphs
   /// share no variable, and the robust kernel's width depends on the loops' dimension (kernel_width_for), which is
@@ -225,7 +219,6 @@ class GraphStage final : public Stage {
   std::map<int, std::pair<int64_t, Eigen::MatrixXd>> gate_marginals_[2];
   Eigen::MatrixXd gate_marginal(const Body& b, int variable);
   int64_t keyframes_since_thinning_[2] = {0, 0};
-  OdometryCoalescer coalescer_;
   std::map<std::string, Body> bodies_;
   int64_t next_variable_id_ = 0, next_request_id_ = 0;
   double chi2_gate_planar_ = 0, chi2_gate_spatial_ = 0, sighting_gate_planar_ = 0, sighting_gate_spatial_ = 0;

@@ -63,9 +63,12 @@ struct GraphConfig {
   /// 30000 against 100000 left 1480 of 3556 loops unmatched and moved the graph's ATE from 14.3 to 13.8 mm, and the
   /// daemon's memory stops growing after 10 minutes instead of 33; bench/RESULTS.md, "Lifelong").
   int odometry_history = 30000;
-  bool coalesce_odometry = true;         // daemon: a body's odometry waiting for the stage is coalesced instead of
-                                         // taking one queue slot per message (odometry_coalescer.hpp)
-  int odometry_batch_max = 256;          // messages a coalesced batch keeps unmerged (keyframe candidates, sighting times)
+  /// Daemon only (daemon/runtime/odometry_batcher.hpp): a body's odometry waiting for the stage's thread is batched,
+  /// one queue slot per batch instead of per message; the stage still handles every message on its own.
+  bool coalesce_odometry = true;
+  int odometry_batch_max = 256;              // messages per batch (a full batch takes one more queue slot)
+  int odometry_waiting_max = 16384;          // messages of one body waiting in batches (about 1.1 kB each)
+  int odometry_waiting_total_max = 65536;    // messages of all bodies waiting in batches
   double min_increment_variance = 1e-10;
   /// The incremental smoother's options (config key `smoother:`): relinearization thresholds and skip, wildfire,
   /// the rank-update budget, reordering and its spreading over updates.  Their defaults are IncrementalOptions'

@@ -122,7 +122,6 @@ void GraphStage::load(archive::ArchiveReader& r) {
     b.feed = TrajectoryFeed(config_.trajectory);
     r(b.feed)(b.newest_utime);
     if (const auto c = r.get<std::optional<GraphCorrection>>()) corrections_->set(source, *c);
-    coalescer_.resume(source, b.selector, b.last_utime, b.last_odom, b.last_odom_covariance);
     if (!bodies_.emplace(source, std::move(b)).second) r.fail("body '" + source + "' twice");
   }
 }
@@ -152,7 +151,6 @@ void GraphStage::forget(const std::string& source) {
     fresh->add_factor(factors[f]->rebind(vs), t.robust, t.kernel_width);
     fresh_tags.push_back(t);
   }
-  coalescer_.forget(source);
   corrections_->erase(source);
   bodies_.erase(it);
   bool others = false;

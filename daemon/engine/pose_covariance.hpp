@@ -30,7 +30,7 @@ inline Matrix6 stated_increment_covariance(const Odometry& odo, const SE3& delta
                                                                                 Matrix6::Zero()));
 }
 
-/// The increment covariance dead reckoning, the graph stage and its odometry coalescer compose: the stated one, the
+/// The increment covariance dead reckoning and the graph stage compose: the stated one, the
 /// differential growth projected onto the PSD cone, and `min_variance` added to the diagonal entries the source uses
 /// (x, y, yaw when planar) so that it stays positive definite.  The filters floor the eigenvalues at `min_variance`
 /// instead (filter_increment_covariance): where the stated covariance is positive definite with eigenvalues above
