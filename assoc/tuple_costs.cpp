@@ -64,6 +64,15 @@ CostKind cost_kind_from_string(const std::string& s) {
   throw std::invalid_argument("unknown cost '" + s + "' (classic, kl or renyi)");
 }
 
+const char* cost_kind_name(CostKind kind) {
+  switch (kind) {
+    case CostKind::kClassic: return "classic";
+    case CostKind::kKl: return "kl";
+    case CostKind::kRenyi: return "renyi";
+  }
+  return "?";
+}
+
 namespace {
 
 // The cost of a tuple whose detections were triangulated to `t` (valid, gate passed).  The classic term

@@ -74,5 +74,6 @@ std::vector<Tuple> build_tuples(const Scan& scan, const CostOptions& options);
 double tuple_cost(const Scan& scan, const std::vector<int>& index, const CostOptions& options, Triangulation* t = nullptr);
 
 CostKind cost_kind_from_string(const std::string& s);  // "classic", "kl", "renyi"; throws std::invalid_argument
+const char* cost_kind_name(CostKind kind);             // the spelling cost_kind_from_string reads
 
 }  // namespace sextant::assoc

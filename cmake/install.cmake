@@ -32,10 +32,11 @@ install(FILES ${CMAKE_BINARY_DIR}/generated/sextantConfig.cmake ${CMAKE_BINARY_D
               ${CMAKE_SOURCE_DIR}/cmake/cholmod.cmake
         DESTINATION ${SEXTANT_CMAKE_DIR})
 
-# Headers of every installed library (the CLI's own headers stay private).
+# Headers of every installed library (the CLI's own headers stay private, and so do the incremental smoother's steps:
+# estimators/graph/incremental_smoother.hpp is their public face and includes none of them).
 foreach(dir estimators assoc daemon/engine daemon/config daemon/runtime replay)
   install(DIRECTORY ${CMAKE_SOURCE_DIR}/${dir}/ DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}/sextant/${dir}
-          FILES_MATCHING PATTERN "*.hpp" PATTERN "cli" EXCLUDE)
+          FILES_MATCHING PATTERN "*.hpp" PATTERN "cli" EXCLUDE REGEX "/estimators/graph/smoother$" EXCLUDE)
 endforeach()
 install(DIRECTORY ${CMAKE_BINARY_DIR}/lcmtypes/cpp/sextant/ DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}/sextant/sextant
         FILES_MATCHING PATTERN "*.hpp")

@@ -123,9 +123,13 @@ py::dict optimize(const py::object& graph_or_path, const std::optional<std::stri
   return out;
 }
 
-// A trajectory: a TUM file's path, or rows [t, x, y, z, qx, qy, qz, qw] (seconds, metres, TUM's quaternion order).
-std::vector<replay::StampedPose> trajectory(const py::object& obj, const char* what) {
-  if (is_path(obj)) return replay::read_tum(py::cast<std::string>(py::str(obj)));
+// A trajectory: a TUM or KITTI file's path (`format`), or rows [t, x, y, z, qx, qy, qz, qw] (seconds, metres, TUM's
+// quaternion order).
+std::vector<replay::StampedPose> trajectory(const py::object& obj, const char* what, const std::string& format) {
+  if (is_path(obj)) {
+    const std::string path = py::cast<std::string>(py::str(obj));
+    return format == "kitti" ? replay::read_kitti(path) : replay::read_tum(path);
+  }
   std::vector<replay::StampedPose> poses;
   size_t k = 0;
   for (const py::handle row : obj) {
@@ -150,12 +154,13 @@ std::vector<replay::StampedPose> trajectory(const py::object& obj, const char* w
 }
 
 py::dict evaluate(const py::object& gt, const py::object& est, bool scale, double delta, const std::string& delta_unit,
-                  double max_difference) {
+                  double max_difference, const std::string& format) {
   if (delta_unit != "s" && delta_unit != "f") throw py::value_error("delta_unit: 's' (seconds) or 'f' (frames)");
+  if (format != "tum" && format != "kitti") throw py::value_error("format: 'tum' or 'kitti'");
   if (!(delta > 0) || !(max_difference > 0)) throw py::value_error("delta and max_difference must be > 0");
   const replay::EvaluationOptions o{scale, delta, delta_unit == "f" ? replay::DeltaUnit::kFrames : replay::DeltaUnit::kSeconds,
                                     max_difference};
-  const auto g = trajectory(gt, "gt"), e = trajectory(est, "est");
+  const auto g = trajectory(gt, "gt", format), e = trajectory(est, "est", format);
   return summary_dict(replay::evaluate_trajectory(g, e, o).summary(o));
 }
 
@@ -170,7 +175,7 @@ void register_solvers(py::module_& m) {
           replay::GraphOptimizationOptions o;
           try {
             o.solver = replay::solver_from_name(solver), o.init = replay::initial_estimate_from_name(init);
-            o.robust = replay::robust_kernel_from_option(robust), o.ordering = replay::ordering_from_name(ordering);
+            o.robust = graph::robust_kernel_from_name(robust), o.ordering = replay::ordering_from_name(ordering);
           } catch (const std::invalid_argument& e) {
             throw py::value_error(e.what());
           }
@@ -189,9 +194,10 @@ void register_solvers(py::module_& m) {
         "output= also writes the optimized graph as g2o; information= 'reject' (the default), 'repair' or 'diagonal' "
         "as `sextant optimize --information`.");
   m.def("eval", &evaluate, py::arg("gt"), py::arg("est"), py::arg("scale") = false, py::arg("delta") = 1.0,
-        py::arg("delta_unit") = "s", py::arg("max_difference") = 0.02,
-        "`sextant eval`: ATE and RPE (TUM benchmark semantics) of est against gt, each a TUM file's path or rows "
-        "[t, x, y, z, qx, qy, qz, qw].  Returns the keys of `sextant eval --json`.");
+        py::arg("delta_unit") = "s", py::arg("max_difference") = 0.02, py::arg("format") = "tum",
+        "`sextant eval`: ATE and RPE (TUM benchmark semantics) and the KITTI odometry error of est against gt, each "
+        "a file's path (format 'tum' or 'kitti': frame i with frame i) or rows [t, x, y, z, qx, qy, qz, qw].  Returns "
+        "the keys of `sextant eval --json`.");
 }
 
 }  // namespace sextant::python

@@ -3,6 +3,7 @@
 #include "estimators/graph/feed_in_order.hpp"
 #include "estimators/graph/initialization.hpp"
 #include "estimators/graph/optimizer.hpp"
+#include "estimators/kind_names.hpp"
 #include "daemon/runtime/nearest_rank_percentile.hpp"
 
 #include <sys/resource.h>
@@ -21,41 +22,11 @@ double percentile(std::vector<double> v, double q) {
   return runtime::nearest_rank_percentile(v, q);
 }
 
-template <class Kind, size_t N>
-using Names = std::pair<Kind, const char*>[N];
-
-template <class Kind, size_t N>
-Kind from_name(const Names<Kind, N>& names, const std::string& name, const char* what) {
-  std::string list;
-  for (const auto& [kind, spelling] : names) {
-    if (name == spelling) return kind;
-    list += (list.empty() ? "" : ", ") + std::string(spelling);
-  }
-  throw std::invalid_argument(std::string(what) + ": '" + name + "' is not one of " + list);
-}
-
-template <class Kind, size_t N>
-const char* spelling_of(const Names<Kind, N>& names, Kind kind) {
-  for (const auto& [k, spelling] : names)
-    if (k == kind) return spelling;
-  return "?";
-}
-
-template <class Kind, size_t N>
-std::vector<std::string> spellings(const Names<Kind, N>& names) {
-  std::vector<std::string> out;
-  for (const auto& [kind, spelling] : names) out.emplace_back(spelling);
-  return out;
-}
-
 constexpr std::pair<graph::Method, const char*> kSolvers[] = {{graph::Method::kGaussNewton, "gn"},
                                                              {graph::Method::kLevenbergMarquardt, "lm"}};
 constexpr std::pair<InitialEstimate, const char*> kInits[] = {
     {InitialEstimate::kAuto, "auto"}, {InitialEstimate::kFile, "file"}, {InitialEstimate::kOdometry, "odometry"},
     {InitialEstimate::kChordal, "chordal"}, {InitialEstimate::kSgd, "sgd"}};
-constexpr std::pair<graph::RobustKernel, const char*> kKernels[] = {
-    {graph::RobustKernel::kNone, "none"}, {graph::RobustKernel::kHuber, "huber"},
-    {graph::RobustKernel::kCauchy, "cauchy"}, {graph::RobustKernel::kDcs, "dcs"}};
 constexpr std::pair<graph::Ordering, const char*> kOrderings[] = {
     {graph::Ordering::kBlockAmd, "block-amd"}, {graph::Ordering::kAmd, "amd"}, {graph::Ordering::kColamd, "colamd"},
     {graph::Ordering::kMetis, "metis"}, {graph::Ordering::kAuto, "auto"}};
@@ -102,7 +73,7 @@ GraphOptimizationResult run_incremental(const graph::G2oGraph& g, const GraphOpt
   s.add("updates", r.step_ms.size()).add("rebuilds", r.rebuilds).add("relinearize_skip", o.relin_skip);
   s.add("relinearized_factors", r.relinearized_factors);
   s.add("factor_nonzeros", static_cast<int64_t>(smoother.factor_nonzeros())).add("peak_rss_mb", peak_mb);
-  s.add("robust", name_of(o.robust));
+  s.add("robust", graph::robust_kernel_name(o.robust));
   if (!r.ok) s.add("termination", r.message);
   res.ok = r.ok;
   res.message = r.ok ? "" : r.message;
@@ -112,18 +83,15 @@ GraphOptimizationResult run_incremental(const graph::G2oGraph& g, const GraphOpt
 
 }  // namespace
 
-graph::Method solver_from_name(const std::string& name) { return from_name(kSolvers, name, "solver"); }
-InitialEstimate initial_estimate_from_name(const std::string& name) { return from_name(kInits, name, "init"); }
-graph::RobustKernel robust_kernel_from_option(const std::string& name) { return from_name(kKernels, name, "robust"); }
-graph::Ordering ordering_from_name(const std::string& name) { return from_name(kOrderings, name, "ordering"); }
-const char* name_of(graph::Method solver) { return spelling_of(kSolvers, solver); }
-const char* name_of(InitialEstimate init) { return spelling_of(kInits, init); }
-const char* name_of(graph::RobustKernel kernel) { return spelling_of(kKernels, kernel); }
-const char* name_of(graph::Ordering ordering) { return spelling_of(kOrderings, ordering); }
-std::vector<std::string> solver_names() { return spellings(kSolvers); }
-std::vector<std::string> initial_estimate_names() { return spellings(kInits); }
-std::vector<std::string> robust_kernel_names() { return spellings(kKernels); }
-std::vector<std::string> ordering_names() { return spellings(kOrderings); }
+graph::Method solver_from_name(const std::string& name) { return kind_from_name(kSolvers, name, "solver"); }
+InitialEstimate initial_estimate_from_name(const std::string& name) { return kind_from_name(kInits, name, "init"); }
+graph::Ordering ordering_from_name(const std::string& name) { return kind_from_name(kOrderings, name, "ordering"); }
+const char* name_of(graph::Method solver) { return kind_name(kSolvers, solver); }
+const char* name_of(InitialEstimate init) { return kind_name(kInits, init); }
+const char* name_of(graph::Ordering ordering) { return kind_name(kOrderings, ordering); }
+std::vector<std::string> solver_names() { return kind_names(kSolvers); }
+std::vector<std::string> initial_estimate_names() { return kind_names(kInits); }
+std::vector<std::string> ordering_names() { return kind_names(kOrderings); }
 
 GraphOptimizationResult optimize_graph(graph::G2oGraph& g, const GraphOptimizationOptions& o,
                                        const std::string& output) {
@@ -169,7 +137,7 @@ GraphOptimizationResult optimize_graph(graph::G2oGraph& g, const GraphOptimizati
   s.add("initial_chi2", st.initial_chi2).add("final_chi2", st.final_chi2);
   s.add("solve_seconds", solve_seconds).add("converged", st.converged());
   s.add("solver", name_of(o.solver)).add("init", name_of(o.init)).add("init_used", name_of(init_used));
-  s.add("robust", name_of(o.robust));
+  s.add("robust", graph::robust_kernel_name(o.robust));
   s.add("repaired_information", g.repaired_information);
   s.add("termination", st.message);
   s.add("linearize_seconds", st.linearize_seconds).add("factorize_seconds", st.factorize_seconds);

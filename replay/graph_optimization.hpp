@@ -7,7 +7,7 @@
 #include "estimators/graph/g2o_io.hpp"
 #include "estimators/graph/optimizer.hpp"
 #include "estimators/graph/robust_kernel.hpp"
-#include "estimators/graph/sparse_normal_equations.hpp"
+#include "estimators/graph/ordering.hpp"
 #include "replay/summary.hpp"
 
 #include <string>
@@ -25,19 +25,16 @@ enum class InitialEstimate {
 };
 
 /// The spellings of the kinds `sextant optimize` and the Python module's optimize() take, one table per kind
-/// (graph_optimization.cpp).  *_from_name throws std::invalid_argument naming the option and its spellings for any
+/// (graph_optimization.cpp; the robust kernels' is graph::robust_kernel_from_name, robust_kernel.hpp).  *_from_name throws std::invalid_argument naming the option and its spellings for any
 /// other name; *_names lists the spellings (for the command line's checks).
 graph::Method solver_from_name(const std::string& name);                // gn | lm
 InitialEstimate initial_estimate_from_name(const std::string& name);    // auto | file | odometry | chordal | sgd
-graph::RobustKernel robust_kernel_from_option(const std::string& name); // none | huber | cauchy | dcs
 graph::Ordering ordering_from_name(const std::string& name);            // block-amd | amd | colamd | metis | auto
 const char* name_of(graph::Method solver);
 const char* name_of(InitialEstimate init);
-const char* name_of(graph::RobustKernel kernel);
 const char* name_of(graph::Ordering ordering);
 std::vector<std::string> solver_names();
 std::vector<std::string> initial_estimate_names();
-std::vector<std::string> robust_kernel_names();
 std::vector<std::string> ordering_names();
 
 struct GraphOptimizationOptions {

@@ -16,6 +16,19 @@ Evaluation evaluate_trajectory(const std::vector<StampedPose>& gt, const std::ve
   } catch (const std::invalid_argument&) {
     e.rpe.reset();
   }
+  // The KITTI error compares frame with frame: the associated pairs, in time order, at the alignment's scale.
+  std::vector<engine::Pose> gt_pairs, est_pairs;
+  for (const auto& [g, x] : associate(gt, est, o.max_difference)) {
+    gt_pairs.push_back(gt[g].pose);
+    engine::Pose p = est[x].pose;
+    p.position *= e.ate.scale;
+    est_pairs.push_back(p);
+  }
+  try {
+    e.kitti = kitti_odometry_error(gt_pairs, est_pairs);
+  } catch (const std::invalid_argument&) {
+    e.kitti.reset();
+  }
   return e;
 }
 
@@ -30,6 +43,12 @@ Summary Evaluation::summary(const EvaluationOptions& o) const {
     s.add("rpe_pairs", rpe->pairs);
   } else {
     s.add("rpe_trans_rmse", std::nan("")).add("rpe_rot_rmse_deg", std::nan("")).add("rpe_pairs", 0);
+  }
+  if (kitti) {
+    s.add("kitti_trans_pct", kitti->translation_percent).add("kitti_rot_deg_per_m", kitti->rotation_deg_per_m);
+    s.add("kitti_segments", kitti->segments.size());
+  } else {
+    s.add("kitti_trans_pct", std::nan("")).add("kitti_rot_deg_per_m", std::nan("")).add("kitti_segments", 0);
   }
   s.add("rpe_delta", o.delta).add("rpe_delta_unit", o.delta_unit == DeltaUnit::kFrames ? "f" : "s");
   return s;

@@ -1,7 +1,10 @@
 #pragma once
 // `sextant eval` as a function, for the CLI and the Python module: ATE after alignment and RPE at the same scale
 // (trajectory_eval.hpp, the TUM tools' semantics), summarized under the keys of `sextant eval --json`
-// (DESIGN.md: ate_rmse, ate_mean, ate_median, ate_max, rpe_trans_rmse, rpe_rot_rmse_deg, matched, ...).
+// (DESIGN.md: ate_rmse, ate_mean, ate_median, ate_max, rpe_trans_rmse, rpe_rot_rmse_deg, matched, ...), and the KITTI
+// odometry benchmark's drift per distance (kitti_odometry_metric.hpp) over the associated poses when the ground truth
+// is long enough for its shortest segment (100 m).
+#include "replay/kitti_odometry_metric.hpp"
 #include "replay/summary.hpp"
 #include "replay/trajectory_eval.hpp"
 
@@ -19,8 +22,10 @@ struct EvaluationOptions {
 struct Evaluation {
   AteResult ate;
   std::optional<RpeResult> rpe;          // none when no pose pair has ground truth at both ends
+  std::optional<KittiOdometryError> kitti;  // none when the associated ground truth is shorter than 100 m
   size_t estimated_poses = 0;
-  /// The `sextant eval --json` keys (RPE keys null and rpe_pairs 0 without RPE).
+  /// The `sextant eval --json` keys (RPE keys null and rpe_pairs 0 without RPE; KITTI keys null and kitti_segments 0
+  /// without the KITTI error).
   Summary summary(const EvaluationOptions& options) const;
 };
 

@@ -6,11 +6,35 @@
 #include <cstdlib>
 #include <cstring>
 #include <fstream>
+#include <limits>
 #include <memory>
 #include <sstream>
 #include <stdexcept>
 
 namespace sextant::replay {
+namespace {
+/// The numbers of one whitespace-separated line; throws naming path:line at the first token that is not a finite
+/// number.
+std::vector<double> finite_numbers(const std::string& line, const std::string& path, int number) {
+  std::istringstream fields(line);
+  std::vector<double> v;
+  std::string tok;
+  while (fields >> tok) {
+    char* end = nullptr;
+    const double x = std::strtod(tok.c_str(), &end);
+    if (end == tok.c_str() || *end != '\0')
+      throw std::runtime_error(path + ":" + std::to_string(number) + ": not a number: '" + tok + "'");
+    if (!std::isfinite(x))
+      throw std::runtime_error(path + ":" + std::to_string(number) + ": value " + std::to_string(v.size() + 1) +
+                               " is not finite");
+    v.push_back(x);
+  }
+  return v;
+}
+
+bool blank(const std::string& line) { return line.find_first_not_of(" \t\r") == std::string::npos; }
+}  // namespace
+
 std::vector<StampedPose> read_tum(const std::string& path) {
   std::ifstream in(path);
   if (!in) throw std::runtime_error("cannot read " + path + ": " + std::strerror(errno));
@@ -23,22 +47,10 @@ std::vector<StampedPose> read_tum(const std::string& path) {
       if (c == ',' || c == '\t' || c == '\r') c = ' ';
     const size_t first = line.find_first_not_of(' ');
     if (first == std::string::npos || line[first] == '#') continue;
-    std::istringstream fields(line);
-    std::vector<double> v;
-    std::string tok;
-    while (fields >> tok) {
-      char* end = nullptr;
-      const double x = std::strtod(tok.c_str(), &end);
-      if (end == tok.c_str() || *end != '\0')
-        throw std::runtime_error(path + ":" + std::to_string(number) + ": not a number: '" + tok + "'");
-      v.push_back(x);
-    }
+    const std::vector<double> v = finite_numbers(line, path, number);
     if (v.size() < 8)
       throw std::runtime_error(path + ":" + std::to_string(number) + ": expected 8 values (t tx ty tz qx qy qz qw), got " +
                                std::to_string(v.size()));
-    for (size_t i = 0; i < 8; ++i)
-      if (!std::isfinite(v[i]))
-        throw std::runtime_error(path + ":" + std::to_string(number) + ": value " + std::to_string(i + 1) + " is not finite");
     // Stamps become int64 microseconds: beyond +-9.2e12 s they cannot.
     if (std::abs(v[0]) > 9.2e12)
       throw std::runtime_error(path + ":" + std::to_string(number) + ": timestamp " + std::to_string(v[0]) +
@@ -51,6 +63,59 @@ std::vector<StampedPose> read_tum(const std::string& path) {
   std::vector<StampedPose> out;
   out.reserve(rows.size());
   for (const auto& [t, p] : rows) out.push_back({t, p});
+  return out;
+}
+
+std::vector<StampedPose> read_kitti(const std::string& path, const std::string& times_path) {
+  std::ifstream in(path);
+  if (!in) throw std::runtime_error("cannot read " + path + ": " + std::strerror(errno));
+  std::vector<StampedPose> out;
+  std::string line;
+  int number = 0;
+  while (std::getline(in, line)) {
+    ++number;
+    if (blank(line)) continue;
+    const std::vector<double> v = finite_numbers(line, path, number);
+    if (v.size() != 12)
+      throw std::runtime_error(path + ":" + std::to_string(number) + ": expected 12 values (the 3x4 matrix [R | t] row-major), got " +
+                               std::to_string(v.size()));
+    Eigen::Matrix3d R;
+    R << v[0], v[1], v[2], v[4], v[5], v[6], v[8], v[9], v[10];
+    const double orthogonality = (R.transpose() * R - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff();
+    if (!(orthogonality <= 1e-3) || R.determinant() < 0)
+      throw std::runtime_error(path + ":" + std::to_string(number) + ": the 3x3 block is not a rotation (|R'R - I| = " +
+                               std::to_string(orthogonality) + ", det " + std::to_string(R.determinant()) + ")");
+    StampedPose s;
+    s.t = static_cast<double>(out.size());
+    s.pose.position = {v[3], v[7], v[11]};
+    s.pose.orientation = Eigen::Quaterniond(R).normalized();
+    out.push_back(s);
+  }
+  if (times_path.empty()) return out;
+  std::ifstream times(times_path);
+  if (!times) throw std::runtime_error("cannot read " + times_path + ": " + std::strerror(errno));
+  size_t i = 0;
+  number = 0;
+  double previous = -std::numeric_limits<double>::infinity();
+  while (std::getline(times, line)) {
+    ++number;
+    if (blank(line)) continue;
+    const std::vector<double> v = finite_numbers(line, times_path, number);
+    if (v.size() != 1)
+      throw std::runtime_error(times_path + ":" + std::to_string(number) + ": expected one time in seconds, got " +
+                               std::to_string(v.size()) + " values");
+    if (v[0] <= previous || std::abs(v[0]) > 9.2e12)
+      throw std::runtime_error(times_path + ":" + std::to_string(number) + ": time " + std::to_string(v[0]) +
+                               " s is not after the previous one or out of range (|t| <= 9.2e12 s)");
+    if (i == out.size())
+      throw std::runtime_error(times_path + ":" + std::to_string(number) + ": more times than the " +
+                               std::to_string(out.size()) + " poses of " + path);
+    previous = v[0];
+    out[i++].t = v[0];
+  }
+  if (i != out.size())
+    throw std::runtime_error(times_path + ": " + std::to_string(i) + " times for the " + std::to_string(out.size()) +
+                             " poses of " + path);
   return out;
 }
 

@@ -24,6 +24,15 @@ struct StampedPose {
 /// and line of a malformed row (fewer than 8 numbers, or a number that does not parse).
 std::vector<StampedPose> read_tum(const std::string& path);
 
+/// Reads a KITTI odometry pose file: one pose per line, the 12 numbers of the 3x4 matrix [R | t] row-major (the
+/// camera-to-world pose of the benchmark's ground truth and of its submissions).  The file has no stamps: with
+/// `times_path` (the sequence's times.txt, one time in seconds per line) pose i gets time i of that file, which must
+/// have exactly as many lines; without it pose i gets t = i, so two KITTI files associate frame by frame.  Empty lines
+/// are skipped.  Throws std::runtime_error naming the file and line of a row that is not 12 finite numbers or whose
+/// R is not a rotation (|R'R - I| > 1e-3 or det R < 0: a file of another format fails here instead of reading as
+/// nonsense); R is re-orthonormalized through its quaternion.
+std::vector<StampedPose> read_kitti(const std::string& path, const std::string& times_path = "");
+
 /// Writes a TUM file (fixed precision: 6 decimals for time, 9 for the rest, so the output is deterministic).
 void write_tum(const std::string& path, const std::vector<StampedPose>& poses);
 

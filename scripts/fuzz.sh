@@ -4,7 +4,7 @@
 # BUILD/fuzz-corpus/<name>/; a crash leaves its input in BUILD/fuzz-crashes/<name>/ (copy it into
 # tests/fuzz/crashes/<name>/ with the fix, so that `make test` replays it for ever) and makes this script fail.
 # Prints one line per harness: executions, executions per second, corpus size.  FUZZ_ONLY="codec lcm_log" runs
-# those harnesses only.
+# those harnesses only; FUZZ_RUNS=N stops each after N executions (then FUZZ_SECONDS is only an upper bound).
 set -euo pipefail
 build=${1:-build-fuzz}
 seconds=${FUZZ_SECONDS:-${2:-60}}
@@ -16,10 +16,12 @@ for bin in "$build"/bin/fuzz_*; do
   corpus="$build/fuzz-corpus/$name"; crashes="$build/fuzz-crashes/$name"
   mkdir -p "$corpus" "$crashes"
   log="$build/fuzz-$name.log"
+  seeds=()  # libFuzzer refuses a folder that does not exist (a harness with no past crash has none)
+  for d in "$src/corpus/$name" "$src/crashes/$name"; do [ -d "$d" ] && seeds+=("$d"); done
   rc=0
   ASAN_OPTIONS=detect_leaks=1:allocator_may_return_null=1 UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1 \
-    "$bin" -max_total_time="$seconds" -rss_limit_mb=2048 -malloc_limit_mb=1024 -timeout=10 -print_final_stats=1 \
-    -artifact_prefix="$crashes/" "$corpus" "$src/corpus/$name" "$src/crashes/$name" > "$log" 2>&1 || rc=$?
+    "$bin" -max_total_time="$seconds" -runs="${FUZZ_RUNS:--1}" -rss_limit_mb=2048 -malloc_limit_mb=1024 -timeout=10 -print_final_stats=1 \
+    -artifact_prefix="$crashes/" "$corpus" "${seeds[@]}" > "$log" 2>&1 || rc=$?
   runs=$(grep -o 'stat::number_of_executed_units: *[0-9]*' "$log" | grep -o '[0-9]*$' || echo "?")
   rate=$(grep -o 'exec/s: *[0-9]*' "$log" | tail -1 | grep -o '[0-9]*$' || echo "?")
   if [ "$rc" -ne 0 ]; then
@@ -27,7 +29,8 @@ for bin in "$build"/bin/fuzz_*; do
     echo "fuzz $name: FAILED after $runs executions (log: $log, inputs: $crashes)"
     grep -m3 -E 'ERROR|SUMMARY|runtime error' "$log" || true
   else
-    echo "fuzz $name: $runs executions in ${seconds} s ($rate exec/s), corpus $(ls "$corpus" | wc -l) files, no failure"
+    took=$(grep -o 'Done [0-9]* runs in [0-9]* second' "$log" | grep -o '[0-9]* second' | grep -o '[0-9]*' || echo "$seconds")
+    echo "fuzz $name: $runs executions in ${took} s ($rate exec/s), corpus $(ls "$corpus" | wc -l) files, no failure"
   fi
 done
 exit $failed

@@ -431,7 +431,7 @@ int run_measure(const MeasureOptions& o) {
   std::printf("  graph queue depth max %lld; dropped: graph +%lld, graph_pose +%lld, filter +%lld\n", static_cast<long long>(graph_queue_max),
               static_cast<long long>(delta("graph", "dropped")), static_cast<long long>(delta("graph_pose", "dropped")),
               static_cast<long long>(delta("filter", "dropped")));
-  std::printf("  graph odometry: coalesced +%lld (merged into a later message before the stage), waiting max %lld (after merging)\n",
+  std::printf("  graph odometry: coalesced +%lld (joined a batch waiting for the stage), waiting max %lld (messages in batches)\n",
               static_cast<long long>(delta("graph", "odometry_coalesced")), static_cast<long long>(odometry_waiting_max));
   const std::array<double, 3> graph_latency = after != nullptr && after->latency_ms.count("graph") ? after->latency_ms.at("graph") : std::array<double, 3>{};
   std::printf("  graph stage, event in -> processed (its last 4096 events, from SEXTANT_STATUS): p50 %.1f ms, p99 %.1f ms, max %.1f ms\n",

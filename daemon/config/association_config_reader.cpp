@@ -6,7 +6,7 @@ namespace sextant::config {
 
 void read_stage_config(Section& s, engine::AssociationConfig& c) {
   s.get("enabled", c.enabled);
-  s.get("cost", c.cost, one_of({"classic", "kl", "renyi"}));
+  s.get_parsed("cost", c.cost, assoc::cost_kind_from_string);
   s.get("alpha", c.alpha, Check<double>([](const double& v) -> std::optional<std::string> {
           if (v > 0 && v < 1) return std::nullopt;
           return "must be in (0, 1), got " + std::to_string(v);

@@ -30,7 +30,7 @@ void read_stage_config(Section& s, engine::GraphConfig& c) {
     int seed = static_cast<int>(c.proposals.seed);
     p.get("seed", seed, int_in_range(0, 2147483647));
     c.proposals.seed = static_cast<uint64_t>(seed);
-    p.get("robust", c.robust, one_of({"none", "huber", "cauchy", "dcs"}));
+    p.get_parsed("robust", c.robust, graph::robust_kernel_from_name);
     // "auto" (a chi-square quantile of the loops' dimension, kernel_width_for in estimators/slam/slam_options.hpp) or a
     // number.
     std::string width;  // stays empty when the key is absent (the default stays)
@@ -98,6 +98,8 @@ void read_stage_config(Section& s, engine::GraphConfig& c) {
   s.get("odometry_history", c.odometry_history, int_in_range(1, 100000000));
   s.get("coalesce_odometry", c.coalesce_odometry);
   s.get("odometry_batch_max", c.odometry_batch_max, int_in_range(1, 1 << 20));
+  s.get("odometry_waiting_max", c.odometry_waiting_max, int_in_range(1, 1 << 24));
+  s.get("odometry_waiting_total_max", c.odometry_waiting_total_max, int_in_range(1, 1 << 24));
   if (s.node().IsMap() && s.node()["trajectory_max_keyframes"])
     throw s.error_at(s.node()["trajectory_max_keyframes"],
                      "'" + s.path() + ".trajectory_max_keyframes' is gone: TRAJECTORY now sends new and moved keyframes and a "

@@ -43,7 +43,7 @@ void AssociationStage::associate(int64_t scan_id, const Emit& emit) {
   assoc::Scan scan;
   Targets out;
   out.scan_id = scan_id;
-  out.cost_kind = config_.cost;
+  out.cost_kind = assoc::cost_kind_name(config_.cost);
   std::vector<int> sizes;
   for (const auto& [sensor_id, s] : group) {
     out.utime = std::max(out.utime, s.utime);
@@ -55,7 +55,7 @@ void AssociationStage::associate(int64_t scan_id, const Emit& emit) {
     scan.detections.push_back(std::move(d));
   }
   assoc::CostOptions o;
-  o.kind = assoc::cost_kind_from_string(config_.cost);
+  o.kind = config_.cost;
   o.alpha = config_.alpha;
   o.p_detect = config_.p_detect;
   o.clutter_density = config_.clutter_density;

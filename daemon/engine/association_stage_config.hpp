@@ -1,4 +1,6 @@
 #pragma once
+#include "assoc/tuple_costs.hpp"
+
 #include <string>
 #include <vector>
 
@@ -16,7 +18,7 @@ const char* association_solver_name(AssociationSolver solver);
 /// Multi-sensor passive association: bearing scans grouped by scan_id, associated by S-D assignment, triangulated.
 struct AssociationConfig {
   bool enabled = true;
-  std::string cost = "classic";    // classic | kl | renyi
+  assoc::CostKind cost = assoc::CostKind::kClassic;  // classic | kl | renyi (assoc/tuple_costs.hpp)
   double alpha = 0.5;              // Renyi order
   double p_detect = 0.9;
   double clutter_density = 1.0;    // false alarms per rad^2, the same for every sensor (when no region is given)

@@ -9,7 +9,8 @@
 
 namespace sextant::engine {
 
-std::vector<std::unique_ptr<Stage>> make_stages(const EngineConfig& config) {
+std::vector<std::unique_ptr<Stage>> make_stages(const EngineConfig& config,
+                                                std::shared_ptr<GraphCorrectionBoard> corrections) {
   std::vector<std::unique_ptr<Stage>> stages;
   if (config.dead_reckoning.enabled) stages.push_back(std::make_unique<DeadReckoningStage>(config.dead_reckoning));
   if (config.filter.type == FilterType::kEkf) stages.push_back(std::make_unique<FilterStage>(config.filter));
@@ -17,7 +18,7 @@ std::vector<std::unique_ptr<Stage>> make_stages(const EngineConfig& config) {
   if (config.graph.enabled) {
     // Two stages around one shared correction: the back end (keyframes, loops, solves) and the fused-pose path that
     // must never wait for a solve (graph_correction.hpp).
-    auto corrections = std::make_shared<GraphCorrections>();
+    if (!corrections) corrections = std::make_shared<GraphCorrections>();
     stages.push_back(std::make_unique<GraphStage>(config.graph, corrections));
     stages.push_back(std::make_unique<GraphPoseStage>(corrections));
   }
@@ -25,7 +26,8 @@ std::vector<std::unique_ptr<Stage>> make_stages(const EngineConfig& config) {
   return stages;
 }
 
-Engine::Engine(const EngineConfig& config) : config_(config), stages_(make_stages(config)) {}
+Engine::Engine(const EngineConfig& config, std::shared_ptr<GraphCorrectionBoard> corrections)
+    : config_(config), stages_(make_stages(config, std::move(corrections))) {}
 
 std::string Engine::primary_estimator() const {
   if (config_.primary_estimator != PrimaryEstimator::kAuto) {

@@ -1,8 +1,11 @@
 #pragma once
 // The engine: every enabled stage, driven synchronously.  No LCM, no threads: replay calls `handle` in utime
 // order; the daemon instead routes each event to the stages that accept it through per-stage queues and threads
-// (daemon/runtime/stage_runner.hpp), calling the same Stage objects.
+// (daemon/runtime/stage_runner.hpp), calling the same Stage objects.  The one piece of state two stages share, the
+// graph's map -> odometry correction board (graph_correction.hpp), is a plain map unless the caller gives another
+// (the daemon's is guarded for its two threads).
 #include "daemon/engine/engine_config.hpp"
+#include "daemon/engine/graph_correction.hpp"
 #include "daemon/engine/stage.hpp"
 
 #include <memory>
@@ -12,7 +15,8 @@ namespace sextant::engine {
 
 class Engine {
  public:
-  explicit Engine(const EngineConfig& config);
+  /// `corrections`: the board between the graph stage and the graph pose stage (nullptr: a GraphCorrections).
+  explicit Engine(const EngineConfig& config, std::shared_ptr<GraphCorrectionBoard> corrections = nullptr);
 
   /// Hands `event` to every stage that accepts it, in stage order.
   void handle(const Event& event, const Emit& emit);
@@ -31,7 +35,9 @@ class Engine {
   std::vector<std::unique_ptr<Stage>> stages_;
 };
 
-/// The stages the config enables, in a fixed order (dead reckoning, filter, association).
-std::vector<std::unique_ptr<Stage>> make_stages(const EngineConfig& config);
+/// The stages the config enables, in a fixed order (dead reckoning, filter, graph and graph pose around
+/// `corrections` (nullptr: a GraphCorrections), association).
+std::vector<std::unique_ptr<Stage>> make_stages(const EngineConfig& config,
+                                                std::shared_ptr<GraphCorrectionBoard> corrections = nullptr);
 
 }  // namespace sextant::engine

@@ -3,13 +3,13 @@
 // every optimization (the newest keyframe's optimized pose, its odometry pose and both covariances); the graph
 // pose stage reads it for every odometry message and publishes
 //     T_map(t) = T_map(kf) * (T_odom(kf)^-1 * T_odom(t)).
-// The two stages run on different threads in the daemon (so a long optimization delays only the correction, never
-// the fused pose): the board is the one piece of state they share, behind a mutex held only to copy an entry.
+// Both stages see the board through GraphCorrectionBoard.  In replay (one thread) it is GraphCorrections, a map; the
+// daemon runs the two stages on different threads (so a long optimization delays only the correction, never the
+// fused pose) and gives them a board that guards the map (daemon/runtime/shared_graph_corrections.hpp).
 #include "daemon/engine/events.hpp"
 #include "estimators/lie/se3.hpp"
 
 #include <map>
-#include <mutex>
 #include <optional>
 #include <string>
 
@@ -23,25 +23,27 @@ struct GraphCorrection {
   Matrix6 keyframe_odom_covariance = Matrix6::Zero(); // the odometry message's pose covariance at the keyframe
 };
 
-class GraphCorrections {
+/// Each body's latest correction: the graph stage writes, the graph pose stage reads.
+class GraphCorrectionBoard {
  public:
-  void set(const std::string& source, const GraphCorrection& c) {
-    std::lock_guard<std::mutex> lock(mutex_);
-    corrections_[source] = c;
-  }
-  void erase(const std::string& source) {
-    std::lock_guard<std::mutex> lock(mutex_);
-    corrections_.erase(source);
-  }
-  std::optional<GraphCorrection> get(const std::string& source) const {
-    std::lock_guard<std::mutex> lock(mutex_);
+  virtual ~GraphCorrectionBoard() = default;
+  virtual void set(const std::string& source, const GraphCorrection& c) = 0;
+  virtual void erase(const std::string& source) = 0;
+  virtual std::optional<GraphCorrection> get(const std::string& source) const = 0;
+};
+
+/// The board of one thread: a map by body.
+class GraphCorrections final : public GraphCorrectionBoard {
+ public:
+  void set(const std::string& source, const GraphCorrection& c) override { corrections_[source] = c; }
+  void erase(const std::string& source) override { corrections_.erase(source); }
+  std::optional<GraphCorrection> get(const std::string& source) const override {
     auto it = corrections_.find(source);
     if (it == corrections_.end()) return std::nullopt;
     return it->second;
   }
 
  private:
-  mutable std::mutex mutex_;
   std::map<std::string, GraphCorrection> corrections_;
 };
 

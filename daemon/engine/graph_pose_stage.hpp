@@ -19,7 +19,7 @@ namespace sextant::engine {
 
 class GraphPoseStage final : public Stage {
  public:
-  explicit GraphPoseStage(std::shared_ptr<const GraphCorrections> corrections) : corrections_(std::move(corrections)) {}
+  explicit GraphPoseStage(std::shared_ptr<const GraphCorrectionBoard> corrections) : corrections_(std::move(corrections)) {}
   std::string_view name() const override { return "graph_pose"; }
   std::string_view estimator() const override { return "graph"; }
   bool accepts(const Event& e) const override { return std::holds_alternative<Odometry>(e); }
@@ -39,7 +39,7 @@ class GraphPoseStage final : public Stage {
   }
 
  private:
-  std::shared_ptr<const GraphCorrections> corrections_;
+  std::shared_ptr<const GraphCorrectionBoard> corrections_;
   std::map<std::string, int64_t> last_utime_;
   int64_t published_ = 0, out_of_order_ = 0, before_correction_ = 0;
   /// Data time from the correction's keyframe to the odometry it was applied to (how far the graph lags the fused

@@ -8,15 +8,6 @@
 namespace sextant::engine {
 namespace {
 
-OdometryCoalescerOptions coalescer_options(const GraphConfig& c) {
-  OdometryCoalescerOptions o;
-  o.keyframes = c.keyframes;
-  o.min_increment_variance = c.min_increment_variance;
-  o.max_entries = static_cast<size_t>(std::max(1, c.odometry_batch_max));
-  o.max_passed = static_cast<size_t>(std::max(1, c.odometry_history));
-  return o;
-}
-
 slam::OdometryInput to_input(const Odometry& o) {
   return {o.utime, o.planar, to_se3(o.pose), o.covariance, o.increment_covariance};
 }
@@ -68,17 +59,13 @@ class GraphStage::Outputs final : public slam::SlamListener {
     emit_(r);
   }
 
-  void keyframe_dropped(const std::string& body, const SE3& pose, const std::optional<SE3>& reference) override {
-    stage_.coalescer_.keyframe_dropped(body, pose, reference);
-  }
-
  private:
   GraphStage& stage_;
   const Emit& emit_;
 };
 
-GraphStage::GraphStage(const GraphConfig& config, std::shared_ptr<GraphCorrections> corrections)
-    : config_(config), corrections_(std::move(corrections)), slam_(config), coalescer_(coalescer_options(config)) {}
+GraphStage::GraphStage(const GraphConfig& config, std::shared_ptr<GraphCorrectionBoard> corrections)
+    : config_(config), corrections_(std::move(corrections)), slam_(config) {}
 
 GraphStage::Feed& GraphStage::feed_of(const std::string& source) {
   auto it = feeds_.find(source);
@@ -86,34 +73,11 @@ GraphStage::Feed& GraphStage::feed_of(const std::string& source) {
   return it->second;
 }
 
-bool GraphStage::offer(const Event& e, const std::function<bool()>& enqueue) {
-  return config_.coalesce_odometry ? coalescer_.offer(e, enqueue) : enqueue();
-}
-
 void GraphStage::handle(const Event& e, const Emit& emit) {
   Outputs out(*this, emit);
-  if (const auto* o = std::get_if<Odometry>(&e)) {
-    if (auto batch = coalescer_.take(o->source))  // a token: the body's odometry since it was queued
-      for (const auto& entry : *batch) on_coalesced(entry, out);
-    else
-      on_odometry(*o, out);
-  }
+  if (const auto* o = std::get_if<Odometry>(&e)) slam_.add_odometry(o->source, to_input(*o), out);
   else if (const auto* l = std::get_if<LoopClosure>(&e)) slam_.add_loop(l->source, to_input(*l), out);
   else if (const auto* s = std::get_if<LandmarkSightings>(&e)) slam_.add_sightings(s->source, to_input(*s), out);
-}
-
-void GraphStage::on_odometry(const Odometry& o, Outputs& out) { slam_.add_odometry(o.source, to_input(o), out); }
-
-void GraphStage::on_coalesced(const OdometryCoalescer::Entry& entry, Outputs& out) {
-  const std::string& source = entry.message.source;
-  if (KeyframeSelector* selector = slam_.selector(source)) {
-    for (const auto& [utime, pose] : entry.passed) slam_.remember_odometry(source, utime, pose);
-    // The coalescer's selector saw the merged messages too (their run towards re-anchoring): continue from it —
-    // unless the layer has dropped a keyframe that selector took (SlamListener::keyframe_dropped): it then keeps its own.
-    if (entry.selector.refers_to(selector->reference())) *selector = entry.selector;
-  }
-  counters_.coalesced_implausible += entry.implausible;
-  on_odometry(entry.message, out);
 }
 
 void GraphStage::publish_trajectory(const std::string& source, Feed& f, int64_t utime, int solves, bool flush,
@@ -150,7 +114,7 @@ Counters GraphStage::counters() const {
   const slam::SlamCounters& s = slam_.counters();
   return {{"updates", s.updates},
           {"keyframes", s.keyframes},
-          {"keyframes_rejected", s.keyframes_rejected + counters_.coalesced_implausible},
+          {"keyframes_rejected", s.keyframes_rejected},
           {"keyframes_reanchored", s.keyframes_reanchored},
           {"match_requests", counters_.match_requests},
           {"loops_accepted", s.loops_accepted},
@@ -160,9 +124,7 @@ Counters GraphStage::counters() const {
           {"optimizer_failures", s.optimizer_failures},
           {"rebuilds", s.rebuilds},
           {"relinearized_factors", s.relinearized_factors},
-          {"odometry_out_of_order", s.odometry_out_of_order + coalescer_.out_of_order()},
-          {"odometry_coalesced", coalescer_.coalesced()},
-          {"odometry_waiting", coalescer_.waiting()},
+          {"odometry_out_of_order", s.odometry_out_of_order},
           {"odometry_edges_rejected", s.odometry_edges_rejected},
           {"landmarks", s.landmarks},
           {"sightings_accepted", s.sightings_accepted},
@@ -192,8 +154,7 @@ Counters GraphStage::counters() const {
 }
 
 void GraphStage::save(archive::ArchiveWriter& w) {
-  w(next_request_id_)(counters_.match_requests)(counters_.trajectory_messages)(counters_.trajectory_keyframe_bytes)(
-      counters_.coalesced_implausible);
+  w(next_request_id_)(counters_.match_requests)(counters_.trajectory_messages)(counters_.trajectory_keyframe_bytes);
   slam_.save(w);
   for (const std::string& source : slam_.bodies()) {
     const Feed& f = feed_of(source);
@@ -203,22 +164,18 @@ void GraphStage::save(archive::ArchiveWriter& w) {
 
 void GraphStage::load(archive::ArchiveReader& r) {
   if (!feeds_.empty()) throw std::logic_error("GraphStage::load into a used stage");
-  r(next_request_id_)(counters_.match_requests)(counters_.trajectory_messages)(counters_.trajectory_keyframe_bytes)(
-      counters_.coalesced_implausible);
+  r(next_request_id_)(counters_.match_requests)(counters_.trajectory_messages)(counters_.trajectory_keyframe_bytes);
   slam_.load(r);
   for (const std::string& source : slam_.bodies()) {
     Feed& f = feed_of(source);
     r(f.feed)(f.newest_utime);
     if (const auto c = r.get<std::optional<GraphCorrection>>()) corrections_->set(source, *c);
-    const slam::KeyframeTrack& track = *slam_.track(source);
-    coalescer_.resume(source, *slam_.selector(source), track.last_utime(), track.last_odom(), track.last_odom_covariance());
   }
 }
 
 void GraphStage::forget(const std::string& source) {
   if (!slam_.track(source)) return;
   slam_.forget(source);
-  coalescer_.forget(source);
   corrections_->erase(source);
   feeds_.erase(source);
 }

@@ -6,13 +6,11 @@
 //  - turns what the layer reports into outputs: MATCH_REQUESTS for its loop proposals (request ids numbered here),
 //    after every update the map -> odometry correction for GraphPoseStage (graph_correction.hpp) and TRAJECTORY at
 //    its own rate (trajectory_feed.hpp: new and moved keyframes, a rolling snapshot, bounded messages);
-//  - in the daemon, receives each body's odometry through an OdometryCoalescer (odometry_coalescer.hpp) instead of one
-//    queue slot per message: a 1 kHz body cannot fill the queue during a long solve, and the keyframes, loops and
-//    sightings come out as from the single messages (config: coalesce_odometry);
+//  - handles one event at a time and knows no threads: in the daemon a body's odometry may reach it in batches
+//    (daemon/runtime/odometry_batcher.hpp), handed to `handle` one message at a time as replay does;
 //  - counts what it does itself (GraphStageCounters) beside the layer's counters (slam_counters.hpp).
 #include "daemon/engine/graph_correction.hpp"
 #include "daemon/engine/graph_stage_config.hpp"
-#include "daemon/engine/odometry_coalescer.hpp"
 #include "daemon/engine/stage.hpp"
 #include "daemon/engine/trajectory_feed.hpp"
 #include "estimators/slam/slam_graph.hpp"
@@ -30,20 +28,16 @@ struct GraphStageCounters {
   int64_t match_requests = 0;             // MATCH_REQUESTS published
   int64_t trajectory_messages = 0;        // TRAJECTORY messages published
   int64_t trajectory_keyframe_bytes = 0;  // their keyframes (72 bytes each) and removed ids (8 bytes each)
-  int64_t coalesced_implausible = 0;      // implausible poses inside coalesced batches (the coalescer's selector saw
-                                          // them; reported within keyframes_rejected)
 };
 
 class GraphStage final : public Stage {
  public:
-  GraphStage(const GraphConfig& config, std::shared_ptr<GraphCorrections> corrections);
+  GraphStage(const GraphConfig& config, std::shared_ptr<GraphCorrectionBoard> corrections);
   std::string_view name() const override { return "graph"; }
   bool accepts(const Event& e) const override {
     return std::holds_alternative<Odometry>(e) || std::holds_alternative<LoopClosure>(e) ||
            (config_.landmarks.enabled && std::holds_alternative<LandmarkSightings>(e));
   }
-  /// Daemon intake thread: odometry goes to the coalescer (when coalesce_odometry), everything else to the queue.
-  bool offer(const Event& e, const std::function<bool()>& enqueue) override;
   void handle(const Event& e, const Emit& emit) override;
   /// The last TRAJECTORY publication of every body: every keyframe that moved at all since it was published.
   void finish(const Emit& emit) override;
@@ -76,18 +70,13 @@ class GraphStage final : public Stage {
     TrajectoryFeed feed;
     int64_t newest_utime = 0;  // of the last optimization, for the final publication
   };
-  void on_odometry(const Odometry& o, Outputs& out);
-  /// A coalesced message: the poses merged into it go to the odometry history first, and the coalescer's selector
-  /// (which saw them) continues.
-  void on_coalesced(const OdometryCoalescer::Entry& entry, Outputs& out);
   /// TRAJECTORY messages of a body when its feed is due (or `flush`): chi2 and the keyframe list are computed only then.
   void publish_trajectory(const std::string& source, Feed& f, int64_t utime, int solves, bool flush, const Emit& emit);
   Feed& feed_of(const std::string& source);
 
   GraphConfig config_;
-  std::shared_ptr<GraphCorrections> corrections_;
+  std::shared_ptr<GraphCorrectionBoard> corrections_;
   slam::SlamGraph slam_;
-  OdometryCoalescer coalescer_;
   std::map<std::string, Feed> feeds_;
   int64_t next_request_id_ = 0;
   GraphStageCounters counters_;

@@ -14,9 +14,12 @@ using slam::sighting_kernel_width_for;
 /// loop proposals and gating, the odometry history, landmarks, the smoother, lifelong) and the stage's own.
 struct GraphConfig : slam::SlamOptions {
   bool enabled = true;
-  bool coalesce_odometry = true;         // daemon: a body's odometry waiting for the stage is coalesced instead of
-                                         // taking one queue slot per message (odometry_coalescer.hpp)
-  int odometry_batch_max = 256;          // messages a coalesced batch keeps unmerged (keyframe candidates, sighting times)
+  /// Daemon only (daemon/runtime/odometry_batcher.hpp): a body's odometry waiting for the stage's thread is batched,
+  /// one queue slot per batch instead of per message; the stage still handles every message on its own.
+  bool coalesce_odometry = true;
+  int odometry_batch_max = 256;              // messages per batch (a full batch takes one more queue slot)
+  int odometry_waiting_max = 16384;          // messages of one body waiting in batches (about 1.1 kB each)
+  int odometry_waiting_total_max = 65536;    // messages of all bodies waiting in batches
   TrajectoryFeedOptions trajectory;       // what TRAJECTORY carries and how often (trajectory_feed.hpp)
 };
 

@@ -15,8 +15,7 @@ inline Matrix6 stated_increment_covariance(const Odometry& odo, const SE3& delta
   return sextant::stated_increment_covariance(odo.covariance, odo.increment_covariance, delta, previous_pose_covariance);
 }
 
-/// The increment covariance dead reckoning, the graph stage and its odometry coalescer compose
-/// (sextant::regularized_increment_covariance).
+/// The increment covariance dead reckoning and the graph stage compose (sextant::regularized_increment_covariance).
 inline Matrix6 increment_covariance(const Odometry& odo, const SE3& delta, const Matrix6& previous_pose_covariance,
                                     double min_variance) {
   return regularized_increment_covariance(odo.covariance, odo.increment_covariance, odo.planar, delta,

@@ -1,7 +1,7 @@
 #pragma once
 // A stage of the engine: consumes the events it accepts, emits outputs.  A stage owns its estimator state and is
-// driven from one thread at a time (the daemon gives each stage its own thread and bounded queue; replay calls
-// stages synchronously in utime order).  A stage must not throw for bad data: it counts and drops it.
+// driven from one thread at a time; it knows no threads (the daemon gives each stage its own thread and bounded queue,
+// daemon/runtime/stage_runner.hpp; replay calls stages synchronously in utime order).  A stage must not throw for bad data: it counts and drops it.
 #include "daemon/engine/outputs.hpp"
 #include "estimators/archive/binary_archive.hpp"
 
@@ -25,12 +25,6 @@ class Stage {
   /// Whether `handle` wants this event (the dispatcher routes only accepted events to the stage's queue).
   virtual bool accepts(const Event& event) const = 0;
   virtual void handle(const Event& event, const Emit& emit) = 0;
-  /// Daemon only: how an accepted event enters the stage.  Called on the intake thread, concurrently with `handle`
-  /// on the stage's thread; `enqueue` puts the event on the stage's bounded queue (false: full, dropped and counted).
-  /// A stage may fold the event into bounded state of its own instead, drained by the events it handles (the graph
-  /// stage coalesces each body's odometry, odometry_coalescer.hpp).  False: the event was dropped.  Replay never calls
-  /// it (it calls `handle` for every event).
-  virtual bool offer(const Event& /*event*/, const std::function<bool()>& enqueue) { return enqueue(); }
   /// After `handle(event)` threw (a solver failure, an allocation): bring the stage back to a consistent state
   /// before the next event, e.g. forget the body the event belongs to (it restarts from its next message) or
   /// rebuild a factorization from the graph.  The runtime counts the failure; the default keeps the state as is.

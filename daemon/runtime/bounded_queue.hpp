@@ -7,6 +7,7 @@
 #include <deque>
 #include <mutex>
 #include <optional>
+#include <utility>
 
 namespace sextant::runtime {
 
@@ -48,12 +49,10 @@ class BoundedQueue {
     cv_.notify_all();
   }
 
-  /// Removes every queued item (a bounded shutdown gives up on them); returns how many.
-  size_t discard() {
+  /// Removes every queued item (a bounded shutdown gives up on them) and returns them.
+  std::deque<T> discard() {
     std::lock_guard lock(mutex_);
-    const size_t n = items_.size();
-    items_.clear();
-    return n;
+    return std::exchange(items_, {});
   }
 
   size_t size() const {

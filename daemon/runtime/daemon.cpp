@@ -5,6 +5,7 @@
 #include "daemon/runtime/publisher.hpp"
 #include "daemon/runtime/raw_subscription.hpp"
 #include "daemon/runtime/recorder.hpp"
+#include "daemon/runtime/shared_graph_corrections.hpp"
 #include "daemon/runtime/stage_runner.hpp"
 #include "daemon/runtime/state_directory.hpp"
 #include "daemon/runtime/status_report.hpp"
@@ -64,6 +65,22 @@ std::string bus_failure_help(const std::string& url) {
          "  or pass another provider with --lcm-url (e.g. 'udpm://239.255.76.67:7667?ttl=0', 'memq://').";
 }
 
+namespace {
+
+// The graph stage's odometry is batched per body (engine.graph.coalesce_odometry): it keeps each body's state apart,
+// so batching (which keeps each body's order but not the order across bodies) changes nothing it computes.  The
+// other stages see every message in arrival order (a filter may fuse several sources of one body).
+std::optional<OdometryBatcherOptions> odometry_batching(const engine::Stage& stage, const engine::EngineConfig& config) {
+  if (stage.name() != "graph" || !config.graph.coalesce_odometry) return std::nullopt;
+  OdometryBatcherOptions o;
+  o.max_batch = static_cast<size_t>(config.graph.odometry_batch_max);
+  o.max_waiting_per_body = static_cast<size_t>(config.graph.odometry_waiting_max);
+  o.max_waiting = static_cast<size_t>(config.graph.odometry_waiting_total_max);
+  return o;
+}
+
+}  // namespace
+
 int run_daemon(const config::DaemonConfig& cfg, const std::atomic<bool>& stop) {
   lcm::LCM lcm(cfg.lcm_url);
   if (!lcm.good()) {
@@ -71,7 +88,8 @@ int run_daemon(const config::DaemonConfig& cfg, const std::atomic<bool>& stop) {
     return kExitBus;
   }
 
-  auto engine = std::make_unique<engine::Engine>(cfg.engine);
+  // The graph stage and the graph pose stage run on two threads: their correction board is guarded.
+  auto engine = std::make_unique<engine::Engine>(cfg.engine, std::make_shared<SharedGraphCorrections>());
   // The state directory: the stages continue from the saved state (state_directory.hpp).
   const std::string state_path = cfg.state_dir.empty() ? std::string() : state_file_path(cfg.state_dir);
   if (!state_path.empty()) {
@@ -101,7 +119,8 @@ int run_daemon(const config::DaemonConfig& cfg, const std::atomic<bool>& stop) {
         spdlog::error("{}", e2.what());
         return kExitState;
       }
-      engine = std::make_unique<engine::Engine>(cfg.engine);  // the stages may have been partly restored
+      // The stages may have been partly restored.
+      engine = std::make_unique<engine::Engine>(cfg.engine, std::make_shared<SharedGraphCorrections>());
     }
   }
   const std::string primary = engine->primary_estimator();
@@ -113,7 +132,8 @@ int run_daemon(const config::DaemonConfig& cfg, const std::atomic<bool>& stop) {
 
   std::vector<std::unique_ptr<StageRunner>> runners;
   for (auto& stage : engine->stages())
-    runners.push_back(std::make_unique<StageRunner>(*stage, static_cast<size_t>(cfg.queue_capacity), emit));
+    runners.push_back(std::make_unique<StageRunner>(*stage, static_cast<size_t>(cfg.queue_capacity), emit,
+                                                    odometry_batching(*stage, cfg.engine)));
 
   ChannelStats stats;
   RateLimitedLog log(cfg.log_rate_limit_s);

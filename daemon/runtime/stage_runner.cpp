@@ -6,14 +6,19 @@
 
 namespace sextant::runtime {
 
-StageRunner::StageRunner(engine::Stage& stage, size_t queue_capacity, engine::Emit emit)
-    : stage_(stage), emit_(std::move(emit)), queue_(queue_capacity), latency_(4096, kLatencyWindowS),
+StageRunner::StageRunner(engine::Stage& stage, size_t queue_capacity, engine::Emit emit,
+                         std::optional<OdometryBatcherOptions> batching)
+    : stage_(stage), emit_(std::move(emit)), queue_(queue_capacity),
+      batcher_(batching ? std::make_unique<OdometryBatcher>(*batching) : nullptr), latency_(4096, kLatencyWindowS),
       counters_(stage.counters()) {}
 
 StageRunner::~StageRunner() { drain_and_stop(); }
 
 bool StageRunner::offer(const QueuedEvent& event) {
-  return stage_.offer(event.event, [&] { return queue_.try_push(event); });
+  if (!batcher_) return queue_.try_push(event);
+  return batcher_->offer(
+      event, [&](const QueuedEvent& e) { return queue_.try_push(e); },
+      [&](const OdometryBatcher::Token& t) { return queue_.try_push(t); });
 }
 
 void StageRunner::start() {
@@ -29,7 +34,11 @@ int64_t StageRunner::drain_and_stop(std::chrono::steady_clock::time_point deadli
   queue_.close();
   while (thread_.joinable() && queue_.size() > 0 && std::chrono::steady_clock::now() < deadline)
     std::this_thread::sleep_for(std::chrono::milliseconds(5));
-  const auto left = static_cast<int64_t>(queue_.discard());
+  int64_t left = 0;
+  for (const Slot& slot : queue_.discard()) {
+    if (const auto* token = std::get_if<OdometryBatcher::Token>(&slot)) left += static_cast<int64_t>(batcher_->take(*token).size());
+    else ++left;
+  }
   drain_discarded_ += left;
   if (thread_.joinable()) thread_.join();
   return left;
@@ -43,6 +52,17 @@ void StageRunner::count_failure(const std::string& message) {
   last_failure_ = message;
 }
 
+void StageRunner::handle_one(const QueuedEvent& event) {
+  if (auto failure = engine::handle_guarded(stage_, event.event, emit_)) {
+    count_failure(failure->message);
+    if (failure->recovered) ++recoveries_;
+    else count_failure(failure->recover_message);
+  }
+  const auto done = std::chrono::steady_clock::now();
+  latency_.add(std::chrono::duration<double, std::milli>(done - event.received).count());
+  ++processed_;
+}
+
 void StageRunner::loop() {
   while (auto item = queue_.pop()) {
     std::unique_lock stage_lock(stage_mutex_);
@@ -53,14 +73,12 @@ void StageRunner::loop() {
     }
     for (const auto& source : forget)
       if (auto thrown = engine::call_guarded([&] { stage_.forget(source); })) count_failure("forget: " + *thrown);
-    if (auto failure = engine::handle_guarded(stage_, item->event, emit_)) {
-      count_failure(failure->message);
-      if (failure->recovered) ++recoveries_;
-      else count_failure(failure->recover_message);
+    if (const auto* event = std::get_if<QueuedEvent>(&*item)) {
+      handle_one(*event);
+    } else {
+      // A batch's token: the batch is closed now (the body's next odometry opens a new one); its messages one by one.
+      for (const QueuedEvent& message : batcher_->take(std::get<OdometryBatcher::Token>(*item))) handle_one(message);
     }
-    const auto done = std::chrono::steady_clock::now();
-    latency_.add(std::chrono::duration<double, std::milli>(done - item->received).count());
-    ++processed_;
     engine::Counters counters;
     if (auto thrown = engine::call_guarded([&] { counters = stage_.counters(); })) {
       count_failure("counters: " + *thrown);
@@ -86,13 +104,18 @@ StageStatus StageRunner::status() const {
   s.queue_depth = queue_.size();
   s.queue_capacity = queue_.capacity();
   s.processed = processed_.load();
-  s.dropped = static_cast<int64_t>(queue_.dropped());
+  s.dropped = static_cast<int64_t>(queue_.dropped()) + (batcher_ ? batcher_->dropped() : 0);
   s.latency = latency_.summary();
   std::lock_guard lock(counters_mutex_);
   s.counters = counters_;
   s.counters.push_back({"stage_failures", failures_.load()});
   s.counters.push_back({"stage_recoveries", recoveries_.load()});
   if (const int64_t d = drain_discarded_.load(); d > 0) s.counters.push_back({"drain_discarded", d});
+  if (batcher_) {
+    s.counters.push_back({"odometry_coalesced", batcher_->coalesced()});
+    s.counters.push_back({"odometry_waiting", batcher_->waiting()});
+    s.counters.push_back({"odometry_waiting_dropped", batcher_->dropped()});
+  }
   s.last_failure = last_failure_;
   return s;
 }

@@ -1,31 +1,36 @@
 #pragma once
 // Runs one engine stage on its own thread, fed by a bounded queue.  The producer never blocks: a full queue drops
 // the event and counts it.  Latency is measured from the moment the event was received to the end of `handle`.
+// With odometry batching (the graph stage's, odometry_batcher.hpp) a body's odometry waits in batches behind one
+// queue slot each; the thread hands every message of a batch to `handle` on its own, as replay does.
 // Nothing leaves the thread: an exception from the stage (a CHOLMOD failure in the smoother, an allocation) is
 // caught, counted ("stage_failures", the message kept as `last_failure` and logged), and the stage is asked to
 // recover (Stage::recover: reset the body, rebuild a factorization) before the next event.
 #include "daemon/engine/stage.hpp"
 #include "daemon/runtime/bounded_queue.hpp"
 #include "daemon/runtime/latency_recorder.hpp"
+#include "daemon/runtime/odometry_batcher.hpp"
+#include "daemon/runtime/queued_event.hpp"
 
 #include <atomic>
 #include <chrono>
+#include <memory>
 #include <mutex>
+#include <optional>
 #include <thread>
+#include <variant>
 
 namespace sextant::runtime {
 
-struct QueuedEvent {
-  engine::Event event;
-  std::chrono::steady_clock::time_point received;
-};
-
 struct StageStatus {
   std::string name;
-  size_t queue_depth = 0, queue_capacity = 0;
-  int64_t processed = 0, dropped = 0;
+  size_t queue_depth = 0, queue_capacity = 0;  // queue slots (a batch of odometry takes one)
+  int64_t processed = 0, dropped = 0;          // events (a batch counts its messages)
   LatencySummary latency;
-  engine::Counters counters;  // the stage's own, then "stage_failures" and "stage_recoveries"
+  /// The stage's own, then "stage_failures" and "stage_recoveries"; with odometry batching also
+  /// "odometry_coalesced" (messages that joined a waiting batch), "odometry_waiting" (messages in batches now) and
+  /// "odometry_waiting_dropped" (dropped at a bound of the batcher, also in `dropped`).
+  engine::Counters counters;
   std::string last_failure;   // what the last exception said ("" when none)
 };
 
@@ -34,13 +39,15 @@ class StageRunner {
   /// Status latencies cover the last 4096 events of at most this many seconds.
   static constexpr double kLatencyWindowS = 10.0;
 
-  /// `emit` must be thread-safe (the publisher is).
-  StageRunner(engine::Stage& stage, size_t queue_capacity, engine::Emit emit);
+  /// `emit` must be thread-safe (the publisher is).  `batching`: the stage's odometry goes through an OdometryBatcher.
+  StageRunner(engine::Stage& stage, size_t queue_capacity, engine::Emit emit,
+              std::optional<OdometryBatcherOptions> batching = std::nullopt);
   ~StageRunner();
   StageRunner(const StageRunner&) = delete;
   StageRunner& operator=(const StageRunner&) = delete;
 
-  /// Offers an event if the stage accepts it; false when the stage accepted it but the queue was full (dropped).
+  /// Offers an event the stage accepts (one thread at a time: the intake's); false when it was dropped (the queue was
+  /// full, or a bound of the batcher was reached).
   bool offer(const QueuedEvent& event);
   bool accepts(const engine::Event& event) const { return stage_.accepts(event); }
   /// Has the stage forget a body (Stage::forget) on its own thread, before it handles its next event (any thread).
@@ -70,13 +77,18 @@ class StageRunner {
 
  private:
   void loop();
+  // Hands one event to the stage (the stage's lock held) and records its latency.
+  void handle_one(const QueuedEvent& event);
   // A call into the stage threw: counted, logged (the first ten, then every power of two), kept as the last failure.
   void count_failure(const std::string& message);
 
   engine::Stage& stage_;
   std::mutex stage_mutex_;  // held while the stage works on an event (and by with_stage)
   engine::Emit emit_;
-  BoundedQueue<QueuedEvent> queue_;
+  // A queue slot: one event, or the token of a batch of one body's odometry.
+  using Slot = std::variant<QueuedEvent, OdometryBatcher::Token>;
+  BoundedQueue<Slot> queue_;
+  std::unique_ptr<OdometryBatcher> batcher_;  // null without batching
   LatencyRecorder latency_;
   std::thread thread_;
   std::atomic<int64_t> processed_{0};

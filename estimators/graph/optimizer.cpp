@@ -1,5 +1,7 @@
 #include "estimators/graph/optimizer.hpp"
 
+#include "estimators/graph/sparse_normal_equations.hpp"
+
 #include <Eigen/Eigenvalues>
 
 #include <chrono>

@@ -5,7 +5,7 @@
 // a CHOLMOD failure) comes back as a status with a message.
 #include "estimators/graph/factor_graph.hpp"
 #include "estimators/graph/robust_kernel.hpp"
-#include "estimators/graph/sparse_normal_equations.hpp"
+#include "estimators/graph/ordering.hpp"
 
 #include <string>
 

@@ -8,17 +8,17 @@
 #include <algorithm>
 #include <cmath>
 #include <string>
+#include <vector>
 
 namespace sextant::graph {
 
 enum class RobustKernel { kNone, kHuber, kCauchy, kDcs };
 
-/// The kernel named "none", "huber", "cauchy" or "dcs" (anything else: none; callers validate names first).
-inline RobustKernel robust_kernel_from_name(const std::string& name) {
-  return name == "huber" ? RobustKernel::kHuber
-         : name == "cauchy" ? RobustKernel::kCauchy
-         : name == "dcs" ? RobustKernel::kDcs : RobustKernel::kNone;
-}
+/// The kernel spelt "none", "huber", "cauchy" or "dcs" (config key engine.graph.robust, `sextant optimize --robust`);
+/// throws std::invalid_argument naming the spellings for any other name.
+RobustKernel robust_kernel_from_name(const std::string& name);
+const char* robust_kernel_name(RobustKernel kernel);
+std::vector<std::string> robust_kernel_names();
 
 /// IRLS weight of a factor whose squared error is `s`.
 inline double robust_weight(RobustKernel k, double width, double s) {

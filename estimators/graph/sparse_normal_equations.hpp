@@ -5,6 +5,7 @@
 //   H = sum_f J_f' W_f J_f,  b = sum_f J_f' W_f e_f,  W_f = w_f Omega_f (w_f: robust weight).
 // Fixed variables have no block: they are constants of the problem (the gauge).
 #include "estimators/graph/factor_graph.hpp"
+#include "estimators/graph/ordering.hpp"
 
 #include <cholmod.h>
 
@@ -12,11 +13,6 @@
 #include <vector>
 
 namespace sextant::graph {
-
-/// Fill-reducing orderings: kBlockAmd runs AMD on the variable (block) graph and expands it, so every variable's
-/// components stay together and the supernodes align with the blocks (as Ceres does); the others order the
-/// scalar matrix.
-enum class Ordering { kBlockAmd, kAmd, kColamd, kMetis, kAuto };
 
 class SparseNormalEquations {
  public:

@@ -49,7 +49,7 @@ sextant::cli::RegisterCommand reg{"optimize", [](CLI::App& app) {
                   "an error listing them), repair (nearest positive definite, eigenvalues floored at 1e-6 of the largest) or "
                   "diagonal (their diagonal, floored the same way)")
       ->check(CLI::IsMember({"reject", "repair", "diagonal"}));
-  cmd->add_option("--robust", kinds->robust, "robust kernel")->check(CLI::IsMember(replay::robust_kernel_names()));
+  cmd->add_option("--robust", kinds->robust, "robust kernel")->check(CLI::IsMember(graph::robust_kernel_names()));
   cmd->add_option("--kernel-width", o->kernel_width, "Huber/Cauchy delta or DCS phi")->check(CLI::PositiveNumber);
   cmd->add_option("--max-iters", o->max_iters, "maximum iterations")->check(CLI::PositiveNumber);
   cmd->add_option("--tolerance", o->tolerance, "stop when chi2 decreases by less than this fraction")->check(CLI::PositiveNumber);
@@ -65,7 +65,7 @@ sextant::cli::RegisterCommand reg{"optimize", [](CLI::App& app) {
   cmd->callback([o, kinds, input, output, json, information] {
     o->solver = replay::solver_from_name(kinds->solver);
     o->init = replay::initial_estimate_from_name(kinds->init);
-    o->robust = replay::robust_kernel_from_option(kinds->robust);
+    o->robust = graph::robust_kernel_from_name(kinds->robust);
     o->ordering = replay::ordering_from_name(kinds->ordering);
     graph::G2oGraph g;
     graph::G2oReadOptions read_options;

@@ -24,6 +24,15 @@ for f in bin/sextantd bin/sextant lib/libsextant_estimators.a lib/libsextant_ass
   [ -e "$p/$f" ] || fail "not installed: $f"
 done
 [ ! -e "$p/include/sextant/replay/cli" ] || fail "the CLI's private headers were installed"
+[ ! -e "$p/include/sextant/estimators/graph/smoother" ] || fail "the smoother's internal headers were installed"
+[ -e "$p/include/sextant/estimators/graph/incremental_smoother.hpp" ] || fail "not installed: the smoother's public header"
+# The public graph headers a consumer includes reach no internal smoother header and no CHOLMOD (their dependency
+# list, from the installed headers only).
+for h in estimators/graph/optimizer.hpp estimators/graph/incremental_smoother.hpp; do
+  deps=$(echo "#include \"$h\"" | ${CXX:-c++} -std=c++17 -I"$p/include/sextant" -isystem /usr/include/eigen3 -M -x c++ - 2>&1) ||
+    fail "$h does not compile from the installed headers alone: $deps"
+  ! grep -q "cholmod\|graph/smoother/" <<< "$deps" || fail "$h reaches CHOLMOD or a smoother step"
+done
 n_lcm=$(ls "$SEXTANT_SOURCE_DIR"/lcmtypes/sextant/*.lcm | wc -l)
 [ "$(ls "$p"/share/sextant/lcmtypes/sextant/*.lcm | wc -l)" -eq "$n_lcm" ] || fail "not every .lcm file was installed"
 [ "$(ls "$p"/include/sextant/sextant/*.hpp | wc -l)" -eq "$n_lcm" ] || fail "not every message header was installed"

@@ -46,6 +46,24 @@ def test_known_offset():
     assert r["matched"] == 100 and r["ate_rmse"] < 1e-9 and r["rpe_trans_rmse"] < 1e-9
 
 
+def test_kitti_files_same_as_the_cli(tmp_path):
+    """KITTI pose files (frame i with frame i): the module and `sextant eval --format kitti` agree, and a 1 % scale
+    error over a 300 m run reads as about 1 % in the KITTI error."""
+    def kitti(path, scale):
+        with open(path, "w") as f:
+            for i in range(301):
+                f.write(f"1 0 0 {i * scale} 0 1 0 0 0 0 1 0\n")
+    gt, est = tmp_path / "gt.txt", tmp_path / "est.txt"
+    kitti(gt, 1.0)
+    kitti(est, 1.01)
+    cli = tool_json("eval", "--gt", str(gt), "--est", str(est), "--format", "kitti")
+    same(sextant.eval(str(gt), str(est), format="kitti"), cli)
+    assert cli["matched"] == 301 and cli["kitti_segments"] > 0
+    assert 1.0 < cli["kitti_trans_pct"] < 1.02 and cli["kitti_rot_deg_per_m"] < 1e-9
+    with pytest.raises(ValueError, match="format"):
+        sextant.eval(str(gt), str(est), format="csv")
+
+
 def test_errors(tmp_path):
     with pytest.raises(ValueError, match=r"est\[1\]: expected 8 values, got 3"):
         sextant.eval([[0, 0, 0, 0, 0, 0, 0, 1]] * 2, [[0, 0, 0, 0, 0, 0, 0, 1], [1, 2, 3]])

@@ -37,20 +37,21 @@ std::string error_of(graph::RobustKernel (*parse)(const std::string&), const std
 TEST_CASE("optimize's kinds: every spelling round-trips, an unknown one is refused with the option and its spellings") {
   CHECK(solver_names() == std::vector<std::string>{"gn", "lm"});
   CHECK(initial_estimate_names() == std::vector<std::string>{"auto", "file", "odometry", "chordal", "sgd"});
-  CHECK(robust_kernel_names() == std::vector<std::string>{"none", "huber", "cauchy", "dcs"});
+  CHECK(graph::robust_kernel_names() == std::vector<std::string>{"none", "huber", "cauchy", "dcs"});
   CHECK(ordering_names() == std::vector<std::string>{"block-amd", "amd", "colamd", "metis", "auto"});
   for (const auto& n : solver_names()) CHECK(name_of(solver_from_name(n)) == n);
   for (const auto& n : initial_estimate_names()) CHECK(name_of(initial_estimate_from_name(n)) == n);
-  for (const auto& n : robust_kernel_names()) CHECK(name_of(robust_kernel_from_option(n)) == n);
+  for (const auto& n : graph::robust_kernel_names())
+    CHECK(graph::robust_kernel_name(graph::robust_kernel_from_name(n)) == n);
   for (const auto& n : ordering_names()) CHECK(name_of(ordering_from_name(n)) == n);
-  CHECK(robust_kernel_from_option("dcs") == graph::RobustKernel::kDcs);
+  CHECK(graph::robust_kernel_from_name("dcs") == graph::RobustKernel::kDcs);
   CHECK(solver_from_name("lm") == graph::Method::kLevenbergMarquardt);
   CHECK(ordering_from_name("block-amd") == graph::Ordering::kBlockAmd);
 
   // A misspelt kernel is an error, not "none".
-  CHECK(error_of(robust_kernel_from_option, "DCS") == "robust: 'DCS' is not one of none, huber, cauchy, dcs");
-  CHECK(error_of(robust_kernel_from_option, "") == "robust: '' is not one of none, huber, cauchy, dcs");
-  CHECK_THROWS_WITH_AS(solver_from_name("newton"), "solver: 'newton' is not one of gn, lm", std::invalid_argument);
+  CHECK(error_of(graph::robust_kernel_from_name, "DCS") == "unknown robust kernel 'DCS' (none, huber, cauchy or dcs)");
+  CHECK(error_of(graph::robust_kernel_from_name, "") == "unknown robust kernel '' (none, huber, cauchy or dcs)");
+  CHECK_THROWS_WITH_AS(solver_from_name("newton"), "unknown solver 'newton' (gn or lm)", std::invalid_argument);
   CHECK_THROWS_AS(initial_estimate_from_name("Chordal"), std::invalid_argument);
   CHECK_THROWS_AS(ordering_from_name("nested"), std::invalid_argument);
 }

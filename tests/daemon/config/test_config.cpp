@@ -113,6 +113,17 @@ TEST_CASE("kinds are parsed once into enums: every spelling maps to its kind, an
   CHECK(a.find("test.yaml:4:13:") == 0);
   CHECK(a.find("'engine.association.solver': unknown association solver 'lagrangian' (lr or exact)") !=
         std::string::npos);
+  const std::string r = error_of("engine:\n  graph:\n    loops: {robust: DCS}\n");
+  CHECK(r.find("test.yaml:3:21:") == 0);
+  CHECK(r.find("'engine.graph.loops.robust': unknown robust kernel 'DCS' (none, huber, cauchy or dcs)") != std::string::npos);
+  const std::string c = error_of("engine:\n  association:\n    cost: kullback\n");
+  CHECK(c.find("test.yaml:3:11:") == 0);
+  CHECK(c.find("'engine.association.cost': unknown cost 'kullback' (classic, kl or renyi)") != std::string::npos);
+  // Parsed once into their kinds.
+  CHECK(parse_daemon_config("engine:\n  graph:\n    loops: {robust: cauchy}\n", "t").engine.graph.robust ==
+        sextant::graph::RobustKernel::kCauchy);
+  CHECK(parse_daemon_config("engine:\n  association:\n    cost: renyi\n", "t").engine.association.cost ==
+        sextant::assoc::CostKind::kRenyi);
   // A name that is not a string is refused as such, at its line.
   CHECK(error_of("engine:\n  filter:\n    type: [ekf]\n").find("test.yaml:3:11:") == 0);
   CHECK_THROWS_AS(sextant::engine::filter_type_from_name("kalman"), std::invalid_argument);

@@ -9,16 +9,13 @@
 #include "daemon/engine/graph_stage.hpp"
 #include "daemon/engine/pose_conversion.hpp"
 #include "daemon/engine/trajectory_rebuild.hpp"
-#include "daemon/runtime/stage_runner.hpp"
 #include "replay/simulated_matcher.hpp"
 #include "replay/trajectory_eval.hpp"
 
 #include <doctest/doctest.h>
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
-#include <deque>
 #include <map>
 #include <set>
 #include <optional>
@@ -681,214 +678,33 @@ TEST_CASE("graph stage: a 3-D body maps 3-D landmarks from range, azimuth and el
 
 namespace {
 
-// The daemon's way into a stage (Stage::offer into a bounded queue), without threads: every event is offered while
-// the stage is busy (nothing handled), then the queue is handled in order.
-struct BlockedStageFeed {
-  size_t capacity = 1024;
-  std::deque<Event> queue;
-  size_t peak = 0, dropped = 0, queued_other = 0;
-  bool offer(Stage& stage, const Event& e) {
-    return stage.offer(e, [&] {
-      if (queue.size() >= capacity) {
-        ++dropped;
-        return false;
-      }
-      queue.push_back(e);
-      peak = std::max(peak, queue.size());
-      queued_other += std::holds_alternative<Odometry>(e) ? 0 : 1;
-      return true;
-    });
-  }
-  void drain(Stage& stage, const Emit& emit) {
-    for (; !queue.empty(); queue.pop_front()) stage.handle(queue.front(), emit);
-  }
-};
+GraphConfig keyframe_per_metre_config() { return graph_only_config(false).graph; }
 
-// Odometry without increment covariances: the pose covariance grows by the same amount per message (the stage derives
-// each increment's covariance from the growth).
-void derive_increments(Run& run) {
-  for (size_t k = 0; k < run.odometry.size(); ++k) {
-    run.odometry[k].covariance = *run.odometry[k].increment_covariance * static_cast<double>(k);
-    run.odometry[k].increment_covariance.reset();
-  }
-}
-
-// The burst: body "other" (10 Hz, sightings of the ring's landmarks) for 20 s, then 10,001 odometry messages of body
-// "fast" (1 kHz for 10 s), then a loop of "other", a loop of "fast" between odometry times that are no keyframes' (the
-// odometry history bridges them), a sighting of "other" ahead of its odometry, and the rest of "other"'s run.
-std::vector<Event> burst_events(bool increments_given) {
-  Run other = circle_run(30, 5, 10, "other"), fast = circle_run(10, 6, 1000, "fast");
-  if (!increments_given) derive_increments(other), derive_increments(fast);
-  auto sightings = ring_sightings(other, 13);
-  for (auto& s : sightings) s.source = "other";
-  std::map<int64_t, SE3> truth_other(other.truth.begin(), other.truth.end()), truth_fast(fast.truth.begin(), fast.truth.end());
-  std::vector<Event> out;
-  size_t j = 0;
-  for (size_t k = 0; k <= 200; ++k) {
-    for (; j < sightings.size() && sightings[j].utime < other.odometry[k].utime; ++j) out.emplace_back(sightings[j]);
-    out.emplace_back(other.odometry[k]);
-  }
-  const size_t other_next_sighting = j;
-  for (const auto& o : fast.odometry) out.emplace_back(o);
-  auto loop = [](const std::string& source, int64_t from, int64_t to, const std::map<int64_t, SE3>& truth) {
-    LoopClosure l;
-    l.utime = to;
-    l.source = source;
-    l.planar = true;
-    l.utime_from = from;
-    l.utime_to = to;
-    l.relative = to_pose(truth.at(from).inverse() * truth.at(to));
-    l.information = Matrix6::Identity() * 1e4;
-    return l;
-  };
-  out.emplace_back(loop("other", other.odometry[20].utime, other.odometry[190].utime, truth_other));
-  out.emplace_back(loop("fast", fast.odometry[1234].utime, fast.odometry[9876].utime, truth_fast));
-  REQUIRE(sightings[other_next_sighting].utime > other.odometry[200].utime);  // ahead of "other"'s odometry
-  out.emplace_back(sightings[other_next_sighting]);
-  j = other_next_sighting + 1;
-  for (size_t k = 201; k < other.odometry.size(); ++k) {
-    for (; j < sightings.size() && sightings[j].utime < other.odometry[k].utime; ++j) out.emplace_back(sightings[j]);
-    out.emplace_back(other.odometry[k]);
-  }
-  for (; j < sightings.size(); ++j) out.emplace_back(sightings[j]);
+std::vector<int64_t> keyframe_times(const GraphStage& g, const std::string& source = "fast") {
+  std::vector<int64_t> out;
+  for (const auto& k : g.keyframes(source)) out.push_back(k.utime);
   return out;
-}
-
-GraphConfig burst_config() { return graph_only_config(false).graph; }  // a keyframe per metre
-
-// The same results: keyframes (times and poses), landmarks, counters, the smoother's chi2 and every variable's
-// marginal covariance (the odometry edges' information, i.e. the composed increment covariances).
-void check_same_graph(const GraphStage& a, const GraphStage& b) {
-  for (const std::string body : {"other", "fast"}) {
-    const auto ka = a.keyframes(body), kb = b.keyframes(body);
-    REQUIRE(ka.size() == kb.size());
-    for (size_t k = 0; k < ka.size(); ++k) {
-      CHECK(ka[k].utime == kb[k].utime);
-      CHECK((ka[k].pose.position - kb[k].pose.position).norm() < 1e-9);
-      CHECK(ka[k].pose.orientation.angularDistance(kb[k].pose.orientation) < 1e-9);
-    }
-    const auto la = a.landmarks(body), lb = b.landmarks(body);
-    REQUIRE(la.size() == lb.size());
-    for (size_t k = 0; k < la.size(); ++k) {
-      CHECK(la[k].id == lb[k].id);
-      CHECK(la[k].sightings == lb[k].sightings);
-      CHECK((la[k].position - lb[k].position).norm() < 1e-9);
-    }
-  }
-  for (const char* name : {"keyframes", "keyframes_rejected", "keyframes_reanchored", "loops_accepted", "loops_rejected", "loops_unmatched",
-                           "landmarks", "sightings_accepted", "sightings_rejected", "sightings_unmatched",
-                           "sightings_dropped", "odometry_out_of_order", "odometry_edges_rejected"})
-    CHECK_MESSAGE(counter(a, name) == counter(b, name), name);
-  for (const bool planar : {false, true}) {  // each kind of body has its smoother
-    const graph::IncrementalSmoother *sa = a.smoother(planar), *sb = b.smoother(planar);
-    REQUIRE((sa == nullptr) == (sb == nullptr));
-    if (sa == nullptr) continue;
-    CHECK(sa->chi2() == doctest::Approx(sb->chi2()).epsilon(1e-9));
-    const size_t n = sa->graph().variables().size();
-    REQUIRE(n == sb->graph().variables().size());
-    for (size_t v = 0; v < n; ++v) {
-      const Eigen::MatrixXd pa = sa->marginal_covariance(static_cast<int>(v));
-      const Eigen::MatrixXd pb = sb->marginal_covariance(static_cast<int>(v));
-      REQUIRE(pa.rows() == pb.rows());
-      if (pa.size() > 0) CHECK((pa - pb).norm() <= 1e-9 * pa.norm());
-    }
-  }
 }
 
 }  // namespace
 
-TEST_CASE("graph stage (daemon path): a 10,000-message odometry burst is coalesced; keyframes, loops and sightings as with a slow feed") {
+TEST_CASE("graph stage: out-of-order and duplicate odometry are counted and dropped") {
   const Emit ignore = [](Output) {};
-  for (const bool increments_given : {true, false}) {
-    CAPTURE(increments_given);
-    const std::vector<Event> events = burst_events(increments_given);
-    size_t odometry = 0;
-    for (const auto& e : events) odometry += std::holds_alternative<Odometry>(e) ? 1 : 0;
-    REQUIRE(odometry == 301 + 10001);
-
-    // The slow feed: the stage keeps up, every event handled as it arrives.
-    GraphStage slow(burst_config(), std::make_shared<GraphCorrections>());
-    for (const auto& e : events) slow.handle(e, ignore);
-
-    // The daemon's path with the stage busy through the whole run: one 1024-event queue.
-    GraphStage busy(burst_config(), std::make_shared<GraphCorrections>());
-    BlockedStageFeed feed;
-    for (const auto& e : events) CHECK(feed.offer(busy, e));
-    CHECK(feed.dropped == 0);
-    CHECK(feed.queued_other == events.size() - odometry);  // every loop and sighting queued, none coalesced
-    CHECK(feed.peak <= 2 * feed.queued_other + 2);  // odometry: a slot per body and other event, not per message
-    CHECK(counter(busy, "odometry_waiting") > 0);
-    feed.drain(busy, ignore);
-    CHECK(counter(busy, "odometry_waiting") == 0);
-    MESSAGE("queue peak " << feed.peak << " events for " << events.size() << " offered; odometry coalesced "
-                          << counter(busy, "odometry_coalesced") << " of " << odometry);
-    CHECK(counter(busy, "odometry_coalesced") > 10000 - 100);
-    CHECK(counter(slow, "odometry_coalesced") == 0);
-
-    // The same graph; the loops (one between odometry times of "fast") and the sightings applied.
-    check_same_graph(busy, slow);
-    CHECK(counter(busy, "loops_accepted") == 2);
-    CHECK(counter(busy, "loops_unmatched") == 0);
-    CHECK(busy.keyframes("fast").size() >= 9);
-    CHECK(counter(busy, "sightings_accepted") > 100);
-
-    // Without coalescing the same burst fills the queue: the loops, the sighting and the rest are dropped.
-    GraphConfig plain = burst_config();
-    plain.coalesce_odometry = false;
-    GraphStage dropping(plain, std::make_shared<GraphCorrections>());
-    BlockedStageFeed old_feed;
-    for (const auto& e : events) old_feed.offer(dropping, e);
-    old_feed.drain(dropping, ignore);
-    CHECK(old_feed.dropped > 9000);
-    CHECK(counter(dropping, "loops_accepted") == 0);
-  }
-}
-
-TEST_CASE("graph stage (daemon path): out-of-order and duplicate odometry, small batches and a full queue") {
-  const Emit ignore = [](Output) {};
-  GraphConfig cfg = burst_config();
+  GraphConfig cfg = keyframe_per_metre_config();
   cfg.keyframes.k1 = 0.2;
-  cfg.odometry_batch_max = 2;  // a new batch (one more queue slot) every second pinned message
   Run fast = circle_run(3, 7, 1000, "fast");
   std::vector<Odometry> sent = fast.odometry;
   sent.insert(sent.begin() + 501, fast.odometry[500]);   // a duplicate stamp
   sent.insert(sent.begin() + 1002, fast.odometry[999]);  // an old message after a newer one
 
-  GraphStage slow(cfg, std::make_shared<GraphCorrections>());
-  for (const auto& o : sent) slow.handle(o, ignore);
-  CHECK(counter(slow, "odometry_out_of_order") == 2);
-
-  GraphStage busy(cfg, std::make_shared<GraphCorrections>());
-  BlockedStageFeed feed;
-  for (const auto& o : sent) CHECK(feed.offer(busy, o));
-  feed.drain(busy, ignore);
-  CHECK(counter(busy, "odometry_out_of_order") == 2);
-  REQUIRE(busy.keyframes("fast").size() > 10);
-  CHECK(feed.peak >= busy.keyframes("fast").size() / 2);  // a batch (a queue slot) per two keyframe candidates
-  CHECK(feed.peak <= busy.keyframes("fast").size() / 2 + 2);
-  check_same_graph(busy, slow);
-
-  // A queue with room for one event: the first batch's token takes it; when a batch is full, the next message needs a
-  // new token, the queue refuses it and the message is dropped without a trace (the keyframe selector has not seen
-  // it).  Once the stage has taken the batch, the odometry goes on; the keyframes are those of the messages that got
-  // through.
-  GraphStage tight(cfg, std::make_shared<GraphCorrections>());
-  GraphStage reference(cfg, std::make_shared<GraphCorrections>());
-  BlockedStageFeed one;
-  one.capacity = 1;
-  size_t refused = 0;
-  for (size_t k = 0; k < fast.odometry.size(); ++k) {
-    if (one.offer(tight, fast.odometry[k])) reference.handle(fast.odometry[k], ignore);
-    else ++refused;
-    if (k % 500 == 499) one.drain(tight, ignore);  // the stage gets to its queue now and then
-  }
-  one.drain(tight, ignore);
-  CHECK(refused > 100);
-  CHECK(one.dropped == refused);
-  const auto kt = tight.keyframes("fast"), kr = reference.keyframes("fast");
-  REQUIRE(kt.size() == kr.size());
-  CHECK(kt.size() >= 4);
-  for (size_t k = 0; k < kt.size(); ++k) CHECK(kt[k].utime == kr[k].utime);
+  GraphStage with_bad(cfg, std::make_shared<GraphCorrections>());
+  for (const auto& o : sent) with_bad.handle(o, ignore);
+  CHECK(counter(with_bad, "odometry_out_of_order") == 2);
+  GraphStage clean(cfg, std::make_shared<GraphCorrections>());
+  for (const auto& o : fast.odometry) clean.handle(o, ignore);
+  CHECK(counter(clean, "odometry_out_of_order") == 0);
+  CHECK(keyframe_times(with_bad).size() > 10);
+  CHECK(keyframe_times(with_bad) == keyframe_times(clean));
 }
 
 TEST_CASE("graph stage: after a real jump keyframing re-anchors and loops pull the new segment in; a spike is rejected") {
@@ -945,29 +761,22 @@ TEST_CASE("graph stage: after a real jump keyframing re-anchors and loops pull t
   CHECK(odo_err > 0.5);
   CHECK(kf_err < 0.2 * odo_err);
 
-  // Without loops: one spurious spike (20 m off for one message) is rejected and changes no keyframe; the daemon's
-  // coalescing path re-anchors at the same message as the slow feed (the coalescer's selector saw the merged poses).
+  // Without loops: one spurious spike (20 m off for one message) is rejected and changes no keyframe.
   Run spiked = run;
   Odometry& spike = spiked.odometry[100];
   spike.pose.position.x() += 20;
   GraphStage plain(graph_only_config(false).graph, std::make_shared<GraphCorrections>());
   GraphStage with_spike(graph_only_config(false).graph, std::make_shared<GraphCorrections>());
-  GraphStage busy(graph_only_config(false).graph, std::make_shared<GraphCorrections>());
   const Emit ignore = [](Output) {};
-  BlockedStageFeed feed;
   for (size_t k = 0; k < run.odometry.size(); ++k) {
     plain.handle(run.odometry[k], ignore);
     with_spike.handle(spiked.odometry[k], ignore);
-    CHECK(feed.offer(busy, spiked.odometry[k]));
   }
-  feed.drain(busy, ignore);
   CHECK(counter(with_spike, "keyframes_rejected") == counter(plain, "keyframes_rejected") + 1);
   CHECK(counter(with_spike, "keyframes_reanchored") == 1);
   const auto kp = plain.keyframes("fast"), ks = with_spike.keyframes("fast");
   REQUIRE(kp.size() == ks.size());
   for (size_t k = 0; k < kp.size(); ++k) CHECK(kp[k].utime == ks[k].utime);
-  CHECK(counter(busy, "odometry_coalesced") > 400);
-  check_same_graph(busy, with_spike);
 }
 
 namespace {
@@ -991,24 +800,17 @@ std::vector<Odometry> straight_run(const std::vector<double>& xs, const std::map
   return out;
 }
 
-std::vector<int64_t> keyframe_times(const GraphStage& g) {
-  std::vector<int64_t> out;
-  for (const auto& k : g.keyframes("fast")) out.push_back(k.utime);
-  return out;
-}
-
 }  // namespace
 
 TEST_CASE("graph stage: a keyframe dropped for its edge covariance leaves the selector on the last keyframe in the graph") {
   const Emit ignore = [](Output) {};
-  GraphConfig cfg = burst_config();
+  GraphConfig cfg = keyframe_per_metre_config();
   cfg.keyframes.k1 = 0.3;  // k2 = 5, reanchor_after = 10: the defaults
   REQUIRE(cfg.keyframes.k2 == 5.0);
   REQUIRE(cfg.keyframes.reanchor_after == 10);
   struct Scenario {
     const char* name;
     std::vector<Odometry> run;
-    size_t drop;                     // the message whose keyframe is dropped
     std::vector<size_t> keyframes;   // the messages that become keyframes
     int64_t rejected, reanchored;
   };
@@ -1019,7 +821,7 @@ TEST_CASE("graph stage: a keyframe dropped for its edge covariance leaves the se
     // keyframe at 0 (0.6 m), not k1 past the dropped one (0.8 m).
     std::vector<double> xs;
     for (int k = 0; k < 8; ++k) xs.push_back(0.2 * k);
-    scenarios.push_back({"one step", straight_run(xs, {{2, -0.01}, {3, 0.02}}), 2, {0, 3, 5, 7}, 0, 0});
+    scenarios.push_back({"one step", straight_run(xs, {{2, -0.01}, {3, 0.02}}), {0, 3, 5, 7}, 0, 0});
   }
   {
     // A keyframe 4.9 m out (within k2) is dropped; the poses after it, 0.4 m apart, are more than k2 from the
@@ -1027,7 +829,7 @@ TEST_CASE("graph stage: a keyframe dropped for its edge covariance leaves the se
     // the dropped pose they would have passed as 0.4 m steps, and an edge of 5.3 m would have entered the graph.
     std::vector<double> xs = {0};
     for (int k = 0; k < 14; ++k) xs.push_back(4.9 + 0.4 * k);
-    scenarios.push_back({"near k2", straight_run(xs, {{1, -0.01}, {2, 0.02}}), 1, {0, 11, 12, 13, 14}, 9, 1});
+    scenarios.push_back({"near k2", straight_run(xs, {{1, -0.01}, {2, 0.02}}), {0, 11, 12, 13, 14}, 9, 1});
   }
   for (const Scenario& sc : scenarios) {
     const std::string name = sc.name;
@@ -1045,129 +847,5 @@ TEST_CASE("graph stage: a keyframe dropped for its edge covariance leaves the se
     for (size_t k = 1; k < kfs.size(); ++k)
       if (sc.reanchored == 0 || kfs[k].utime != sc.run[11].utime)
         CHECK((kfs[k].pose.position - kfs[k - 1].pose.position).norm() <= 5.0);
-
-    // The daemon's path, the stage keeping up: the same graph.
-    GraphStage step(cfg, std::make_shared<GraphCorrections>());
-    BlockedStageFeed each;
-    for (const auto& o : sc.run) {
-      CHECK(each.offer(step, o));
-      each.drain(step, ignore);
-    }
-    check_same_graph(step, slow);
-    // The stage busy from the message after the drop on: the coalescer's selector was sent back with the stage's,
-    // so it pins the same keyframe candidates.
-    GraphStage late(cfg, std::make_shared<GraphCorrections>());
-    BlockedStageFeed after;
-    for (size_t k = 0; k < sc.run.size(); ++k) {
-      CHECK(after.offer(late, sc.run[k]));
-      if (k <= sc.drop) after.drain(late, ignore);
-    }
-    after.drain(late, ignore);
-    check_same_graph(late, slow);
   }
-  // The stage busy through the whole run: the coalescer decided the later messages against the dropped keyframe.
-  // Near k2 every one of them was a keyframe candidate for it (pinned): the stage decides each on its own selector,
-  // the same graph.  One step: the pose at 0.6 m was merged into the one at 0.8 m, which becomes the keyframe (the
-  // documented cost, odometry_coalescer.hpp); the keyframes stay between k1 and k2 apart.
-  for (const Scenario& sc : scenarios) {
-    const std::string name = sc.name;
-    CAPTURE(name);
-    GraphStage slow(cfg, std::make_shared<GraphCorrections>());
-    for (const auto& o : sc.run) slow.handle(o, ignore);
-    GraphStage busy(cfg, std::make_shared<GraphCorrections>());
-    BlockedStageFeed all;
-    for (const auto& o : sc.run) CHECK(all.offer(busy, o));
-    all.drain(busy, ignore);
-    if (sc.reanchored == 1) {
-      check_same_graph(busy, slow);
-    } else {
-      CHECK(keyframe_times(busy) == std::vector<int64_t>{sc.run[0].utime, sc.run[4].utime, sc.run[6].utime});
-      CHECK(counter(busy, "odometry_edges_rejected") == 1);
-    }
-  }
-}
-
-TEST_CASE("graph stage (daemon path): a loop the full queue refuses leaves no trace in the coalescer") {
-  // Body "fast" at 10 Hz, a keyframe per metre.  The stage is busy; its queue holds 3 events: the token of the first
-  // batch, a loop, the token of the second batch.  A second loop (about a time the odometry has not reached) is
-  // refused.  The odometry after it must still merge into the open second batch, as if the loop had never come: it
-  // needs no queue slot.  (Were the refused loop to close the batch, every later message would need a token of its
-  // own and be dropped with it, and its time would pin a later message for nothing.)
-  const Emit ignore = [](Output) {};
-  const Run run = circle_run(20, 9, 10, "fast");
-  std::map<int64_t, SE3> truth(run.truth.begin(), run.truth.end());
-  auto loop = [&](size_t from, size_t to) {
-    LoopClosure l;
-    l.utime = run.odometry[to].utime;
-    l.source = "fast";
-    l.planar = true;
-    l.utime_from = run.odometry[from].utime;
-    l.utime_to = run.odometry[to].utime;
-    l.relative = to_pose(truth.at(l.utime_from).inverse() * truth.at(l.utime_to));
-    l.information = Matrix6::Identity() * 1e4;
-    return l;
-  };
-  auto feed_run = [&](GraphStage& stage, BlockedStageFeed& feed, bool with_refused_loop) {
-    size_t refused = 0;
-    for (size_t k = 0; k < run.odometry.size(); ++k) {
-      if (k == 50) refused += feed.offer(stage, loop(10, 40)) ? 0 : 1;
-      if (k == 100 && with_refused_loop) refused += feed.offer(stage, loop(20, 120)) ? 0 : 1;
-      refused += feed.offer(stage, run.odometry[k]) ? 0 : 1;
-    }
-    feed.drain(stage, ignore);
-    return refused;
-  };
-  GraphStage busy(burst_config(), std::make_shared<GraphCorrections>());
-  BlockedStageFeed feed;
-  feed.capacity = 3;
-  CHECK(feed_run(busy, feed, true) == 1);  // the second loop only
-  CHECK(feed.dropped == 1);
-  CHECK(feed.peak == 3);
-
-  GraphStage without(burst_config(), std::make_shared<GraphCorrections>());
-  BlockedStageFeed reference;
-  reference.capacity = 3;
-  CHECK(feed_run(without, reference, false) == 0);
-  check_same_graph(busy, without);
-  CHECK(counter(busy, "odometry_coalesced") == counter(without, "odometry_coalesced"));
-  CHECK(counter(busy, "loops_accepted") == 1);
-  CHECK(busy.keyframes("fast").size() >= 18);  // the whole run's, 20 m
-}
-
-TEST_CASE("graph stage (daemon path): its thread behind a 16-event queue takes a 10,000-message burst and two loops as the slow feed does") {
-  const Emit ignore = [](Output) {};
-  const Run fast = circle_run(10, 8, 1000, "fast");
-  std::map<int64_t, SE3> truth(fast.truth.begin(), fast.truth.end());
-  auto loop = [&](size_t from, size_t to) {
-    LoopClosure l;
-    l.utime = fast.odometry[to].utime;
-    l.source = "fast";
-    l.planar = true;
-    l.utime_from = fast.odometry[from].utime;
-    l.utime_to = fast.odometry[to].utime;
-    l.relative = to_pose(truth.at(l.utime_from).inverse() * truth.at(l.utime_to));
-    l.information = Matrix6::Identity() * 1e4;
-    return l;
-  };
-  std::vector<Event> events;
-  for (size_t k = 0; k < fast.odometry.size(); ++k) {
-    events.emplace_back(fast.odometry[k]);
-    if (k == 6000) events.emplace_back(loop(1234, 5876));  // behind the odometry, between keyframes
-    if (k == 7000) events.emplace_back(loop(2000, 9876));  // ahead of it: waits
-  }
-  GraphStage slow(burst_config(), std::make_shared<GraphCorrections>());
-  for (const auto& e : events) slow.handle(e, ignore);
-
-  GraphStage threaded(burst_config(), std::make_shared<GraphCorrections>());
-  size_t refused = 0;
-  {
-    runtime::StageRunner runner(threaded, 16, ignore);
-    runner.start();
-    for (const auto& e : events) refused += runner.offer(runtime::QueuedEvent{e, std::chrono::steady_clock::now()}) ? 0 : 1;
-    runner.drain_and_stop();
-    CHECK(runner.status().dropped == 0);
-  }
-  CHECK(refused == 0);
-  CHECK(counter(threaded, "loops_accepted") == 2);
-  check_same_graph(threaded, slow);
 }
