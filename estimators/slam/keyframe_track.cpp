@@ -14,14 +14,10 @@ void KeyframeTrack::extend_since_keyframe(const SE3& delta, const Matrix6d& q) {
 void KeyframeTrack::advance(int64_t utime, const SE3& pose, const Matrix6d& pose_covariance, size_t history) {
   last_utime_ = utime;
   last_odom_ = pose;
-  remember(utime, pose, history);
-  last_odom_covariance_ = pose_covariance;
-}
-
-void KeyframeTrack::remember(int64_t utime, const SE3& pose, size_t history) {
   if (odometry_.size() >= history)
     odometry_.erase(odometry_.begin(), odometry_.begin() + static_cast<std::ptrdiff_t>(odometry_.size() / 2));
   odometry_.emplace_back(utime, pose);
+  last_odom_covariance_ = pose_covariance;
 }
 
 int64_t KeyframeTrack::add_keyframe(TrackKeyframe keyframe) {

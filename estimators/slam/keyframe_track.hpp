@@ -77,8 +77,6 @@ class KeyframeTrack {
   /// A new odometry message: the latest pose and covariance, and the pose enters the history (at most `history`
   /// poses: when it is full the older half goes).
   void advance(int64_t utime, const SE3& pose, const Matrix6d& pose_covariance, size_t history);
-  /// An odometry pose that did not come as its own message (merged into a later one): into the history only.
-  void remember(int64_t utime, const SE3& pose, size_t history);
 
   /// Appends a keyframe (its id is the next one) and restarts since_keyframe(); returns its id.
   int64_t add_keyframe(TrackKeyframe keyframe);

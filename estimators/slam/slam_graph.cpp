@@ -18,7 +18,7 @@ namespace {
 
 graph::IncrementalOptions smoother_options(const SlamOptions& o, bool planar) {
   graph::IncrementalOptions s = o.smoother;
-  s.kernel = graph::robust_kernel_from_name(o.robust);
+  s.kernel = o.robust;
   s.kernel_width = kernel_width_for(o, planar);
   return s;
 }
@@ -27,7 +27,7 @@ graph::IncrementalOptions smoother_options(const SlamOptions& o, bool planar) {
 double auto_kernel_width(const SlamOptions& options, int dimension, double probability) {
   if (options.kernel_width) return *options.kernel_width;
   const double q = assoc::chi2_quantile(dimension, probability);
-  return graph::robust_kernel_from_name(options.robust) == graph::RobustKernel::kDcs ? q : std::sqrt(q);
+  return options.robust == graph::RobustKernel::kDcs ? q : std::sqrt(q);
 }
 
 }  // namespace
@@ -80,8 +80,9 @@ void SlamGraph::add_factor(Body& b, std::unique_ptr<graph::Factor> factor, Facto
 }
 
 void SlamGraph::add_odometry(const std::string& name, const OdometryInput& o, SlamListener& listener) {
-  const bool known = bodies_.count(name) > 0;
-  Body& b = body_for(name, o.planar);
+  const auto it = bodies_.find(name);
+  const bool known = it != bodies_.end();
+  Body& b = known ? it->second : body_for(name, o.planar);
   if (known && o.utime <= b.track.last_utime()) {
     ++counters_.odometry_out_of_order;
     return;
@@ -124,12 +125,6 @@ void SlamGraph::add_odometry(const std::string& name, const OdometryInput& o, Sl
   }
 }
 
-void SlamGraph::remember_odometry(const std::string& name, int64_t utime, const SE3& pose) {
-  auto it = bodies_.find(name);
-  if (it != bodies_.end() && utime > it->second.track.last_utime())
-    it->second.track.remember(utime, pose, static_cast<size_t>(options_.odometry_history));
-}
-
 void SlamGraph::on_keyframe_candidate(const std::string& name, Body& b, const OdometryInput& o, SlamListener& listener) {
   const SE3& odom = o.pose;
   const KeyframeDecision d = b.selector.decide(odom);
@@ -150,7 +145,7 @@ void SlamGraph::on_keyframe_candidate(const std::string& name, Body& b, const Od
     // graph) and keeps accumulating towards the next one, whose edge spans the dropped pose.
     edge_factor = odometry_factor(b.planar, b.track.newest().variable, -1, node.edge, node.edge_covariance);
     if (!edge_factor) {
-      drop_keyframe(name, b, odom, listener);
+      drop_keyframe(b);
       return;
     }
   }
@@ -171,7 +166,7 @@ void SlamGraph::on_keyframe_candidate(const std::string& name, Body& b, const Od
       add_factor(b, edge_factor->rebind({b.track.newest().variable, node.variable}), FactorRole::kOdometry, false,
                  std::nullopt);
   } catch (const std::invalid_argument&) {
-    drop_keyframe(name, b, odom, listener);  // a non-finite pose or information: never reaches the smoother's system
+    drop_keyframe(b);  // a non-finite pose or information: never reaches the smoother's system
     return;
   }
   b.track.add_keyframe(std::move(node));
@@ -195,11 +190,9 @@ void SlamGraph::propose_loops(const std::string& name, const Body& b, int64_t ut
   }
 }
 
-void SlamGraph::drop_keyframe(const std::string& name, Body& b, const SE3& pose, SlamListener& listener) {
+void SlamGraph::drop_keyframe(Body& b) {
   ++counters_.odometry_edges_rejected;
-  const std::optional<SE3> last = b.track.empty() ? std::nullopt : std::optional<SE3>(b.track.newest().odom);
-  b.selector.reset_reference(last);
-  listener.keyframe_dropped(name, pose, last);
+  b.selector.reset_reference(b.track.empty() ? std::nullopt : std::optional<SE3>(b.track.newest().odom));
 }
 
 void SlamGraph::add_loop(const std::string& name, const LoopInput& l, SlamListener& listener) {
@@ -259,11 +252,6 @@ void SlamGraph::update(const std::string& name, Body& b, int64_t utime, SlamList
 void SlamGraph::rebuild() {
   for (auto& s : smoothers_)
     if (s) s->rebuild();
-}
-
-KeyframeSelector* SlamGraph::selector(const std::string& name) {
-  auto it = bodies_.find(name);
-  return it == bodies_.end() ? nullptr : &it->second.selector;
 }
 
 const KeyframeTrack* SlamGraph::track(const std::string& name) const {

@@ -73,9 +73,6 @@ class SlamListener {
   /// A loop candidate for the new keyframe `a` (newest first) against the earlier keyframe `b`.
   virtual void loop_proposed(const std::string& body, int64_t utime, const KeyframeEstimate& a, const KeyframeEstimate& b,
                              bool random) = 0;
-  /// A keyframe at `pose` was dropped; the selector's reference went back to `reference` (the last keyframe in the
-  /// graph, nullopt when there is none).
-  virtual void keyframe_dropped(const std::string& /*body*/, const SE3& /*pose*/, const std::optional<SE3>& /*reference*/) {}
 };
 
 class SlamGraph {
@@ -96,10 +93,6 @@ class SlamGraph {
   /// Refactorizes the smoothers from their graphs (after a failure the caller recovers from).
   void rebuild();
 
-  /// Odometry poses merged into a later message (they did not come one by one): into the body's history only.
-  void remember_odometry(const std::string& body, int64_t utime, const SE3& pose);
-  /// The keyframe selector of a body (nullptr: unknown body), for a caller that runs a copy of it ahead.
-  KeyframeSelector* selector(const std::string& body);
   /// The keyframe track of a body (nullptr: unknown body).
   const KeyframeTrack* track(const std::string& body) const;
 
@@ -164,7 +157,10 @@ class SlamGraph {
   void add_factor(Body& b, std::unique_ptr<graph::Factor> factor, FactorRole role, bool robust, std::optional<double> width);
   SE3 estimate(const Body& b, int variable) const;
   void on_keyframe_candidate(const std::string& name, Body& b, const OdometryInput& o, SlamListener& listener);
-  void drop_keyframe(const std::string& name, Body& b, const SE3& pose, SlamListener& listener);
+  /// A keyframe candidate that cannot enter the graph (its odometry edge's covariance cannot be inverted, or the
+  /// smoother refuses it): counted; the selector goes back to the body's last keyframe in the graph, so the next
+  /// keyframe is measured from that one and its edge, which spans the dropped pose, accumulates from there.
+  void drop_keyframe(Body& b);
   void propose_loops(const std::string& name, const Body& b, int64_t utime, SlamListener& listener);
   /// One smoother update for `b`, counted and reported when it succeeds.
   void update(const std::string& name, Body& b, int64_t utime, SlamListener& listener);

@@ -46,7 +46,8 @@ struct SlamOptions {
   KeyframeSelectorOptions keyframes;   // k1, k2 (motion magnitude, metres/radians combined) and the weights
   bool propose_loops = true;           // propose loop candidates for each new keyframe (SlamListener::loop_proposed)
   LoopProposalOptions proposals;       // n1 local, n2 random (-1: 2 n1), seed
-  std::string robust = "dcs";          // kernel on loop closures (and landmark sightings): none | huber | cauchy | dcs
+  graph::RobustKernel robust = graph::RobustKernel::kDcs;  // on loop closures (and landmark sightings): none | huber |
+                                                          // cauchy | dcs
   /// Huber/Cauchy delta or DCS phi.  nullopt ("auto"): per body kind, from the chi-square quantile of the loop
   /// residual's dimension at loop_gate_probability, q = chi2_d(p), d = 3 planar / 6 spatial (kernel_width_for).
   std::optional<double> kernel_width;

@@ -19,7 +19,7 @@ template <>
 struct sextant::testing::aggregate_parts<engine::GraphConfig> {
   static auto of(const engine::GraphConfig& c) {
     return std::tie(static_cast<const slam::SlamOptions&>(c), c.enabled, c.coalesce_odometry, c.odometry_batch_max,
-                    c.trajectory);
+                    c.odometry_waiting_max, c.odometry_waiting_total_max, c.trajectory);
   }
 };
 
