@@ -3,8 +3,6 @@
 #include "daemon/engine/event_archive.hpp"
 #include "daemon/engine/pose_conversion.hpp"
 
-#include <algorithm>
-
 namespace sextant::engine {
 namespace {
 
