@@ -33,7 +33,7 @@ Matrix6d planar6(const Eigen::Matrix3d& m) {
 
 }  // namespace
 
-TEST_CASE("sighting model: the first sighting places the landmark by hand; the gate's d2 matches a numeric S") {
+TEST_CASE("sighting model: the first sighting places the landmark by hand, and the gate's d2 matches a numeric S") {
   const SE2 K(2.0, -1.0, 0.3), D(1.0, 0.2, 0.4), S(0.5, 0.0, -0.2);
   Eigen::Matrix3d sigma_d;
   sigma_d << 0.02, 0.003, 0.0, 0.003, 0.04, 0.001, 0.0, 0.001, 0.005;
@@ -100,7 +100,7 @@ TEST_CASE("sighting model: the first sighting places the landmark by hand; the g
   CHECK((model.sensor_in_keyframe().translation() - (D * S).to_se3().translation()).norm() < 1e-12);
 }
 
-TEST_CASE("sighting model: malformed sightings are refused; a 3-D sighting has range, azimuth and elevation") {
+TEST_CASE("sighting model: malformed sightings are refused, and a 3-D sighting has range, azimuth and elevation") {
   const TrackPoint anchor{0, SE3(), Matrix6d::Zero()};
   const SightingModel planar(true, SE3(), anchor, SE3());
   LandmarkSighting s;
