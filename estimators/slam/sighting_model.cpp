@@ -82,9 +82,10 @@ Eigen::MatrixXd SightingModel::information(const Evaluation& ev, const Eigen::Ma
   Eigen::MatrixXd cov = R + ev.odometry_part;
   cov = 0.5 * (cov + cov.transpose());
   Eigen::MatrixXd information = cov.llt().solve(Eigen::MatrixXd::Identity(n, n));
-  // In place, as the graph stage always did: Eigen evaluates this coefficient by coefficient, so the entries below the
-  // diagonal see the ones above already averaged (aliasing; off by a rounding from a true average on 3x3).  Kept so
-  // that replays stay bit for bit what they were (bench/refactor_identity.sh).
+  // In place, as the graph stage always did: Eigen evaluates this coefficient by coefficient, column by column, so the
+  // entries above the diagonal are averaged with the already averaged ones below (aliasing; for a matrix symmetric up
+  // to rounding, as here, a difference of a rounding).  Kept so that replays stay bit for bit what they were
+  // (bench/refactor_identity.sh).
   information = 0.5 * (information + information.transpose());
   return information;
 }
