@@ -147,7 +147,7 @@ ComponentResult solve_relaxation(const RelaxationProblem& P, int max_iterations,
       // cost and the best upper bound stayed 1-5 units above the optimum for dozens of iterations (while
       // reduced-cost fixing needs a close one).  Seeds 1-3 x 20 scans of bench/assoc/timing_driver.cpp's grid
       // 3 x 20 + 5 (120 with the target prior): 6 % fewer instructions in the solver, seed 2's mean time per scan
-      // -27 % (its iterations, e.g. 51 -> 26 on one scan), the same optima.
+      // -28 % (its iterations, e.g. 51 -> 26 on one scan), the same optima.
       const bool promising = ub <= best_recovery;
       best_recovery = std::min(best_recovery, ub);
       if (promising && std::find(recovered.begin(), recovered.end(), feasible) == recovered.end()) {
