@@ -6,9 +6,9 @@
 //    between sensors 1 and 2 whose costs are the tuples' reduced costs minimized over the other indices (tuples
 //    missing both take every negative reduced cost); its value L(u) is a lower bound;
 //  - upper bounds: the recovery (relaxation_recovery.hpp), improved on promising recoveries (those that tie or
-//    beat the best) by re-assigning one sensor at a time (sensor_reassignment.hpp); the relaxed solution itself
-//    counts when it uses no detection twice; exchange moves (tuple_packing.hpp) polish the best solution when the
-//    gap stays open at the end;
+//    beat every earlier recovery, both before local search) by re-assigning one sensor at a time
+//    (sensor_reassignment.hpp); the relaxed solution itself counts when it uses no detection twice; exchange moves
+//    (tuple_packing.hpp) polish the best solution when the gap stays open at the end;
 //  - the multipliers start at each detection's smallest equal share c_t / m_t of the tuples holding it (a feasible
 //    point of the packing LP's dual: far fewer iterations than starting at 0);
 //  - they follow a deflected subgradient (Camerini, Fratta & Maffioli, Math. Programming Study 3, 1975): the

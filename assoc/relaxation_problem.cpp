@@ -53,20 +53,21 @@ RelaxationProblem::RelaxationProblem(const std::vector<Tuple>& tuples, const std
   }
 }
 
-std::pair<int, int> RelaxationProblem::range(const int* prefix, size_t L) const {
+std::pair<int, int> RelaxationProblem::range(const int* prefix, size_t L, int first, int last) const {
   auto below = [&](size_t t) {  // row t's prefix < prefix
     return std::lexicographical_compare(index.data() + t * S, index.data() + t * S + L, prefix, prefix + L);
   };
   auto above = [&](size_t t) {  // prefix < row t's prefix
     return std::lexicographical_compare(prefix, prefix + L, index.data() + t * S, index.data() + t * S + L);
   };
-  size_t lo = 0, hi = size();
+  size_t lo = static_cast<size_t>(first), hi = last < 0 ? size() : static_cast<size_t>(last);
+  const size_t window_end = hi;
   while (lo < hi) {  // first row not below
     const size_t mid = (lo + hi) / 2;
     if (below(mid)) lo = mid + 1;
     else hi = mid;
   }
-  size_t end = lo, top = size();
+  size_t end = lo, top = window_end;
   while (end < top) {  // first row above
     const size_t mid = (end + top) / 2;
     if (above(mid)) top = mid;

@@ -35,8 +35,9 @@ struct RelaxationProblem {
   size_t size() const { return cost.size(); }
   int at(size_t t, size_t q) const { return index[t * S + q]; }
 
-  /// The contiguous range [first, second) of tuples whose first L indices equal prefix[0 .. L).
-  std::pair<int, int> range(const int* prefix, size_t L) const;
+  /// The contiguous range [first, second) of tuples whose first L indices equal prefix[0 .. L), searched within
+  /// [lo, hi) (by default all tuples; a narrower window must hold that whole range).
+  std::pair<int, int> range(const int* prefix, size_t L, int lo = 0, int hi = -1) const;
 
   /// Tuples with the same (sensor 1, sensor 2) indices (a, b; 0 = missed), contiguous in the sorted order.
   struct PairGroup {

@@ -5,6 +5,20 @@
 
 namespace sextant::assoc {
 
+RelaxationRecovery::RelaxationRecovery(const RelaxationProblem& P) : P_(P) {
+  if (P.sensors() < 2) return;
+  pair_range_.assign(static_cast<size_t>(P.n[0] + 1) * static_cast<size_t>(P.n[1] + 1), {0, 0});
+  for (const auto& g : P.pair_groups())
+    pair_range_[static_cast<size_t>(g.a) * static_cast<size_t>(P.n[1] + 1) + static_cast<size_t>(g.b)] = {g.lo, g.hi};
+}
+
+std::pair<int, int> RelaxationRecovery::range(const int* prefix, size_t L) const {
+  if (pair_range_.empty()) return P_.range(prefix, L);
+  const auto window = pair_range_[static_cast<size_t>(prefix[0]) * static_cast<size_t>(P_.n[1] + 1) + static_cast<size_t>(prefix[1])];
+  if (L == 2 || window.first == window.second) return window;
+  return P_.range(prefix, L, window.first, window.second);
+}
+
 void RelaxationRecovery::recover(const Multipliers& u, const MissedAssignment& relaxed, std::vector<int>& chosen) {
   constexpr double kInf = std::numeric_limits<double>::infinity();
   const size_t S = P_.sensors();
@@ -21,7 +35,7 @@ void RelaxationRecovery::recover(const Multipliers& u, const MissedAssignment& r
     pairs_.clear();
     row_missed_.assign(rows, 0.0);
     for (size_t p = 0; p < rows; ++p) {
-      const auto [lo, hi] = P_.range(partial_.data() + p * S, s);
+      const auto [lo, hi] = range(partial_.data() + p * S, s);
       for (int t = lo; t < hi;) {  // tuples of the range grouped by their index at sensor s (sorted)
         const int k = P_.at(static_cast<size_t>(t), s);
         double best = kInf;
@@ -42,7 +56,7 @@ void RelaxationRecovery::recover(const Multipliers& u, const MissedAssignment& r
   }
   chosen.clear();
   for (size_t p = 0; p < partial_.size() / S; ++p) {
-    const auto [lo, hi] = P_.range(partial_.data() + p * S, S);
+    const auto [lo, hi] = range(partial_.data() + p * S, S);
     if (hi > lo) chosen.push_back(lo);
   }
   std::sort(chosen.begin(), chosen.end());

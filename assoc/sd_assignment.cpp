@@ -9,6 +9,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <optional>
 #include <stdexcept>
 #include <string>
 
@@ -159,14 +160,24 @@ ComponentResult solve_component(const std::vector<Tuple>& tuples, const std::vec
   const RelaxationProblem P(tuples, group, n);
   if (P.sensors() >= 3) {
     r = solve_relaxation(P, max_iterations, gap_tolerance);
+    // The branch and bound below fixes tuples at the multipliers of the run (first or rotated) with the best bound:
+    // the rotations reach different bounds.  On a 3 x 20 grid scan with false alarms (d = 0.5 km) the first run's
+    // was 0.67 below a rotation's: 515 tuples survived instead of 315, and the exact solver ran out of its 200 000
+    // nodes where it now proves the optimum in 1343.
+    std::optional<RelaxationProblem> rotated;  // that run's problem, when a rotation's
     for (size_t rotation = 1; rotation <= kExtraRotations && rotation < P.sensors() && r.ub - r.lb > gap_tolerance;
          ++rotation) {
-      const auto q = solve_relaxation(RelaxationProblem(tuples, group, n, rotation), max_iterations, gap_tolerance);
+      RelaxationProblem Q(tuples, group, n, rotation);
+      auto q = solve_relaxation(Q, max_iterations, gap_tolerance);
       r.lb = std::max(r.lb, q.lb);  // both bound the same component from below
       r.iterations += q.iterations;
       if (q.ub < r.ub) r.ub = q.ub, r.chosen = q.chosen;
+      if (!q.dual.reduced.empty() && (r.dual.reduced.empty() || q.dual.bound > r.dual.bound)) {
+        r.u = std::move(q.u), r.dual = std::move(q.dual);
+        rotated.emplace(std::move(Q));
+      }
     }
-    if (r.ub - r.lb > gap_tolerance && max_nodes > 0 && !r.dual.reduced.empty()) close_gap(P, r, max_nodes);
+    if (r.ub - r.lb > gap_tolerance && max_nodes > 0 && !r.dual.reduced.empty()) close_gap(rotated ? *rotated : P, r, max_nodes);
   } else if (P.sensors() == 2) {
     r = solve_two_sensors(P);
     r.proven = true;

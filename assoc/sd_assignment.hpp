@@ -21,8 +21,10 @@
 //    being often fractional).  It stops when the gap UB - LB is at most the tolerance, in cost units (nats; why
 //    absolute: lagrangian_relaxation.hpp), or when the branch and bound over the tuples left by reduced-cost fixing
 //    proves the optimum.  A component still above the tolerance at the iteration limit is solved again with the
-//    sensor order rotated (another sensor relaxed), up to twice, then goes to that branch and bound within a small
-//    node budget: it proves (or finds) the optimum where the LP bound is fractional, which no multiplier can close.
+//    sensor order rotated (another sensor relaxed), up to twice, then goes to that branch and bound (at the
+//    multipliers of the run with the best bound) within a small node budget: it proves (or finds) the optimum where
+//    the LP bound is fractional, which no multiplier can close.  The exact solver ends the same way, with its own
+//    budget.
 #include "assoc/tuple_costs.hpp"
 
 #include <vector>
