@@ -7,7 +7,7 @@ namespace sextant::runtime {
 class OdometryBatcher::Batch {
  public:
   std::string source;
-  std::vector<QueuedEvent> messages;
+  std::deque<QueuedEvent> messages;
 };
 
 OdometryBatcher::OdometryBatcher(const OdometryBatcherOptions& options) : options_(options) {
@@ -49,9 +49,9 @@ bool OdometryBatcher::offer(const QueuedEvent& event, const EnqueueEvent& enqueu
   return true;
 }
 
-std::vector<QueuedEvent> OdometryBatcher::take(const Token& token) {
+std::deque<QueuedEvent> OdometryBatcher::take(const Token& token) {
   std::lock_guard lock(mutex_);
-  std::vector<QueuedEvent> messages = std::move(token->messages);
+  std::deque<QueuedEvent> messages = std::move(token->messages);
   token->messages.clear();
   waiting_ -= messages.size();
   if (auto it = bodies_.find(token->source); it != bodies_.end()) {

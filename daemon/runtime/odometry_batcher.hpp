@@ -15,7 +15,9 @@
 //  - a batch holds at most `max_batch` messages; the next message starts a new batch (one more token);
 //  - a token the queue refuses drops its batch (the message that opened it), counted by the queue as a drop;
 //  - memory: at most `max_waiting_per_body` messages of one body and `max_waiting` of all bodies wait in batches (a
-//    QueuedEvent is about 1.1 kB); a message beyond either bound is dropped and counted (`dropped`).
+//    QueuedEvent is 1088 bytes, one allocation each: a batch is a deque, whose blocks hold one such element, so the
+//    memory follows the count without a vector's doubling); a message beyond either bound is dropped and counted
+//    (`dropped`).
 // Thread safety: `offer` on the intake thread, `take` on the stage's thread, the counts anywhere.  One mutex, held for
 // the bookkeeping and while `offer` calls the queue (so an offer is one step for `take`); the queue's lock nests inside
 // it, and `take` is called after the pop has released the queue's lock, so the two never wait for each other in a cycle.
@@ -23,12 +25,12 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <deque>
 #include <functional>
 #include <map>
 #include <memory>
 #include <mutex>
 #include <string>
-#include <vector>
 
 namespace sextant::runtime {
 
@@ -56,7 +58,7 @@ class OdometryBatcher {
 
   /// Stage thread: the messages of a popped token's batch, in arrival order.  The batch is closed: the body's next
   /// message opens a new one.
-  std::vector<QueuedEvent> take(const Token& token);
+  std::deque<QueuedEvent> take(const Token& token);
 
   int64_t coalesced() const;  // messages that joined a waiting batch (no queue slot of their own)
   int64_t waiting() const;    // messages waiting in batches now
