@@ -55,12 +55,6 @@ double KeyframeSelector::magnitude(const SE3& from, const SE3& to) const {
   return std::sqrt(options_.translation_weight * t2 + options_.rotation_weight * r2);
 }
 
-bool KeyframeSelector::refers_to(const std::optional<SE3>& pose) const {
-  if (!reference_ || !pose) return !reference_ && !pose;
-  return reference_->translation() == pose->translation() &&
-         reference_->rotation().quaternion().coeffs() == pose->rotation().quaternion().coeffs();
-}
-
 void KeyframeSelector::reset_reference(const std::optional<SE3>& pose) {
   if (pose && !finite(*pose)) throw std::invalid_argument("keyframe selector: reset_reference to a non-finite pose");
   reference_ = pose;

@@ -71,9 +71,6 @@ class KeyframeSelector {
   int jump_run() const { return jump_run_; }
   /// The pose of the last keyframe (nullopt before the first one).
   const std::optional<SE3>& reference() const { return reference_; }
-  /// True when the reference is `pose` exactly (both nullopt, or the same numbers: the reference is a copy of a
-  /// decide() argument), e.g. to tell whether two copies of a selector have taken the same keyframes.
-  bool refers_to(const std::optional<SE3>& pose) const;
   /// Makes `pose` the reference (nullopt: none, the next pose will be the first keyframe) and ends any run towards
   /// re-anchoring; the counters stay as they are.  For a caller that could not use the keyframe (or re-anchoring)
   /// this selector has just accepted and goes back to the last keyframe it did use: the graph stage drops a keyframe

@@ -10,6 +10,7 @@
 #include "assoc/sd_assignment.hpp"
 
 #include "assoc/bearing_model.hpp"
+#include "crowded_scan.hpp"
 
 #include <doctest/doctest.h>
 
@@ -22,35 +23,11 @@ using namespace sextant::assoc;
 
 namespace {
 
-// Targets in a small box seen by three sensors, with misses and uniform clutter (dense ghosts: large components).
+// Three sensors (crowded_scan.hpp draws the same scans as before it was shared).
 Scan crowded_scan(std::mt19937& rng, int targets, double pd, double clutter) {
-  std::uniform_real_distribution<double> u(0, 1);
-  std::normal_distribution<double> noise(0, 0.005);
-  Scan scan;
-  scan.sensors = {{30, 0, 0.1}, {0, 30, 0.1}, {0, 0, 0}};
-  std::vector<Eigen::Vector3d> truth;
-  for (int t = 0; t < targets; ++t) truth.push_back({10 + 2 * u(rng), 10 + 2 * u(rng), 4 + u(rng)});
-  scan.detections.resize(3);
-  for (size_t s = 0; s < 3; ++s) {
-    for (const auto& x : truth) {
-      if (u(rng) > pd) continue;
-      const auto h = *bearing(scan.sensors[s], x);
-      scan.detections[s].push_back({h[0] + noise(rng), h[1] + noise(rng), 0.005, 0.005});
-    }
-    const auto lo = *bearing(scan.sensors[s], {10, 10, 4}), hi = *bearing(scan.sensors[s], {12, 12, 5});
-    for (int k = 0; k < std::poisson_distribution<int>(clutter)(rng); ++k)
-      scan.detections[s].push_back({std::min(lo[0], hi[0]) + std::abs(hi[0] - lo[0]) * u(rng),
-                                    std::min(lo[1], hi[1]) + std::abs(hi[1] - lo[1]) * u(rng), 0.005, 0.005});
-    std::shuffle(scan.detections[s].begin(), scan.detections[s].end(), rng);
-  }
-  return scan;
+  return test::crowded_scan(rng, 3, targets, pd, clutter);
 }
-
-std::vector<int> sizes(const Scan& s) {
-  std::vector<int> n;
-  for (const auto& d : s.detections) n.push_back(static_cast<int>(d.size()));
-  return n;
-}
+using test::sizes;
 
 // best[S] = the cheapest packing of P's tuples within the detection set S (bit d = detection d of P.packing).
 std::vector<double> subset_optima(const RelaxationProblem& P) {

@@ -7,6 +7,7 @@
 
 #include "assoc/assignment_with_missed.hpp"
 #include "assoc/bearing_model.hpp"
+#include "crowded_scan.hpp"
 
 #include <doctest/doctest.h>
 
@@ -19,36 +20,8 @@ using namespace sextant::assoc;
 
 namespace {
 
-// Targets in a small box seen by `sensors` sensors, with misses and uniform clutter (many competing tuples).
-Scan crowded_scan(std::mt19937& rng, size_t sensors, int targets, double clutter) {
-  std::uniform_real_distribution<double> u(0, 1);
-  std::normal_distribution<double> noise(0, 0.005);
-  Scan scan;
-  scan.sensors = {{30, 0, 0.1}, {0, 30, 0.1}, {0, 0, 0}, {30, 30, 0.1}};
-  scan.sensors.resize(sensors);
-  std::vector<Eigen::Vector3d> truth;
-  for (int t = 0; t < targets; ++t) truth.push_back({10 + 2 * u(rng), 10 + 2 * u(rng), 4 + u(rng)});
-  scan.detections.resize(sensors);
-  for (size_t s = 0; s < sensors; ++s) {
-    for (const auto& x : truth) {
-      if (u(rng) > 0.9) continue;
-      const auto h = *bearing(scan.sensors[s], x);
-      scan.detections[s].push_back({h[0] + noise(rng), h[1] + noise(rng), 0.005, 0.005});
-    }
-    const auto lo = *bearing(scan.sensors[s], {10, 10, 4}), hi = *bearing(scan.sensors[s], {12, 12, 5});
-    for (int k = 0; k < std::poisson_distribution<int>(clutter)(rng); ++k)
-      scan.detections[s].push_back({std::min(lo[0], hi[0]) + std::abs(hi[0] - lo[0]) * u(rng),
-                                    std::min(lo[1], hi[1]) + std::abs(hi[1] - lo[1]) * u(rng), 0.005, 0.005});
-    std::shuffle(scan.detections[s].begin(), scan.detections[s].end(), rng);
-  }
-  return scan;
-}
-
-std::vector<int> sizes(const Scan& s) {
-  std::vector<int> n;
-  for (const auto& d : s.detections) n.push_back(static_cast<int>(d.size()));
-  return n;
-}
+using test::crowded_scan;
+using test::sizes;
 
 bool same_prefix(const RelaxationProblem& P, size_t t, const int* prefix, size_t L) {
   for (size_t q = 0; q < L; ++q)
@@ -115,7 +88,7 @@ TEST_CASE("tuple ranges by prefix, whole and within a window, equal a linear sca
   std::mt19937 rng(5);
   int prefixes = 0;
   for (size_t sensors : {3u, 4u}) {
-    const Scan scan = crowded_scan(rng, sensors, 10, 2.0);
+    const Scan scan = crowded_scan(rng, sensors, 10, 0.9, 2.0);
     const auto tuples = build_tuples(scan, CostOptions{});
     REQUIRE(tuples.size() > 50);
     std::vector<int> group(tuples.size());
@@ -151,7 +124,7 @@ TEST_CASE("the recovery equals a stage-by-stage reference by linear scans, with 
   int checked = 0;
   for (int trial = 0; trial < 24; ++trial) {
     const size_t sensors = trial % 2 ? 4 : 3;
-    const Scan scan = crowded_scan(rng, sensors, 6 + trial % 6, 1.5);
+    const Scan scan = crowded_scan(rng, sensors, 6 + trial % 6, 0.9, 1.5);
     const auto tuples = build_tuples(scan, CostOptions{});
     std::vector<int> group(tuples.size());
     std::iota(group.begin(), group.end(), 0);
