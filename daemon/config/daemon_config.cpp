@@ -131,6 +131,7 @@ static void read_daemon_config(const YAML::Node& root, const std::string& file, 
     d.get("max_ahead_of_wall_s", c.max_ahead_of_wall_s, positive());
     d.get("max_sources", c.max_sources, int_in_range(1, 1 << 20));
     d.get("source_idle_s", c.source_idle_s, non_negative());
+    d.get("source_evict_idle_s", c.source_evict_idle_s, non_negative());
     d.get("drain_timeout_s", c.drain_timeout_s, non_negative());
     d.get("state_dir", c.state_dir);
     d.get("state_period_s", c.state_period_s, in_range(0.1, 86400));

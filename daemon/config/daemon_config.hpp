@@ -37,6 +37,7 @@ struct DaemonConfig {
   double max_ahead_of_wall_s = 60.0;
   int max_sources = 256;                // bodies and sensors tracked
   double source_idle_s = 0;             // forget a silent source after this long (0: never)
+  double source_evict_idle_s = 60.0;    // live, table full: a source silent this long may give its place (0: never)
   double drain_timeout_s = 5.0;         // SIGTERM: how long stage queues may drain
   std::string state_dir;                // state directory (README "State directory"; "" = off); --state-dir overrides
   double state_period_s = 10.0;         // wall-clock seconds between two saves of the state (and one at shutdown)

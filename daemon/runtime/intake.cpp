@@ -36,7 +36,8 @@ int64_t wall_utime() {
 IntakeOptions intake_options(const config::DaemonConfig& c, bool live) {
   IntakeOptions o;
   o.live = live;
-  o.time = TimeGuardOptions{c.max_ahead_s, c.time_resync_messages, c.max_ahead_of_wall_s, c.max_sources, c.source_idle_s};
+  o.time = TimeGuardOptions{c.max_ahead_s, c.time_resync_messages, c.max_ahead_of_wall_s, c.max_sources, c.source_idle_s,
+                            c.source_evict_idle_s};
   return o;
 }
 
@@ -72,7 +73,8 @@ std::optional<engine::Event> Intake::accept_unguarded(const std::string& channel
   Decoded d = decode_event(kind, data, size, &origin);
   // When the message decoded, its sender's sequence number tells what was lost before it (even if it is invalid).
   if (origin.seq >= 0)
-    if (const int64_t lost = sequences_.at(channel).observe(origin.sender, origin.seq); lost > 0) stats_.lost(channel, lost);
+    if (const int64_t lost = sequences_.at(channel).observe(origin.sender, origin.seq); lost > 0)
+      stats_.lost(channel, origin.sender, lost);
   if (auto* r = std::get_if<Rejection>(&d)) {
     reject(channel, r->reason, channel + ": " + r->message);
     return std::nullopt;

@@ -40,9 +40,11 @@ class Intake {
   /// Streams whose clock jumped and was re-synchronised, and the last such event's description.
   int64_t time_resyncs() const { return order_.resyncs(); }
   const std::string& last_resync() const { return order_.last_resync(); }
-  /// Bodies and sensors tracked now, and those forgotten after idling.
+  /// Bodies and sensors tracked now, and those forgotten (after idling, or evicted from a full table: both are
+  /// counted as expired, the evicted ones also on their own).
   size_t sources() const { return order_.streams(); }
   int64_t sources_expired() const { return order_.expired(); }
+  int64_t sources_evicted() const { return order_.evicted(); }
   /// The bodies whose odometry stream was forgotten after idling since the last call (their odometry source names):
   /// the daemon has the stages forget them too (Stage::forget), so that expiry frees all their per-body state.
   std::vector<std::string> take_expired_bodies();

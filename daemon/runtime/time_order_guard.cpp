@@ -6,6 +6,8 @@
 namespace sextant::runtime {
 namespace {
 
+using SteadyDuration = TimeOrderGuard::SteadyTime::duration;
+
 constexpr size_t kRecentSignatures = 16;
 
 std::string seconds(int64_t us) {
@@ -22,21 +24,49 @@ uint64_t mix(int64_t utime, uint64_t signature) {
   return z ^ (z >> 31);
 }
 
+SteadyDuration seconds_of(double s) {
+  return std::chrono::duration_cast<SteadyDuration>(std::chrono::duration<double>(s));
+}
+
 }  // namespace
+
+void TimeOrderGuard::forget(std::unordered_map<std::string, Stream>::iterator it) {
+  if (expired_names_.size() < 4096) expired_names_.push_back(it->first);
+  streams_.erase(it);
+  ++expired_;
+}
 
 void TimeOrderGuard::expire(SteadyTime now) {
   if (options_.idle_s <= 0) return;
-  const auto idle = std::chrono::duration_cast<SteadyTime::duration>(std::chrono::duration<double>(options_.idle_s));
+  const auto idle = seconds_of(options_.idle_s);
   for (auto it = streams_.begin(); it != streams_.end();) {
-    if (now - it->second.seen > idle) {
-      if (expired_names_.size() < 4096) expired_names_.push_back(it->first);
-      it = streams_.erase(it);
-      ++expired_;
-    } else {
-      ++it;
-    }
+    auto next = std::next(it);
+    if (now - it->second.seen > idle) forget(it);
+    it = next;
   }
   last_expiry_ = now;
+}
+
+bool TimeOrderGuard::evict(SteadyTime now) {
+  if (options_.evict_idle_s <= 0 || now < no_eviction_before_) return false;
+  const auto idle = seconds_of(options_.evict_idle_s);
+  auto victim = streams_.end();
+  SteadyTime oldest = SteadyTime::max();
+  for (auto it = streams_.begin(); it != streams_.end(); ++it) {
+    const Stream& s = it->second;
+    oldest = std::min(oldest, s.seen);
+    if (now - s.seen < idle) continue;
+    if (victim == streams_.end() || s.messages < victim->second.messages ||
+        (s.messages == victim->second.messages && s.seen < victim->second.seen))
+      victim = it;
+  }
+  if (victim == streams_.end()) {
+    no_eviction_before_ = oldest + idle;  // nobody can go before the longest-silent stream has been silent long enough
+    return false;
+  }
+  forget(victim);
+  ++evicted_;
+  return true;
 }
 
 std::optional<TimeOrderGuard::Refusal> TimeOrderGuard::check(const std::string& stream, int64_t utime, bool strict,
@@ -51,9 +81,11 @@ std::optional<TimeOrderGuard::Refusal> TimeOrderGuard::check(const std::string& 
   if (options_.idle_s > 0 && now - last_expiry_ > std::chrono::seconds(1)) expire(now);
   auto it = streams_.find(stream);
   if (it == streams_.end()) {
-    if (streams_.size() >= static_cast<size_t>(std::max(options_.max_streams, 0))) {
+    const auto full = [&] { return streams_.size() >= static_cast<size_t>(std::max(options_.max_streams, 0)); };
+    if (full()) {
       expire(now);
-      if (streams_.size() >= static_cast<size_t>(std::max(options_.max_streams, 0)))
+      if (full() && live) evict(now);
+      if (full())
         return Refusal{"too_many_sources", "a new source " + stream + " beyond the " +
                                                std::to_string(options_.max_streams) + " tracked (daemon.max_sources)"};
     }
@@ -61,11 +93,13 @@ std::optional<TimeOrderGuard::Refusal> TimeOrderGuard::check(const std::string& 
     s.clock = utime;
     s.recent.push_back(mix(utime, signature));
     s.seen = s.moved = now;
+    s.messages = 1;
     streams_.emplace(stream, std::move(s));
     return std::nullopt;
   }
   Stream& s = it->second;
   s.seen = now;
+  ++s.messages;
   const uint64_t sig = mix(utime, signature);
   if ((strict && utime == s.clock) || (!strict && std::find(s.recent.begin(), s.recent.end(), sig) != s.recent.end()))
     return Refusal{"time_order", "duplicate utime " + std::to_string(utime) + " for " + stream};

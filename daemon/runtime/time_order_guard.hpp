@@ -16,7 +16,11 @@
 //    counted in `resyncs`).  Forward and backward jumps alike.
 //  - Bounded state: at most `max_streams` streams; a new stream beyond that is refused (reason "too_many_sources")
 //    and known streams are not slowed.  With `idle_s` > 0 a stream silent for that long (by the caller's monotonic
-//    clock) is forgotten, which frees its place.
+//    clock) is forgotten, which frees its place.  Live, a full table also makes room by eviction: a new stream takes
+//    the place of the stream that sent the fewest messages among those silent for at least `evict_idle_s` (the
+//    longest silent of them on a tie), so a flood of one-off names cannot lock a real body out for longer than that,
+//    and a real body that merely paused is the last to go.  Replay never evicts (its answers must not depend on how
+//    fast it runs).
 #include <chrono>
 #include <cstdint>
 #include <deque>
@@ -34,6 +38,7 @@ struct TimeGuardOptions {
   double max_ahead_of_wall_s = 60.0;   // live only: a message further ahead of the wall clock is refused
   int max_streams = 256;               // bodies and sensors tracked (per input side)
   double idle_s = 0;                   // forget a stream silent this long (0: never; the stages keep their state)
+  double evict_idle_s = 60.0;          // live, table full: a stream silent this long may give its place (0: never)
 };
 
 class TimeOrderGuard {
@@ -58,7 +63,9 @@ class TimeOrderGuard {
                                uint64_t signature = 0, std::optional<LiveClock> live = std::nullopt);
 
   int64_t resyncs() const { return resyncs_; }
+  /// Streams forgotten: after idling (`idle_s`) or evicted from a full table (also counted in `evicted()`).
   int64_t expired() const { return expired_; }
+  int64_t evicted() const { return evicted_; }
   /// The streams forgotten since the last call (at most 4096 kept between calls), for the caller to free what it
   /// keeps per stream.
   std::vector<std::string> take_expired() { return std::exchange(expired_names_, {}); }
@@ -74,13 +81,18 @@ class TimeOrderGuard {
     std::deque<uint64_t> recent;  // signatures of the last accepted messages (duplicates)
     SteadyTime seen{};            // last message of any kind (idle expiry)
     SteadyTime moved{};           // when `clock` last moved
+    int64_t messages = 0;         // messages seen (the eviction prefers the streams that said least)
   };
   void expire(SteadyTime now);
+  void forget(std::unordered_map<std::string, Stream>::iterator it);
+  /// Live, table full: frees the place of the quietest stream silent for `evict_idle_s`; false when none is.
+  bool evict(SteadyTime now);
 
   TimeGuardOptions options_;
   std::unordered_map<std::string, Stream> streams_;
   SteadyTime last_expiry_{};
-  int64_t resyncs_ = 0, expired_ = 0;
+  SteadyTime no_eviction_before_{};  // no stream can be evicted before then (spares a scan per refused message)
+  int64_t resyncs_ = 0, expired_ = 0, evicted_ = 0;
   std::vector<std::string> expired_names_;
   std::string last_resync_;
 };
