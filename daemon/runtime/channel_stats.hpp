@@ -16,6 +16,10 @@ struct ChannelCounts {
   int64_t lost = 0;  // gaps in the senders' sequence numbers (sequence_gaps.hpp)
   std::map<std::string, int64_t> reasons;
   std::string last_error;
+  /// `lost` by sender: at most kMaxLostSenders names; a sender beyond them is summed under kOtherSenders.
+  std::map<std::string, int64_t> lost_by_sender;
+  static constexpr size_t kMaxLostSenders = 64;
+  static inline const std::string kOtherSenders = "*";
 };
 
 class ChannelStats {
@@ -26,7 +30,8 @@ class ChannelStats {
   void decoded(const std::string& channel);
   void rejected(const std::string& channel, const std::string& reason, const std::string& message);
   void dropped(const std::string& channel, int64_t n = 1);
-  void lost(const std::string& channel, int64_t n);
+  /// `n` messages of `sender` never arrived on `channel`.
+  void lost(const std::string& channel, const std::string& sender, int64_t n);
   std::map<std::string, ChannelCounts> snapshot() const;
 
  private:

@@ -159,7 +159,7 @@ int run_daemon(const config::DaemonConfig& cfg, const std::atomic<bool>& stop) {
 
   // The intake's own counters, copied out by the LCM thread for the status thread (the intake is not thread-safe).
   struct IntakeCounters {
-    std::atomic<int64_t> resyncs{0}, sources{0}, expired{0};
+    std::atomic<int64_t> resyncs{0}, sources{0}, expired{0}, evicted{0};
   } intake_counters;
 
   // The LCM thread: every message on the bus is recorded (when asked) and, on an input channel, decoded and routed.
@@ -192,6 +192,7 @@ int run_daemon(const config::DaemonConfig& cfg, const std::atomic<bool>& stop) {
         for (auto& r : runners) r->forget(body);
       counters.sources = static_cast<int64_t>(intake.sources());
       counters.expired = intake.sources_expired();
+      counters.evicted = intake.sources_evicted();
       if (!event) return;
       const QueuedEvent queued{std::move(*event), received};
       for (auto& r : runners)
@@ -233,7 +234,8 @@ int run_daemon(const config::DaemonConfig& cfg, const std::atomic<bool>& stop) {
     engine::Counters runtime_counters{{"fused_pose_not_monotonic", publisher.not_monotonic()},
                                       {"time_resyncs", intake_counters.resyncs.load()},
                                       {"sources", intake_counters.sources.load()},
-                                      {"sources_expired", intake_counters.expired.load()}};
+                                      {"sources_expired", intake_counters.expired.load()},
+                                      {"sources_evicted", intake_counters.evicted.load()}};
     if (const auto drops = udp_receive_drops()) runtime_counters.push_back({"udp_receive_drops", *drops - drops_at_start});
     if (!state_path.empty()) {
       runtime_counters.push_back({"state_saves", state_counters.saves.load()});

@@ -43,6 +43,11 @@ sextant::status_t StatusReport::build(double uptime_s, const std::map<std::strin
       x.reason_counts.push_back(count);
     }
     x.last_error = c.last_error;
+    for (const auto& [sender, n] : c.lost_by_sender) {
+      x.lost_senders.push_back(sender);
+      x.lost_counts.push_back(n);
+    }
+    x.num_lost_senders = static_cast<int32_t>(x.lost_senders.size());
     m.channels.push_back(x);
   }
   m.num_channels = static_cast<int32_t>(m.channels.size());

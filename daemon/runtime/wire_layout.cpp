@@ -201,7 +201,9 @@ const WireLayout& wire_layout<sextant::status_t>() {
   static const WireLayout channel{"channel_status_t",
                                   {str("channel"), i64("received"), i64("decoded"), i64("rejected"), i64("dropped"),
                                    i64("lost"), count("num_reasons", kMaxListed), array("reasons", kStringElement),
-                                   array("reason_counts", kInt64Element), str("last_error")}};
+                                   array("reason_counts", kInt64Element), str("last_error"),
+                                   count("num_lost_senders", kMaxListed), array("lost_senders", kStringElement),
+                                   array("lost_counts", kInt64Element)}};
   static const WireLayout stage{"stage_status_t",
                                 {str("name"), i32("queue_depth"), i32("queue_capacity"), i64("processed"),
                                  i64("dropped"), doubles("latency_ms_p50", 1), doubles("latency_ms_p90", 1),

@@ -128,6 +128,10 @@ def check(bus):
     never_arrived = sent_odometry - odo.received
     if odo.lost != GAPS + never_arrived:
         errors.append(f"ODOMETRY lost {odo.lost}, expected {GAPS} gaps + {never_arrived} not received")
+    lost_by_sender = dict(zip(odo.lost_senders, odo.lost_counts))
+    if sum(lost_by_sender.values()) != odo.lost or lost_by_sender.get("robot-driver", 0) < GAPS:
+        errors.append(f"ODOMETRY lost by sender {lost_by_sender}: expected the {GAPS} gaps under robot-driver, "
+                      f"summing to {odo.lost}")
     if reasons["ODOMETRY"].get("decode") != 1:
         errors.append(f"ODOMETRY decode rejections {reasons['ODOMETRY']}")
     if reasons["ODOMETRY"].get("time_future") != 2:

@@ -10,6 +10,7 @@
 #include <cstdint>
 #include <chrono>
 #include <limits>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -174,6 +175,48 @@ TEST_CASE("state per name is bounded: new names beyond the cap are refused, idle
   CHECK(g.take_expired().empty());
 }
 
+TEST_CASE("live, a full table makes room from the quietest source silent for evict_idle_s, never in replay") {
+  TimeGuardOptions o;
+  o.max_streams = 10;
+  o.evict_idle_s = 60;  // idle_s stays 0: nothing expires by idling alone
+  TimeOrderGuard g(o);
+  // Two real robots talk a lot; eight one-off names fill the table.
+  for (int k = 0; k < 100; ++k) {
+    REQUIRE_FALSE(g.check("robot1", kT0 + k, true, 0, live_at(0)));
+    REQUIRE_FALSE(g.check("robot2", kT0 + k, true, 0, live_at(0)));
+  }
+  for (int k = 0; k < 8; ++k) REQUIRE_FALSE(g.check("flood" + std::to_string(k), kT0, true, 0, live_at(1 + k)));
+  // Full, and nobody silent for 60 s yet: refused, known names not slowed.
+  CHECK(g.check("newcomer", kT0, true, 0, live_at(30))->reason == "too_many_sources");
+  CHECK_FALSE(g.check("robot2", kT0 + 200, true, 0, live_at(30)));
+  CHECK(g.evicted() == 0);
+  // 62 s in: robot1 (silent since 0) and flood0 (since 1) have been silent for 60 s; flood0 said less: it goes.
+  CHECK_FALSE(g.check("newcomer", kT0, true, 0, live_at(62)));
+  CHECK(g.evicted() == 1);
+  CHECK(g.expired() == 1);
+  CHECK(g.take_expired() == std::vector<std::string>{"flood0"});
+  CHECK(g.streams() == 10);
+  // The next newcomers take flood1.. in their order of silence; robot1, silent longest but with 100 messages, stays
+  // while a quieter one can go; robot2 spoke at 30 s and is not silent long enough.
+  for (int k = 1; k < 8; ++k) CHECK_FALSE(g.check("late" + std::to_string(k), kT0, true, 0, live_at(70)));
+  CHECK(g.evicted() == 8);
+  const auto gone = g.take_expired();
+  CHECK(std::find(gone.begin(), gone.end(), "robot1") == gone.end());
+  CHECK(gone.size() == 7);
+  // Now only robot1 is silent long enough among the quiet ones: it gives its place last.
+  CHECK_FALSE(g.check("late8", kT0, true, 0, live_at(71)));
+  CHECK(g.take_expired() == std::vector<std::string>{"robot1"});
+  // Nobody else is silent for 60 s before 90 s (robot2 spoke at 30 s): refused without a scan of the table.
+  CHECK(g.check("late9", kT0, true, 0, live_at(72))->reason == "too_many_sources");
+  CHECK(g.evicted() == 9);
+
+  // Replay (no live clock) never evicts: its answers must not depend on how fast it runs.
+  TimeOrderGuard replay(o);
+  for (int k = 0; k < 10; ++k) REQUIRE_FALSE(replay.check("name" + std::to_string(k), kT0, true));
+  CHECK(replay.check("one more", kT0, true)->reason == "too_many_sources");
+  CHECK(replay.evicted() == 0);
+}
+
 TEST_CASE("the intake names the bodies whose odometry stream expired (not sensors, not other channels)") {
   runtime::ChannelStats stats;
   runtime::IntakeOptions o;
@@ -210,5 +253,22 @@ TEST_CASE("the intake counts sequence gaps per channel and sender as lost") {
   send(kT0 + 4, 0, "a");   // a restarted: nothing lost
   send(kT0 + 5, 1, "a");
   send(kT0 + 4, 1, "a");   // a repeat (and refused as backwards): nothing lost
-  CHECK(stats.snapshot().at("ODOMETRY").lost == 4);
+  const auto odo = stats.snapshot().at("ODOMETRY");
+  CHECK(odo.lost == 4);
+  CHECK(odo.lost_by_sender == std::map<std::string, int64_t>{{"a", 3}, {"b", 1}});
+}
+
+TEST_CASE("loss by sender is bounded: beyond the first 64 senders that lost messages, one shared entry") {
+  runtime::ChannelStats stats;
+  for (int k = 0; k < 1000; ++k) stats.lost("ODOMETRY", "sender" + std::to_string(k), 2);
+  stats.lost("ODOMETRY", "sender3", 5);    // a named one keeps its own count
+  stats.lost("ODOMETRY", "sender999", 1);  // a later one goes on into the shared entry
+  const auto c = stats.snapshot().at("ODOMETRY");
+  CHECK(c.lost == 2006);
+  CHECK(c.lost_by_sender.size() == runtime::ChannelCounts::kMaxLostSenders + 1);
+  CHECK(c.lost_by_sender.at("sender3") == 7);
+  CHECK(c.lost_by_sender.at(runtime::ChannelCounts::kOtherSenders) == 2 * (1000 - 64) + 1);
+  int64_t sum = 0;
+  for (const auto& [sender, n] : c.lost_by_sender) sum += n;
+  CHECK(sum == c.lost);
 }
