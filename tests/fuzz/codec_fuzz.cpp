@@ -1,7 +1,6 @@
 // Fuzz harness: the message codec, every type that arrives from outside (the daemon's four inputs; ground truth,
-// match requests and fused poses read by the tools).  status_t, trajectory_t and targets_t have no wire layout yet
-// (only the tools decode them; an array count there can still make lcm-gen allocate before failing).  The first byte picks the type; with its
-// high bit set the harness writes the type's fingerprint in front of the rest, so that the fuzzer reaches the
+// match requests, fused poses, status, trajectories and targets, which the tools decode).  The first byte picks the
+// type; with its high bit set the harness writes the type's fingerprint in front of the rest, so that the fuzzer reaches the
 // layout walk and the validation behind the fingerprint check (random bytes almost never carry a fingerprint).
 // Contract checked: decoding never throws and never crashes; what it accepts re-encodes and decodes to the same event.
 #include "daemon/runtime/codec.hpp"
@@ -61,14 +60,17 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   const bool fp = (data[0] & 0x80) != 0;
   const uint8_t which = data[0] & 0x7f;
   ++data, --size;
-  switch (which % 7) {
+  switch (which % 10) {
     case 0: decode_input<sextant::odometry_t>(runtime::InputKind::kOdometry, fp, data, size); break;
     case 1: decode_input<sextant::landmarks_t>(runtime::InputKind::kLandmarks, fp, data, size); break;
     case 2: decode_input<sextant::bearing_scan_t>(runtime::InputKind::kBearings, fp, data, size); break;
     case 3: decode_input<sextant::loop_closure_t>(runtime::InputKind::kLoopClosures, fp, data, size); break;
     case 4: decode_other<sextant::truth_t>(fp, data, size); break;
     case 5: decode_other<sextant::match_request_t>(fp, data, size); break;
-    default: decode_other<sextant::fused_pose_t>(fp, data, size); break;
+    case 6: decode_other<sextant::fused_pose_t>(fp, data, size); break;
+    case 7: decode_other<sextant::status_t>(fp, data, size); break;
+    case 8: decode_other<sextant::trajectory_t>(fp, data, size); break;
+    default: decode_other<sextant::targets_t>(fp, data, size); break;
   }
   return 0;
 }
