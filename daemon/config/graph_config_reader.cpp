@@ -25,6 +25,7 @@ void read_stage_config(Section& s, engine::GraphConfig& c) {
   {
     Section p = s.child("loops");
     p.get("propose", c.propose_loops);
+    p.get("max_waiting", c.max_waiting_loops, int_in_range(0, 1 << 20));
     p.get("n1", c.proposals.n1, int_in_range(0, 1000));
     p.get("n2", c.proposals.n2, int_in_range(-1, 1000));
     int seed = static_cast<int>(c.proposals.seed);

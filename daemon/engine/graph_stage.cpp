@@ -119,6 +119,8 @@ Counters GraphStage::counters() const {
           {"loops_rejected", s.loops_rejected},
           {"loops_unmatched", s.loops_unmatched},
           {"loops_unknown_source", s.loops_unknown_source},
+          {"loops_waiting", s.loops_waiting},
+          {"loops_waiting_dropped", s.loops_waiting_dropped},
           {"optimizer_failures", s.optimizer_failures},
           {"rebuilds", s.rebuilds},
           {"relinearized_factors", s.relinearized_factors},

@@ -19,6 +19,9 @@ struct SlamCounters {
   int64_t loops_unmatched = 0;        // an end not tied to a keyframe, or both ends on the same keyframe
   int64_t loops_unknown_source = 0;   // about a body without odometry
   int64_t loops_on_thinned = 0;       // accepted or not, an end landed through a thinned keyframe (widened)
+  // Loops ahead of their body's odometry: waiting now (all bodies), and dropped at SlamOptions::max_waiting_loops.
+  // Not saved: the waiting ones are counted again from the bodies on load, the dropped ones start from 0.
+  int64_t loops_waiting = 0, loops_waiting_dropped = 0;
   int64_t landmarks = 0;              // landmarks created
   int64_t sightings_accepted = 0, sightings_rejected = 0;  // by the sighting gate
   int64_t sightings_without_id = 0;   // left to the filters' association

@@ -121,6 +121,7 @@ void SlamGraph::add_odometry(const std::string& name, const OdometryInput& o, Sl
     for (auto& l : b.early_loops)
       (std::max(l.utime_from, l.utime_to) <= b.track.last_utime() ? due : later).push_back(std::move(l));
     b.early_loops = std::move(later);
+    counters_.loops_waiting -= static_cast<int64_t>(due.size());
     for (const auto& l : due) add_loop(name, l, listener);
   }
 }
@@ -205,8 +206,15 @@ void SlamGraph::add_loop(const std::string& name, const LoopInput& l, SlamListen
   const auto tolerance = static_cast<int64_t>(options_.loop_time_tolerance_s * 1e6);
   const auto end_from = b.track.resolve(l.keyframe_from, l.utime_from, tolerance);
   const auto end_to = b.track.resolve(l.keyframe_to, l.utime_to, tolerance);
-  if ((!end_from || !end_to) && std::max(l.utime_from, l.utime_to) > b.track.last_utime() && b.early_loops.size() < 256) {
-    b.early_loops.push_back(l);  // ahead of the odometry: retried when it gets there
+  if ((!end_from || !end_to) && std::max(l.utime_from, l.utime_to) > b.track.last_utime()) {
+    // Ahead of the odometry: retried when it gets there, within a bound per body (a far-future loop would otherwise
+    // wait forever).
+    if (b.early_loops.size() < static_cast<size_t>(std::max(options_.max_waiting_loops, 0))) {
+      b.early_loops.push_back(l);
+      ++counters_.loops_waiting;
+    } else {
+      ++counters_.loops_waiting_dropped;
+    }
     return;
   }
   if (!end_from || !end_to || end_from->keyframe == end_to->keyframe) {

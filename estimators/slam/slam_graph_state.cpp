@@ -86,6 +86,7 @@ void SlamGraph::load(archive::ArchiveReader& r) {
       check_variable(l.variable, false);
       b.landmarks[id] = l;
     }
+    counters_.loops_waiting += static_cast<int64_t>(b.early_loops.size());
     if (!bodies_.emplace(name, std::move(b)).second) r.fail("body '" + name + "' twice");
   }
 }
@@ -115,6 +116,7 @@ void SlamGraph::forget(const std::string& name) {
     fresh->add_factor(factors[f]->rebind(vs), t.robust, t.kernel_width);
     fresh_tags.push_back(t);
   }
+  counters_.loops_waiting -= static_cast<int64_t>(it->second.early_loops.size());
   bodies_.erase(it);
   bool others = false;
   for (auto& [other, b] : bodies_) {

@@ -55,6 +55,9 @@ struct SlamOptions {
   double loop_gate_odometry_scale = 3.0; // the odometry's standard deviations are taken this many times larger in the
                                          // gate (odometry covariances are optimistic: biases are not in them)
   double loop_time_tolerance_s = 1.0;    // a loop's times must be this close to keyframes' times (odometry bridges the gap)
+  /// Loops about times a body's odometry has not reached yet wait for it, at most this many per body; one beyond
+  /// is dropped and counted (SlamCounters::loops_waiting_dropped).  0: none waits.
+  int max_waiting_loops = 256;
   /// Odometry poses kept per body to bridge loop times to keyframes (10 minutes at 50 Hz): memory per body is bounded
   /// at 64 bytes each.  A loop about an older time that is not a keyframe's own is counted as unmatched; with lifelong
   /// thinning such a loop would land on a thinned keyframe's anchor, weakened to little (planar 60-minute run:

@@ -134,6 +134,44 @@ TEST_CASE("slam graph: keyframes from odometry, loops gated, unmatched and waiti
     CHECK((after[k].pose.translation() - before[k].pose.translation()).norm() < 1e-3);
 }
 
+TEST_CASE("slam graph: loops waiting for the odometry are bounded per body and counted, waiting and dropped") {
+  SlamOptions options;
+  options.max_waiting_loops = 3;
+  SlamGraph slam(options);
+  Recorder out;
+  for (int i = 0; i < 4; ++i) slam.add_odometry("robot", odometry(i), out);
+  for (int i = 0; i < 2; ++i) slam.add_odometry("other", odometry(i), out);
+  // Five loops ahead of the robot's odometry: three wait, two are dropped at the cap (not unmatched).
+  for (int k = 0; k < 5; ++k) slam.add_loop("robot", loop(1, 6 + k, 0, 0), out);
+  CHECK(slam.counters().loops_waiting == 3);
+  CHECK(slam.counters().loops_waiting_dropped == 2);
+  CHECK(slam.counters().loops_unmatched == 0);
+  // Another body has its own bound.
+  slam.add_loop("other", loop(0, 5, 0, 0), out);
+  CHECK(slam.counters().loops_waiting == 4);
+  CHECK(slam.counters().loops_waiting_dropped == 2);
+  // The odometry reaches two of the robot's loops: they leave the waiting set (and are gated).
+  for (int i = 4; i <= 7; ++i) slam.add_odometry("robot", odometry(i), out);
+  CHECK(slam.counters().loops_waiting == 2);
+  CHECK(slam.counters().loops_accepted == 2);
+  // A saved state restores the waiting count; forgetting a body takes its waiting loops out.
+  archive::ArchiveWriter w;
+  slam.save(w);
+  SlamGraph restored(options);
+  archive::ArchiveReader r(w.data().data(), w.data().size(), "test");
+  restored.load(r);
+  CHECK(restored.counters().loops_waiting == 2);
+  restored.forget("robot");
+  CHECK(restored.counters().loops_waiting == 1);
+  // 0: no loop waits.
+  options.max_waiting_loops = 0;
+  SlamGraph none(options);
+  for (int i = 0; i < 2; ++i) none.add_odometry("robot", odometry(i), out);
+  none.add_loop("robot", loop(0, 5, 0, 0), out);
+  CHECK(none.counters().loops_waiting == 0);
+  CHECK(none.counters().loops_waiting_dropped == 1);
+}
+
 TEST_CASE("slam graph: a state saved and restored continues bit for bit, and saves the same bytes") {
   SlamOptions options;
   SlamGraph a(options);
