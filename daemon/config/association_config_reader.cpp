@@ -22,6 +22,8 @@ void read_stage_config(Section& s, engine::AssociationConfig& c) {
   s.get("gap_tolerance", c.gap_tolerance, non_negative());
   s.get("expected_sensors", c.expected_sensors, int_in_range(0, 64));
   s.get("max_pending_scans", c.max_pending_scans, int_in_range(1, 4096));
+  s.get("max_scan_id_jump", c.max_scan_id_jump, int_in_range(0, 2147483647));
+  s.get("scan_id_resync_after", c.scan_id_resync_after, int_in_range(1, 1000));
   const Check<std::vector<double>> point = [](const std::vector<double>& v) -> std::optional<std::string> {
     if (v.empty() || (v.size() == 3 && std::isfinite(v[0]) && std::isfinite(v[1]) && std::isfinite(v[2]))) return std::nullopt;
     return "expected [x, y, z] (3 finite numbers, metres) or []";

@@ -6,12 +6,14 @@
 #include "assoc/sd_assignment.hpp"
 
 #include <algorithm>
+#include <limits>
 
 namespace sextant::engine {
 
 void AssociationStage::handle(const Event& e, const Emit& emit) {
   const auto& scan = std::get<BearingScan>(e);
   ++scans_;
+  if (!admit_scan_id(scan.scan_id, emit)) return;
   if (scan.scan_id <= last_associated_) {
     ++late_scans_;  // its group was already associated
     return;
@@ -25,6 +27,28 @@ void AssociationStage::handle(const Event& e, const Emit& emit) {
     ++forced_;
     associate(pending_.begin()->first, emit);
   }
+}
+
+bool AssociationStage::admit_scan_id(int64_t scan_id, const Emit& emit) {
+  if (config_.max_scan_id_jump <= 0) return true;
+  const auto window = static_cast<uint64_t>(config_.max_scan_id_jump);
+  if (!newest_scan_id_ || value_distance(scan_id, *newest_scan_id_) <= window) {
+    scan_id_jump_.accepted();
+    newest_scan_id_ = std::max(newest_scan_id_.value_or(scan_id), scan_id);
+    return true;
+  }
+  // Several sensors send the same scan id: equal ids continue a run.
+  if (!scan_id_jump_.refused(scan_id, window, config_.scan_id_resync_after, /*allow_equal=*/true)) {
+    ++scan_id_jumps_;
+    return false;
+  }
+  // A renumbering: the groups of the old numbering are complete, and this scan starts the new one (after a jump
+  // back, ids up to it are new again).
+  ++scan_id_resyncs_;
+  while (!pending_.empty()) associate(pending_.begin()->first, emit);
+  if (scan_id > std::numeric_limits<int64_t>::min()) last_associated_ = std::min(last_associated_, scan_id - 1);
+  newest_scan_id_ = scan_id;
+  return true;
 }
 
 void AssociationStage::finish(const Emit& emit) {
@@ -96,7 +120,8 @@ Counters AssociationStage::counters() const {
   return {{"scans", scans_},           {"groups", groups_},
           {"targets", targets_},       {"tuples", tuples_},
           {"too_few_sensors", too_few_sensors_}, {"late_scans", late_scans_},
-          {"forced_groups", forced_},  {"duplicate_sensor_scans", duplicate_sensor_}};
+          {"forced_groups", forced_},  {"duplicate_sensor_scans", duplicate_sensor_},
+          {"scan_id_jumps", scan_id_jumps_}, {"scan_id_resyncs", scan_id_resyncs_}};
 }
 
 void AssociationStage::save(archive::ArchiveWriter& w) {
@@ -107,6 +132,11 @@ void AssociationStage::save(archive::ArchiveWriter& w) {
 void AssociationStage::load(archive::ArchiveReader& r) {
   r(pending_)(last_associated_)(scans_)(groups_)(targets_)(tuples_)(too_few_sensors_)(late_scans_)(forced_)(
       duplicate_sensor_);
+  // The numbering goes on from the newest scan id the saved state knows (a state saved after a far scan id was
+  // associated recovers through a renumbering run).
+  newest_scan_id_.reset();
+  if (last_associated_ != -1) newest_scan_id_ = last_associated_;
+  if (!pending_.empty()) newest_scan_id_ = std::max(newest_scan_id_.value_or(pending_.rbegin()->first), pending_.rbegin()->first);
 }
 
 }  // namespace sextant::engine

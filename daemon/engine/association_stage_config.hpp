@@ -36,6 +36,14 @@ struct AssociationConfig {
   double gap_tolerance = 0.01;  // absolute duality gap, cost units (assoc/sd_assignment.hpp)
   int expected_sensors = 0;        // associate a scan_id as soon as this many sensors reported (0: when the next scan_id arrives)
   int max_pending_scans = 16;      // scan_ids waiting for sensors; beyond this the oldest is associated as it is
+  // Scan ids are one numbering for all sensors, so one scan numbered far from the others (INT64_MAX, a far jump)
+  // would make every later scan "late".  A scan_id more than `max_scan_id_jump` away from the newest accepted one
+  // (ahead or behind) is refused and counted (scan_id_jumps) without moving the numbering; `scan_id_resync_after`
+  // consecutive such scans that agree (non-decreasing, each within max_scan_id_jump of the one before) are a true
+  // renumbering: the last of them is taken (scan_id_resyncs), the groups of the old numbering are associated first.
+  // 0: no check (scan ids that are not consecutive counters, e.g. times).
+  int max_scan_id_jump = 1000;
+  int scan_id_resync_after = 5;
 };
 
 }  // namespace sextant::engine

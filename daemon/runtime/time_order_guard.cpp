@@ -109,22 +109,18 @@ std::optional<TimeOrderGuard::Refusal> TimeOrderGuard::check(const std::string& 
   const bool ahead = live && utime > s.clock && utime - s.clock > max_ahead + std::max<int64_t>(elapsed_us, 0);
   const bool behind = strict && utime < s.clock;
   if (!ahead && !behind) {
-    s.candidates = 0;
+    s.jump.accepted();
     if (utime > s.clock) s.clock = utime, s.moved = now;
     s.recent.push_back(sig);
     if (s.recent.size() > kRecentSignatures) s.recent.pop_front();
     return std::nullopt;
   }
-  // A possible jump: consistent with the previous refused message?
-  if (s.candidates > 0 && utime > s.candidate && utime - s.candidate <= max_ahead) ++s.candidates;
-  else s.candidates = 1;
-  s.candidate = utime;
-  if (s.candidates >= std::max(options_.resync_after, 1)) {
+  // A possible jump: the last of a run of consistent refused messages re-synchronises the clock.
+  if (s.jump.refused(utime, static_cast<uint64_t>(std::max<int64_t>(max_ahead, 0)), options_.resync_after)) {
     last_resync_ = stream + ": clock re-synchronised from " + std::to_string(s.clock) + " to " + std::to_string(utime) +
-                   " after " + std::to_string(s.candidates) + " consistent messages";
+                   " after " + std::to_string(std::max(options_.resync_after, 1)) + " consistent messages";
     s.clock = utime;
     s.moved = now;
-    s.candidates = 0;
     s.recent.assign(1, sig);
     ++resyncs_;
     return std::nullopt;

@@ -21,6 +21,8 @@
 //    longest silent of them on a tie), so a flood of one-off names cannot lock a real body out for longer than that,
 //    and a real body that merely paused is the last to go.  Replay never evicts (its answers must not depend on how
 //    fast it runs).
+#include "daemon/engine/jump_run.hpp"
+
 #include <chrono>
 #include <cstdint>
 #include <deque>
@@ -76,8 +78,7 @@ class TimeOrderGuard {
  private:
   struct Stream {
     int64_t clock = 0;          // newest accepted utime
-    int64_t candidate = 0;      // last refused utime of a possible jump
-    int candidates = 0;         // consecutive consistent refused ones
+    engine::JumpRun jump;       // consecutive consistent refused stamps: a possible true jump
     std::deque<uint64_t> recent;  // signatures of the last accepted messages (duplicates)
     SteadyTime seen{};            // last message of any kind (idle expiry)
     SteadyTime moved{};           // when `clock` last moved
