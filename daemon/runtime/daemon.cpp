@@ -1,6 +1,7 @@
 #include "daemon/runtime/daemon.hpp"
 
 #include "daemon/engine/engine.hpp"
+#include "daemon/runtime/input_router.hpp"
 #include "daemon/runtime/intake.hpp"
 #include "daemon/runtime/publisher.hpp"
 #include "daemon/runtime/raw_subscription.hpp"
@@ -135,6 +136,12 @@ int run_daemon(const config::DaemonConfig& cfg, const std::atomic<bool>& stop) {
     runners.push_back(std::make_unique<StageRunner>(*stage, static_cast<size_t>(cfg.queue_capacity), emit,
                                                     odometry_batching(*stage, cfg.engine)));
 
+  // A body a stage forgets (idle, or its clock re-synchronised) is forgotten by the publisher for that stage's
+  // estimator too, on the stage's thread after its earlier outputs.
+  for (size_t i = 0; i < runners.size(); ++i)
+    if (const std::string estimator(engine->stages()[i]->estimator()); !estimator.empty())
+      runners[i]->on_forget([&publisher, estimator](const std::string& source) { publisher.forget(estimator, source); });
+
   ChannelStats stats;
   RateLimitedLog log(cfg.log_rate_limit_s);
   Intake intake(stats, [&log](const std::string& c, const std::string& r, const std::string& m) { log.warn(c, r, m); },
@@ -183,20 +190,14 @@ int run_daemon(const config::DaemonConfig& cfg, const std::atomic<bool>& stop) {
         const auto* b = static_cast<const uint8_t*>(rbuf.data);
         recorder->record(LogRecord{rbuf.recv_utime, channel, std::vector<uint8_t>(b, b + rbuf.data_size)});
       }
-      auto event = intake.accept(channel, rbuf.data, rbuf.data_size);
+      route_input(intake, runners, stats, channel, rbuf.data, rbuf.data_size, received);
       if (intake.time_resyncs() != counters.resyncs.load()) {
         counters.resyncs = intake.time_resyncs();
-        spdlog::warn("{} (time_resyncs: {})", intake.last_resync(), intake.time_resyncs());
+        spdlog::warn("{} (time_resyncs: {}; every stage forgets the body)", intake.last_resync(), intake.time_resyncs());
       }
-      for (const std::string& body : intake.take_expired_bodies())
-        for (auto& r : runners) r->forget(body);
       counters.sources = static_cast<int64_t>(intake.sources());
       counters.expired = intake.sources_expired();
       counters.evicted = intake.sources_evicted();
-      if (!event) return;
-      const QueuedEvent queued{std::move(*event), received};
-      for (auto& r : runners)
-        if (r->accepts(queued.event) && !r->offer(queued)) stats.dropped(channel);
     }
   } handler{intake, runners, stats, recorder.get(), intake_counters};
   // LCM keeps 30 undelivered messages per subscription by default and silently drops beyond that; our own
@@ -232,6 +233,7 @@ int run_daemon(const config::DaemonConfig& cfg, const std::atomic<bool>& stop) {
     std::vector<StageStatus> stage_status;
     for (auto& r : runners) stage_status.push_back(r->status());
     engine::Counters runtime_counters{{"fused_pose_not_monotonic", publisher.not_monotonic()},
+                                      {"fused_pose_sources_forgotten", publisher.fused_pose_sources_forgotten()},
                                       {"time_resyncs", intake_counters.resyncs.load()},
                                       {"sources", intake_counters.sources.load()},
                                       {"sources_expired", intake_counters.expired.load()},

@@ -59,6 +59,7 @@ std::optional<engine::Event> Intake::accept(const std::string& channel, const vo
   auto it = channels_.find(channel);
   if (it == channels_.end()) return std::nullopt;
   stats_.received(channel);
+  resynced_body_.clear();
   try {
     return accept_unguarded(channel, it->second, data, size);
   } catch (const std::exception& e) {
@@ -83,10 +84,13 @@ std::optional<engine::Event> Intake::accept_unguarded(const std::string& channel
   const StreamKey key = stream_of(channel, event);
   std::optional<TimeOrderGuard::LiveClock> live;
   if (options_.live) live = TimeOrderGuard::LiveClock{wall_utime(), std::chrono::steady_clock::now()};
+  const int64_t resyncs = order_.resyncs();
   if (auto why = order_.check(key.stream, engine::event_utime(event), key.strict, key.signature, live)) {
     reject(channel, why->reason, channel + ": " + why->message);
     return std::nullopt;
   }
+  if (order_.resyncs() != resyncs)
+    if (const auto* o = std::get_if<engine::Odometry>(&event)) resynced_body_ = o->source;
   stats_.decoded(channel);
   return event;
 }

@@ -37,6 +37,9 @@ class Intake {
   /// Decodes, validates and time-checks one message; nullopt when it was rejected (and counted).
   std::optional<engine::Event> accept(const std::string& channel, const void* data, size_t size);
 
+  /// The body (odometry source) whose clock the last accepted message re-synchronised, empty when it did not: the
+  /// daemon has every stage forget that body just before this message (its state belongs to the old clock).
+  const std::string& resynced_body() const { return resynced_body_; }
   /// Streams whose clock jumped and was re-synchronised, and the last such event's description.
   int64_t time_resyncs() const { return order_.resyncs(); }
   const std::string& last_resync() const { return order_.last_resync(); }
@@ -59,6 +62,7 @@ class Intake {
   std::map<std::string, InputKind> channels_;
   TimeOrderGuard order_;
   std::map<std::string, SequenceGaps> sequences_;  // per channel
+  std::string resynced_body_;
 };
 
 }  // namespace sextant::runtime

@@ -15,7 +15,7 @@
 //  - a batch holds at most `max_batch` messages; the next message starts a new batch (one more token);
 //  - a token the queue refuses drops its batch (the message that opened it), counted by the queue as a drop;
 //  - memory: at most `max_waiting_per_body` messages of one body and `max_waiting` of all bodies wait in batches (a
-//    QueuedEvent is 1088 bytes, one allocation each: a batch is a deque, whose blocks hold one such element, so the
+//    QueuedEvent is 1120 bytes, one allocation each: a batch is a deque, whose blocks hold one such element, so the
 //    memory follows the count without a vector's doubling); a message beyond either bound is dropped and counted
 //    (`dropped`).
 // Thread safety: `offer` on the intake thread, `take` on the stage's thread, the counts anywhere.  One mutex, held for

@@ -76,4 +76,15 @@ int64_t Publisher::not_monotonic() const {
   return not_monotonic_;
 }
 
+void Publisher::forget(const std::string& estimator, const std::string& source) {
+  const std::string key = fused_pose_channel(estimator) + "/" + source;
+  std::lock_guard lock(mutex_);
+  forgotten_ += static_cast<int64_t>(last_fused_utime_.erase(key));
+}
+
+int64_t Publisher::fused_pose_sources_forgotten() const {
+  std::lock_guard lock(mutex_);
+  return forgotten_;
+}
+
 }  // namespace sextant::runtime

@@ -6,6 +6,8 @@
 // Routing: FusedPose of the primary estimator -> FUSED_POSE; of any other estimator -> FUSED_POSE_<ESTIMATOR>
 // (e.g. FUSED_POSE_DEAD_RECKONING), so estimators can be compared live.  A FusedPose whose utime is not after
 // the last one published for its source on that channel is dropped and counted ("fused_pose_not_monotonic").
+// A body the stages forget (idle, or its clock re-synchronised) is forgotten here too (`forget`), so that its new
+// clock is not refused.
 // Thread-safe.
 #include "daemon/config/daemon_config.hpp"
 #include "daemon/engine/outputs.hpp"
@@ -36,6 +38,10 @@ class Publisher {
   /// Bytes published per channel (LCM payloads).
   std::map<std::string, int64_t> bytes() const;
   int64_t not_monotonic() const;
+  /// Forgets the last FusedPose time of `source` from `estimator` (after the stage forgot the body).
+  void forget(const std::string& estimator, const std::string& source);
+  /// Channel and source pairs forgotten.
+  int64_t fused_pose_sources_forgotten() const;
   const std::string& sender() const { return sender_; }
   /// The channel a FusedPose of `estimator` is published on.
   std::string fused_pose_channel(const std::string& estimator) const;
@@ -52,7 +58,7 @@ class Publisher {
   std::map<std::string, int64_t> seq_;
   std::map<std::string, int64_t> bytes_;
   std::map<std::string, int64_t> last_fused_utime_;  // by channel + "/" + source
-  int64_t not_monotonic_ = 0;
+  int64_t not_monotonic_ = 0, forgotten_ = 0;
 };
 
 }  // namespace sextant::runtime

@@ -52,7 +52,19 @@ void StageRunner::count_failure(const std::string& message) {
   last_failure_ = message;
 }
 
+void StageRunner::forget_now(const std::string& source) {
+  if (auto thrown = engine::call_guarded([&] { stage_.forget(source); })) count_failure("forget: " + *thrown);
+  if (on_forget_)
+    if (auto thrown = engine::call_guarded([&] { on_forget_(source); })) count_failure("forget: " + *thrown);
+}
+
 void StageRunner::handle_one(const QueuedEvent& event) {
+  // A body whose clock jumped: what the stage keeps of it belongs to the old clock and would refuse every message of
+  // the new one, so it starts afresh here, in order with the messages before.
+  if (!event.forget_first.empty()) {
+    forget_now(event.forget_first);
+    ++resync_forgets_;
+  }
   if (auto failure = engine::handle_guarded(stage_, event.event, emit_)) {
     count_failure(failure->message);
     if (failure->recovered) ++recoveries_;
@@ -71,8 +83,7 @@ void StageRunner::loop() {
       std::lock_guard lock(forget_mutex_);
       forget.swap(forget_);
     }
-    for (const auto& source : forget)
-      if (auto thrown = engine::call_guarded([&] { stage_.forget(source); })) count_failure("forget: " + *thrown);
+    for (const auto& source : forget) forget_now(source);
     if (const auto* event = std::get_if<QueuedEvent>(&*item)) {
       handle_one(*event);
     } else {
@@ -110,6 +121,7 @@ StageStatus StageRunner::status() const {
   s.counters = counters_;
   s.counters.push_back({"stage_failures", failures_.load()});
   s.counters.push_back({"stage_recoveries", recoveries_.load()});
+  s.counters.push_back({"resync_forgets", resync_forgets_.load()});
   if (const int64_t d = drain_discarded_.load(); d > 0) s.counters.push_back({"drain_discarded", d});
   if (batcher_) {
     s.counters.push_back({"odometry_coalesced", batcher_->coalesced()});

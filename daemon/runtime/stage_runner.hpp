@@ -14,6 +14,7 @@
 
 #include <atomic>
 #include <chrono>
+#include <functional>
 #include <memory>
 #include <mutex>
 #include <optional>
@@ -29,7 +30,8 @@ struct StageStatus {
   LatencySummary latency;
   /// The stage's own, then "stage_failures" and "stage_recoveries"; with odometry batching also
   /// "odometry_coalesced" (messages that joined a waiting batch), "odometry_waiting" (messages in batches now) and
-  /// "odometry_waiting_dropped" (dropped at a bound of the batcher, also in `dropped`).
+  /// "odometry_waiting_dropped" (dropped at a bound of the batcher, also in `dropped`); "resync_forgets": bodies
+  /// forgotten because their clock was re-synchronised.
   engine::Counters counters;
   std::string last_failure;   // what the last exception said ("" when none)
 };
@@ -55,6 +57,10 @@ class StageRunner {
     std::lock_guard lock(forget_mutex_);
     if (forget_.size() < 4096) forget_.push_back(source);
   }
+  /// Called on the stage's thread each time the stage forgot a body (after idling, or before the first message of a
+  /// re-synchronised clock, QueuedEvent::forget_first), after the stage's earlier outputs: how the publisher forgets
+  /// what it keeps for that body.  Set before start.
+  void on_forget(std::function<void(const std::string&)> hook) { on_forget_ = std::move(hook); }
 
   void start();
   /// Refuses further events (what is queued stays).
@@ -81,6 +87,8 @@ class StageRunner {
   void handle_one(const QueuedEvent& event);
   // A call into the stage threw: counted, logged (the first ten, then every power of two), kept as the last failure.
   void count_failure(const std::string& message);
+  // Has the stage (and the on_forget hook) forget a body; the stage's lock held.
+  void forget_now(const std::string& source);
 
   engine::Stage& stage_;
   std::mutex stage_mutex_;  // held while the stage works on an event (and by with_stage)
@@ -98,6 +106,8 @@ class StageRunner {
   std::string last_failure_;   // under counters_mutex_
   std::mutex forget_mutex_;
   std::vector<std::string> forget_;  // bodies to forget before the next event (under forget_mutex_)
+  std::function<void(const std::string&)> on_forget_;
+  std::atomic<int64_t> resync_forgets_{0};
 };
 
 }  // namespace sextant::runtime
