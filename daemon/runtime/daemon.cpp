@@ -128,7 +128,9 @@ int run_daemon(const config::DaemonConfig& cfg, const std::atomic<bool>& stop) {
   Publisher publisher(cfg.channels, cfg.name, primary,
                       [&lcm](const std::string& channel, const std::vector<uint8_t>& bytes, int64_t) {
                         lcm.publish(channel, bytes.data(), static_cast<unsigned>(bytes.size()));
-                      });
+                      },
+                      // Last FusedPose times per estimator channel and body: the bodies are bounded by max_sources.
+                      static_cast<size_t>(std::max(cfg.max_sources, 1)) * 8);
   const engine::Emit emit = [&publisher](engine::Output o) { publisher.publish(o); };
 
   std::vector<std::unique_ptr<StageRunner>> runners;
@@ -233,7 +235,9 @@ int run_daemon(const config::DaemonConfig& cfg, const std::atomic<bool>& stop) {
     std::vector<StageStatus> stage_status;
     for (auto& r : runners) stage_status.push_back(r->status());
     engine::Counters runtime_counters{{"fused_pose_not_monotonic", publisher.not_monotonic()},
+                                      {"fused_pose_sources", static_cast<int64_t>(publisher.fused_pose_sources())},
                                       {"fused_pose_sources_forgotten", publisher.fused_pose_sources_forgotten()},
+                                      {"fused_pose_sources_evicted", publisher.fused_pose_sources_evicted()},
                                       {"time_resyncs", intake_counters.resyncs.load()},
                                       {"sources", intake_counters.sources.load()},
                                       {"sources_expired", intake_counters.expired.load()},

@@ -7,9 +7,10 @@
 
 namespace sextant::runtime {
 
-Publisher::Publisher(config::Channels channels, std::string sender, std::string primary_estimator, RawSink raw)
+Publisher::Publisher(config::Channels channels, std::string sender, std::string primary_estimator, RawSink raw,
+                     size_t max_tracked)
     : channels_(std::move(channels)), sender_(std::move(sender)), primary_(std::move(primary_estimator)),
-      raw_(std::move(raw)) {}
+      raw_(std::move(raw)), max_tracked_(std::max<size_t>(max_tracked, 1)) {}
 
 std::string Publisher::fused_pose_channel(const std::string& estimator) const {
   if (estimator == primary_) return channels_.full(channels_.fused_pose);
@@ -36,7 +37,15 @@ void Publisher::publish(const engine::Output& output) {
         using T = std::decay_t<decltype(o)>;
         if constexpr (std::is_same_v<T, engine::FusedPose>) {
           const std::string channel = fused_pose_channel(o.estimator);
-          auto [it, inserted] = last_fused_utime_.try_emplace(channel + "/" + o.source, o.utime);
+          const std::string key = channel + "/" + o.source;
+          if (last_fused_utime_.size() >= max_tracked_ && !last_fused_utime_.contains(key)) {
+            // Only when the stages did not forget their bodies (they are bounded by daemon.max_sources): the entry
+            // published longest ago goes, a linear search at most once per new name.
+            last_fused_utime_.erase(std::min_element(last_fused_utime_.begin(), last_fused_utime_.end(),
+                                                     [](const auto& a, const auto& b) { return a.second < b.second; }));
+            ++evicted_;
+          }
+          auto [it, inserted] = last_fused_utime_.try_emplace(key, o.utime);
           if (!inserted) {
             if (o.utime <= it->second) {
               ++not_monotonic_;
@@ -82,9 +91,19 @@ void Publisher::forget(const std::string& estimator, const std::string& source) 
   forgotten_ += static_cast<int64_t>(last_fused_utime_.erase(key));
 }
 
+size_t Publisher::fused_pose_sources() const {
+  std::lock_guard lock(mutex_);
+  return last_fused_utime_.size();
+}
+
 int64_t Publisher::fused_pose_sources_forgotten() const {
   std::lock_guard lock(mutex_);
   return forgotten_;
+}
+
+int64_t Publisher::fused_pose_sources_evicted() const {
+  std::lock_guard lock(mutex_);
+  return evicted_;
 }
 
 }  // namespace sextant::runtime

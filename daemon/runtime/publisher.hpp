@@ -6,8 +6,9 @@
 // Routing: FusedPose of the primary estimator -> FUSED_POSE; of any other estimator -> FUSED_POSE_<ESTIMATOR>
 // (e.g. FUSED_POSE_DEAD_RECKONING), so estimators can be compared live.  A FusedPose whose utime is not after
 // the last one published for its source on that channel is dropped and counted ("fused_pose_not_monotonic").
-// A body the stages forget (idle, or its clock re-synchronised) is forgotten here too (`forget`), so that its new
-// clock is not refused.
+// That last time is kept per channel and source for at most `max_tracked` of them (a new one beyond evicts the one
+// published longest ago in data time, counted); a body the stages forget (idle, or its clock re-synchronised) is
+// forgotten here too (`forget`), so that its new clock is not refused.
 // Thread-safe.
 #include "daemon/config/daemon_config.hpp"
 #include "daemon/engine/outputs.hpp"
@@ -28,7 +29,10 @@ class Publisher {
   /// `raw(channel, bytes, utime)` delivers one encoded message.
   using RawSink = std::function<void(const std::string& channel, const std::vector<uint8_t>& bytes, int64_t utime)>;
 
-  Publisher(config::Channels channels, std::string sender, std::string primary_estimator, RawSink raw);
+  static constexpr size_t kDefaultMaxTracked = 4096;
+
+  Publisher(config::Channels channels, std::string sender, std::string primary_estimator, RawSink raw,
+            size_t max_tracked = kDefaultMaxTracked);
 
   void publish(const engine::Output& output);
   void publish(const sextant::status_t& status);
@@ -40,8 +44,10 @@ class Publisher {
   int64_t not_monotonic() const;
   /// Forgets the last FusedPose time of `source` from `estimator` (after the stage forgot the body).
   void forget(const std::string& estimator, const std::string& source);
-  /// Channel and source pairs forgotten.
+  /// Channel and source pairs whose last FusedPose time is kept now; forgotten ones; evicted at the bound.
+  size_t fused_pose_sources() const;
   int64_t fused_pose_sources_forgotten() const;
+  int64_t fused_pose_sources_evicted() const;
   const std::string& sender() const { return sender_; }
   /// The channel a FusedPose of `estimator` is published on.
   std::string fused_pose_channel(const std::string& estimator) const;
@@ -57,8 +63,9 @@ class Publisher {
   mutable std::mutex mutex_;
   std::map<std::string, int64_t> seq_;
   std::map<std::string, int64_t> bytes_;
-  std::map<std::string, int64_t> last_fused_utime_;  // by channel + "/" + source
-  int64_t not_monotonic_ = 0, forgotten_ = 0;
+  const size_t max_tracked_;
+  std::map<std::string, int64_t> last_fused_utime_;  // by channel + "/" + source, at most max_tracked_
+  int64_t not_monotonic_ = 0, forgotten_ = 0, evicted_ = 0;
 };
 
 }  // namespace sextant::runtime
