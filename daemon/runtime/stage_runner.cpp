@@ -78,7 +78,7 @@ void StageRunner::handle_one(const QueuedEvent& event) {
 void StageRunner::loop() {
   while (auto item = queue_.pop()) {
     std::unique_lock stage_lock(stage_mutex_);
-    std::vector<std::string> forget;
+    std::unordered_set<std::string> forget;
     {
       std::lock_guard lock(forget_mutex_);
       forget.swap(forget_);

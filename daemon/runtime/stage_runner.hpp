@@ -19,6 +19,7 @@
 #include <mutex>
 #include <optional>
 #include <thread>
+#include <unordered_set>
 #include <variant>
 
 namespace sextant::runtime {
@@ -53,9 +54,11 @@ class StageRunner {
   bool offer(const QueuedEvent& event);
   bool accepts(const engine::Event& event) const { return stage_.accepts(event); }
   /// Has the stage forget a body (Stage::forget) on its own thread, before it handles its next event (any thread).
+  /// Every body asked for is forgotten: they are the bodies the intake forgot since the stage's last event, each
+  /// once (the intake tracks at most daemon.max_sources at a time).
   void forget(const std::string& source) {
     std::lock_guard lock(forget_mutex_);
-    if (forget_.size() < 4096) forget_.push_back(source);
+    forget_.insert(source);
   }
   /// Called on the stage's thread each time the stage forgot a body (after idling, or before the first message of a
   /// re-synchronised clock, QueuedEvent::forget_first), after the stage's earlier outputs: how the publisher forgets
@@ -105,7 +108,7 @@ class StageRunner {
   engine::Counters counters_;  // copied from the stage after each event (the stage is not thread-safe)
   std::string last_failure_;   // under counters_mutex_
   std::mutex forget_mutex_;
-  std::vector<std::string> forget_;  // bodies to forget before the next event (under forget_mutex_)
+  std::unordered_set<std::string> forget_;  // bodies to forget before the next event (under forget_mutex_)
   std::function<void(const std::string&)> on_forget_;
   std::atomic<int64_t> resync_forgets_{0};
 };

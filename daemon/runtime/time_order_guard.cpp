@@ -31,9 +31,17 @@ SteadyDuration seconds_of(double s) {
 }  // namespace
 
 void TimeOrderGuard::forget(std::unordered_map<std::string, Stream>::iterator it) {
-  if (expired_names_.size() < 4096) expired_names_.push_back(it->first);
+  expired_names_.push_back(it->first);
   streams_.erase(it);
   ++expired_;
+}
+
+void TimeOrderGuard::trim_expired() {
+  const size_t bound = 2 * static_cast<size_t>(std::max(options_.max_streams, 1));
+  if (expired_names_.size() <= bound) return;
+  const size_t untold = expired_names_.size() - bound;
+  expired_names_.erase(expired_names_.begin(), expired_names_.begin() + static_cast<std::ptrdiff_t>(untold));
+  expired_untold_ += static_cast<int64_t>(untold);
 }
 
 void TimeOrderGuard::expire(SteadyTime now) {
@@ -45,6 +53,7 @@ void TimeOrderGuard::expire(SteadyTime now) {
     it = next;
   }
   last_expiry_ = now;
+  trim_expired();
 }
 
 bool TimeOrderGuard::evict(SteadyTime now) {
@@ -65,6 +74,7 @@ bool TimeOrderGuard::evict(SteadyTime now) {
     return false;
   }
   forget(victim);
+  trim_expired();
   ++evicted_;
   return true;
 }

@@ -68,9 +68,12 @@ class TimeOrderGuard {
   /// Streams forgotten: after idling (`idle_s`) or evicted from a full table (also counted in `evicted()`).
   int64_t expired() const { return expired_; }
   int64_t evicted() const { return evicted_; }
-  /// The streams forgotten since the last call (at most 4096 kept between calls), for the caller to free what it
-  /// keeps per stream.
+  /// The streams forgotten since the last call, for the caller to free what it keeps per stream.  Every one is
+  /// kept up to 2 x max_streams between calls (a check forgets at most the max_streams tracked, by one sweep of idle
+  /// ones and one eviction, and the daemon takes them after every message); beyond that, when the caller does not
+  /// take them (replay, whose stages forget nothing), the oldest are let go and counted in `expired_untold`.
   std::vector<std::string> take_expired() { return std::exchange(expired_names_, {}); }
+  int64_t expired_untold() const { return expired_untold_; }
   size_t streams() const { return streams_.size(); }
   /// The message of the last re-synchronisation (for the log), empty before the first.
   const std::string& last_resync() const { return last_resync_; }
@@ -86,6 +89,8 @@ class TimeOrderGuard {
   };
   void expire(SteadyTime now);
   void forget(std::unordered_map<std::string, Stream>::iterator it);
+  // Lets go of the oldest names not taken beyond 2 x max_streams (counted in expired_untold_).
+  void trim_expired();
   /// Live, table full: frees the place of the quietest stream silent for `evict_idle_s`; false when none is.
   bool evict(SteadyTime now);
 
@@ -93,7 +98,7 @@ class TimeOrderGuard {
   std::unordered_map<std::string, Stream> streams_;
   SteadyTime last_expiry_{};
   SteadyTime no_eviction_before_{};  // no stream can be evicted before then (spares a scan per refused message)
-  int64_t resyncs_ = 0, expired_ = 0, evicted_ = 0;
+  int64_t resyncs_ = 0, expired_ = 0, evicted_ = 0, expired_untold_ = 0;
   std::vector<std::string> expired_names_;
   std::string last_resync_;
 };

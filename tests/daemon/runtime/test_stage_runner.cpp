@@ -122,3 +122,43 @@ TEST_CASE("status latency covers a recent time window, not a flood long past") {
   CHECK(later.p50_ms == 3);
   CHECK(r.summary(t0 + std::chrono::seconds(40)).samples == 0);
 }
+
+namespace {
+// Counts the bodies it is told to forget.
+class ForgettingStage final : public engine::Stage {
+ public:
+  std::string_view name() const override { return "forgetting"; }
+  bool accepts(const engine::Event& e) const override { return std::holds_alternative<engine::Odometry>(e); }
+  void handle(const engine::Event&, const engine::Emit&) override { ++handled; }
+  void forget(const std::string& source) override { forgotten.push_back(source); }
+  int64_t handled = 0;
+  std::vector<std::string> forgotten;
+};
+}  // namespace
+
+TEST_CASE("a stage runner forgets every body it is told to, beyond 4096, each once, and tells its forget hook") {
+  ForgettingStage stage;
+  runtime::StageRunner runner(stage, 16, [](engine::Output) {});
+  std::vector<std::string> told;
+  runner.on_forget([&](const std::string& s) { told.push_back(s); });
+  for (int k = 0; k < 5000; ++k) runner.forget("body" + std::to_string(k));
+  runner.forget("body7");  // asked twice before the stage's next event: forgotten once
+  REQUIRE(runner.offer(odometry(1)));
+  runner.start();
+  runner.drain_and_stop();
+  CHECK(stage.forgotten.size() == 5000);  // a cap of 4096 used to drop the rest silently
+  CHECK(told.size() == 5000);
+  CHECK(stage.handled == 1);
+  // A message that re-synchronised its body's clock: the body is forgotten just before it, and counted.
+  ForgettingStage second;
+  runtime::StageRunner resync(second, 16, [](engine::Output) {});
+  auto first = odometry(3);
+  first.forget_first = "body1";
+  REQUIRE(resync.offer(odometry(1)));
+  REQUIRE(resync.offer(first));
+  resync.start();
+  resync.drain_and_stop();
+  CHECK(second.forgotten == std::vector<std::string>{"body1"});
+  CHECK(second.handled == 2);
+  CHECK(counter(resync.status(), "resync_forgets") == 1);
+}

@@ -272,3 +272,26 @@ TEST_CASE("loss by sender is bounded: beyond the first 64 senders that lost mess
   for (const auto& [sender, n] : c.lost_by_sender) sum += n;
   CHECK(sum == c.lost);
 }
+
+TEST_CASE("every expired name is told, beyond 4096 at once, and untaken ones are bounded at 2 x max_streams and counted") {
+  TimeGuardOptions o;
+  o.max_streams = 5000;
+  o.idle_s = 30;
+  TimeOrderGuard g(o);
+  for (int k = 0; k < 5000; ++k) REQUIRE_FALSE(g.check("body" + std::to_string(k), kT0, true, 0, live_at(0)));
+  CHECK_FALSE(g.check("newcomer", kT0, true, 0, live_at(40)));
+  CHECK(g.expired() == 5000);
+  CHECK(g.take_expired().size() == 5000);  // a cap of 4096 used to leave 904 bodies in the stages for good
+  CHECK(g.expired_untold() == 0);
+
+  // A caller that never takes them (replay): kept up to 2 x max_streams, the rest counted.
+  o.max_streams = 10;
+  TimeOrderGuard h(o);
+  for (int round = 0; round < 3; ++round) {
+    for (int k = 0; k < 10; ++k)
+      REQUIRE_FALSE(h.check("r" + std::to_string(round) + "b" + std::to_string(k), kT0, true, 0, live_at(100.0 * round)));
+    CHECK_FALSE(h.check("tick" + std::to_string(round), kT0, true, 0, live_at(100.0 * round + 50)));
+  }
+  CHECK(h.expired_untold() > 0);
+  CHECK(static_cast<int64_t>(h.take_expired().size()) + h.expired_untold() == h.expired());
+}
