@@ -1,5 +1,7 @@
 #include "daemon/config/daemon_config.hpp"
 
+#include "daemon/config/engine_config_fields.hpp"
+
 #include "daemon/config/stage_config_readers.hpp"
 
 #include <filesystem>
@@ -78,17 +80,9 @@ void read_channels(Section s, Channels& c) {
 
 }  // namespace
 
-uint64_t engine_fingerprint(const YAML::Node& root) {
-  // FNV-1a over the engine section as yaml-cpp writes it back: comments and layout do not count, values and
-  // written keys do.
-  std::string text;
-  if (root.IsMap()) {
-    const YAML::Node& r = root;
-    if (const YAML::Node e = r["engine"]; e.IsDefined()) text = YAML::Dump(e);
-  }
-  uint64_t h = 1469598103934665603ull;
-  for (unsigned char ch : text) h = (h ^ ch) * 1099511628211ull;
-  return h;
+uint64_t engine_fingerprint(const engine::EngineConfig& engine) {
+  // Of the parsed values, not the text: a default written out or left out, comments and layout do not count.
+  return FieldHash().add(engine).value();
 }
 
 void read_engine_config(Section& s, engine::EngineConfig& c) {
@@ -143,7 +137,7 @@ static void read_daemon_config(const YAML::Node& root, const std::string& file, 
     read_engine_config(e, c.engine);
   }
   top.reject_unknown_keys();
-  c.engine_fingerprint = engine_fingerprint(root);
+  c.engine_fingerprint = engine_fingerprint(c.engine);
 }
 
 DaemonConfig parse_daemon_config(const std::string& yaml_text, const std::string& file) {

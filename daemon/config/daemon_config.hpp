@@ -42,13 +42,14 @@ struct DaemonConfig {
   std::string state_dir;                // state directory (README "State directory"; "" = off); --state-dir overrides
   double state_period_s = 10.0;         // wall-clock seconds between two saves of the state (and one at shutdown)
   bool discard_bad_state = false;       // --discard-bad-state: set a bad state file aside and start fresh
-  uint64_t engine_fingerprint = 0;      // of the config's engine section (state files of another config are refused)
+  uint64_t engine_fingerprint = 0;      // of the parsed engine config (state files of another config are refused)
   Channels channels;
   engine::EngineConfig engine;
 };
 
-/// The fingerprint of a config's engine section (the state directory refuses another config's state).
-uint64_t engine_fingerprint(const YAML::Node& root);
+/// The fingerprint of a parsed engine config, by its values (aggregate_fields.hpp): the same whether a default is
+/// written or left out; the state directory refuses a state saved under another.
+uint64_t engine_fingerprint(const engine::EngineConfig& engine);
 /// Parses and validates a YAML config file.
 DaemonConfig load_daemon_config(const std::string& path);
 /// The same from YAML text (`file` names it in errors).

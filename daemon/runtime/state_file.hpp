@@ -1,8 +1,8 @@
 #pragma once
 // The daemon's state file (README, "State directory"): the saved state of every engine stage, written atomically
 // and read back at start.  Layout (little-endian):
-//   magic "SEXTANT-STATE\n\0\0" (16 bytes), format version (u32), config fingerprint (u64: of the config's engine
-//   section, daemon_config.hpp), payload size (u64), CRC-32 of the payload (u32), payload.
+//   magic "SEXTANT-STATE\n\0\0" (16 bytes), format version (u32), config fingerprint (u64: of the parsed engine
+//   config's values, daemon_config.hpp), payload size (u64), CRC-32 of the payload (u32), payload.
 //   payload: sections, each a name (the stage's) and its bytes (binary_archive.hpp), in stage order.
 // Writing: a temporary file beside the target, fsync, rename over the target, fsync of the directory: a crash at any
 // moment leaves the previous complete file or the new one, never a torn one.
