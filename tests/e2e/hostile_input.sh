@@ -3,56 +3,19 @@
 # what is sent): the daemon must stay up (it used to abort on one 20-byte packet), refuse and count every hostile
 # message by channel and reason, keep its memory bounded, follow the robot past the far-future stamps, count the
 # sequence gaps as lost, and exit 0 on SIGTERM.  --record onto an existing file must keep that file.
-# Then the checks that need no bus: configs that cannot work exit 2 with FILE:LINE (a non-scalar key aborted
-# sextantd), and `sextant replay` of a damaged log says so and exits 4 unless --tolerate-damage.
+# The checks that need no bus run first, also where no network namespace can be made: configs that cannot work exit
+# 2 with FILE:LINE (a non-scalar key aborted sextantd), `sextant replay` of a damaged log says so and exits 4 unless
+# --tolerate-damage, a 52-byte log claiming 2 GiB does not crash it, and --record keeps an existing file (memq://).
 set -euo pipefail
 source "$(dirname "$0")/netns.bash"
-require_netns
 here=$(cd "$(dirname "$0")" && pwd)
 work=$(mktemp -d)
 trap '[ -n "${KEEP:-}" ] || rm -rf "$work"' EXIT; echo "work dir: $work"
 
 python3 "$here/hostile_input.py" make "$work/hostile.lcm"
 printf 'daemon:\n  status_period_s: 0.2\nengine:\n  primary_estimator: dead_reckoning\n  filter:\n    type: none\n  graph:\n    enabled: false\n  association:\n    enabled: false\n' > "$work/config.yaml"
-echo "an earlier recording" > "$work/rec.lcm"
 
-cat > "$work/run.sh" <<EOS
-set -euo pipefail
-source "$here/netns.bash"
-lcm-logger -f "$work/bus.lcm" > /dev/null 2>&1 &
-logger=\$!
-"$SEXTANT_BIN/sextantd" --config "$work/config.yaml" --record "$work/rec.lcm" --log-level info > "$work/daemon.log" 2>&1 &
-daemon=\$!
-wait_running \$daemon "$work/daemon.log" || { kill -INT \$logger; exit 1; }
-sleep 0.2
-( while kill -0 \$daemon 2>/dev/null; do grep VmRSS /proc/\$daemon/status | awk '{print \$2}'; sleep 0.1; done ) > "$work/rss.txt" &
-sampler=\$!
-lcm-logplayer -s 2 "$work/hostile.lcm"
-sleep 0.8
-kill -0 \$daemon || { echo "sextantd died"; cat "$work/daemon.log"; exit 1; }
-kill -TERM \$daemon
-wait \$daemon || { echo "sextantd exited with \$?"; cat "$work/daemon.log"; exit 1; }
-sleep 0.3
-kill -INT \$logger; wait \$logger || true
-wait \$sampler || true
-EOS
-in_netns bash "$work/run.sh"
-python3 "$here/hostile_input.py" check "$work/bus.lcm"
-
-# --record kept the earlier file and recorded next to it, and said so.
-[ "$(cat "$work/rec.lcm")" = "an earlier recording" ] || { echo "FAIL: --record overwrote $work/rec.lcm"; exit 1; }
-[ -s "$work/rec-1.lcm" ] || { echo "FAIL: no recording in $work/rec-1.lcm"; exit 1; }
-grep -q "rec.lcm exists and is kept; recording to .*rec-1.lcm" "$work/daemon.log" || { echo "FAIL: --record said nothing"; exit 1; }
-
-if [ -z "${ASAN_OPTIONS:-}" ]; then
-  python3 - "$work/rss.txt" <<'EOP'
-import sys
-v = [int(x) for x in open(sys.argv[1]).read().split()]
-print(f"RSS kB: start {v[0]} peak {max(v)}")
-assert max(v) < 64 * 1024, f"peak RSS {max(v)} kB (20,000,000 landmark observations were allocated before)"
-EOP
-fi
-
+# First the checks that need no bus, so that they run wherever the test does (without network namespaces too).
 # Configs that cannot work: exit 2 naming FILE:LINE (no bus needed: they fail before LCM starts).
 check_config_error() {  # YAML EXPECTED_PREFIX
   printf "$1" > "$work/bad.yaml"
@@ -92,4 +55,58 @@ EOP
 python3 -c "import struct,sys; open(sys.argv[1],'wb').write(struct.pack('>Iqqii',0xEDA1DA01,0,0,4,0x7fffffff)+b'ODOM'+bytes(20))" "$work/52.lcm"
 "$SEXTANT_BIN/sextant" replay "$work/52.lcm" --config "$work/config.yaml" > /dev/null 2> "$work/52.err"
 grep -q "last event truncated" "$work/52.err" || { echo "FAIL: truncation not reported"; cat "$work/52.err"; exit 1; }
+# --record onto an existing file keeps it, over LCM's in-process provider (the daemon records its own status).
+echo "an earlier recording" > "$work/memq.lcm"
+"$SEXTANT_BIN/sextantd" --config "$work/config.yaml" --lcm-url memq:// --record "$work/memq.lcm" --log-level info \
+  > "$work/memq.log" 2>&1 &
+daemon=$!
+wait_running $daemon "$work/memq.log" || exit 1
+sleep 0.5
+kill -TERM $daemon
+wait $daemon || { echo "FAIL: sextantd (memq://) exited with $?"; cat "$work/memq.log"; exit 1; }
+[ "$(cat "$work/memq.lcm")" = "an earlier recording" ] || { echo "FAIL: --record overwrote $work/memq.lcm"; exit 1; }
+[ -s "$work/memq-1.lcm" ] || { echo "FAIL: no recording in $work/memq-1.lcm"; cat "$work/memq.log"; exit 1; }
+grep -q "memq.lcm exists and is kept; recording to .*memq-1.lcm" "$work/memq.log" || { echo "FAIL: --record said nothing"; exit 1; }
+echo "hostile_input: the checks without a bus passed"
+
+# Then the hostile sender on a real bus.
+require_netns
+echo "an earlier recording" > "$work/rec.lcm"
+cat > "$work/run.sh" <<EOS
+set -euo pipefail
+source "$here/netns.bash"
+lcm-logger -f "$work/bus.lcm" > /dev/null 2>&1 &
+logger=\$!
+"$SEXTANT_BIN/sextantd" --config "$work/config.yaml" --record "$work/rec.lcm" --log-level info > "$work/daemon.log" 2>&1 &
+daemon=\$!
+wait_running \$daemon "$work/daemon.log" || { kill -INT \$logger; exit 1; }
+sleep 0.2
+( while kill -0 \$daemon 2>/dev/null; do grep VmRSS /proc/\$daemon/status | awk '{print \$2}'; sleep 0.1; done ) > "$work/rss.txt" &
+sampler=\$!
+lcm-logplayer -s 2 "$work/hostile.lcm"
+sleep 0.8
+kill -0 \$daemon || { echo "sextantd died"; cat "$work/daemon.log"; exit 1; }
+kill -TERM \$daemon
+wait \$daemon || { echo "sextantd exited with \$?"; cat "$work/daemon.log"; exit 1; }
+sleep 0.3
+kill -INT \$logger; wait \$logger || true
+wait \$sampler || true
+EOS
+in_netns bash "$work/run.sh"
+python3 "$here/hostile_input.py" check "$work/bus.lcm"
+
+# --record kept the earlier file and recorded next to it, and said so.
+[ "$(cat "$work/rec.lcm")" = "an earlier recording" ] || { echo "FAIL: --record overwrote $work/rec.lcm"; exit 1; }
+[ -s "$work/rec-1.lcm" ] || { echo "FAIL: no recording in $work/rec-1.lcm"; exit 1; }
+grep -q "rec.lcm exists and is kept; recording to .*rec-1.lcm" "$work/daemon.log" || { echo "FAIL: --record said nothing"; exit 1; }
+
+if [ -z "${ASAN_OPTIONS:-}" ]; then
+  python3 - "$work/rss.txt" <<'EOP'
+import sys
+v = [int(x) for x in open(sys.argv[1]).read().split()]
+print(f"RSS kB: start {v[0]} peak {max(v)}")
+assert max(v) < 64 * 1024, f"peak RSS {max(v)} kB (20,000,000 landmark observations were allocated before)"
+EOP
+fi
+
 echo "hostile_input: ok"
