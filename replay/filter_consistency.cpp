@@ -31,8 +31,13 @@ void one_run(const ConsistencyOptions& o, uint64_t seed, std::vector<double>& ne
     runtime::LogWriter w(log);
     summary = simulate(sim, w);
   }
-  const auto records = runtime::LogReader::read_all(log);
+  runtime::LogDamage damage;
+  const auto records = runtime::LogReader::read_all(log, &damage);
   std::remove(log.c_str());
+  // The log was written just above: damage is a disk problem, and a run with events missing would be misread as an
+  // inconsistent filter.
+  if (damage.damaged() || damage.truncated_tail_bytes > 0)
+    throw std::runtime_error(log + ": the simulated log read back damaged: " + damage.summary());
   engine::FilterConfig cfg = o.filter;
   cfg.slam = o.slam;
   cfg.map.clear();

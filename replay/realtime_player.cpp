@@ -14,8 +14,9 @@
 
 namespace sextant::replay {
 
-int64_t play_realtime(const std::string& log_path, double speed, const std::string& lcm_url) {
-  auto records = runtime::LogReader::read_all(log_path);
+int64_t play_realtime(const std::string& log_path, double speed, const std::string& lcm_url,
+                      runtime::LogDamage* damage) {
+  auto records = runtime::LogReader::read_all(log_path, damage);
   std::vector<int64_t> keys(records.size());
   for (size_t i = 0; i < records.size(); ++i) keys[i] = peek_utime(records[i].data).value_or(records[i].timestamp);
   std::vector<size_t> order(records.size());

@@ -117,7 +117,7 @@ std::optional<engine::LoopClosure> SimulatedMatcher::answer(const engine::MatchR
   return lc;
 }
 
-std::map<std::string, MatcherTruth> read_matcher_truth(const std::string& log_path) {
+std::map<std::string, MatcherTruth> read_matcher_truth(const std::string& log_path, runtime::LogDamage* damage) {
   std::map<std::string, std::vector<std::pair<int64_t, SE3>>> samples;
   std::map<std::string, bool> odometry_planar;  // the first odometry message of each body
   runtime::LogReader reader(log_path);
@@ -133,6 +133,7 @@ std::map<std::string, MatcherTruth> read_matcher_truth(const std::string& log_pa
       if (runtime::decode_message(rec->data, m)) odometry_planar.emplace(m.source, m.planar);
     }
   }
+  if (damage != nullptr) *damage = reader.damage();
   if (samples.empty()) throw std::runtime_error(log_path + ": no robot ground truth (GROUND_TRUTH, truth_t kind \"robot\")");
   std::map<std::string, MatcherTruth> out;
   for (auto& [source, s] : samples) {

@@ -28,6 +28,7 @@
 // draws, so the same seed and the same request sequence give the same answers on every platform.
 #include "daemon/engine/events.hpp"
 #include "daemon/engine/outputs.hpp"
+#include "daemon/runtime/lcm_log.hpp"
 #include "estimators/lie/se2.hpp"
 #include "replay/interpolated_trajectory.hpp"
 
@@ -86,7 +87,9 @@ class SimulatedMatcher {
 /// Reads the robot ground truth of an LCM log (GROUND_TRUTH channel, truth_t with kind "robot"), one trajectory
 /// per truth_t.source.  A body is planar when its odometry in the same log (ODOMETRY, odometry_t.planar) says so;
 /// without odometry of that body, when every truth pose has z = 0 and a rotation about z only (within 1e-9).
-/// Throws std::runtime_error naming the log when it holds no robot truth.
-std::map<std::string, MatcherTruth> read_matcher_truth(const std::string& log_path);
+/// Throws std::runtime_error naming the log when it holds no robot truth.  What the checked reader skipped goes
+/// into `damage` when given (the caller reports it).
+std::map<std::string, MatcherTruth> read_matcher_truth(const std::string& log_path,
+                                                       runtime::LogDamage* damage = nullptr);
 
 }  // namespace sextant::replay

@@ -9,6 +9,7 @@
 #include "replay/cli/handle_until_stopped.hpp"
 #include "replay/json_writer.hpp"
 #include "replay/simulated_matcher.hpp"
+#include "replay/cli/log_damage_report.hpp"
 
 #include <lcm/lcm-cpp.hpp>
 
@@ -87,8 +88,13 @@ sextant::cli::RegisterCommand reg{"matcher", [](CLI::App& app) {
   cmd->add_option("--answers", *answers, "answer channel");
   cmd->add_option("--seconds", *seconds, "exit after this many seconds (default: run until SIGINT/SIGTERM)");
   cmd->add_flag("--json", *json, "print the counts as JSON on exit");
+  auto tolerate_damage = std::make_shared<bool>(false);
+  cmd->add_flag("--tolerate-damage", *tolerate_damage, sextant::cli::kTolerateDamageHelp);
   cmd->callback([=] {
-    sextant::replay::SimulatedMatcher matcher(sextant::replay::read_matcher_truth(*truth), *o);
+    sextant::runtime::LogDamage damage;
+    sextant::replay::SimulatedMatcher matcher(sextant::replay::read_matcher_truth(*truth, &damage), *o);
+    // Before the bus: a damaged truth log is said at once (with exit 4 unless tolerated), not after the run.
+    sextant::cli::report_log_damage("sextant matcher", *truth, damage, *tolerate_damage);
     lcm::LCM lcm(*url);
     if (!lcm.good()) {
       std::fprintf(stderr, "sextant matcher: cannot start LCM on '%s' (is there a multicast route? "

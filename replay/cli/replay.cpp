@@ -4,6 +4,7 @@
 #include "daemon/runtime/lcm_log.hpp"
 #include "daemon/runtime/nearest_rank_percentile.hpp"
 #include "replay/cli/command.hpp"
+#include "replay/cli/log_damage_report.hpp"
 #include "daemon/runtime/version.hpp"
 #include "replay/json_writer.hpp"
 #include "replay/replay_driver.hpp"
@@ -148,13 +149,13 @@ sextant::cli::RegisterCommand reg{"replay", [](CLI::App& app) {
   cmd->add_flag("--realtime", o->realtime, "republish the log to the live bus at the pace of message utimes");
   cmd->add_option("--speed", o->speed, "playback speed for --realtime (2 = twice as fast)")->check(CLI::PositiveNumber);
   cmd->add_option("--lcm-url", o->lcm_url, "LCM URL for --realtime");
-  cmd->add_flag("--tolerate-damage", o->tolerate_damage,
-                "exit 0 on a damaged log (corrupt events are skipped and counted either way; without this flag a "
-                "damaged log makes the exit code 4)");
+  cmd->add_flag("--tolerate-damage", o->tolerate_damage, cli::kTolerateDamageHelp);
   cmd->callback([o] {
     if (o->realtime) {
-      const auto n = replay::play_realtime(o->log, o->speed, o->lcm_url);
+      runtime::LogDamage damage;
+      const auto n = replay::play_realtime(o->log, o->speed, o->lcm_url, &damage);
       if (!o->json) std::printf("republished %lld messages\n", static_cast<long long>(n));
+      cli::report_log_damage("sextant replay", o->log, damage, o->tolerate_damage);
       return;
     }
     config::DaemonConfig cfg;
@@ -217,13 +218,7 @@ sextant::cli::RegisterCommand reg{"replay", [](CLI::App& app) {
         std::fprintf(stderr, "sextant replay: stage '%s' failed on %lld event(s) and recovered from %lld (the replay went on); "
                              "last: %s\n", s.name.c_str(), static_cast<long long>(s.failures),
                      static_cast<long long>(s.recoveries), s.last_failure.c_str());
-    if (const std::string d = result.log_damage.summary(); !d.empty())
-      std::fprintf(stderr, "sextant replay: %s: %s\n", o->log.c_str(), d.c_str());
-    if (result.log_damage.damaged() && !o->tolerate_damage) {
-      std::fprintf(stderr, "sextant replay: the log is damaged (the good events were replayed); --tolerate-damage "
-                           "accepts it\n");
-      throw CLI::RuntimeError(4);
-    }
+    cli::report_log_damage("sextant replay", o->log, result.log_damage, o->tolerate_damage);
   });
 }};
 

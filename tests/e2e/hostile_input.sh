@@ -5,7 +5,8 @@
 # sequence gaps as lost, and exit 0 on SIGTERM.  --record onto an existing file must keep that file.
 # The checks that need no bus run first, also where no network namespace can be made: configs that cannot work exit
 # 2 with FILE:LINE (a non-scalar key aborted sextantd), `sextant replay` of a damaged log says so and exits 4 unless
-# --tolerate-damage, a 52-byte log claiming 2 GiB does not crash it, and --record keeps an existing file (memq://).
+# --tolerate-damage (so do `replay --realtime` and `matcher --truth`), a 52-byte log claiming 2 GiB does not crash it,
+# and --record keeps an existing file (memq://).
 set -euo pipefail
 source "$(dirname "$0")/netns.bash"
 here=$(cd "$(dirname "$0")" && pwd)
@@ -51,6 +52,38 @@ assert r["log_damage"]["corrupt_events"] == 1, r["log_damage"]
 assert r["records"] > 300, r["records"]  # the events after the damage were replayed
 print("replay of the damaged log:", r["records"], "events,", r["log_damage"])
 EOP
+# The other commands that read a log say so too, naming it, and exit 4 unless --tolerate-damage: republishing it
+# (--realtime) and the simulated matcher's truth: a simulated run, damaged the same way (the hostile log's far-future
+# stamps would make a real-time replay wait for years).
+check_damage_reported() {  # WHAT LOG CMD...: exit 4 and the log named with its damage on stderr
+  local what=$1 log=$2 rc=0
+  shift 2
+  "$@" > "$work/other.out" 2> "$work/other.err" || rc=$?
+  [ "$rc" -eq 4 ] || { echo "FAIL: $what of a damaged log exited $rc"; cat "$work/other.err"; exit 1; }
+  grep -q "$log: 1 corrupt event header(s)" "$work/other.err" || { echo "FAIL: $what: damage not reported"; cat "$work/other.err"; exit 1; }
+}
+"$SEXTANT_BIN/sextant" simulate planar -o "$work/sim.lcm" --duration 10 > /dev/null
+python3 - "$work/sim.lcm" "$work/sim-damaged.lcm" <<'EOP'
+import struct, sys
+b = bytearray(open(sys.argv[1], "rb").read())
+pos, n = 0, 0
+while n < 40:
+    clen, dlen = struct.unpack_from(">ii", b, pos + 20)
+    pos += 28 + clen + dlen; n += 1
+b[pos + 24:pos + 28] = struct.pack(">i", 1 << 24)
+open(sys.argv[2], "wb").write(b)
+EOP
+check_damage_reported "replay --realtime" "$work/sim-damaged.lcm" \
+  "$SEXTANT_BIN/sextant" replay "$work/sim-damaged.lcm" --realtime --speed 1000 --lcm-url memq://
+"$SEXTANT_BIN/sextant" replay "$work/sim-damaged.lcm" --realtime --speed 1000 --lcm-url memq:// --tolerate-damage > /dev/null 2>&1 \
+  || { echo "FAIL: replay --realtime --tolerate-damage of a damaged log failed"; exit 1; }
+check_damage_reported "matcher --truth" "$work/sim-damaged.lcm" \
+  "$SEXTANT_BIN/sextant" matcher --truth "$work/sim-damaged.lcm" --lcm-url memq:// --seconds 0.1
+"$SEXTANT_BIN/sextant" matcher --truth "$work/sim-damaged.lcm" --lcm-url memq:// --seconds 0.1 --tolerate-damage \
+  > /dev/null 2>&1 || { echo "FAIL: matcher --tolerate-damage on a damaged truth log failed"; exit 1; }
+"$SEXTANT_BIN/sextant" matcher --truth "$work/sim.lcm" --lcm-url memq:// --seconds 0.1 > /dev/null 2> "$work/clean.err" \
+  || { echo "FAIL: matcher on a clean truth log failed"; cat "$work/clean.err"; exit 1; }
+[ ! -s "$work/clean.err" ] || { echo "FAIL: matcher warned on a clean log"; cat "$work/clean.err"; exit 1; }
 # A 52-byte log whose only event claims 2 GiB of data: no crash (liblcm's reader segfaulted).
 python3 -c "import struct,sys; open(sys.argv[1],'wb').write(struct.pack('>Iqqii',0xEDA1DA01,0,0,4,0x7fffffff)+b'ODOM'+bytes(20))" "$work/52.lcm"
 "$SEXTANT_BIN/sextant" replay "$work/52.lcm" --config "$work/config.yaml" > /dev/null 2> "$work/52.err"

@@ -1,7 +1,9 @@
 """LCM logs: read what `sextant simulate` and replay write, write logs the tools read back; checked against an
 independent reader of lcm-logger's format (tests/e2e/lcmlog.py)."""
 import os
+import struct
 import sys
+import warnings
 
 import pytest
 import sextant
@@ -78,3 +80,36 @@ def test_replay_reads_a_module_written_log(tmp_path):
     fused = [sextant.decode(d) for _, c, d in sextant.read_log(str(out)) if c == "FUSED_POSE"]
     assert len(fused) == 50
     assert fused[-1]["position"][0] == pytest.approx(4.9, abs=1e-6)
+
+
+def _damaged_copy(src, dst):
+    """`src` with the data length of its 40th event set to 16 MiB: one corrupt header the reader skips over."""
+    b = bytearray(open(src, "rb").read())
+    pos = 0
+    for _ in range(40):
+        clen, dlen = struct.unpack_from(">ii", b, pos + 20)
+        pos += 28 + clen + dlen
+    b[pos + 24:pos + 28] = struct.pack(">i", 1 << 24)
+    open(dst, "wb").write(b)
+
+
+def test_a_damaged_log_is_reported_not_silently_cut(simulated_run, tmp_path):
+    clean = str(simulated_run["log"])
+    bad = str(tmp_path / "damaged.lcm")
+    _damaged_copy(clean, bad)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # a clean log warns of nothing
+        events = sextant.read_log(clean)
+        reader = sextant.LogReader(clean)
+        assert list(reader) == events
+        assert reader.damage["damaged"] is False
+    with pytest.warns(RuntimeWarning, match=r"damaged\.lcm: 1 corrupt event header"):
+        got = sextant.read_log(bad)
+    assert len(events) - 2 <= len(got) < len(events)  # the events after the damage are read
+    reader = sextant.LogReader(bad)
+    with pytest.warns(RuntimeWarning, match=r"damaged\.lcm"):
+        assert list(reader) == got
+    assert reader.damage["damaged"] is True
+    assert reader.damage["bad_events"] == 1
+    assert reader.damage["skipped_bytes"] > 0
+    assert reader.damage["first_problems"][0].startswith("byte ")
