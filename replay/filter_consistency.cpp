@@ -89,7 +89,7 @@ ConsistencyResult pose_nees_over_runs(const ConsistencyOptions& o) {
   std::vector<double> sum, sq;
   for (int r = 0; r < o.runs; ++r) one_run(o, o.first_seed + static_cast<uint64_t>(r), sum, out.time_s, sq);
   const double N = o.runs;
-  const int dof = o.simulation.scenario == "planar" ? 3 : 6;
+  const int dof = o.simulation.scenario == Scenario::kPlanar ? 3 : 6;
   out.lower = assoc::chi2_quantile(dof * o.runs, 0.025) / N;
   out.upper = assoc::chi2_quantile(dof * o.runs, 0.975) / N;
   int inside = 0;

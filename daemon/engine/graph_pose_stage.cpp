@@ -20,7 +20,7 @@ void GraphPoseStage::handle(const Event& e, const Emit& emit) {
   FusedPose out;
   out.utime = o.utime;
   out.source = o.source;
-  out.estimator = "graph";
+  out.estimator = estimator();
   out.planar = o.planar;
   const SE3 odom = to_se3(o.pose);
   if (const auto c = corrections_->get(o.source)) {
