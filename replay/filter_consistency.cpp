@@ -4,6 +4,7 @@
 #include "daemon/engine/filter_stage.hpp"
 #include "daemon/runtime/codec.hpp"
 #include "daemon/runtime/lcm_log.hpp"
+#include "estimators/lie/planar_axes.hpp"
 
 #include <sextant/truth_t.hpp>
 
@@ -58,10 +59,7 @@ void one_run(const ConsistencyOptions& o, uint64_t seed, std::vector<double>& ne
       double n = 0, position2 = 0;
       if (f.planar) {
         const Eigen::Vector3d err = planar(f.pose).between(planar(truth.at(f.utime))).log();
-        Eigen::Matrix3d P;
-        const int idx[3] = {0, 1, 5};
-        for (int r = 0; r < 3; ++r)
-          for (int c = 0; c < 3; ++c) P(r, c) = f.covariance(idx[r], idx[c]);
+        const Eigen::Matrix3d P = planar_block(f.covariance);
         n = err.dot(P.ldlt().solve(err));
         position2 = err.head<2>().squaredNorm();
       } else {

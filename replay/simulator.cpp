@@ -4,6 +4,7 @@
 #include "daemon/engine/dead_reckoning_stage.hpp"
 #include "daemon/runtime/codec.hpp"
 #include "estimators/kind_names.hpp"
+#include "estimators/lie/planar_axes.hpp"
 
 #include <sextant/truth_t.hpp>
 
@@ -11,6 +12,7 @@
 #include <cmath>
 #include <map>
 #include <random>
+#include <span>
 #include <stdexcept>
 #include <utility>
 
@@ -214,7 +216,7 @@ class Simulation {
     history_.push_back({t, T});
   }
 
-  std::vector<int> active() const { return planar_ ? std::vector<int>{0, 1, 5} : std::vector<int>{0, 1, 2, 3, 4, 5}; }
+  std::span<const int> active() const { return pose_axes(planar_); }
 
   void landmark_step(int64_t t) {
     const Eigen::Isometry3d T = truth(t);

@@ -1,10 +1,9 @@
 #include "daemon/engine/filter_stage.hpp"
 
 #include "assoc/chi_square.hpp"
-#include "daemon/engine/planar_axes.hpp"
 #include "daemon/engine/planar_pose_covariance.hpp"
 #include "estimators/filter/interpolated_prediction.hpp"
-
+#include "estimators/lie/planar_axes.hpp"
 
 #include <algorithm>
 #include <type_traits>

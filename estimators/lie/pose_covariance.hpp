@@ -4,6 +4,7 @@
 // theory", arXiv 1812.01537, eq. 55 and the adjoint of eq. 29).  Plain values here; the engine's wrappers that take
 // an odometry message are in daemon/engine/pose_covariance.hpp.
 #include "estimators/filter/eigenvalue_floor.hpp"
+#include "estimators/lie/planar_axes.hpp"
 #include "estimators/lie/se3.hpp"
 
 #include <optional>
@@ -42,11 +43,7 @@ inline Matrix6d regularized_increment_covariance(const Matrix6d& pose_covariance
                                                  double min_variance) {
   Matrix6d q = stated_increment_covariance(pose_covariance, stated_increment, delta, previous_pose_covariance);
   if (!stated_increment) q = nearest_psd(q);
-  if (planar) {
-    for (int i : {0, 1, 5}) q(i, i) += min_variance;
-  } else {
-    q.diagonal().array() += min_variance;
-  }
+  for (int i : pose_axes(planar)) q(i, i) += min_variance;
   return q;
 }
 
