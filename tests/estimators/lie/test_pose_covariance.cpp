@@ -3,6 +3,8 @@
 // regularization by hand on diagonal matrices.
 #include "estimators/lie/pose_covariance.hpp"
 
+#include "estimators/lie/pose_test_values.hpp"
+
 #include <doctest/doctest.h>
 
 #include <Eigen/Eigenvalues>
@@ -10,21 +12,12 @@
 #include <optional>
 
 using namespace sextant;
+using sextant::test::max_abs;
+using sextant::test::pose;
 
 namespace {
 
-SE3 pose(double x, double y, double z, double rx, double ry, double rz) {
-  Vector6d xi;
-  xi << x, y, z, rx, ry, rz;
-  return SE3::exp(xi);
-}
-
-Matrix6d spd(int seed) {
-  Matrix6d a = Matrix6d::Zero();
-  for (int r = 0; r < 6; ++r)
-    for (int c = 0; c < 6; ++c) a(r, c) = 0.1 * std::sin(1.0 + seed + 7 * r + 3 * c);
-  return a * a.transpose() + 0.01 * Matrix6d::Identity();
-}
+Matrix6d spd(int seed) { return test::spd(seed, 0.1); }
 
 // d Log((X Delta)^-1 X Exp(h e_k) Delta) / dh at h = 0, by central differences: how a right perturbation of X
 // appears on X Delta.
@@ -41,8 +34,6 @@ Matrix6d numeric_transport(const SE3& X, const SE3& delta) {
   }
   return J;
 }
-
-double max_abs(const Matrix6d& m) { return m.cwiseAbs().maxCoeff(); }
 
 }  // namespace
 

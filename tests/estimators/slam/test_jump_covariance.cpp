@@ -2,20 +2,19 @@
 // axis gets |rho|^2, each rotation axis |phi|^2, of mu = Log(edge); planar bodies only x, y and yaw.
 #include "estimators/slam/jump_covariance.hpp"
 
+#include "estimators/lie/pose_test_values.hpp"
+
 #include <doctest/doctest.h>
 
 using namespace sextant;
 using namespace sextant::slam;
+using sextant::test::max_abs;
 
 namespace {
 
 Matrix6d diagonal(double a, double b, double c, double d, double e, double f) {
-  Vector6d v;
-  v << a, b, c, d, e, f;
-  return Matrix6d(v.asDiagonal());
+  return Matrix6d(test::tangent(a, b, c, d, e, f).asDiagonal());
 }
-
-double max_abs(const Matrix6d& m) { return m.cwiseAbs().maxCoeff(); }
 
 }  // namespace
 
@@ -26,9 +25,7 @@ TEST_CASE("jump covariance, planar: |rho|^2 on x and y, yaw^2 on yaw, nothing on
   const SE3 edge = SE2::exp(Eigen::Vector3d(1, -2, 0.5)).to_se3();
   CHECK(max_abs(jump_covariance(edge, true) - diagonal(5, 5, 0, 0, 0, 0.25)) < 1e-12);
   // The height and tilt of an edge are ignored for a planar body.
-  Vector6d xi;
-  xi << 3, 4, 7, 0, 0, 0;
-  CHECK(max_abs(jump_covariance(SE3::exp(xi), true) - diagonal(25, 25, 0, 0, 0, 0)) < 1e-12);
+  CHECK(max_abs(jump_covariance(test::pose(3, 4, 7, 0, 0, 0), true) - diagonal(25, 25, 0, 0, 0, 0)) < 1e-12);
 }
 
 TEST_CASE("jump covariance, 3-D: |rho|^2 on each translation axis, |phi|^2 on each rotation axis") {

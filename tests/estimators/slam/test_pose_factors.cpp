@@ -3,6 +3,7 @@
 #include "estimators/slam/pose_factors.hpp"
 
 #include "estimators/lie/planar_axes.hpp"
+#include "estimators/lie/pose_test_values.hpp"
 #include "estimators/lie/se2.hpp"
 
 #include <doctest/doctest.h>
@@ -13,23 +14,11 @@
 
 using namespace sextant;
 using namespace sextant::slam;
+using sextant::test::max_abs;
+using sextant::test::pose;
+using sextant::test::spd;
 
 namespace {
-
-SE3 pose(double x, double y, double z, double rx, double ry, double rz) {
-  Vector6d xi;
-  xi << x, y, z, rx, ry, rz;
-  return SE3::exp(xi);
-}
-
-Matrix6d spd(int seed) {
-  Matrix6d a = Matrix6d::Zero();
-  for (int r = 0; r < 6; ++r)
-    for (int c = 0; c < 6; ++c) a(r, c) = std::sin(2.0 + seed + 5 * r + 11 * c);
-  return a * a.transpose() + Matrix6d::Identity();
-}
-
-double max_abs(const Eigen::MatrixXd& m) { return m.cwiseAbs().maxCoeff(); }
 
 // The chi2 e' Omega e of a two-pose factor with its poses at a and b.
 double chi2(const graph::Factor& f, const SE3& a, const SE3& b) {
