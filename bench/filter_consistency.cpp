@@ -23,7 +23,7 @@ int main(int argc, char** argv) {
     replay::ConsistencyOptions o;
     o.runs = runs;
     o.slam = slam;
-    if (kind == 2) o.simulation.scenario = "spatial";
+    if (kind == 2) o.simulation.scenario = replay::Scenario::kSpatial;
     o.simulation.duration_s = duration;
     o.every = 25;
     o.filter.initial_sigma_xy = 1e-3;

@@ -30,7 +30,7 @@ int main(int argc, char** argv) {
   std::filesystem::create_directories(dir);
   const std::string log = (dir / "run.lcm").string(), state = (dir / runtime::kStateFileName).string();
   replay::SimulationOptions sim;
-  sim.scenario = scenario;
+  sim.scenario = replay::scenario_from_name(scenario);
   sim.seed = seed;
   sim.duration_s = minutes * 60;
   {

@@ -102,9 +102,11 @@ py::list variable_values(const graph::Variable& v) {
 py::dict optimize(const py::object& graph_or_path, const std::optional<std::string>& output,
                   const replay::GraphOptimizationOptions& options, const std::string& information) {
   graph::G2oReadOptions read;
-  if (information == "repair") read.information = graph::InformationPolicy::kRepair;
-  else if (information == "diagonal") read.information = graph::InformationPolicy::kDiagonal;
-  else if (information != "reject") throw py::value_error("information: 'reject', 'repair' or 'diagonal'");
+  try {
+    read.information = graph::information_policy_from_name(information);
+  } catch (const std::invalid_argument& e) {
+    throw py::value_error(e.what());
+  }
   graph::G2oGraph g = is_path(graph_or_path)
                           ? graph::read_g2o(py::cast<std::string>(py::str(graph_or_path)), read)
                           : graph_from_records(graph_or_path, read);

@@ -31,12 +31,6 @@ double thread_cpu_ms() {
   return 1e3 * static_cast<double>(t.tv_sec) + 1e-6 * static_cast<double>(t.tv_nsec);
 }
 
-// The nearest-rank percentile (daemon/runtime/nearest_rank_percentile.hpp) of an unsorted sample.
-double percentile(std::vector<double> v, double p) {
-  std::sort(v.begin(), v.end());
-  return runtime::nearest_rank_percentile(v, p);
-}
-
 }  // namespace
 
 std::vector<Eigen::Vector3d> assoc_experiment_sensors(int count) {
@@ -188,10 +182,10 @@ AssocExperimentResult run_assoc_experiment(const AssocExperimentOptions& o) {
   r.ghosts_per_scan = static_cast<double>(r.ghost_tuples) / runs;
   r.position_rmse = err_n ? std::sqrt(sq_err / static_cast<double>(err_n)) : 0.0;
   for (double m : ms) r.mean_ms += m / static_cast<double>(ms.size());  // every scan solved, proven or not
-  r.median_ms = percentile(ms, 0.5);
-  r.p95_ms = percentile(ms, 0.95);
-  r.median_cpu_ms = percentile(cpu_ms, 0.5);
-  r.build_median_ms = percentile(build_ms, 0.5);
+  r.median_ms = runtime::nearest_rank_percentile_of(ms, 0.5);
+  r.p95_ms = runtime::nearest_rank_percentile_of(ms, 0.95);
+  r.median_cpu_ms = runtime::nearest_rank_percentile_of(cpu_ms, 0.5);
+  r.build_median_ms = runtime::nearest_rank_percentile_of(build_ms, 0.5);
   r.gap_mean = gap / runs;
   r.absolute_gap_mean = absolute_gap / runs;
   r.tuples_mean = tuples / runs;

@@ -4,6 +4,7 @@
 #include "daemon/engine/filter_stage.hpp"
 #include "daemon/runtime/codec.hpp"
 #include "daemon/runtime/lcm_log.hpp"
+#include "estimators/lie/planar_axes.hpp"
 
 #include <sextant/truth_t.hpp>
 
@@ -63,10 +64,7 @@ void one_run(const ConsistencyOptions& o, uint64_t seed, std::vector<double>& ne
       double n = 0, position2 = 0;
       if (f.planar) {
         const Eigen::Vector3d err = planar(f.pose).between(planar(truth.at(f.utime))).log();
-        Eigen::Matrix3d P;
-        const int idx[3] = {0, 1, 5};
-        for (int r = 0; r < 3; ++r)
-          for (int c = 0; c < 3; ++c) P(r, c) = f.covariance(idx[r], idx[c]);
+        const Eigen::Matrix3d P = planar_block(f.covariance);
         n = err.dot(P.ldlt().solve(err));
         position2 = err.head<2>().squaredNorm();
       } else {
@@ -94,7 +92,7 @@ ConsistencyResult pose_nees_over_runs(const ConsistencyOptions& o) {
   std::vector<double> sum, sq;
   for (int r = 0; r < o.runs; ++r) one_run(o, o.first_seed + static_cast<uint64_t>(r), sum, out.time_s, sq);
   const double N = o.runs;
-  const int dof = o.simulation.scenario == "planar" ? 3 : 6;
+  const int dof = o.simulation.scenario == Scenario::kPlanar ? 3 : 6;
   out.lower = assoc::chi2_quantile(dof * o.runs, 0.025) / N;
   out.upper = assoc::chi2_quantile(dof * o.runs, 0.975) / N;
   int inside = 0;

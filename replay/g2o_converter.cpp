@@ -3,6 +3,7 @@
 #include "daemon/runtime/codec.hpp"
 #include "daemon/runtime/lcm_log.hpp"
 #include "estimators/graph/g2o_io.hpp"
+#include "estimators/lie/planar_axes.hpp"
 #include "replay/trajectory_io.hpp"
 
 #include <algorithm>
@@ -11,13 +12,7 @@
 namespace sextant::replay {
 
 Eigen::Matrix<double, 6, 6> g2o_information_to_sextant(const Eigen::MatrixXd& info, bool planar) {
-  Eigen::Matrix<double, 6, 6> out = Eigen::Matrix<double, 6, 6>::Zero();
-  if (planar) {
-    const int map[3] = {0, 1, 5};
-    for (int r = 0; r < 3; ++r)
-      for (int c = 0; c < 3; ++c) out(map[r], map[c]) = info(r, c);
-    return out;
-  }
+  if (planar) return embed_planar(info.topLeftCorner<3, 3>());
   Eigen::Matrix<double, 6, 6> T = Eigen::Matrix<double, 6, 6>::Identity();
   T.bottomRightCorner<3, 3>() *= 0.5;  // e_g2o = T e_sextant to first order
   return T.transpose() * info * T;
@@ -59,7 +54,7 @@ G2oConversion convert_g2o(const std::string& g2o_path, const std::string& out_lc
   int64_t seq_odo = 0, seq_loop = 0;
   SE3 pose;  // the composed chain, starting at the identity
   Eigen::Matrix<double, 6, 6> cov = Eigen::Matrix<double, 6, 6>::Zero();
-  const std::vector<int> active = planar ? std::vector<int>{0, 1, 5} : std::vector<int>{0, 1, 2, 3, 4, 5};
+  const auto active = pose_axes(planar);
   for (int i : active) cov(i, i) = 1e-9;
   // Loop closures are emitted when their later vertex's odometry has been sent.
   std::multimap<int64_t, const graph::RelativePoseFactor*> loops_by_time;

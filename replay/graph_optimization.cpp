@@ -17,11 +17,6 @@
 namespace sextant::replay {
 namespace {
 
-double percentile(std::vector<double> v, double q) {
-  std::sort(v.begin(), v.end());
-  return runtime::nearest_rank_percentile(v, q);
-}
-
 constexpr std::pair<graph::Method, const char*> kSolvers[] = {{graph::Method::kGaussNewton, "gn"},
                                                              {graph::Method::kLevenbergMarquardt, "lm"}};
 constexpr std::pair<InitialEstimate, const char*> kInits[] = {
@@ -67,8 +62,9 @@ GraphOptimizationResult run_incremental(const graph::G2oGraph& g, const GraphOpt
   s.add("dimension", g.dimension).add("iterations", r.step_ms.size());
   s.add("initial_chi2", initial_chi2).add("final_chi2", final_chi2);
   s.add("solve_seconds", seconds).add("converged", r.ok);
-  s.add("step_ms_mean", mean).add("step_ms_p50", percentile(r.step_ms, 0.5));
-  s.add("step_ms_p99", percentile(r.step_ms, 0.99)).add("step_ms_max", percentile(r.step_ms, 1.0));
+  s.add("step_ms_mean", mean).add("step_ms_p50", runtime::nearest_rank_percentile_of(r.step_ms, 0.5));
+  s.add("step_ms_p99", runtime::nearest_rank_percentile_of(r.step_ms, 0.99))
+      .add("step_ms_max", runtime::nearest_rank_percentile_of(r.step_ms, 1.0));
   s.add("final_chi2_batch_ratio", ratio).add("batch_final_chi2", batch.final_chi2);
   s.add("updates", r.step_ms.size()).add("rebuilds", r.rebuilds).add("relinearize_skip", o.relin_skip);
   s.add("relinearized_factors", r.relinearized_factors);

@@ -2,6 +2,7 @@
 
 #include "daemon/runtime/codec.hpp"
 #include "daemon/runtime/lcm_log.hpp"
+#include "estimators/lie/planar_axes.hpp"
 #include "estimators/lie/se2.hpp"
 #include "replay/trajectory_io.hpp"
 
@@ -133,7 +134,7 @@ MrclamConversion convert_mrclam(const std::string& dir, int robot, const std::st
   while (g + 1 < gt.size() && std::abs(gt[g + 1].t - t_first) < std::abs(gt[g].t - t_first)) ++g;
   SE2 pose = SE2::from_se3(SE3(gt[g].pose.orientation, gt[g].pose.position));
   engine::Matrix6 cov = engine::Matrix6::Zero();
-  cov(0, 0) = cov(1, 1) = 1e-6, cov(5, 5) = 1e-6;
+  for (int i : kPlanarAxes) cov(i, i) = 1e-6;
   auto emit_odometry = [&](double t, const engine::Matrix6& q) {
     engine::Odometry e;
     e.utime = utime_of(t);
@@ -146,7 +147,7 @@ MrclamConversion convert_mrclam(const std::string& dir, int robot, const std::st
     ++result.odometry;
   };
   engine::Matrix6 q0 = engine::Matrix6::Zero();
-  q0(0, 0) = q0(1, 1) = q0(5, 5) = o.min_sigma * o.min_sigma;
+  for (int i : kPlanarAxes) q0(i, i) = o.min_sigma * o.min_sigma;
   emit_odometry(t_first, q0);
   for (size_t k = 0; k + 1 < odometry.size(); ++k) {
     const auto& row = odometry[k].second;

@@ -142,7 +142,7 @@ ReplayResult replay_log(const std::string& log_path, const config::DaemonConfig&
       if (!l.empty()) st.p50_ms = runtime::nearest_rank_percentile(l, 0.5), st.p99_ms = runtime::nearest_rank_percentile(l, 0.99), st.max_ms = l.back();
       seg.stages.push_back(st);
       l.clear();
-      if (st.name == "graph") seg.graph_counters = engine.stages()[i]->counters();
+      if (engine.stages()[i]->kind() == engine::StageKind::kGraph) seg.graph_counters = engine.stages()[i]->counters();
     }
     result.segments.push_back(std::move(seg));
     segment_start_wall = now;

@@ -3,6 +3,8 @@
 #include "assoc/field_of_view.hpp"
 #include "daemon/engine/dead_reckoning_stage.hpp"
 #include "daemon/runtime/codec.hpp"
+#include "estimators/kind_names.hpp"
+#include "estimators/lie/planar_axes.hpp"
 
 #include <sextant/truth_t.hpp>
 
@@ -10,7 +12,9 @@
 #include <cmath>
 #include <map>
 #include <random>
+#include <span>
 #include <stdexcept>
+#include <utility>
 
 namespace sextant::replay {
 namespace {
@@ -65,8 +69,6 @@ SE3 to_se3(const Eigen::Isometry3d& x) { return SE3(Eigen::Quaterniond(x.linear(
 class Simulation {
  public:
   Simulation(const SimulationOptions& o, runtime::LogWriter& out) : o_(o), out_(out), rng_(o.seed) {
-    if (o.scenario != "planar" && o.scenario != "spatial")
-      throw std::invalid_argument("unknown scenario '" + o.scenario + "' (planar or spatial)");
     if (!(o.duration_s > 0) || !(o.speed > 0) || !(o.odometry_rate_hz > 0) || !(o.landmark_rate_hz > 0) ||
         !(o.scan_rate_hz > 0))
       throw std::invalid_argument("duration, speed and rates must be positive");
@@ -78,7 +80,7 @@ class Simulation {
     for (size_t i = 0; i < o.clutter_region_min.size(); ++i)
       if (!(o.clutter_region_min[i] < o.clutter_region_max[i]))
         throw std::invalid_argument("clutter region: min must be below max on every axis (axis " + std::to_string(i) + ")");
-    planar_ = o.scenario == "planar";
+    planar_ = o.scenario == Scenario::kPlanar;
   }
 
   SimulationSummary run() {
@@ -214,7 +216,7 @@ class Simulation {
     history_.push_back({t, T});
   }
 
-  std::vector<int> active() const { return planar_ ? std::vector<int>{0, 1, 5} : std::vector<int>{0, 1, 2, 3, 4, 5}; }
+  std::span<const int> active() const { return pose_axes(planar_); }
 
   void landmark_step(int64_t t) {
     const Eigen::Isometry3d T = truth(t);
@@ -341,6 +343,14 @@ class Simulation {
 };
 
 }  // namespace
+
+namespace {
+constexpr std::pair<Scenario, const char*> kScenarios[] = {{Scenario::kPlanar, "planar"}, {Scenario::kSpatial, "spatial"}};
+}  // namespace
+
+Scenario scenario_from_name(const std::string& name) { return kind_from_name(kScenarios, name, "scenario"); }
+const char* scenario_name(Scenario scenario) { return kind_name(kScenarios, scenario); }
+std::vector<std::string> scenario_names() { return kind_names(kScenarios); }
 
 SimulationSummary simulate(const SimulationOptions& options, runtime::LogWriter& out) {
   return Simulation(options, out).run();

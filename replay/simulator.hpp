@@ -25,8 +25,15 @@
 
 namespace sextant::replay {
 
+/// The simulated world: a planar robot (x, y, yaw) or one that also climbs, pitches and rolls (3-D).
+enum class Scenario { kPlanar, kSpatial };
+/// The scenario spelt "planar" or "spatial"; throws std::invalid_argument naming the spellings for any other name.
+Scenario scenario_from_name(const std::string& name);
+const char* scenario_name(Scenario scenario);
+std::vector<std::string> scenario_names();
+
 struct SimulationOptions {
-  std::string scenario = "planar";  // "planar" or "spatial"
+  Scenario scenario = Scenario::kPlanar;
   uint64_t seed = 1;
   double duration_s = 60;
   int64_t start_utime = 1'700'000'000'000'000;  // 2023-11-14, an arbitrary fixed epoch

@@ -3,6 +3,7 @@
 #include "daemon/engine/dead_reckoning_stage.hpp"
 #include "daemon/runtime/codec.hpp"
 #include "daemon/runtime/lcm_log.hpp"
+#include "estimators/lie/planar_axes.hpp"
 #include "replay/trajectory_io.hpp"
 
 #include <sextant/truth_t.hpp>
@@ -19,7 +20,7 @@ TumConversion convert_tum(const std::string& gt_tum, const std::string& out_lcm,
   std::normal_distribution<double> normal(0.0, 1.0);
   runtime::LogWriter out(out_lcm);
   TumConversion result;
-  const std::vector<int> active = o.planar ? std::vector<int>{0, 1, 5} : std::vector<int>{0, 1, 2, 3, 4, 5};
+  const auto active = pose_axes(o.planar);
   SE3 odom;
   engine::Matrix6 cov = engine::Matrix6::Zero();
   for (int i : active) cov(i, i) = 1e-8;

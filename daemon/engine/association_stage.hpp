@@ -17,7 +17,7 @@ namespace sextant::engine {
 class AssociationStage final : public Stage {
  public:
   explicit AssociationStage(const AssociationConfig& config) : config_(config) {}
-  std::string_view name() const override { return "association"; }
+  StageKind kind() const override { return StageKind::kAssociation; }
   bool accepts(const Event& e) const override { return std::holds_alternative<BearingScan>(e); }
   void handle(const Event& e, const Emit& emit) override;
   void finish(const Emit& emit) override;

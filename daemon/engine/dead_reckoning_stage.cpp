@@ -35,7 +35,7 @@ void DeadReckoningStage::handle(const Event& e, const Emit& emit) {
   FusedPose out;
   out.utime = odo.utime;
   out.source = odo.source;
-  out.estimator = "dead_reckoning";
+  out.estimator = estimator();
   out.planar = odo.planar;
   out.pose = to_pose(t.map_pose);
   out.covariance = t.covariance;

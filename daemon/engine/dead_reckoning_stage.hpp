@@ -19,8 +19,8 @@ class DeadReckoningStage final : public Stage {
  public:
   explicit DeadReckoningStage(const DeadReckoningConfig& config) : config_(config) {}
 
-  std::string_view name() const override { return "dead_reckoning"; }
-  std::string_view estimator() const override { return "dead_reckoning"; }
+  StageKind kind() const override { return StageKind::kDeadReckoning; }
+  std::optional<PrimaryEstimator> estimator_kind() const override { return PrimaryEstimator::kDeadReckoning; }
   bool accepts(const Event& e) const override { return std::holds_alternative<Odometry>(e); }
   void handle(const Event& e, const Emit& emit) override;
   /// Forgets the failed event's source (it restarts from its next odometry message).

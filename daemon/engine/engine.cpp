@@ -29,18 +29,33 @@ std::vector<std::unique_ptr<Stage>> make_stages(const EngineConfig& config,
 Engine::Engine(const EngineConfig& config, std::shared_ptr<GraphCorrectionBoard> corrections)
     : config_(config), stages_(make_stages(config, std::move(corrections))) {}
 
+namespace {
+
+// How capable an estimator is, for "auto": graph > filter > dead reckoning.
+int capability(PrimaryEstimator estimator) {
+  switch (estimator) {
+    case PrimaryEstimator::kGraph: return 3;
+    case PrimaryEstimator::kEkf:
+    case PrimaryEstimator::kPf: return 2;
+    case PrimaryEstimator::kDeadReckoning: return 1;
+    case PrimaryEstimator::kAuto: break;
+  }
+  return -1;
+}
+
+}  // namespace
+
 std::string Engine::primary_estimator() const {
   if (config_.primary_estimator != PrimaryEstimator::kAuto) {
-    const std::string wanted = primary_estimator_name(config_.primary_estimator);
     for (const auto& stage : stages_)
-      if (stage->estimator() == wanted) return wanted;
+      if (stage->estimator_kind() == config_.primary_estimator) return std::string(stage->estimator());
   }
   std::string best;
   int best_rank = -1;
   for (const auto& stage : stages_) {
-    const std::string_view e = stage->estimator();
-    const int rank = e == "graph" ? 3 : (e == "ekf" || e == "pf") ? 2 : e == "dead_reckoning" ? 1 : -1;
-    if (rank > best_rank) best_rank = rank, best = std::string(e);
+    const auto e = stage->estimator_kind();
+    const int rank = e ? capability(*e) : -1;
+    if (rank > best_rank) best_rank = rank, best = std::string(stage->estimator());
   }
   return best;
 }

@@ -1,10 +1,9 @@
 #include "daemon/engine/filter_stage.hpp"
 
 #include "assoc/chi_square.hpp"
-#include "daemon/engine/planar_axes.hpp"
 #include "daemon/engine/planar_pose_covariance.hpp"
 #include "estimators/filter/interpolated_prediction.hpp"
-
+#include "estimators/lie/planar_axes.hpp"
 
 #include <algorithm>
 #include <type_traits>
@@ -153,7 +152,7 @@ void FilterStage::publish(const std::string& body, const Track& t, const Emit& e
   FusedPose out;
   out.utime = t.fusion.utime();
   out.source = body;
-  out.estimator = "ekf";
+  out.estimator = estimator();
   out.planar = true;
   const SE3 p3 = pose.to_se3();
   out.pose.position = p3.translation();
@@ -188,9 +187,9 @@ void FilterStage::update_with(Track& t, const LandmarkSightings& s) const {
       continue;
     }
     const auto r = ekf.observe(ob.id, ob.range, ob.azimuth, ob.covariance.topLeftCorner<2, 2>());
-    if (r.accepted) (r.reason == "new_landmark" ? t.new_landmarks : t.updates)++;
-    else if (r.reason == "gate") ++t.gated;
-    else if (r.reason == "unknown_landmark") ++t.unknown;
+    if (r.accepted) (r.reason == filter::UpdateReason::kNewLandmark ? t.new_landmarks : t.updates)++;
+    else if (r.reason == filter::UpdateReason::kGate) ++t.gated;
+    else if (r.reason == filter::UpdateReason::kUnknownLandmark) ++t.unknown;
     else ++t.rejected;
   }
   if (!unidentified.empty()) {
@@ -269,8 +268,8 @@ void FilterStage::update_with(SpatialTrack& t, const LandmarkSightings& s) const
       continue;
     }
     const auto r = t.ekf.observe(ob.id, Eigen::Vector3d(ob.range, ob.azimuth, ob.elevation), ob.covariance);
-    if (r.accepted) (r.reason == "new_landmark" ? t.new_landmarks : t.updates)++;
-    else if (r.reason == "gate") ++t.gated;
+    if (r.accepted) (r.reason == filter::UpdateReason::kNewLandmark ? t.new_landmarks : t.updates)++;
+    else if (r.reason == filter::UpdateReason::kGate) ++t.gated;
     else ++t.rejected;
   }
 }
@@ -279,7 +278,7 @@ void FilterStage::publish(const std::string& body, const SpatialTrack& t, const 
   FusedPose out;
   out.utime = t.utime;
   out.source = body;
-  out.estimator = "ekf";
+  out.estimator = estimator();
   out.planar = false;
   out.pose.position = t.ekf.pose().translation();
   out.pose.orientation = t.ekf.pose().rotation().quaternion();

@@ -36,8 +36,8 @@ namespace sextant::engine {
 class FilterStage final : public Stage {
  public:
   explicit FilterStage(const FilterConfig& config) : config_(config) {}
-  std::string_view name() const override { return "filter"; }
-  std::string_view estimator() const override { return "ekf"; }
+  StageKind kind() const override { return StageKind::kFilter; }
+  std::optional<PrimaryEstimator> estimator_kind() const override { return PrimaryEstimator::kEkf; }
   bool accepts(const Event& e) const override {
     return std::holds_alternative<Odometry>(e) || std::holds_alternative<LandmarkSightings>(e);
   }

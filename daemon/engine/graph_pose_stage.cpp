@@ -20,13 +20,13 @@ void GraphPoseStage::handle(const Event& e, const Emit& emit) {
   FusedPose out;
   out.utime = o.utime;
   out.source = o.source;
-  out.estimator = "graph";
+  out.estimator = estimator();
   out.planar = o.planar;
   const SE3 odom = to_se3(o.pose);
   if (const auto c = corrections_->get(o.source)) {
     const SE3 delta = c->keyframe_odom.between(odom);
-    // The odometry's own uncertainty growth since the keyframe: its pose covariance minus the transported one.
-    const Matrix6 growth = nearest_psd(o.covariance - compose_covariance(c->keyframe_odom_covariance, delta, Matrix6::Zero()));
+    // The odometry's own uncertainty growth since the keyframe, PSD without a floor (pose_covariance.hpp says why).
+    const Matrix6 growth = nearest_psd(pose_covariance_growth(o.covariance, delta, c->keyframe_odom_covariance));
     out.pose = to_pose(c->keyframe_map * delta);
     record_correction_age(o.utime - c->keyframe_utime);
     out.covariance = compose_covariance(c->keyframe_covariance, delta, growth);

@@ -20,8 +20,8 @@ namespace sextant::engine {
 class GraphPoseStage final : public Stage {
  public:
   explicit GraphPoseStage(std::shared_ptr<const GraphCorrectionBoard> corrections) : corrections_(std::move(corrections)) {}
-  std::string_view name() const override { return "graph_pose"; }
-  std::string_view estimator() const override { return "graph"; }
+  StageKind kind() const override { return StageKind::kGraphPose; }
+  std::optional<PrimaryEstimator> estimator_kind() const override { return PrimaryEstimator::kGraph; }
   bool accepts(const Event& e) const override { return std::holds_alternative<Odometry>(e); }
   void handle(const Event& e, const Emit& emit) override;
   void forget(const std::string& source) override { last_utime_.erase(source); }

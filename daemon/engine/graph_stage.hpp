@@ -33,7 +33,7 @@ struct GraphStageCounters {
 class GraphStage final : public Stage {
  public:
   GraphStage(const GraphConfig& config, std::shared_ptr<GraphCorrectionBoard> corrections);
-  std::string_view name() const override { return "graph"; }
+  StageKind kind() const override { return StageKind::kGraph; }
   bool accepts(const Event& e) const override {
     return std::holds_alternative<Odometry>(e) || std::holds_alternative<LoopClosure>(e) ||
            (config_.landmarks.enabled && std::holds_alternative<LandmarkSightings>(e));

@@ -51,7 +51,7 @@ void ParticleFilterStage::on_odometry(const Odometry& o, const Emit& emit) {
   FusedPose out;
   out.utime = o.utime;
   out.source = o.source;
-  out.estimator = "pf";
+  out.estimator = estimator();
   out.planar = true;
   const SE3 p3 = pose.to_se3();
   out.pose.position = p3.translation();

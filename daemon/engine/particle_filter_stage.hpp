@@ -18,8 +18,8 @@ namespace sextant::engine {
 class ParticleFilterStage final : public Stage {
  public:
   explicit ParticleFilterStage(const FilterConfig& config) : config_(config) {}
-  std::string_view name() const override { return "particle_filter"; }
-  std::string_view estimator() const override { return "pf"; }
+  StageKind kind() const override { return StageKind::kParticleFilter; }
+  std::optional<PrimaryEstimator> estimator_kind() const override { return PrimaryEstimator::kPf; }
   bool accepts(const Event& e) const override {
     return std::holds_alternative<Odometry>(e) || std::holds_alternative<LandmarkSightings>(e);
   }

@@ -7,9 +7,9 @@
 // placed on the x, y and yaw rows/columns (0, 1, 5); z, roll and pitch are left at zero.
 // Also the other direction, for a planar filter's motion noise: the 3x3 increment covariance of an odometry message.
 #include "daemon/engine/events.hpp"
-#include "daemon/engine/planar_axes.hpp"
 #include "daemon/engine/pose_covariance.hpp"
 #include "estimators/filter/eigenvalue_floor.hpp"
+#include "estimators/lie/planar_axes.hpp"
 #include "estimators/lie/se2.hpp"
 
 namespace sextant::engine {

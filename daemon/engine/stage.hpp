@@ -3,9 +3,11 @@
 // driven from one thread at a time; it knows no threads (the daemon gives each stage its own thread and bounded queue,
 // daemon/runtime/stage_runner.hpp; replay calls stages synchronously in utime order).  A stage must not throw for bad data: it counts and drops it.
 #include "daemon/engine/outputs.hpp"
+#include "daemon/engine/stage_kinds.hpp"
 #include "estimators/archive/binary_archive.hpp"
 
 #include <functional>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <utility>
@@ -21,7 +23,10 @@ using Counters = std::vector<std::pair<std::string, int64_t>>;
 class Stage {
  public:
   virtual ~Stage() = default;
-  virtual std::string_view name() const = 0;
+  /// Which of the engine's stages this is: what code outside the stage asks instead of comparing names.
+  virtual StageKind kind() const = 0;
+  /// The name on the status channel and in reports: the kind's spelling (a stage of kind kOther names itself).
+  virtual std::string_view name() const { return stage_kind_name(kind()); }
   /// Whether `handle` wants this event (the dispatcher routes only accepted events to the stage's queue).
   virtual bool accepts(const Event& event) const = 0;
   virtual void handle(const Event& event, const Emit& emit) = 0;
@@ -44,9 +49,13 @@ class Stage {
   /// Restores what `save` wrote, into a stage just constructed with the same config and not yet fed; throws
   /// archive::ArchiveError for anything that does not fit (the caller names the file).
   virtual void load(archive::ArchiveReader& /*r*/) {}
-  /// The estimator name of the FusedPose outputs this stage emits ("dead_reckoning", "ekf", "pf", "graph"),
-  /// empty when it emits none.
-  virtual std::string_view estimator() const { return {}; }
+  /// The estimator of the FusedPose outputs this stage emits, none when it emits none.
+  virtual std::optional<PrimaryEstimator> estimator_kind() const { return std::nullopt; }
+  /// Its name ("dead_reckoning", "ekf", "pf", "graph": FusedPose::estimator), empty when the stage emits none.
+  std::string_view estimator() const {
+    const auto kind = estimator_kind();
+    return kind ? primary_estimator_name(*kind) : std::string_view();
+  }
 };
 
 }  // namespace sextant::engine

@@ -1,10 +1,12 @@
 #include "daemon/runtime/codec.hpp"
 
 #include "daemon/runtime/wire_layout.hpp"
+#include "estimators/lie/planar_axes.hpp"
 
 #include <Eigen/Eigenvalues>
 
 #include <cmath>
+#include <span>
 #include <sstream>
 
 namespace sextant::runtime {
@@ -58,7 +60,7 @@ engine::Pose check_pose(const double p[3], const double q[4], const std::string&
 // Symmetric positive (semi-)definite check over the components that are meaningful. For planar messages only
 // the x, y, yaw block must be positive definite; the other diagonal entries may be zero.
 template <int N>
-Eigen::Matrix<double, N, N> check_covariance(const double* v, const std::string& field, const std::vector<int>& active) {
+Eigen::Matrix<double, N, N> check_covariance(const double* v, const std::string& field, std::span<const int> active) {
   check_finite(v, N * N, field);
   Eigen::Matrix<double, N, N> m = Eigen::Map<const Eigen::Matrix<double, N, N, Eigen::RowMajor>>(v);
   const double scale = std::max(1.0, m.cwiseAbs().maxCoeff());
@@ -77,8 +79,7 @@ Eigen::Matrix<double, N, N> check_covariance(const double* v, const std::string&
   return m;
 }
 
-const std::vector<int> kAll6{0, 1, 2, 3, 4, 5};
-const std::vector<int> kPlanar6{0, 1, 5};
+// A sighting's (range, azimuth, elevation): planar sightings have no elevation.
 const std::vector<int> kAll3{0, 1, 2};
 const std::vector<int> kPlanar3{0, 1};
 
@@ -160,7 +161,7 @@ Decoded to_event(const sextant::odometry_t& m) {
     e.source = m.source;
     e.planar = m.planar;
     e.pose = check_pose(m.position, m.orientation, "odometry_t.");
-    const auto& active = m.planar ? kPlanar6 : kAll6;
+    const auto active = pose_axes(m.planar);
     e.covariance = check_covariance<6>(m.covariance, "odometry_t.covariance", active);
     if (m.has_increment_covariance)
       e.increment_covariance = check_covariance<6>(m.increment_covariance, "odometry_t.increment_covariance", active);
@@ -254,7 +255,7 @@ Decoded to_event(const sextant::loop_closure_t& m) {
     e.keyframe_to = m.keyframe_to;
     e.request_id = m.request_id;
     e.relative = check_pose(m.position, m.orientation, "loop_closure_t.");
-    e.information = check_covariance<6>(m.information, "loop_closure_t.information", m.planar ? kPlanar6 : kAll6);
+    e.information = check_covariance<6>(m.information, "loop_closure_t.information", pose_axes(m.planar));
     e.matcher = m.matcher;
     e.score = check_finite(m.score, "loop_closure_t.score");
     return engine::Event{std::move(e)};

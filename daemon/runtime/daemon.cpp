@@ -72,7 +72,7 @@ namespace {
 // so batching (which keeps each body's order but not the order across bodies) changes nothing it computes.  The
 // other stages see every message in arrival order (a filter may fuse several sources of one body).
 std::optional<OdometryBatcherOptions> odometry_batching(const engine::Stage& stage, const engine::EngineConfig& config) {
-  if (stage.name() != "graph" || !config.graph.coalesce_odometry) return std::nullopt;
+  if (stage.kind() != engine::StageKind::kGraph || !config.graph.coalesce_odometry) return std::nullopt;
   OdometryBatcherOptions o;
   o.max_batch = static_cast<size_t>(config.graph.odometry_batch_max);
   o.max_waiting_per_body = static_cast<size_t>(config.graph.odometry_waiting_max);

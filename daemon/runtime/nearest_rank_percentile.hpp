@@ -15,4 +15,10 @@ inline double nearest_rank_percentile(const std::vector<double>& sorted, double 
   return sorted[static_cast<size_t>(std::clamp(rank, 0.0, static_cast<double>(sorted.size() - 1)))];
 }
 
+/// The same of an unsorted sample (sorts a copy).
+inline double nearest_rank_percentile_of(std::vector<double> sample, double p) {
+  std::sort(sample.begin(), sample.end());
+  return nearest_rank_percentile(sample, p);
+}
+
 }  // namespace sextant::runtime

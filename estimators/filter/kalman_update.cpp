@@ -1,16 +1,33 @@
 #include "estimators/filter/kalman_update.hpp"
 
+#include "estimators/kind_names.hpp"
+
 #include <Eigen/Cholesky>
 
 #include <algorithm>
+#include <utility>
 
 namespace sextant::filter {
+namespace {
+constexpr std::pair<UpdateReason, const char*> kUpdateReasons[] = {
+    {UpdateReason::kNone, "none"},
+    {UpdateReason::kNewLandmark, "new_landmark"},
+    {UpdateReason::kGate, "gate"},
+    {UpdateReason::kNonFinite, "non_finite"},
+    {UpdateReason::kSingular, "singular"},
+    {UpdateReason::kNoComponents, "no_components"},
+    {UpdateReason::kNoTwist, "no_twist"},
+    {UpdateReason::kUnknownLandmark, "unknown_landmark"},
+    {UpdateReason::kMapFull, "map_full"}};
+}  // namespace
+
+const char* update_reason_name(UpdateReason reason) { return kind_name(kUpdateReasons, reason); }
 
 UpdateResult kalman_update(Eigen::VectorXd& x, Eigen::MatrixXd& P, const Eigen::VectorXd& r, const Eigen::MatrixXd& H,
                            const Eigen::MatrixXd& R, double gate) {
   if (!H.allFinite()) {
     UpdateResult out;
-    out.reason = "non_finite";
+    out.reason = UpdateReason::kNonFinite;
     return out;
   }
   const Eigen::MatrixXd PHt = P * H.transpose();
@@ -22,18 +39,18 @@ UpdateResult kalman_update_from(Eigen::VectorXd& x, Eigen::MatrixXd& P, const Ei
                                 double gate) {
   UpdateResult out;
   if (!r.allFinite() || !PHt.allFinite() || !R.allFinite()) {
-    out.reason = "non_finite";
+    out.reason = UpdateReason::kNonFinite;
     return out;
   }
   const Eigen::MatrixXd S = HPHt + R;
   const Eigen::LLT<Eigen::MatrixXd> llt(S);
   if (llt.info() != Eigen::Success) {
-    out.reason = "singular";
+    out.reason = UpdateReason::kSingular;
     return out;
   }
   out.nis = r.dot(llt.solve(r));
   if (gate > 0 && out.nis > gate) {
-    out.reason = "gate";
+    out.reason = UpdateReason::kGate;
     return out;
   }
   const Eigen::MatrixXd K = llt.solve(PHt.transpose()).transpose();  // P H' S^-1

@@ -11,10 +11,26 @@
 
 namespace sextant::filter {
 
+/// How an update ended when it was not a plain accepted one: why it was refused, or that it added a landmark.
+enum class UpdateReason {
+  kNone,             // accepted: an update of what the state holds
+  kNewLandmark,      // accepted: the landmark joined the state (landmark_admission.hpp)
+  kGate,             // refused: the innovation failed the gate
+  kNonFinite,        // refused: a NaN or infinity in the innovation, Jacobian or noise
+  kSingular,         // refused: S is not positive definite
+  kNoComponents,     // refused: no component of the measurement is fused
+  kNoTwist,          // refused: velocities to fuse but no twist in the message or its predecessor
+  kUnknownLandmark,  // refused: a landmark the state does not hold and may not add (not SLAM, or no id)
+  kMapFull,          // refused: the state holds max_landmarks already
+};
+/// The reason's spelling for counters and logs: "none", "new_landmark", "gate", "non_finite", "singular",
+/// "no_components", "no_twist", "unknown_landmark", "map_full".
+const char* update_reason_name(UpdateReason reason);
+
 struct UpdateResult {
   bool accepted = false;
-  double nis = 0;       // r' S^-1 r
-  std::string reason;   // why it was refused: "gate", "non_finite", "singular"
+  double nis = 0;                           // r' S^-1 r
+  UpdateReason reason = UpdateReason::kNone;
 };
 
 /// Updates (x, P) in place unless the innovation fails the gate (`gate` <= 0 disables gating).

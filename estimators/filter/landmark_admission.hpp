@@ -10,19 +10,19 @@
 
 namespace sextant::filter {
 
-/// Calls `add()` and returns an accepted result ("new_landmark") when the landmark may join the state; else returns
-/// the refusal: "unknown_landmark" (not in SLAM mode, or no id) or "map_full" (`held` >= max_landmarks).
+/// Calls `add()` and returns an accepted result (kNewLandmark) when the landmark may join the state; else returns
+/// the refusal: kUnknownLandmark (not in SLAM mode, or no id) or kMapFull (`held` >= max_landmarks).
 template <class Add>
 UpdateResult admit_new_landmark(bool slam, int64_t id, std::size_t held, int max_landmarks, Add&& add) {
   UpdateResult out;
   if (!slam || id < 0) {
-    out.reason = "unknown_landmark";
+    out.reason = UpdateReason::kUnknownLandmark;
   } else if (static_cast<int>(held) >= max_landmarks) {
-    out.reason = "map_full";
+    out.reason = UpdateReason::kMapFull;
   } else {
     std::forward<Add>(add)();
     out.accepted = true;
-    out.reason = "new_landmark";
+    out.reason = UpdateReason::kNewLandmark;
   }
   return out;
 }

@@ -126,7 +126,7 @@ OdometryOutcome MultiSourceEkf::measure(Source& s, SourceCounters& c, const Plan
       combine(ekf_.observe_relative_pose(s.clone, SE2::exp(v * dt), R, {f[3], f[4], f[5]}, s.options.gate));
     } else {
       UpdateResult u;
-      u.reason = "no_twist";
+      u.reason = UpdateReason::kNoTwist;
       combine(u);
     }
   }
@@ -143,7 +143,7 @@ OdometryOutcome MultiSourceEkf::measure(Source& s, SourceCounters& c, const Plan
     ++c.fused;
     return OdometryOutcome::fused;
   }
-  if (r.reason == "gate") {
+  if (r.reason == UpdateReason::kGate) {
     ++c.gated;
     return OdometryOutcome::gated;
   }

@@ -59,7 +59,7 @@ void PlanarEkf::predict(const SE2& delta, const Eigen::Matrix3d& Q) {
 UpdateResult PlanarEkf::observe(int64_t id, double range, double bearing, const Eigen::Matrix2d& R) {
   UpdateResult out;
   if (!std::isfinite(range) || !std::isfinite(bearing) || !R.allFinite() || range <= 0) {
-    out.reason = "non_finite";
+    out.reason = UpdateReason::kNonFinite;
     return out;
   }
   Eigen::Vector2d z(range, bearing);
@@ -81,7 +81,7 @@ UpdateResult PlanarEkf::observe(int64_t id, double range, double bearing, const 
                               [&] { augment(id, range, bearing, R); });
   }
   if (predicted[0] < 1e-6) {
-    out.reason = "singular";
+    out.reason = UpdateReason::kSingular;
     return out;
   }
   Eigen::VectorXd r = z - predicted;
@@ -164,7 +164,7 @@ UpdateResult PlanarEkf::update_rows(const Eigen::Vector3d& r, const Eigen::Matri
                                     const Eigen::Matrix3d& R, const std::array<bool, 3>& rows, double gate) {
   UpdateResult out;
   if (!r.allFinite() || !R.allFinite() || !Hx.allFinite() || !Ho.allFinite()) {
-    out.reason = "non_finite";
+    out.reason = UpdateReason::kNonFinite;
     return out;
   }
   std::vector<int> use;
@@ -172,7 +172,7 @@ UpdateResult PlanarEkf::update_rows(const Eigen::Vector3d& r, const Eigen::Matri
     if (rows[static_cast<size_t>(i)]) use.push_back(i);
   const auto m = static_cast<Eigen::Index>(use.size());
   if (m == 0) {
-    out.reason = "no_components";
+    out.reason = UpdateReason::kNoComponents;
     return out;
   }
   Eigen::MatrixXd Hx_m(m, 3), Ho_m(m, 3), R_m(m, m);

@@ -68,7 +68,7 @@ Eigen::Vector3d SpatialEkf::inverse_observation(const SE3& X, const Eigen::Vecto
 UpdateResult SpatialEkf::observe(int64_t id, const Eigen::Vector3d& z, const Eigen::Matrix3d& R) {
   UpdateResult out;
   if (!z.allFinite() || !R.allFinite() || z[0] <= 0) {
-    out.reason = "non_finite";
+    out.reason = UpdateReason::kNonFinite;
     return out;
   }
   auto s = slot_.find(id);
@@ -79,7 +79,7 @@ UpdateResult SpatialEkf::observe(int64_t id, const Eigen::Vector3d& z, const Eig
   Eigen::Matrix3d Hl;
   const Eigen::Vector3d h = observation(pose_, landmarks_.segment<3>(k - 6), &Hx, &Hl);
   if (h[0] < 1e-6 || !Hx.allFinite()) {
-    out.reason = "singular";
+    out.reason = UpdateReason::kSingular;
     return out;
   }
   Eigen::VectorXd r = z - h;

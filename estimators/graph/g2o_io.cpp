@@ -1,6 +1,7 @@
 #include "estimators/graph/g2o_io.hpp"
 
 #include "estimators/graph/initialization.hpp"
+#include "estimators/kind_names.hpp"
 
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
@@ -93,6 +94,18 @@ bool positive_definite(const Eigen::MatrixXd& I) {
 constexpr size_t kBadEdgesShown = 5;
 
 }  // namespace
+
+namespace {
+constexpr std::pair<InformationPolicy, const char*> kInformationPolicies[] = {
+    {InformationPolicy::kReject, "reject"}, {InformationPolicy::kRepair, "repair"},
+    {InformationPolicy::kDiagonal, "diagonal"}};
+}  // namespace
+
+InformationPolicy information_policy_from_name(const std::string& name) {
+  return kind_from_name(kInformationPolicies, name, "information policy");
+}
+const char* information_policy_name(InformationPolicy policy) { return kind_name(kInformationPolicies, policy); }
+std::vector<std::string> information_policy_names() { return kind_names(kInformationPolicies); }
 
 Eigen::MatrixXd repair_information(const Eigen::MatrixXd& I, InformationPolicy policy) {
   if (policy == InformationPolicy::kReject) return I;

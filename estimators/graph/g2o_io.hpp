@@ -24,10 +24,16 @@
 #include <istream>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 namespace sextant::graph {
 
 enum class InformationPolicy { kReject, kRepair, kDiagonal };
+/// The policy spelt "reject", "repair" or "diagonal" (`sextant optimize --information`); throws
+/// std::invalid_argument naming the spellings for any other name.
+InformationPolicy information_policy_from_name(const std::string& name);
+const char* information_policy_name(InformationPolicy policy);
+std::vector<std::string> information_policy_names();
 
 struct G2oReadOptions {
   InformationPolicy information = InformationPolicy::kReject;

@@ -5,9 +5,17 @@
 
 #include <Eigen/Core>
 
+#include <span>
+
 namespace sextant {
 
 inline constexpr int kPlanarAxes[3] = {0, 1, 5};
+inline constexpr int kSpatialAxes[6] = {0, 1, 2, 3, 4, 5};
+
+/// The axes a body's poses and covariances use: x, y and yaw when it is planar, all six otherwise.
+inline std::span<const int> pose_axes(bool planar) {
+  return planar ? std::span<const int>(kPlanarAxes) : std::span<const int>(kSpatialAxes);
+}
 
 /// The 3x3 block over (x, y, yaw) of a 6x6 matrix.
 inline Eigen::Matrix3d planar_block(const Matrix6d& m) {

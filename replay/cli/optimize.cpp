@@ -30,9 +30,9 @@ std::string text(const replay::Summary& s, const std::string& key) {
 sextant::cli::RegisterCommand reg{"optimize", [](CLI::App& app) {
   auto* cmd = app.add_subcommand("optimize", "optimize a g2o pose graph (Gauss-Newton or Levenberg-Marquardt on CHOLMOD)");
   auto o = std::make_shared<Options>();
-  // The kinds' spellings, parsed once into o by the callback (replay/graph_optimization.hpp holds the tables).
+  // The kinds' spellings, parsed once by the callback (each kind's spelling table sits beside its enum).
   struct Kinds {
-    std::string solver = "gn", init = "auto", robust = "none", ordering = "block-amd";
+    std::string solver = "gn", init = "auto", robust = "none", ordering = "block-amd", information = "reject";
   };
   auto kinds = std::make_shared<Kinds>();
   auto input = std::make_shared<std::string>(), output = std::make_shared<std::string>();
@@ -44,11 +44,10 @@ sextant::cli::RegisterCommand reg{"optimize", [](CLI::App& app) {
                   "file's), file (the file's vertices), odometry (spanning tree), chordal (rotation relaxation), "
                   "sgd (Olson's SGD from odometry, planar graphs)")
       ->check(CLI::IsMember(replay::initial_estimate_names()));
-  auto information = std::make_shared<std::string>("reject");
-  cmd->add_option("--information", *information, "information matrices that are not positive definite: reject (the default: "
+  cmd->add_option("--information", kinds->information, "information matrices that are not positive definite: reject (the default: "
                   "an error listing them), repair (nearest positive definite, eigenvalues floored at 1e-6 of the largest) or "
                   "diagonal (their diagonal, floored the same way)")
-      ->check(CLI::IsMember({"reject", "repair", "diagonal"}));
+      ->check(CLI::IsMember(graph::information_policy_names()));
   cmd->add_option("--robust", kinds->robust, "robust kernel")->check(CLI::IsMember(graph::robust_kernel_names()));
   cmd->add_option("--kernel-width", o->kernel_width, "Huber/Cauchy delta or DCS phi")->check(CLI::PositiveNumber);
   cmd->add_option("--max-iters", o->max_iters, "maximum iterations")->check(CLI::PositiveNumber);
@@ -62,16 +61,14 @@ sextant::cli::RegisterCommand reg{"optimize", [](CLI::App& app) {
   cmd->add_option("--relin-skip", o->relin_skip, "incremental: look for variables to relinearize every this many updates "
                   "(iSAM2's relinearizeSkip, 10 by its default; 1, the default here, keeps every update's estimate at the "
                   "batch optimum)")->check(CLI::PositiveNumber);
-  cmd->callback([o, kinds, input, output, json, information] {
+  cmd->callback([o, kinds, input, output, json] {
     o->solver = replay::solver_from_name(kinds->solver);
     o->init = replay::initial_estimate_from_name(kinds->init);
     o->robust = graph::robust_kernel_from_name(kinds->robust);
     o->ordering = replay::ordering_from_name(kinds->ordering);
     graph::G2oGraph g;
     graph::G2oReadOptions read_options;
-    read_options.information = *information == "repair"     ? graph::InformationPolicy::kRepair
-                               : *information == "diagonal" ? graph::InformationPolicy::kDiagonal
-                                                            : graph::InformationPolicy::kReject;
+    read_options.information = graph::information_policy_from_name(kinds->information);
     try {
       g = graph::read_g2o(*input, read_options);
     } catch (const graph::IndefiniteInformationError& e) {
@@ -84,7 +81,8 @@ sextant::cli::RegisterCommand reg{"optimize", [](CLI::App& app) {
     }
     if (g.repaired_information > 0 && !*json)
       std::printf("%s: %d information matrices were not positive definite; used %s\n", input->c_str(), g.repaired_information,
-                  *information == "repair" ? "the nearest positive definite ones" : "their diagonals");
+                  read_options.information == graph::InformationPolicy::kRepair ? "the nearest positive definite ones"
+                                                                                : "their diagonals");
     replay::GraphOptimizationResult r;
     try {
       r = replay::optimize_graph(g, *o, *output);

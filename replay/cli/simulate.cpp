@@ -15,9 +15,10 @@ sextant::cli::RegisterCommand reg{"simulate", [](CLI::App& app) {
   auto out = std::make_shared<std::string>();
   auto tum = std::make_shared<std::string>();
   auto region = std::make_shared<std::vector<double>>();
-  cmd->add_option("scenario", o->scenario, "planar (2D robot) or spatial (3D)")
+  auto scenario = std::make_shared<std::string>();
+  cmd->add_option("scenario", *scenario, "planar (2D robot) or spatial (3D)")
       ->required()
-      ->check(CLI::IsMember({"planar", "spatial"}));
+      ->check(CLI::IsMember(sextant::replay::scenario_names()));
   cmd->add_option("-o,--output", *out, "output LCM log")->required();
   cmd->add_option("--seed", o->seed, "random seed (the same seed gives the same log, byte for byte)");
   cmd->add_option("--duration", o->duration_s, "seconds of robot time")->check(CLI::PositiveNumber);
@@ -38,6 +39,7 @@ sextant::cli::RegisterCommand reg{"simulate", [](CLI::App& app) {
   cmd->add_option("--loop-distance", o->loop_distance, "loop closures when the robot returns within this distance, m "
                   "(0: none, e.g. when a matcher answers the daemon's requests instead)")->check(CLI::NonNegativeNumber);
   cmd->callback([=] {
+    o->scenario = sextant::replay::scenario_from_name(*scenario);
     if (!region->empty()) {
       o->clutter_region_min.assign(region->begin(), region->begin() + 3);
       o->clutter_region_max.assign(region->begin() + 3, region->end());

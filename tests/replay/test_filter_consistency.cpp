@@ -41,7 +41,7 @@ TEST_CASE("EKF-SLAM is consistent on short runs: average pose NEES inside the 95
 
 TEST_CASE("3-D EKF-SLAM pose NEES (6 dof) over seeds") {
   auto o = short_runs(true);
-  o.simulation.scenario = "spatial";
+  o.simulation.scenario = replay::Scenario::kSpatial;
   const auto r = replay::pose_nees_over_runs(o);
   MESSAGE("3-D SLAM: mean ANEES " << r.mean_anees << " in [" << r.lower << ", " << r.upper << "], "
                                   << 100 * r.fraction_inside << " % of samples inside, final position RMSE " << r.final_position_rmse);

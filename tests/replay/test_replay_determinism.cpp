@@ -10,6 +10,9 @@
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <stdexcept>
+#include <string>
+#include <vector>
 
 using namespace sextant;
 
@@ -26,7 +29,7 @@ std::string file_bytes(const std::string& path) {
 
 replay::SimulationSummary simulate_to(const std::string& path, const std::string& scenario, uint64_t seed) {
   replay::SimulationOptions o;
-  o.scenario = scenario;
+  o.scenario = replay::scenario_from_name(scenario);
   o.seed = seed;
   o.duration_s = 12;
   runtime::LogWriter w(path);
@@ -49,6 +52,10 @@ TEST_CASE("the same seed gives a byte-identical simulated log, another seed a di
     CHECK(file_bytes(a).size() > 100000);
     for (const auto& p : {a, b, c}) std::remove(p.c_str());
   }
+  // The scenario's spellings (`sextant simulate SCENARIO`): an unknown one names itself and the spellings.
+  CHECK(replay::scenario_names() == std::vector<std::string>{"planar", "spatial"});
+  CHECK(std::string(replay::scenario_name(replay::Scenario::kSpatial)) == "spatial");
+  CHECK_THROWS_WITH_AS(replay::scenario_from_name("3d"), "unknown scenario '3d' (planar or spatial)", std::invalid_argument);
 }
 
 TEST_CASE("replaying a log twice publishes the same bytes, and the ground truth is read back") {

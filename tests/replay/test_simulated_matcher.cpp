@@ -323,7 +323,7 @@ TEST_CASE("matcher truth from logs: simulate's planar and spatial runs, a truth-
     CAPTURE(scenario);
     const std::string path = temp(scenario + ".lcm");
     replay::SimulationOptions so;
-    so.scenario = scenario;
+    so.scenario = replay::scenario_from_name(scenario);
     so.duration_s = 5;
     so.landmarks = 0, so.sensors = 2, so.targets = 0;
     replay::SimulationSummary summary;

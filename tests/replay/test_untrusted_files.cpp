@@ -1,8 +1,8 @@
-// Readers of files from outside (TUM, MRCLAM, g2o, LCM logs through replay) on the inputs that used to loop, cast out
-// of range (undefined behaviour) or stop silently: each now ends with a clear error naming FILE:LINE, or reads on.
+// Readers of files from outside (TUM, MRCLAM, LCM logs through replay; g2o's: tests/estimators/graph/test_g2o_io.cpp)
+// on the inputs that used to loop, cast out of range (undefined behaviour) or stop silently: each now ends with a
+// clear error naming FILE:LINE, or reads on.
 #include "daemon/config/daemon_config.hpp"
 #include "daemon/runtime/lcm_log.hpp"
-#include "estimators/graph/g2o_io.hpp"
 #include "replay/mrclam_converter.hpp"
 #include "replay/replay_driver.hpp"
 #include "replay/simulator.hpp"
@@ -62,15 +62,6 @@ TEST_CASE("MRCLAM: a barcode or landmark id outside int's range is an error nami
   write("Robot1_Measurement.dat", "1.05 27 2.0 0.5\n");
   CHECK_NOTHROW(replay::convert_mrclam(dir, 1, dir + "/out.lcm", ""));
   std::filesystem::remove_all(dir);
-}
-
-TEST_CASE("g2o: an id outside int64's range is an error naming FILE:LINE, not a cast") {
-  const auto path = temp("ids.g2o");
-  std::ofstream(path) << "VERTEX_SE2 0 0 0 0\nVERTEX_SE2 1e30 0 0 0\n";
-  CHECK_THROWS_WITH(graph::read_g2o(path), doctest::Contains((path + ":2: VERTEX_SE2: id out of range: '1e30'").c_str()));
-  std::ofstream(path) << "VERTEX_SE2 nan 0 0 0\n";
-  CHECK_THROWS_WITH(graph::read_g2o(path), doctest::Contains((path + ":1: VERTEX_SE2: id out of range").c_str()));
-  std::remove(path.c_str());
 }
 
 TEST_CASE("replay of a log with a corrupt event mid-file replays the rest and reports the damage") {

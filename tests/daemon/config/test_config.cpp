@@ -104,6 +104,15 @@ TEST_CASE("kinds are parsed once into enums: every spelling maps to its kind, an
   CHECK(sextant::engine::Engine(cfg).primary_estimator() == "dead_reckoning");
   cfg.primary_estimator = PrimaryEstimator::kPf;  // its stage does not run (filter type ekf): auto, the graph
   CHECK(sextant::engine::Engine(cfg).primary_estimator() == "graph");
+  // Each stage's kind spells its name on the status channel, its estimator kind the FusedPose estimator name.
+  cfg.dead_reckoning.enabled = cfg.graph.enabled = cfg.association.enabled = true;
+  cfg.filter.type = FilterType::kPf;
+  const sextant::engine::Engine all(cfg);
+  std::vector<std::string> names, estimators;
+  for (const auto& stage : all.stages()) names.emplace_back(stage->name()), estimators.emplace_back(stage->estimator());
+  CHECK(names == std::vector<std::string>{"dead_reckoning", "particle_filter", "graph", "graph_pose", "association"});
+  CHECK(estimators == std::vector<std::string>{"dead_reckoning", "pf", "", "graph", ""});
+  CHECK(all.primary_estimator() == "pf");
 
   // Unknown names: the file, line and column of the value, the key, the name and the spellings.
   const std::string f = error_of("engine:\n  filter:\n    type: EKF\n");

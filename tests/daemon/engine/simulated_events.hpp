@@ -16,7 +16,7 @@ namespace sextant::test {
 
 inline std::vector<engine::Event> simulated_events(const replay::SimulationOptions& sim, bool bearings = true) {
   const auto log = (std::filesystem::temp_directory_path() /
-                    ("sextant_events_" + std::to_string(::getpid()) + "_" + sim.scenario + "_" + sim.source + "_" +
+                    ("sextant_events_" + std::to_string(::getpid()) + "_" + replay::scenario_name(sim.scenario) + "_" + sim.source + "_" +
                      std::to_string(sim.seed) + ".lcm"))
                        .string();
   {

@@ -244,7 +244,7 @@ TEST_CASE("filter stage: sightings after the newest prediction wait for the next
 TEST_CASE("filter stage: a 3-D body gets the 3-D EKF-SLAM, better than dead reckoning") {
   const auto log = (std::filesystem::temp_directory_path() / ("sextant_filter_3d_" + std::to_string(::getpid()) + ".lcm")).string();
   replay::SimulationOptions o;
-  o.scenario = "spatial";
+  o.scenario = replay::Scenario::kSpatial;
   o.duration_s = 60;
   o.seed = 5;
   {

@@ -175,7 +175,7 @@ EngineConfig graph_only_config(bool propose_loops) {
 
 GraphStage& graph_stage_of(Engine& engine) {
   for (auto& s : engine.stages())
-    if (s->name() == "graph") return dynamic_cast<GraphStage&>(*s);
+    if (s->kind() == StageKind::kGraph) return dynamic_cast<GraphStage&>(*s);
   throw std::runtime_error("no graph stage");
 }
 

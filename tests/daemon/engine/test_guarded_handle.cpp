@@ -12,6 +12,7 @@ using namespace sextant::engine;
 struct FlakyStage final : Stage {
   int handled = 0, recovered = 0, recover_throws = 0;
   bool broken = false;
+  StageKind kind() const override { return StageKind::kOther; }
   std::string_view name() const override { return "flaky"; }
   bool accepts(const Event&) const override { return true; }
   void handle(const Event& e, const Emit&) override {

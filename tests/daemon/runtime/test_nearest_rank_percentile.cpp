@@ -29,3 +29,11 @@ TEST_CASE("nearest-rank percentile: the smallest value with at least p of the sa
     CHECK(static_cast<double>(below) < p * static_cast<double>(v.size()));
   }
 }
+
+TEST_CASE("nearest-rank percentile of an unsorted sample: the sorted sample's, the sample left as it was") {
+  const std::vector<double> shuffled{40, 10, 50, 30, 20};
+  for (double p : {0.0, 0.2, 0.21, 0.5, 0.99, 1.0})
+    CHECK(sextant::runtime::nearest_rank_percentile_of(shuffled, p) ==
+          nearest_rank_percentile(std::vector<double>{10, 20, 30, 40, 50}, p));
+  CHECK(sextant::runtime::nearest_rank_percentile_of({}, 0.5) == 0);
+}

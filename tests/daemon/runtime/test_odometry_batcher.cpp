@@ -171,6 +171,7 @@ namespace {
 // Records what it handled, per body, and now and then takes its time (so that the queue fills and batches grow).
 class RecordingStage final : public engine::Stage {
  public:
+  engine::StageKind kind() const override { return engine::StageKind::kOther; }
   std::string_view name() const override { return "recording"; }
   bool accepts(const engine::Event&) const override { return true; }
   void handle(const engine::Event& e, const engine::Emit&) override {

@@ -28,13 +28,13 @@ const Emit ignore = [](Output) {};
 // (the next increment makes it positive again), so the stage drops that keyframe and goes back to the one before.
 std::vector<Event> two_bodies(int64_t drop_at) {
   replay::SimulationOptions a;
-  a.scenario = "planar";
+  a.scenario = replay::Scenario::kPlanar;
   a.source = "robot1";
   a.seed = 5;
   a.duration_s = 70;
   a.odometry_rate_hz = 200;
   replay::SimulationOptions b = a;
-  b.scenario = "spatial";
+  b.scenario = replay::Scenario::kSpatial;
   b.source = "robot2";
   b.seed = 6;
   std::vector<Event> events = test::simulated_events(a, false), other = test::simulated_events(b, false);

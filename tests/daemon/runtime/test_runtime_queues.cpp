@@ -110,6 +110,7 @@ namespace {
 // A stage that is slow on purpose, to overload its queue.
 class SlowStage final : public engine::Stage {
  public:
+  engine::StageKind kind() const override { return engine::StageKind::kOther; }
   std::string_view name() const override { return "slow"; }
   bool accepts(const engine::Event& e) const override { return std::holds_alternative<engine::Odometry>(e); }
   void handle(const engine::Event&, const engine::Emit& emit) override {

@@ -16,6 +16,7 @@ namespace {
 class FaultyStage final : public engine::Stage {
  public:
   explicit FaultyStage(int64_t every) : every_(every) {}
+  engine::StageKind kind() const override { return engine::StageKind::kOther; }
   std::string_view name() const override { return "faulty"; }
   bool accepts(const engine::Event& e) const override { return std::holds_alternative<engine::Odometry>(e); }
   void handle(const engine::Event& e, const engine::Emit& emit) override {
@@ -87,6 +88,7 @@ TEST_CASE("a recovery that throws is a failure too, and the runner still goes on
 namespace {
 class SleepyStage final : public engine::Stage {
  public:
+  engine::StageKind kind() const override { return engine::StageKind::kOther; }
   std::string_view name() const override { return "sleepy"; }
   bool accepts(const engine::Event&) const override { return true; }
   void handle(const engine::Event&, const engine::Emit&) override {

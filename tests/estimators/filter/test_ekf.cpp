@@ -115,7 +115,7 @@ TEST_CASE("planar EKF-SLAM: localization converges, outliers are gated, NaN refu
     }
     if (k % 50 == 0) {
       const auto r = ekf.observe(1, 25.0, 1.0, R);  // a wild outlier of a known landmark
-      gated += r.reason == "gate";
+      gated += r.reason == UpdateReason::kGate;
     }
   }
   CHECK(gated == 12);
@@ -130,7 +130,7 @@ TEST_CASE("planar EKF-SLAM: localization converges, outliers are gated, NaN refu
   CHECK(eig.eigenvalues().minCoeff() > 0);
   const auto bad = ekf.observe(2, std::nan(""), 0.1, R);
   CHECK_FALSE(bad.accepted);
-  CHECK(bad.reason == "non_finite");
+  CHECK(bad.reason == UpdateReason::kNonFinite);
 }
 
 TEST_CASE("a spurious unidentified sighting stays tentative and is forgotten, a repeated one is confirmed") {

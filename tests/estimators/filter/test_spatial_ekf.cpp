@@ -95,7 +95,7 @@ TEST_CASE("3-D EKF-SLAM: converges on a climbing circle, gates an outlier, refus
       const Eigen::Vector3d z = SpatialEkf::observation(truth, lm[i], nullptr, nullptr) + Eigen::Vector3d(0.1 * n(rng), 0.02 * n(rng), 0.02 * n(rng));
       accepted += ekf.observe(static_cast<int64_t>(i), z, R).accepted;
     }
-    if (k % 50 == 25) gated += ekf.observe(1, Eigen::Vector3d(30, 1, 0.5), R).reason == "gate";
+    if (k % 50 == 25) gated += ekf.observe(1, Eigen::Vector3d(30, 1, 0.5), R).reason == UpdateReason::kGate;
   }
   CHECK(gated == 8);
   CHECK(accepted > 2000);
@@ -107,10 +107,10 @@ TEST_CASE("3-D EKF-SLAM: converges on a climbing circle, gates an outlier, refus
   CHECK((P - P.transpose()).norm() == 0.0);
   Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(P);
   CHECK(eig.eigenvalues().minCoeff() > 0);
-  CHECK(ekf.observe(2, Eigen::Vector3d(std::nan(""), 0, 0), R).reason == "non_finite");
+  CHECK(ekf.observe(2, Eigen::Vector3d(std::nan(""), 0, 0), R).reason == UpdateReason::kNonFinite);
   SpatialEkfOptions loc;
   loc.slam = false;
   SpatialEkf no_slam(loc);
   no_slam.initialize(SE3(), SE3::Matrix6::Identity());
-  CHECK(no_slam.observe(7, Eigen::Vector3d(3, 0, 0), R).reason == "unknown_landmark");
+  CHECK(no_slam.observe(7, Eigen::Vector3d(3, 0, 0), R).reason == UpdateReason::kUnknownLandmark);
 }

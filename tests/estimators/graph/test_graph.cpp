@@ -418,6 +418,13 @@ TEST_CASE("information matrices that are not positive definite: every bad edge n
     CHECK(s.usable());
     CHECK(s.final_chi2 < s.initial_chi2);
   }
+  // The policies' spellings (`sextant optimize --information`, Python's information=): parsed once, an unknown
+  // name names itself and the spellings.
+  for (auto policy : {InformationPolicy::kReject, InformationPolicy::kRepair, InformationPolicy::kDiagonal})
+    CHECK(information_policy_from_name(information_policy_name(policy)) == policy);
+  CHECK(information_policy_names() == std::vector<std::string>{"reject", "repair", "diagonal"});
+  CHECK_THROWS_WITH_AS(information_policy_from_name("fix"),
+                       "unknown information policy 'fix' (reject, repair or diagonal)", std::invalid_argument);
   std::remove(p.c_str());
 }
 

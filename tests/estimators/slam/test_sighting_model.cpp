@@ -3,6 +3,7 @@
 // Jacobian taken by central differences of a range/bearing written out here (not the factor's analytic one).
 #include "estimators/slam/sighting_model.hpp"
 
+#include "estimators/lie/planar_axes.hpp"
 #include "estimators/lie/se2.hpp"
 
 #include <doctest/doctest.h>
@@ -23,21 +24,13 @@ Eigen::Vector2d range_bearing(const SE2& K, const SE2& D, const SE2& S, const Ei
   return {p.norm(), std::atan2(p.y(), p.x())};
 }
 
-Matrix6d planar6(const Eigen::Matrix3d& m) {
-  Matrix6d out = Matrix6d::Zero();
-  const int axes[3] = {0, 1, 5};
-  for (int r = 0; r < 3; ++r)
-    for (int c = 0; c < 3; ++c) out(axes[r], axes[c]) = m(r, c);
-  return out;
-}
-
 }  // namespace
 
 TEST_CASE("sighting model: the first sighting places the landmark by hand, and the gate's d2 matches a numeric S") {
   const SE2 K(2.0, -1.0, 0.3), D(1.0, 0.2, 0.4), S(0.5, 0.0, -0.2);
   Eigen::Matrix3d sigma_d;
   sigma_d << 0.02, 0.003, 0.0, 0.003, 0.04, 0.001, 0.0, 0.001, 0.005;
-  const TrackPoint anchor{0, D.to_se3(), planar6(sigma_d)};
+  const TrackPoint anchor{0, D.to_se3(), embed_planar(sigma_d)};
   const SightingModel model(true, K.to_se3(), anchor, S.to_se3());
   CHECK(model.dimension() == 2);
 
