@@ -707,7 +707,7 @@ TEST_CASE("graph stage: out-of-order and duplicate odometry are counted and drop
   CHECK(keyframe_times(with_bad) == keyframe_times(clean));
 }
 
-TEST_CASE("graph stage: after a real jump keyframing re-anchors and loops pull the new segment in; a spike is rejected") {
+TEST_CASE("graph stage: after a real jump keyframing re-anchors and loops pull the new segment in, a spike is rejected") {
   // 60 s on the circle at 10 Hz; the odometry stops at 20 s and resumes at 30 s (the robot went on 10 m meanwhile:
   // a 9.6 m chord, > k2 = 5) with a wrong guess of that motion (0.5 m and 0.1 rad off, as a visual odometry that
   // re-initialized).  The matcher answers loop proposals from the truth.

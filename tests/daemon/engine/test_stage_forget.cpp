@@ -28,7 +28,7 @@ std::vector<Event> run_of(const std::string& source, uint64_t seed, double secon
 
 }  // namespace
 
-TEST_CASE("forget: a body leaves the graph, the filters and dead reckoning; the other body goes on") {
+TEST_CASE("forget: a body leaves the graph, the filters and dead reckoning, the other body goes on") {
   const auto a = run_of("a", 1, 40), b = run_of("b", 2, 60);
   std::vector<Event> both(a);
   both.insert(both.end(), b.begin(), b.end());

@@ -79,7 +79,7 @@ using Slots = std::vector<std::vector<std::string>>;
 
 }  // namespace
 
-TEST_CASE("odometry batcher: a body's odometry waits behind one queue slot; its other events close the batch") {
+TEST_CASE("odometry batcher: a body's odometry waits behind one queue slot, its other events close the batch") {
   OdometryBatcher b(runtime::OdometryBatcherOptions{});
   Queue q;
   for (const auto& e : {odometry("a", 1), odometry("b", 2), odometry("a", 3), odometry("a", 4), loop("a", 5),
@@ -95,7 +95,7 @@ TEST_CASE("odometry batcher: a body's odometry waits behind one queue slot; its 
   CHECK(b.dropped() == 0);
 }
 
-TEST_CASE("odometry batcher: a taken batch takes no more; a full batch opens the next one") {
+TEST_CASE("odometry batcher: a taken batch takes no more, a full batch opens the next one") {
   runtime::OdometryBatcherOptions o;
   o.max_batch = 3;
   OdometryBatcher b(o);
@@ -115,7 +115,7 @@ TEST_CASE("odometry batcher: a taken batch takes no more; a full batch opens the
   CHECK(b.coalesced() == 5);
 }
 
-TEST_CASE("odometry batcher: a token the queue refuses drops its message; an event the queue refuses closes nothing") {
+TEST_CASE("odometry batcher: a token the queue refuses drops its message, an event the queue refuses closes nothing") {
   OdometryBatcher b(runtime::OdometryBatcherOptions{});
   Queue q;
   q.capacity = 2;

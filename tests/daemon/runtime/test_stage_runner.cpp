@@ -129,6 +129,7 @@ namespace {
 // Counts the bodies it is told to forget.
 class ForgettingStage final : public engine::Stage {
  public:
+  engine::StageKind kind() const override { return engine::StageKind::kOther; }
   std::string_view name() const override { return "forgetting"; }
   bool accepts(const engine::Event& e) const override { return std::holds_alternative<engine::Odometry>(e); }
   void handle(const engine::Event&, const engine::Emit&) override { ++handled; }

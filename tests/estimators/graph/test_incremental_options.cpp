@@ -14,7 +14,7 @@
 
 using namespace sextant::graph;
 
-TEST_CASE("incremental options: defaults are valid; an option out of range is named with its value") {
+TEST_CASE("incremental options: defaults are valid, an option out of range is named with its value") {
   CHECK(invalid_option(IncrementalOptions{}).empty());
   const double nan = std::nan(""), inf = std::numeric_limits<double>::infinity();
   struct Case {

@@ -350,7 +350,7 @@ WrongLoopEffect wrong_loop_effect(double options_width, std::optional<double> lo
   return r;
 }
 
-TEST_CASE("with DCS a wrong loop closure does not bend the incremental map; a factor's own kernel width applies to it") {
+TEST_CASE("with DCS a wrong loop closure does not bend the incremental map, a factor's own kernel width applies to it") {
   // DCS weight (Agarwal et al. 2013): min(1, 2 phi / (phi + chi2))^2, computed here from the loop's own residual.
   const auto dcs = [](double phi, double chi2) { return std::pow(std::min(1.0, 2 * phi / (phi + chi2)), 2); };
   const WrongLoopEffect narrow = wrong_loop_effect(1.0, std::nullopt);

@@ -47,7 +47,7 @@ TEST_CASE("keyframe thinning: laps of a circle keep one keyframe per place plus 
   CHECK(keyframes_to_keep(kfs, true, o) == keep);
 }
 
-TEST_CASE("keyframe thinning: heading sectors and height separate places; bad options are refused") {
+TEST_CASE("keyframe thinning: heading sectors and height separate places, bad options are refused") {
   KeyframeThinningOptions o;
   o.window = 1;
   // Same cell, opposite headings: two places.  Same cell and heading: one.

@@ -32,7 +32,7 @@ double chi2(const graph::Factor& f, const SE3& a, const SE3& b) {
 
 }  // namespace
 
-TEST_CASE("residual_information: T Omega T with T = diag(I, 2 I); a small tangent error then costs xi' Omega xi") {
+TEST_CASE("residual_information: T Omega T with T = diag(I, 2 I), a small tangent error then costs xi' Omega xi") {
   const Matrix6d omega = spd(1);
   Matrix6d T = Matrix6d::Identity();
   T.bottomRightCorner<3, 3>() *= 2;

@@ -8,7 +8,7 @@
 
 using namespace sextant::graph::smoother;
 
-TEST_CASE("cholmod handles free what they own; the fault seam fails one factorization") {
+TEST_CASE("cholmod handles free what they own, the fault seam fails one factorization") {
   Workspace w;
   const size_t before = w->memory_inuse;
   {
