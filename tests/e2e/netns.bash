@@ -30,7 +30,7 @@ in_netns_fn() {
 # info.  Returns non-zero, with the daemon's log on stdout, when it dies or does not get there (it is then stopped).
 wait_running() {
   local daemon=$1 daemon_log=$2 waited=0
-  until grep -q "running on" "$daemon_log"; do
+  until grep -q "running on" "$daemon_log" 2> /dev/null; do  # the log may not exist yet
     if ! kill -0 "$daemon" 2> /dev/null || [ "$waited" -ge 600 ]; then
       echo "sextantd did not start (waited ${waited}x0.1 s)"; cat "$daemon_log"
       kill -TERM "$daemon" 2> /dev/null
