@@ -87,7 +87,8 @@ TEST_CASE("a body whose clock jumps back is re-synchronised, forgotten by every 
   CHECK(publisher.not_monotonic() == 0);
   CHECK(publisher.fused_pose_sources_forgotten() >= 1);
   int channels = 0;
-  for (const auto& [ch, utimes] : published) {
+  for (const auto& [name, utimes] : published) {
+    const std::string& ch = name;  // INFO captures it in a lambda: not a structured binding (clang 14)
     int old_clock = 0, new_clock = 0;
     for (int64_t u : utimes) (u >= before_jump ? old_clock : new_clock) += 1;
     INFO(ch << ": " << old_clock << " before the jump, " << new_clock << " after");
