@@ -58,7 +58,8 @@ TEST_CASE("keyframe selector: L = sqrt(w_t |rho|^2 + w_r |phi|^2) of the logarit
   const SE3 kf = SE3::exp(xi(3, 1, -2, 0.1, 0.2, 1.2));
   const Vector6d mu = xi(0.12, -0.09, 0.05, 0.1, -0.05, 0.15);  // |rho|^2 = 0.025, |phi|^2 = 0.035
   const SE3 pose = kf * SE3::exp(mu);
-  for (const auto& [wt, wr] : {std::pair{1.0, 1.0}, std::pair{4.0, 0.0}, std::pair{0.0, 9.0}, std::pair{2.5, 0.5}}) {
+  for (const auto& weights : {std::pair{1.0, 1.0}, std::pair{4.0, 0.0}, std::pair{0.0, 9.0}, std::pair{2.5, 0.5}}) {
+    const double wt = weights.first, wr = weights.second;  // plain variables: CAPTURE's lambda takes them (clang 14)
     KeyframeSelectorOptions o;
     o.translation_weight = wt;
     o.rotation_weight = wr;

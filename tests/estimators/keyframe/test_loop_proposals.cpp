@@ -43,7 +43,8 @@ std::set<int64_t> reference_random_set(uint64_t seed, int64_t k, int n1, int n2)
 }  // namespace
 
 TEST_CASE("loop proposals: local then random sets equal an independent reimplementation of the documented draw") {
-  for (const auto& [n1, n2] : {std::pair{3, -1}, std::pair{4, 8}, std::pair{1, 5}, std::pair{0, 3}, std::pair{2, 0}}) {
+  for (const auto& sizes : {std::pair{3, -1}, std::pair{4, 8}, std::pair{1, 5}, std::pair{0, 3}, std::pair{2, 0}}) {
+    const int n1 = sizes.first, n2 = sizes.second;  // plain variables: CAPTURE's lambda takes them (clang 14)
     for (const uint64_t seed : {uint64_t{1}, uint64_t{42}, uint64_t{0xdeadbeefcafe1234}}) {
       const LoopProposer p({n1, n2, seed});
       const int resolved_n2 = n2 < 0 ? 2 * n1 : n2;
