@@ -122,7 +122,10 @@ std::optional<FastSlam::ProposalStep> FastSlam::refine_proposal(PoseGaussian& g,
 }
 
 Eigen::Vector3d FastSlam::sample(const PoseGaussian& g) {
-  const Eigen::Vector3d n(normal_(rng_), normal_(rng_), normal_(rng_));
+  // Three draws in a fixed order (the order in which a constructor's arguments are evaluated is the compiler's, so
+  // g++ and clang builds drew different particles from one seed); the last component first, as g++ builds did.
+  const double n3 = normal_(rng_), n2 = normal_(rng_), n1 = normal_(rng_);
+  const Eigen::Vector3d n(n1, n2, n3);
   if (g.covariance.isZero(0)) return g.mean;
   const Eigen::LDLT<Eigen::Matrix3d> ldlt(g.covariance);
   Eigen::Vector3d s = ldlt.vectorD().cwiseMax(0.0).cwiseSqrt().cwiseProduct(n);

@@ -217,7 +217,10 @@ World make_world(int steps, uint32_t seed, double range = 4.0, double odometry_n
     const SE2 d(0.1, 0, 0.1 / 4.0);  // a circle of radius 4
     x = x * d;
     w.truth.push_back(x);
-    const Eigen::Vector3d e = q.matrixL() * Eigen::Vector3d(n(rng), n(rng), n(rng));
+    // Drawn in a fixed order (the order of a constructor's arguments is the compiler's: g++ and clang drew different
+    // worlds), the last component first as g++ did.
+    const double n3 = n(rng), n2 = n(rng), n1 = n(rng);
+    const Eigen::Vector3d e = q.matrixL() * Eigen::Vector3d(n1, n2, n3);
     w.odometry.push_back(d * SE2(e[0], e[1], e[2]).inverse());  // the true motion is odometry (+) noise
     std::vector<RangeBearing> s;
     if (k % 2 == 0) {
