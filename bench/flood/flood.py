@@ -18,9 +18,9 @@ phase's end and its peak; and the daemon's final counters (sources refused and e
 """
 import json
 import math
-import struct
 import sys
 
+from lcmlog import read_log, write_event
 from sextant import fused_pose_t, loop_closure_t, odometry_t, status_t
 
 RATE_HZ = 50
@@ -55,11 +55,6 @@ def loop(utime, seq, source, utime_from, utime_to):
     lc.utime_from, lc.utime_to = utime_from, utime_to
     lc.position, lc.orientation, lc.information = [0.5, 0.0, 0.0], [1.0, 0.0, 0.0, 0.0], INFO6
     return lc.encode()
-
-
-def event(num, ts, channel, data):
-    ch = channel.encode()
-    return struct.pack(">Iqqii", 0xEDA1DA01, num, ts, len(ch), len(data)) + ch + data
 
 
 def make(path, start, flood=True):
@@ -97,7 +92,7 @@ def make(path, start, flood=True):
     events.sort(key=lambda e: e[0])
     with open(path, "wb") as f:
         for i, (t, c, b) in enumerate(events):
-            f.write(event(i, t, c, b))
+            write_event(f, i, t, c, b)
 
 
 def pct(v, q):
@@ -108,7 +103,6 @@ def pct(v, q):
 
 
 def summarize(bus, rss_path, json_out=None):
-    from lcmlog import read_log
     odo_at, pose_at, statuses = {}, {}, []
     for ts, c, b in read_log(bus):
         if c == "ODOMETRY":

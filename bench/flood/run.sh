@@ -51,5 +51,5 @@ kill -INT \$logger; wait \$logger || true
 wait \$sampler || true
 EOS
 in_netns bash "$work/inside.sh"
-PYTHONPATH="$root/tests/e2e:$PYTHONPATH" python3 "$root/bench/flood/flood.py" summarize "$work/bus.lcm" "$work/rss.txt" $json
+python3 "$root/bench/flood/flood.py" summarize "$work/bus.lcm" "$work/rss.txt" $json
 echo "load average: $(cut -d' ' -f1-3 /proc/loadavg)"

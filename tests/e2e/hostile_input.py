@@ -12,6 +12,7 @@ check BUS.lcm: the daemon's last SEXTANT_STATUS and its FUSED_POSE output on the
 import struct
 import sys
 
+from lcmlog import read_log, write_event
 from sextant import (bearing_detection_t, bearing_scan_t, fused_pose_t, landmark_observation_t, landmarks_t,
                      loop_closure_t, odometry_t, status_t)
 
@@ -65,11 +66,6 @@ def with_string_length(msg_bytes, at, n):
     return bytes(b)
 
 
-def event(num, ts, channel, data):
-    ch = channel.encode()
-    return struct.pack(">Iqqii", 0xEDA1DA01, num, ts, len(ch), len(data)) + ch + data
-
-
 def make(path):
     events = []
     hostile = []
@@ -110,11 +106,10 @@ def make(path):
                 events.append((t + 4, "BEARINGS", scan(T2100, 100).encode()))
     with open(path, "wb") as f:
         for i, (t, c, b) in enumerate(events):
-            f.write(event(i, t, c, b))
+            write_event(f, i, t, c, b)
 
 
 def check(bus):
-    from lcmlog import read_log
     statuses = [status_t.decode(b) for _, c, b in read_log(bus) if c == "SEXTANT_STATUS"]
     fused = [fused_pose_t.decode(b) for _, c, b in read_log(bus) if c == "FUSED_POSE"]
     assert statuses, "no status message"

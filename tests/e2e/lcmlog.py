@@ -1,9 +1,17 @@
-"""Reads LCM log files (lcm-logger's format) and decodes sextant messages, for the end-to-end checks.
+"""Reads and writes LCM log files (lcm-logger's format) and decodes sextant messages, for the end-to-end checks.
 
 Format: each event is a 0xEDA1DA01 sync word, int64 event number, int64 timestamp (us), int32 channel length,
 int32 data length, the channel name and the data, all big-endian.
 """
 import struct
+
+
+def write_event(f, num, ts, channel, data):
+    """Writes one event (number `num`, timestamp `ts` in us, `channel`, the bytes `data`) to the open file `f`."""
+    ch = channel.encode()
+    f.write(struct.pack(">IqqII", 0xEDA1DA01, num, ts, len(ch), len(data)))
+    f.write(ch)
+    f.write(data)
 
 
 def read_log(path):

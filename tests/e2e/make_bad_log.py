@@ -5,19 +5,12 @@ Valid odometry runs at 100 Hz for 4 s; then a flood at 10x that rate (1 kHz) fol
 """
 import json
 import math
-import struct
 import sys
 
+from lcmlog import write_event
 from sextant import odometry_t, landmarks_t, bearing_scan_t, bearing_detection_t
 
 T0 = 1_700_000_000_000_000
-
-
-def write_event(f, num, ts, channel, data):
-    ch = channel.encode()
-    f.write(struct.pack(">IqqII", 0xEDA1DA01, num, ts, len(ch), len(data)))
-    f.write(ch)
-    f.write(data)
 
 
 def odometry(utime, x, seq):

@@ -11,18 +11,10 @@
 import json
 import math
 import random
-import struct
 import sys
 
-from lcmlog import decode_all, read_log
+from lcmlog import decode_all, read_log, write_event
 from sextant import loop_closure_t, match_request_t, truth_t
-
-
-def write_event(f, num, ts, channel, data):
-    ch = channel.encode()
-    f.write(struct.pack(">IqqII", 0xEDA1DA01, num, ts, len(ch), len(data)))
-    f.write(ch)
-    f.write(data)
 
 
 def robot_truth(sim):
