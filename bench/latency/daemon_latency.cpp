@@ -145,6 +145,7 @@ struct Monitor {
   };
   std::mutex mutex;
   std::vector<Solve> solves;
+  std::map<std::string, int64_t> last_update_utime;  // per source: the publication the last solve was taken from
   std::vector<Status> statuses;
 
   void on_message(const lcm_recv_buf_t& b, const std::string& channel) {
@@ -152,9 +153,23 @@ struct Monitor {
     if (channel == trajectory_channel) {
       sextant::trajectory_t m;
       if (m.decode(b.data, 0, static_cast<int>(b.data_size)) < 0) return;
-      const int64_t newest = m.keyframes.empty() ? -1 : m.keyframes.back().id;
-      if (m.source == fed_source) newest_keyframe = newest;
+      // Keyframe ids only grow.  Neither kind of message ends with the newest: an UPDATE lists the new keyframes
+      // first, then the moved ones; a SNAPSHOT chunk covers an older id range.  So the newest is the largest id seen.
+      int64_t newest = -1;
+      for (const auto& k : m.keyframes) newest = std::max(newest, k.id);
+      if (m.source == fed_source) {
+        int64_t seen = newest_keyframe.load();
+        while (newest > seen && !newest_keyframe.compare_exchange_weak(seen, newest)) {
+        }
+        newest = std::max(newest, seen);
+      }
+      // One solve per publication: its UPDATE messages share the newest keyframe's time; SNAPSHOT chunks repeat
+      // poses already solved.
+      if (m.kind != sextant::trajectory_t::UPDATE) return;
       std::lock_guard lock(mutex);
+      const auto last = last_update_utime.find(m.source);
+      if (last != last_update_utime.end() && last->second == m.utime) return;
+      last_update_utime[m.source] = m.utime;
       solves.push_back({t, m.source, m.solve_ms, newest, m.chi2});
     } else if (channel == status_channel) {
       sextant::status_t m;
@@ -434,7 +449,7 @@ int run_measure(const MeasureOptions& o) {
   std::printf("  graph odometry: coalesced +%lld (joined a batch waiting for the stage), waiting max %lld (messages in batches)\n",
               static_cast<long long>(delta("graph", "odometry_coalesced")), static_cast<long long>(odometry_waiting_max));
   const std::array<double, 3> graph_latency = after != nullptr && after->latency_ms.count("graph") ? after->latency_ms.at("graph") : std::array<double, 3>{};
-  std::printf("  graph stage, event in -> processed (its last 4096 events, from SEXTANT_STATUS): p50 %.1f ms, p99 %.1f ms, max %.1f ms\n",
+  std::printf("  graph stage, event in -> processed (the last 10 s of events, from SEXTANT_STATUS): p50 %.1f ms, p99 %.1f ms, max %.1f ms\n",
               graph_latency[0], graph_latency[1], graph_latency[2]);
   if (!o.idle && fed.finished_ns >= 0)
     std::printf("  the whole graph was fed %.1f s into the measurement\n", static_cast<double>(fed.finished_ns - t_begin) * 1e-9);
