@@ -20,6 +20,7 @@ import json
 import math
 import sys
 
+from hostile_input import ident
 from lcmlog import read_log, write_event
 from sextant import fused_pose_t, loop_closure_t, odometry_t, status_t
 
@@ -30,12 +31,9 @@ NAMES = 60_000
 LOOPS = 100_000
 
 
-def ident(n, s):
-    return [s if i % (n + 1) == 0 else 0.0 for i in range(n * n)]
-
-
 COV6 = ident(6, 1e-4)
 ZERO6 = ident(6, 0.0)
+INC6 = ident(6, 1e-6)
 INFO6 = ident(6, 100.0)
 
 
@@ -44,7 +42,7 @@ def odometry(utime, sender, seq, source, x, y, yaw):
     m.utime, m.sender, m.seq, m.source, m.planar = utime, sender, seq, source, True
     m.position = [x, y, 0.0]
     m.orientation = [math.cos(yaw / 2), 0.0, 0.0, math.sin(yaw / 2)]
-    m.covariance, m.increment_covariance, m.twist_covariance = COV6, ident(6, 1e-6), ZERO6
+    m.covariance, m.increment_covariance, m.twist_covariance = COV6, INC6, ZERO6
     m.linear_velocity = m.angular_velocity = [0.0] * 3
     return m.encode()
 
