@@ -2,7 +2,7 @@
 // `sextant optimize` as a function, for the CLI and the Python module: initialize and optimize a pose graph (batch
 // Gauss-Newton / Levenberg-Marquardt on CHOLMOD), or feed it to the incremental smoother one pose per update and
 // compare with a batch solve from the same start.  The summary carries the keys of `sextant optimize --json`
-// (DESIGN.md: vertices, edges, dimension, iterations, initial_chi2, final_chi2, solve_seconds, converged; with
+// (the keys scripts depend on: vertices, edges, dimension, iterations, initial_chi2, final_chi2, solve_seconds, converged; with
 // `incremental` also step_ms_mean/p50/p99/max and final_chi2_batch_ratio); chi2 is g2o's, the sum of eᵀΩe.
 #include "estimators/graph/g2o_io.hpp"
 #include "estimators/graph/optimizer.hpp"

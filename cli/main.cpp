@@ -1,4 +1,4 @@
-// sextant: offline and debugging tools around the sextant engine (see DESIGN.md for the contracts).
+// sextant: offline and debugging tools around the sextant engine (the README lists the subcommands and their options).
 #include "daemon/runtime/version.hpp"
 #include "cli/command.hpp"
 

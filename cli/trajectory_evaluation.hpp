@@ -1,7 +1,7 @@
 #pragma once
 // `sextant eval` as a function, for the CLI and the Python module: ATE after alignment and RPE at the same scale
 // (trajectory_eval.hpp, the TUM tools' semantics), summarized under the keys of `sextant eval --json`
-// (DESIGN.md: ate_rmse, ate_mean, ate_median, ate_max, rpe_trans_rmse, rpe_rot_rmse_deg, matched, ...), and the KITTI
+// (the keys scripts depend on: ate_rmse, ate_mean, ate_median, ate_max, rpe_trans_rmse, rpe_rot_rmse_deg, matched, ...), and the KITTI
 // odometry benchmark's drift per distance (kitti_odometry_metric.hpp) over the associated poses when the ground truth
 // is long enough for its shortest segment (100 m).
 #include "eval/kitti_odometry_metric.hpp"

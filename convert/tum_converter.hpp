@@ -18,8 +18,8 @@
 // seeds 1-3), the order published for frame-to-frame RGB-D visual odometry on that sequence (Kerl, Sturm, Cremers,
 // "Robust odometry estimation for RGB-D cameras", ICRA 2013, and Steinbruecker et al. 2011: a few cm/s and 1-2
 // deg/s on fr1/desk, as recalled, not re-checked against the papers here) and just above full RGB-D SLAM systems,
-// which a frame-to-frame odometry does not beat: measured on the estimates in ../shared/data/tum
-// (../shared/data/tum/METRICS.md, section 4), ORB-SLAM2 RGB-D has 2.26 cm and 1.38 deg over 1 s on fr1_desk, 1.58 cm
+// which a frame-to-frame odometry does not beat: measured on the ORB-SLAM2 estimates that come with the TUM data
+// set copy the tests read, ORB-SLAM2 RGB-D has 2.26 cm and 1.38 deg over 1 s on fr1_desk, 1.58 cm
 // and 0.98 deg on fr1_xyz, 0.72 cm and 0.46 deg on fr2_desk.  The same parameters apply to every sequence (fr1_xyz
 // gets 2.2 cm and 1.0 deg, fr2_desk 1.9 cm and 0.9 deg, fr3_long_office_household 2.1 cm and 0.9 deg).  The earlier
 // model (sigma proportional to d) gave fr1_desk 0.5 cm and 0.12 deg: 4 and 11 times less than ORB-SLAM2 with its

@@ -1,6 +1,6 @@
 #pragma once
 // Trajectory evaluation with the exact semantics of the TUM RGB-D benchmark tools (associate.py, evaluate_ate.py,
-// evaluate_rpe.py; see ../shared/data/tum/METRICS.md), so sextant's numbers are the numbers everyone cites.
+// evaluate_rpe.py), so sextant's numbers are the numbers everyone cites.
 //  - Association: every (gt, est) stamp pair closer than max_difference, sorted by |difference| (then by the gt
 //    and est stamps), taken greedily one-to-one.
 //  - ATE: rigid alignment of the matched positions (Kabsch/Umeyama without scale; with scale = Sim(3), Umeyama

@@ -3,7 +3,7 @@
 // (VERTEX_SE3:QUAT lines), for evo, g2o_viewer and scripts.
 //
 // TUM: one pose per line, "timestamp tx ty tz qx qy qz qw" (seconds, metres, quaternion x y z w).  Reading follows
-// the TUM tools (see ../shared/data/tum/METRICS.md §0): commas and tabs count as spaces, empty lines and lines
+// the TUM tools (associate.py and evaluate_ate.py of the TUM RGB-D benchmark): commas and tabs count as spaces, empty lines and lines
 // starting with '#' are skipped, and a repeated timestamp replaces the earlier row.
 #include "daemon/engine/events.hpp"
 
