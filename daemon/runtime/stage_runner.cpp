@@ -18,6 +18,14 @@ bool StageRunner::offer(const QueuedEvent& event) {
       [&](const OdometryBatcher::Token& t) { return queue_.try_push(t); });
 }
 
+void StageRunner::forget(const std::string& source) {
+  const auto push = [&] { return queue_.try_push(ForgetOrder{source}); };
+  if (batcher_ ? batcher_->offer_marker(source, push) : push()) return;
+  std::lock_guard lock(forget_mutex_);
+  forget_.insert(source);
+  ++forget_out_of_order_;
+}
+
 void StageRunner::start() {
   if (!thread_.joinable()) thread_ = std::thread([this] { loop(); });
 }
@@ -34,7 +42,7 @@ int64_t StageRunner::drain_and_stop(std::chrono::steady_clock::time_point deadli
   int64_t left = 0;
   for (const Slot& slot : queue_.discard()) {
     if (const auto* token = std::get_if<OdometryBatcher::Token>(&slot)) left += static_cast<int64_t>(batcher_->take(*token).size());
-    else ++left;
+    else if (std::holds_alternative<QueuedEvent>(slot)) ++left;
   }
   drain_discarded_ += left;
   if (thread_.joinable()) thread_.join();
@@ -66,6 +74,8 @@ void StageRunner::loop() {
     for (const auto& source : forget) host_.forget(source);
     if (const auto* event = std::get_if<QueuedEvent>(&*item)) {
       handle_one(*event);
+    } else if (const auto* order = std::get_if<ForgetOrder>(&*item)) {
+      host_.forget(order->body);
     } else {
       // A batch's token: the batch is closed now (the body's next odometry opens a new one); its messages one by one.
       for (const QueuedEvent& message : batcher_->take(std::get<OdometryBatcher::Token>(*item))) handle_one(message);
@@ -90,6 +100,7 @@ StageStatus StageRunner::status() const {
     s.counters = host_.with_host_counters(counters_);
   }
   if (const int64_t d = drain_discarded_.load(); d > 0) s.counters.push_back({"drain_discarded", d});
+  if (const int64_t f = forget_out_of_order_.load(); f > 0) s.counters.push_back({"forget_out_of_order", f});
   if (batcher_) {
     s.counters.push_back({"odometry_coalesced", batcher_->coalesced()});
     s.counters.push_back({"odometry_waiting", batcher_->waiting()});

@@ -55,13 +55,12 @@ class StageRunner {
   /// full, or a bound of the batcher was reached).
   bool offer(const QueuedEvent& event);
   bool accepts(const engine::Event& event) const { return host_.stage().accepts(event); }
-  /// Has the stage forget a body (Stage::forget) on its own thread, before it handles its next event (any thread).
-  /// Every body asked for is forgotten: they are the bodies the intake forgot since the stage's last event, each
-  /// once (the intake tracks at most daemon.max_sources at a time).
-  void forget(const std::string& source) {
-    std::lock_guard lock(forget_mutex_);
-    forget_.insert(source);
-  }
+  /// Has the stage forget a body (Stage::forget) on its own thread, in order with the events offered before (one
+  /// thread at a time: the intake's): the order takes a queue slot (and closes the body's odometry batch), so the
+  /// body's earlier events are handled first.  When the queue is full the order is kept aside and carried out before
+  /// the stage's next event, counted as "forget_out_of_order" (the bodies the intake forgets are at most
+  /// daemon.max_sources at a time, so the orders kept aside are bounded too).
+  void forget(const std::string& source);
   /// Called on the stage's thread each time the stage forgot a body (after idling, or before the first message of a
   /// re-synchronised clock, QueuedEvent::forget_first), after the stage's earlier outputs: how the publisher forgets
   /// what it keeps for that body.  Set before start.
@@ -95,8 +94,12 @@ class StageRunner {
 
   StageHost host_;
   std::mutex stage_mutex_;  // held while the stage works on an event (and by with_stage)
-  // A queue slot: one event, or the token of a batch of one body's odometry.
-  using Slot = std::variant<QueuedEvent, OdometryBatcher::Token>;
+  // The order to forget a body, in the queue.
+  struct ForgetOrder {
+    std::string body;
+  };
+  // A queue slot: one event, the token of a batch of one body's odometry, or an order to forget a body.
+  using Slot = std::variant<QueuedEvent, OdometryBatcher::Token, ForgetOrder>;
   BoundedQueue<Slot> queue_;
   std::unique_ptr<OdometryBatcher> batcher_;  // null without batching
   LatencyRecorder latency_;
@@ -106,7 +109,8 @@ class StageRunner {
   mutable std::mutex counters_mutex_;
   engine::Counters counters_;  // copied from the stage after each event (the stage is not thread-safe)
   std::mutex forget_mutex_;
-  std::unordered_set<std::string> forget_;  // bodies to forget before the next event (under forget_mutex_)
+  std::unordered_set<std::string> forget_;  // orders the full queue refused, carried out before the next event
+  std::atomic<int64_t> forget_out_of_order_{0};
 };
 
 }  // namespace sextant::runtime
