@@ -32,14 +32,15 @@ void check_channels(Section& s, const Channels& c) {
   };
   using Named = std::vector<std::pair<std::string, std::string>>;
   Named inputs{
-      {"odometry", c.odometry}, {"landmarks", c.landmarks}, {"bearings", c.bearings}, {"loop_closures", c.loop_closures}};
+      {"odometry", c.odometry}, {"landmarks", c.landmarks}, {"bearings", c.bearings}, {"loop_closures", c.loop_closures},
+      {"imu", c.imu},           {"gnss", c.gnss}};
   Named outputs{{"fused_pose", c.fused_pose},
                                                            {"trajectory", c.trajectory},
                                                            {"targets", c.targets},
                                                            {"match_requests", c.match_requests},
                                                            {"status", c.status}};
   // The estimators that are not primary publish on FUSED_POSE_<ESTIMATOR> (publisher.hpp).
-  for (const char* e : {"_DEAD_RECKONING", "_EKF", "_PF", "_GRAPH"}) outputs.push_back({"fused_pose", c.fused_pose + e});
+  for (const char* e : {"_DEAD_RECKONING", "_EKF", "_PF", "_GRAPH", "_INERTIAL"}) outputs.push_back({"fused_pose", c.fused_pose + e});
   for (const Named* list : {&inputs, &outputs})
     for (const auto& [key, name] : *list)
       if (c.full(name).size() > kLcmMaxChannel)
@@ -70,7 +71,8 @@ void check_channels(Section& s, const Channels& c) {
 void read_channels(Section s, Channels& c) {
   s.get("prefix", c.prefix);
   for (auto [key, field] : {std::pair{"odometry", &c.odometry}, {"landmarks", &c.landmarks}, {"bearings", &c.bearings},
-                            {"loop_closures", &c.loop_closures}, {"fused_pose", &c.fused_pose},
+                            {"loop_closures", &c.loop_closures}, {"imu", &c.imu}, {"gnss", &c.gnss},
+                            {"fused_pose", &c.fused_pose},
                             {"trajectory", &c.trajectory}, {"targets", &c.targets},
                             {"match_requests", &c.match_requests}, {"status", &c.status}})
     s.get(key, *field, channel_name());

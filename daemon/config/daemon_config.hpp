@@ -15,6 +15,8 @@ struct Channels {
   std::string landmarks = "LANDMARKS";
   std::string bearings = "BEARINGS";
   std::string loop_closures = "LOOP_CLOSURES";
+  std::string imu = "IMU";
+  std::string gnss = "GNSS";
   std::string fused_pose = "FUSED_POSE";
   std::string trajectory = "TRAJECTORY";
   std::string targets = "TARGETS";

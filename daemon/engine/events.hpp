@@ -84,7 +84,34 @@ struct LoopClosure {
   double score = 0;
 };
 
-using Event = std::variant<Odometry, LandmarkSightings, BearingScan, LoopClosure>;
+/// One sample of an IMU mounted on a body (imu_t), in the IMU's own frame (`frame` selects its mounting).  A group
+/// the message did not carry is empty.  Covariances are 3x3; a zero matrix means "not stated".
+struct ImuSample {
+  int64_t utime = 0;
+  std::string source;
+  std::string frame;
+  std::optional<Eigen::Vector3d> angular_velocity;     // rad/s, sensor frame
+  Eigen::Matrix3d angular_velocity_covariance = Eigen::Matrix3d::Zero();
+  std::optional<Eigen::Vector3d> linear_acceleration;  // specific force, m/s^2, sensor frame, gravity not removed
+  Eigen::Matrix3d linear_acceleration_covariance = Eigen::Matrix3d::Zero();
+  std::optional<Eigen::Quaterniond> orientation;       // sensor to world (ENU when orientation_has_yaw)
+  bool orientation_has_yaw = false;
+  Eigen::Matrix3d orientation_covariance = Eigen::Matrix3d::Zero();  // rad^2, [roll pitch yaw]
+};
+
+/// One fix of a GNSS receiver whose antenna is on a body (gnss_t).  Only fixes (status >= 0) become events.
+struct GnssFix {
+  int64_t utime = 0;
+  std::string source;
+  std::string frame;
+  int status = 0;                                  // gnss_t.STATUS_*
+  double latitude = 0, longitude = 0, altitude = 0;  // degrees, degrees, metres above the WGS84 ellipsoid
+  Eigen::Matrix3d position_covariance = Eigen::Matrix3d::Zero();  // East-North-Up, m^2
+  std::optional<Eigen::Vector3d> velocity;          // East-North-Up, m/s
+  Eigen::Matrix3d velocity_covariance = Eigen::Matrix3d::Zero();
+};
+
+using Event = std::variant<Odometry, LandmarkSightings, BearingScan, LoopClosure, ImuSample, GnssFix>;
 
 /// The utime every event carries.
 inline int64_t event_utime(const Event& e) {

@@ -145,6 +145,8 @@ Decoded decode_event(InputKind kind, const void* data, size_t size, MessageOrigi
       case InputKind::kLandmarks: return decode_as<sextant::landmarks_t>(data, size, origin);
       case InputKind::kBearings: return decode_as<sextant::bearing_scan_t>(data, size, origin);
       case InputKind::kLoopClosures: return decode_as<sextant::loop_closure_t>(data, size, origin);
+      case InputKind::kImu: return decode_as<sextant::imu_t>(data, size, origin);
+      case InputKind::kGnss: return decode_as<sextant::gnss_t>(data, size, origin);
     }
   } catch (const std::exception& e) {
     return Rejection{"decode", std::string("cannot decode: ") + e.what()};
@@ -234,6 +236,97 @@ Decoded to_event(const sextant::bearing_scan_t& m) {
       if (!(b.sigma_azimuth > 0)) fail("covariance", f + "sigma_azimuth: not positive");
       if (!(b.sigma_elevation > 0)) fail("covariance", f + "sigma_elevation: not positive");
       e.detections.push_back(b);
+    }
+    return engine::Event{std::move(e)};
+  });
+}
+
+namespace {
+
+// A 3x3 covariance a sensor states: finite, symmetric, positive semi-definite; zero means "not stated".
+Eigen::Matrix3d check_stated_covariance(const double* v, const std::string& field) {
+  check_finite(v, 9, field);
+  const Eigen::Matrix3d m = read_matrix<3>(v);
+  if (m.isZero(0)) return m;
+  const double scale = std::max(1.0, m.cwiseAbs().maxCoeff());
+  if ((m - m.transpose()).cwiseAbs().maxCoeff() > 1e-9 * scale) fail("covariance", field + ": not symmetric");
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(m, Eigen::EigenvaluesOnly);
+  if (eig.eigenvalues().minCoeff() < -1e-12 * scale) {
+    std::ostringstream s;
+    s << field << ": not positive semi-definite (smallest eigenvalue " << eig.eigenvalues().minCoeff() << ")";
+    fail("covariance", s.str());
+  }
+  return m;
+}
+
+Eigen::Vector3d check_vector3(const double v[3], const std::string& field) {
+  check_finite(v, 3, field);
+  return {v[0], v[1], v[2]};
+}
+
+void check_in(double v, double lo, double hi, const std::string& field) {
+  check_finite(v, field);
+  if (v < lo || v > hi) {
+    std::ostringstream s;
+    s << field << ": " << v << " outside [" << lo << ", " << hi << "]";
+    fail("invalid", s.str());
+  }
+}
+
+}  // namespace
+
+Decoded to_event(const sextant::imu_t& m) {
+  return guarded([&]() -> Decoded {
+    check_name(m.source, "imu_t.source");
+    check_name(m.frame, "imu_t.frame");
+    if (m.utime <= 0) fail("invalid", "imu_t.utime: not positive (" + std::to_string(m.utime) + ")");
+    if (!m.has_angular_velocity && !m.has_linear_acceleration && !m.has_orientation)
+      fail("invalid", "imu_t: no group present (has_angular_velocity, has_linear_acceleration, has_orientation)");
+    engine::ImuSample e;
+    e.utime = m.utime;
+    e.source = m.source;
+    e.frame = m.frame;
+    if (m.has_angular_velocity) {
+      e.angular_velocity = check_vector3(m.angular_velocity, "imu_t.angular_velocity");
+      e.angular_velocity_covariance = check_stated_covariance(m.angular_velocity_covariance, "imu_t.angular_velocity_covariance");
+    }
+    if (m.has_linear_acceleration) {
+      e.linear_acceleration = check_vector3(m.linear_acceleration, "imu_t.linear_acceleration");
+      e.linear_acceleration_covariance =
+          check_stated_covariance(m.linear_acceleration_covariance, "imu_t.linear_acceleration_covariance");
+    }
+    if (m.has_orientation) {
+      e.orientation = check_quaternion(m.orientation, "imu_t.orientation");
+      e.orientation_has_yaw = m.orientation_has_yaw;
+      e.orientation_covariance = check_stated_covariance(m.orientation_covariance, "imu_t.orientation_covariance");
+    }
+    return engine::Event{std::move(e)};
+  });
+}
+
+Decoded to_event(const sextant::gnss_t& m) {
+  return guarded([&]() -> Decoded {
+    check_name(m.source, "gnss_t.source");
+    check_name(m.frame, "gnss_t.frame");
+    if (m.utime <= 0) fail("invalid", "gnss_t.utime: not positive (" + std::to_string(m.utime) + ")");
+    if (m.status == sextant::gnss_t::STATUS_NO_FIX) fail("no_fix", "gnss_t.status: no fix");
+    if (m.status < sextant::gnss_t::STATUS_FIX || m.status > sextant::gnss_t::STATUS_RTK_FIXED)
+      fail("invalid", "gnss_t.status: unknown value " + std::to_string(m.status));
+    engine::GnssFix e;
+    e.utime = m.utime;
+    e.source = m.source;
+    e.frame = m.frame;
+    e.status = m.status;
+    check_in(m.latitude, -90, 90, "gnss_t.latitude");
+    check_in(m.longitude, -180, 180, "gnss_t.longitude");
+    check_in(m.altitude, -1e5, 1e5, "gnss_t.altitude");
+    e.latitude = m.latitude;
+    e.longitude = m.longitude;
+    e.altitude = m.altitude;
+    e.position_covariance = check_stated_covariance(m.position_covariance, "gnss_t.position_covariance");
+    if (m.has_velocity) {
+      e.velocity = check_vector3(m.velocity, "gnss_t.velocity");
+      e.velocity_covariance = check_stated_covariance(m.velocity_covariance, "gnss_t.velocity_covariance");
     }
     return engine::Event{std::move(e)};
   });

@@ -7,6 +7,8 @@
 
 #include <sextant/bearing_scan_t.hpp>
 #include <sextant/fused_pose_t.hpp>
+#include <sextant/gnss_t.hpp>
+#include <sextant/imu_t.hpp>
 #include <sextant/landmarks_t.hpp>
 #include <sextant/loop_closure_t.hpp>
 #include <sextant/match_request_t.hpp>
@@ -33,7 +35,7 @@ inline constexpr int kMaxObservationsPerMessage = 4096;
 inline constexpr int kMaxDetectionsPerScan = 4096;
 
 /// The kinds of input channel the daemon subscribes to.
-enum class InputKind { kOdometry, kLandmarks, kBearings, kLoopClosures };
+enum class InputKind { kOdometry, kLandmarks, kBearings, kLoopClosures, kImu, kGnss };
 
 using Decoded = std::variant<engine::Event, Rejection>;
 
@@ -53,6 +55,13 @@ Decoded to_event(const sextant::odometry_t& msg);
 Decoded to_event(const sextant::landmarks_t& msg);
 Decoded to_event(const sextant::bearing_scan_t& msg);
 Decoded to_event(const sextant::loop_closure_t& msg);
+/// An IMU sample: each present group finite, its covariance symmetric positive semi-definite (zero: not stated), the
+/// orientation a unit quaternion; at least one group present.
+Decoded to_event(const sextant::imu_t& msg);
+/// A GNSS fix: status a gnss_t.STATUS_* value, latitude in [-90, 90], longitude in [-180, 180], altitude within
+/// 100 km of the ellipsoid, covariances symmetric positive semi-definite.  A message without a fix (STATUS_NO_FIX) is
+/// refused with reason "no_fix": it carries nothing to fuse.
+Decoded to_event(const sextant::gnss_t& msg);
 
 /// Conversions event/output -> message, stamped with the sender's name and sequence number.
 sextant::odometry_t to_message(const engine::Odometry& e, const std::string& sender, int64_t seq);

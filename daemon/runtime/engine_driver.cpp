@@ -33,6 +33,8 @@ EngineDriver::EngineDriver(const config::DaemonConfig& config, engine::Engine& e
   intake_.add_channel(ch.full(ch.landmarks), InputKind::kLandmarks);
   intake_.add_channel(ch.full(ch.bearings), InputKind::kBearings);
   intake_.add_channel(ch.full(ch.loop_closures), InputKind::kLoopClosures);
+  intake_.add_channel(ch.full(ch.imu), InputKind::kImu);
+  intake_.add_channel(ch.full(ch.gnss), InputKind::kGnss);
   make_lanes(config);
 }
 

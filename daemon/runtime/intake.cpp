@@ -19,6 +19,8 @@ StreamKey stream_of(const std::string& channel, const engine::Event& e) {
         else if constexpr (std::is_same_v<T, engine::BearingScan>)
           return {channel + "/sensor " + std::to_string(x.sensor_id), true, 0};
         else if constexpr (std::is_same_v<T, engine::LandmarkSightings>) return {channel + "/" + x.source, false, 0};
+        else if constexpr (std::is_same_v<T, engine::ImuSample> || std::is_same_v<T, engine::GnssFix>)
+          return {channel + "/" + x.source + "/" + x.frame, true, 0};  // one clock per sensor of a body
         else
           return {channel + "/" + x.source, false,
                   static_cast<uint64_t>(x.utime_from) * 0x9e3779b97f4a7c15ULL ^ static_cast<uint64_t>(x.utime_to)};

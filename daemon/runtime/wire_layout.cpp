@@ -11,6 +11,7 @@ WireField fixed(std::string name, size_t bytes) { return {std::move(name), Kind:
 WireField i64(std::string name) { return fixed(std::move(name), 8); }
 WireField i32(std::string name) { return fixed(std::move(name), 4); }
 WireField boolean(std::string name) { return fixed(std::move(name), 1); }
+WireField i8(std::string name) { return fixed(std::move(name), 1); }
 WireField doubles(std::string name, size_t n) { return fixed(std::move(name), 8 * n); }
 WireField str(std::string name) { return {std::move(name), Kind::kString, 0, 0, nullptr}; }
 WireField count(std::string name, int32_t max) { return {std::move(name), Kind::kCount, 4, max, nullptr}; }
@@ -156,6 +157,29 @@ const WireLayout& wire_layout<sextant::bearing_scan_t>() {
                             {i64("utime"), str("sender"), i64("seq"), i32("sensor_id"), doubles("sensor_position", 3),
                              i64("scan_id"), count("num_detections", kMaxDetectionsPerScan),
                              array("detections", detection)}};
+  return l;
+}
+
+template <>
+const WireLayout& wire_layout<sextant::imu_t>() {
+  static const WireLayout l{"imu_t",
+                            {i64("utime"), str("sender"), i64("seq"), str("source"), str("frame"),
+                             boolean("has_angular_velocity"), doubles("angular_velocity", 3),
+                             doubles("angular_velocity_covariance", 9), boolean("has_linear_acceleration"),
+                             doubles("linear_acceleration", 3), doubles("linear_acceleration_covariance", 9),
+                             boolean("has_orientation"), boolean("orientation_has_yaw"), doubles("orientation", 4),
+                             doubles("orientation_covariance", 9)}};
+  return l;
+}
+
+template <>
+const WireLayout& wire_layout<sextant::gnss_t>() {
+  static const WireLayout l{"gnss_t",
+                            {i64("utime"), str("sender"), i64("seq"), str("source"), str("frame"), i8("status"),
+                             doubles("latitude", 1), doubles("longitude", 1), doubles("altitude", 1),
+                             i8("covariance_type"), doubles("position_covariance", 9), boolean("has_velocity"),
+                             doubles("velocity", 3), doubles("velocity_covariance", 9), boolean("has_heading"),
+                             doubles("heading", 1), doubles("heading_variance", 1)}};
   return l;
 }
 

@@ -12,6 +12,8 @@
 // encoder (the encoded size of random messages, and every truncation refused).
 #include <sextant/bearing_scan_t.hpp>
 #include <sextant/fused_pose_t.hpp>
+#include <sextant/gnss_t.hpp>
+#include <sextant/imu_t.hpp>
 #include <sextant/landmarks_t.hpp>
 #include <sextant/loop_closure_t.hpp>
 #include <sextant/match_request_t.hpp>
@@ -73,6 +75,8 @@ template <> const WireLayout& wire_layout<sextant::odometry_t>();
 template <> const WireLayout& wire_layout<sextant::landmarks_t>();
 template <> const WireLayout& wire_layout<sextant::bearing_scan_t>();
 template <> const WireLayout& wire_layout<sextant::loop_closure_t>();
+template <> const WireLayout& wire_layout<sextant::imu_t>();
+template <> const WireLayout& wire_layout<sextant::gnss_t>();
 template <> const WireLayout& wire_layout<sextant::truth_t>();
 template <> const WireLayout& wire_layout<sextant::match_request_t>();
 template <> const WireLayout& wire_layout<sextant::fused_pose_t>();
@@ -87,6 +91,8 @@ template <> inline constexpr bool kHasWireLayout<sextant::odometry_t> = true;
 template <> inline constexpr bool kHasWireLayout<sextant::landmarks_t> = true;
 template <> inline constexpr bool kHasWireLayout<sextant::bearing_scan_t> = true;
 template <> inline constexpr bool kHasWireLayout<sextant::loop_closure_t> = true;
+template <> inline constexpr bool kHasWireLayout<sextant::imu_t> = true;
+template <> inline constexpr bool kHasWireLayout<sextant::gnss_t> = true;
 template <> inline constexpr bool kHasWireLayout<sextant::truth_t> = true;
 template <> inline constexpr bool kHasWireLayout<sextant::match_request_t> = true;
 template <> inline constexpr bool kHasWireLayout<sextant::fused_pose_t> = true;
