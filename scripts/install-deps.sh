@@ -6,7 +6,7 @@ set -euo pipefail
 packages=(
   build-essential cmake pkg-config make
   liblcm-dev liblcm-bin liblcm-java libjchart2d-java libglib2.0-dev default-jdk-headless
-  libeigen3-dev libsuitesparse-dev
+  libeigen3-dev libsuitesparse-dev libgeographiclib-dev
   libspdlog-dev libyaml-cpp-dev libcli11-dev doctest-dev libbenchmark-dev
   iproute2 util-linux procps python3
   pybind11-dev python3-dev python3-pytest   # the sextant Python module and its tests
