@@ -171,11 +171,11 @@ TEST_CASE("ESKF: per-field selection, gating and refusals") {
 }
 
 TEST_CASE("sensor mounting: ROS roll-pitch-yaw, the check, and an IMU off the body origin") {
-  // robot_localization's bag 1 IMU: base_link -> imu_link at (0, -0.3, 0.52), roll -pi/2, yaw pi/2: the IMU's z axis
-  // points along the body's -x... R = Rz(pi/2) Rx(-pi/2) maps sensor x to body y, sensor y to body -z, z to -x.
-  const SensorMounting m = SensorMounting::from_xyz_rpy({0, -0.3, 0.52}, -M_PI / 2, 0, M_PI / 2);
-  CHECK((m.rotation * Eigen::Vector3d::UnitX() - Eigen::Vector3d::UnitY()).norm() < 1e-12);
-  CHECK((m.rotation * Eigen::Vector3d::UnitY() + Eigen::Vector3d::UnitZ()).norm() < 1e-12);
+  // robot_localization's bag 1 IMU: base_link -> imu_link at (0, -0.3, 0.52), roll pi/2, yaw -pi/2:
+  // R = Rz(-pi/2) Rx(pi/2) maps sensor x to body -y, sensor y to body z (up), sensor z to body -x.
+  const SensorMounting m = SensorMounting::from_xyz_rpy({0, -0.3, 0.52}, M_PI / 2, 0, -M_PI / 2);
+  CHECK((m.rotation * Eigen::Vector3d::UnitX() + Eigen::Vector3d::UnitY()).norm() < 1e-12);
+  CHECK((m.rotation * Eigen::Vector3d::UnitY() - Eigen::Vector3d::UnitZ()).norm() < 1e-12);
   CHECK((m.rotation * Eigen::Vector3d::UnitZ() + Eigen::Vector3d::UnitX()).norm() < 1e-12);
   SensorMounting bad;
   bad.rotation(0, 1) = 0.1;
