@@ -101,4 +101,42 @@ NavState ImuPreintegration::predict(const NavState& i, const ImuBias& b, const E
   return j;
 }
 
+ImuPreintegration::Vector9 ImuPreintegration::residual(const NavState& i, const NavState& j, const ImuBias& b,
+                                                       const Eigen::Vector3d& g, Matrix9x15* J_i, Matrix9* J_j) const {
+  const Eigen::Vector3d dbg = b.gyro - bias_.gyro;
+  const Eigen::Matrix3d dR_b = corrected_delta_R(b);
+  const Eigen::Matrix3d Rit = i.R.transpose();
+  const Eigen::Vector3d dv_world = Rit * (j.v - i.v - g * dt_);
+  const Eigen::Vector3d dp_world = Rit * (j.p - i.p - i.v * dt_ - 0.5 * g * dt_ * dt_);
+  Eigen::Matrix3d Jr_inv;
+  Vector9 r;
+  r.segment<3>(0) = SO3(Eigen::Matrix3d(dR_b.transpose() * Rit * j.R)).log(&Jr_inv);
+  r.segment<3>(3) = dv_world - corrected_delta_v(b);
+  r.segment<3>(6) = dp_world - corrected_delta_p(b);
+  // Error-state offsets of the filter: [dp, dv, dth, db_a, db_g].
+  constexpr int P = 0, V = 3, TH = 6, BA = 9, BG = 12;
+  if (J_i) {
+    J_i->setZero();
+    const Eigen::Matrix3d E = SO3::exp(r.segment<3>(0)).matrix();
+    J_i->block<3, 3>(0, TH) = -Jr_inv * j.R.transpose() * i.R;
+    J_i->block<3, 3>(0, BG) = -Jr_inv * E.transpose() * SO3::right_jacobian(dR_dbg_ * dbg) * dR_dbg_;
+    J_i->block<3, 3>(3, V) = -Rit;
+    J_i->block<3, 3>(3, TH) = SO3::hat(dv_world);
+    J_i->block<3, 3>(3, BA) = -dv_dba_;
+    J_i->block<3, 3>(3, BG) = -dv_dbg_;
+    J_i->block<3, 3>(6, P) = -Rit;
+    J_i->block<3, 3>(6, V) = -Rit * dt_;
+    J_i->block<3, 3>(6, TH) = SO3::hat(dp_world);
+    J_i->block<3, 3>(6, BA) = -dp_dba_;
+    J_i->block<3, 3>(6, BG) = -dp_dbg_;
+  }
+  if (J_j) {
+    J_j->setZero();
+    J_j->block<3, 3>(0, TH) = Jr_inv;
+    J_j->block<3, 3>(3, V) = Rit;
+    J_j->block<3, 3>(6, P) = Rit;
+  }
+  return r;
+}
+
 }  // namespace sextant::inertial

@@ -84,6 +84,18 @@ class ImuPreintegration {
   /// The state at j from the state at i (eq. 38) at bias `b` (first-order corrected), gravity `g` in the world frame.
   NavState predict(const NavState& i, const ImuBias& b, const Eigen::Vector3d& g) const;
 
+  /// The residual of a preintegrated-IMU factor between the states i and j with the bias b at i (eq. 45), ordered
+  /// like covariance() [r_R, r_v, r_p]:
+  ///   r_R = Log(dR(b)^T R_i^T R_j),  r_v = R_i^T (v_j - v_i - g dt) - dv(b),
+  ///   r_p = R_i^T (p_j - p_i - v_i dt - g dt^2 / 2) - dp(b)
+  /// with the first-order corrected deltas.  Jacobians (when asked) with respect to the error states of the
+  /// error-state filter (error_state_ekf.hpp): J_i over [dp_i, dv_i, dth_i, db_a, db_g] (9 x 15) and J_j over
+  /// [dp_j, dv_j, dth_j] (9 x 9), where p <- p + dp, v <- v + dv, R <- R Exp(dth), b <- b + db.
+  using Vector9 = Eigen::Matrix<double, 9, 1>;
+  using Matrix9x15 = Eigen::Matrix<double, 9, 15>;
+  Vector9 residual(const NavState& i, const NavState& j, const ImuBias& b, const Eigen::Vector3d& g,
+                   Matrix9x15* J_i = nullptr, Matrix9* J_j = nullptr) const;
+
   /// One sample's propagation of the preintegrated error (eq. 62): d' = A d + B eta_g + C eta_a, with
   /// d = [d_phi, d_v, d_p] at the start of the sample, for the bias-corrected sample (w, a) held for dt, at the
   /// preintegrated rotation dR before the sample.  Public for the tests and for graph factors.

@@ -264,3 +264,50 @@ TEST_CASE("EuRoC V1_02: preintegrated dR, dv, dp with the true biases against Vi
     }
   }
 }
+
+TEST_CASE("preintegrated-IMU factor: zero residual on the integrated states, Jacobians against central differences") {
+  std::mt19937 rng(13);
+  const std::vector<Sample> samples = random_samples(rng, 150);
+  ImuBias b0;
+  b0.gyro = Eigen::Vector3d(0.01, 0.02, -0.01);
+  b0.accel = Eigen::Vector3d(-0.1, 0.05, 0.2);
+  const ImuPreintegration pim = preintegrate(samples, b0);
+  const Eigen::Vector3d g(0, 0, -9.81);
+  NavState i;
+  i.R = rodrigues(Eigen::Vector3d(0.3, -0.5, 1.0));
+  i.v = Eigen::Vector3d(1, 0.5, -0.2);
+  i.p = Eigen::Vector3d(3, -4, 1);
+  const NavState j = pim.predict(i, b0, g);
+  CHECK(pim.residual(i, j, b0, g).norm() < 1e-9);
+
+  // Away from the solution and from the linearisation point, so that every term of the Jacobians is exercised.
+  NavState jj = j;
+  jj.R = j.R * rodrigues(Eigen::Vector3d(0.05, -0.02, 0.04));
+  jj.v += Eigen::Vector3d(0.1, -0.2, 0.05);
+  jj.p += Eigen::Vector3d(-0.3, 0.1, 0.2);
+  ImuBias b = b0;
+  b.gyro += Eigen::Vector3d(0.003, -0.002, 0.004);
+  b.accel += Eigen::Vector3d(0.02, 0.01, -0.03);
+  ImuPreintegration::Matrix9x15 Ji;
+  ImuPreintegration::Matrix9 Jj;
+  pim.residual(i, jj, b, g, &Ji, &Jj);
+  // The error states: [dp, dv, dth, db_a, db_g] at i, [dp, dv, dth] at j.
+  auto perturbed = [&](const Eigen::Matrix<double, 24, 1>& e) {
+    NavState a = i, c = jj;
+    ImuBias bb = b;
+    a.p += e.segment<3>(0), a.v += e.segment<3>(3), a.R = a.R * rodrigues(e.segment<3>(6));
+    bb.accel += e.segment<3>(9), bb.gyro += e.segment<3>(12);
+    c.p += e.segment<3>(15), c.v += e.segment<3>(18), c.R = c.R * rodrigues(e.segment<3>(21));
+    return pim.residual(a, c, bb, g);
+  };
+  Eigen::Matrix<double, 9, 24> J;
+  J << Ji, Jj;
+  const double h = 1e-6;
+  for (int c = 0; c < 24; ++c) {
+    Eigen::Matrix<double, 24, 1> e = Eigen::Matrix<double, 24, 1>::Zero();
+    e(c) = h;
+    const Eigen::Matrix<double, 9, 1> num = (perturbed(e) - perturbed(-e)) / (2 * h);
+    INFO("column ", c);
+    CHECK((num - J.col(c)).norm() < 1e-6);
+  }
+}
