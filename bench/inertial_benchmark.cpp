@@ -4,6 +4,7 @@
 // covariance, no Jacobians), the least work any inertial estimator does per sample.
 #include "estimators/inertial/error_state_ekf.hpp"
 #include "estimators/inertial/imu_preintegration.hpp"
+#include "estimators/inertial/lagged_eskf.hpp"
 
 #include <benchmark/benchmark.h>
 
@@ -96,6 +97,24 @@ void BM_EskfWheelVelocityUpdate(benchmark::State& state) {
   }
 }
 BENCHMARK(BM_EskfWheelVelocityUpdate);
+
+// A GNSS fix arriving 100 ms after its stamp at 1 kHz IMU: the update plus the 100 samples re-applied after it.
+// Each iteration: 200 IMU samples (0.2 s) and one fix 100 ms late, reported per fix.
+void BM_LaggedEskfLateFix(benchmark::State& state) {
+  const std::vector<BodyImuSample> s = one_second();
+  LaggedEskf f(EskfOptions{}, 0.5);
+  f.initialize(0, EskfState{}, ErrorStateEkf::Matrix15::Identity() * 1e-2);
+  size_t k = 0;
+  const auto fix = [](ErrorStateEkf& e) {
+    return e.update_gnss_position(Eigen::Vector3d::Zero(), Eigen::Matrix3d::Identity(), Eigen::Vector3d::Zero());
+  };
+  for (auto _ : state) {
+    for (int i = 0; i < 200; ++i, ++k) f.add_imu(static_cast<double>(k) * kDt, s[k % s.size()]);
+    const auto r = f.add_measurement(static_cast<double>(k - 100) * kDt, fix);
+    benchmark::DoNotOptimize(r);
+  }
+}
+BENCHMARK(BM_LaggedEskfLateFix)->Unit(benchmark::kMicrosecond);
 
 }  // namespace
 
