@@ -105,6 +105,10 @@ void read_engine_config(Section& s, engine::EngineConfig& c) {
     Section a = s.child("association");
     read_stage_config(a, c.association);
   }
+  {
+    Section i = s.child("inertial");
+    read_stage_config(i, c.inertial);
+  }
   s.reject_unknown_keys();
 }
 

@@ -9,5 +9,6 @@ void read_stage_config(Section& section, engine::DeadReckoningConfig& config);
 void read_stage_config(Section& section, engine::FilterConfig& config);
 void read_stage_config(Section& section, engine::AssociationConfig& config);
 void read_stage_config(Section& section, engine::GraphConfig& config);
+void read_stage_config(Section& section, engine::InertialConfig& config);
 
 }  // namespace sextant::config

@@ -5,6 +5,7 @@
 #include "daemon/engine/filter_stage.hpp"
 #include "daemon/engine/graph_pose_stage.hpp"
 #include "daemon/engine/graph_stage.hpp"
+#include "daemon/engine/inertial_stage.hpp"
 #include "daemon/engine/particle_filter_stage.hpp"
 
 namespace sextant::engine {
@@ -23,6 +24,7 @@ std::vector<std::unique_ptr<Stage>> make_stages(const EngineConfig& config,
     stages.push_back(std::make_unique<GraphPoseStage>(corrections));
   }
   if (config.association.enabled) stages.push_back(std::make_unique<AssociationStage>(config.association));
+  if (config.inertial.enabled) stages.push_back(std::make_unique<InertialStage>(config.inertial));
   return stages;
 }
 
@@ -31,10 +33,11 @@ Engine::Engine(const EngineConfig& config, std::shared_ptr<GraphCorrectionBoard>
 
 namespace {
 
-// How capable an estimator is, for "auto": graph > filter > dead reckoning.
+// How capable an estimator is, for "auto": graph > inertial filter > filter > dead reckoning.
 int capability(PrimaryEstimator estimator) {
   switch (estimator) {
-    case PrimaryEstimator::kGraph: return 3;
+    case PrimaryEstimator::kGraph: return 4;
+    case PrimaryEstimator::kInertial: return 3;
     case PrimaryEstimator::kEkf:
     case PrimaryEstimator::kPf: return 2;
     case PrimaryEstimator::kDeadReckoning: return 1;

@@ -5,6 +5,7 @@
 #include "daemon/engine/dead_reckoning_stage_config.hpp"
 #include "daemon/engine/filter_stage_config.hpp"
 #include "daemon/engine/graph_stage_config.hpp"
+#include "daemon/engine/inertial_stage_config.hpp"
 #include "daemon/engine/stage_kinds.hpp"
 
 #include <string>
@@ -20,6 +21,7 @@ struct EngineConfig {
   FilterConfig filter;
   GraphConfig graph;
   AssociationConfig association;
+  InertialConfig inertial;
 };
 
 }  // namespace sextant::engine

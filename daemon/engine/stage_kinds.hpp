@@ -14,6 +14,7 @@ enum class PrimaryEstimator {
   kEkf,            // "ekf"
   kPf,             // "pf"
   kGraph,          // "graph"
+  kInertial,       // "inertial"
 };
 /// The kind of a config spelling; throws std::invalid_argument naming the spellings for any other name.
 PrimaryEstimator primary_estimator_from_name(const std::string& name);
@@ -28,6 +29,7 @@ enum class StageKind {
   kGraph,           // "graph": the graph back end (graph_stage.hpp)
   kGraphPose,       // "graph_pose": the graph's fused pose (graph_pose_stage.hpp)
   kAssociation,     // "association" (association_stage.hpp)
+  kInertial,        // "inertial": IMU-driven error-state filter (inertial_stage.hpp)
   kOther,           // "other"
 };
 const char* stage_kind_name(StageKind kind);

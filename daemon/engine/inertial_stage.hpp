@@ -1,0 +1,68 @@
+#pragma once
+// FUSED_POSE "inertial": for every body that carries an IMU, the error-state filter of estimators/inertial
+// (error_state_ekf.hpp, with late measurements placed in time by lagged_eskf.hpp) driven by the IMU and corrected
+// by what robot_localization's users fuse:
+//  - IMU (imu_t): angular velocity and specific force predict (both needed); the unit's own orientation updates
+//    roll, pitch and, when the unit gives one, yaw (engine.inertial.imu_orientation selects the fields);
+//  - wheel odometry (odometry_t's twist): the body velocity in the odometry message's body frame
+//    (engine.inertial.odometry_velocity selects vx, vy, vz);
+//  - GNSS (gnss_t): the antenna's position in an East-North-Up tangent plane at the datum (configured, or the body's
+//    first fix), with the antenna's lever arm, behind a chi-square gate; optionally its velocity.
+// Each sensor's mounting (rotation and lever arm) is looked up by (body, frame) in engine.inertial.mountings; a
+// sample of a frame without one is refused and counted (`unmounted`).  The filter starts at a body's first IMU sample
+// that has both rates and acceleration: roll and pitch from the unit's orientation when it has one, else from gravity
+// in the specific force (the body at rest), yaw from the unit's orientation when it has a yaw, else 0.
+// Frames: the world frame is the filter's: ENU at the datum when GNSS is fused (and the IMU's yaw is ENU), else the
+// frame the first orientation gives.  Outputs at most engine.inertial.publish_rate_hz per body (data time), pose and
+// 6x6 covariance over [position, rotation error] (the filter's p and theta blocks, right perturbation).
+#include "daemon/engine/inertial_stage_config.hpp"
+#include "daemon/engine/stage.hpp"
+#include "estimators/geodesy/local_tangent_plane.hpp"
+#include "estimators/inertial/lagged_eskf.hpp"
+
+#include <map>
+#include <memory>
+#include <optional>
+#include <string>
+
+namespace sextant::engine {
+
+class InertialStage final : public Stage {
+ public:
+  /// Throws std::invalid_argument for a mounting that is not a rotation or not finite.
+  explicit InertialStage(InertialConfig config);
+
+  StageKind kind() const override { return StageKind::kInertial; }
+  std::optional<PrimaryEstimator> estimator_kind() const override { return PrimaryEstimator::kInertial; }
+  bool accepts(const Event& e) const override;
+  void handle(const Event& e, const Emit& emit) override;
+  void forget(const std::string& source) override { bodies_.erase(source); }
+  Counters counters() const override;
+
+ private:
+  struct Body {
+    std::unique_ptr<inertial::LaggedEskf> filter;  // null until the first IMU sample with rates and acceleration
+    int64_t t0 = 0;                                // utime of the filter's time 0 (seconds are relative to it)
+    int64_t last_published = 0;
+    std::optional<geodesy::LocalTangentPlane> plane;
+  };
+
+  const inertial::SensorMounting* mounting(const std::string& source, const std::string& frame) const;
+  double seconds(const Body& b, int64_t utime) const { return static_cast<double>(utime - b.t0) * 1e-6; }
+  void on_imu(const ImuSample& s, const Emit& emit);
+  void start(Body& b, const ImuSample& s, const inertial::SensorMounting& m);
+  void on_odometry(const Odometry& o);
+  void on_gnss(const GnssFix& g);
+  /// Counts the outcome of an update by its reason.
+  void count(const filter::UpdateResult& r);
+  void publish(const std::string& source, Body& b, int64_t utime, const Emit& emit);
+
+  InertialConfig config_;
+  inertial::EskfOptions options_;
+  std::map<std::pair<std::string, std::string>, inertial::SensorMounting> mountings_;  // (source or "", frame)
+  std::map<std::string, Body> bodies_;
+  int64_t imu_ = 0, started_ = 0, unmounted_ = 0, imu_refused_ = 0, updates_ = 0, refused_ = 0, gated_ = 0,
+          too_old_ = 0, published_ = 0, no_filter_yet_ = 0;
+};
+
+}  // namespace sextant::engine

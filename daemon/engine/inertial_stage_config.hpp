@@ -1,0 +1,48 @@
+#pragma once
+// Configuration of the inertial filter stage (inertial_stage.hpp): sensor mountings, IMU noise, which fields of
+// each sensor are fused, late measurements, the GNSS datum.  Read from engine.inertial (daemon/config/), documented in
+// config/default.yaml.
+#include <array>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace sextant::engine {
+
+/// Where one sensor of a body sits: the transform body -> sensor as ROS's static_transform_publisher gives it
+/// (translation in metres, then roll, pitch, yaw in radians composed R = Rz(yaw) Ry(pitch) Rx(roll)).
+struct SensorMountingConfig {
+  std::string source;  // the body ("" = every body)
+  std::string frame;   // imu_t.frame / gnss_t.frame
+  std::array<double, 3> xyz{0, 0, 0};
+  std::array<double, 3> rpy{0, 0, 0};
+};
+
+struct InertialConfig {
+  bool enabled = false;  // the stage runs only for users who say they have an IMU
+  std::vector<SensorMountingConfig> mountings;
+  /// IMU white noise (densities) and bias random walks, SI units per sqrt(s).
+  double gyro_noise_density = 3.6e-3, accel_noise_density = 1.8e-2;
+  double gyro_bias_random_walk = 1e-4, accel_bias_random_walk = 1e-3;
+  /// Which components are fused (robot_localization's per-field selection): the IMU's orientation [roll, pitch, yaw]
+  /// (yaw only from units whose orientation has a yaw), the wheel odometry's body velocity [vx, vy, vz], GNSS
+  /// position [E, N, U] and velocity.
+  std::array<bool, 3> imu_orientation{true, true, true};
+  std::array<bool, 3> odometry_velocity{true, true, true};
+  std::array<bool, 3> gnss_position{true, true, true};
+  std::array<bool, 3> gnss_velocity{false, false, false};
+  /// Variances used where a message states none (a zero covariance): orientation rad^2, velocity (m/s)^2.
+  double default_orientation_variance = 1e-3, default_velocity_variance = 1e-2, default_gnss_variance = 4.0;
+  /// Chi-square gate (Mahalanobis squared) of GNSS position fixes; 0: none.  A multipath outlier is refused, counted.
+  double gnss_gate = 16.27;  // 3 degrees of freedom, 0.999
+  /// Late measurements: how far back (seconds of data time) a measurement is inserted where it belongs.
+  double history_s = 1.0;
+  /// FUSED_POSE "inertial" per body at most this often (data time; the IMU may run at 1 kHz).
+  double publish_rate_hz = 50;
+  /// The ENU datum [latitude deg, longitude deg, altitude m]; empty: the first fix of each body.
+  std::vector<double> datum;
+  /// Initial standard deviations of the biases.
+  double initial_sigma_gyro_bias = 0.01, initial_sigma_accel_bias = 0.1;
+};
+
+}  // namespace sextant::engine
