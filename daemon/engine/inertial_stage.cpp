@@ -128,7 +128,8 @@ void InertialStage::on_gnss(const GnssFix& g) {
     return;
   }
   const geodesy::Geodetic fix{g.latitude, g.longitude, g.altitude};
-  if (!b.plane) {
+  const bool first = !b.plane;
+  if (first) {
     const bool configured = config_.datum.size() == 3;
     b.plane.emplace(configured ? geodesy::Geodetic{config_.datum[0], config_.datum[1], config_.datum[2]} : fix);
   }
@@ -137,6 +138,10 @@ void InertialStage::on_gnss(const GnssFix& g) {
   const Eigen::Matrix3d R =
       to_plane * or_default(g.position_covariance, config_.default_gnss_variance) * to_plane.transpose();
   const Eigen::Vector3d lever = m->lever_arm;
+  if (first) {
+    anchor(b, z, R, lever);
+    return;
+  }
   const inertial::FieldMask fields = config_.gnss_position;
   const double gate = config_.gnss_gate;
   const double t = seconds(b, g.utime);
@@ -152,6 +157,20 @@ void InertialStage::on_gnss(const GnssFix& g) {
       return f.update_gnss_velocity(v, Rv, lever, vfields);
     }));
   }
+}
+
+void InertialStage::anchor(Body& b, const Eigen::Vector3d& antenna, const Eigen::Matrix3d& R,
+                           const Eigen::Vector3d& lever) {
+  const inertial::ErrorStateEkf& f = b.filter->filter();
+  inertial::EskfState x = f.state();
+  x.p = antenna - x.q * lever;
+  inertial::ErrorStateEkf::Matrix15 P = f.covariance();
+  using E = inertial::ErrorStateEkf;
+  P.block<3, E::kDim>(E::kP, 0).setZero();
+  P.block<E::kDim, 3>(0, E::kP).setZero();
+  P.block<3, 3>(E::kP, E::kP) = R;
+  b.filter->initialize(f.time(), x, P);
+  ++anchored_;
 }
 
 void InertialStage::publish(const std::string& source, Body& b, int64_t utime, const Emit& emit) {
@@ -180,6 +199,7 @@ Counters InertialStage::counters() const {
   return {{"bodies", static_cast<int64_t>(bodies_.size())},
           {"imu_samples", imu_},
           {"started", started_},
+          {"gnss_anchored", anchored_},
           {"unmounted", unmounted_},
           {"before_start", no_filter_yet_},
           {"imu_refused", imu_refused_},

@@ -7,7 +7,8 @@
 //  - wheel odometry (odometry_t's twist): the body velocity in the odometry message's body frame
 //    (engine.inertial.odometry_velocity selects vx, vy, vz);
 //  - GNSS (gnss_t): the antenna's position in an East-North-Up tangent plane at the datum (configured, or the body's
-//    first fix), with the antenna's lever arm, behind a chi-square gate; optionally its velocity.
+//    first fix), with the antenna's lever arm, behind a chi-square gate; optionally its velocity.  The body's first
+//    fix places it (its position becomes the fix's, less the lever arm).
 // Each sensor's mounting (rotation and lever arm) is looked up by (body, frame) in engine.inertial.mountings; a
 // sample of a frame without one is refused and counted (`unmounted`).  The filter starts at a body's first IMU sample
 // that has both rates and acceleration: roll and pitch from the unit's orientation when it has one, else from gravity
@@ -53,6 +54,9 @@ class InertialStage final : public Stage {
   void start(Body& b, const ImuSample& s, const inertial::SensorMounting& m);
   void on_odometry(const Odometry& o);
   void on_gnss(const GnssFix& g);
+  /// The body's first fix: its position becomes the antenna's, less the lever arm, with the fix's covariance (the
+  /// filter's frame becomes the ENU plane; whatever it held of the position before is dropped).
+  void anchor(Body& b, const Eigen::Vector3d& antenna, const Eigen::Matrix3d& R, const Eigen::Vector3d& lever);
   /// Counts the outcome of an update by its reason.
   void count(const filter::UpdateResult& r);
   void publish(const std::string& source, Body& b, int64_t utime, const Emit& emit);
@@ -62,7 +66,8 @@ class InertialStage final : public Stage {
   std::map<std::pair<std::string, std::string>, inertial::SensorMounting> mountings_;  // (source or "", frame)
   std::map<std::string, Body> bodies_;
   int64_t imu_ = 0, started_ = 0, unmounted_ = 0, imu_refused_ = 0, updates_ = 0, refused_ = 0, gated_ = 0,
-          too_old_ = 0, published_ = 0, no_filter_yet_ = 0;
+          too_old_ = 0, published_ = 0, no_filter_yet_ = 0,
+          anchored_ = 0;
 };
 
 }  // namespace sextant::engine
