@@ -244,7 +244,7 @@ void FilterStage::apply(SpatialTrack& t, const Input& in) const {
       return;
     }
     const SE3 delta = t.last_odom.between(odom);
-    const Matrix6 Q = filter_increment_covariance(o, delta, t.last_covariance, config_.min_increment_variance);
+    const Matrix6 Q = increment_covariance(o, delta, t.last_covariance, config_.min_increment_variance);
     std::vector<int64_t> stops;
     for (const auto& p : t.pending) stops.push_back(p.utime);
     std::vector<LandmarkSightings> waiting;

@@ -6,6 +6,7 @@
 
 #include "estimators/filter/low_variance_resampling.hpp"
 #include "estimators/filter/planar_ekf.hpp"
+#include "estimators/spd_matrix.hpp"
 
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
@@ -45,7 +46,7 @@ bool update_landmark(MapLandmark& lm, const Eigen::Vector3d& pose, const Eigen::
   lm.mean += K * nu;
   const Eigen::Matrix2d IKH = Eigen::Matrix2d::Identity() - K * H;
   const Eigen::Matrix2d P = IKH * lm.covariance * IKH.transpose() + K * R * K.transpose();
-  lm.covariance = 0.5 * (P + P.transpose());
+  lm.covariance = symmetrized(P);
   return true;
 }
 
@@ -57,7 +58,7 @@ MapLandmark new_landmark(const Eigen::Vector3d& pose, const RangeBearing& s) {
   Eigen::Matrix2d Jz;
   Jz << c, -s.range * sn, sn, s.range * c;
   const Eigen::Matrix2d P = Jz * s.covariance * Jz.transpose();
-  lm.covariance = 0.5 * (P + P.transpose());
+  lm.covariance = symmetrized(P);
   lm.id = s.id;
   lm.observations = 1;
   return lm;
@@ -72,7 +73,7 @@ FastSlam::FastSlam(const FastSlamOptions& options) : options_(options), rng_(opt
 void FastSlam::initialize(const SE2& pose, const Eigen::Matrix3d& covariance) {
   Particle p;
   p.pose.mean << pose.translation(), pose.angle();
-  p.pose.covariance = 0.5 * (covariance + covariance.transpose());
+  p.pose.covariance = symmetrized(covariance);
   particles_.assign(static_cast<size_t>(options_.particles), p);
   identified_slot_.clear();
   batches_ = 0;
@@ -81,7 +82,7 @@ void FastSlam::initialize(const SE2& pose, const Eigen::Matrix3d& covariance) {
 
 bool FastSlam::predict(const SE2& delta, const Eigen::Matrix3d& Q) {
   if (!initialized_ || !Q.allFinite() || !delta.translation().allFinite() || !std::isfinite(delta.angle())) return false;
-  const Eigen::Matrix3d Qs = 0.5 * (Q + Q.transpose());
+  const Eigen::Matrix3d Qs = symmetrized(Q);
   if (Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(Qs, Eigen::EigenvaluesOnly).eigenvalues().minCoeff() <
       -1e-12 * (1 + Qs.cwiseAbs().maxCoeff()))
     return false;
@@ -89,7 +90,7 @@ bool FastSlam::predict(const SE2& delta, const Eigen::Matrix3d& Q) {
   for (auto& p : particles_) {
     p.pose.mean = PlanarEkf::motion(p.pose.mean, delta, &F, &G);
     const Eigen::Matrix3d P = F * p.pose.covariance * F.transpose() + G * Qs * G.transpose();
-    p.pose.covariance = 0.5 * (P + P.transpose());
+    p.pose.covariance = symmetrized(P);
   }
   return true;
 }
@@ -117,7 +118,7 @@ std::optional<FastSlam::ProposalStep> FastSlam::refine_proposal(PoseGaussian& g,
   g.mean[2] = wrap_angle(g.mean[2]);
   const Eigen::Matrix3d IKG = Eigen::Matrix3d::Identity() - K * Gs;
   const Eigen::Matrix3d P = IKG * g.covariance * IKG.transpose() + K * Qn * K.transpose();
-  g.covariance = 0.5 * (P + P.transpose());
+  g.covariance = symmetrized(P);
   return out;
 }
 
@@ -375,7 +376,7 @@ void FastSlam::mixture(SE2* mean, Eigen::Matrix3d* covariance) const {
     d[2] = wrap_angle(d[2]);
     out += w[i] * (d * d.transpose() + particles_[i].pose.covariance);
   }
-  *covariance = 0.5 * (out + out.transpose());
+  *covariance = symmetrized(out);
 }
 
 SE2 FastSlam::mean_pose() const {

@@ -2,6 +2,7 @@
 
 #include "estimators/graph/initialization.hpp"
 #include "estimators/kind_names.hpp"
+#include "estimators/spd_matrix.hpp"
 
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
@@ -82,14 +83,6 @@ struct PendingEdge {
   std::function<std::unique_ptr<Factor>(int, int)> make;
 };
 
-double smallest_eigenvalue(const Eigen::MatrixXd& I) {
-  return Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(I, Eigen::EigenvaluesOnly).eigenvalues().minCoeff();
-}
-
-bool positive_definite(const Eigen::MatrixXd& I) {
-  return I.allFinite() && Eigen::LLT<Eigen::MatrixXd>(I).info() == Eigen::Success && smallest_eigenvalue(I) > 0;
-}
-
 // Edges shown by name in the error about bad information matrices (the rest are counted).
 constexpr size_t kBadEdgesShown = 5;
 
@@ -109,15 +102,14 @@ std::vector<std::string> information_policy_names() { return kind_names(kInforma
 
 Eigen::MatrixXd repair_information(const Eigen::MatrixXd& I, InformationPolicy policy) {
   if (policy == InformationPolicy::kReject) return I;
-  const Eigen::MatrixXd S = 0.5 * (I + I.transpose());
+  const Eigen::MatrixXd S = symmetrized(I);
   if (policy == InformationPolicy::kDiagonal) {
     const double floor = 1e-6 * std::max(S.diagonal().cwiseAbs().maxCoeff(), 1e-300);
     return S.diagonal().cwiseMax(floor).asDiagonal();
   }
-  Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(S);
-  const double floor = 1e-6 * std::max(eig.eigenvalues().cwiseAbs().maxCoeff(), 1e-300);
-  const Eigen::MatrixXd R = eig.eigenvectors() * eig.eigenvalues().cwiseMax(floor).asDiagonal() * eig.eigenvectors().transpose();
-  return 0.5 * (R + R.transpose());
+  const Eigen::VectorXd eigenvalues = Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(S, Eigen::EigenvaluesOnly).eigenvalues();
+  const double floor = 1e-6 * std::max(eigenvalues.cwiseAbs().maxCoeff(), 1e-300);
+  return symmetrized(floor_eigenvalues(S, floor));
 }
 
 G2oGraph read_g2o(const std::string& path, const G2oReadOptions& options) {
@@ -137,14 +129,15 @@ G2oGraph read_g2o(std::istream& in, const std::string& path, const G2oReadOption
   // Information matrices that are not positive definite: repaired, or listed for the error.
   std::vector<std::string> bad;
   auto information = [&](const Eigen::MatrixXd& I, int64_t a, int64_t b) -> Eigen::MatrixXd {
-    if (positive_definite(I)) return I;
-    if (!I.allFinite()) r.fail(r.tokens[0] + " " + std::to_string(a) + " " + std::to_string(b) + ": information matrix has a NaN or infinite entry");
+    const DefinitenessCheck check = check_positive_definite(I);
+    if (check.ok()) return I;
+    if (check.problem == DefinitenessCheck::Problem::kNotFinite) r.fail(r.tokens[0] + " " + std::to_string(a) + " " + std::to_string(b) + ": information matrix has a NaN or infinite entry");
     if (options.information != InformationPolicy::kReject) {
       ++out.repaired_information;
       return repair_information(I, options.information);
     }
     std::ostringstream m;
-    m << path << ":" << r.line << " (" << r.tokens[0] << " " << a << " " << b << ", smallest eigenvalue " << smallest_eigenvalue(I) << ")";
+    m << path << ":" << r.line << " (" << r.tokens[0] << " " << a << " " << b << ", smallest eigenvalue " << check.smallest_eigenvalue << ")";
     bad.push_back(m.str());
     return I;
   };

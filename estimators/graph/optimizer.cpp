@@ -1,6 +1,7 @@
 #include "estimators/graph/optimizer.hpp"
 
 #include "estimators/graph/sparse_normal_equations.hpp"
+#include "estimators/spd_matrix.hpp"
 
 #include <Eigen/Eigenvalues>
 
@@ -42,16 +43,16 @@ std::string validate_factor(const std::vector<Variable>& vars, const Factor& f, 
   const std::string name = "factor " + std::to_string(index) + " (" + f.type() + " on variable " +
                            std::to_string(vars[static_cast<size_t>(f.variables()[0])].id) +
                            (f.variables().size() > 1 ? " and " + std::to_string(vars[static_cast<size_t>(f.variables()[1])].id) : "") + ")";
-  if (!I.allFinite()) return name + ": information matrix has a NaN or infinite entry";
-  if ((I - I.transpose()).cwiseAbs().maxCoeff() > 1e-9 * std::max(1.0, I.cwiseAbs().maxCoeff()))
-    return name + ": information matrix is not symmetric";
-  Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(I, Eigen::EigenvaluesOnly);
-  if (!(eig.eigenvalues().minCoeff() > 0)) {
-    std::ostringstream s;
-    s << name << ": information matrix is not positive definite (smallest eigenvalue " << eig.eigenvalues().minCoeff() << ")";
-    return s.str();
+  const DefinitenessCheck check = check_positive_definite(I);
+  switch (check.problem) {
+    case DefinitenessCheck::Problem::kNone: return "";
+    case DefinitenessCheck::Problem::kNotFinite: return name + ": information matrix has a NaN or infinite entry";
+    case DefinitenessCheck::Problem::kNotSymmetric: return name + ": information matrix is not symmetric";
+    case DefinitenessCheck::Problem::kNotPositiveDefinite: break;
   }
-  return "";
+  std::ostringstream s;
+  s << name << ": information matrix is not positive definite (smallest eigenvalue " << check.smallest_eigenvalue << ")";
+  return s.str();
 }
 
 std::string validate(const FactorGraph& g) {
