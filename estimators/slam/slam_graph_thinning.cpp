@@ -28,6 +28,9 @@ void SlamGraph::maybe_thin(bool planar) {
 
 // What one thinning keeps and builds, filled step by step by thin().
 struct SlamGraph::ThinningPlan {
+  ThinningPlan(bool planar_kind, graph::IncrementalSmoother& smoother, const std::vector<FactorTag>& factor_tags)
+      : planar(planar_kind), kind(planar_kind ? 1 : 0), old(smoother), vars(smoother.graph().variables()),
+        factors(smoother.graph().factors()), tags(factor_tags) {}
   bool planar;
   int kind;  // smoothers_[kind]
   graph::IncrementalSmoother& old;
@@ -53,7 +56,7 @@ void SlamGraph::thin(bool planar) {
   const auto started = std::chrono::steady_clock::now();
   const int kind = planar ? 1 : 0;
   graph::IncrementalSmoother& old = *smoothers_[kind];
-  ThinningPlan p{planar, kind, old, old.graph().variables(), old.graph().factors(), factor_tags_[kind]};
+  ThinningPlan p(planar, old, factor_tags_[kind]);
   if (p.tags.size() != p.factors.size()) return;  // cannot happen: every factor goes through add_factor
   if (!choose_kept_keyframes(p)) return;
   choose_kept_factors(p);
