@@ -46,6 +46,17 @@ class MissedAssignmentSolver {
                                 const std::vector<PairCost>& pairs);
 
  private:
+  // solve's steps.
+  void start_unpaired(const std::vector<double>& row_missed, const std::vector<double>& column_missed);
+  void collect_gains(const std::vector<double>& row_missed, const std::vector<double>& column_missed,
+                     const std::vector<PairCost>& pairs);
+  void index_gains_by_row();
+  void augment_from_row(int r);
+  void relax(int search, int i, int j, double w, double base);
+  void read_matching();
+  void map_duals();
+
+  int R_ = 0, C_ = 0;  // rows, columns
   MissedAssignment out_;
   std::vector<PairCost> gains_;
   std::vector<int> begin_, column_, row_of_, column_of_, way_, seen_, scanned_;

@@ -112,7 +112,9 @@ double tuple_cost(const Scan& scan, const std::vector<int>& index, const CostOpt
   return cost_at(scan, index, o, t);
 }
 
-std::vector<Tuple> build_tuples(const Scan& scan, const CostOptions& o) {
+namespace {
+
+void check_scan_and_options(const Scan& scan, const CostOptions& o) {
   const size_t S = scan.sensors.size();
   if (scan.detections.size() != S)
     throw std::invalid_argument("build_tuples: " + std::to_string(scan.detections.size()) + " detection lists for " +
@@ -122,166 +124,220 @@ std::vector<Tuple> build_tuples(const Scan& scan, const CostOptions& o) {
                                 " per-sensor clutter densities for " + std::to_string(S) + " sensors");
   for (size_t s = 0; s < S; ++s)
     if (!(clutter_density(o, s) > 0)) throw std::invalid_argument("build_tuples: clutter density of sensor " + std::to_string(s) + " is not positive");
-  // Per detection: its line of sight, larger angular sigma and prepared observation (computed once).
-  std::vector<std::vector<Eigen::Vector3d>> los(S);
-  std::vector<std::vector<double>> sigma(S);
-  std::vector<std::vector<PreparedBearing>> observation(S);
-  for (size_t s = 0; s < S; ++s)
-    for (const auto& d : scan.detections[s]) {
-      los[s].push_back(line_of_sight(d.azimuth, d.elevation));
-      sigma[s].push_back(std::max(d.sigma_azimuth, d.sigma_elevation));
-      const Eigen::Vector2d var(d.sigma_azimuth * d.sigma_azimuth, d.sigma_elevation * d.sigma_elevation);
-      observation[s].emplace_back(BearingObservation{scan.sensors[s], d.azimuth, d.elevation, var.asDiagonal()},
-                                  var.cwiseInverse().asDiagonal());
-    }
-  // Triangulation of partial tuples, each once (no linear solve above the pairs): a pair starts from its linear
-  // solution and takes two Gauss-Newton steps (in the pair gate below, which keeps the resulting position for the
-  // search); a partial tuple of m >= 3 detections starts from its parent's position (the maximum-likelihood point
-  // of m - 1 of its detections, already close) and takes two steps, reusing the parent's normal equations at that
-  // point (only the new detection is linearized there).  A complete tuple uses the triangulation of its deepest
-  // partial tuple.
+}
+
+// The tuples of one scan: the pair gate over every two sensors, then a depth-first search over the sensors that
+// extends partial tuples by compatible detections.
+//
+// Triangulation of partial tuples, each once (no linear solve above the pairs): a pair starts from its linear
+// solution and takes two Gauss-Newton steps (in the pair gate, which keeps the resulting position for the search);
+// a partial tuple of m >= 3 detections starts from its parent's position (the maximum-likelihood point of m - 1 of
+// its detections, already close) and takes two steps, reusing the parent's normal equations at that point (only the
+// new detection is linearized there).  A complete tuple uses the triangulation of its deepest partial tuple.
+class TupleBuilder {
+ public:
+  TupleBuilder(const Scan& scan, const CostOptions& o)
+      : scan_(scan), o_(o), S_(scan.sensors.size()), pair_residual_gate_(chi2_quantile(1, o.gate_probability)),
+        fit_of_(S_ + 1), gate_(gates_by_size(S_, o.gate_probability)), index_(S_, 0), candidates_(S_) {
+    prepare_detections();
+  }
+
+  std::vector<Tuple> build() {
+    gate_pairs();
+    out_.reserve(2 * pair_positions_.size());  // capacity hint (tuples are mostly pairs and their extensions): no growth copies
+    members_.clear();
+    search(0);
+    return std::move(out_);
+  }
+
+ private:
   struct Fit {
     Eigen::Vector3d x = Eigen::Vector3d::Zero();
     NormalEquations at_x;  // of the fit's detections, at x
     Triangulation t;
   };
-  std::vector<std::pair<size_t, int>> members;  // (sensor, 0-based detection) of the partial tuple being fitted
-  // The normal equations of `members` at x.
-  auto linearize = [&](const Eigen::Vector3d& x, NormalEquations& at_x) {
+
+  // Per detection: its line of sight, larger angular sigma and prepared observation (computed once).
+  void prepare_detections() {
+    los_.resize(S_), sigma_.resize(S_), observation_.resize(S_);
+    for (size_t s = 0; s < S_; ++s)
+      for (const auto& d : scan_.detections[s]) {
+        los_[s].push_back(line_of_sight(d.azimuth, d.elevation));
+        sigma_[s].push_back(std::max(d.sigma_azimuth, d.sigma_elevation));
+        const Eigen::Vector2d var(d.sigma_azimuth * d.sigma_azimuth, d.sigma_elevation * d.sigma_elevation);
+        observation_[s].emplace_back(BearingObservation{scan_.sensors[s], d.azimuth, d.elevation, var.asDiagonal()},
+                                     var.cwiseInverse().asDiagonal());
+      }
+  }
+
+  // The normal equations of `members_` at x.
+  bool linearize(const Eigen::Vector3d& x, NormalEquations& at_x) const {
     at_x = NormalEquations{};
-    for (const auto& [q, k] : members)
-      if (!add_observation(at_x, observation[q][static_cast<size_t>(k)], x)) return false;
+    for (const auto& [q, k] : members_)
+      if (!add_observation(at_x, observation_[q][static_cast<size_t>(k)], x)) return false;
     return true;
-  };
+  }
+
   // x_to = x_from + one Gauss-Newton step from the normal equations at x_from.
-  auto step = [](const Eigen::Vector3d& x_from, const NormalEquations& at_from, Eigen::Vector3d& x_to) {
+  static bool step(const Eigen::Vector3d& x_from, const NormalEquations& at_from, Eigen::Vector3d& x_to) {
     x_to = x_from + at_from.information.inverse() * at_from.gradient;  // closed-form 3 x 3 (conditioning is checked at the end)
     return x_to.allFinite();
-  };
+  }
+
   // f.x = two steps from `start` (normal equations `at_start` there), f.at_x and f.t at f.x; false when degenerate.
-  auto fit_from = [&](const Eigen::Vector3d& start, const NormalEquations& at_start, Fit& f) {
+  bool fit_from(const Eigen::Vector3d& start, const NormalEquations& at_start, Fit& f) const {
     Eigen::Vector3d x1;
     NormalEquations at_x1;
     if (!step(start, at_start, x1) || !linearize(x1, at_x1) || !step(x1, at_x1, f.x) || !linearize(f.x, f.at_x)) return false;
     f.t = triangulation_at(f.x, f.at_x);
     return f.t.valid;
-  };
-  // The pair `members`: its linear solution, one step, the chi-square gate on the residual there (as
+  }
+
+  // The pair `members_`: its linear solution, one step, the chi-square gate on the residual there (as
   // triangulate(pair, 1)), and the second step's position into x2; false when gated out or degenerate.
-  const double pair_residual_gate = chi2_quantile(1, o.gate_probability);
-  auto gate_pair = [&](Eigen::Vector3d& x2) {
-    const PreparedBearing& a = observation[members[0].first][static_cast<size_t>(members[0].second)];
-    const PreparedBearing& b = observation[members[1].first][static_cast<size_t>(members[1].second)];
+  bool gate_pair(Eigen::Vector3d& x2) const {
+    const PreparedBearing& a = observation_[members_[0].first][static_cast<size_t>(members_[0].second)];
+    const PreparedBearing& b = observation_[members_[1].first][static_cast<size_t>(members_[1].second)];
     const Triangulation lin = triangulate_linear(a.linear_information + b.linear_information, a.linear_rhs + b.linear_rhs);
     Eigen::Vector3d x1;
     NormalEquations at_x0, at_x1;
     return lin.valid && linearize(lin.position, at_x0) && step(lin.position, at_x0, x1) && linearize(x1, at_x1) &&
-           at_x1.residual <= pair_residual_gate && step(x1, at_x1, x2);
-  };
+           at_x1.residual <= pair_residual_gate_ && step(x1, at_x1, x2);
+  }
+
   // Pair gate.  The closest approach of the two lines of sight must lie in front of both sensors, and the miss
   // distance within 2 sqrt(chi2_1) times the cross-range noise at those ranges (a loose pre-test: the residual of
   // the pair's triangulation is about miss^2 / (sigma_s^2 r_s^2 + sigma_t^2 r_t^2) <= chi2_1); then the chi-square
   // gate on the residual of the pair's fit after one Gauss-Newton step from its linear solution (gate_pair; a
-  // complete pair tuple is gated again on its final fit).  compatible[s][t][k] = the detections j of sensor t
-  // (1-based, sorted) that pass with (s, k); for s < t, pair_fit[s][t][k] = the positions of their two-step
-  // positions in `pair_positions` (only the position is kept: 24 bytes a pair, the search linearizes there).
-  const double pair_gate = 2 * std::sqrt(chi2_quantile(1, o.gate_probability));
-  using Lists = std::vector<std::vector<std::vector<std::vector<int>>>>;
-  Lists compatible(S, std::vector<std::vector<std::vector<int>>>(S)), pair_fit = compatible;
-  std::vector<Eigen::Vector3d> pair_positions;
-  for (size_t s = 0; s < S; ++s)
-    for (size_t t = s + 1; t < S; ++t) {
-      const size_t ns = scan.detections[s].size(), nt = scan.detections[t].size();
-      compatible[s][t].assign(ns + 1, {});
-      pair_fit[s][t].assign(ns + 1, {});
-      compatible[t][s].assign(nt + 1, {});
-      const Eigen::Vector3d w = scan.sensors[s] - scan.sensors[t];
-      for (size_t k = 0; k < ns; ++k)
-        for (size_t j = 0; j < nt; ++j) {
-          const Eigen::Vector3d &us = los[s][k], &ut = los[t][j];
-          const double b = us.dot(ut), d = us.dot(w), e = ut.dot(w), den = 1 - b * b;
-          if (den < 1e-12) continue;  // parallel lines of sight
-          const double rs = (b * e - d) / den, rt = (e - b * d) / den;
-          if (!(rs > 0 && rt > 0)) continue;
-          const double miss = (w + rs * us - rt * ut).norm();
-          if (miss > pair_gate * (sigma[s][k] * rs + sigma[t][j] * rt)) continue;
-          members = {{s, static_cast<int>(k)}, {t, static_cast<int>(j)}};
-          Eigen::Vector3d x2;
-          if (!gate_pair(x2)) continue;
-          compatible[s][t][k + 1].push_back(static_cast<int>(j) + 1);
-          pair_fit[s][t][k + 1].push_back(static_cast<int>(pair_positions.size()));
-          compatible[t][s][j + 1].push_back(static_cast<int>(k) + 1);
-          pair_positions.push_back(x2);
-        }
-    }
-  // Depth-first over the sensors: a detection joins a partial tuple only when it is compatible with each of its
-  // detections; partial tuples of >= 3 detections pass the residual gate before being extended.
-  std::vector<Fit> fit_of(S + 1);  // the current partial tuple's fit, by its number of detections
-  const std::vector<double> gate = gates_by_size(S, o.gate_probability);  // residual gate by number of detections
-  // Fits the partial tuple `members` (m >= 3) from its parent's fit into fit_of[m].
-  auto extend = [&](size_t m) {
-    const Fit& parent = fit_of[m - 1];
+  // complete pair tuple is gated again on its final fit).  compatible_[s][t][k] = the detections j of sensor t
+  // (1-based, sorted) that pass with (s, k); for s < t, pair_fit_[s][t][k] = the positions of their two-step
+  // positions in `pair_positions_` (only the position is kept: 24 bytes a pair, the search linearizes there).
+  void gate_pairs() {
+    const double pair_gate = 2 * std::sqrt(chi2_quantile(1, o_.gate_probability));
+    compatible_.assign(S_, std::vector<std::vector<std::vector<int>>>(S_));
+    pair_fit_ = compatible_;
+    for (size_t s = 0; s < S_; ++s)
+      for (size_t t = s + 1; t < S_; ++t) {
+        const size_t ns = scan_.detections[s].size(), nt = scan_.detections[t].size();
+        compatible_[s][t].assign(ns + 1, {});
+        pair_fit_[s][t].assign(ns + 1, {});
+        compatible_[t][s].assign(nt + 1, {});
+        const Eigen::Vector3d w = scan_.sensors[s] - scan_.sensors[t];
+        for (size_t k = 0; k < ns; ++k)
+          for (size_t j = 0; j < nt; ++j) {
+            const Eigen::Vector3d &us = los_[s][k], &ut = los_[t][j];
+            const double b = us.dot(ut), d = us.dot(w), e = ut.dot(w), den = 1 - b * b;
+            if (den < 1e-12) continue;  // parallel lines of sight
+            const double rs = (b * e - d) / den, rt = (e - b * d) / den;
+            if (!(rs > 0 && rt > 0)) continue;
+            const double miss = (w + rs * us - rt * ut).norm();
+            if (miss > pair_gate * (sigma_[s][k] * rs + sigma_[t][j] * rt)) continue;
+            members_ = {{s, static_cast<int>(k)}, {t, static_cast<int>(j)}};
+            Eigen::Vector3d x2;
+            if (!gate_pair(x2)) continue;
+            compatible_[s][t][k + 1].push_back(static_cast<int>(j) + 1);
+            pair_fit_[s][t][k + 1].push_back(static_cast<int>(pair_positions_.size()));
+            compatible_[t][s][j + 1].push_back(static_cast<int>(k) + 1);
+            pair_positions_.push_back(x2);
+          }
+      }
+  }
+
+  // Fits the partial tuple `members_` (m >= 3) from its parent's fit into fit_of_[m].
+  bool extend(size_t m) {
+    const Fit& parent = fit_of_[m - 1];
     NormalEquations at_parent = parent.at_x;
-    const auto [q, k] = members.back();
-    if (!add_observation(at_parent, observation[q][static_cast<size_t>(k)], parent.x)) return false;
-    return fit_from(parent.x, at_parent, fit_of[m]);
-  };
-  std::vector<Tuple> out;
-  out.reserve(2 * pair_positions.size());  // capacity hint (tuples are mostly pairs and their extensions): no growth copies
-  std::vector<int> index(S, 0);
-  std::vector<size_t> real;  // sensors with a detection in the partial tuple
-  std::vector<std::vector<std::pair<int, int>>> candidates(S);  // per depth: (detection, its pair fit or -1)
-  auto recurse = [&](auto&& self, size_t s) -> void {
-    if (real.size() + (S - s) < 2) return;  // cannot reach two detections any more
-    if (s == S) {
-      const Triangulation& t = fit_of[real.size()].t;
-      if (!passes_gate(t, gate[real.size()])) return;
-      const double c = cost_at(scan, index, o, t);
-      if (c < 0) out.push_back({index, c, t.position, t.covariance});
+    const auto [q, k] = members_.back();
+    if (!add_observation(at_parent, observation_[q][static_cast<size_t>(k)], parent.x)) return false;
+    return fit_from(parent.x, at_parent, fit_of_[m]);
+  }
+
+  // The detections of sensor s that may join the current partial tuple, with their pair fit with its first
+  // detection (-1 when it has none yet: every detection): those compatible with each of its detections.
+  void collect_candidates(size_t s) {
+    auto& cand = candidates_[s];
+    cand.clear();
+    if (real_.empty()) {
+      for (int k = 1; k <= static_cast<int>(scan_.detections[s].size()); ++k) cand.push_back({k, -1});
       return;
     }
-    index[s] = 0;
-    if (o.p_detect < 1) self(self, s + 1);  // with P_D = 1 a missed index costs +infinity
-    auto& cand = candidates[s];
-    cand.clear();
-    if (real.empty()) {
-      for (int k = 1; k <= static_cast<int>(scan.detections[s].size()); ++k) cand.push_back({k, -1});
-    } else {
-      const size_t r0 = real.front();
-      const auto& first = compatible[r0][s][static_cast<size_t>(index[r0])];
-      const auto& first_fit = pair_fit[r0][s][static_cast<size_t>(index[r0])];
-      for (size_t i = 0; i < first.size(); ++i) {
-        const int k = first[i];
-        bool ok = true;
-        for (size_t q = 1; q < real.size() && ok; ++q) {
-          const auto& list = compatible[real[q]][s][static_cast<size_t>(index[real[q]])];
-          ok = std::binary_search(list.begin(), list.end(), k);
-        }
-        if (ok) cand.push_back({k, first_fit[i]});
+    const size_t r0 = real_.front();
+    const auto& first = compatible_[r0][s][static_cast<size_t>(index_[r0])];
+    const auto& first_fit = pair_fit_[r0][s][static_cast<size_t>(index_[r0])];
+    for (size_t i = 0; i < first.size(); ++i) {
+      const int k = first[i];
+      bool ok = true;
+      for (size_t q = 1; q < real_.size() && ok; ++q) {
+        const auto& list = compatible_[real_[q]][s][static_cast<size_t>(index_[real_[q]])];
+        ok = std::binary_search(list.begin(), list.end(), k);
       }
+      if (ok) cand.push_back({k, first_fit[i]});
     }
-    for (const auto& [k, pair] : cand) {
-      index[s] = k;
-      members.push_back({s, k - 1});
-      real.push_back(s);
-      const size_t m = real.size();
-      bool fitted = true;
-      if (m == 2) {
-        Fit& f = fit_of[2];
-        f.x = pair_positions[static_cast<size_t>(pair)];
-        fitted = linearize(f.x, f.at_x) && (f.t = triangulation_at(f.x, f.at_x)).valid;
-      } else if (m >= 3) {
-        fitted = extend(m) && passes_gate(fit_of[m].t, gate[m]);
-      }
-      if (fitted) self(self, s + 1);
-      real.pop_back();
-      members.pop_back();
+  }
+
+  // The fit of the partial tuple just grown to m detections (a pair from its gated position, a larger one from its
+  // parent's fit); partial tuples of >= 3 detections pass the residual gate before being extended.
+  bool fit_partial(size_t m, int pair) {
+    if (m == 2) {
+      Fit& f = fit_of_[2];
+      f.x = pair_positions_[static_cast<size_t>(pair)];
+      return linearize(f.x, f.at_x) && (f.t = triangulation_at(f.x, f.at_x)).valid;
     }
-    index[s] = 0;
-  };
-  members.clear();
-  recurse(recurse, 0);
-  return out;
+    if (m >= 3) return extend(m) && passes_gate(fit_of_[m].t, gate_[m]);
+    return true;
+  }
+
+  // A complete tuple: gated on its fit, kept when its cost is negative.
+  void add_complete() {
+    const Triangulation& t = fit_of_[real_.size()].t;
+    if (!passes_gate(t, gate_[real_.size()])) return;
+    const double c = cost_at(scan_, index_, o_, t);
+    if (c < 0) out_.push_back({index_, c, t.position, t.covariance});
+  }
+
+  // Depth-first over the sensors from sensor s: a detection joins a partial tuple only when it is compatible with
+  // each of its detections.
+  void search(size_t s) {
+    if (real_.size() + (S_ - s) < 2) return;  // cannot reach two detections any more
+    if (s == S_) return add_complete();
+    index_[s] = 0;
+    if (o_.p_detect < 1) search(s + 1);  // with P_D = 1 a missed index costs +infinity
+    collect_candidates(s);
+    for (const auto& [k, pair] : candidates_[s]) {
+      index_[s] = k;
+      members_.push_back({s, k - 1});
+      real_.push_back(s);
+      if (fit_partial(real_.size(), pair)) search(s + 1);
+      real_.pop_back();
+      members_.pop_back();
+    }
+    index_[s] = 0;
+  }
+
+  const Scan& scan_;
+  const CostOptions& o_;
+  const size_t S_;
+  const double pair_residual_gate_;
+  std::vector<std::vector<Eigen::Vector3d>> los_;
+  std::vector<std::vector<double>> sigma_;
+  std::vector<std::vector<PreparedBearing>> observation_;
+  std::vector<std::pair<size_t, int>> members_;  // (sensor, 0-based detection) of the partial tuple being fitted
+  using Lists = std::vector<std::vector<std::vector<std::vector<int>>>>;
+  Lists compatible_, pair_fit_;
+  std::vector<Eigen::Vector3d> pair_positions_;
+  std::vector<Fit> fit_of_;         // the current partial tuple's fit, by its number of detections
+  const std::vector<double> gate_;  // residual gate by number of detections
+  std::vector<Tuple> out_;
+  std::vector<int> index_;
+  std::vector<size_t> real_;  // sensors with a detection in the partial tuple
+  std::vector<std::vector<std::pair<int, int>>> candidates_;  // per depth: (detection, its pair fit or -1)
+};
+
+}  // namespace
+
+std::vector<Tuple> build_tuples(const Scan& scan, const CostOptions& o) {
+  check_scan_and_options(scan, o);
+  return TupleBuilder(scan, o).build();
 }
 
 }  // namespace sextant::assoc

@@ -75,6 +75,21 @@ ExchangeImprover::ExchangeImprover(const TuplePacking& p, int refill_candidates)
 }
 
 double ExchangeImprover::improve(std::vector<int>& chosen, int max_passes) {
+  load(chosen);
+  for (int pass = 0; pass < max_passes; ++pass) {
+    bool improved = false;
+    for (int t = 0; t < negative_; ++t) {
+      if (!look_[static_cast<size_t>(t)] || in_[static_cast<size_t>(t)]) continue;
+      look_[static_cast<size_t>(t)] = 0;
+      if (try_move(t)) improved = true;
+    }
+    if (!improved) break;
+  }
+  return unload(chosen);
+}
+
+// The chosen tuples in (by rank), their detections owned; every negative tuple to be looked at.
+void ExchangeImprover::load(const std::vector<int>& chosen) {
   std::fill(owner_.begin(), owner_.end(), -1);
   std::fill(in_.begin(), in_.end(), 0);
   std::fill(look_.begin(), look_.begin() + negative_, 1);
@@ -85,80 +100,97 @@ double ExchangeImprover::improve(std::vector<int>& chosen, int max_passes) {
     in_[static_cast<size_t>(r)] = 1;
     for (int i = begin[r]; i < begin[r + 1]; ++i) owner_[static_cast<size_t>(mem[i])] = r;
   }
-  auto &conflicts = conflicts_, &freed = freed_ids_, &refill = refill_;  // per move, reused
-  // Detection d changed hands: every tuple containing it has a new bound.
-  auto touched = [&](int d) {
-    for (int i = of_detection_begin_[static_cast<size_t>(d)]; i < of_detection_begin_[static_cast<size_t>(d) + 1]; ++i)
-      look_[static_cast<size_t>(of_detection_[static_cast<size_t>(i)])] = 1;
-  };
-  for (int pass = 0; pass < max_passes; ++pass) {
-    bool improved = false;
-    for (int t = 0; t < negative_; ++t) {
-      if (!look_[static_cast<size_t>(t)] || in_[static_cast<size_t>(t)]) continue;
-      look_[static_cast<size_t>(t)] = 0;
-      const long stamp = ++stamp_;
-      conflicts.clear(), freed.clear(), refill.clear();
-      double delta = cost_[static_cast<size_t>(t)];
-      for (int i = begin[t]; i < begin[t + 1]; ++i) {
-        const int d = mem[i];
-        blocked_[static_cast<size_t>(d)] = stamp;
-        const int o = owner_[static_cast<size_t>(d)];
-        if (o >= 0 && dropped_[static_cast<size_t>(o)] != stamp) {
-          dropped_[static_cast<size_t>(o)] = stamp, conflicts.push_back(o), delta -= cost_[static_cast<size_t>(o)];
-        }
-      }
-      double bound = delta;  // each refill tuple holds a freed detection of its own
-      for (int o : conflicts)
-        for (int i = begin[o]; i < begin[o + 1]; ++i)
-          if (blocked_[static_cast<size_t>(mem[i])] != stamp) {
-            freed.push_back(mem[i]), bound += cheapest_[static_cast<size_t>(mem[i])];
-            freed_[static_cast<size_t>(mem[i])] = stamp;
-          }
-      if (!(bound < -1e-9)) continue;
-      // Greedy refill of the freed detections with tuples that fit.  `rest` bounds what the freed detections not
-      // yet refilled can still gain (each at most its cheapest tuple); once delta + rest cannot go below zero the
-      // move is rejected without looking further (the same decision as finishing the refill).
-      double rest = bound - delta;
-      for (int d : freed) {
-        if (!(delta + rest < -1e-9)) break;
-        if (blocked_[static_cast<size_t>(d)] == stamp) continue;  // taken by an earlier refill tuple
-        rest -= cheapest_[static_cast<size_t>(d)];
-        counted_[static_cast<size_t>(d)] = stamp;
-        int looked = 0;
-        for (int j = of_detection_begin_[static_cast<size_t>(d)]; j < of_detection_begin_[static_cast<size_t>(d) + 1]; ++j) {
-          const int c = of_detection_[static_cast<size_t>(j)];
-          if (++looked > refill_candidates_) break;
-          if (c == t || in_[static_cast<size_t>(c)]) continue;
-          // Fits: every detection unblocked and either free or freed by this move.
-          bool fits = true;
-          for (int i = begin[c]; i < begin[c + 1] && fits; ++i) {
-            const auto m = static_cast<size_t>(mem[i]);
-            fits = blocked_[m] != stamp && (owner_[m] < 0 || freed_[m] == stamp);
-          }
-          if (!fits) continue;
-          refill.push_back(c), delta += cost_[static_cast<size_t>(c)];
-          for (int i = begin[c]; i < begin[c + 1]; ++i) {
-            const auto m = static_cast<size_t>(mem[i]);
-            if (freed_[m] == stamp && counted_[m] != stamp) rest -= cheapest_[m], counted_[m] = stamp;  // refilled along with d
-            blocked_[m] = stamp;
-          }
-          break;
-        }
-      }
-      if (!(delta < -1e-9)) continue;
-      for (int o : conflicts) {
-        in_[static_cast<size_t>(o)] = 0;
-        for (int i = begin[o]; i < begin[o + 1]; ++i) owner_[static_cast<size_t>(mem[i])] = -1, touched(mem[i]);
-      }
-      refill.push_back(t);
-      for (int c : refill) {
-        in_[static_cast<size_t>(c)] = 1;
-        for (int i = begin[c]; i < begin[c + 1]; ++i) owner_[static_cast<size_t>(mem[i])] = c, touched(mem[i]);
-      }
-      improved = true;
+}
+
+// The move that puts tuple t in: the chosen tuples sharing a detection with it out, the detections they free
+// refilled greedily; made when it lowers the cost.  True when made.
+bool ExchangeImprover::try_move(int t) {
+  const int* mem = members_.data();
+  const int* begin = member_begin_.data();
+  const long stamp = ++stamp_;
+  conflicts_.clear(), freed_ids_.clear(), refill_.clear();
+  double delta = cost_[static_cast<size_t>(t)];
+  for (int i = begin[t]; i < begin[t + 1]; ++i) {
+    const int d = mem[i];
+    blocked_[static_cast<size_t>(d)] = stamp;
+    const int o = owner_[static_cast<size_t>(d)];
+    if (o >= 0 && dropped_[static_cast<size_t>(o)] != stamp) {
+      dropped_[static_cast<size_t>(o)] = stamp, conflicts_.push_back(o), delta -= cost_[static_cast<size_t>(o)];
     }
-    if (!improved) break;
   }
+  double bound = delta;  // each refill tuple holds a freed detection of its own
+  for (int o : conflicts_)
+    for (int i = begin[o]; i < begin[o + 1]; ++i)
+      if (blocked_[static_cast<size_t>(mem[i])] != stamp) {
+        freed_ids_.push_back(mem[i]), bound += cheapest_[static_cast<size_t>(mem[i])];
+        freed_[static_cast<size_t>(mem[i])] = stamp;
+      }
+  if (!(bound < -1e-9)) return false;
+  delta = refill_freed(t, stamp, delta, bound);
+  if (!(delta < -1e-9)) return false;
+  apply_move(t);
+  return true;
+}
+
+// Greedy refill of the freed detections with tuples that fit; returns the move's cost change.  `rest` bounds what
+// the freed detections not yet refilled can still gain (each at most its cheapest tuple); once delta + rest cannot
+// go below zero the move is rejected without looking further (the same decision as finishing the refill).
+double ExchangeImprover::refill_freed(int t, long stamp, double delta, double bound) {
+  const int* mem = members_.data();
+  const int* begin = member_begin_.data();
+  double rest = bound - delta;
+  for (int d : freed_ids_) {
+    if (!(delta + rest < -1e-9)) break;
+    if (blocked_[static_cast<size_t>(d)] == stamp) continue;  // taken by an earlier refill tuple
+    rest -= cheapest_[static_cast<size_t>(d)];
+    counted_[static_cast<size_t>(d)] = stamp;
+    int looked = 0;
+    for (int j = of_detection_begin_[static_cast<size_t>(d)]; j < of_detection_begin_[static_cast<size_t>(d) + 1]; ++j) {
+      const int c = of_detection_[static_cast<size_t>(j)];
+      if (++looked > refill_candidates_) break;
+      if (c == t || in_[static_cast<size_t>(c)]) continue;
+      // Fits: every detection unblocked and either free or freed by this move.
+      bool fits = true;
+      for (int i = begin[c]; i < begin[c + 1] && fits; ++i) {
+        const auto m = static_cast<size_t>(mem[i]);
+        fits = blocked_[m] != stamp && (owner_[m] < 0 || freed_[m] == stamp);
+      }
+      if (!fits) continue;
+      refill_.push_back(c), delta += cost_[static_cast<size_t>(c)];
+      for (int i = begin[c]; i < begin[c + 1]; ++i) {
+        const auto m = static_cast<size_t>(mem[i]);
+        if (freed_[m] == stamp && counted_[m] != stamp) rest -= cheapest_[m], counted_[m] = stamp;  // refilled along with d
+        blocked_[m] = stamp;
+      }
+      break;
+    }
+  }
+  return delta;
+}
+
+// The conflicts out, t and its refill in; every tuple holding a detection that changed hands is looked at again.
+void ExchangeImprover::apply_move(int t) {
+  const int* mem = members_.data();
+  const int* begin = member_begin_.data();
+  for (int o : conflicts_) {
+    in_[static_cast<size_t>(o)] = 0;
+    for (int i = begin[o]; i < begin[o + 1]; ++i) owner_[static_cast<size_t>(mem[i])] = -1, touched(mem[i]);
+  }
+  refill_.push_back(t);
+  for (int c : refill_) {
+    in_[static_cast<size_t>(c)] = 1;
+    for (int i = begin[c]; i < begin[c + 1]; ++i) owner_[static_cast<size_t>(mem[i])] = c, touched(mem[i]);
+  }
+}
+
+// Detection d changed hands: every tuple containing it has a new bound.
+void ExchangeImprover::touched(int d) {
+  for (int i = of_detection_begin_[static_cast<size_t>(d)]; i < of_detection_begin_[static_cast<size_t>(d) + 1]; ++i)
+    look_[static_cast<size_t>(of_detection_[static_cast<size_t>(i)])] = 1;
+}
+
+// The chosen tuples back as sorted tuple indices; their cost.
+double ExchangeImprover::unload(std::vector<int>& chosen) const {
   chosen.clear();
   for (size_t r = 0; r < in_.size(); ++r)
     if (in_[r]) chosen.push_back(tuple_of_rank_[r]);

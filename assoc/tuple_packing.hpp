@@ -53,6 +53,14 @@ class ExchangeImprover {
   double improve(std::vector<int>& chosen, int max_passes = 20);
 
  private:
+  // improve's steps.
+  void load(const std::vector<int>& chosen);
+  bool try_move(int t);
+  double refill_freed(int t, long stamp, double delta, double bound);
+  void apply_move(int t);
+  void touched(int d);
+  double unload(std::vector<int>& chosen) const;
+
   // Tuples are addressed by rank: 0..negative_-1 the tuples of negative cost, cheapest first, then the others.
   int refill_candidates_;
   int negative_ = 0;

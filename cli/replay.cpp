@@ -130,96 +130,134 @@ void print_json(const Options& o, const tools::ReplayResult& r, const std::strin
   std::fputs(j.str().c_str(), stdout);
 }
 
+void add_options(CLI::App* cmd, Options& o) {
+  cmd->add_option("log", o.log, "LCM log")->required()->check(CLI::ExistingFile);
+  cmd->add_option("--config", o.config, "sextantd configuration (YAML)");
+  cmd->add_option("--tum-out", o.tum_out, "write the primary estimator's fused poses as a TUM trajectory");
+  cmd->add_option("--kitti-out", o.kitti_out, "the same as KITTI 3x4 poses");
+  cmd->add_option("--g2o-out", o.g2o_out, "the same as a g2o graph");
+  cmd->add_option("--out-log", o.out_log, "write everything the engine published to an LCM log");
+  cmd->add_option("--estimator", o.estimator, "which estimator's poses to export (default: the primary)");
+  cmd->add_flag("--json", o.json, "print a JSON summary on stdout");
+  cmd->add_option("--segment-seconds", o.segment_seconds,
+                  "with --json: report each stretch of this many seconds of data time (replay speed, stage times, memory)")
+      ->check(CLI::NonNegativeNumber);
+  cmd->add_option("--report", o.report, "write an HTML report with plots (and report.json) into this folder");
+  cmd->add_flag("--realtime", o.realtime, "republish the log to the live bus at the pace of message utimes");
+  cmd->add_option("--speed", o.speed, "playback speed for --realtime (2 = twice as fast)")->check(CLI::PositiveNumber);
+  cmd->add_option("--lcm-url", o.lcm_url, "LCM URL for --realtime");
+  cmd->add_flag("--tolerate-damage", o.tolerate_damage, cli::kTolerateDamageHelp);
+}
+
+// --realtime: the log republished on the live bus at the pace of its utimes.
+void replay_in_realtime(const Options& o) {
+  runtime::LogDamage damage;
+  const auto n = tools::play_realtime(o.log, o.speed, o.lcm_url, &damage);
+  if (!o.json) std::printf("republished %lld messages\n", static_cast<long long>(n));
+  cli::report_log_damage("sextant replay", o.log, damage, o.tolerate_damage);
+}
+
+// --config's configuration (the defaults without one); a bad one exits 2 with its place.
+config::DaemonConfig load_config(const Options& o) {
+  config::DaemonConfig cfg;
+  if (o.config.empty()) return cfg;
+  try {
+    cfg = config::load_daemon_config(o.config);
+  } catch (const config::ConfigError& e) {
+    std::fprintf(stderr, "sextant replay: bad configuration (--config %s): %s\n", o.config.c_str(), e.what());
+    throw CLI::RuntimeError(2);
+  }
+  return cfg;
+}
+
+// The files the replay streams its outputs into as it goes (memory keeps bounded samples for the report and the
+// summary): everything published into --out-log, the exported estimator's poses into the trajectory files.  The
+// callbacks it installs refer to it: it stays in place until closed.
+class StreamedOutputs {
+ public:
+  StreamedOutputs(const Options& o, const config::DaemonConfig& cfg, tools::ReplayOptions& ro) {
+    if (!o.out_log.empty()) {
+      out_log_ = std::make_unique<runtime::LogWriter>(o.out_log);
+      ro.on_publish = [this](const std::string& channel, const std::vector<uint8_t>& bytes, int64_t utime) {
+        out_log_->write_raw(utime, channel, bytes.data(), bytes.size());
+      };
+    }
+    if (!o.tum_out.empty()) writers_.push_back(std::make_unique<tools::TrajectoryWriter>(o.tum_out, tools::TrajectoryFormat::kTum));
+    if (!o.kitti_out.empty()) writers_.push_back(std::make_unique<tools::TrajectoryWriter>(o.kitti_out, tools::TrajectoryFormat::kKitti));
+    if (!o.g2o_out.empty()) writers_.push_back(std::make_unique<tools::TrajectoryWriter>(o.g2o_out, tools::TrajectoryFormat::kG2o));
+    // The estimator to export is known once the engine is built (the primary one by default): its name is matched
+    // against each pose's.
+    export_estimator_ = o.estimator;
+    if (export_estimator_.empty()) export_estimator_ = engine::Engine(cfg.engine).primary_estimator();
+    ro.on_fused_pose = [this](const engine::FusedPose& p) {
+      if (p.estimator != export_estimator_) return;
+      for (auto& w : writers_) w->add({static_cast<double>(p.utime) * 1e-6, p.pose});
+    };
+  }
+  StreamedOutputs(const StreamedOutputs&) = delete;
+  StreamedOutputs& operator=(const StreamedOutputs&) = delete;
+
+  void close() {
+    for (auto& w : writers_) w->close();
+    if (out_log_) out_log_->flush();
+  }
+
+ private:
+  std::unique_ptr<runtime::LogWriter> out_log_;
+  std::vector<std::unique_ptr<tools::TrajectoryWriter>> writers_;
+  std::string export_estimator_;
+};
+
+// The one line without --json: events, data time, wall time, poses exported, inputs rejected.
+void print_summary_line(const tools::ReplayResult& result, const std::string& estimator) {
+  const auto counted = result.fused_pose_counts.find(estimator);
+  const int64_t exported = counted == result.fused_pose_counts.end() ? 0 : counted->second;
+  int64_t rejected = 0;
+  for (const auto& [c, counts] : result.channels) rejected += counts.rejected;
+  std::printf("replayed %lld log events (%.1f s of data) in %.2f s; %zu %s poses; %lld inputs rejected\n",
+              static_cast<long long>(result.records), static_cast<double>(result.last_utime - result.first_utime) * 1e-6,
+              result.wall_seconds, static_cast<size_t>(exported), estimator.c_str(), static_cast<long long>(rejected));
+}
+
+// Stages that failed on an event (and recovered: the replay went on), on stderr.
+void report_stage_failures(const tools::ReplayResult& result) {
+  for (const auto& s : result.stages)
+    if (s.failures > 0)
+      std::fprintf(stderr, "sextant replay: stage '%s' failed on %lld event(s) and recovered from %lld (the replay went on); "
+                           "last: %s\n", s.name.c_str(), static_cast<long long>(s.failures),
+                   static_cast<long long>(s.recoveries), s.last_failure.c_str());
+}
+
+void run(const Options& o) {
+  if (o.realtime) return replay_in_realtime(o);
+  const config::DaemonConfig cfg = load_config(o);
+  ProgressBar bar(isatty(STDERR_FILENO) != 0 && !o.json);
+  tools::ReplayOptions ro;
+  ro.max_kept = 8192;
+  ro.segment_seconds = o.segment_seconds;
+  StreamedOutputs outputs(o, cfg, ro);
+  const auto result = tools::replay_log(o.log, cfg, [&bar](int64_t d, int64_t t) { bar(d, t); }, ro);
+  const std::string estimator = o.estimator.empty() ? result.primary_estimator : o.estimator;
+  outputs.close();
+  if (!o.report.empty()) {
+    const auto n = tools::write_report(o.report, result, o.log, estimator);
+    if (!o.json) {
+      if (n.have_truth) std::printf("ATE %.4f m RMSE (max %.4f m) over %zu poses\n", n.ate_rmse, n.ate_max, n.matched);
+      std::printf("report: %s/index.html\n", o.report.c_str());
+    }
+  }
+  if (o.json) print_json(o, result, estimator);
+  else print_summary_line(result, estimator);
+  report_stage_failures(result);
+  cli::report_log_damage("sextant replay", o.log, result.log_damage, o.tolerate_damage);
+}
+
 sextant::cli::RegisterCommand reg{"replay", [](CLI::App& app) {
   auto* cmd = app.add_subcommand("replay", "run a log through the engine deterministically (message utime order), "
                                            "or republish it in real time with --realtime");
   auto o = std::make_shared<Options>();
-  cmd->add_option("log", o->log, "LCM log")->required()->check(CLI::ExistingFile);
-  cmd->add_option("--config", o->config, "sextantd configuration (YAML)");
-  cmd->add_option("--tum-out", o->tum_out, "write the primary estimator's fused poses as a TUM trajectory");
-  cmd->add_option("--kitti-out", o->kitti_out, "the same as KITTI 3x4 poses");
-  cmd->add_option("--g2o-out", o->g2o_out, "the same as a g2o graph");
-  cmd->add_option("--out-log", o->out_log, "write everything the engine published to an LCM log");
-  cmd->add_option("--estimator", o->estimator, "which estimator's poses to export (default: the primary)");
-  cmd->add_flag("--json", o->json, "print a JSON summary on stdout");
-  cmd->add_option("--segment-seconds", o->segment_seconds,
-                  "with --json: report each stretch of this many seconds of data time (replay speed, stage times, memory)")
-      ->check(CLI::NonNegativeNumber);
-  cmd->add_option("--report", o->report, "write an HTML report with plots (and report.json) into this folder");
-  cmd->add_flag("--realtime", o->realtime, "republish the log to the live bus at the pace of message utimes");
-  cmd->add_option("--speed", o->speed, "playback speed for --realtime (2 = twice as fast)")->check(CLI::PositiveNumber);
-  cmd->add_option("--lcm-url", o->lcm_url, "LCM URL for --realtime");
-  cmd->add_flag("--tolerate-damage", o->tolerate_damage, cli::kTolerateDamageHelp);
-  cmd->callback([o] {
-    if (o->realtime) {
-      runtime::LogDamage damage;
-      const auto n = tools::play_realtime(o->log, o->speed, o->lcm_url, &damage);
-      if (!o->json) std::printf("republished %lld messages\n", static_cast<long long>(n));
-      cli::report_log_damage("sextant replay", o->log, damage, o->tolerate_damage);
-      return;
-    }
-    config::DaemonConfig cfg;
-    if (!o->config.empty()) {
-      try {
-        cfg = config::load_daemon_config(o->config);
-      } catch (const config::ConfigError& e) {
-        std::fprintf(stderr, "sextant replay: bad configuration (--config %s): %s\n", o->config.c_str(), e.what());
-        throw CLI::RuntimeError(2);
-      }
-    }
-    ProgressBar bar(isatty(STDERR_FILENO) != 0 && !o->json);
-    // Outputs stream to their files as the replay goes; memory keeps bounded samples for the report and the summary.
-    tools::ReplayOptions ro;
-    ro.max_kept = 8192;
-    ro.segment_seconds = o->segment_seconds;
-    std::unique_ptr<runtime::LogWriter> out_log;
-    if (!o->out_log.empty()) {
-      out_log = std::make_unique<runtime::LogWriter>(o->out_log);
-      ro.on_publish = [&out_log](const std::string& channel, const std::vector<uint8_t>& bytes, int64_t utime) {
-        out_log->write_raw(utime, channel, bytes.data(), bytes.size());
-      };
-    }
-    std::vector<std::unique_ptr<tools::TrajectoryWriter>> writers;
-    if (!o->tum_out.empty()) writers.push_back(std::make_unique<tools::TrajectoryWriter>(o->tum_out, tools::TrajectoryFormat::kTum));
-    if (!o->kitti_out.empty()) writers.push_back(std::make_unique<tools::TrajectoryWriter>(o->kitti_out, tools::TrajectoryFormat::kKitti));
-    if (!o->g2o_out.empty()) writers.push_back(std::make_unique<tools::TrajectoryWriter>(o->g2o_out, tools::TrajectoryFormat::kG2o));
-    // The estimator to export is known once the engine is built (the primary one by default): its name is matched
-    // against each pose's.
-    std::string export_estimator = o->estimator;
-    if (export_estimator.empty()) export_estimator = engine::Engine(cfg.engine).primary_estimator();
-    ro.on_fused_pose = [&](const engine::FusedPose& p) {
-      if (p.estimator != export_estimator) return;
-      for (auto& w : writers) w->add({static_cast<double>(p.utime) * 1e-6, p.pose});
-    };
-    const auto result = tools::replay_log(o->log, cfg, [&bar](int64_t d, int64_t t) { bar(d, t); }, ro);
-    const std::string estimator = o->estimator.empty() ? result.primary_estimator : o->estimator;
-    for (auto& w : writers) w->close();
-    if (out_log) out_log->flush();
-    const auto counted = result.fused_pose_counts.find(estimator);
-    const int64_t exported = counted == result.fused_pose_counts.end() ? 0 : counted->second;
-    if (!o->report.empty()) {
-      const auto n = tools::write_report(o->report, result, o->log, estimator);
-      if (!o->json) {
-        if (n.have_truth) std::printf("ATE %.4f m RMSE (max %.4f m) over %zu poses\n", n.ate_rmse, n.ate_max, n.matched);
-        std::printf("report: %s/index.html\n", o->report.c_str());
-      }
-    }
-    if (o->json) {
-      print_json(*o, result, estimator);
-    } else {
-      int64_t rejected = 0;
-      for (const auto& [c, counts] : result.channels) rejected += counts.rejected;
-      std::printf("replayed %lld log events (%.1f s of data) in %.2f s; %zu %s poses; %lld inputs rejected\n",
-                  static_cast<long long>(result.records), static_cast<double>(result.last_utime - result.first_utime) * 1e-6,
-                  result.wall_seconds, static_cast<size_t>(exported), estimator.c_str(), static_cast<long long>(rejected));
-    }
-    for (const auto& s : result.stages)
-      if (s.failures > 0)
-        std::fprintf(stderr, "sextant replay: stage '%s' failed on %lld event(s) and recovered from %lld (the replay went on); "
-                             "last: %s\n", s.name.c_str(), static_cast<long long>(s.failures),
-                     static_cast<long long>(s.recoveries), s.last_failure.c_str());
-    cli::report_log_damage("sextant replay", o->log, result.log_damage, o->tolerate_damage);
-  });
+  add_options(cmd, *o);
+  cmd->callback([o] { run(*o); });
 }};
 
 }  // namespace

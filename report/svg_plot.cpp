@@ -142,14 +142,51 @@ void SvgPlot::hband(double lo, double hi, const std::string& color, const std::s
     items_.push_back({Item::kBand, {Eigen::Vector2d(0, lo), Eigen::Vector2d(0, hi)}, color, label, 1.0, {}});
 }
 
-std::string SvgPlot::render() const {
+// Where the plot goes: margins, the plot area (pw x ph at (ml, mt)), the data range [x0, x1] x [y0, y1] shown, the
+// range of the coloured lines' values, and the plot's id (for its clip path and gradient).
+struct SvgPlot::Frame {
   bool colour_bar = false;
+  double ml = 0, mr = 0, mt = 0, mb = 0, pw = 0, ph = 0;
+  double x0 = 0, x1 = 0, y0 = 0, y1 = 0;
+  double vmin = 0, vmax = 0;
+  std::string value_label, id;
+  double X(double x) const { return ml + (x - x0) / (x1 - x0) * pw; }
+  double Y(double y) const { return mt + ph - (y - y0) / (y1 - y0) * ph; }
+};
+
+std::string SvgPlot::render() const {
+  const Frame f = frame();
+  std::string s = "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"" + std::to_string(width_) + "\" height=\"" +
+                  std::to_string(height_) + "\" viewBox=\"0 0 " + std::to_string(width_) + " " + std::to_string(height_) +
+                  "\" class=\"plot\" font-family=\"sans-serif\" font-size=\"11\">\n";
+  s += "<rect x=\"0\" y=\"0\" width=\"100%\" height=\"100%\" fill=\"white\"/>\n";
+  s += "<text x=\"" + fmt(width_ / 2.0) + "\" y=\"20\" text-anchor=\"middle\" font-size=\"14\" font-weight=\"bold\">" +
+       html_escape(title_) + "</text>\n";
+  if (!subtitle_.empty())
+    s += "<text x=\"" + fmt(width_ / 2.0) + "\" y=\"36\" text-anchor=\"middle\" fill=\"#555\">" + html_escape(subtitle_) +
+         "</text>\n";
+  render_axes(s, f);
+  s += "<clipPath id=\"" + f.id + "-clip\"><rect x=\"" + fmt(f.ml) + "\" y=\"" + fmt(f.mt) + "\" width=\"" + fmt(f.pw) +
+       "\" height=\"" + fmt(f.ph) + "\"/></clipPath>\n";
+  s += "<g clip-path=\"url(#" + f.id + "-clip)\">\n";
+  render_items(s, f);
+  s += "</g>\n";
+  if (f.colour_bar) render_colour_bar(s, f);
+  render_legend(s, f);
+  s += "</svg>\n";
+  return s;
+}
+
+// Margins from what is drawn beside the plot (colour bar, subtitle, category labels); the data range from the items
+// (bars from 0), padded, or the view set; widened on one axis for equal aspect.
+SvgPlot::Frame SvgPlot::frame() const {
+  Frame f;
   size_t longest_category = 0;
-  for (const auto& it : items_) colour_bar = colour_bar || it.kind == Item::kColoredLine;
+  for (const auto& it : items_) f.colour_bar = f.colour_bar || it.kind == Item::kColoredLine;
   for (const auto& c : categories_) longest_category = std::max(longest_category, c.size());
-  const double ml = 70, mr = colour_bar ? 80 : 20, mt = subtitle_.empty() ? 34 : 48;
-  const double mb = categories_.empty() ? 48 : std::min(140.0, 40.0 + 4.2 * static_cast<double>(longest_category));
-  const double pw = width_ - ml - mr, ph = height_ - mt - mb;
+  f.ml = 70, f.mr = f.colour_bar ? 80 : 20, f.mt = subtitle_.empty() ? 34 : 48;
+  f.mb = categories_.empty() ? 48 : std::min(140.0, 40.0 + 4.2 * static_cast<double>(longest_category));
+  f.pw = width_ - f.ml - f.mr, f.ph = height_ - f.mt - f.mb;
   double x0 = std::numeric_limits<double>::infinity(), x1 = -x0, y0 = x0, y1 = -x0;
   for (const auto& it : items_)
     for (const auto& p : it.pts) {
@@ -170,73 +207,70 @@ std::string SvgPlot::render() const {
     x0 -= padx, x1 += padx, y0 -= pady, y1 += pady;
   }
   if (equal_aspect_) {
-    const double sx = pw / (x1 - x0), sy = ph / (y1 - y0);
+    const double sx = f.pw / (x1 - x0), sy = f.ph / (y1 - y0);
     if (sx < sy) {
-      const double c = 0.5 * (y0 + y1), h = ph / sx / 2;
+      const double c = 0.5 * (y0 + y1), h = f.ph / sx / 2;
       y0 = c - h, y1 = c + h;
     } else {
-      const double c = 0.5 * (x0 + x1), h = pw / sy / 2;
+      const double c = 0.5 * (x0 + x1), h = f.pw / sy / 2;
       x0 = c - h, x1 = c + h;
     }
   }
-  auto X = [&](double x) { return ml + (x - x0) / (x1 - x0) * pw; };
-  auto Y = [&](double y) { return mt + ph - (y - y0) / (y1 - y0) * ph; };
-  std::string s = "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"" + std::to_string(width_) + "\" height=\"" +
-                  std::to_string(height_) + "\" viewBox=\"0 0 " + std::to_string(width_) + " " + std::to_string(height_) +
-                  "\" class=\"plot\" font-family=\"sans-serif\" font-size=\"11\">\n";
-  s += "<rect x=\"0\" y=\"0\" width=\"100%\" height=\"100%\" fill=\"white\"/>\n";
-  s += "<text x=\"" + fmt(width_ / 2.0) + "\" y=\"20\" text-anchor=\"middle\" font-size=\"14\" font-weight=\"bold\">" +
-       html_escape(title_) + "</text>\n";
-  if (!subtitle_.empty())
-    s += "<text x=\"" + fmt(width_ / 2.0) + "\" y=\"36\" text-anchor=\"middle\" fill=\"#555\">" + html_escape(subtitle_) +
-         "</text>\n";
+  f.x0 = x0, f.x1 = x1, f.y0 = y0, f.y1 = y1;
+  f.id = plot_id(title_, x_label_, y_label_);
+  f.vmin = std::numeric_limits<double>::infinity(), f.vmax = -f.vmin;
+  for (const auto& it : items_)
+    if (it.kind == Item::kColoredLine) {
+      for (double v : it.values)
+        if (std::isfinite(v)) f.vmin = std::min(f.vmin, v), f.vmax = std::max(f.vmax, v);
+      f.value_label = it.label;
+    }
+  if (!(f.vmax > f.vmin)) f.vmax = f.vmin + 1;
+  return f;
+}
+
+// The plot's box, its grid with tick labels (or the category labels under it) and the axis labels.
+void SvgPlot::render_axes(std::string& s, const Frame& f) const {
+  const double ml = f.ml, mt = f.mt, pw = f.pw, ph = f.ph;
   s += "<rect x=\"" + fmt(ml) + "\" y=\"" + fmt(mt) + "\" width=\"" + fmt(pw) + "\" height=\"" + fmt(ph) +
        "\" fill=\"none\" stroke=\"#333\"/>\n";
-  const double sx = nice_step(x1 - x0, 6), sy = nice_step(y1 - y0, 5);
+  const double sx = nice_step(f.x1 - f.x0, 6), sy = nice_step(f.y1 - f.y0, 5);
   if (categories_.empty()) {
-    for (double t = std::ceil(x0 / sx) * sx; t <= x1; t += sx)
-      s += "<line x1=\"" + fmt(X(t)) + "\" y1=\"" + fmt(mt) + "\" x2=\"" + fmt(X(t)) + "\" y2=\"" + fmt(mt + ph) +
-           "\" stroke=\"#e4e4e4\"/><text x=\"" + fmt(X(t)) + "\" y=\"" + fmt(mt + ph + 15) +
+    for (double t = std::ceil(f.x0 / sx) * sx; t <= f.x1; t += sx)
+      s += "<line x1=\"" + fmt(f.X(t)) + "\" y1=\"" + fmt(mt) + "\" x2=\"" + fmt(f.X(t)) + "\" y2=\"" + fmt(mt + ph) +
+           "\" stroke=\"#e4e4e4\"/><text x=\"" + fmt(f.X(t)) + "\" y=\"" + fmt(mt + ph + 15) +
            "\" text-anchor=\"middle\">" + tick_label(t) + "</text>\n";
   } else {
     for (size_t k = 0; k < categories_.size(); ++k) {
-      const double cx = X(static_cast<double>(k) + 0.45), cy = mt + ph + 12;
+      const double cx = f.X(static_cast<double>(k) + 0.45), cy = mt + ph + 12;
       s += "<text class=\"category\" x=\"" + fmt(cx) + "\" y=\"" + fmt(cy) + "\" text-anchor=\"end\" transform=\"rotate(-35 " +
            fmt(cx) + " " + fmt(cy) + ")\">" + html_escape(categories_[k]) + "</text>\n";
     }
   }
-  for (double t = std::ceil(y0 / sy) * sy; t <= y1; t += sy)
-    s += "<line x1=\"" + fmt(ml) + "\" y1=\"" + fmt(Y(t)) + "\" x2=\"" + fmt(ml + pw) + "\" y2=\"" + fmt(Y(t)) +
-         "\" stroke=\"#e4e4e4\"/><text x=\"" + fmt(ml - 6) + "\" y=\"" + fmt(Y(t) + 4) + "\" text-anchor=\"end\">" +
+  for (double t = std::ceil(f.y0 / sy) * sy; t <= f.y1; t += sy)
+    s += "<line x1=\"" + fmt(ml) + "\" y1=\"" + fmt(f.Y(t)) + "\" x2=\"" + fmt(ml + pw) + "\" y2=\"" + fmt(f.Y(t)) +
+         "\" stroke=\"#e4e4e4\"/><text x=\"" + fmt(ml - 6) + "\" y=\"" + fmt(f.Y(t) + 4) + "\" text-anchor=\"end\">" +
          tick_label(t) + "</text>\n";
   s += "<text x=\"" + fmt(ml + pw / 2) + "\" y=\"" + fmt(height_ - 8.0) + "\" text-anchor=\"middle\">" + html_escape(x_label_) + "</text>\n";
   s += "<text transform=\"translate(16," + fmt(mt + ph / 2) + ") rotate(-90)\" text-anchor=\"middle\">" + html_escape(y_label_) + "</text>\n";
-  const std::string id = plot_id(title_, x_label_, y_label_);
-  s += "<clipPath id=\"" + id + "-clip\"><rect x=\"" + fmt(ml) + "\" y=\"" + fmt(mt) + "\" width=\"" + fmt(pw) +
-       "\" height=\"" + fmt(ph) + "\"/></clipPath>\n";
-  s += "<g clip-path=\"url(#" + id + "-clip)\">\n";
-  double vmin = std::numeric_limits<double>::infinity(), vmax = -vmin;
-  std::string value_label;
-  for (const auto& it : items_)
-    if (it.kind == Item::kColoredLine) {
-      for (double v : it.values)
-        if (std::isfinite(v)) vmin = std::min(vmin, v), vmax = std::max(vmax, v);
-      value_label = it.label;
-    }
-  if (!(vmax > vmin)) vmax = vmin + 1;
+}
+
+// The items, in the order they were added.
+void SvgPlot::render_items(std::string& s, const Frame& f) const {
+  const double ml = f.ml, pw = f.pw;
   for (const auto& it : items_) {
     if (it.kind == Item::kBand) {
-      const double ya = Y(std::max(it.pts[0].y(), it.pts[1].y())), yb = Y(std::min(it.pts[0].y(), it.pts[1].y()));
+      const double ya = f.Y(std::max(it.pts[0].y(), it.pts[1].y())), yb = f.Y(std::min(it.pts[0].y(), it.pts[1].y()));
       s += "<rect class=\"stat\" x=\"" + fmt(ml) + "\" y=\"" + fmt(ya) + "\" width=\"" + fmt(pw) + "\" height=\"" +
            fmt(yb - ya) + "\" fill=\"" + it.color + "\" fill-opacity=\"0.15\"/>\n";
     } else if (it.kind == Item::kHLine) {
-      s += "<line class=\"stat\" x1=\"" + fmt(ml) + "\" y1=\"" + fmt(Y(it.pts[0].y())) + "\" x2=\"" + fmt(ml + pw) + "\" y2=\"" +
-           fmt(Y(it.pts[0].y())) + "\" stroke=\"" + it.color + "\" stroke-width=\"1.5\" stroke-dasharray=\"6,4\"/>\n";
+      s += "<line class=\"stat\" x1=\"" + fmt(ml) + "\" y1=\"" + fmt(f.Y(it.pts[0].y())) + "\" x2=\"" + fmt(ml + pw) + "\" y2=\"" +
+           fmt(f.Y(it.pts[0].y())) + "\" stroke=\"" + it.color + "\" stroke-width=\"1.5\" stroke-dasharray=\"6,4\"/>\n";
     } else if (it.kind == Item::kColoredLine) {
       // Runs of segments in the same one of 64 colour levels become one polyline.
       auto level = [&](size_t i) {
         const double v = 0.5 * (it.values[i] + it.values[i + 1]);
-        return std::clamp(static_cast<int>((v - vmin) / (vmax - vmin) * 64), 0, 63);
+        return std::clamp(static_cast<int>((v - f.vmin) / (f.vmax - f.vmin) * 64), 0, 63);
       };
       size_t start = 0;
       while (start + 1 < it.pts.size()) {
@@ -245,61 +279,62 @@ std::string SvgPlot::render() const {
         while (end + 1 < it.pts.size() && level(end) == lv) ++end;
         s += "<polyline fill=\"none\" stroke=\"" + viridis((lv + 0.5) / 64.0) + "\" stroke-width=\"" + fmt(it.size) +
              "\" stroke-linecap=\"round\" class=\"series colored\" points=\"";
-        for (size_t k = start; k <= end; ++k) s += fmt(X(it.pts[k].x())) + "," + fmt(Y(it.pts[k].y())) + " ";
+        for (size_t k = start; k <= end; ++k) s += fmt(f.X(it.pts[k].x())) + "," + fmt(f.Y(it.pts[k].y())) + " ";
         s += "\"/>\n";
         start = end;
       }
     } else if (it.kind == Item::kLine || it.kind == Item::kEllipse) {
       s += "<polyline fill=\"none\" stroke=\"" + it.color + "\" stroke-width=\"" + fmt(it.size) + "\" class=\"" +
            (it.kind == Item::kLine ? "series" : "ellipse") + "\" points=\"";
-      for (const auto& p : it.pts) s += fmt(X(p.x())) + "," + fmt(Y(p.y())) + " ";
+      for (const auto& p : it.pts) s += fmt(f.X(p.x())) + "," + fmt(f.Y(p.y())) + " ";
       s += "\"/>\n";
     } else if (it.kind == Item::kPoints) {
       for (const auto& p : it.pts)
-        s += "<circle class=\"series\" cx=\"" + fmt(X(p.x())) + "\" cy=\"" + fmt(Y(p.y())) + "\" r=\"" + fmt(it.size) +
+        s += "<circle class=\"series\" cx=\"" + fmt(f.X(p.x())) + "\" cy=\"" + fmt(f.Y(p.y())) + "\" r=\"" + fmt(it.size) +
              "\" fill=\"" + it.color + "\"/>\n";
     } else {
       for (size_t i = 0; i + 1 < it.pts.size(); ++i) {
-        const double xa = X(it.pts[i].x()), xb = X(it.pts[i + 1].x()), yt = Y(it.pts[i].y()), yb = Y(0);
+        const double xa = f.X(it.pts[i].x()), xb = f.X(it.pts[i + 1].x()), yt = f.Y(it.pts[i].y()), yb = f.Y(0);
         s += "<rect class=\"series\" x=\"" + fmt(xa) + "\" y=\"" + fmt(std::min(yt, yb)) + "\" width=\"" +
              fmt(std::max(0.5, xb - xa - 1)) + "\" height=\"" + fmt(std::abs(yb - yt)) + "\" fill=\"" + it.color + "\"/>\n";
       }
     }
   }
-  s += "</g>\n";
-  if (colour_bar) {
-    const double bx = ml + pw + 18, bw = 14;
-    s += "<defs><linearGradient id=\"" + id + "-scale\" x1=\"0\" y1=\"1\" x2=\"0\" y2=\"0\">";
-    for (int k = 0; k <= 8; ++k)
-      s += "<stop offset=\"" + fmt(k / 8.0) + "\" stop-color=\"" + viridis(k / 8.0) + "\"/>";
-    s += "</linearGradient></defs>\n<rect class=\"colorbar\" x=\"" + fmt(bx) + "\" y=\"" + fmt(mt) + "\" width=\"" + fmt(bw) +
-         "\" height=\"" + fmt(ph) + "\" fill=\"url(#" + id + "-scale)\"/>\n";
-    s += "<text x=\"" + fmt(bx + bw + 3) + "\" y=\"" + fmt(mt + 8) + "\">" + tick_label(vmax) + "</text>\n";
-    s += "<text x=\"" + fmt(bx + bw + 3) + "\" y=\"" + fmt(mt + ph) + "\">" + tick_label(vmin) + "</text>\n";
-    s += "<text transform=\"translate(" + fmt(bx + bw + 14) + "," + fmt(mt + ph / 2) +
-         ") rotate(-90)\" text-anchor=\"middle\">" + html_escape(value_label) + "</text>\n";
-  }
-  // The legend in the top right corner, as wide as its longest label (about 6.2 px per character at 11 px), on a
-  // translucent white box so the data under it stays visible.
+}
+
+// The colour bar of the coloured lines' values, right of the plot.
+void SvgPlot::render_colour_bar(std::string& s, const Frame& f) const {
+  const double bx = f.ml + f.pw + 18, bw = 14, mt = f.mt, ph = f.ph;
+  s += "<defs><linearGradient id=\"" + f.id + "-scale\" x1=\"0\" y1=\"1\" x2=\"0\" y2=\"0\">";
+  for (int k = 0; k <= 8; ++k)
+    s += "<stop offset=\"" + fmt(k / 8.0) + "\" stop-color=\"" + viridis(k / 8.0) + "\"/>";
+  s += "</linearGradient></defs>\n<rect class=\"colorbar\" x=\"" + fmt(bx) + "\" y=\"" + fmt(mt) + "\" width=\"" + fmt(bw) +
+       "\" height=\"" + fmt(ph) + "\" fill=\"url(#" + f.id + "-scale)\"/>\n";
+  s += "<text x=\"" + fmt(bx + bw + 3) + "\" y=\"" + fmt(mt + 8) + "\">" + tick_label(f.vmax) + "</text>\n";
+  s += "<text x=\"" + fmt(bx + bw + 3) + "\" y=\"" + fmt(mt + ph) + "\">" + tick_label(f.vmin) + "</text>\n";
+  s += "<text transform=\"translate(" + fmt(bx + bw + 14) + "," + fmt(mt + ph / 2) +
+       ") rotate(-90)\" text-anchor=\"middle\">" + html_escape(f.value_label) + "</text>\n";
+}
+
+// The legend in the top right corner, as wide as its longest label (about 6.2 px per character at 11 px), on a
+// translucent white box so the data under it stays visible.
+void SvgPlot::render_legend(std::string& s, const Frame& f) const {
   size_t longest = 0, entries = 0;
   for (const auto& it : items_)
     if (!it.label.empty() && it.kind != Item::kColoredLine) longest = std::max(longest, it.label.size()), ++entries;
-  if (entries > 0) {
-    const double lw = std::min(pw - 10, 26 + 6.2 * static_cast<double>(longest)), lx = ml + pw - lw - 4;
-    const double lh = 16.0 * static_cast<double>(entries) + 6, top = legend_bottom_ ? mt + ph - lh - 3 : mt + 3;
-    s += "<rect class=\"legend\" x=\"" + fmt(lx) + "\" y=\"" + fmt(top) + "\" width=\"" + fmt(lw) + "\" height=\"" +
-         fmt(lh) + "\" fill=\"white\" fill-opacity=\"0.8\" stroke=\"#ccc\"/>\n";
-    double ly = top + 14;
-    for (const auto& it : items_) {
-      if (it.label.empty() || it.kind == Item::kColoredLine) continue;
-      s += "<rect x=\"" + fmt(lx + 5) + "\" y=\"" + fmt(ly - 9) + "\" width=\"12\" height=\"" +
-           (it.kind == Item::kHLine ? "3" : "10") + "\" fill=\"" + it.color + "\"/><text x=\"" + fmt(lx + 22) + "\" y=\"" +
-           fmt(ly) + "\">" + html_escape(it.label) + "</text>\n";
-      ly += 16;
-    }
+  if (entries == 0) return;
+  const double lw = std::min(f.pw - 10, 26 + 6.2 * static_cast<double>(longest)), lx = f.ml + f.pw - lw - 4;
+  const double lh = 16.0 * static_cast<double>(entries) + 6, top = legend_bottom_ ? f.mt + f.ph - lh - 3 : f.mt + 3;
+  s += "<rect class=\"legend\" x=\"" + fmt(lx) + "\" y=\"" + fmt(top) + "\" width=\"" + fmt(lw) + "\" height=\"" +
+       fmt(lh) + "\" fill=\"white\" fill-opacity=\"0.8\" stroke=\"#ccc\"/>\n";
+  double ly = top + 14;
+  for (const auto& it : items_) {
+    if (it.label.empty() || it.kind == Item::kColoredLine) continue;
+    s += "<rect x=\"" + fmt(lx + 5) + "\" y=\"" + fmt(ly - 9) + "\" width=\"12\" height=\"" +
+         (it.kind == Item::kHLine ? "3" : "10") + "\" fill=\"" + it.color + "\"/><text x=\"" + fmt(lx + 22) + "\" y=\"" +
+         fmt(ly) + "\">" + html_escape(it.label) + "</text>\n";
+    ly += 16;
   }
-  s += "</svg>\n";
-  return s;
 }
 
 }  // namespace sextant::tools

@@ -66,6 +66,14 @@ class SvgPlot {
   Eigen::Vector4d view_ = Eigen::Vector4d::Zero();  // x0, x1, y0, y1
   std::vector<std::string> categories_;
   std::vector<Item> items_;
+
+  // render's steps (svg_plot.cpp): the frame (margins, plot area, data range), then the parts drawn in it.
+  struct Frame;
+  Frame frame() const;
+  void render_axes(std::string& s, const Frame& f) const;
+  void render_items(std::string& s, const Frame& f) const;
+  void render_colour_bar(std::string& s, const Frame& f) const;
+  void render_legend(std::string& s, const Frame& f) const;
 };
 
 /// A view [x0, x1, y0, y1] that shows every point of `must_show` and the central part of `points` (per axis, between

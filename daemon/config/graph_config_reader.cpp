@@ -7,132 +7,161 @@
 #include <string>
 
 namespace sextant::config {
+namespace {
 
-void read_stage_config(Section& s, engine::GraphConfig& c) {
-  s.get("enabled", c.enabled);
-  {
-    Section k = s.child("keyframes");
-    k.get("k1", c.keyframes.k1, non_negative());
-    k.get("k2", c.keyframes.k2, positive());
-    k.get("translation_weight", c.keyframes.translation_weight, non_negative());
-    k.get("rotation_weight", c.keyframes.rotation_weight, non_negative());
-    k.get("reanchor_after", c.keyframes.reanchor_after, int_in_range(0, 1 << 20));
-    if (!(c.keyframes.k1 < c.keyframes.k2)) throw k.error("'" + k.path() + "': k1 must be smaller than k2");
-    if (c.keyframes.translation_weight == 0 && c.keyframes.rotation_weight == 0)
-      throw k.error("'" + k.path() + "': translation_weight and rotation_weight cannot both be 0");
-    k.reject_unknown_keys();
+void read_keyframes(Section& s, engine::GraphConfig& c) {
+  Section k = s.child("keyframes");
+  k.get("k1", c.keyframes.k1, non_negative());
+  k.get("k2", c.keyframes.k2, positive());
+  k.get("translation_weight", c.keyframes.translation_weight, non_negative());
+  k.get("rotation_weight", c.keyframes.rotation_weight, non_negative());
+  k.get("reanchor_after", c.keyframes.reanchor_after, int_in_range(0, 1 << 20));
+  if (!(c.keyframes.k1 < c.keyframes.k2)) throw k.error("'" + k.path() + "': k1 must be smaller than k2");
+  if (c.keyframes.translation_weight == 0 && c.keyframes.rotation_weight == 0)
+    throw k.error("'" + k.path() + "': translation_weight and rotation_weight cannot both be 0");
+  k.reject_unknown_keys();
+}
+
+void read_loops(Section& s, engine::GraphConfig& c) {
+  Section p = s.child("loops");
+  p.get("propose", c.propose_loops);
+  p.get("max_waiting", c.max_waiting_loops, int_in_range(0, 1 << 20));
+  p.get("n1", c.proposals.n1, int_in_range(0, 1000));
+  p.get("n2", c.proposals.n2, int_in_range(-1, 1000));
+  int seed = static_cast<int>(c.proposals.seed);
+  p.get("seed", seed, int_in_range(0, 2147483647));
+  c.proposals.seed = static_cast<uint64_t>(seed);
+  p.get_parsed("robust", c.robust, graph::robust_kernel_from_name);
+  // "auto" (a chi-square quantile of the loops' dimension, kernel_width_for in estimators/slam/slam_options.hpp) or a
+  // number.
+  std::string width;  // stays empty when the key is absent (the default stays)
+  p.get("kernel_width", width, Check<std::string>([](const std::string& v) -> std::optional<std::string> {
+    if (v == "auto") return std::nullopt;
+    char* end = nullptr;
+    const double x = std::strtod(v.c_str(), &end);
+    if (end == v.c_str() || *end != '\0' || !std::isfinite(x) || !(x > 0))
+      return "expected 'auto' or a positive number, got '" + v + "'";
+    return std::nullopt;
+  }));
+  if (width == "auto") c.kernel_width.reset();
+  else if (!width.empty()) c.kernel_width = std::strtod(width.c_str(), nullptr);
+  p.get("gate_probability", c.loop_gate_probability, in_range(0.5, 0.999999999));
+  p.get("gate_odometry_scale", c.loop_gate_odometry_scale, positive());
+  p.get("time_tolerance_s", c.loop_time_tolerance_s, non_negative());
+  p.reject_unknown_keys();
+}
+
+void read_landmarks(Section& s, engine::GraphConfig& c) {
+  Section l = s.child("landmarks");
+  l.get("enabled", c.landmarks.enabled);
+  l.get("robust", c.landmarks.robust);
+  l.get("gate_probability", c.landmarks.gate_probability, in_range(0.5, 0.999999999));
+  l.get("gate_odometry_scale", c.landmarks.gate_odometry_scale, positive());
+  l.get("max_waiting", c.landmarks.max_waiting, int_in_range(0, 1 << 20));
+  l.reject_unknown_keys();
+}
+
+void read_smoother(Section& s, engine::GraphConfig& c) {
+  // The incremental smoother's options (estimators/graph/incremental_options.hpp says what each does); an absent
+  // key keeps IncrementalOptions' default.
+  Section m = s.child("smoother");
+  graph::IncrementalOptions& o = c.smoother;
+  m.get("relinearize_translation", o.relinearize_translation, positive());
+  m.get("relinearize_rotation", o.relinearize_rotation, positive());
+  m.get("relinearization_passes", o.relinearization_passes, int_in_range(0, 100));
+  m.get("relinearize_skip", o.relinearize_skip, int_in_range(1, 1 << 20));
+  m.get("wildfire", o.wildfire, non_negative());
+  m.get("update_fraction", o.update_fraction, in_range(0.0, 1.0));
+  m.get("min_update_factors", o.min_update_factors, int_in_range(1, 1 << 20));
+  m.get("max_update_factors", o.max_update_factors, int_in_range(1, 1 << 20));
+  m.get("refill_ratio", o.refill_ratio, Check<double>([](const double& v) -> std::optional<std::string> {
+    if (v > 1 && std::isfinite(v)) return std::nullopt;  // at 1 any fill-in would reorder at every update
+    return "must be a number > 1, got " + std::to_string(v);
+  }));
+  m.get("nested_dissection_above", o.nested_dissection_above, int_in_range(0, std::numeric_limits<int>::max()));
+  m.get("reorder_spread", o.reorder_spread, int_in_range(0, 1000));
+  m.get("reorder_spread_above", o.reorder_spread_above, int_in_range(0, std::numeric_limits<int>::max()));
+  m.get("reorder_slice_ms", o.reorder_slice_ms, non_negative());
+  if (o.max_update_factors < o.min_update_factors) {
+    // The smoother would quietly take the larger; name the key that was set.
+    const YAML::Node& n = m.node();
+    const YAML::Node at = n.IsMap() && n["max_update_factors"] ? n["max_update_factors"] : n.IsMap() ? n["min_update_factors"] : n;
+    throw m.error_at(at, "'" + m.path() + "': max_update_factors (" + std::to_string(o.max_update_factors) +
+                             ") must not be smaller than min_update_factors (" + std::to_string(o.min_update_factors) + ")");
   }
-  {
-    Section p = s.child("loops");
-    p.get("propose", c.propose_loops);
-    p.get("max_waiting", c.max_waiting_loops, int_in_range(0, 1 << 20));
-    p.get("n1", c.proposals.n1, int_in_range(0, 1000));
-    p.get("n2", c.proposals.n2, int_in_range(-1, 1000));
-    int seed = static_cast<int>(c.proposals.seed);
-    p.get("seed", seed, int_in_range(0, 2147483647));
-    c.proposals.seed = static_cast<uint64_t>(seed);
-    p.get_parsed("robust", c.robust, graph::robust_kernel_from_name);
-    // "auto" (a chi-square quantile of the loops' dimension, kernel_width_for in estimators/slam/slam_options.hpp) or a
-    // number.
-    std::string width;  // stays empty when the key is absent (the default stays)
-    p.get("kernel_width", width, Check<std::string>([](const std::string& v) -> std::optional<std::string> {
-      if (v == "auto") return std::nullopt;
-      char* end = nullptr;
-      const double x = std::strtod(v.c_str(), &end);
-      if (end == v.c_str() || *end != '\0' || !std::isfinite(x) || !(x > 0))
-        return "expected 'auto' or a positive number, got '" + v + "'";
-      return std::nullopt;
-    }));
-    if (width == "auto") c.kernel_width.reset();
-    else if (!width.empty()) c.kernel_width = std::strtod(width.c_str(), nullptr);
-    p.get("gate_probability", c.loop_gate_probability, in_range(0.5, 0.999999999));
-    p.get("gate_odometry_scale", c.loop_gate_odometry_scale, positive());
-    p.get("time_tolerance_s", c.loop_time_tolerance_s, non_negative());
-    p.reject_unknown_keys();
-  }
-  {
-    Section l = s.child("landmarks");
-    l.get("enabled", c.landmarks.enabled);
-    l.get("robust", c.landmarks.robust);
-    l.get("gate_probability", c.landmarks.gate_probability, in_range(0.5, 0.999999999));
-    l.get("gate_odometry_scale", c.landmarks.gate_odometry_scale, positive());
-    l.get("max_waiting", c.landmarks.max_waiting, int_in_range(0, 1 << 20));
-    l.reject_unknown_keys();
-  }
-  {
-    // The incremental smoother's options (estimators/graph/incremental_options.hpp says what each does); an absent
-    // key keeps IncrementalOptions' default.
-    Section m = s.child("smoother");
-    graph::IncrementalOptions& o = c.smoother;
-    m.get("relinearize_translation", o.relinearize_translation, positive());
-    m.get("relinearize_rotation", o.relinearize_rotation, positive());
-    m.get("relinearization_passes", o.relinearization_passes, int_in_range(0, 100));
-    m.get("relinearize_skip", o.relinearize_skip, int_in_range(1, 1 << 20));
-    m.get("wildfire", o.wildfire, non_negative());
-    m.get("update_fraction", o.update_fraction, in_range(0.0, 1.0));
-    m.get("min_update_factors", o.min_update_factors, int_in_range(1, 1 << 20));
-    m.get("max_update_factors", o.max_update_factors, int_in_range(1, 1 << 20));
-    m.get("refill_ratio", o.refill_ratio, Check<double>([](const double& v) -> std::optional<std::string> {
-      if (v > 1 && std::isfinite(v)) return std::nullopt;  // at 1 any fill-in would reorder at every update
-      return "must be a number > 1, got " + std::to_string(v);
-    }));
-    m.get("nested_dissection_above", o.nested_dissection_above, int_in_range(0, std::numeric_limits<int>::max()));
-    m.get("reorder_spread", o.reorder_spread, int_in_range(0, 1000));
-    m.get("reorder_spread_above", o.reorder_spread_above, int_in_range(0, std::numeric_limits<int>::max()));
-    m.get("reorder_slice_ms", o.reorder_slice_ms, non_negative());
-    if (o.max_update_factors < o.min_update_factors) {
-      // The smoother would quietly take the larger; name the key that was set.
-      const YAML::Node& n = m.node();
-      const YAML::Node at = n.IsMap() && n["max_update_factors"] ? n["max_update_factors"] : n.IsMap() ? n["min_update_factors"] : n;
-      throw m.error_at(at, "'" + m.path() + "': max_update_factors (" + std::to_string(o.max_update_factors) +
-                               ") must not be smaller than min_update_factors (" + std::to_string(o.min_update_factors) + ")");
-    }
-    m.reject_unknown_keys();
-  }
-  // The relinearization thresholds were keys of this section in earlier versions: say where they went.
+  m.reject_unknown_keys();
+}
+
+// Keys that moved or are gone: say where they went.
+void reject_moved_smoother_keys(Section& s) {
+  // The relinearization thresholds were keys of this section in earlier versions.
   if (s.node().IsMap())
     for (const auto& kv : s.node())
       for (const char* moved : {"relinearize_translation", "relinearize_rotation"})
         if (kv.first.as<std::string>() == moved)
           throw s.error_at(kv.first, "'" + s.path() + "." + moved + "' has moved to '" + s.path() + ".smoother." + moved + "'");
+}
+
+void reject_gone_trajectory_key(Section& s) {
+  if (s.node().IsMap() && s.node()["trajectory_max_keyframes"])
+    throw s.error_at(s.node()["trajectory_max_keyframes"],
+                     "'" + s.path() + ".trajectory_max_keyframes' is gone: TRAJECTORY now sends new and moved keyframes and a "
+                     "rolling snapshot in bounded messages (see '" + s.path() + ".trajectory')");
+}
+
+// The odometry's keys: regularization, history, batching.
+void read_odometry(Section& s, engine::GraphConfig& c) {
   s.get("min_increment_variance", c.min_increment_variance, positive());
   s.get("odometry_history", c.odometry_history, int_in_range(1, 100000000));
   s.get("coalesce_odometry", c.coalesce_odometry);
   s.get("odometry_batch_max", c.odometry_batch_max, int_in_range(1, 1 << 20));
   s.get("odometry_waiting_max", c.odometry_waiting_max, int_in_range(1, 1 << 24));
   s.get("odometry_waiting_total_max", c.odometry_waiting_total_max, int_in_range(1, 1 << 24));
-  if (s.node().IsMap() && s.node()["trajectory_max_keyframes"])
-    throw s.error_at(s.node()["trajectory_max_keyframes"],
-                     "'" + s.path() + ".trajectory_max_keyframes' is gone: TRAJECTORY now sends new and moved keyframes and a "
-                     "rolling snapshot in bounded messages (see '" + s.path() + ".trajectory')");
-  {
-    Section l = s.child("lifelong");
-    l.get("enabled", c.lifelong.enabled);
-    for (const char* gone : {"max_keyframes", "window"})
-      if (l.node().IsMap() && l.node()[gone])
-        throw l.error_at(l.node()[gone], "'" + l.path() + "." + gone + "' is now per kind of body: '" + l.path() +
-                                             ".planar." + gone + "' and '" + l.path() + ".spatial." + gone + "'");
-    l.get("cell_size", c.lifelong.thinning.cell_size, positive());
-    l.get("heading_sector", c.lifelong.thinning.heading_sector, in_range(1e-3, 2 * M_PI));
-    for (auto [key, budget] : {std::pair{"planar", &c.lifelong.planar}, std::pair{"spatial", &c.lifelong.spatial}}) {
-      Section b = l.child(key);
-      b.get("max_keyframes", budget->max_keyframes, int_in_range(2, 1 << 24));
-      b.get("window", budget->window, int_in_range(1, 1 << 24));
-      b.reject_unknown_keys();
-    }
-    l.reject_unknown_keys();
+}
+
+void read_lifelong(Section& s, engine::GraphConfig& c) {
+  Section l = s.child("lifelong");
+  l.get("enabled", c.lifelong.enabled);
+  for (const char* gone : {"max_keyframes", "window"})
+    if (l.node().IsMap() && l.node()[gone])
+      throw l.error_at(l.node()[gone], "'" + l.path() + "." + gone + "' is now per kind of body: '" + l.path() +
+                                           ".planar." + gone + "' and '" + l.path() + ".spatial." + gone + "'");
+  l.get("cell_size", c.lifelong.thinning.cell_size, positive());
+  l.get("heading_sector", c.lifelong.thinning.heading_sector, in_range(1e-3, 2 * M_PI));
+  for (auto [key, budget] : {std::pair{"planar", &c.lifelong.planar}, std::pair{"spatial", &c.lifelong.spatial}}) {
+    Section b = l.child(key);
+    b.get("max_keyframes", budget->max_keyframes, int_in_range(2, 1 << 24));
+    b.get("window", budget->window, int_in_range(1, 1 << 24));
+    b.reject_unknown_keys();
   }
-  {
-    Section t = s.child("trajectory");
-    engine::TrajectoryFeedOptions& o = c.trajectory;
-    t.get("rate_hz", o.rate_hz, non_negative());
-    t.get("move_translation", o.move_translation, positive());
-    t.get("move_rotation", o.move_rotation, positive());
-    t.get("max_keyframes_per_message", o.max_keyframes_per_message, int_in_range(1, 850));  // 850 x 72 B < 64 KB
-    t.get("max_keyframes_per_tick", o.max_keyframes_per_tick, int_in_range(1, 1 << 20));
-    t.get("snapshot_chunk", o.snapshot_chunk, int_in_range(0, 850));
-    t.reject_unknown_keys();
-  }
+  l.reject_unknown_keys();
+}
+
+void read_trajectory(Section& s, engine::GraphConfig& c) {
+  Section t = s.child("trajectory");
+  engine::TrajectoryFeedOptions& o = c.trajectory;
+  t.get("rate_hz", o.rate_hz, non_negative());
+  t.get("move_translation", o.move_translation, positive());
+  t.get("move_rotation", o.move_rotation, positive());
+  t.get("max_keyframes_per_message", o.max_keyframes_per_message, int_in_range(1, 850));  // 850 x 72 B < 64 KB
+  t.get("max_keyframes_per_tick", o.max_keyframes_per_tick, int_in_range(1, 1 << 20));
+  t.get("snapshot_chunk", o.snapshot_chunk, int_in_range(0, 850));
+  t.reject_unknown_keys();
+}
+
+}  // namespace
+
+void read_stage_config(Section& s, engine::GraphConfig& c) {
+  s.get("enabled", c.enabled);
+  read_keyframes(s, c);
+  read_loops(s, c);
+  read_landmarks(s, c);
+  read_smoother(s, c);
+  reject_moved_smoother_keys(s);
+  read_odometry(s, c);
+  reject_gone_trajectory_key(s);
+  read_lifelong(s, c);
+  read_trajectory(s, c);
   s.reject_unknown_keys();
 }
 

@@ -2,7 +2,6 @@
 
 #include "assoc/chi_square.hpp"
 #include "daemon/engine/planar_pose_covariance.hpp"
-#include "estimators/filter/interpolated_prediction.hpp"
 #include "estimators/lie/planar_axes.hpp"
 
 #include <algorithm>
@@ -111,8 +110,8 @@ void FilterStage::add(H& history, const std::string& body, int64_t utime, int ra
     if (!t.fusion.started()) return;
     newest = t.fusion.utime();
   } else {
-    if (!t.started) return;
-    newest = t.utime;
+    if (!t.fusion.started()) return;
+    newest = t.fusion.utime();
   }
   if (newest != utime) return;
   auto [p, first] = published_.try_emplace(body, utime);
@@ -206,16 +205,19 @@ FilterStage::SpatialTrack FilterStage::new_spatial_track() const {
   opt.gate = assoc::chi2_quantile(3, 0.99);
   opt.slam = config_.slam;
   opt.max_landmarks = config_.max_landmarks;
+  const double sxy = config_.initial_sigma_xy, sth = config_.initial_sigma_theta;
+  Matrix6 P0 = Matrix6::Zero();
+  P0.diagonal() << sxy * sxy, sxy * sxy, sxy * sxy, sth * sth, sth * sth, sth * sth;
   SpatialTrack t;
-  t.ekf = filter::SpatialEkf(opt);
+  t.fusion = filter::SpatialFusion(opt, P0, config_.min_increment_variance);
   return t;
 }
 
 void FilterStage::apply(SpatialTrack& t, const Input& in) const {
   if (const auto* s = std::get_if<LandmarkSightings>(&in)) {
-    if (!t.started) {
+    if (!t.fusion.started()) {
       ++t.before_odometry;
-    } else if (s->utime <= t.utime) {
+    } else if (s->utime <= t.fusion.utime()) {
       update_with(t, *s);
     } else {
       if (t.pending.size() >= kMaxPending) {
@@ -231,34 +233,21 @@ void FilterStage::apply(SpatialTrack& t, const Input& in) const {
     ++t.unfused;
     return;
   }
-  const SE3 odom(o.pose.orientation, o.pose.position);
-  if (!t.started) {
-    const double sxy = config_.initial_sigma_xy, sth = config_.initial_sigma_theta;
-    Matrix6 P0 = Matrix6::Zero();
-    P0.diagonal() << sxy * sxy, sxy * sxy, sxy * sxy, sth * sth, sth * sth, sth * sth;
-    t.ekf.initialize(odom, P0);
-    t.started = true;
-  } else {
-    if (o.utime <= t.utime) {
-      ++t.duplicates;
-      return;
-    }
-    const SE3 delta = t.last_odom.between(odom);
-    const Matrix6 Q = filter_increment_covariance(o, delta, t.last_covariance, config_.min_increment_variance);
-    std::vector<int64_t> stops;
-    for (const auto& p : t.pending) stops.push_back(p.utime);
-    std::vector<LandmarkSightings> waiting;
-    waiting.swap(t.pending);
-    filter::predict_through_stops(
-        delta, Q, t.utime, o.utime, stops, [&t](const SE3& piece, const Matrix6& q) { t.ekf.predict(piece, q); },
-        [&](size_t i) { update_with(t, waiting[i]); });
-    for (auto& p : waiting)
-      if (p.utime >= o.utime) t.pending.push_back(std::move(p));
-    ++t.predictions;
-  }
-  t.last_odom = odom;
-  t.last_covariance = o.covariance;
-  t.utime = o.utime;
+  filter::SpatialOdometry m;
+  m.utime = o.utime;
+  m.pose = SE3(o.pose.orientation, o.pose.position);
+  m.covariance = o.covariance;
+  m.increment_covariance = o.increment_covariance;
+  std::vector<int64_t> stops;
+  for (const auto& p : t.pending) stops.push_back(p.utime);
+  std::vector<LandmarkSightings> waiting;
+  waiting.swap(t.pending);
+  const auto outcome = t.fusion.odometry(m, stops, [&](size_t i) { update_with(t, waiting[i]); });
+  // Sightings the prediction did not pass (a duplicate stamp) wait for the next one.
+  for (auto& p : waiting)
+    if (outcome != filter::SpatialOdometryOutcome::kPredicted || p.utime >= o.utime) t.pending.push_back(std::move(p));
+  if (outcome == filter::SpatialOdometryOutcome::kPredicted) ++t.predictions;
+  else if (outcome == filter::SpatialOdometryOutcome::kDuplicate) ++t.duplicates;
 }
 
 void FilterStage::update_with(SpatialTrack& t, const LandmarkSightings& s) const {
@@ -267,7 +256,7 @@ void FilterStage::update_with(SpatialTrack& t, const LandmarkSightings& s) const
       ++t.unidentified;
       continue;
     }
-    const auto r = t.ekf.observe(ob.id, Eigen::Vector3d(ob.range, ob.azimuth, ob.elevation), ob.covariance);
+    const auto r = t.fusion.ekf().observe(ob.id, Eigen::Vector3d(ob.range, ob.azimuth, ob.elevation), ob.covariance);
     if (r.accepted) (r.reason == filter::UpdateReason::kNewLandmark ? t.new_landmarks : t.updates)++;
     else if (r.reason == filter::UpdateReason::kGate) ++t.gated;
     else ++t.rejected;
@@ -276,19 +265,20 @@ void FilterStage::update_with(SpatialTrack& t, const LandmarkSightings& s) const
 
 void FilterStage::publish(const std::string& body, const SpatialTrack& t, const Emit& emit) const {
   FusedPose out;
-  out.utime = t.utime;
+  const filter::SpatialEkf& ekf = t.fusion.ekf();
+  out.utime = t.fusion.utime();
   out.source = body;
   out.estimator = estimator();
   out.planar = false;
-  out.pose.position = t.ekf.pose().translation();
-  out.pose.orientation = t.ekf.pose().rotation().quaternion();
-  out.covariance = t.ekf.pose_covariance();  // already the right perturbation [rho, phi]
+  out.pose.position = ekf.pose().translation();
+  out.pose.orientation = ekf.pose().rotation().quaternion();
+  out.covariance = ekf.pose_covariance();  // already the right perturbation [rho, phi]
   emit(out);
 }
 
 const filter::SpatialEkf* FilterStage::spatial_ekf(const std::string& body) const {
   auto it = spatial_.find(body);
-  return it == spatial_.end() || !it->second.state().started ? nullptr : &it->second.state().ekf;
+  return it == spatial_.end() || !it->second.state().fusion.started() ? nullptr : &it->second.state().fusion.ekf();
 }
 
 Counters FilterStage::counters() const {

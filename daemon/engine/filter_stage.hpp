@@ -28,6 +28,7 @@
 #include "estimators/filter/measurement_history.hpp"
 #include "estimators/filter/multi_source_ekf.hpp"
 #include "estimators/filter/spatial_ekf.hpp"
+#include "estimators/filter/spatial_fusion.hpp"
 
 #include <map>
 
@@ -79,14 +80,10 @@ class FilterStage final : public Stage {
   };
   using Input = std::variant<Odometry, LandmarkSightings>;
   using History = filter::MeasurementHistory<Track, Input>;
-  // A 3-D body: the same, with the 3-D filter and its predicting source's previous message.
+  // A 3-D body: the same, with the 3-D filter driven by its predicting source (estimators/filter/spatial_fusion.hpp).
   struct SpatialTrack {
-    filter::SpatialEkf ekf;
-    bool started = false;
-    SE3 last_odom;
-    Matrix6 last_covariance = Matrix6::Zero();
-    int64_t utime = 0;
-    std::vector<LandmarkSightings> pending;
+    filter::SpatialFusion fusion;
+    std::vector<LandmarkSightings> pending;  // taken after the newest prediction: applied inside the next one
     int64_t predictions = 0, updates = 0, gated = 0, new_landmarks = 0, rejected = 0, before_odometry = 0,
             duplicates = 0, unidentified = 0, unfused = 0, stale_sightings = 0;
     void save(archive::ArchiveWriter& w) const;

@@ -15,12 +15,12 @@ void FilterStage::Track::load(archive::ArchiveReader& r) {
 }
 
 void FilterStage::SpatialTrack::save(archive::ArchiveWriter& w) const {
-  w(ekf)(started)(last_odom)(last_covariance)(utime)(pending)(predictions)(updates)(gated)(new_landmarks)(rejected)(
+  w(fusion)(pending)(predictions)(updates)(gated)(new_landmarks)(rejected)(
       before_odometry)(duplicates)(unidentified)(unfused)(stale_sightings);
 }
 
 void FilterStage::SpatialTrack::load(archive::ArchiveReader& r) {
-  r(ekf)(started)(last_odom)(last_covariance)(utime)(pending)(predictions)(updates)(gated)(new_landmarks)(rejected)(
+  r(fusion)(pending)(predictions)(updates)(gated)(new_landmarks)(rejected)(
       before_odometry)(duplicates)(unidentified)(unfused)(stale_sightings);
 }
 

@@ -8,7 +8,6 @@
 // Also the other direction, for a planar filter's motion noise: the 3x3 increment covariance of an odometry message.
 #include "daemon/engine/events.hpp"
 #include "daemon/engine/pose_covariance.hpp"
-#include "estimators/filter/eigenvalue_floor.hpp"
 #include "estimators/lie/planar_axes.hpp"
 #include "estimators/lie/se2.hpp"
 
@@ -21,14 +20,14 @@ inline Matrix6 planar_covariance_in_body_frame(const SE2& pose, const Eigen::Mat
 }
 
 /// The covariance Q (3x3 over [dx, dy, dtheta], body frame after the motion) of the planar increment `delta` that
-/// odometry message `o` brings after a message with pose covariance `previous_covariance`: the message's increment
-/// covariance, or, without one, the growth of its pose covariance (differential mode, as dead reckoning does it).
-/// Symmetrized, with eigenvalues floored at `min_variance` so the filter's prediction stays positive definite (the
-/// planar block of filter_increment_covariance's, pose_covariance.hpp).
+/// odometry message `o` brings after a message with pose covariance `previous_covariance`: the (x, y, yaw) block of
+/// the one regularized increment covariance (pose_covariance.hpp: the message's increment covariance, or the growth
+/// of its pose covariance, with eigenvalues floored at `min_variance`), so the filter's prediction stays positive
+/// definite.
 inline Eigen::Matrix3d planar_increment_covariance(const Odometry& o, const Matrix6& previous_covariance, const SE2& delta,
                                                    double min_variance) {
-  const Eigen::Matrix3d q = planar_block(stated_increment_covariance(o, delta.to_se3(), previous_covariance));
-  return filter::floor_eigenvalues<3>(q, min_variance);
+  return planar_block(regularized_increment_covariance(o.covariance, o.increment_covariance, /*planar=*/true,
+                                                       delta.to_se3(), previous_covariance, min_variance));
 }
 
 }  // namespace sextant::engine

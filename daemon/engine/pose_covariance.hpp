@@ -3,7 +3,6 @@
 // estimators/lie/pose_covariance.hpp (compose_covariance, nearest_psd and the increment's, found from here
 // unqualified: the engine's namespace is inside sextant's).
 #include "daemon/engine/events.hpp"
-#include "estimators/filter/eigenvalue_floor.hpp"
 #include "estimators/lie/pose_covariance.hpp"
 
 namespace sextant::engine {
@@ -15,18 +14,12 @@ inline Matrix6 stated_increment_covariance(const Odometry& odo, const SE3& delta
   return sextant::stated_increment_covariance(odo.covariance, odo.increment_covariance, delta, previous_pose_covariance);
 }
 
-/// The increment covariance dead reckoning and the graph stage compose (sextant::regularized_increment_covariance).
+/// The increment covariance dead reckoning, the graph stage and the 3-D filter compose or predict with
+/// (sextant::regularized_increment_covariance: eigenvalues on the body's axes floored at `min_variance`).
 inline Matrix6 increment_covariance(const Odometry& odo, const SE3& delta, const Matrix6& previous_pose_covariance,
                                     double min_variance) {
   return regularized_increment_covariance(odo.covariance, odo.increment_covariance, odo.planar, delta,
                                           previous_pose_covariance, min_variance);
-}
-
-/// The increment covariance the filters predict with: the stated one with its eigenvalues floored at `min_variance`
-/// (positive definite, so the prediction keeps the filter's covariance positive definite).
-inline Matrix6 filter_increment_covariance(const Odometry& odo, const SE3& delta,
-                                           const Matrix6& previous_pose_covariance, double min_variance) {
-  return filter::floor_eigenvalues<6>(stated_increment_covariance(odo, delta, previous_pose_covariance), min_variance);
 }
 
 }  // namespace sextant::engine

@@ -51,6 +51,14 @@ class TrajectoryFeed {
   void load(archive::ArchiveReader& r);
 
  private:
+  // publish's steps (trajectory_feed.cpp).
+  struct Changes;
+  Changes compare_with_published(const std::vector<Keyframe>& current, bool flush);
+  std::vector<size_t> choose_keyframes_to_send(const Changes& changes, bool flush) const;
+  void add_updates(std::vector<Trajectory>& out, const Trajectory& first, const std::vector<Keyframe>& current,
+                   const std::vector<size_t>& send, const std::vector<int64_t>& removed);
+  void add_snapshot_chunk(std::vector<Trajectory>& out, const Trajectory& first, const std::vector<Keyframe>& current);
+
   TrajectoryFeedOptions options_;
   bool started_ = false;
   int64_t next_utime_ = 0;

@@ -2,6 +2,7 @@
 
 #include "daemon/runtime/wire_layout.hpp"
 #include "estimators/lie/planar_axes.hpp"
+#include "estimators/spd_matrix.hpp"
 
 #include <Eigen/Eigenvalues>
 
@@ -57,23 +58,22 @@ engine::Pose check_pose(const double p[3], const double q[4], const std::string&
   return pose;
 }
 
-// Symmetric positive (semi-)definite check over the components that are meaningful. For planar messages only
-// the x, y, yaw block must be positive definite; the other diagonal entries may be zero.
+// The one positive-definiteness check (estimators/spd_matrix.hpp) over the components that are meaningful: the whole
+// matrix symmetric; for planar messages only the x, y, yaw block must be positive definite, the other diagonal
+// entries may be zero.
 template <int N>
 Eigen::Matrix<double, N, N> check_covariance(const double* v, const std::string& field, std::span<const int> active) {
   check_finite(v, N * N, field);
   Eigen::Matrix<double, N, N> m = Eigen::Map<const Eigen::Matrix<double, N, N, Eigen::RowMajor>>(v);
-  const double scale = std::max(1.0, m.cwiseAbs().maxCoeff());
-  if ((m - m.transpose()).cwiseAbs().maxCoeff() > 1e-9 * scale) fail("covariance", field + ": not symmetric");
+  if (!is_symmetric(m)) fail("covariance", field + ": not symmetric");
   const int k = static_cast<int>(active.size());
   Eigen::MatrixXd sub(k, k);
   for (int i = 0; i < k; ++i)
     for (int j = 0; j < k; ++j) sub(i, j) = m(active[i], active[j]);
-  Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(sub, Eigen::EigenvaluesOnly);
-  const double min_ev = eig.eigenvalues().minCoeff();
-  if (!(min_ev > 0)) {
+  const DefinitenessCheck check = check_positive_definite(sub);
+  if (!check.ok()) {
     std::ostringstream s;
-    s << field << ": not positive definite (smallest eigenvalue " << min_ev << ")";
+    s << field << ": not positive definite (smallest eigenvalue " << check.smallest_eigenvalue << ")";
     fail("covariance", s.str());
   }
   return m;

@@ -6,6 +6,7 @@
 
 #include "estimators/filter/low_variance_resampling.hpp"
 #include "estimators/filter/planar_ekf.hpp"
+#include "estimators/spd_matrix.hpp"
 
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
@@ -45,7 +46,7 @@ bool update_landmark(MapLandmark& lm, const Eigen::Vector3d& pose, const Eigen::
   lm.mean += K * nu;
   const Eigen::Matrix2d IKH = Eigen::Matrix2d::Identity() - K * H;
   const Eigen::Matrix2d P = IKH * lm.covariance * IKH.transpose() + K * R * K.transpose();
-  lm.covariance = 0.5 * (P + P.transpose());
+  lm.covariance = symmetrized(P);
   return true;
 }
 
@@ -57,7 +58,7 @@ MapLandmark new_landmark(const Eigen::Vector3d& pose, const RangeBearing& s) {
   Eigen::Matrix2d Jz;
   Jz << c, -s.range * sn, sn, s.range * c;
   const Eigen::Matrix2d P = Jz * s.covariance * Jz.transpose();
-  lm.covariance = 0.5 * (P + P.transpose());
+  lm.covariance = symmetrized(P);
   lm.id = s.id;
   lm.observations = 1;
   return lm;
@@ -72,7 +73,7 @@ FastSlam::FastSlam(const FastSlamOptions& options) : options_(options), rng_(opt
 void FastSlam::initialize(const SE2& pose, const Eigen::Matrix3d& covariance) {
   Particle p;
   p.pose.mean << pose.translation(), pose.angle();
-  p.pose.covariance = 0.5 * (covariance + covariance.transpose());
+  p.pose.covariance = symmetrized(covariance);
   particles_.assign(static_cast<size_t>(options_.particles), p);
   identified_slot_.clear();
   batches_ = 0;
@@ -81,7 +82,7 @@ void FastSlam::initialize(const SE2& pose, const Eigen::Matrix3d& covariance) {
 
 bool FastSlam::predict(const SE2& delta, const Eigen::Matrix3d& Q) {
   if (!initialized_ || !Q.allFinite() || !delta.translation().allFinite() || !std::isfinite(delta.angle())) return false;
-  const Eigen::Matrix3d Qs = 0.5 * (Q + Q.transpose());
+  const Eigen::Matrix3d Qs = symmetrized(Q);
   if (Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(Qs, Eigen::EigenvaluesOnly).eigenvalues().minCoeff() <
       -1e-12 * (1 + Qs.cwiseAbs().maxCoeff()))
     return false;
@@ -89,7 +90,7 @@ bool FastSlam::predict(const SE2& delta, const Eigen::Matrix3d& Q) {
   for (auto& p : particles_) {
     p.pose.mean = PlanarEkf::motion(p.pose.mean, delta, &F, &G);
     const Eigen::Matrix3d P = F * p.pose.covariance * F.transpose() + G * Qs * G.transpose();
-    p.pose.covariance = 0.5 * (P + P.transpose());
+    p.pose.covariance = symmetrized(P);
   }
   return true;
 }
@@ -117,7 +118,7 @@ std::optional<FastSlam::ProposalStep> FastSlam::refine_proposal(PoseGaussian& g,
   g.mean[2] = wrap_angle(g.mean[2]);
   const Eigen::Matrix3d IKG = Eigen::Matrix3d::Identity() - K * Gs;
   const Eigen::Matrix3d P = IKG * g.covariance * IKG.transpose() + K * Qn * K.transpose();
-  g.covariance = 0.5 * (P + P.transpose());
+  g.covariance = symmetrized(P);
   return out;
 }
 
@@ -210,91 +211,120 @@ FastSlamBatchOutcome FastSlam::observe(const std::vector<RangeBearing>& sighting
   return out;
 }
 
-void FastSlam::observe_particle(Particle& p, const std::vector<RangeBearing>& batch, const std::vector<int>& slot,
-                                std::vector<char>& gated_everywhere, FastSlamBatchOutcome* stats) {
-  PoseGaussian g = p.pose;
+// One particle's proposal over a batch, built sighting by sighting: the pose Gaussian refined by each associated
+// sighting, the log-weight, the landmark updates and creations left for after the pose is sampled, and the
+// landmarks already taken by a sighting of the batch.
+struct FastSlam::Proposal {
+  PoseGaussian g;
   double log_w = 0;
   std::vector<Pending> pending;
   std::set<std::pair<int, int64_t>> used;  // (tree: 0 known, 1 identified, 2 unidentified; id or slot)
+};
+
+void FastSlam::observe_particle(Particle& p, const std::vector<RangeBearing>& batch, const std::vector<int>& slot,
+                                std::vector<char>& gated_everywhere, FastSlamBatchOutcome* stats) {
+  Proposal q{p.pose, 0, {}, {}};
   const int identified_count = static_cast<int>(identified_slot_.size());
   for (size_t j = 0; j < batch.size(); ++j) {
-    const RangeBearing& s = batch[j];
-    const Eigen::Vector2d z(s.range, s.bearing);
-    const double log_p0 = log_new_landmark_likelihood(options_.gate, s.covariance);
-    if (s.id >= 0) {
-      if (slot[j] <= -2) {  // first sighting of this id: created from the sampled pose below
-        pending.push_back({j, true, false, -2 - slot[j]});
-        gated_everywhere[j] = 0;
-        if (stats) ++stats->created;
-        continue;
-      }
-      Eigen::Vector2d mean;
-      Eigen::Matrix2d cov = Eigen::Matrix2d::Zero();
-      if (slot[j] < 0) {
-        mean = known_.at(s.id);
-      } else {
-        const MapLandmark* lm = p.identified.find(slot[j]);
-        if (lm == nullptr) {  // (cannot happen: identified landmarks are created in every particle)
-          pending.push_back({j, true, false, slot[j]});
-          gated_everywhere[j] = 0;
-          continue;
-        }
-        mean = lm->mean;
-        cov = lm->covariance;
-      }
-      PoseGaussian trial = g;
-      const auto step = refine_proposal(trial, mean, cov, z, s.covariance);
-      if (!step || step->d2 > options_.gate) {
-        log_w += log_p0;
-        continue;
-      }
-      g = trial;
-      log_w += step->log_likelihood;
-      gated_everywhere[j] = 0;
-      used.insert(slot[j] < 0 ? std::pair<int, int64_t>{0, s.id} : std::pair<int, int64_t>{1, slot[j]});
-      if (stats) ++stats->updated;
-      if (slot[j] >= 0) pending.push_back({j, false, false, slot[j]});
+    if (batch[j].id >= 0) {
+      propose_with_id(q, p, batch[j], j, slot[j], gated_everywhere, stats);
       continue;
     }
-    // Without id: maximum likelihood over the known map and this particle's landmarks, inside the gate.
-    struct Best {
-      int tree = -1;
-      int64_t key = 0;
-      double log_likelihood = -INFINITY;
-      PoseGaussian pose;
-    } best;
-    double nearest_d2 = INFINITY;
-    const auto consider = [&](int tree, int64_t key, const Eigen::Vector2d& mean, const Eigen::Matrix2d& cov) {
-      if (used.count({tree, key})) return;
-      PoseGaussian trial = g;
-      const auto step = refine_proposal(trial, mean, cov, z, s.covariance);
-      if (step) nearest_d2 = std::min(nearest_d2, step->d2);
-      if (step && step->d2 <= options_.gate && step->log_likelihood > best.log_likelihood)
-        best = {tree, key, step->log_likelihood, trial};
-    };
-    for (const auto& [id, l] : known_) consider(0, id, l, Eigen::Matrix2d::Zero());
-    if (identified_count > 0)
-      p.identified.for_each([&](int32_t k, const MapLandmark& lm) { consider(1, k, lm.mean, lm.covariance); });
-    p.unidentified.for_each([&](int32_t k, const MapLandmark& lm) { consider(2, k, lm.mean, lm.covariance); });
-    if (best.tree >= 0) {
-      used.insert({best.tree, best.key});
-      g = best.pose;
-      log_w += best.log_likelihood;
-      if (best.tree > 0) pending.push_back({j, false, best.tree == 2, static_cast<int32_t>(best.key)});
-      if (stats) ++stats->associated;
-    } else {
-      log_w += log_p0;
-      if (options_.slam && nearest_d2 > options_.new_landmark_gate &&
-          identified_count + p.unidentified.slots() < options_.max_landmarks) {
-        pending.push_back({j, true, true, -1});
-        if (stats) ++stats->created;
-      }
-    }
+    propose_without_id(q, p, batch[j], j, identified_count, stats);
     gated_everywhere[j] = 0;
   }
   // Sample the pose from the improved proposal, then update the landmarks' EKFs from it.
-  p.pose.mean = sample(g);
+  p.pose.mean = sample(q.g);
   p.pose.covariance.setZero();
+  update_particle_map(p, batch, q.pending);
+  drop_stale_tentatives(p, stats);
+  p.log_weight += q.log_w;
+}
+
+// A sighting with an id: its landmark created from the sampled pose when first seen, else the proposal refined by
+// it (known map or identified landmark) when it passes the gate; outside the gate it weighs as a new landmark.
+void FastSlam::propose_with_id(Proposal& q, const Particle& p, const RangeBearing& s, size_t j, int slot,
+                               std::vector<char>& gated_everywhere, FastSlamBatchOutcome* stats) const {
+  if (slot <= -2) {  // first sighting of this id: created from the sampled pose below
+    q.pending.push_back({j, true, false, -2 - slot});
+    gated_everywhere[j] = 0;
+    if (stats) ++stats->created;
+    return;
+  }
+  const Eigen::Vector2d z(s.range, s.bearing);
+  const double log_p0 = log_new_landmark_likelihood(options_.gate, s.covariance);
+  Eigen::Vector2d mean;
+  Eigen::Matrix2d cov = Eigen::Matrix2d::Zero();
+  if (slot < 0) {
+    mean = known_.at(s.id);
+  } else {
+    const MapLandmark* lm = p.identified.find(slot);
+    if (lm == nullptr) {  // (cannot happen: identified landmarks are created in every particle)
+      q.pending.push_back({j, true, false, slot});
+      gated_everywhere[j] = 0;
+      return;
+    }
+    mean = lm->mean;
+    cov = lm->covariance;
+  }
+  PoseGaussian trial = q.g;
+  const auto step = refine_proposal(trial, mean, cov, z, s.covariance);
+  if (!step || step->d2 > options_.gate) {
+    q.log_w += log_p0;
+    return;
+  }
+  q.g = trial;
+  q.log_w += step->log_likelihood;
+  gated_everywhere[j] = 0;
+  q.used.insert(slot < 0 ? std::pair<int, int64_t>{0, s.id} : std::pair<int, int64_t>{1, slot});
+  if (stats) ++stats->updated;
+  if (slot >= 0) q.pending.push_back({j, false, false, slot});
+}
+
+// A sighting without id: maximum likelihood over the known map and this particle's landmarks not yet taken, inside
+// the gate; when none qualifies it weighs as a new landmark and, far enough from every one (and below the map's
+// size limit), becomes a tentative one.
+void FastSlam::propose_without_id(Proposal& q, const Particle& p, const RangeBearing& s, size_t j, int identified_count,
+                                  FastSlamBatchOutcome* stats) const {
+  const Eigen::Vector2d z(s.range, s.bearing);
+  const double log_p0 = log_new_landmark_likelihood(options_.gate, s.covariance);
+  struct Best {
+    int tree = -1;
+    int64_t key = 0;
+    double log_likelihood = -INFINITY;
+    PoseGaussian pose;
+  } best;
+  double nearest_d2 = INFINITY;
+  const auto consider = [&](int tree, int64_t key, const Eigen::Vector2d& mean, const Eigen::Matrix2d& cov) {
+    if (q.used.count({tree, key})) return;
+    PoseGaussian trial = q.g;
+    const auto step = refine_proposal(trial, mean, cov, z, s.covariance);
+    if (step) nearest_d2 = std::min(nearest_d2, step->d2);
+    if (step && step->d2 <= options_.gate && step->log_likelihood > best.log_likelihood)
+      best = {tree, key, step->log_likelihood, trial};
+  };
+  for (const auto& [id, l] : known_) consider(0, id, l, Eigen::Matrix2d::Zero());
+  if (identified_count > 0)
+    p.identified.for_each([&](int32_t k, const MapLandmark& lm) { consider(1, k, lm.mean, lm.covariance); });
+  p.unidentified.for_each([&](int32_t k, const MapLandmark& lm) { consider(2, k, lm.mean, lm.covariance); });
+  if (best.tree >= 0) {
+    q.used.insert({best.tree, best.key});
+    q.g = best.pose;
+    q.log_w += best.log_likelihood;
+    if (best.tree > 0) q.pending.push_back({j, false, best.tree == 2, static_cast<int32_t>(best.key)});
+    if (stats) ++stats->associated;
+    return;
+  }
+  q.log_w += log_p0;
+  if (options_.slam && nearest_d2 > options_.new_landmark_gate &&
+      identified_count + p.unidentified.slots() < options_.max_landmarks) {
+    q.pending.push_back({j, true, true, -1});
+    if (stats) ++stats->created;
+  }
+}
+
+// The landmarks the batch created or updated, from the particle's sampled pose (EKF updates, Joseph form).
+void FastSlam::update_particle_map(Particle& p, const std::vector<RangeBearing>& batch, const std::vector<Pending>& pending) const {
   for (const Pending& u : pending) {
     const RangeBearing& s = batch[u.sighting];
     LandmarkMapTree& tree = u.in_unidentified ? p.unidentified : p.identified;
@@ -316,16 +346,17 @@ void FastSlam::observe_particle(Particle& p, const std::vector<RangeBearing>& ba
       tree.set(u.slot, lm);
     }
   }
-  // Tentative landmarks without id that were not confirmed in time.
-  if (p.unidentified.slots() > 0) {
-    std::vector<int32_t> stale;
-    p.unidentified.for_each([&](int32_t k, const MapLandmark& lm) {
-      if (lm.observations < options_.confirmations && batches_ - lm.last_seen > options_.tentative_lifetime) stale.push_back(k);
-    });
-    for (int32_t k : stale) p.unidentified.erase(k);
-    if (stats) stats->removed += static_cast<int>(stale.size());
-  }
-  p.log_weight += log_w;
+}
+
+// Tentative landmarks without id that were not confirmed in time.
+void FastSlam::drop_stale_tentatives(Particle& p, FastSlamBatchOutcome* stats) const {
+  if (p.unidentified.slots() == 0) return;
+  std::vector<int32_t> stale;
+  p.unidentified.for_each([&](int32_t k, const MapLandmark& lm) {
+    if (lm.observations < options_.confirmations && batches_ - lm.last_seen > options_.tentative_lifetime) stale.push_back(k);
+  });
+  for (int32_t k : stale) p.unidentified.erase(k);
+  if (stats) stats->removed += static_cast<int>(stale.size());
 }
 
 std::vector<double> FastSlam::weights() const {
@@ -375,7 +406,7 @@ void FastSlam::mixture(SE2* mean, Eigen::Matrix3d* covariance) const {
     d[2] = wrap_angle(d[2]);
     out += w[i] * (d * d.transpose() + particles_[i].pose.covariance);
   }
-  *covariance = 0.5 * (out + out.transpose());
+  *covariance = symmetrized(out);
 }
 
 SE2 FastSlam::mean_pose() const {

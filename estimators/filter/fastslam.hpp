@@ -149,9 +149,17 @@ class FastSlam {
 
  private:
   struct Pending;
+  struct Proposal;
   bool valid(const RangeBearing& s) const;
   void observe_particle(Particle& p, const std::vector<RangeBearing>& batch, const std::vector<int>& identified_slot,
                         std::vector<char>& gated_here, FastSlamBatchOutcome* stats);
+  // observe_particle's steps (fastslam.cpp).
+  void propose_with_id(Proposal& q, const Particle& p, const RangeBearing& s, size_t j, int slot,
+                       std::vector<char>& gated_here, FastSlamBatchOutcome* stats) const;
+  void propose_without_id(Proposal& q, const Particle& p, const RangeBearing& s, size_t j, int identified_count,
+                          FastSlamBatchOutcome* stats) const;
+  void update_particle_map(Particle& p, const std::vector<RangeBearing>& batch, const std::vector<Pending>& pending) const;
+  void drop_stale_tentatives(Particle& p, FastSlamBatchOutcome* stats) const;
   Eigen::Vector3d sample(const PoseGaussian& g);
 
   FastSlamOptions options_;

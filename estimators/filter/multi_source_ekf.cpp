@@ -1,6 +1,6 @@
 #include "estimators/filter/multi_source_ekf.hpp"
 
-#include "estimators/filter/eigenvalue_floor.hpp"
+#include "estimators/spd_matrix.hpp"
 #include "estimators/lie/lie_archive.hpp"
 
 #include "estimators/filter/interpolated_prediction.hpp"
@@ -47,9 +47,9 @@ void MultiSourceEkf::validate(const std::map<std::string, OdometrySourceOptions>
 }
 
 Eigen::Matrix3d MultiSourceEkf::increment_noise(const PlanarOdometry& prev, const PlanarOdometry& cur, double min_variance) {
-  if (cur.increment_covariance) return floor_eigenvalues<3>(*cur.increment_covariance, min_variance);
+  if (cur.increment_covariance) return floor_eigenvalues(*cur.increment_covariance, min_variance);
   const Eigen::Matrix3d A = prev.pose.between(cur.pose).inverse().adjoint();
-  return floor_eigenvalues<3>(cur.covariance - A * prev.covariance * A.transpose(), min_variance);
+  return floor_eigenvalues(cur.covariance - A * prev.covariance * A.transpose(), min_variance);
 }
 
 void MultiSourceEkf::advance(int64_t utime) {
@@ -122,7 +122,7 @@ OdometryOutcome MultiSourceEkf::measure(Source& s, SourceCounters& c, const Plan
     if (m.twist && s.last->twist) {
       const double dt = static_cast<double>(m.utime - s.last->utime) * 1e-6;
       const Eigen::Vector3d v = 0.5 * (*m.twist + *s.last->twist);
-      const Eigen::Matrix3d R = floor_eigenvalues<3>(0.5 * (m.twist_covariance + s.last->twist_covariance) * dt * dt, min_variance_);
+      const Eigen::Matrix3d R = floor_eigenvalues(0.5 * (m.twist_covariance + s.last->twist_covariance) * dt * dt, min_variance_);
       combine(ekf_.observe_relative_pose(s.clone, SE2::exp(v * dt), R, {f[3], f[4], f[5]}, s.options.gate));
     } else {
       UpdateResult u;
@@ -135,7 +135,7 @@ OdometryOutcome MultiSourceEkf::measure(Source& s, SourceCounters& c, const Plan
     if (s.options.differential)
       combine(ekf_.observe_relative_pose(s.clone, s.last->pose.between(m.pose), increment_noise(*s.last, m, min_variance_), rows, s.options.gate));
     else
-      combine(ekf_.observe_pose(s.frame, m.pose, floor_eigenvalues<3>(m.covariance, min_variance_), rows, s.options.gate));
+      combine(ekf_.observe_pose(s.frame, m.pose, floor_eigenvalues(m.covariance, min_variance_), rows, s.options.gate));
   }
   if (relative) ekf_.refresh_clone(s.clone);
   s.last = m;

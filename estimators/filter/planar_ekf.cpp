@@ -5,6 +5,7 @@
 #include "assoc/landmark/jcbb.hpp"
 #include "estimators/filter/landmark_admission.hpp"
 #include "estimators/filter/state_augmentation.hpp"
+#include "estimators/spd_matrix.hpp"
 
 #include <cmath>
 
@@ -49,7 +50,7 @@ void PlanarEkf::predict(const SE2& delta, const Eigen::Matrix3d& Q) {
   const Eigen::Index n = x_.size();
   // Only the robot rows and columns change: P_rr = F P_rr F' + G Q G', P_rl = F P_rl.
   const Eigen::Matrix3d Prr = F * P_.topLeftCorner<3, 3>() * F.transpose() + G * Q * G.transpose();
-  P_.topLeftCorner<3, 3>() = 0.5 * (Prr + Prr.transpose());
+  P_.topLeftCorner<3, 3>() = symmetrized(Prr);
   if (n > 3) {
     P_.topRightCorner(3, n - 3) = F * P_.topRightCorner(3, n - 3);
     P_.bottomLeftCorner(n - 3, 3) = P_.topRightCorner(3, n - 3).transpose();

@@ -5,6 +5,7 @@
 
 #include "estimators/filter/state_augmentation.hpp"
 #include "estimators/lie/so2.hpp"
+#include "estimators/spd_matrix.hpp"
 
 #include <cmath>
 
@@ -23,7 +24,7 @@ void SpatialEkf::predict(const SE3& delta, const Matrix6& Q) {
   pose_ = pose_ * delta;
   const Eigen::Index n = P_.rows();
   const Matrix6 Prr = F * P_.topLeftCorner<6, 6>() * F.transpose() + Q;
-  P_.topLeftCorner<6, 6>() = 0.5 * (Prr + Prr.transpose());
+  P_.topLeftCorner<6, 6>() = symmetrized(Prr);
   if (n > 6) {
     P_.topRightCorner(6, n - 6) = F * P_.topRightCorner(6, n - 6);
     P_.bottomLeftCorner(n - 6, 6) = P_.topRightCorner(6, n - 6).transpose();

@@ -1,5 +1,7 @@
 #include "estimators/filter/state_augmentation.hpp"
 
+#include "estimators/spd_matrix.hpp"
+
 #include <stdexcept>
 
 namespace sextant::filter {
@@ -15,7 +17,7 @@ Eigen::MatrixXd augmented_covariance(const Eigen::MatrixXd& P, const Eigen::Matr
   out.bottomLeftCorner(m, n) = cross;
   out.topRightCorner(n, m) = cross.transpose();
   const Eigen::MatrixXd Pll = Jx * P.topLeftCorner(k, k) * Jx.transpose() + Jz * R * Jz.transpose();
-  out.bottomRightCorner(m, m) = 0.5 * (Pll + Pll.transpose());
+  out.bottomRightCorner(m, m) = symmetrized(Pll);
   return out;
 }
 

@@ -2,6 +2,7 @@
 
 #include "estimators/graph/initialization.hpp"
 #include "estimators/kind_names.hpp"
+#include "estimators/spd_matrix.hpp"
 
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
@@ -82,14 +83,6 @@ struct PendingEdge {
   std::function<std::unique_ptr<Factor>(int, int)> make;
 };
 
-double smallest_eigenvalue(const Eigen::MatrixXd& I) {
-  return Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(I, Eigen::EigenvaluesOnly).eigenvalues().minCoeff();
-}
-
-bool positive_definite(const Eigen::MatrixXd& I) {
-  return I.allFinite() && Eigen::LLT<Eigen::MatrixXd>(I).info() == Eigen::Success && smallest_eigenvalue(I) > 0;
-}
-
 // Edges shown by name in the error about bad information matrices (the rest are counted).
 constexpr size_t kBadEdgesShown = 5;
 
@@ -109,15 +102,14 @@ std::vector<std::string> information_policy_names() { return kind_names(kInforma
 
 Eigen::MatrixXd repair_information(const Eigen::MatrixXd& I, InformationPolicy policy) {
   if (policy == InformationPolicy::kReject) return I;
-  const Eigen::MatrixXd S = 0.5 * (I + I.transpose());
+  const Eigen::MatrixXd S = symmetrized(I);
   if (policy == InformationPolicy::kDiagonal) {
     const double floor = 1e-6 * std::max(S.diagonal().cwiseAbs().maxCoeff(), 1e-300);
     return S.diagonal().cwiseMax(floor).asDiagonal();
   }
-  Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(S);
-  const double floor = 1e-6 * std::max(eig.eigenvalues().cwiseAbs().maxCoeff(), 1e-300);
-  const Eigen::MatrixXd R = eig.eigenvectors() * eig.eigenvalues().cwiseMax(floor).asDiagonal() * eig.eigenvectors().transpose();
-  return 0.5 * (R + R.transpose());
+  const Eigen::VectorXd eigenvalues = Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(S, Eigen::EigenvaluesOnly).eigenvalues();
+  const double floor = 1e-6 * std::max(eigenvalues.cwiseAbs().maxCoeff(), 1e-300);
+  return symmetrized(floor_eigenvalues(S, floor));
 }
 
 G2oGraph read_g2o(const std::string& path, const G2oReadOptions& options) {
@@ -126,131 +118,168 @@ G2oGraph read_g2o(const std::string& path, const G2oReadOptions& options) {
   return read_g2o(in, path, options);
 }
 
-G2oGraph read_g2o(std::istream& in, const std::string& path, const G2oReadOptions& options) {
-  G2oGraph out;
-  FactorGraph& g = out.graph;
-  std::map<int64_t, SE3> offsets;
-  std::vector<PendingEdge> edges;
-  std::vector<std::pair<int, int64_t>> fixes;
-  bool saw2 = false, saw3 = false;
-  LineReader r{path, 0, {}, 1};
-  // Information matrices that are not positive definite: repaired, or listed for the error.
-  std::vector<std::string> bad;
-  auto information = [&](const Eigen::MatrixXd& I, int64_t a, int64_t b) -> Eigen::MatrixXd {
-    if (positive_definite(I)) return I;
-    if (!I.allFinite()) r.fail(r.tokens[0] + " " + std::to_string(a) + " " + std::to_string(b) + ": information matrix has a NaN or infinite entry");
-    if (options.information != InformationPolicy::kReject) {
-      ++out.repaired_information;
-      return repair_information(I, options.information);
+namespace {
+
+// One read of a g2o file: each line read into a vertex (added at once) or a pending edge (added once every vertex
+// is known, so edges may come first), then the bad information matrices reported, the edges and FIX lines applied.
+class G2oReader {
+ public:
+  G2oReader(const std::string& path, const G2oReadOptions& options) : path_(path), options_(options), r_{path, 0, {}, 1} {}
+
+  G2oGraph read(std::istream& in) {
+    std::string text;
+    while (std::getline(in, text)) {
+      ++r_.line;
+      const size_t hash = text.find('#');
+      if (hash != std::string::npos) text.resize(hash);
+      std::istringstream s(text);
+      r_.tokens.clear();
+      r_.next = 1;
+      for (std::string t; s >> t;) r_.tokens.push_back(t);
+      if (!r_.tokens.empty()) read_line();
     }
-    std::ostringstream m;
-    m << path << ":" << r.line << " (" << r.tokens[0] << " " << a << " " << b << ", smallest eigenvalue " << smallest_eigenvalue(I) << ")";
-    bad.push_back(m.str());
-    return I;
-  };
-  std::string text;
-  while (std::getline(in, text)) {
-    ++r.line;
-    const size_t hash = text.find('#');
-    if (hash != std::string::npos) text.resize(hash);
-    std::istringstream s(text);
-    r.tokens.clear();
-    r.next = 1;
-    for (std::string t; s >> t;) r.tokens.push_back(t);
-    if (r.tokens.empty()) continue;
-    const std::string& tag = r.tokens[0];
+    throw_if_bad_information();
+    if (saw2_ && saw3_) throw std::runtime_error(path_ + ": mixes 2-D and 3-D poses");
+    out_.dimension = saw3_ ? 3 : 2;
+    for (const auto& e : edges_) add_edge(e);
+    apply_fixes();
+    if (!out_.had_vertices) initialize_by_odometry(out_.graph);
+    return std::move(out_);
+  }
+
+ private:
+  // One line's tokens (a tag and its values): a vertex, an edge, a parameter or FIX.
+  void read_line() {
+    const std::string& tag = r_.tokens[0];
+    if (tag.rfind("VERTEX_", 0) == 0) {
+      const Variable v = read_vertex(tag);
+      r_.done();
+      if (out_.graph.index_of(v.id) >= 0) r_.fail(tag + ": vertex " + std::to_string(v.id) + " defined twice");
+      out_.graph.add_variable(v);
+      out_.had_vertices = true;
+      return;
+    }
+    if (tag.rfind("EDGE_", 0) == 0) read_edge(tag);
+    else if (tag == "PARAMS_SE3OFFSET") {
+      const int64_t id = r_.integer();
+      const Eigen::Vector3d t = r_.vector3();
+      offsets_[id] = SE3(r_.quaternion_xyzw(), t);
+    } else if (tag == "FIX") {
+      while (r_.next < r_.tokens.size()) fixes_.push_back({r_.line, r_.integer()});
+    } else {
+      r_.fail("unknown tag '" + tag + "'");
+    }
+    r_.done();
+  }
+
+  Variable read_vertex(const std::string& tag) {
     Variable v;
     if (tag == "VERTEX_SE2") {
       v.kind = VariableKind::kPose2;
-      v.id = r.integer();
-      v.pose2 = r.se2();
-      saw2 = true;
+      v.id = r_.integer();
+      v.pose2 = r_.se2();
+      saw2_ = true;
     } else if (tag == "VERTEX_SE3:QUAT") {
       v.kind = VariableKind::kPose3;
-      v.id = r.integer();
-      const Eigen::Vector3d t = r.vector3();
-      v.pose3 = SE3(r.quaternion_xyzw(), t);
-      saw3 = true;
+      v.id = r_.integer();
+      const Eigen::Vector3d t = r_.vector3();
+      v.pose3 = SE3(r_.quaternion_xyzw(), t);
+      saw3_ = true;
     } else if (tag == "VERTEX_XY") {
       v.kind = VariableKind::kPoint2;
-      v.id = r.integer();
-      v.point << r.numbers(2), 0;
+      v.id = r_.integer();
+      v.point << r_.numbers(2), 0;
     } else if (tag == "VERTEX_TRACKXYZ") {
       v.kind = VariableKind::kPoint3;
-      v.id = r.integer();
-      v.point = r.vector3();
-    } else if (tag == "EDGE_SE2") {
-      const int64_t a = r.integer(), b = r.integer();
-      const SE2 z = r.se2();
-      const Eigen::Matrix3d I = information(r.upper_information(3), a, b);
-      saw2 = true;
-      edges.push_back({r.line, tag, a, b, [z, I](int i, int j) { return std::make_unique<RelativePoseFactor>(i, j, z, I); }});
-    } else if (tag == "EDGE_SE3:QUAT") {
-      const int64_t a = r.integer(), b = r.integer();
-      const Eigen::Vector3d t = r.vector3();
-      const SE3 z(r.quaternion_xyzw(), t);
-      const Matrix6d I = information(r.upper_information(6), a, b);
-      saw3 = true;
-      edges.push_back({r.line, tag, a, b, [z, I](int i, int j) { return std::make_unique<RelativePoseFactor>(i, j, z, I); }});
-    } else if (tag == "EDGE_SE2_XY") {
-      const int64_t a = r.integer(), b = r.integer();
-      const Eigen::VectorXd z = r.numbers(2);
-      const Eigen::MatrixXd I = information(r.upper_information(2), a, b);
-      edges.push_back({r.line, tag, a, b, [z, I](int i, int j) {
-                         return std::make_unique<PointObservationFactor>(i, j, PointObservationFactor::Model::kPosition, z, I);
-                       }});
-    } else if (tag == "EDGE_SE3_TRACKXYZ") {
-      const int64_t a = r.integer(), b = r.integer(), param = r.integer();
-      const Eigen::VectorXd z = r.numbers(3);
-      const Eigen::MatrixXd I = information(r.upper_information(3), a, b);
-      if (!offsets.count(param)) r.fail("EDGE_SE3_TRACKXYZ: unknown parameter id " + std::to_string(param) + " (PARAMS_SE3OFFSET must come first)");
-      const SE3 offset = offsets.at(param);
-      edges.push_back({r.line, tag, a, b, [z, I, offset](int i, int j) {
-                         return std::make_unique<PointObservationFactor>(i, j, PointObservationFactor::Model::kPosition, z, I, offset);
-                       }});
-    } else if (tag == "PARAMS_SE3OFFSET") {
-      const int64_t id = r.integer();
-      const Eigen::Vector3d t = r.vector3();
-      offsets[id] = SE3(r.quaternion_xyzw(), t);
-    } else if (tag == "FIX") {
-      while (r.next < r.tokens.size()) fixes.push_back({r.line, r.integer()});
+      v.id = r_.integer();
+      v.point = r_.vector3();
     } else {
-      r.fail("unknown tag '" + tag + "'");
+      r_.fail("unknown tag '" + tag + "'");
     }
-    r.done();
-    if (tag.rfind("VERTEX_", 0) == 0) {
-      if (g.index_of(v.id) >= 0) r.fail(tag + ": vertex " + std::to_string(v.id) + " defined twice");
-      g.add_variable(v);
-      out.had_vertices = true;
+    return v;
+  }
+
+  void read_edge(const std::string& tag) {
+    if (tag == "EDGE_SE2") {
+      const int64_t a = r_.integer(), b = r_.integer();
+      const SE2 z = r_.se2();
+      const Eigen::Matrix3d I = information(r_.upper_information(3), a, b);
+      saw2_ = true;
+      edges_.push_back({r_.line, tag, a, b, [z, I](int i, int j) { return std::make_unique<RelativePoseFactor>(i, j, z, I); }});
+    } else if (tag == "EDGE_SE3:QUAT") {
+      const int64_t a = r_.integer(), b = r_.integer();
+      const Eigen::Vector3d t = r_.vector3();
+      const SE3 z(r_.quaternion_xyzw(), t);
+      const Matrix6d I = information(r_.upper_information(6), a, b);
+      saw3_ = true;
+      edges_.push_back({r_.line, tag, a, b, [z, I](int i, int j) { return std::make_unique<RelativePoseFactor>(i, j, z, I); }});
+    } else if (tag == "EDGE_SE2_XY") {
+      const int64_t a = r_.integer(), b = r_.integer();
+      const Eigen::VectorXd z = r_.numbers(2);
+      const Eigen::MatrixXd I = information(r_.upper_information(2), a, b);
+      edges_.push_back({r_.line, tag, a, b, [z, I](int i, int j) {
+                          return std::make_unique<PointObservationFactor>(i, j, PointObservationFactor::Model::kPosition, z, I);
+                        }});
+    } else if (tag == "EDGE_SE3_TRACKXYZ") {
+      const int64_t a = r_.integer(), b = r_.integer(), param = r_.integer();
+      const Eigen::VectorXd z = r_.numbers(3);
+      const Eigen::MatrixXd I = information(r_.upper_information(3), a, b);
+      if (!offsets_.count(param)) r_.fail("EDGE_SE3_TRACKXYZ: unknown parameter id " + std::to_string(param) + " (PARAMS_SE3OFFSET must come first)");
+      const SE3 offset = offsets_.at(param);
+      edges_.push_back({r_.line, tag, a, b, [z, I, offset](int i, int j) {
+                          return std::make_unique<PointObservationFactor>(i, j, PointObservationFactor::Model::kPosition, z, I, offset);
+                        }});
+    } else {
+      r_.fail("unknown tag '" + tag + "'");
     }
   }
-  if (!bad.empty()) {
+
+  // An edge's information matrix: kept when positive definite; else repaired (options.information), or listed for
+  // the error about bad information matrices.
+  Eigen::MatrixXd information(const Eigen::MatrixXd& I, int64_t a, int64_t b) {
+    const DefinitenessCheck check = check_positive_definite(I);
+    if (check.ok()) return I;
+    if (check.problem == DefinitenessCheck::Problem::kNotFinite) r_.fail(r_.tokens[0] + " " + std::to_string(a) + " " + std::to_string(b) + ": information matrix has a NaN or infinite entry");
+    if (options_.information != InformationPolicy::kReject) {
+      ++out_.repaired_information;
+      return repair_information(I, options_.information);
+    }
     std::ostringstream m;
-    m << path << ": " << bad.size() << " edge" << (bad.size() > 1 ? "s have information matrices" : " has an information matrix")
-      << " that " << (bad.size() > 1 ? "are" : "is") << " not positive definite: ";
-    for (size_t i = 0; i < std::min(bad.size(), kBadEdgesShown); ++i) m << (i ? "; " : "") << bad[i];
-    if (bad.size() > kBadEdgesShown) m << "; and " << bad.size() - kBadEdgesShown << " more";
+    m << path_ << ":" << r_.line << " (" << r_.tokens[0] << " " << a << " " << b << ", smallest eigenvalue " << check.smallest_eigenvalue << ")";
+    bad_.push_back(m.str());
+    return I;
+  }
+
+  // Every bad information matrix at once (the first kBadEdgesShown by name).
+  void throw_if_bad_information() const {
+    if (bad_.empty()) return;
+    std::ostringstream m;
+    m << path_ << ": " << bad_.size() << " edge" << (bad_.size() > 1 ? "s have information matrices" : " has an information matrix")
+      << " that " << (bad_.size() > 1 ? "are" : "is") << " not positive definite: ";
+    for (size_t i = 0; i < std::min(bad_.size(), kBadEdgesShown); ++i) m << (i ? "; " : "") << bad_[i];
+    if (bad_.size() > kBadEdgesShown) m << "; and " << bad_.size() - kBadEdgesShown << " more";
     IndefiniteInformationError e(m.str());
-    e.edges = static_cast<int>(bad.size());
+    e.edges = static_cast<int>(bad_.size());
     throw e;
   }
-  if (saw2 && saw3) throw std::runtime_error(path + ": mixes 2-D and 3-D poses");
-  out.dimension = saw3 ? 3 : 2;
-  for (const auto& e : edges) {
+
+  // A pending edge into the graph: its vertices (created for pose edges in a file without vertices), kinds that fit.
+  void add_edge(const PendingEdge& e) {
+    FactorGraph& g = out_.graph;
     int ia = g.index_of(e.a), ib = g.index_of(e.b);
     for (auto [id, idx] : {std::pair{e.a, &ia}, std::pair{e.b, &ib}}) {
       if (*idx >= 0) continue;
-      if (out.had_vertices)
-        throw std::runtime_error(path + ":" + std::to_string(e.line) + ": " + e.tag + " refers to vertex " +
+      if (out_.had_vertices)
+        throw std::runtime_error(path_ + ":" + std::to_string(e.line) + ": " + e.tag + " refers to vertex " +
                                  std::to_string(id) + ", which is not defined");
       if (e.tag != "EDGE_SE2" && e.tag != "EDGE_SE3:QUAT")
-        throw std::runtime_error(path + ":" + std::to_string(e.line) + ": " + e.tag + " needs its vertices defined");
+        throw std::runtime_error(path_ + ":" + std::to_string(e.line) + ": " + e.tag + " needs its vertices defined");
       Variable v;
       v.id = id;
-      v.kind = out.dimension == 3 ? VariableKind::kPose3 : VariableKind::kPose2;
+      v.kind = out_.dimension == 3 ? VariableKind::kPose3 : VariableKind::kPose2;
       *idx = g.add_variable(v);
     }
-    if (ia == ib) throw std::runtime_error(path + ":" + std::to_string(e.line) + ": " + e.tag + " joins vertex " + std::to_string(e.a) + " to itself");
+    if (ia == ib) throw std::runtime_error(path_ + ":" + std::to_string(e.line) + ": " + e.tag + " joins vertex " + std::to_string(e.a) + " to itself");
     auto f = e.make(ia, ib);
     // Kinds must fit the edge.
     const auto ka = g.variables()[static_cast<size_t>(ia)].kind, kb = g.variables()[static_cast<size_t>(ib)].kind;
@@ -258,16 +287,33 @@ G2oGraph read_g2o(std::istream& in, const std::string& path, const G2oReadOption
                     (e.tag == "EDGE_SE3:QUAT" && ka == VariableKind::kPose3 && kb == VariableKind::kPose3) ||
                     (e.tag == "EDGE_SE2_XY" && ka == VariableKind::kPose2 && kb == VariableKind::kPoint2) ||
                     (e.tag == "EDGE_SE3_TRACKXYZ" && ka == VariableKind::kPose3 && kb == VariableKind::kPoint3);
-    if (!ok) throw std::runtime_error(path + ":" + std::to_string(e.line) + ": " + e.tag + " between vertices of the wrong kinds");
+    if (!ok) throw std::runtime_error(path_ + ":" + std::to_string(e.line) + ": " + e.tag + " between vertices of the wrong kinds");
     g.add_factor(std::move(f));
   }
-  for (const auto& [line, id] : fixes) {
-    const int i = g.index_of(id);
-    if (i < 0) throw std::runtime_error(path + ":" + std::to_string(line) + ": FIX of unknown vertex " + std::to_string(id));
-    g.variables()[static_cast<size_t>(i)].fixed = true;
+
+  void apply_fixes() {
+    for (const auto& [line, id] : fixes_) {
+      const int i = out_.graph.index_of(id);
+      if (i < 0) throw std::runtime_error(path_ + ":" + std::to_string(line) + ": FIX of unknown vertex " + std::to_string(id));
+      out_.graph.variables()[static_cast<size_t>(i)].fixed = true;
+    }
   }
-  if (!out.had_vertices) initialize_by_odometry(g);
-  return out;
+
+  const std::string& path_;
+  const G2oReadOptions& options_;
+  LineReader r_;
+  G2oGraph out_;
+  std::map<int64_t, SE3> offsets_;
+  std::vector<PendingEdge> edges_;
+  std::vector<std::pair<int, int64_t>> fixes_;
+  bool saw2_ = false, saw3_ = false;
+  std::vector<std::string> bad_;  // information matrices that are not positive definite, for the error
+};
+
+}  // namespace
+
+G2oGraph read_g2o(std::istream& in, const std::string& path, const G2oReadOptions& options) {
+  return G2oReader(path, options).read(in);
 }
 
 void write_g2o(const std::string& path, const FactorGraph& g) {

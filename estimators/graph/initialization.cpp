@@ -52,119 +52,157 @@ Eigen::Matrix<double, D, D> project_to_so(const Eigen::Matrix<double, D, D>& M) 
   return svd.matrixU() * S * svd.matrixV().transpose();
 }
 
+// The chordal relaxation (Carlone et al., ICRA 2015) of the poses of g: rotations first, as a linear least-squares
+// problem over vec(R) projected onto SO(D), then translations given them; each a sparse LDL' solve.
 template <int D>
-std::string chordal(FactorGraph& g) {
+class ChordalRelaxation {
+ public:
   using MatD = Eigen::Matrix<double, D, D>;
   using VecD = Eigen::Matrix<double, D, 1>;
-  auto& vars = g.variables();
-  const auto edges = pose_edges(g);
-  auto rotation = [&](int v) -> MatD {
-    if constexpr (D == 2) return vars[static_cast<size_t>(v)].pose2.rotation().matrix();
-    else return vars[static_cast<size_t>(v)].pose3.rotation().matrix();
-  };
-  auto translation = [&](int v) -> VecD {
-    if constexpr (D == 2) return vars[static_cast<size_t>(v)].pose2.translation();
-    else return vars[static_cast<size_t>(v)].pose3.translation();
-  };
-  // Unknown poses; the gauge (fixed poses, else the first pose) stays.
-  std::vector<int> index(vars.size(), -1);
-  int n = 0;
-  bool any_fixed = false;
-  for (const auto& v : vars) any_fixed = any_fixed || (v.fixed && v.is_pose());
-  bool gauge_taken = any_fixed;
-  for (size_t v = 0; v < vars.size(); ++v) {
-    if (!vars[v].is_pose() || vars[v].fixed) continue;
-    if (!gauge_taken) {
-      gauge_taken = true;
-      continue;
-    }
-    index[v] = n++;
+
+  explicit ChordalRelaxation(FactorGraph& g) : g_(g), vars_(g.variables()), edges_(pose_edges(g)) {}
+
+  /// Initializes the unknown poses (and the points seen from them); returns why it could not, or "".
+  std::string run() {
+    if (number_unknown_poses() == 0) return "";
+    if (!solve_rotations()) return "chordal relaxation: the rotation system is singular (disconnected graph?)";
+    if (!solve_translations()) return "chordal relaxation: the translation system is singular (disconnected graph?)";
+    std::vector<bool> known(vars_.size(), true);
+    place_points(g_, known);
+    return "";
   }
-  if (n == 0) return "";
+
+ private:
+  MatD rotation(int v) const {
+    if constexpr (D == 2) return vars_[static_cast<size_t>(v)].pose2.rotation().matrix();
+    else return vars_[static_cast<size_t>(v)].pose3.rotation().matrix();
+  }
+  VecD translation(int v) const {
+    if constexpr (D == 2) return vars_[static_cast<size_t>(v)].pose2.translation();
+    else return vars_[static_cast<size_t>(v)].pose3.translation();
+  }
+
+  // Unknown poses numbered 0..n-1 in index_; the gauge (fixed poses, else the first pose) stays.
+  int number_unknown_poses() {
+    index_.assign(vars_.size(), -1);
+    bool any_fixed = false;
+    for (const auto& v : vars_) any_fixed = any_fixed || (v.fixed && v.is_pose());
+    bool gauge_taken = any_fixed;
+    for (size_t v = 0; v < vars_.size(); ++v) {
+      if (!vars_[v].is_pose() || vars_[v].fixed) continue;
+      if (!gauge_taken) {
+        gauge_taken = true;
+        continue;
+      }
+      index_[v] = n_++;
+    }
+    return n_;
+  }
+
   // Scalar weights from the information blocks (SE-Sync's isotropic approximation).
-  auto weights = [&](const RelativePoseFactor* f, double& kappa, double& tau) {
+  static void weights(const RelativePoseFactor* f, double& kappa, double& tau) {
     const Eigen::MatrixXd& I = f->information();
     const int rdim = D == 2 ? 1 : 3;
     tau = D / I.topLeftCorner(D, D).inverse().trace();
     kappa = D == 2 ? I(2, 2) : 3.0 / (2.0 * I.bottomRightCorner(rdim, rdim).inverse().trace());
-  };
+  }
+
   // Rotations: unknowns vec(R_i) (column-major), D*D per pose.  Residual vec(R_j) - K vec(R_i), K = Z' (x) I.
-  const int nr = D * D;
-  std::vector<Eigen::Triplet<double>> trip;
-  Eigen::VectorXd rhs = Eigen::VectorXd::Zero(n * nr);
-  for (const auto& e : edges) {
-    double kappa, tau;
-    weights(e.f, kappa, tau);
-    MatD Z;
-    if constexpr (D == 2) Z = e.f->measurement2().rotation().matrix();
-    else Z = e.f->measurement3().rotation().matrix();
-    Eigen::Matrix<double, D * D, D * D> K = Eigen::Matrix<double, D * D, D * D>::Zero();
-    for (int a = 0; a < D; ++a)
-      for (int b = 0; b < D; ++b) K.template block<D, D>(a * D, b * D) = Z(b, a) * MatD::Identity();
-    const int ii = index[static_cast<size_t>(e.i)], jj = index[static_cast<size_t>(e.j)];
-    // H += kappa [K'K, -K'; -K, I] over (i, j); known poses move to the right-hand side.
-    // vec(R) of the two ends (copies: rotation() returns a temporary).
-    const MatD Ri = rotation(e.i), Rj = rotation(e.j);
-    const Eigen::Map<const Eigen::Matrix<double, D * D, 1>> ri(Ri.data()), rj(Rj.data());
-    if (ii >= 0) {
-      for (int a = 0; a < nr; ++a) trip.emplace_back(ii * nr + a, ii * nr + a, kappa);  // K'K = I
-      if (jj < 0) rhs.segment<D * D>(ii * nr) += kappa * K.transpose() * rj;
+  // Solved, then projected onto SO(D) into R_; false when the system is singular.
+  bool solve_rotations() {
+    const int nr = D * D, n = n_;
+    std::vector<Eigen::Triplet<double>> trip;
+    Eigen::VectorXd rhs = Eigen::VectorXd::Zero(n * nr);
+    for (const auto& e : edges_) {
+      double kappa, tau;
+      weights(e.f, kappa, tau);
+      MatD Z;
+      if constexpr (D == 2) Z = e.f->measurement2().rotation().matrix();
+      else Z = e.f->measurement3().rotation().matrix();
+      Eigen::Matrix<double, D * D, D * D> K = Eigen::Matrix<double, D * D, D * D>::Zero();
+      for (int a = 0; a < D; ++a)
+        for (int b = 0; b < D; ++b) K.template block<D, D>(a * D, b * D) = Z(b, a) * MatD::Identity();
+      const int ii = index_[static_cast<size_t>(e.i)], jj = index_[static_cast<size_t>(e.j)];
+      // H += kappa [K'K, -K'; -K, I] over (i, j); known poses move to the right-hand side.
+      // vec(R) of the two ends (copies: rotation() returns a temporary).
+      const MatD Ri = rotation(e.i), Rj = rotation(e.j);
+      const Eigen::Map<const Eigen::Matrix<double, D * D, 1>> ri(Ri.data()), rj(Rj.data());
+      if (ii >= 0) {
+        for (int a = 0; a < nr; ++a) trip.emplace_back(ii * nr + a, ii * nr + a, kappa);  // K'K = I
+        if (jj < 0) rhs.segment<D * D>(ii * nr) += kappa * K.transpose() * rj;
+      }
+      if (jj >= 0) {
+        for (int a = 0; a < nr; ++a) trip.emplace_back(jj * nr + a, jj * nr + a, kappa);
+        if (ii < 0) rhs.segment<D * D>(jj * nr) += kappa * K * ri;
+      }
+      if (ii >= 0 && jj >= 0)
+        for (int a = 0; a < nr; ++a)
+          for (int b = 0; b < nr; ++b)
+            if (K(a, b) != 0) {
+              trip.emplace_back(jj * nr + a, ii * nr + b, -kappa * K(a, b));
+              trip.emplace_back(ii * nr + b, jj * nr + a, -kappa * K(a, b));
+            }
     }
-    if (jj >= 0) {
-      for (int a = 0; a < nr; ++a) trip.emplace_back(jj * nr + a, jj * nr + a, kappa);
-      if (ii < 0) rhs.segment<D * D>(jj * nr) += kappa * K * ri;
+    Eigen::SparseMatrix<double> H(n * nr, n * nr);
+    H.setFromTriplets(trip.begin(), trip.end());
+    Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> chol(H);
+    if (chol.info() != Eigen::Success) return false;
+    const Eigen::VectorXd r = chol.solve(rhs);
+    R_.resize(vars_.size());
+    for (size_t v = 0; v < vars_.size(); ++v) {
+      if (!vars_[v].is_pose()) continue;
+      R_[v] = index_[v] >= 0 ? project_to_so<D>(Eigen::Map<const MatD>(r.data() + index_[v] * nr)) : rotation(static_cast<int>(v));
     }
-    if (ii >= 0 && jj >= 0)
-      for (int a = 0; a < nr; ++a)
-        for (int b = 0; b < nr; ++b)
-          if (K(a, b) != 0) {
-            trip.emplace_back(jj * nr + a, ii * nr + b, -kappa * K(a, b));
-            trip.emplace_back(ii * nr + b, jj * nr + a, -kappa * K(a, b));
-          }
+    return true;
   }
-  Eigen::SparseMatrix<double> H(n * nr, n * nr);
-  H.setFromTriplets(trip.begin(), trip.end());
-  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> chol(H);
-  if (chol.info() != Eigen::Success) return "chordal relaxation: the rotation system is singular (disconnected graph?)";
-  const Eigen::VectorXd r = chol.solve(rhs);
-  std::vector<MatD> R(vars.size());
-  for (size_t v = 0; v < vars.size(); ++v) {
-    if (!vars[v].is_pose()) continue;
-    R[v] = index[v] >= 0 ? project_to_so<D>(Eigen::Map<const MatD>(r.data() + index[v] * nr)) : rotation(static_cast<int>(v));
-  }
-  // Translations: t_j - t_i = R_i t_ij.
-  trip.clear();
-  Eigen::VectorXd rt = Eigen::VectorXd::Zero(n * D);
-  for (const auto& e : edges) {
-    double kappa, tau;
-    weights(e.f, kappa, tau);
-    VecD tij;
-    if constexpr (D == 2) tij = e.f->measurement2().translation();
-    else tij = e.f->measurement3().translation();
-    const VecD c = R[static_cast<size_t>(e.i)] * tij;
-    const int ii = index[static_cast<size_t>(e.i)], jj = index[static_cast<size_t>(e.j)];
-    for (int a = 0; a < D; ++a) {
-      if (ii >= 0) trip.emplace_back(ii * D + a, ii * D + a, tau), rt[ii * D + a] -= tau * c[a];
-      if (jj >= 0) trip.emplace_back(jj * D + a, jj * D + a, tau), rt[jj * D + a] += tau * c[a];
-      if (ii >= 0 && jj >= 0) trip.emplace_back(ii * D + a, jj * D + a, -tau), trip.emplace_back(jj * D + a, ii * D + a, -tau);
-      if (ii < 0 && jj >= 0) rt[jj * D + a] += tau * translation(e.i)[a];
-      if (jj < 0 && ii >= 0) rt[ii * D + a] += tau * translation(e.j)[a];
+
+  // Translations: t_j - t_i = R_i t_ij, weighted least squares; written with R_ into the unknown poses.  False when
+  // the system is singular.
+  bool solve_translations() {
+    const int n = n_;
+    std::vector<Eigen::Triplet<double>> trip;
+    Eigen::VectorXd rt = Eigen::VectorXd::Zero(n * D);
+    for (const auto& e : edges_) {
+      double kappa, tau;
+      weights(e.f, kappa, tau);
+      VecD tij;
+      if constexpr (D == 2) tij = e.f->measurement2().translation();
+      else tij = e.f->measurement3().translation();
+      const VecD c = R_[static_cast<size_t>(e.i)] * tij;
+      const int ii = index_[static_cast<size_t>(e.i)], jj = index_[static_cast<size_t>(e.j)];
+      for (int a = 0; a < D; ++a) {
+        if (ii >= 0) trip.emplace_back(ii * D + a, ii * D + a, tau), rt[ii * D + a] -= tau * c[a];
+        if (jj >= 0) trip.emplace_back(jj * D + a, jj * D + a, tau), rt[jj * D + a] += tau * c[a];
+        if (ii >= 0 && jj >= 0) trip.emplace_back(ii * D + a, jj * D + a, -tau), trip.emplace_back(jj * D + a, ii * D + a, -tau);
+        if (ii < 0 && jj >= 0) rt[jj * D + a] += tau * translation(e.i)[a];
+        if (jj < 0 && ii >= 0) rt[ii * D + a] += tau * translation(e.j)[a];
+      }
     }
+    Eigen::SparseMatrix<double> Ht(n * D, n * D);
+    Ht.setFromTriplets(trip.begin(), trip.end());
+    Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> chol_t(Ht);
+    if (chol_t.info() != Eigen::Success) return false;
+    const Eigen::VectorXd t = chol_t.solve(rt);
+    for (size_t v = 0; v < vars_.size(); ++v) {
+      if (index_[v] < 0) continue;
+      const VecD tv = t.segment<D>(index_[v] * D);
+      if constexpr (D == 2) vars_[v].pose2 = SE2(SO2(std::atan2(R_[v](1, 0), R_[v](0, 0))), tv);
+      else vars_[v].pose3 = SE3(SO3(Eigen::Matrix3d(R_[v])), tv);
+    }
+    return true;
   }
-  Eigen::SparseMatrix<double> Ht(n * D, n * D);
-  Ht.setFromTriplets(trip.begin(), trip.end());
-  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> chol_t(Ht);
-  if (chol_t.info() != Eigen::Success) return "chordal relaxation: the translation system is singular (disconnected graph?)";
-  const Eigen::VectorXd t = chol_t.solve(rt);
-  for (size_t v = 0; v < vars.size(); ++v) {
-    if (index[v] < 0) continue;
-    const VecD tv = t.segment<D>(index[v] * D);
-    if constexpr (D == 2) vars[v].pose2 = SE2(SO2(std::atan2(R[v](1, 0), R[v](0, 0))), tv);
-    else vars[v].pose3 = SE3(SO3(Eigen::Matrix3d(R[v])), tv);
-  }
-  std::vector<bool> known(vars.size(), true);
-  place_points(g, known);
-  return "";
+
+  FactorGraph& g_;
+  std::vector<Variable>& vars_;
+  const std::vector<PoseEdge> edges_;
+  std::vector<int> index_;  // per variable: its unknown's number, or -1
+  int n_ = 0;               // unknown poses
+  std::vector<MatD> R_;     // per variable: the rotation (solved or known)
+};
+
+template <int D>
+std::string chordal(FactorGraph& g) {
+  return ChordalRelaxation<D>(g).run();
 }
 
 // Range-add of a linear ramp over pose indices, point query: poses a+1..b get c * (j - a), poses after b get

@@ -17,7 +17,19 @@ double seconds_since(Clock::time_point t) { return std::chrono::duration<double>
 }  // namespace
 
 SparseNormalEquations::SparseNormalEquations(const FactorGraph& graph, Ordering ordering) : graph_(graph) {
-  const auto& vars = graph.variables();
+  number_blocks();
+  const BlockPattern rows = block_pattern();
+  std::vector<int> colptr(static_cast<size_t>(n_) + 1, 0), rowind;
+  std::map<std::pair<int, int>, int> pair_index;
+  lay_out_columns(rows, colptr, rowind, pair_index);
+  map_factor_pairs(pair_index);
+  start_cholmod(ordering, colptr, rowind);
+  analyze(ordering, rows);
+}
+
+// One block of unknowns per variable that is not fixed, in the variables' order: offsets and dimensions.
+void SparseNormalEquations::number_blocks() {
+  const auto& vars = graph_.variables();
   const size_t nv = vars.size();
   offset_.assign(nv, -1);
   dim_.resize(nv);
@@ -30,23 +42,30 @@ SparseNormalEquations::SparseNormalEquations(const FactorGraph& graph, Ordering 
     offset_[i] = n_;
     n_ += dim_[i];
   }
+}
+
+// Rows (block indices <= column block) present in each block column; every block has its diagonal.
+SparseNormalEquations::BlockPattern SparseNormalEquations::block_pattern() const {
   const int nb = static_cast<int>(block_var_.size());
-  // Rows (block indices <= column block) present in each block column; every block has its diagonal.
-  std::vector<std::set<int>> rows(static_cast<size_t>(nb));
+  BlockPattern rows(static_cast<size_t>(nb));
   for (int b = 0; b < nb; ++b) rows[static_cast<size_t>(b)].insert(b);
-  for (const auto& f : graph.factors())
+  for (const auto& f : graph_.factors())
     for (int u : f->variables())
       for (int v : f->variables()) {
         const int bu = var_block_[static_cast<size_t>(u)], bv = var_block_[static_cast<size_t>(v)];
         if (bu >= 0 && bv >= 0 && bu <= bv) rows[static_cast<size_t>(bv)].insert(bu);
       }
-  // Compressed columns of the upper triangle.
-  std::vector<int> colptr(static_cast<size_t>(n_) + 1, 0), rowind;
-  std::map<std::pair<int, int>, int> pair_index;
+  return rows;
+}
+
+// Compressed columns of the upper triangle (colptr, rowind), each block pair's column starts and the diagonal's
+// positions.
+void SparseNormalEquations::lay_out_columns(const BlockPattern& rows, std::vector<int>& colptr, std::vector<int>& rowind,
+                                            std::map<std::pair<int, int>, int>& pair_index) {
+  const int nb = static_cast<int>(block_var_.size());
   for (int b = 0; b < nb; ++b) {
     const int db = dim_[static_cast<size_t>(block_var_[static_cast<size_t>(b)])];
     const int ob = offset_[static_cast<size_t>(block_var_[static_cast<size_t>(b)])];
-    std::vector<std::pair<int, int>> starts;  // (pair, first position) filled per k below
     for (int k = 0; k < db; ++k) {
       const int col = ob + k;
       colptr[static_cast<size_t>(col)] = static_cast<int>(rowind.size());
@@ -64,16 +83,23 @@ SparseNormalEquations::SparseNormalEquations(const FactorGraph& graph, Ordering 
   }
   colptr[static_cast<size_t>(n_)] = static_cast<int>(rowind.size());
   // diag_pos_ was filled in column order, which is also the order of the unknowns.
-  factor_pairs_.resize(graph.factors().size());
-  for (size_t fi = 0; fi < graph.factors().size(); ++fi) {
-    const auto& fv = graph.factors()[fi]->variables();
+}
+
+// Per factor, the block pair of each (u, v) of its variables (u <= v), or -1 when a variable is fixed.
+void SparseNormalEquations::map_factor_pairs(const std::map<std::pair<int, int>, int>& pair_index) {
+  factor_pairs_.resize(graph_.factors().size());
+  for (size_t fi = 0; fi < graph_.factors().size(); ++fi) {
+    const auto& fv = graph_.factors()[fi]->variables();
     for (size_t i = 0; i < fv.size(); ++i)
       for (size_t j = 0; j < fv.size(); ++j) {
         const int bu = var_block_[static_cast<size_t>(fv[i])], bv = var_block_[static_cast<size_t>(fv[j])];
         factor_pairs_[fi].push_back(bu >= 0 && bv >= 0 && bu <= bv ? pair_index.at({bu, bv}) : -1);
       }
   }
+}
 
+// CHOLMOD with the ordering asked for, H's pattern allocated (values zero), b zero.
+void SparseNormalEquations::start_cholmod(Ordering ordering, const std::vector<int>& colptr, const std::vector<int>& rowind) {
   cholmod_start(&common_);
   common_.supernodal = CHOLMOD_SUPERNODAL;
   common_.print = 0;
@@ -91,8 +117,14 @@ SparseNormalEquations::SparseNormalEquations(const FactorGraph& graph, Ordering 
   std::copy(rowind.begin(), rowind.end(), static_cast<int*>(H_->i));
   values_.assign(rowind.size(), 0.0);
   b_ = Eigen::VectorXd::Zero(n_);
-  if (n_ > 0 && ordering == Ordering::kBlockAmd) {
-    // The block pattern (upper triangle, one entry per block pair), ordered by AMD, expanded to components.
+}
+
+// The symbolic analysis: with kBlockAmd the block pattern (upper triangle, one entry per block pair) ordered by
+// AMD and expanded to components; else CHOLMOD's own choice.
+void SparseNormalEquations::analyze(Ordering ordering, const BlockPattern& rows) {
+  if (n_ == 0) return;
+  if (ordering == Ordering::kBlockAmd) {
+    const int nb = static_cast<int>(block_var_.size());
     std::vector<std::vector<int>> upper(static_cast<size_t>(nb));
     for (int b = 0; b < nb; ++b) upper[static_cast<size_t>(b)].assign(rows[static_cast<size_t>(b)].begin(), rows[static_cast<size_t>(b)].end());
     const std::vector<int> block_perm = block_amd_order(upper, common_);
@@ -106,11 +138,10 @@ SparseNormalEquations::SparseNormalEquations(const FactorGraph& graph, Ordering 
     common_.method[0].ordering = CHOLMOD_GIVEN;
     common_.postorder = 1;
     L_ = cholmod_analyze_p(H_, perm.data(), nullptr, 0, &common_);
-    if (L_ == nullptr) throw std::runtime_error("CHOLMOD symbolic analysis failed");
-  } else if (n_ > 0) {
+  } else {
     L_ = cholmod_analyze(H_, &common_);
-    if (L_ == nullptr) throw std::runtime_error("CHOLMOD symbolic analysis failed");
   }
+  if (L_ == nullptr) throw std::runtime_error("CHOLMOD symbolic analysis failed");
 }
 
 SparseNormalEquations::~SparseNormalEquations() {

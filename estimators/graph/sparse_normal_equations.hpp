@@ -9,6 +9,8 @@
 
 #include <cholmod.h>
 
+#include <map>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -41,6 +43,15 @@ class SparseNormalEquations {
 
  private:
   int position(int pair, int col_in_block, int row_in_block) const;
+  // The constructor's steps.
+  using BlockPattern = std::vector<std::set<int>>;  // per block column: the block rows (<= it) present
+  void number_blocks();
+  BlockPattern block_pattern() const;
+  void lay_out_columns(const BlockPattern& rows, std::vector<int>& colptr, std::vector<int>& rowind,
+                       std::map<std::pair<int, int>, int>& pair_index);
+  void map_factor_pairs(const std::map<std::pair<int, int>, int>& pair_index);
+  void start_cholmod(Ordering ordering, const std::vector<int>& colptr, const std::vector<int>& rowind);
+  void analyze(Ordering ordering, const BlockPattern& rows);
 
   const FactorGraph& graph_;
   int n_ = 0;

@@ -2,6 +2,7 @@
 
 #include "estimators/lie/planar_axes.hpp"
 #include "estimators/lie/se2.hpp"
+#include "estimators/spd_matrix.hpp"
 
 #include <Eigen/Cholesky>
 #include <Eigen/LU>
@@ -18,7 +19,7 @@ KeyframeLoop loop_on_keyframes(bool planar, const SE3& relative, const Matrix6d&
     const Matrix6d extra = from.covariance + to.covariance;
     const Eigen::MatrixXd widened = cov + (planar ? Eigen::MatrixXd(planar_block(extra)) : Eigen::MatrixXd(extra));
     const Eigen::MatrixXd info = widened.inverse();
-    out.information = planar ? embed_planar(info) : Matrix6d(0.5 * (info + info.transpose()));
+    out.information = planar ? embed_planar(info) : Matrix6d(symmetrized(info));
   }
   out.z = from.motion * relative * to.motion.inverse();
   return out;

@@ -2,6 +2,7 @@
 
 #include "estimators/lie/planar_axes.hpp"
 #include "estimators/lie/se2.hpp"
+#include "estimators/spd_matrix.hpp"
 
 #include <Eigen/Cholesky>
 
@@ -16,10 +17,8 @@ Matrix6d residual_information(const Matrix6d& tangent_information) {
 
 std::unique_ptr<graph::Factor> odometry_factor(bool planar, int from, int to, const SE3& edge, const Matrix6d& covariance) {
   const Eigen::MatrixXd cov = planar ? Eigen::MatrixXd(planar_block(covariance)) : Eigen::MatrixXd(covariance);
-  Eigen::LLT<Eigen::MatrixXd> llt(cov);
-  if (llt.info() != Eigen::Success || !cov.allFinite()) return nullptr;
-  Eigen::MatrixXd information = llt.solve(Eigen::MatrixXd::Identity(cov.rows(), cov.cols()));
-  information = 0.5 * (information + information.transpose());
+  if (!is_positive_definite(cov)) return nullptr;
+  const Eigen::MatrixXd information = symmetrized(cov.llt().solve(Eigen::MatrixXd::Identity(cov.rows(), cov.cols())));
   if (planar) return std::make_unique<graph::RelativePoseFactor>(from, to, SE2::from_se3(edge), Eigen::Matrix3d(information));
   return std::make_unique<graph::RelativePoseFactor>(from, to, edge, residual_information(information));
 }

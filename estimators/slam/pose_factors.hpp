@@ -16,7 +16,7 @@ namespace sextant::slam {
 Matrix6d residual_information(const Matrix6d& tangent_information);
 
 /// The factor of an odometry edge `edge` from keyframe variable `from` to `to` with covariance `covariance`; nullptr
-/// when that covariance cannot be inverted (it can only come from a sender's malformed covariances).
+/// when that covariance is not positive definite on the body's axes (spd_matrix.hpp's check: bad input, refused).
 std::unique_ptr<graph::Factor> odometry_factor(bool planar, int from, int to, const SE3& edge, const Matrix6d& covariance);
 
 /// The factor of a loop z between keyframe variables with information `information` over the tangent.

@@ -2,6 +2,7 @@
 
 #include "estimators/lie/planar_axes.hpp"
 #include "estimators/lie/se2.hpp"
+#include "estimators/spd_matrix.hpp"
 
 #include <Eigen/Cholesky>
 
@@ -37,7 +38,7 @@ bool SightingModel::measurement(const LandmarkSighting& s, Eigen::VectorXd& z, E
   z[0] = s.range, z[1] = s.azimuth;
   if (!planar_) z[2] = s.elevation;
   R = s.covariance.topLeftCorner(n, n);
-  return z.allFinite() && s.range > 0 && R.allFinite() && R.llt().info() == Eigen::Success;
+  return z.allFinite() && s.range > 0 && is_positive_definite(R);
 }
 
 Eigen::Vector3d SightingModel::landmark_from(const LandmarkSighting& s) const {
@@ -79,15 +80,8 @@ double SightingModel::mahalanobis(const Evaluation& ev, const Eigen::MatrixXd& R
 
 Eigen::MatrixXd SightingModel::information(const Evaluation& ev, const Eigen::MatrixXd& R) const {
   const int n = dimension();
-  Eigen::MatrixXd cov = R + ev.odometry_part;
-  cov = 0.5 * (cov + cov.transpose());
-  Eigen::MatrixXd information = cov.llt().solve(Eigen::MatrixXd::Identity(n, n));
-  // In place, as the graph stage always did: Eigen evaluates this coefficient by coefficient, column by column, so the
-  // entries above the diagonal are averaged with the already averaged ones below (aliasing; for a matrix symmetric up
-  // to rounding, as here, a difference of a rounding).  Kept so that replays stay bit for bit what they were
-  // (bench/refactor_identity.sh).
-  information = 0.5 * (information + information.transpose());
-  return information;
+  const Eigen::MatrixXd cov = symmetrized(R + ev.odometry_part);
+  return symmetrized(cov.llt().solve(Eigen::MatrixXd::Identity(n, n)));
 }
 
 }  // namespace sextant::slam

@@ -32,7 +32,7 @@ class SightingModel {
   int dimension() const { return planar_ ? 2 : 3; }
   graph::PointObservationFactor::Model model() const;
   /// The sighting's measurement z and covariance R (n of each); false when malformed: a non-finite value, a range
-  /// that is not positive or an R that is not positive definite.
+  /// that is not positive or an R that is not positive definite (spd_matrix.hpp's check).
   bool measurement(const LandmarkSighting& s, Eigen::VectorXd& z, Eigen::MatrixXd& R) const;
   /// Where the sighting puts the landmark, X_K D S l(z) (z = 0 on a planar body).
   Eigen::Vector3d landmark_from(const LandmarkSighting& s) const;

@@ -174,6 +174,12 @@ class SlamGraph {
   /// thinned ones, loops and sightings of thinned keyframes dropped, landmarks left without sightings dropped.
   void maybe_thin(bool planar);
   void thin(bool planar);
+  /// thin's steps (slam_graph_thinning.cpp), on the plan they fill in turn.
+  struct ThinningPlan;
+  bool choose_kept_keyframes(ThinningPlan& p);
+  void choose_kept_factors(ThinningPlan& p);
+  void rebuild_smoother(ThinningPlan& p);
+  void commit_thinning(ThinningPlan& p);
 
   SlamOptions options_;
   LoopProposer proposer_;

@@ -26,59 +26,23 @@ void SlamGraph::maybe_thin(bool planar) {
   thin(planar);
 }
 
-void SlamGraph::thin(bool planar) {
-  const auto started = std::chrono::steady_clock::now();
-  const int kind = planar ? 1 : 0;
-  graph::IncrementalSmoother& old = *smoothers_[kind];
-  const auto& vars = old.graph().variables();
-  const auto& factors = old.graph().factors();
-  const std::vector<FactorTag>& tags = factor_tags_[kind];
-  if (tags.size() != factors.size()) return;  // cannot happen: every factor goes through add_factor
-
-  // 1. Which keyframes stay, per body of this kind.
-  std::vector<char> keep_var(vars.size(), 1);
-  std::map<Body*, std::vector<char>> keep_of;
-  bool any = false;
-  for (auto& [name, b] : bodies_) {
-    if (b.planar != planar || b.track.empty()) continue;
-    std::vector<ThinningCandidate> candidates;
-    candidates.reserve(b.track.keyframes().size());
-    for (const auto& k : b.track.keyframes()) candidates.push_back({k.id, vars[static_cast<size_t>(k.variable)].as_se3()});
-    KeyframeThinningOptions thinning = options_.lifelong.thinning;
-    thinning.window = options_.lifelong.budget(planar).window;
-    auto keep = keyframes_to_keep(candidates, planar, thinning);
-    for (size_t i = 0; i < keep.size(); ++i)
-      if (!keep[i]) keep_var[static_cast<size_t>(b.track.keyframes()[i].variable)] = 0, any = true;
-    keep_of.emplace(&b, std::move(keep));
-  }
-  if (!any) return;
-
-  // 2. Which factors stay: loops and sightings whose variables all stay; odometry is recomposed below.  A landmark
-  //    without a sighting left leaves too.
-  std::vector<char> keep_factor(factors.size(), 0);
-  std::vector<int> sightings_left(vars.size(), 0);
-  for (size_t f = 0; f < factors.size(); ++f) {
-    if (tags[f].role == FactorRole::kOdometry) continue;
-    bool all = true;
-    for (int v : factors[f]->variables()) all = all && keep_var[static_cast<size_t>(v)];
-    keep_factor[f] = all ? 1 : 0;
-    if (all && tags[f].role == FactorRole::kSighting) ++sightings_left[static_cast<size_t>(factors[f]->variables()[1])];
-  }
-  std::vector<char> is_landmark(vars.size(), 0);
-  for (auto& [name, b] : bodies_)
-    if (b.planar == planar)
-      for (const auto& [id, l] : b.landmarks) is_landmark[static_cast<size_t>(l.variable)] = 1;
-  for (size_t v = 0; v < vars.size(); ++v)
-    if (is_landmark[v] && sightings_left[v] == 0) keep_var[v] = 0;
-
-  // 3. The new smoother: the variables that stay at their current estimates, in the old order.
-  auto fresh = std::make_unique<graph::IncrementalSmoother>(old.options());
+// What one thinning keeps and builds, filled step by step by thin().
+struct SlamGraph::ThinningPlan {
+  ThinningPlan(bool planar_kind, graph::IncrementalSmoother& smoother, const std::vector<FactorTag>& factor_tags)
+      : planar(planar_kind), kind(planar_kind ? 1 : 0), old(smoother), vars(smoother.graph().variables()),
+        factors(smoother.graph().factors()), tags(factor_tags) {}
+  bool planar;
+  int kind;  // smoothers_[kind]
+  graph::IncrementalSmoother& old;
+  const std::vector<graph::Variable>& vars;
+  const std::vector<std::unique_ptr<graph::Factor>>& factors;
+  const std::vector<FactorTag>& tags;
+  std::vector<char> keep_var;                    // by old variable index
+  std::map<Body*, std::vector<char>> keep_of;    // per body of this kind: by keyframe
+  std::vector<char> keep_factor;                 // loops and sightings that stay (odometry is recomposed)
+  std::unique_ptr<graph::IncrementalSmoother> fresh;
   std::vector<FactorTag> fresh_tags;
-  std::vector<int> remap(vars.size(), -1);
-  for (size_t v = 0; v < vars.size(); ++v)
-    if (keep_var[v]) remap[v] = fresh->add_variable(vars[v]);
-
-  // 4. Per body: the kept keyframes, their odometry edges composed across the thinned ones, and the thinned records.
+  std::vector<int> remap;                        // old variable index -> new, -1 when it leaves
   struct BodyPlan {
     Body* body;
     std::vector<TrackKeyframe> keyframes;
@@ -86,73 +50,140 @@ void SlamGraph::thin(bool planar) {
   };
   std::vector<BodyPlan> plans;
   int64_t thinned_count = 0;
+};
+
+void SlamGraph::thin(bool planar) {
+  const auto started = std::chrono::steady_clock::now();
+  const int kind = planar ? 1 : 0;
+  graph::IncrementalSmoother& old = *smoothers_[kind];
+  ThinningPlan p(planar, old, factor_tags_[kind]);
+  if (p.tags.size() != p.factors.size()) return;  // cannot happen: every factor goes through add_factor
+  if (!choose_kept_keyframes(p)) return;
+  choose_kept_factors(p);
   try {
-    for (auto& [b, keep] : keep_of) {
-      BodyPlan plan{b, {}, {}};
-      SE3 edge;
-      Matrix6d covariance = Matrix6d::Zero();
-      bool spanning = false;  // thinned keyframes since the last kept one
-      const auto& keyframes = b->track.keyframes();
-      for (size_t i = 0; i < keyframes.size(); ++i) {
-        const TrackKeyframe& k = keyframes[i];
-        if (i > 0) {
-          covariance = compose_covariance(covariance, k.edge, k.edge_covariance);
-          edge = edge * k.edge;
-        }
-        if (!keep[i]) {
-          plan.thinned.push_back({k.id, k.utime, k.odom});
-          spanning = true;
-          continue;
-        }
-        TrackKeyframe node = k;
-        node.variable = remap[static_cast<size_t>(k.variable)];
-        if (i > 0) {
-          if (spanning) node.edge = edge, node.edge_covariance = covariance;
-          auto f = odometry_factor(planar, plan.keyframes.back().variable, node.variable, node.edge, node.edge_covariance);
-          if (!f) throw std::invalid_argument("composed odometry covariance cannot be inverted");
-          fresh->add_factor(std::move(f), false);
-          fresh_tags.push_back({FactorRole::kOdometry, false, std::nullopt});
-        }
-        plan.keyframes.push_back(std::move(node));
-        edge = SE3();
-        covariance.setZero();
-        spanning = false;
-      }
-      thinned_count += static_cast<int64_t>(plan.thinned.size());
-      plans.push_back(std::move(plan));
-    }
-    // 5. Loops and sightings that stay, in their old order, with their kernels.
-    for (size_t f = 0; f < factors.size(); ++f) {
-      if (!keep_factor[f]) continue;
-      std::vector<int> vs;
-      for (int v : factors[f]->variables()) vs.push_back(remap[static_cast<size_t>(v)]);
-      fresh->add_factor(factors[f]->rebind(vs), tags[f].robust, tags[f].kernel_width);
-      fresh_tags.push_back(tags[f]);
-    }
+    rebuild_smoother(p);
   } catch (const std::invalid_argument&) {
     ++counters_.thinning_failures;
     return;
   }
   const auto solve_started = std::chrono::steady_clock::now();
-  const graph::IncrementalStatus st = fresh->update();
+  const graph::IncrementalStatus st = p.fresh->update();
   counters_.thinning_solve_us_last =
       std::chrono::duration_cast<std::chrono::microseconds>(std::chrono::steady_clock::now() - solve_started).count();
   if (!st.ok) {
     ++counters_.thinning_failures;  // the old graph stays
     return;
   }
+  commit_thinning(p);
+  counters_.thinning_us_last =
+      std::chrono::duration_cast<std::chrono::microseconds>(std::chrono::steady_clock::now() - started).count();
+  counters_.thinning_us_max = std::max(counters_.thinning_us_max, counters_.thinning_us_last);
+  factor_tags_[kind] = std::move(p.fresh_tags);
+}
 
-  // 6. Commit.
-  for (size_t f = 0; f < factors.size(); ++f) {
-    if (keep_factor[f] || tags[f].role == FactorRole::kOdometry) continue;
-    if (tags[f].role == FactorRole::kLoop) ++counters_.loops_thinned;
+// 1. Which keyframes stay, per body of this kind; false when all do.
+bool SlamGraph::choose_kept_keyframes(ThinningPlan& p) {
+  p.keep_var.assign(p.vars.size(), 1);
+  bool any = false;
+  for (auto& [name, b] : bodies_) {
+    if (b.planar != p.planar || b.track.empty()) continue;
+    std::vector<ThinningCandidate> candidates;
+    candidates.reserve(b.track.keyframes().size());
+    for (const auto& k : b.track.keyframes()) candidates.push_back({k.id, p.vars[static_cast<size_t>(k.variable)].as_se3()});
+    KeyframeThinningOptions thinning = options_.lifelong.thinning;
+    thinning.window = options_.lifelong.budget(p.planar).window;
+    auto keep = keyframes_to_keep(candidates, p.planar, thinning);
+    for (size_t i = 0; i < keep.size(); ++i)
+      if (!keep[i]) p.keep_var[static_cast<size_t>(b.track.keyframes()[i].variable)] = 0, any = true;
+    p.keep_of.emplace(&b, std::move(keep));
+  }
+  return any;
+}
+
+// 2. Which factors stay: loops and sightings whose variables all stay; odometry is recomposed below.  A landmark
+//    without a sighting left leaves too.
+void SlamGraph::choose_kept_factors(ThinningPlan& p) {
+  p.keep_factor.assign(p.factors.size(), 0);
+  std::vector<int> sightings_left(p.vars.size(), 0);
+  for (size_t f = 0; f < p.factors.size(); ++f) {
+    if (p.tags[f].role == FactorRole::kOdometry) continue;
+    bool all = true;
+    for (int v : p.factors[f]->variables()) all = all && p.keep_var[static_cast<size_t>(v)];
+    p.keep_factor[f] = all ? 1 : 0;
+    if (all && p.tags[f].role == FactorRole::kSighting) ++sightings_left[static_cast<size_t>(p.factors[f]->variables()[1])];
+  }
+  std::vector<char> is_landmark(p.vars.size(), 0);
+  for (auto& [name, b] : bodies_)
+    if (b.planar == p.planar)
+      for (const auto& [id, l] : b.landmarks) is_landmark[static_cast<size_t>(l.variable)] = 1;
+  for (size_t v = 0; v < p.vars.size(); ++v)
+    if (is_landmark[v] && sightings_left[v] == 0) p.keep_var[v] = 0;
+}
+
+// 3.-5. The new smoother: the variables that stay at their current estimates, in the old order; per body the kept
+// keyframes with their odometry edges composed across the thinned ones (and the thinned records); the loops and
+// sightings that stay, in their old order, with their kernels.  Throws std::invalid_argument when a factor cannot
+// enter it.
+void SlamGraph::rebuild_smoother(ThinningPlan& p) {
+  p.fresh = std::make_unique<graph::IncrementalSmoother>(p.old.options());
+  p.remap.assign(p.vars.size(), -1);
+  for (size_t v = 0; v < p.vars.size(); ++v)
+    if (p.keep_var[v]) p.remap[v] = p.fresh->add_variable(p.vars[v]);
+  for (auto& [b, keep] : p.keep_of) {
+    ThinningPlan::BodyPlan plan{b, {}, {}};
+    SE3 edge;
+    Matrix6d covariance = Matrix6d::Zero();
+    bool spanning = false;  // thinned keyframes since the last kept one
+    const auto& keyframes = b->track.keyframes();
+    for (size_t i = 0; i < keyframes.size(); ++i) {
+      const TrackKeyframe& k = keyframes[i];
+      if (i > 0) {
+        covariance = compose_covariance(covariance, k.edge, k.edge_covariance);
+        edge = edge * k.edge;
+      }
+      if (!keep[i]) {
+        plan.thinned.push_back({k.id, k.utime, k.odom});
+        spanning = true;
+        continue;
+      }
+      TrackKeyframe node = k;
+      node.variable = p.remap[static_cast<size_t>(k.variable)];
+      if (i > 0) {
+        if (spanning) node.edge = edge, node.edge_covariance = covariance;
+        auto f = odometry_factor(p.planar, plan.keyframes.back().variable, node.variable, node.edge, node.edge_covariance);
+        if (!f) throw std::invalid_argument("composed odometry covariance cannot be inverted");
+        p.fresh->add_factor(std::move(f), false);
+        p.fresh_tags.push_back({FactorRole::kOdometry, false, std::nullopt});
+      }
+      plan.keyframes.push_back(std::move(node));
+      edge = SE3();
+      covariance.setZero();
+      spanning = false;
+    }
+    p.thinned_count += static_cast<int64_t>(plan.thinned.size());
+    p.plans.push_back(std::move(plan));
+  }
+  for (size_t f = 0; f < p.factors.size(); ++f) {
+    if (!p.keep_factor[f]) continue;
+    std::vector<int> vs;
+    for (int v : p.factors[f]->variables()) vs.push_back(p.remap[static_cast<size_t>(v)]);
+    p.fresh->add_factor(p.factors[f]->rebind(vs), p.tags[f].robust, p.tags[f].kernel_width);
+    p.fresh_tags.push_back(p.tags[f]);
+  }
+}
+
+// 6. Commit: the counters, the bodies' tracks and landmarks on the new variables, the new smoother in place.
+void SlamGraph::commit_thinning(ThinningPlan& p) {
+  for (size_t f = 0; f < p.factors.size(); ++f) {
+    if (p.keep_factor[f] || p.tags[f].role == FactorRole::kOdometry) continue;
+    if (p.tags[f].role == FactorRole::kLoop) ++counters_.loops_thinned;
     else ++counters_.sightings_thinned;
   }
-  for (auto& plan : plans) {
+  for (auto& plan : p.plans) {
     Body& b = *plan.body;
     b.track.replace_keyframes(std::move(plan.keyframes), plan.thinned);
     for (auto it = b.landmarks.begin(); it != b.landmarks.end();) {
-      const int v = remap[static_cast<size_t>(it->second.variable)];
+      const int v = p.remap[static_cast<size_t>(it->second.variable)];
       if (v < 0) {
         ++counters_.landmarks_thinned;
         it = b.landmarks.erase(it);
@@ -161,16 +192,12 @@ void SlamGraph::thin(bool planar) {
         ++it;
       }
     }
-    b.smoother = fresh.get();
+    b.smoother = p.fresh.get();
   }
-  counters_.keyframes_thinned += thinned_count;
+  counters_.keyframes_thinned += p.thinned_count;
   ++counters_.thinnings;
-  smoothers_[kind] = std::move(fresh);
-  gate_marginals_[kind].clear();  // the variables' indices changed
-  counters_.thinning_us_last =
-      std::chrono::duration_cast<std::chrono::microseconds>(std::chrono::steady_clock::now() - started).count();
-  counters_.thinning_us_max = std::max(counters_.thinning_us_max, counters_.thinning_us_last);
-  factor_tags_[kind] = std::move(fresh_tags);
+  smoothers_[p.kind] = std::move(p.fresh);
+  gate_marginals_[p.kind].clear();  // the variables' indices changed
 }
 
 }  // namespace sextant::slam

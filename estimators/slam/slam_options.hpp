@@ -64,7 +64,7 @@ struct SlamOptions {
   /// 30000 against 100000 left 1480 of 3556 loops unmatched and moved the graph's ATE from 14.3 to 13.8 mm, and the
   /// daemon's memory stops growing after 10 minutes instead of 33; bench/RESULTS.md, "Lifelong").
   int odometry_history = 30000;
-  double min_increment_variance = 1e-10;  // added to the increment covariance's diagonal (pose_covariance.hpp)
+  double min_increment_variance = 1e-10;  // floor of the increment covariance's eigenvalues (pose_covariance.hpp)
   /// The incremental smoother's options (config key `smoother:`): relinearization thresholds and skip, wildfire,
   /// the rank-update budget, reordering and its spreading over updates.  Their defaults are IncrementalOptions'
   /// own (one source of truth).  `kernel` and `kernel_width` here are not used: the smoother's kernel is `robust`

@@ -1,5 +1,7 @@
 #include "estimators/graph/smoother/marginal_covariance.hpp"
 
+#include "estimators/spd_matrix.hpp"
+
 #include <algorithm>
 #include <vector>
 
@@ -45,7 +47,7 @@ Eigen::MatrixXd marginal_covariance(SmootherState& s, int index) {
   out.triangularView<Eigen::StrictlyUpper>() = out.transpose();
   for (int j : path) slot[static_cast<size_t>(j)] = -1;
   if (!ok || !out.allFinite()) return {};
-  return 0.5 * (out + out.transpose());
+  return symmetrized(out);
 }
 
 }  // namespace sextant::graph::smoother

@@ -78,39 +78,35 @@ TEST_CASE("stated_increment_covariance: the stated one, else the growth of the p
   CHECK(max_abs(stated_increment_covariance(after, std::nullopt, SE3(), before) - hand) < 1e-15);
 }
 
-TEST_CASE("regularized_increment_covariance: PSD projection of a differential growth only, min_variance on the used axes") {
+TEST_CASE("regularized_increment_covariance: eigenvalues on the used axes floored at min_variance, stated or growth") {
   const double mv = 1e-6;
-  // Differential and indefinite, no motion: diag(1, -0.5, 0, 0, 0, 2) projects to diag(1, 0, 0, 0, 0, 2) (Higham:
-  // the negative eigenvalue floored at 0), then min_variance on x, y, yaw only when planar, on all six when not.
+  // Differential and indefinite, no motion: the growth diag(1, -0.5, 0, 0, 0, 2); its eigenvalues on the used axes
+  // floored at min_variance: x, y, yaw only when planar (z, roll, pitch as they are), all six when not.
   Matrix6d before = Matrix6d::Identity();
   Matrix6d after = Matrix6d::Identity();
   after(0, 0) = 2, after(1, 1) = 0.5, after(5, 5) = 3;
   for (int i : {2, 3, 4}) after(i, i) = 1;  // no growth on z, roll, pitch
   const Matrix6d planar = regularized_increment_covariance(after, std::nullopt, true, SE3(), before, mv);
   Eigen::Matrix<double, 6, 1> d;
-  d << 1 + mv, 0 + mv, 0, 0, 0, 2 + mv;
+  d << 1, mv, 0, 0, 0, 2;
   CHECK(max_abs(planar - Matrix6d(d.asDiagonal())) < 1e-14);
   const Matrix6d spatial = regularized_increment_covariance(after, std::nullopt, false, SE3(), before, mv);
-  d << 1 + mv, 0 + mv, mv, mv, mv, 2 + mv;
+  d << 1, mv, mv, mv, mv, 2;
   CHECK(max_abs(spatial - Matrix6d(d.asDiagonal())) < 1e-14);
-  // The result is positive definite on the used axes, its smallest eigenvalue there min_variance.
-  Eigen::Matrix3d p3;
-  for (int r = 0; r < 3; ++r)
-    for (int c = 0; c < 3; ++c) p3(r, c) = planar(kPlanarAxes[r], kPlanarAxes[c]);
-  CHECK(Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(p3).eigenvalues().minCoeff() == doctest::Approx(mv));
+  CHECK(Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(planar_block(planar)).eigenvalues().minCoeff() == doctest::Approx(mv));
 
-  // Stated: not projected (a stated increment is the sender's word), min_variance added all the same.
+  // Stated and well above the floor: kept as stated (to rounding); the entries off the used axes untouched.
   Matrix6d stated = Matrix6d::Zero();
   stated(0, 0) = 0.01, stated(0, 1) = stated(1, 0) = 0.002, stated(1, 1) = 0.02, stated(5, 5) = 0.003;
-  Matrix6d expected = stated;
-  for (int i : kPlanarAxes) expected(i, i) += mv;
-  CHECK(regularized_increment_covariance(Matrix6d::Identity(), stated, true, pose(1, 2, 0, 0, 0, 1), Matrix6d::Zero(),
-                                         mv) == expected);
-  Matrix6d indefinite = Matrix6d::Zero();
-  indefinite(0, 0) = -1;
-  Matrix6d kept = indefinite;
-  kept.diagonal().array() += mv;
-  CHECK(regularized_increment_covariance(Matrix6d::Zero(), indefinite, false, SE3(), Matrix6d::Zero(), mv) == kept);
+  stated(2, 2) = 0.5;  // z: not a planar body's axis
+  CHECK(max_abs(regularized_increment_covariance(Matrix6d::Identity(), stated, true, pose(1, 2, 0, 0, 0, 1),
+                                                 Matrix6d::Zero(), mv) - stated) < 1e-15);
+  // Stated with a direction below the floor (yaw 1e-9): that direction raised to min_variance, the others kept.
+  Matrix6d thin = stated;
+  thin(5, 5) = 1e-9;
+  Matrix6d expected = thin;
+  expected(5, 5) = mv;
+  CHECK(max_abs(regularized_increment_covariance(Matrix6d::Zero(), thin, true, SE3(), Matrix6d::Zero(), mv) - expected) < 1e-15);
 }
 
 TEST_CASE("nearest_psd: eigenvalues floored at zero, eigenvectors kept (Higham 1988)") {

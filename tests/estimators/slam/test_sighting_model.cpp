@@ -89,6 +89,7 @@ TEST_CASE("sighting model: the first sighting places the landmark by hand, and t
   // The factor's information: (R + J_D Sigma_D J_D')^-1 (odometry unscaled).
   const Eigen::Matrix2d info = (Rm + JD * sigma_d * JD.transpose()).inverse();
   CHECK((model.information(ev, R) - info).norm() < 1e-6 * info.norm());
+  CHECK(model.information(ev, R) == model.information(ev, R).transpose());  // exactly symmetric
   // The factor's sensor offset is D S.
   CHECK((model.sensor_in_keyframe().translation() - (D * S).to_se3().translation()).norm() < 1e-12);
 }

@@ -1,0 +1,96 @@
+#pragma once
+// Covariance and information matrices: the one home of their symmetrization, of the positive-definiteness check and
+// of their regularization, for every estimator (filters, graph, SLAM layer) and the bus's intake.
+//
+// The rule:
+//  - Where a covariance or information enters as data (a message field at the bus's intake, a g2o edge, a factor
+//    given to the optimizer or the incremental smoother, a sighting's covariance or an odometry edge in the SLAM
+//    layer) it must be finite, symmetric (to 1e-9 of its largest entry, or of 1) and positive definite on the axes
+//    it is used on (check_positive_definite).  One that is not is bad input: refused with the reason, never repaired
+//    silently.  The intake drops and counts such a message (daemon/runtime/codec.cpp), the g2o reader lists such
+//    edges in its error (repairing them, with floor_eigenvalues, only when the user asks for it), the optimizer and
+//    the smoother refuse such a factor, the SLAM layer such an edge or sighting.
+//  - The increment covariance every estimator composes or predicts with (dead reckoning, the EKFs, the particle
+//    filter, the SLAM layer's odometry edges) is regularized one way: its eigenvalues on the body's axes floored at
+//    the estimator's `min_increment_variance` (estimators/lie/pose_covariance.hpp, regularized_increment_covariance;
+//    the planar EKF's increment_noise).  It is the sender's stated increment (positive definite: the intake checked
+//    it) or the growth of its pose covariance between two messages, derived and possibly indefinite through rounding
+//    or a reset of the sender; the floor keeps every prediction positive definite and a step without growth
+//    invertible.  An estimator given an indefinite increment directly (not through the intake) floors it the same
+//    way.  Covariances derived for publication are floored at 0 (nearest_psd), where a floor would inflate them.
+//  - Symmetrizing is `symmetrized(m)`, never `m = 0.5 * (m + m.transpose())`: Eigen evaluates that in place,
+//    coefficient by coefficient, so the upper triangle averages entries already averaged (aliasing) and the result
+//    is not symmetric.
+#include <Eigen/Core>
+#include <Eigen/Eigenvalues>
+
+#include <algorithm>
+
+namespace sextant {
+
+/// (m + m') / 2, evaluated into a new matrix (safe to assign back to m).
+template <typename Derived>
+typename Derived::PlainObject symmetrized(const Eigen::MatrixBase<Derived>& m) {
+  return (0.5 * (m + m.transpose())).eval();
+}
+
+/// The smallest eigenvalue of the symmetric matrix m (its lower triangle is read).
+template <typename Derived>
+double smallest_eigenvalue(const Eigen::MatrixBase<Derived>& m) {
+  using Plain = typename Derived::PlainObject;
+  return Eigen::SelfAdjointEigenSolver<Plain>(Plain(m), Eigen::EigenvaluesOnly).eigenvalues().minCoeff();
+}
+
+/// m equals its transpose to 1e-9 of max(1, largest |entry|) (rounding of a symmetric computation passes).
+template <typename Derived>
+bool is_symmetric(const Eigen::MatrixBase<Derived>& m) {
+  if (m.size() == 0) return true;
+  const double scale = std::max(1.0, m.cwiseAbs().maxCoeff());
+  return (m - m.transpose()).cwiseAbs().maxCoeff() <= 1e-9 * scale;
+}
+
+/// What check_positive_definite found.
+struct DefinitenessCheck {
+  enum class Problem { kNone, kNotFinite, kNotSymmetric, kNotPositiveDefinite };
+  Problem problem = Problem::kNone;
+  double smallest_eigenvalue = 0;  ///< set when the matrix is finite and symmetric
+  bool ok() const { return problem == Problem::kNone; }
+};
+
+/// The one positive-definiteness check of a stated covariance or information: finite, symmetric (is_symmetric), and
+/// its smallest eigenvalue > 0.
+template <typename Derived>
+DefinitenessCheck check_positive_definite(const Eigen::MatrixBase<Derived>& m) {
+  DefinitenessCheck c;
+  if (!m.allFinite()) {
+    c.problem = DefinitenessCheck::Problem::kNotFinite;
+    return c;
+  }
+  if (!is_symmetric(m)) {
+    c.problem = DefinitenessCheck::Problem::kNotSymmetric;
+    return c;
+  }
+  c.smallest_eigenvalue = m.size() > 0 ? smallest_eigenvalue(m) : 0.0;
+  if (!(c.smallest_eigenvalue > 0)) c.problem = DefinitenessCheck::Problem::kNotPositiveDefinite;
+  return c;
+}
+
+template <typename Derived>
+bool is_positive_definite(const Eigen::MatrixBase<Derived>& m) {
+  return check_positive_definite(m).ok();
+}
+
+/// The one regularization of a derived covariance-like matrix: symmetrize, then floor the eigenvalues at `floor`.
+/// With floor 0 this is the nearest positive semi-definite matrix in the Frobenius norm (Higham, "Computing a
+/// nearest symmetric positive semidefinite matrix", Linear Algebra Appl. 103, 1988); with floor v > 0 every
+/// eigenvalue is at least v, so the matrix is positive definite with its inverse bounded by 1/v.  Directions already
+/// above the floor are left as they are.
+template <typename Derived>
+typename Derived::PlainObject floor_eigenvalues(const Eigen::MatrixBase<Derived>& m, double floor) {
+  using Plain = typename Derived::PlainObject;
+  const Plain plain = m;
+  const Eigen::SelfAdjointEigenSolver<Plain> eig(symmetrized(plain));
+  return eig.eigenvectors() * eig.eigenvalues().cwiseMax(floor).asDiagonal() * eig.eigenvectors().transpose();
+}
+
+}  // namespace sextant
