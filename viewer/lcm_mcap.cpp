@@ -85,7 +85,7 @@ McapToLcmResult convert_mcap_to_lcm(const std::string& mcap_path, const std::str
       ++r.views_skipped;
       return;
     }
-    const auto timestamp = static_cast<int64_t>(m.log_time / 1000);
+    const int64_t timestamp = static_cast<int64_t>(m.log_time) / 1000;  // the two's-complement bits of a negative one
     const std::string where = mcap_path + ": message " + std::to_string(index) + " on topic " + ch.topic;
     if (ch.message_encoding == "lcm") {
       writer.write_raw(timestamp, lcm->second, m.data.data(), m.data.size());
