@@ -2,8 +2,11 @@
 
 #include "daemon/runtime/lcm_log.hpp"
 #include "daemon/runtime/version.hpp"
+#include "replay/replay_driver.hpp"
 
+#include <algorithm>
 #include <filesystem>
+#include <limits>
 #include <stdexcept>
 
 namespace sextant::viewer {
@@ -14,13 +17,11 @@ McapWriterOptions with_library(McapWriterOptions o) {
   return o;
 }
 
-/// The utime every sextant message starts with (after its 8-byte fingerprint), in ns; `fallback` when there is none.
+/// The utime of a sextant message in ns (replay::peek_utime); `fallback` for other bytes or a negative utime.
 uint64_t publish_time(const uint8_t* data, size_t size, uint64_t fallback) {
-  if (size < 16 || !lcm_json_type_of(data, size)) return fallback;
-  uint64_t utime = 0;
-  for (int i = 8; i < 16; ++i) utime = (utime << 8) | data[i];
-  const auto us = static_cast<int64_t>(utime);
-  return us >= 0 ? static_cast<uint64_t>(us) * 1000 : fallback;
+  if (!lcm_json_type_of(data, size)) return fallback;
+  const auto us = replay::peek_utime(std::vector<uint8_t>(data, data + std::min<size_t>(size, 16)));
+  return us && *us >= 0 ? static_cast<uint64_t>(*us) * 1000 : fallback;
 }
 
 }  // namespace
@@ -55,6 +56,28 @@ void McapRecorder::add(const std::string& channel, int64_t timestamp_us, const u
 }
 
 void McapRecorder::close() { writer_.close(); }
+
+ReplayMcapRecorder::ReplayMcapRecorder(const std::string& log_path, const std::string& mcap_path)
+    : inputs_(log_path), next_input_(inputs_.next()), recorder_(mcap_path) {}
+
+void ReplayMcapRecorder::inputs_until(int64_t utime) {
+  while (next_input_) {
+    const int64_t t = replay::peek_utime(next_input_->data).value_or(next_input_->timestamp);
+    if (t > utime) return;
+    recorder_.add(next_input_->channel, t, next_input_->data.data(), next_input_->data.size());
+    next_input_ = inputs_.next();
+  }
+}
+
+void ReplayMcapRecorder::published(const std::string& channel, const std::vector<uint8_t>& bytes, int64_t utime) {
+  inputs_until(utime);
+  recorder_.add(channel, utime, bytes.data(), bytes.size());
+}
+
+void ReplayMcapRecorder::close() {
+  inputs_until(std::numeric_limits<int64_t>::max());
+  recorder_.close();
+}
 
 LcmToMcapResult convert_lcm_to_mcap(const std::string& lcm_path, const std::string& mcap_path, McapWriterOptions options) {
   runtime::LogReader reader(lcm_path);

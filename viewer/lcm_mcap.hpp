@@ -6,11 +6,13 @@
 // publish_time.  MCAP -> LCM reads back the channels that carry "lcm_channel" (views are skipped): the JSON
 // re-encoded by the generated conversions, raw LCM bytes as they are, each with its log_time as the LCM timestamp,
 // in file order.  The round trip gives the same channels, timestamps and bytes in the same order.
+#include "daemon/runtime/lcm_log.hpp"
 #include "viewer/mcap.hpp"
 #include "viewer/topics.hpp"
 
 #include <cstdint>
 #include <map>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -38,6 +40,24 @@ class McapRecorder {
   std::map<std::string, uint16_t> schema_ids_;                           // by schema name
   std::map<std::pair<std::string, std::string>, uint16_t> channel_ids_;  // by (topic, schema name or encoding)
   std::vector<ViewerMessage> scratch_;
+};
+
+/// `sextant replay LOG --mcap-out F`: what the replay read and what it published, in one file.  Each published
+/// message is written when the replay publishes it, after the log's inputs up to its utime (read in file order from
+/// a second reader, so memory stays bounded); the inputs left are written at close().  Every message's log_time is
+/// its utime (data time), so inputs and outputs line up in a viewer whatever clock stamped the log.
+class ReplayMcapRecorder {
+ public:
+  ReplayMcapRecorder(const std::string& log_path, const std::string& mcap_path);
+  void published(const std::string& channel, const std::vector<uint8_t>& bytes, int64_t utime);
+  void close();
+
+ private:
+  void inputs_until(int64_t utime);
+
+  runtime::LogReader inputs_;
+  std::optional<runtime::LogRecord> next_input_;
+  McapRecorder recorder_;
 };
 
 struct LcmToMcapResult {

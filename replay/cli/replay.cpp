@@ -11,6 +11,7 @@
 #include "replay/realtime_player.hpp"
 #include "replay/report.hpp"
 #include "replay/trajectory_io.hpp"
+#include "viewer/lcm_mcap.hpp"
 
 #include <algorithm>
 #include <cstdio>
@@ -21,7 +22,7 @@ namespace {
 using namespace sextant;
 
 struct Options {
-  std::string log, config, tum_out, kitti_out, g2o_out, out_log, estimator, report;
+  std::string log, config, tum_out, kitti_out, g2o_out, out_log, mcap_out, estimator, report;
   bool json = false;
   bool realtime = false;
   bool tolerate_damage = false;
@@ -140,6 +141,8 @@ sextant::cli::RegisterCommand reg{"replay", [](CLI::App& app) {
   cmd->add_option("--kitti-out", o->kitti_out, "the same as KITTI 3x4 poses");
   cmd->add_option("--g2o-out", o->g2o_out, "the same as a g2o graph");
   cmd->add_option("--out-log", o->out_log, "write everything the engine published to an LCM log");
+  cmd->add_option("--mcap-out", o->mcap_out, "write the log's inputs and everything published to an MCAP file for "
+                                             "Foxglove (the topics of `sextant foxglove`)");
   cmd->add_option("--estimator", o->estimator, "which estimator's poses to export (default: the primary)");
   cmd->add_flag("--json", o->json, "print a JSON summary on stdout");
   cmd->add_option("--segment-seconds", o->segment_seconds,
@@ -179,6 +182,14 @@ sextant::cli::RegisterCommand reg{"replay", [](CLI::App& app) {
         out_log->write_raw(utime, channel, bytes.data(), bytes.size());
       };
     }
+    std::unique_ptr<viewer::ReplayMcapRecorder> mcap;
+    if (!o->mcap_out.empty()) {
+      mcap = std::make_unique<viewer::ReplayMcapRecorder>(o->log, o->mcap_out);
+      ro.on_publish = [&out_log, &mcap](const std::string& channel, const std::vector<uint8_t>& bytes, int64_t utime) {
+        if (out_log) out_log->write_raw(utime, channel, bytes.data(), bytes.size());
+        mcap->published(channel, bytes, utime);
+      };
+    }
     std::vector<std::unique_ptr<replay::TrajectoryWriter>> writers;
     if (!o->tum_out.empty()) writers.push_back(std::make_unique<replay::TrajectoryWriter>(o->tum_out, replay::TrajectoryFormat::kTum));
     if (!o->kitti_out.empty()) writers.push_back(std::make_unique<replay::TrajectoryWriter>(o->kitti_out, replay::TrajectoryFormat::kKitti));
@@ -195,6 +206,7 @@ sextant::cli::RegisterCommand reg{"replay", [](CLI::App& app) {
     const std::string estimator = o->estimator.empty() ? result.primary_estimator : o->estimator;
     for (auto& w : writers) w->close();
     if (out_log) out_log->flush();
+    if (mcap) mcap->close();
     const auto counted = result.fused_pose_counts.find(estimator);
     const int64_t exported = counted == result.fused_pose_counts.end() ? 0 : counted->second;
     if (!o->report.empty()) {
