@@ -11,7 +11,7 @@ packages=(
   iproute2 util-linux procps python3
   pybind11-dev python3-dev python3-pytest   # the sextant Python module and its tests
   chromium   # the report test renders the HTML report in headless Chromium
-  libzstd-dev libboost-dev nlohmann-json3-dev   # viewer/: MCAP chunks, the Foxglove WebSocket bridge, JSON
+  libzstd-dev zlib1g-dev libboost-dev nlohmann-json3-dev   # viewer/: MCAP chunks and CRCs, the Foxglove bridge, JSON
 )
 # Optional extras: installed when asked for (benchmarks against Ceres).
 if [[ "${SEXTANT_WITH_BENCH:-0}" == 1 ]]; then packages+=(libceres-dev libopenblas0 time); fi

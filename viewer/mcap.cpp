@@ -1,5 +1,6 @@
 #include "viewer/mcap.hpp"
 
+#include <zlib.h>
 #include <zstd.h>
 
 #include <algorithm>
@@ -15,19 +16,6 @@ enum Op : uint8_t {
   kMessageIndex = 0x07, kChunkIndex = 0x08, kStatistics = 0x0B, kSummaryOffset = 0x0E, kDataEnd = 0x0F,
 };
 constexpr size_t kFooterRecordSize = 1 + 8 + 8 + 8 + 4;
-
-const std::array<uint32_t, 256>& crc_table() {
-  static const auto table = [] {
-    std::array<uint32_t, 256> t{};
-    for (uint32_t i = 0; i < 256; ++i) {
-      uint32_t c = i;
-      for (int k = 0; k < 8; ++k) c = (c & 1) ? 0xEDB88320u ^ (c >> 1) : c >> 1;
-      t[i] = c;
-    }
-    return t;
-  }();
-  return table;
-}
 
 // ---- encoding (little-endian) ----
 template <class T>
@@ -139,11 +127,16 @@ McapChannel parse_channel(Cursor c) {
 }  // namespace
 
 uint32_t crc32(const void* data, size_t size, uint32_t crc) {
-  const auto& t = crc_table();
-  const auto* p = static_cast<const uint8_t*>(data);
-  crc = ~crc;
-  for (size_t i = 0; i < size; ++i) crc = t[(crc ^ p[i]) & 0xFF] ^ (crc >> 8);
-  return ~crc;
+  // zlib's, in pieces that fit its uInt lengths (several GB/s where the table-driven loop ran at a few hundred MB/s).
+  const auto* p = static_cast<const Bytef*>(data);
+  uLong c = crc;
+  while (size > 0) {
+    const auto n = static_cast<uInt>(std::min<size_t>(size, 1u << 30));
+    c = ::crc32(c, p, n);
+    p += n;
+    size -= n;
+  }
+  return static_cast<uint32_t>(c);
 }
 
 // ================================ writer ================================

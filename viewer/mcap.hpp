@@ -21,7 +21,7 @@
 
 namespace sextant::viewer {
 
-/// CRC-32 (ISO-HDLC, zlib's: reflected polynomial 0xEDB88320), continued from `crc` (0 to start).
+/// CRC-32 (ISO-HDLC, zlib's: reflected polynomial 0xEDB88320), continued from `crc` (0 to start), computed by zlib.
 uint32_t crc32(const void* data, size_t size, uint32_t crc = 0);
 
 struct McapSchema {

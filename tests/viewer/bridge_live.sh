@@ -4,7 +4,8 @@
 # @foxglove/ws-protocol) subscribe to every advertised channel and validate every message against its schema; one
 # keeps up, one stalls.  check_bridge.mjs then compares what the first received with the bus recorded by lcm-logger
 # (as-is messages equal, poses equal, nothing missed after its subscription); the stalled one must not have cost the
-# other anything and its queue must have stayed within the bound, the rest dropped and counted.
+# other anything and its queue must have stayed within the bound, the rest dropped and counted.  The recording, as
+# an MCAP file, also goes through the reference reader (check_mcap.mjs).
 set -euo pipefail
 here="$(cd "$(dirname "$0")" && pwd)"
 source "$here/../e2e/netns.bash"
@@ -39,6 +40,9 @@ in_netns bash "$0" --inside "$work"
 cat "$work/bridge.log"
 python3 "$here/lcm_to_json.py" "$work/bus.lcm" "$work/bus.jsonl"
 node "$here/check_bridge.mjs" "$work/client.json" "$work/bus.jsonl"
+# The same bus as an MCAP file (everything a daemon publishes, SEXTANT_STATUS included), through the reference reader.
+"$SEXTANT_BIN/sextant" convert mcap "$work/bus.lcm" -o "$work/bus.mcap" > /dev/null
+node "$here/check_mcap.mjs" "$work/bus.mcap" "$work/bus.jsonl"
 
 # The stalled client: its queue stayed within --queue, the excess was dropped and counted, and the keeping-up client
 # lost nothing (checked above).
