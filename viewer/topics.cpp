@@ -10,6 +10,7 @@
 
 #include <cmath>
 #include <exception>
+#include <set>
 
 namespace sextant::viewer {
 namespace {
@@ -116,19 +117,46 @@ struct TopicMapper::Views {
     out(o, "/tf", "foxglove.FrameTransforms", Json{{"transforms", transforms}});
   }
 
+  /// A body's trajectory is drawn in segments of kSegment keyframe ids (entity "<source>/trajectory/<k>", each
+  /// strip starting at the last keyframe before its range so that the strips join), and a message redraws only the
+  /// segments whose keyframes it touched: a lifelong trajectory of thousands of keyframes costs a message what its
+  /// changes cost, not the whole trajectory.
+  static constexpr int64_t kSegment = 256;
+
+  Json trajectory_segment(const engine::TrajectoryRebuild& rebuild, const std::string& source, int64_t segment, int64_t utime) {
+    const auto& kfs = rebuild.keyframes();
+    Json points = Json::array();
+    auto it = kfs.lower_bound(segment * kSegment);
+    if (it != kfs.begin()) points.push_back(vec3(std::prev(it)->second.pose.position));
+    for (; it != kfs.end() && it->first < (segment + 1) * kSegment; ++it) points.push_back(vec3(it->second.pose.position));
+    Json e = entity(utime, source + "/trajectory/" + std::to_string(segment));
+    if (points.size() >= 2) e["lines"].push_back(line(kLineStrip, points, 0.05, color(0.1, 0.6, 1.0)));
+    return e;
+  }
+
   void trajectory(const sextant::trajectory_t& m, std::vector<ViewerMessage>& o) {
     auto& rebuild = trajectories[{m.sender, m.source}];
-    rebuild.add(runtime::to_output(m));
-    Json points = Json::array();
-    Eigen::Vector3d last = Eigen::Vector3d::Zero();
-    for (const auto& [id, k] : rebuild.keyframes()) {
-      points.push_back(vec3(k.pose.position));
-      last = k.pose.position;
+    const auto t = runtime::to_output(m);
+    std::set<int64_t> touched;  // segments whose strip changed (a change at a segment's end moves the next one's start)
+    auto touch = [&](int64_t id) {
+      touched.insert(id / kSegment);
+      touched.insert(id / kSegment + 1);
+    };
+    if (t.kind == engine::Trajectory::Kind::kSnapshot)  // the keyframes it may erase (its range can be open-ended)
+      for (auto it = rebuild.keyframes().lower_bound(t.range_first); it != rebuild.keyframes().end() && it->first <= t.range_last; ++it)
+        touch(it->first);
+    rebuild.add(t);
+    for (const auto& k : t.keyframes) touch(k.id);
+    for (int64_t id : t.removed_ids) touch(id);
+    Json entities = Json::array();
+    for (int64_t s : touched) entities.push_back(trajectory_segment(rebuild, m.source, s, m.utime));
+    if (!rebuild.keyframes().empty()) {
+      Json label = entity(m.utime, m.source + "/trajectory/label");
+      label["texts"].push_back(text(rebuild.keyframes().rbegin()->second.pose.position,
+                                    m.source + " (" + std::to_string(rebuild.keyframes().size()) + " keyframes)", color(1, 1, 1)));
+      entities.push_back(label);
     }
-    Json e = entity(m.utime, m.source + "/trajectory");
-    e["lines"].push_back(line(kLineStrip, points, 0.05, color(0.1, 0.6, 1.0)));
-    e["texts"].push_back(text(last, m.source + " (" + std::to_string(rebuild.keyframes().size()) + " keyframes)", color(1, 1, 1)));
-    out(o, "/sextant/trajectories", "foxglove.SceneUpdate", scene_update(Json::array({e})));
+    out(o, "/sextant/trajectories", "foxglove.SceneUpdate", scene_update(entities));
   }
 
   void targets(const sextant::targets_t& m, std::vector<ViewerMessage>& o) {

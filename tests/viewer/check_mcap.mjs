@@ -15,7 +15,8 @@ import { crc32 } from "@foxglove/crc";
 import foxgloveSchemas from "@foxglove/schemas/jsonschema.js";
 import Ajv from "ajv";
 import { decompress } from "fzstd";
-import { readFileSync } from "node:fs";
+import { createReadStream, readFileSync } from "node:fs";
+import { createInterface } from "node:readline";
 import { isDeepStrictEqual } from "node:util";
 
 const [mcapPath, jsonlPath] = process.argv.slice(2);
@@ -79,6 +80,7 @@ for (const [id, schema] of reader.schemasById) {
   }
   validators.set(id, checks);
 }
+const key = (e) => `${e.timestamp.toString().padStart(20, "0")} ${JSON.stringify(e.message ?? e.raw)}`;
 const textDecoder = new TextDecoder();
 const byLcmChannel = new Map();
 const validated = new Map();
@@ -101,17 +103,16 @@ for (const m of messages) {
   }
 }
 
-// 4. Channel by channel, the LCM log's messages.
+// 4. Channel by channel, the LCM log's messages (read line by line: a long run's log is larger than a string can be).
 const expected = new Map();
-for (const line of readFileSync(jsonlPath, "utf8").split("\n")) {
+for await (const line of createInterface({ input: createReadStream(jsonlPath), crlfDelay: Infinity })) {
   if (!line) continue;
   const e = JSON.parse(line);
   if (!expected.has(e.channel)) expected.set(e.channel, []);
-  expected.get(e.channel).push({ timestamp: BigInt(e.timestamp), ...(e.raw ? { raw: e.raw } : { message: e.message }) });
+  expected.get(e.channel).push(key({ timestamp: BigInt(e.timestamp), ...(e.raw ? { raw: e.raw } : { message: e.message }) }));
 }
-const key = (e) => `${e.timestamp.toString().padStart(20, "0")} ${JSON.stringify(e.message ?? e.raw)}`;
 for (const channel of new Set([...expected.keys(), ...byLcmChannel.keys()])) {
-  const want = (expected.get(channel) ?? []).map(key).sort(), got = (byLcmChannel.get(channel) ?? []).map(key).sort();
+  const want = (expected.get(channel) ?? []).sort(), got = (byLcmChannel.get(channel) ?? []).map(key).sort();
   if (want.length !== got.length) { fail(`${channel}: ${want.length} messages in the log, ${got.length} in the MCAP file`); continue; }
   const i = want.findIndex((w, k) => w !== got[k]);
   if (i >= 0) fail(`${channel}: message differs from the log's:\n  log:  ${want[i].slice(0, 300)}\n  mcap: ${got[i].slice(0, 300)}`);

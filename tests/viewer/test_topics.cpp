@@ -7,7 +7,10 @@
 #include <sextant/targets_t.hpp>
 #include <sextant/trajectory_t.hpp>
 
+#include <algorithm>
 #include <cmath>
+#include <limits>
+#include <map>
 
 using namespace sextant::viewer;
 
@@ -68,36 +71,73 @@ TEST_CASE("a fused pose: its as-is topic, a PoseInFrame and the frames map -> so
   CHECK(tf2["transforms"][0]["child_frame_id"] == "robot1/dead_reckoning");
 }
 
-TEST_CASE("trajectory messages rebuild each body's trajectory as trajectory_t.lcm says") {
-  TopicMapper mapper;
+namespace {
+
+sextant::trajectory_t trajectory_update(const std::vector<int64_t>& ids, double y) {
   sextant::trajectory_t t{};
   t.source = "robot1";
   t.estimator = "graph";
   t.kind = sextant::trajectory_t::UPDATE;
-  for (int i = 0; i < 3; ++i) {
+  for (int64_t id : ids) {
     sextant::keyframe_t k{};
-    k.id = i;
-    k.position[0] = i;
+    k.id = id;
+    k.position[0] = static_cast<double>(id);
+    k.position[1] = y;
     k.orientation[0] = 1;
     t.keyframes.push_back(k);
   }
-  t.num_keyframes = 3;
-  t.total_keyframes = 3;
-  map(mapper, "TRAJECTORY", t);
-  // A snapshot chunk for ids [0, 1] carrying only id 1 (moved) erases id 0.
-  sextant::trajectory_t s = t;
-  s.kind = sextant::trajectory_t::SNAPSHOT;
-  s.range_first = 0, s.range_last = 1;
-  s.keyframes = {t.keyframes[1]};
-  s.keyframes[0].position[1] = 5;
-  s.num_keyframes = 1;
-  const Json u = Json::parse(on(map(mapper, "TRAJECTORY", s), "/sextant/trajectories").data);
-  const auto& points = u["entities"][0]["lines"][0]["points"];
-  REQUIRE(points.size() == 2);
-  CHECK(points[0]["x"] == 1.0);
-  CHECK(points[0]["y"] == 5.0);
-  CHECK(points[1]["x"] == 2.0);
-  CHECK(u["entities"][0]["id"] == "robot1/trajectory");
+  t.num_keyframes = static_cast<int32_t>(t.keyframes.size());
+  return t;
+}
+
+/// The strips of one SceneUpdate by entity id, each as its points' x (= keyframe id) and y.
+std::map<std::string, std::vector<std::pair<double, double>>> strips(const Json& update) {
+  std::map<std::string, std::vector<std::pair<double, double>>> out;
+  for (const auto& e : update["entities"]) {
+    auto& pts = out[e["id"].get<std::string>()];
+    for (const auto& l : e["lines"])
+      for (const auto& p : l["points"]) pts.emplace_back(p["x"].get<double>(), p["y"].get<double>());
+  }
+  return out;
+}
+
+}  // namespace
+
+TEST_CASE("trajectory messages rebuild each body's trajectory as trajectory_t.lcm says, redrawing the segments they touch") {
+  TopicMapper mapper;
+  std::vector<int64_t> ids(600);
+  for (int64_t i = 0; i < 600; ++i) ids[static_cast<size_t>(i)] = i;
+  const auto first = strips(Json::parse(on(map(mapper, "TRAJECTORY", trajectory_update(ids, 0)), "/sextant/trajectories").data));
+  // 600 keyframes: segments [0,256), [256,512), [512,600), each strip joined to the previous one's last keyframe.
+  REQUIRE(first.count("robot1/trajectory/0"));
+  CHECK(first.at("robot1/trajectory/0").size() == 256);
+  CHECK(first.at("robot1/trajectory/1").size() == 257);
+  CHECK(first.at("robot1/trajectory/1").front().first == 255.0);
+  CHECK(first.at("robot1/trajectory/2").size() == 89);
+  CHECK(first.at("robot1/trajectory/2").back().first == 599.0);
+
+  // A snapshot chunk for ids [300, 310] carrying only 305 (moved): 300..310 but 305 are erased, and only segment 1
+  // (and the one after it, whose strip starts at segment 1's end) is redrawn.
+  auto snapshot = trajectory_update({305}, 7);
+  snapshot.kind = sextant::trajectory_t::SNAPSHOT;
+  snapshot.range_first = 300, snapshot.range_last = 310;
+  const auto second = strips(Json::parse(on(map(mapper, "TRAJECTORY", snapshot), "/sextant/trajectories").data));
+  CHECK_FALSE(second.count("robot1/trajectory/0"));
+  REQUIRE(second.count("robot1/trajectory/1"));
+  const auto& seg = second.at("robot1/trajectory/1");
+  CHECK(seg.size() == 257 - 10);
+  CHECK(std::count(seg.begin(), seg.end(), std::make_pair(305.0, 7.0)) == 1);
+  CHECK(std::none_of(seg.begin(), seg.end(), [](const auto& p) { return p.first >= 300 && p.first <= 310 && p.first != 305; }));
+  CHECK(second.count("robot1/trajectory/label"));
+
+  // An open-ended snapshot range (to the largest id) erases the keyframes from its start on, quickly.
+  auto tail = trajectory_update({}, 0);
+  tail.kind = sextant::trajectory_t::SNAPSHOT;
+  tail.range_first = 590, tail.range_last = std::numeric_limits<int64_t>::max();
+  const auto third = strips(Json::parse(on(map(mapper, "TRAJECTORY", tail), "/sextant/trajectories").data));
+  REQUIRE(third.count("robot1/trajectory/2"));
+  CHECK(third.at("robot1/trajectory/2").back().first == 589.0);
+  CHECK(third.size() == 3);  // segments 2 and 3, and the label
 }
 
 TEST_CASE("a target's ellipsoid has the 95 % diameters of its covariance along its principal axes") {
