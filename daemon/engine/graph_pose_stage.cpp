@@ -9,14 +9,6 @@ namespace sextant::engine {
 
 void GraphPoseStage::handle(const Event& e, const Emit& emit) {
   const auto& o = std::get<Odometry>(e);
-  auto [it, first] = last_utime_.try_emplace(o.source, o.utime);
-  if (!first) {
-    if (o.utime <= it->second) {
-      ++out_of_order_;
-      return;
-    }
-    it->second = o.utime;
-  }
   FusedPose out;
   out.utime = o.utime;
   out.source = o.source;
@@ -40,11 +32,11 @@ void GraphPoseStage::handle(const Event& e, const Emit& emit) {
 }
 
 void GraphPoseStage::save(archive::ArchiveWriter& w) {
-  w(last_utime_)(published_)(out_of_order_)(before_correction_)(correction_ages_)(static_cast<uint64_t>(age_next_));
+  w(published_)(before_correction_)(correction_ages_)(static_cast<uint64_t>(age_next_));
 }
 
 void GraphPoseStage::load(archive::ArchiveReader& r) {
-  r(last_utime_)(published_)(out_of_order_)(before_correction_)(correction_ages_);
+  r(published_)(before_correction_)(correction_ages_);
   age_next_ = static_cast<size_t>(r.get<uint64_t>());
   if (correction_ages_.size() > 1024 || (!correction_ages_.empty() && age_next_ >= correction_ages_.size()) ||
       (correction_ages_.empty() && age_next_ != 0))

@@ -26,9 +26,10 @@ struct StateSection {
   std::string bytes;  // what Stage::save wrote
 };
 
+/// Version 3: the graph pose stage keeps no per-body publication time (the publisher's rule is the only one).
 /// Version 2: the graph stage's section is the SLAM layer's state (estimators/slam/slam_graph.hpp) between the stage's
-/// counters and its per-body TRAJECTORY feeds; version 1 files are refused (another format version).
-inline constexpr uint32_t kStateFormatVersion = 2;
+/// counters and its per-body TRAJECTORY feeds.  Files of another version are refused.
+inline constexpr uint32_t kStateFormatVersion = 3;
 /// The state file inside a state directory.
 inline constexpr const char* kStateFileName = "sextantd.state";
 
