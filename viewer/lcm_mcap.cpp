@@ -17,10 +17,10 @@ McapWriterOptions with_library(McapWriterOptions o) {
   return o;
 }
 
-/// The utime of a sextant message in ns (replay::peek_utime); `fallback` for other bytes or a negative utime.
+/// The utime of a sextant message in ns (tools::peek_utime); `fallback` for other bytes or a negative utime.
 uint64_t publish_time(const uint8_t* data, size_t size, uint64_t fallback) {
   if (!lcm_json_type_of(data, size)) return fallback;
-  const auto us = replay::peek_utime(std::vector<uint8_t>(data, data + std::min<size_t>(size, 16)));
+  const auto us = tools::peek_utime(std::vector<uint8_t>(data, data + std::min<size_t>(size, 16)));
   return us && *us >= 0 ? static_cast<uint64_t>(*us) * 1000 : fallback;
 }
 
@@ -62,7 +62,7 @@ ReplayMcapRecorder::ReplayMcapRecorder(const std::string& log_path, const std::s
 
 void ReplayMcapRecorder::inputs_until(int64_t utime) {
   while (next_input_) {
-    const int64_t t = replay::peek_utime(next_input_->data).value_or(next_input_->timestamp);
+    const int64_t t = tools::peek_utime(next_input_->data).value_or(next_input_->timestamp);
     if (t > utime) return;
     recorder_.add(next_input_->channel, t, next_input_->data.data(), next_input_->data.size());
     next_input_ = inputs_.next();
