@@ -1,12 +1,18 @@
 // sextant convert g2o FILE -o OUT.lcm [--gt-out GT.txt] | mrclam DIR --robot N -o OUT.lcm [--gt-out GT.txt]
-//                 | tum GT.txt -o OUT.lcm [--seed N ...]
+//                 | tum GT.txt -o OUT.lcm [--seed N ...] | euroc DIR -o OUT.lcm [--gt-out GT.txt]
+//                 | rosbag FILE.bag -o OUT.lcm [--topic TOPIC=CHANNEL]... [--frame FRAME=BODY]... [--yaw-free TOPIC]...
 #include "cli/command.hpp"
+#include "convert/euroc_converter.hpp"
 #include "convert/g2o_converter.hpp"
 #include "convert/mrclam_converter.hpp"
-#include "eval/trajectory_io.hpp"
+#include "convert/rosbag/rosbag_converter.hpp"
 #include "convert/tum_converter.hpp"
+#include "eval/trajectory_io.hpp"
 
 #include <cstdio>
+#include <map>
+#include <stdexcept>
+#include <vector>
 
 namespace {
 
@@ -20,6 +26,65 @@ void guarded(const char* what, F&& f) {
     std::fprintf(stderr, "sextant convert %s: %s\n", what, e.what());
     throw CLI::RuntimeError(2);
   }
+}
+
+// "KEY=VALUE" arguments (--topic, --frame) as a map; std::invalid_argument naming the option for a malformed one.
+std::map<std::string, std::string> key_values(const std::vector<std::string>& args, const char* option) {
+  std::map<std::string, std::string> out;
+  for (const std::string& a : args) {
+    const size_t eq = a.find('=');
+    if (eq == std::string::npos || eq == 0 || eq + 1 == a.size())
+      throw std::invalid_argument(std::string(option) + " " + a + ": expected NAME=VALUE");
+    out[a.substr(0, eq)] = a.substr(eq + 1);
+  }
+  return out;
+}
+
+std::string counts(const std::map<std::string, int64_t>& m) {
+  std::string s;
+  for (const auto& [k, v] : m) s += (s.empty() ? "" : ", ") + k + " " + std::to_string(v);
+  return s.empty() ? "none" : s;
+}
+
+void add_euroc(CLI::App* cmd) {
+  auto* eu = cmd->add_subcommand("euroc", "a EuRoC MAV folder (ASL CSV: imu0, ground truth) -> imu_t samples and truth");
+  auto dir = std::make_shared<std::string>(), out = std::make_shared<std::string>(), gt = std::make_shared<std::string>();
+  auto opt = std::make_shared<EurocConversionOptions>();
+  eu->add_option("dir", *dir, "folder with imu0/data.csv (or mav0/imu0/data.csv)")->required()->check(CLI::ExistingDirectory);
+  eu->add_option("-o,--output", *out, "output LCM log")->required();
+  eu->add_option("--gt-out", *gt, "the ground truth as a TUM trajectory");
+  eu->add_option("--source", opt->source, "body name (imu_t.source)");
+  eu->add_option("--channel", opt->imu_channel, "IMU channel");
+  eu->callback([=] {
+    guarded("euroc", [&] {
+      const auto r = convert_euroc(*dir, *out, *gt, *opt);
+      std::printf("%s: %lld imu samples, %lld truth\n", out->c_str(), (long long)r.imu, (long long)r.truth);
+    });
+  });
+}
+
+void add_rosbag(CLI::App* cmd) {
+  auto* rb = cmd->add_subcommand("rosbag", "a ROS 1 bag (Imu, Odometry, NavSatFix, PoseWithCovarianceStamped) -> sextant's messages");
+  auto in = std::make_shared<std::string>(), out = std::make_shared<std::string>();
+  auto topics = std::make_shared<std::vector<std::string>>(), frames = std::make_shared<std::vector<std::string>>();
+  auto yaw_free = std::make_shared<std::vector<std::string>>();
+  rb->add_option("file", *in, "ROS 1 bag")->required()->check(CLI::ExistingFile);
+  rb->add_option("-o,--output", *out, "output LCM log")->required();
+  rb->add_option("--topic", *topics, "TOPIC=CHANNEL; when given, only the listed topics are converted (default: IMU, "
+                                     "ODOMETRY, GNSS by type)");
+  rb->add_option("--frame", *frames, "FRAME=BODY: a ROS frame_id's body name (default: the frame_id itself)");
+  rb->add_option("--yaw-free", *yaw_free, "an IMU topic whose orientation has no meaningful yaw");
+  rb->callback([=] {
+    guarded("rosbag", [&] {
+      RosbagConversionOptions o;
+      o.channels = key_values(*topics, "--topic");
+      o.bodies = key_values(*frames, "--frame");
+      o.yaw_free_topics.insert(yaw_free->begin(), yaw_free->end());
+      const auto r = convert_rosbag(*in, *out, o);
+      std::printf("%s: written %s; skipped %s; dropped (non-finite) %s\n", out->c_str(), counts(r.written).c_str(),
+                  counts(r.skipped).c_str(), counts(r.dropped).c_str());
+    });
+  });
 }
 
 sextant::cli::RegisterCommand reg{"convert", [](CLI::App& app) {
@@ -82,6 +147,9 @@ sextant::cli::RegisterCommand reg{"convert", [](CLI::App& app) {
       std::printf("%s: %lld odometry messages with ground truth\n", t_out->c_str(), (long long)r.odometry);
     });
   });
+
+  add_euroc(cmd);
+  add_rosbag(cmd);
 }};
 
 }  // namespace

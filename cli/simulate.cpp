@@ -36,6 +36,13 @@ sextant::cli::RegisterCommand reg{"simulate", [](CLI::App& app) {
   cmd->add_option("--odometry-rate", o->odometry_rate_hz, "Hz")->check(CLI::PositiveNumber);
   cmd->add_option("--odometry-noise", o->odometry_trans_noise, "translation noise, m per m travelled");
   cmd->add_option("--speed", o->speed, "m/s")->check(CLI::PositiveNumber);
+  cmd->add_option("--imu-rate", o->imu_rate_hz, "IMU samples on IMU, Hz (0: none)")->check(CLI::NonNegativeNumber);
+  cmd->add_option("--gnss-rate", o->gnss_rate_hz, "GNSS fixes on GNSS, Hz (0: none)")->check(CLI::NonNegativeNumber);
+  cmd->add_option("--gnss-outage", o->gnss.outage_duration_s, "seconds without GNSS at the end of every --gnss-outage-period")
+      ->check(CLI::NonNegativeNumber);
+  cmd->add_option("--gnss-outage-period", o->gnss.outage_period_s, "s")->check(CLI::NonNegativeNumber);
+  cmd->add_option("--gnss-outliers", o->gnss.outlier_probability, "probability of a multipath outlier per fix")
+      ->check(CLI::Range(0.0, 1.0));
   cmd->add_option("--loop-distance", o->loop_distance, "loop closures when the robot returns within this distance, m "
                   "(0: none, e.g. when a matcher answers the daemon's requests instead)")->check(CLI::NonNegativeNumber);
   cmd->callback([=] {
@@ -62,6 +69,9 @@ sextant::cli::RegisterCommand reg{"simulate", [](CLI::App& app) {
                 out->c_str(), (long long)s.odometry, (long long)s.landmark_messages,
                 (long long)s.landmark_observations, (long long)s.bearing_scans, (long long)s.detections,
                 (long long)s.false_alarms, (long long)s.loop_closures, (long long)s.truth, gt.c_str());
+    if (s.imu > 0 || s.gnss > 0)
+      std::printf("%lld IMU samples, %lld GNSS fixes (%lld multipath outliers)\n", (long long)s.imu, (long long)s.gnss,
+                  (long long)s.gnss_outliers);
   });
 }};
 

@@ -10,7 +10,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <map>
+#include <optional>
 #include <random>
 #include <span>
 #include <stdexcept>
@@ -80,7 +82,13 @@ class Simulation {
     for (size_t i = 0; i < o.clutter_region_min.size(); ++i)
       if (!(o.clutter_region_min[i] < o.clutter_region_max[i]))
         throw std::invalid_argument("clutter region: min must be below max on every axis (axis " + std::to_string(i) + ")");
+    if (o.imu_rate_hz < 0 || o.gnss_rate_hz < 0) throw std::invalid_argument("IMU and GNSS rates must not be negative");
     planar_ = o.scenario == Scenario::kPlanar;
+    if (o.imu_rate_hz > 0 || o.gnss_rate_hz > 0) {
+      imu_ = o.imu, gnss_ = o.gnss;
+      imu_.rate_hz = o.imu_rate_hz, gnss_.rate_hz = o.gnss_rate_hz;
+      inertial_.emplace([this](double t) { return truth_at(t); }, imu_, gnss_, o.seed ^ 0x1e27ULL);
+    }
   }
 
   SimulationSummary run() {
@@ -90,9 +98,11 @@ class Simulation {
     const auto period = [](double hz) { return static_cast<int64_t>(std::llround(1e6 / hz)); };
     // Event times of every stream, merged in time order (ties: truth, odometry, landmarks, scans, loops).
     int64_t next_odo = t0, next_lm = t0 + period(o_.landmark_rate_hz) / 2, next_scan = t0 + period(o_.scan_rate_hz) / 3;
+    const int64_t never = std::numeric_limits<int64_t>::max();
+    int64_t next_imu = o_.imu_rate_hz > 0 ? t0 : never, next_gnss = o_.gnss_rate_hz > 0 ? t0 : never;
     write_landmark_truth(t0);
     while (true) {
-      const int64_t t = std::min({next_odo, next_lm, next_scan});
+      const int64_t t = std::min({next_odo, next_lm, next_scan, next_imu, next_gnss});
       if (t > end) break;
       if (t == next_odo) {
         odometry_step(t);
@@ -106,6 +116,14 @@ class Simulation {
         scan_step(t);
         next_scan += period(o_.scan_rate_hz);
       }
+      if (t == next_imu) {
+        imu_step(t);
+        next_imu += period(o_.imu_rate_hz);
+      }
+      if (t == next_gnss) {
+        gnss_step(t);
+        next_gnss += period(o_.gnss_rate_hz);
+      }
     }
     return summary_;
   }
@@ -115,8 +133,10 @@ class Simulation {
   double uniform(double a, double b) { return std::uniform_real_distribution<double>(a, b)(rng_); }
 
   // True robot pose at time t.
-  Eigen::Isometry3d truth(int64_t utime) const {
-    const double s = o_.speed * static_cast<double>(utime - o_.start_utime) * 1e-6;
+  Eigen::Isometry3d truth(int64_t utime) const { return truth_at(static_cast<double>(utime - o_.start_utime) * 1e-6); }
+  // ... at t seconds after the start.
+  Eigen::Isometry3d truth_at(double t) const {
+    const double s = o_.speed * t;
     double x, y, yaw;
     course_.at(s, x, y, yaw);
     double z = 0, pitch = 0, roll = 0;
@@ -170,6 +190,22 @@ class Simulation {
     m.orientation[0] = q.w(), m.orientation[1] = q.x(), m.orientation[2] = q.y(), m.orientation[3] = q.z();
     out_.write(utime, "GROUND_TRUTH", m);
     ++summary_.truth;
+  }
+
+  double seconds(int64_t utime) const { return static_cast<double>(utime - o_.start_utime) * 1e-6; }
+
+  void imu_step(int64_t t) {
+    const ImuReading r = inertial_->imu(seconds(t));
+    out_.write(t, "IMU", InertialSensorSimulator::to_message(r, imu_, t, o_.source, seq_["IMU"]++));
+    ++summary_.imu;
+  }
+
+  void gnss_step(int64_t t) {
+    const auto r = inertial_->gnss(seconds(t));
+    if (!r) return;  // an outage
+    out_.write(t, "GNSS", InertialSensorSimulator::to_message(*r, gnss_, t, o_.source, seq_["GNSS"]++));
+    ++summary_.gnss;
+    summary_.gnss_outliers += r->outlier;
   }
 
   void write_landmark_truth(int64_t utime) {
@@ -329,6 +365,9 @@ class Simulation {
   std::mt19937_64 rng_;
   bool planar_ = true;
   Course course_;
+  SimulatedImuOptions imu_;     // o_.imu and o_.gnss with their rates
+  SimulatedGnssOptions gnss_;
+  std::optional<InertialSensorSimulator> inertial_;
   std::vector<Eigen::Vector3d> landmarks_, sensors_;
   std::vector<Target> targets_;
   std::vector<assoc::FieldOfView> clutter_view_;  // per sensor, with a clutter region

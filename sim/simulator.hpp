@@ -14,10 +14,15 @@
 //    no information.
 //  - LOOP_CLOSURES (loop_closure_t): when the robot comes back within `loop_distance` of a pose at least
 //    `loop_min_age_s` old, the true relative pose plus noise, with the matching information matrix.
+//  - IMU (imu_t) and GNSS (gnss_t), when their rates are positive: the robot's IMU (white noise, bias random walk,
+//    mounting) and GNSS receiver (noise, periodic outages, multipath outliers, fixes in latitude/longitude/altitude
+//    around `gnss.datum`), from the same true trajectory (sim/inertial_sensor_sim.hpp), with their own random
+//    stream so that the other streams do not change when they are switched on.
 //  - GROUND_TRUTH (truth_t): robot poses at the odometry rate, target positions per scan, landmarks once.
 // Deterministic for a seed: the same options give a byte-identical log.
 #include "daemon/engine/events.hpp"
 #include "daemon/runtime/lcm_log.hpp"
+#include "sim/inertial_sensor_sim.hpp"
 
 #include <cstdint>
 #include <string>
@@ -73,11 +78,16 @@ struct SimulationOptions {
   double loop_min_age_s = 20;     // s
   double loop_min_interval_s = 1; // s between two loop closures
   double loop_trans_sigma = 0.05, loop_rot_sigma = 0.01;
+
+  // IMU and GNSS (0 Hz: not simulated).  imu.rate_hz and gnss.rate_hz are set from these.
+  double imu_rate_hz = 0, gnss_rate_hz = 0;
+  SimulatedImuOptions imu;
+  SimulatedGnssOptions gnss;
 };
 
 struct SimulationSummary {
   int64_t odometry = 0, landmark_messages = 0, landmark_observations = 0, bearing_scans = 0, detections = 0,
-          false_alarms = 0, loop_closures = 0, truth = 0;
+          false_alarms = 0, loop_closures = 0, truth = 0, imu = 0, gnss = 0, gnss_outliers = 0;
   std::vector<std::pair<int64_t, engine::Pose>> robot_truth;  // (utime, pose), at the odometry rate
 };
 

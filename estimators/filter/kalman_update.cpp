@@ -18,7 +18,8 @@ constexpr std::pair<UpdateReason, const char*> kUpdateReasons[] = {
     {UpdateReason::kNoComponents, "no_components"},
     {UpdateReason::kNoTwist, "no_twist"},
     {UpdateReason::kUnknownLandmark, "unknown_landmark"},
-    {UpdateReason::kMapFull, "map_full"}};
+    {UpdateReason::kMapFull, "map_full"},
+    {UpdateReason::kTooOld, "too_old"}};
 }  // namespace
 
 const char* update_reason_name(UpdateReason reason) { return kind_name(kUpdateReasons, reason); }

@@ -22,9 +22,10 @@ enum class UpdateReason {
   kNoTwist,          // refused: velocities to fuse but no twist in the message or its predecessor
   kUnknownLandmark,  // refused: a landmark the state does not hold and may not add (not SLAM, or no id)
   kMapFull,          // refused: the state holds max_landmarks already
+  kTooOld,           // refused: stamped before the filter's history (inertial/lagged_eskf.hpp)
 };
 /// The reason's spelling for counters and logs: "none", "new_landmark", "gate", "non_finite", "singular",
-/// "no_components", "no_twist", "unknown_landmark", "map_full".
+/// "no_components", "no_twist", "unknown_landmark", "map_full", "too_old".
 const char* update_reason_name(UpdateReason reason);
 
 struct UpdateResult {
