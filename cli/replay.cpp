@@ -11,6 +11,7 @@
 #include "replay/realtime_player.hpp"
 #include "report/report.hpp"
 #include "eval/trajectory_io.hpp"
+#include "viewer/lcm_mcap.hpp"
 
 #include <algorithm>
 #include <cstdio>
@@ -21,7 +22,7 @@ namespace {
 using namespace sextant;
 
 struct Options {
-  std::string log, config, tum_out, kitti_out, g2o_out, out_log, estimator, report;
+  std::string log, config, tum_out, kitti_out, g2o_out, out_log, mcap_out, estimator, report;
   bool json = false;
   bool realtime = false;
   bool tolerate_damage = false;
@@ -137,6 +138,8 @@ void add_options(CLI::App* cmd, Options& o) {
   cmd->add_option("--kitti-out", o.kitti_out, "the same as KITTI 3x4 poses");
   cmd->add_option("--g2o-out", o.g2o_out, "the same as a g2o graph");
   cmd->add_option("--out-log", o.out_log, "write everything the engine published to an LCM log");
+  cmd->add_option("--mcap-out", o.mcap_out, "write the log's inputs and everything published to an MCAP file for "
+                                            "Foxglove (the topics of `sextant foxglove`)");
   cmd->add_option("--estimator", o.estimator, "which estimator's poses to export (default: the primary)");
   cmd->add_flag("--json", o.json, "print a JSON summary on stdout");
   cmd->add_option("--segment-seconds", o.segment_seconds,
@@ -171,17 +174,18 @@ config::DaemonConfig load_config(const Options& o) {
 }
 
 // The files the replay streams its outputs into as it goes (memory keeps bounded samples for the report and the
-// summary): everything published into --out-log, the exported estimator's poses into the trajectory files.  The
-// callbacks it installs refer to it: it stays in place until closed.
+// summary): everything published into --out-log and, with the log's inputs, into --mcap-out; the exported
+// estimator's poses into the trajectory files.  The callbacks it installs refer to it: it stays in place until closed.
 class StreamedOutputs {
  public:
   StreamedOutputs(const Options& o, const config::DaemonConfig& cfg, tools::ReplayOptions& ro) {
-    if (!o.out_log.empty()) {
-      out_log_ = std::make_unique<runtime::LogWriter>(o.out_log);
+    if (!o.out_log.empty()) out_log_ = std::make_unique<runtime::LogWriter>(o.out_log);
+    if (!o.mcap_out.empty()) mcap_ = std::make_unique<viewer::ReplayMcapRecorder>(o.log, o.mcap_out);
+    if (out_log_ || mcap_)
       ro.on_publish = [this](const std::string& channel, const std::vector<uint8_t>& bytes, int64_t utime) {
-        out_log_->write_raw(utime, channel, bytes.data(), bytes.size());
+        if (out_log_) out_log_->write_raw(utime, channel, bytes.data(), bytes.size());
+        if (mcap_) mcap_->published(channel, bytes, utime);
       };
-    }
     if (!o.tum_out.empty()) writers_.push_back(std::make_unique<tools::TrajectoryWriter>(o.tum_out, tools::TrajectoryFormat::kTum));
     if (!o.kitti_out.empty()) writers_.push_back(std::make_unique<tools::TrajectoryWriter>(o.kitti_out, tools::TrajectoryFormat::kKitti));
     if (!o.g2o_out.empty()) writers_.push_back(std::make_unique<tools::TrajectoryWriter>(o.g2o_out, tools::TrajectoryFormat::kG2o));
@@ -200,10 +204,12 @@ class StreamedOutputs {
   void close() {
     for (auto& w : writers_) w->close();
     if (out_log_) out_log_->flush();
+    if (mcap_) mcap_->close();
   }
 
  private:
   std::unique_ptr<runtime::LogWriter> out_log_;
+  std::unique_ptr<viewer::ReplayMcapRecorder> mcap_;
   std::vector<std::unique_ptr<tools::TrajectoryWriter>> writers_;
   std::string export_estimator_;
 };

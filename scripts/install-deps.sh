@@ -11,6 +11,7 @@ packages=(
   iproute2 util-linux procps python3
   pybind11-dev python3-dev python3-pytest   # the sextant Python module and its tests
   chromium   # the report test renders the HTML report in headless Chromium
+  libzstd-dev zlib1g-dev libboost-dev nlohmann-json3-dev   # viewer/: MCAP chunks and CRCs, the Foxglove bridge, JSON
   # `sextant convert rosbag`: ROS 1's bag reader and message headers (cmake/rosbag.cmake says why the ROS 2
   # pluginlib and class_loader headers are here); python3-rosbag is the test's independent reader.
   librosbag-storage-dev libsensor-msgs-dev libnav-msgs-dev libgeometry-msgs-dev
@@ -21,18 +22,23 @@ if [[ "${SEXTANT_WITH_BENCH:-0}" == 1 ]]; then packages+=(libceres-dev libopenbl
 # `make fuzz`: clang with libFuzzer and the sanitizer runtimes.
 if [[ "${SEXTANT_WITH_FUZZ:-0}" == 1 ]]; then packages+=(clang libclang-rt-dev); fi
 
+# The reference-client tests (tests/viewer/) run on Node.js; a machine whose node comes from elsewhere keeps it.
+if ! command -v node >/dev/null || ! command -v npm >/dev/null; then packages+=(nodejs npm); fi
+
 missing=()
 for p in "${packages[@]}"; do
   if ! dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed"; then
     missing+=("$p")
   fi
 done
-[[ ${#missing[@]} -eq 0 ]] && exit 0
-
-if [[ $(id -u) -eq 0 ]]; then sudo=(); elif command -v sudo >/dev/null; then sudo=(sudo); else
-  echo "install-deps: missing packages: ${missing[*]}; run as root or install sudo" >&2; exit 1
+if [[ ${#missing[@]} -gt 0 ]]; then
+  if [[ $(id -u) -eq 0 ]]; then sudo=(); elif command -v sudo >/dev/null; then sudo=(sudo); else
+    echo "install-deps: missing packages: ${missing[*]}; run as root or install sudo" >&2; exit 1
+  fi
+  echo "install-deps: installing ${missing[*]}"
+  export DEBIAN_FRONTEND=noninteractive
+  "${sudo[@]}" apt-get update -qq
+  "${sudo[@]}" apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
 fi
-echo "install-deps: installing ${missing[*]}"
-export DEBIAN_FRONTEND=noninteractive
-"${sudo[@]}" apt-get update -qq
-"${sudo[@]}" apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
+# npm packages of the reference-client tests, pinned by tests/viewer/package-lock.json.
+"$(dirname "$0")/install-node-deps.sh"

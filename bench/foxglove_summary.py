@@ -1,0 +1,67 @@
+"""The table of bench/foxglove.sh: bench/foxglove_summary.py OUT RUN (RUN: the MCAP run's path prefix)."""
+import json
+import os
+import re
+import statistics
+import sys
+
+
+def pct(values, p):
+    v = sorted(values)
+    return v[min(len(v) - 1, max(0, round(p * len(v)) - 1))] if v else float("nan")
+
+
+def client_lines(bridge_log):
+    """Each client's last counters in the bridge's periodic stats: address -> (sent, dropped, queue max)."""
+    last = {}
+    for m in re.finditer(r"client (\S+): \d+ subscriptions, (\d+) sent, (\d+) dropped \(queue now \d+, at most (\d+)\)",
+                         open(bridge_log).read()):
+        last[m.group(1)] = tuple(int(x) for x in m.groups()[1:])
+    return last
+
+
+def bridge_row(out, name, label):
+    d = os.path.join(out, name)
+    viewers = [json.load(open(os.path.join(d, f))) for f in sorted(os.listdir(d)) if re.match(r"viewer\d+\.json", f)]
+    lat = [x for v in viewers for x in v["latencies_ms"]]
+    ticks, hz, t0, t1 = open(os.path.join(d, "cpu.txt")).read().split()
+    cpu = 100 * int(ticks) / int(hz) / (float(t1) - float(t0))
+    received = [v["counts"].get("FUSED_POSE", 0) for v in viewers]
+    clients = client_lines(os.path.join(d, "bridge.log"))
+    dropped = sorted(c[1] for c in clients.values())
+    queue = max((c[2] for c in clients.values()), default=0)
+    return (f"| {label} | {len(viewers)} | {pct(lat, 0.5):.2f} | {pct(lat, 0.99):.2f} | {cpu:.1f} | "
+            f"{min(received)}–{max(received)} of 30000 | {', '.join(map(str, dropped))} | {queue} |")
+
+
+def mcap_row(log, label):
+    text = open(log + ".convert.txt").read()
+    m = re.search(r"(\d+) LCM events .* -> (\d+) MCAP messages on (\d+) channels in (\d+) chunks; ([\d.]+) MB -> ([\d.]+) MB "
+                  r"\(([\d.]+)x\) in ([\d.]+) s \(([\d.]+) MB/s", text)
+    check = open(log + ".check.txt").read().strip().splitlines()
+    ok = "ok" if check and check[-1] == "ok" else "FAILED: " + " ".join(check[-3:])
+    return f"| {label} | {m[1]} | {m[5]} | {m[6]} ({m[7]}x smaller) | {m[4]} | {m[8]} | {m[9]} | {ok} |"
+
+
+def main():
+    out, run = sys.argv[1], sys.argv[2]
+    print("Bridge: 10 bodies x 100 Hz FUSED_POSE + TRAJECTORY (1 Hz per body) + SEXTANT_STATUS (1 Hz), 30 s played by "
+          "`sextant replay --realtime` on a namespace bus; viewers: tests/viewer/bridge_client.mjs --bench "
+          "(@foxglove/ws-protocol).  Latency: viewer receive time - bridge receive time, every FUSED_POSE of every viewer. "
+          "CPU: the bridge process's user+system time over the playing time.\n")
+    print("| case | viewers | added latency p50 (ms) | p99 (ms) | bridge CPU (% of a core) | FUSED_POSE received per viewer | "
+          "dropped per client (bridge) | largest client queue |")
+    print("|---|---|---|---|---|---|---|---|")
+    print(bridge_row(out, "one_viewer", "one viewer"))
+    print(bridge_row(out, "ten_viewers", "ten viewers"))
+    print(bridge_row(out, "stalled_viewer", "one viewer + one stalled"))
+    print("\nMCAP: `sextant convert mcap` (zstd level 3, 1 MiB chunks) of a 60-minute planar run, checked by "
+          "tests/viewer/check_mcap.mjs (@mcap/core indexed + stream readers, CRCs, statistics, every message against the log).\n")
+    print("| log | LCM events | LCM MB | MCAP MB | chunks | seconds | MB/s of LCM log | reference reader |")
+    print("|---|---|---|---|---|---|---|---|")
+    print(mcap_row(run + ".out", "daemon outputs (replay --out-log)"))
+    print(mcap_row(run, "inputs (simulated run)"))
+
+
+if __name__ == "__main__":
+    main()

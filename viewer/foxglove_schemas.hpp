@@ -1,0 +1,13 @@
+#pragma once
+// The Foxglove message schemas sextant's views use, as JSON Schema text: foxglove.PoseInFrame,
+// foxglove.FrameTransforms and foxglove.SceneUpdate, from viewer/schemas/ (copied from @foxglove/schemas 2.1, MIT;
+// tests/viewer/ checks that they equal the reference package's).  Compiled in at build time.
+#include <map>
+#include <string>
+
+namespace sextant::viewer {
+
+/// Schema name ("foxglove.PoseInFrame") -> its JSON Schema.
+const std::map<std::string, std::string>& foxglove_schema_texts();
+
+}  // namespace sextant::viewer

@@ -1,0 +1,285 @@
+#include "viewer/topics.hpp"
+
+#include "daemon/engine/trajectory_rebuild.hpp"
+#include "daemon/runtime/codec.hpp"
+#include "daemon/runtime/wire_layout.hpp"
+#include "viewer/foxglove_schemas.hpp"
+
+#include <Eigen/Eigenvalues>
+#include <Eigen/Geometry>
+
+#include <cmath>
+#include <exception>
+#include <set>
+
+namespace sextant::viewer {
+namespace {
+
+// ---- Foxglove JSON building blocks ----
+Json stamp(int64_t utime) {
+  const int64_t us = std::max<int64_t>(utime, 0);
+  return Json{{"sec", us / 1000000}, {"nsec", (us % 1000000) * 1000}};
+}
+Json vec3(double x, double y, double z) { return Json{{"x", x}, {"y", y}, {"z", z}}; }
+Json vec3(const Eigen::Vector3d& v) { return vec3(v.x(), v.y(), v.z()); }
+Json quat(const Eigen::Quaterniond& q) { return Json{{"x", q.x()}, {"y", q.y()}, {"z", q.z()}, {"w", q.w()}}; }
+Json pose(const Eigen::Vector3d& p, const Eigen::Quaterniond& q = Eigen::Quaterniond::Identity()) {
+  return Json{{"position", vec3(p)}, {"orientation", quat(q)}};
+}
+Json color(double r, double g, double b, double a = 1) { return Json{{"r", r}, {"g", g}, {"b", b}, {"a", a}}; }
+Eigen::Vector3d vec(const double* p) { return {p[0], p[1], p[2]}; }
+Eigen::Quaterniond quat_wxyz(const double* q) { return Eigen::Quaterniond(q[0], q[1], q[2], q[3]).normalized(); }
+
+/// A SceneEntity in the map frame with every primitive list present (the schema requires them all) and empty.
+Json entity(int64_t utime, const std::string& id) {
+  Json e{{"timestamp", stamp(utime)}, {"frame_id", "map"}, {"id", id}, {"lifetime", Json{{"sec", 0}, {"nsec", 0}}},
+         {"frame_locked", false}, {"metadata", Json::array()}};
+  for (const char* k : {"arrows", "cubes", "spheres", "cylinders", "lines", "triangles", "texts", "models"}) e[k] = Json::array();
+  return e;
+}
+Json scene_update(Json entities) { return Json{{"deletions", Json::array()}, {"entities", std::move(entities)}}; }
+Json text(const Eigen::Vector3d& at, const std::string& s, const Json& c) {
+  return Json{{"pose", pose(at)}, {"billboard", true}, {"font_size", 14.0}, {"scale_invariant", true}, {"color", c}, {"text", s}};
+}
+Json line(int type, const Json& points, double thickness, const Json& c) {
+  return Json{{"type", type}, {"pose", pose(Eigen::Vector3d::Zero())}, {"thickness", thickness}, {"scale_invariant", false},
+              {"points", points}, {"color", c}, {"colors", Json::array()}, {"indices", Json::array()}};
+}
+Json sphere(const Eigen::Vector3d& at, const Eigen::Vector3d& size, const Json& c,
+            const Eigen::Quaterniond& q = Eigen::Quaterniond::Identity()) {
+  return Json{{"pose", pose(at, q)}, {"size", vec3(size)}, {"color", c}};
+}
+constexpr int kLineStrip = 0, kLineList = 2;
+
+int estimator_rank(const std::string& e) {  // higher is better: the body's frame follows its best estimator
+  return e == "graph" ? 4 : e == "ekf" ? 3 : e == "pf" ? 2 : e == "dead_reckoning" ? 1 : 0;
+}
+
+/// The 95 % ellipsoid of a 3x3 covariance: its diameters along the principal axes and their orientation.
+void ellipsoid(const double* cov, Eigen::Vector3d& size, Eigen::Quaterniond& q) {
+  const Eigen::Matrix3d c = Eigen::Map<const Eigen::Matrix<double, 3, 3, Eigen::RowMajor>>(cov);
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(0.5 * (c + c.transpose()));
+  Eigen::Matrix3d axes = es.eigenvectors();
+  if (axes.determinant() < 0) axes.col(2) = -axes.col(2);
+  constexpr double kChi2_3dof_95 = 7.814727903251178;
+  for (int i = 0; i < 3; ++i) size[i] = 2 * std::sqrt(kChi2_3dof_95 * std::max(es.eigenvalues()[i], 0.0));
+  q = Eigen::Quaterniond(axes);
+}
+
+template <class Msg>
+bool decode(const uint8_t* data, size_t size, Msg& m) {
+  return !runtime::safe_decode(data, size, m);
+}
+
+}  // namespace
+
+const TopicSchema* topic_schema(const std::string& name) {
+  static const std::map<std::string, TopicSchema> schemas = [] {
+    std::map<std::string, TopicSchema> s;
+    for (const auto& t : lcm_json_types()) s[t.name] = {t.name, "jsonschema", t.schema};
+    for (const auto& [n, text] : foxglove_schema_texts()) s[n] = {n, "jsonschema", text};
+    return s;
+  }();
+  const auto it = schemas.find(name);
+  return it == schemas.end() ? nullptr : &it->second;
+}
+
+/// The Foxglove views and the state they need.
+struct TopicMapper::Views {
+  TopicMapperOptions options;
+  struct BodyPose {
+    int rank = 0;
+    Eigen::Vector3d position = Eigen::Vector3d::Zero();
+    Eigen::Quaterniond orientation = Eigen::Quaterniond::Identity();
+  };
+  std::map<std::string, BodyPose> bodies;  // by source: its best estimator's latest pose
+  std::map<std::pair<std::string, std::string>, engine::TrajectoryRebuild> trajectories;  // by (sender, source)
+
+  void out(std::vector<ViewerMessage>& o, std::string topic, const char* schema, const Json& j) {
+    o.push_back({std::move(topic), topic_schema(schema), "json", "", j.dump()});
+  }
+
+  void fused_pose(const sextant::fused_pose_t& m, std::vector<ViewerMessage>& o) {
+    const Eigen::Vector3d p = vec(m.position);
+    const Eigen::Quaterniond q = quat_wxyz(m.orientation);
+    out(o, "/sextant/" + m.source + "/" + m.estimator + "/pose", "foxglove.PoseInFrame",
+        Json{{"timestamp", stamp(m.utime)}, {"frame_id", "map"}, {"pose", pose(p, q)}});
+    auto transform = [&](const std::string& child) {
+      return Json{{"timestamp", stamp(m.utime)}, {"parent_frame_id", "map"}, {"child_frame_id", child},
+                  {"translation", vec3(p)}, {"rotation", quat(q)}};
+    };
+    Json transforms = Json::array({transform(m.source + "/" + m.estimator)});
+    auto& body = bodies[m.source];
+    if (estimator_rank(m.estimator) >= body.rank) {
+      body = {estimator_rank(m.estimator), p, q};
+      transforms.push_back(transform(m.source));
+    }
+    out(o, "/tf", "foxglove.FrameTransforms", Json{{"transforms", transforms}});
+  }
+
+  /// A body's trajectory is drawn in segments of kSegment keyframe ids (entity "<source>/trajectory/<k>", each
+  /// strip starting at the last keyframe before its range so that the strips join), and a message redraws only the
+  /// segments whose keyframes it touched: a lifelong trajectory of thousands of keyframes costs a message what its
+  /// changes cost, not the whole trajectory.
+  static constexpr int64_t kSegment = 256;
+
+  Json trajectory_segment(const engine::TrajectoryRebuild& rebuild, const std::string& source, int64_t segment, int64_t utime) {
+    const auto& kfs = rebuild.keyframes();
+    Json points = Json::array();
+    auto it = kfs.lower_bound(segment * kSegment);
+    if (it != kfs.begin()) points.push_back(vec3(std::prev(it)->second.pose.position));
+    for (; it != kfs.end() && it->first < (segment + 1) * kSegment; ++it) points.push_back(vec3(it->second.pose.position));
+    Json e = entity(utime, source + "/trajectory/" + std::to_string(segment));
+    if (points.size() >= 2) e["lines"].push_back(line(kLineStrip, points, 0.05, color(0.1, 0.6, 1.0)));
+    return e;
+  }
+
+  void trajectory(const sextant::trajectory_t& m, std::vector<ViewerMessage>& o) {
+    auto& rebuild = trajectories[{m.sender, m.source}];
+    const auto t = runtime::to_output(m);
+    std::set<int64_t> touched;  // segments whose strip changed (a change at a segment's end moves the next one's start)
+    auto touch = [&](int64_t id) {
+      touched.insert(id / kSegment);
+      touched.insert(id / kSegment + 1);
+    };
+    if (t.kind == engine::Trajectory::Kind::kSnapshot)  // the keyframes it may erase (its range can be open-ended)
+      for (auto it = rebuild.keyframes().lower_bound(t.range_first); it != rebuild.keyframes().end() && it->first <= t.range_last; ++it)
+        touch(it->first);
+    rebuild.add(t);
+    for (const auto& k : t.keyframes) touch(k.id);
+    for (int64_t id : t.removed_ids) touch(id);
+    Json entities = Json::array();
+    for (int64_t s : touched) entities.push_back(trajectory_segment(rebuild, m.source, s, m.utime));
+    if (!rebuild.keyframes().empty()) {
+      Json label = entity(m.utime, m.source + "/trajectory/label");
+      label["texts"].push_back(text(rebuild.keyframes().rbegin()->second.pose.position,
+                                    m.source + " (" + std::to_string(rebuild.keyframes().size()) + " keyframes)", color(1, 1, 1)));
+      entities.push_back(label);
+    }
+    out(o, "/sextant/trajectories", "foxglove.SceneUpdate", scene_update(entities));
+  }
+
+  void targets(const sextant::targets_t& m, std::vector<ViewerMessage>& o) {
+    Json e = entity(m.utime, "targets/" + m.sender);
+    for (size_t i = 0; i < m.targets.size(); ++i) {
+      Eigen::Vector3d size;
+      Eigen::Quaterniond q;
+      ellipsoid(m.targets[i].covariance, size, q);
+      const Eigen::Vector3d p = vec(m.targets[i].position);
+      e["spheres"].push_back(sphere(p, size, color(1.0, 0.3, 0.2, 0.5), q));
+      e["texts"].push_back(text(p, "target " + std::to_string(i), color(1.0, 0.5, 0.4)));
+    }
+    out(o, "/sextant/targets", "foxglove.SceneUpdate", scene_update(Json::array({e})));
+  }
+
+  void bearings(const sextant::bearing_scan_t& m, std::vector<ViewerMessage>& o) {
+    const Eigen::Vector3d s = vec(m.sensor_position);
+    Json e = entity(m.utime, "sensor/" + std::to_string(m.sensor_id));
+    e["cubes"].push_back(Json{{"pose", pose(s)}, {"size", vec3(0.6, 0.6, 0.6)}, {"color", color(0.9, 0.8, 0.1)}});
+    e["texts"].push_back(text(s, "sensor " + std::to_string(m.sensor_id), color(0.9, 0.8, 0.1)));
+    Json rays = Json::array();
+    for (const auto& d : m.detections) {
+      const Eigen::Vector3d dir(std::cos(d.elevation) * std::cos(d.azimuth), std::cos(d.elevation) * std::sin(d.azimuth),
+                                std::sin(d.elevation));
+      rays.push_back(vec3(s));
+      rays.push_back(vec3(s + options.bearing_ray_length_m * dir));
+    }
+    e["lines"].push_back(line(kLineList, rays, 0.03, color(0.9, 0.8, 0.1, 0.7)));
+    out(o, "/sextant/bearings", "foxglove.SceneUpdate", scene_update(Json::array({e})));
+  }
+
+  void landmarks(const sextant::landmarks_t& m, std::vector<ViewerMessage>& o) {
+    const auto body = bodies.find(m.source);
+    if (body == bodies.end()) return;  // no pose of the body yet: nowhere to place its sightings
+    const Eigen::Isometry3d map_body = Eigen::Translation3d(body->second.position) * body->second.orientation;
+    const Eigen::Isometry3d map_sensor = map_body * (Eigen::Translation3d(vec(m.sensor_position)) * quat_wxyz(m.sensor_orientation));
+    Json e = entity(m.utime, m.source + "/sightings");
+    Json rays = Json::array();
+    for (const auto& s : m.observations) {
+      const double el = m.planar ? 0.0 : s.elevation;
+      const Eigen::Vector3d in_sensor = s.range * Eigen::Vector3d(std::cos(el) * std::cos(s.azimuth), std::cos(el) * std::sin(s.azimuth), std::sin(el));
+      const Eigen::Vector3d p = map_sensor * in_sensor;
+      rays.push_back(vec3(map_sensor.translation()));
+      rays.push_back(vec3(p));
+      e["spheres"].push_back(sphere(p, Eigen::Vector3d::Constant(0.3), color(0.3, 1.0, 0.3)));
+    }
+    e["lines"].push_back(line(kLineList, rays, 0.02, color(0.3, 1.0, 0.3, 0.6)));
+    out(o, "/sextant/landmarks", "foxglove.SceneUpdate", scene_update(Json::array({e})));
+  }
+
+  void truth(const sextant::truth_t& m, std::vector<ViewerMessage>& o) {
+    if (m.kind == "robot") {
+      out(o, "/sextant/" + m.source + "/truth/pose", "foxglove.PoseInFrame",
+          Json{{"timestamp", stamp(m.utime)}, {"frame_id", "map"}, {"pose", pose(vec(m.position), quat_wxyz(m.orientation))}});
+      return;
+    }
+    const std::string id = m.kind + " " + std::to_string(m.id);
+    Json e = entity(m.utime, "truth/" + id);
+    e["spheres"].push_back(sphere(vec(m.position), Eigen::Vector3d::Constant(0.5), color(0.7, 0.7, 0.7, 0.8)));
+    e["texts"].push_back(text(vec(m.position), id, color(0.8, 0.8, 0.8)));
+    out(o, "/sextant/truth", "foxglove.SceneUpdate", scene_update(Json::array({e})));
+  }
+
+  /// The Foxglove views of one message of a known type.
+  void add(const LcmJsonType& type, const uint8_t* data, size_t size, std::vector<ViewerMessage>& o) {
+    if (type.name == "sextant.fused_pose_t") {
+      sextant::fused_pose_t m;
+      if (decode(data, size, m)) fused_pose(m, o);
+    } else if (type.name == "sextant.trajectory_t") {
+      sextant::trajectory_t m;
+      if (decode(data, size, m)) trajectory(m, o);
+    } else if (type.name == "sextant.targets_t") {
+      sextant::targets_t m;
+      if (decode(data, size, m)) targets(m, o);
+    } else if (type.name == "sextant.bearing_scan_t") {
+      sextant::bearing_scan_t m;
+      if (decode(data, size, m)) bearings(m, o);
+    } else if (type.name == "sextant.landmarks_t") {
+      sextant::landmarks_t m;
+      if (decode(data, size, m)) landmarks(m, o);
+    } else if (type.name == "sextant.truth_t") {
+      sextant::truth_t m;
+      if (decode(data, size, m)) truth(m, o);
+    }
+  }
+};
+
+TopicMapper::TopicMapper(TopicMapperOptions options) : options_(options), views_(std::make_unique<Views>()) {
+  views_->options = options;
+}
+TopicMapper::~TopicMapper() = default;
+TopicMapper::TopicMapper(TopicMapper&&) noexcept = default;
+TopicMapper& TopicMapper::operator=(TopicMapper&&) noexcept = default;
+
+void TopicMapper::map(const std::string& channel, const uint8_t* data, size_t size, std::vector<ViewerMessage>& out) {
+  ++counts_.messages;
+  const LcmJsonType* type = lcm_json_type_of(data, size);
+  std::optional<std::string> json;
+  if (type) {
+    if (auto j = type->decode(data, size, nullptr)) {
+      try {
+        json = j->dump();  // throws on a string that is not UTF-8
+        if (options_.check_round_trip) {
+          const auto bytes = type->encode(*j);
+          if (bytes.size() != size || !std::equal(bytes.begin(), bytes.end(), data)) json.reset();
+        }
+      } catch (const std::exception&) {
+        json.reset();
+      }
+    }
+  }
+  if (!json) {
+    ++counts_.raw;
+    if (options_.keep_raw)
+      out.push_back({"lcm_raw/" + channel, nullptr, "lcm", channel, std::string(reinterpret_cast<const char*>(data), size)});
+    return;
+  }
+  out.push_back({channel, topic_schema(type->name), "json", channel, std::move(*json)});
+  try {
+    views_->add(*type, data, size, out);
+  } catch (const std::exception&) {
+    ++counts_.view_errors;
+  }
+}
+
+}  // namespace sextant::viewer

@@ -1,0 +1,87 @@
+#pragma once
+// What sextant's LCM channels look like in Foxglove: the one mapping from LCM messages to viewer topics and schemas,
+// shared by the live bridge (`sextant foxglove`) and the MCAP files (`sextant convert mcap`, `replay --mcap-out`), so
+// both show the same scene.  Every message is JSON with a JSON Schema.
+//
+//   LCM message (any channel)   topic                               schema
+//   every sextant type          the LCM channel, as-is              sextant.<type> (generated from its .lcm file)
+//   fused_pose_t                /sextant/<source>/<estimator>/pose  foxglove.PoseInFrame (frame "map")
+//                               /tf                                 foxglove.FrameTransforms: map -> <source>/<estimator>,
+//                                                                   and map -> <source> from its best estimator so far
+//                                                                   (graph, then ekf, pf, dead_reckoning)
+//   trajectory_t                /sextant/trajectories               foxglove.SceneUpdate: each body's optimized trajectory
+//                                                                   rebuilt as trajectory_t.lcm says, a line strip + label
+//   targets_t                   /sextant/targets                    foxglove.SceneUpdate: 95 % covariance ellipsoids + labels
+//   bearing_scan_t              /sextant/bearings                   foxglove.SceneUpdate: the sensor (cube) and a ray per detection
+//   landmarks_t                 /sextant/landmarks                  foxglove.SceneUpdate: each sighting placed from the body's
+//                                                                   current pose (rays and points)
+//   truth_t                     /sextant/truth (landmark, target)   foxglove.SceneUpdate: spheres
+//                               /sextant/<source>/truth/pose        foxglove.PoseInFrame (robot)
+//   SEXTANT_STATUS (status_t) is its as-is topic: counters and latencies plot as /SEXTANT_STATUS.stages[:]{name=="graph"}...
+// A message whose bytes are not a sextant type (unknown fingerprint, malformed) has no JSON form: MCAP files keep it
+// as raw LCM bytes on the topic "lcm_raw/<channel>" (message encoding "lcm", no schema) so that converting back
+// loses nothing; the bridge counts and drops it.
+#include "viewer/lcm_json.hpp"
+
+#include <cstdint>
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace sextant::viewer {
+
+struct TopicSchema {
+  std::string name;      // "foxglove.PoseInFrame", "sextant.fused_pose_t"
+  std::string encoding;  // "jsonschema"
+  std::string data;      // the schema text
+};
+
+/// One message for a viewer.
+struct ViewerMessage {
+  std::string topic;
+  const TopicSchema* schema = nullptr;  // nullptr for raw LCM bytes
+  std::string encoding;                 // "json", or "lcm" for raw bytes
+  std::string lcm_channel;              // the LCM channel when this is a channel's as-is (or raw) form, else ""
+  std::string data;                     // the payload
+};
+
+/// The schema of each sextant type and each Foxglove schema used, by name; nullptr when unknown.
+const TopicSchema* topic_schema(const std::string& name);
+
+struct TopicMapperOptions {
+  /// Keep messages without a JSON form as raw LCM bytes (MCAP files) instead of dropping them (the bridge).
+  bool keep_raw = false;
+  /// Check that the JSON form converts back to the same bytes; a message that does not (a string that is not
+  /// UTF-8) is kept raw.  MCAP files turn it on so that `convert lcm` is exact.
+  bool check_round_trip = false;
+  double bearing_ray_length_m = 60;  // how far a bearing ray is drawn from its sensor
+};
+
+struct TopicMapperCounts {
+  int64_t messages = 0;    // LCM messages mapped
+  int64_t raw = 0;         // without a JSON form: kept raw (keep_raw) or dropped
+  int64_t view_errors = 0; // a Foxglove view that could not be built (the as-is topic still went out)
+};
+
+/// Turns LCM messages into viewer messages, in the order they arrive.  Stateful: trajectories are rebuilt, each
+/// body's latest pose places its landmark sightings.  One per output (a bridge, a file); not thread-safe.
+class TopicMapper {
+ public:
+  explicit TopicMapper(TopicMapperOptions options = {});
+  ~TopicMapper();
+  TopicMapper(TopicMapper&&) noexcept;
+  TopicMapper& operator=(TopicMapper&&) noexcept;
+
+  /// Appends to `out` what the LCM message `data` on `channel` becomes.
+  void map(const std::string& channel, const uint8_t* data, size_t size, std::vector<ViewerMessage>& out);
+  const TopicMapperCounts& counts() const { return counts_; }
+
+ private:
+  struct Views;
+  TopicMapperOptions options_;
+  std::unique_ptr<Views> views_;
+  TopicMapperCounts counts_;
+};
+
+}  // namespace sextant::viewer
