@@ -1,7 +1,8 @@
 #pragma once
 // The Foxglove message schemas sextant's views use, as JSON Schema text: foxglove.PoseInFrame,
-// foxglove.FrameTransforms and foxglove.SceneUpdate, from viewer/schemas/ (copied from @foxglove/schemas 2.1, MIT;
-// tests/viewer/ checks that they equal the reference package's).  Compiled in at build time.
+// foxglove.FrameTransforms and foxglove.SceneUpdate, from viewer/schemas/ (written for sextant: the fields it sends, named
+// and typed as Foxglove's schemas of the same name define them; tests/viewer/ validates every message against both
+// these and the reference package's).  Compiled in at build time.
 #include <map>
 #include <string>
 

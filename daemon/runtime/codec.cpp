@@ -438,6 +438,41 @@ sextant::loop_closure_t to_message(const engine::LoopClosure& e, const std::stri
   return m;
 }
 
+sextant::imu_t to_message(const engine::ImuSample& e, const std::string& sender, int64_t seq) {
+  auto m = message_header<sextant::imu_t>(e.utime, sender, seq);
+  m.source = e.source;
+  m.frame = e.frame;
+  m.has_angular_velocity = e.angular_velocity.has_value();
+  if (e.angular_velocity) std::copy(e.angular_velocity->data(), e.angular_velocity->data() + 3, m.angular_velocity);
+  copy_row_major<3>(e.angular_velocity_covariance, m.angular_velocity_covariance);
+  m.has_linear_acceleration = e.linear_acceleration.has_value();
+  if (e.linear_acceleration)
+    std::copy(e.linear_acceleration->data(), e.linear_acceleration->data() + 3, m.linear_acceleration);
+  copy_row_major<3>(e.linear_acceleration_covariance, m.linear_acceleration_covariance);
+  m.has_orientation = e.orientation.has_value();
+  m.orientation_has_yaw = e.orientation_has_yaw;
+  const Eigen::Quaterniond q = e.orientation.value_or(Eigen::Quaterniond::Identity()).normalized();
+  m.orientation[0] = q.w(), m.orientation[1] = q.x(), m.orientation[2] = q.y(), m.orientation[3] = q.z();
+  copy_row_major<3>(e.orientation_covariance, m.orientation_covariance);
+  return m;
+}
+
+sextant::gnss_t to_message(const engine::GnssFix& e, const std::string& sender, int64_t seq) {
+  auto m = message_header<sextant::gnss_t>(e.utime, sender, seq);
+  m.source = e.source;
+  m.frame = e.frame;
+  m.status = static_cast<int8_t>(e.status);
+  m.latitude = e.latitude;
+  m.longitude = e.longitude;
+  m.altitude = e.altitude;
+  m.covariance_type = sextant::gnss_t::COVARIANCE_KNOWN;
+  copy_row_major<3>(e.position_covariance, m.position_covariance);
+  m.has_velocity = e.velocity.has_value();
+  if (e.velocity) std::copy(e.velocity->data(), e.velocity->data() + 3, m.velocity);
+  copy_row_major<3>(e.velocity_covariance, m.velocity_covariance);
+  return m;
+}
+
 sextant::fused_pose_t to_message(const engine::FusedPose& o, const std::string& sender, int64_t seq) {
   auto m = message_header<sextant::fused_pose_t>(o.utime, sender, seq);
   m.source = o.source;

@@ -68,6 +68,8 @@ sextant::odometry_t to_message(const engine::Odometry& e, const std::string& sen
 sextant::landmarks_t to_message(const engine::LandmarkSightings& e, const std::string& sender, int64_t seq);
 sextant::bearing_scan_t to_message(const engine::BearingScan& e, const std::string& sender, int64_t seq);
 sextant::loop_closure_t to_message(const engine::LoopClosure& e, const std::string& sender, int64_t seq);
+sextant::imu_t to_message(const engine::ImuSample& e, const std::string& sender, int64_t seq);
+sextant::gnss_t to_message(const engine::GnssFix& e, const std::string& sender, int64_t seq);
 sextant::fused_pose_t to_message(const engine::FusedPose& o, const std::string& sender, int64_t seq);
 sextant::trajectory_t to_message(const engine::Trajectory& o, const std::string& sender, int64_t seq);
 sextant::match_request_t to_message(const engine::MatchRequest& o, const std::string& sender, int64_t seq);

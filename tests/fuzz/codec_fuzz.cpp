@@ -60,7 +60,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   const bool fp = (data[0] & 0x80) != 0;
   const uint8_t which = data[0] & 0x7f;
   ++data, --size;
-  switch (which % 10) {
+  switch (which % 12) {
     case 0: decode_input<sextant::odometry_t>(runtime::InputKind::kOdometry, fp, data, size); break;
     case 1: decode_input<sextant::landmarks_t>(runtime::InputKind::kLandmarks, fp, data, size); break;
     case 2: decode_input<sextant::bearing_scan_t>(runtime::InputKind::kBearings, fp, data, size); break;
@@ -70,7 +70,9 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     case 6: decode_other<sextant::fused_pose_t>(fp, data, size); break;
     case 7: decode_other<sextant::status_t>(fp, data, size); break;
     case 8: decode_other<sextant::trajectory_t>(fp, data, size); break;
-    default: decode_other<sextant::targets_t>(fp, data, size); break;
+    case 9: decode_other<sextant::targets_t>(fp, data, size); break;
+    case 10: decode_input<sextant::imu_t>(runtime::InputKind::kImu, fp, data, size); break;
+    default: decode_input<sextant::gnss_t>(runtime::InputKind::kGnss, fp, data, size); break;
   }
   return 0;
 }
