@@ -12,7 +12,8 @@ namespace {
 void read_fields(Section& s, const std::string& key, const std::array<const char*, 3>& names, std::array<bool, 3>& out) {
   std::vector<std::string> listed;
   s.get(key, listed);
-  const YAML::Node node = s.node().IsMap() ? s.node()[key] : YAML::Node();
+  if (!s.node().IsMap()) return;  // no section: the defaults
+  const YAML::Node node = s.node()[key];
   if (!node.IsDefined()) return;
   out.fill(false);
   for (const auto& f : listed) {

@@ -71,7 +71,7 @@ TEST_CASE("a value out of range names its line and the bound") {
 TEST_CASE("enumerations list the allowed values") {
   const std::string e = error_of("engine:\n  primary_estimator: kalman\n");
   CHECK(e.find("test.yaml:2:22:") == 0);
-  CHECK(e.find("'engine.primary_estimator': unknown estimator 'kalman' (auto, dead_reckoning, ekf, pf or graph)") !=
+  CHECK(e.find("'engine.primary_estimator': unknown estimator 'kalman' (auto, dead_reckoning, ekf, pf, graph or inertial)") !=
         std::string::npos);
 }
 
