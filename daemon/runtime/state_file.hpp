@@ -27,8 +27,9 @@ struct StateSection {
 };
 
 /// Version 2: the graph stage's section is the SLAM layer's state (estimators/slam/slam_graph.hpp) between the stage's
-/// counters and its per-body TRAJECTORY feeds; version 1 files are refused (another format version).
-inline constexpr uint32_t kStateFormatVersion = 2;
+/// counters and its per-body TRAJECTORY feeds; version 1 files are refused (another format version).  Version 3: every
+/// estimator also keeps the steps it refused as unhealthy (estimators/filter/estimate_health.hpp).
+inline constexpr uint32_t kStateFormatVersion = 3;
 /// The state file inside a state directory.
 inline constexpr const char* kStateFileName = "sextantd.state";
 
