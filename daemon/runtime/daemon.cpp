@@ -214,7 +214,7 @@ int run_daemon(const config::DaemonConfig& cfg, const std::atomic<bool>& stop) {
   struct StateCounters {
     std::atomic<int64_t> saves{0}, failures{0}, bytes{0}, save_us{0};
   } state_counters;
-  auto save_state = [&] {
+  auto save_state = [&]() -> bool {
     try {
       const StateSave s = save_stages(state_path, cfg.engine_fingerprint, runners);
       if (state_counters.saves.fetch_add(1) == 0)
@@ -222,9 +222,11 @@ int run_daemon(const config::DaemonConfig& cfg, const std::atomic<bool>& stop) {
                      s.collect_ms, s.write_ms);
       state_counters.bytes = static_cast<int64_t>(s.bytes);
       state_counters.save_us = static_cast<int64_t>(1000 * (s.collect_ms + s.write_ms));
+      return true;
     } catch (const std::exception& e) {
       const int64_t n = ++state_counters.failures;
       if (n <= 10 || (n & (n - 1)) == 0) spdlog::error("state not saved ({} failure(s) so far): {}", n, e.what());
+      return false;
     }
   };
 
@@ -309,8 +311,14 @@ int run_daemon(const config::DaemonConfig& cfg, const std::atomic<bool>& stop) {
   status_thread.join();
   if (state_thread.joinable()) state_thread.join();
   if (!state_path.empty()) {
-    save_state();  // every stage drained and finished: the state a restart continues from
-    spdlog::info("state saved to {} at shutdown ({} bytes)", state_path, state_counters.bytes.load());
+    // Every stage drained and finished: the state a restart continues from.  A failed save is said, never hidden.
+    if (save_state()) {
+      spdlog::info("state saved to {} at shutdown ({} bytes)", state_path, state_counters.bytes.load());
+    } else {
+      spdlog::error("state NOT saved at shutdown: {} holds the last successful save ({} of {} saves failed)", state_path,
+                    state_counters.failures.load(), state_counters.saves.load() + state_counters.failures.load());
+      if (rc == kExitOk) rc = kExitState;
+    }
   }
   if (recorder) {
     recorder->close();
