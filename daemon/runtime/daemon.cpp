@@ -131,6 +131,9 @@ int run_daemon(const config::DaemonConfig& cfg, const std::atomic<bool>& stop) {
                       },
                       // Last FusedPose times per estimator channel and body: the bodies are bounded by max_sources.
                       static_cast<size_t>(std::max(cfg.max_sources, 1)) * 8);
+  publisher.measure_lag([] {
+    return std::chrono::duration_cast<std::chrono::microseconds>(std::chrono::system_clock::now().time_since_epoch()).count();
+  });
   const engine::Emit emit = [&publisher](engine::Output o) { publisher.publish(o); };
 
   std::vector<std::unique_ptr<StageRunner>> runners;
@@ -245,6 +248,11 @@ int run_daemon(const config::DaemonConfig& cfg, const std::atomic<bool>& stop) {
                                       {"sources_expired", intake_counters.expired.load()},
                                       {"sources_evicted", intake_counters.evicted.load()}};
     if (const auto drops = udp_receive_drops()) runtime_counters.push_back({"udp_receive_drops", *drops - drops_at_start});
+    const Publisher::Lag lag = publisher.take_lag();
+    runtime_counters.push_back({"publish_lag_us", lag.last_us});
+    runtime_counters.push_back({"publish_lag_us_max", lag.max_us});
+    if (lag.max_us > 1'000'000)
+      spdlog::warn("published up to {:.1f} s behind real time since the last status (a stall, or a backlog)", lag.max_us * 1e-6);
     if (!state_path.empty()) {
       runtime_counters.push_back({"state_saves", state_counters.saves.load()});
       runtime_counters.push_back({"state_save_failures", state_counters.failures.load()});
