@@ -40,8 +40,9 @@ def mutate(case, events):
             elif case == "second_sender":
                 out.append((ts, ch, data))
                 m.sender = "impostor"
+                m.utime += 5000  # between two of the robot's messages (50 Hz)
                 m.position = [m.position[0] + 100.0, m.position[1], m.position[2]]
-                ts += 1
+                ts += 5000
             data = m.encode()
         elif ch == "LANDMARKS":
             lmk += 1
@@ -75,6 +76,7 @@ def make(case, clean, path):
 def check(path):
     poses = bad = negative = 0
     biggest = 0.0
+    last = {}
     for _, ch, data in read_log(path):
         if not ch.startswith("FUSED_POSE"):
             continue
@@ -87,7 +89,9 @@ def check(path):
         if any(m.covariance[7 * i] < 0 for i in range(6)):
             negative += 1
         biggest = max(biggest, max(abs(v) for v in m.position))
-    print(json.dumps({"poses": poses, "non_finite": bad, "negative_variance": negative, "max_abs_position": biggest}))
+        last[ch] = [round(m.position[0], 3), round(m.position[1], 3)]
+    print(json.dumps({"poses": poses, "non_finite": bad, "negative_variance": negative,
+                      "max_abs_position": float(f"{biggest:.4g}"), "last_xy": last}))
 
 
 if __name__ == "__main__":

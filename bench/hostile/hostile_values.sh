@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # The "hostile values" table (bench/results/hostile_values.md): each case of hostile_values.py replayed offline
 # through `sextant replay` (the same intake and engine as sextantd), with what was published and how long it took.
-#   bench/hostile/hostile_values.sh [BUILD_DIR] [CASE...]
+#   [CONFIG=FILE] bench/hostile/hostile_values.sh [BUILD_DIR] [CASE...]   (CONFIG: default config/default.yaml)
 set -euo pipefail
 here="$(cd "$(dirname "$0")" && pwd)"
 build="${1:-$here/../../build}"
@@ -15,7 +15,7 @@ trap 'rm -rf "$work"' EXIT
 for c in "${cases[@]}"; do
   if [ "$c" = clean ]; then cp "$work/clean.lcm" "$work/case_$c.lcm"; else python3 "$here/hostile_values.py" make "$c" "$work/clean.lcm" "$work/case_$c.lcm"; fi
   start=$(date +%s.%N)
-  if timeout 120 "$build/bin/sextant" replay "$work/case_$c.lcm" --config "$here/../../config/default.yaml" --out-log "$work/$c.out.lcm" --json > "$work/$c.json" 2>/dev/null; then
+  if timeout 120 "$build/bin/sextant" replay "$work/case_$c.lcm" --config "${CONFIG:-$here/../../config/default.yaml}" --out-log "$work/$c.out.lcm" --json > "$work/$c.json" 2>/dev/null; then
     seconds=$(echo "$(date +%s.%N) - $start" | bc)
     printf '%s\t%.1f s\t%s\n' "$c" "$seconds" "$(python3 "$here/hostile_values.py" check "$work/$c.out.lcm")"
   else
