@@ -5,7 +5,7 @@ JOBS  ?= $(shell nproc)
 BUILD ?= build
 CMAKE_FLAGS ?=
 
-.PHONY: all deps build test demo install bench asan tsan fuzz spy clean
+.PHONY: all deps build test demo install bench asan tsan fuzz spy clean format format-check
 
 all: build
 
@@ -67,6 +67,18 @@ fuzz:
 spy: build
 	@CLASSPATH=/usr/share/java/lcm.jar:/usr/share/java/jchart2d.jar:$(BUILD)/lcmtypes/sextant_types.jar \
 	  java -Djava.net.preferIPv4Stack=true -Xmx256m lcm.spy.Spy $(SPY_ARGS)
+
+# The house style (.clang-format): `make format` rewrites every C++ source in place, `make format-check` lists the
+# files that differ from it and fails when there is one.
+FORMAT_FILES = $(shell git ls-files '*.cpp' '*.hpp' '*.h')
+format:
+	@command -v clang-format >/dev/null || apt-get install -y -qq clang-format >/dev/null
+	@clang-format -i $(FORMAT_FILES)
+
+format-check:
+	@command -v clang-format >/dev/null || apt-get install -y -qq clang-format >/dev/null
+	@bad=$$(for f in $(FORMAT_FILES); do clang-format $$f | cmp -s - $$f || echo $$f; done); \
+	  if [ -n "$$bad" ]; then echo "not formatted (make format):"; echo "$$bad"; exit 1; fi; echo "format: every file as .clang-format says"
 
 clean:
 	rm -rf $(BUILD) build-asan build-tsan build-fuzz

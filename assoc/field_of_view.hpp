@@ -1,5 +1,5 @@
 #pragma once
-// A passive sensor's field of view over a surveillance region (the clutter model of replay/assoc_experiment.hpp):
+// A passive sensor's field of view over a surveillance region (the clutter model of sim/assoc_experiment.hpp):
 // the azimuth-elevation bounding box of an axis-aligned box region seen from the sensor, padded on every side.  Its area psi (rad^2) turns an
 // expected number of false alarms per scan into the false-alarm density of the association cost,
 // lambda = false alarms / psi, and false alarms can be drawn uniformly in it.

@@ -6,7 +6,7 @@
 #include "daemon/engine/filter_stage.hpp"
 #include "daemon/runtime/codec.hpp"
 #include "daemon/runtime/lcm_log.hpp"
-#include "replay/simulator.hpp"
+#include "sim/simulator.hpp"
 
 #include <algorithm>
 #include <chrono>
@@ -22,11 +22,11 @@ int main(int argc, char** argv) {
   const int reps = argc > 1 ? std::stoi(argv[1]) : 5;
   const double lag = argc > 2 ? std::stod(argv[2]) : 0.4;
   const auto log = (std::filesystem::temp_directory_path() / ("sextant_late_" + std::to_string(::getpid()) + ".lcm")).string();
-  replay::SimulationOptions o;
+  tools::SimulationOptions o;
   o.seed = 1;
   {
     runtime::LogWriter w(log);
-    replay::simulate(o, w);
+    tools::simulate(o, w);
   }
   std::vector<engine::Event> events;
   for (const auto& r : runtime::LogReader::read_all(log)) {

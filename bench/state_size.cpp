@@ -10,7 +10,7 @@
 #include "daemon/runtime/codec.hpp"
 #include "daemon/runtime/lcm_log.hpp"
 #include "daemon/runtime/state_file.hpp"
-#include "replay/simulator.hpp"
+#include "sim/simulator.hpp"
 
 #include <chrono>
 #include <cstdio>
@@ -29,13 +29,13 @@ int main(int argc, char** argv) {
   const auto dir = std::filesystem::temp_directory_path() / ("sextant_state_size_" + std::to_string(::getpid()));
   std::filesystem::create_directories(dir);
   const std::string log = (dir / "run.lcm").string(), state = (dir / runtime::kStateFileName).string();
-  replay::SimulationOptions sim;
-  sim.scenario = replay::scenario_from_name(scenario);
+  tools::SimulationOptions sim;
+  sim.scenario = tools::scenario_from_name(scenario);
   sim.seed = seed;
   sim.duration_s = minutes * 60;
   {
     runtime::LogWriter w(log);
-    replay::simulate(sim, w);
+    tools::simulate(sim, w);
   }
   engine::Engine engine(engine::EngineConfig{});
   const engine::GraphStage* graph = nullptr;

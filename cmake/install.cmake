@@ -13,7 +13,7 @@ include(CMakePackageConfigHelpers)
 set(SEXTANT_CMAKE_DIR ${CMAKE_INSTALL_LIBDIR}/cmake/sextant)
 
 # Exported as sextant::<name> without the "sextant_" of the build-tree name.
-set(sextant_exported assoc estimators engine config runtime replay lcmtypes version)
+set(sextant_exported assoc estimators engine config runtime replay eval sim convert report cli lcmtypes version)
 foreach(n ${sextant_exported})
   set_target_properties(sextant_${n} PROPERTIES EXPORT_NAME ${n})
   list(APPEND sextant_export_targets sextant_${n})
@@ -32,11 +32,12 @@ install(FILES ${CMAKE_BINARY_DIR}/generated/sextantConfig.cmake ${CMAKE_BINARY_D
               ${CMAKE_SOURCE_DIR}/cmake/cholmod.cmake
         DESTINATION ${SEXTANT_CMAKE_DIR})
 
-# Headers of every installed library (the CLI's own headers stay private, and so do the incremental smoother's steps:
+# Headers of every installed library (the CLI's command plumbing stays private, and so do the incremental smoother's steps:
 # estimators/graph/incremental_smoother.hpp is their public face and includes none of them).
-foreach(dir estimators assoc daemon/engine daemon/config daemon/runtime replay)
+foreach(dir estimators assoc daemon/engine daemon/config daemon/runtime replay eval sim convert report cli)
   install(DIRECTORY ${CMAKE_SOURCE_DIR}/${dir}/ DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}/sextant/${dir}
-          FILES_MATCHING PATTERN "*.hpp" PATTERN "cli" EXCLUDE REGEX "/estimators/graph/smoother$" EXCLUDE)
+          FILES_MATCHING PATTERN "*.hpp"
+          REGEX "/cli/(command|handle_until_stopped|log_damage_report)\\.hpp$" EXCLUDE REGEX "/estimators/graph/smoother$" EXCLUDE)
 endforeach()
 install(DIRECTORY ${CMAKE_BINARY_DIR}/lcmtypes/cpp/sextant/ DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}/sextant/sextant
         FILES_MATCHING PATTERN "*.hpp")

@@ -1,9 +1,9 @@
-// The `sextant` module's `sextant optimize` and `sextant eval`: the CLI's functions (replay/graph_optimization.hpp,
-// replay/trajectory_evaluation.hpp), their summaries as dicts with the CLI's JSON keys.
+// The `sextant` module's `sextant optimize` and `sextant eval`: the CLI's functions (cli/graph_optimization.hpp,
+// cli/trajectory_evaluation.hpp), their summaries as dicts with the CLI's JSON keys.
 #include "python/module_parts.hpp"
 
-#include "replay/graph_optimization.hpp"
-#include "replay/trajectory_evaluation.hpp"
+#include "cli/graph_optimization.hpp"
+#include "cli/trajectory_evaluation.hpp"
 
 #include <pybind11/stl.h>
 
@@ -15,11 +15,11 @@
 namespace sextant::python {
 namespace {
 
-py::object summary_value(const replay::SummaryValue& v) {
+py::object summary_value(const tools::SummaryValue& v) {
   return std::visit([](const auto& x) -> py::object { return py::cast(x); }, v);
 }
 
-py::dict summary_dict(const replay::Summary& s) {
+py::dict summary_dict(const tools::Summary& s) {
   py::dict d;
   for (const auto& [k, v] : s.entries()) d[py::str(k)] = summary_value(v);
   return d;
@@ -100,7 +100,7 @@ py::list variable_values(const graph::Variable& v) {
 }
 
 py::dict optimize(const py::object& graph_or_path, const std::optional<std::string>& output,
-                  const replay::GraphOptimizationOptions& options, const std::string& information) {
+                  const tools::GraphOptimizationOptions& options, const std::string& information) {
   graph::G2oReadOptions read;
   try {
     read.information = graph::information_policy_from_name(information);
@@ -110,10 +110,10 @@ py::dict optimize(const py::object& graph_or_path, const std::optional<std::stri
   graph::G2oGraph g = is_path(graph_or_path)
                           ? graph::read_g2o(py::cast<std::string>(py::str(graph_or_path)), read)
                           : graph_from_records(graph_or_path, read);
-  replay::GraphOptimizationResult r;
+  tools::GraphOptimizationResult r;
   {
     py::gil_scoped_release release;
-    r = replay::optimize_graph(g, options, output.value_or(""));
+    r = tools::optimize_graph(g, options, output.value_or(""));
   }
   py::dict poses;
   for (const auto& v : r.variables) poses[py::int_(v.id)] = variable_values(v);
@@ -127,19 +127,19 @@ py::dict optimize(const py::object& graph_or_path, const std::optional<std::stri
 
 // A trajectory: a TUM or KITTI file's path (`format`), or rows [t, x, y, z, qx, qy, qz, qw] (seconds, metres, TUM's
 // quaternion order).
-std::vector<replay::StampedPose> trajectory(const py::object& obj, const char* what, const std::string& format) {
+std::vector<tools::StampedPose> trajectory(const py::object& obj, const char* what, const std::string& format) {
   if (is_path(obj)) {
     const std::string path = py::cast<std::string>(py::str(obj));
-    return format == "kitti" ? replay::read_kitti(path) : replay::read_tum(path);
+    return format == "kitti" ? tools::read_kitti(path) : tools::read_tum(path);
   }
-  std::vector<replay::StampedPose> poses;
+  std::vector<tools::StampedPose> poses;
   size_t k = 0;
   for (const py::handle row : obj) {
     const std::string where = std::string(what) + "[" + std::to_string(k++) + "]";
     const py::list l = as_list(row, where, 8);
     double v[8];
     for (size_t i = 0; i < 8; ++i) v[i] = read_number(l[i], where + "[" + std::to_string(i) + "]");
-    replay::StampedPose p;
+    tools::StampedPose p;
     p.t = v[0];
     p.pose.position = {v[1], v[2], v[3]};
     p.pose.orientation = Eigen::Quaterniond(v[7], v[4], v[5], v[6]);  // as read_tum: used as given
@@ -147,7 +147,7 @@ std::vector<replay::StampedPose> trajectory(const py::object& obj, const char* w
   }
   // As read_tum: sorted by time, a repeated stamp replaces the earlier row.
   std::stable_sort(poses.begin(), poses.end(), [](const auto& a, const auto& b) { return a.t < b.t; });
-  std::vector<replay::StampedPose> unique;
+  std::vector<tools::StampedPose> unique;
   for (const auto& p : poses) {
     if (!unique.empty() && unique.back().t == p.t) unique.back() = p;
     else unique.push_back(p);
@@ -160,10 +160,10 @@ py::dict evaluate(const py::object& gt, const py::object& est, bool scale, doubl
   if (delta_unit != "s" && delta_unit != "f") throw py::value_error("delta_unit: 's' (seconds) or 'f' (frames)");
   if (format != "tum" && format != "kitti") throw py::value_error("format: 'tum' or 'kitti'");
   if (!(delta > 0) || !(max_difference > 0)) throw py::value_error("delta and max_difference must be > 0");
-  const replay::EvaluationOptions o{scale, delta, delta_unit == "f" ? replay::DeltaUnit::kFrames : replay::DeltaUnit::kSeconds,
+  const tools::EvaluationOptions o{scale, delta, delta_unit == "f" ? tools::DeltaUnit::kFrames : tools::DeltaUnit::kSeconds,
                                     max_difference};
   const auto g = trajectory(gt, "gt", format), e = trajectory(est, "est", format);
-  return summary_dict(replay::evaluate_trajectory(g, e, o).summary(o));
+  return summary_dict(tools::evaluate_trajectory(g, e, o).summary(o));
 }
 
 }  // namespace
@@ -174,10 +174,10 @@ void register_solvers(py::module_& m) {
            const std::string& init, const std::string& robust, double kernel_width, int max_iters, double tolerance,
            const std::string& ordering, bool incremental, double relin_translation, double relin_rotation,
            int relin_skip, const std::string& information) {
-          replay::GraphOptimizationOptions o;
+          tools::GraphOptimizationOptions o;
           try {
-            o.solver = replay::solver_from_name(solver), o.init = replay::initial_estimate_from_name(init);
-            o.robust = graph::robust_kernel_from_name(robust), o.ordering = replay::ordering_from_name(ordering);
+            o.solver = tools::solver_from_name(solver), o.init = tools::initial_estimate_from_name(init);
+            o.robust = graph::robust_kernel_from_name(robust), o.ordering = tools::ordering_from_name(ordering);
           } catch (const std::invalid_argument& e) {
             throw py::value_error(e.what());
           }

@@ -7,7 +7,7 @@
 #include <cstdint>
 #include <vector>
 
-namespace sextant::replay {
+namespace sextant::tools {
 
 class EvenSample {
  public:
@@ -34,4 +34,4 @@ class EvenSample {
   int64_t seen_ = 0, stride_ = 1;
 };
 
-}  // namespace sextant::replay
+}  // namespace sextant::tools

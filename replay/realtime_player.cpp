@@ -12,7 +12,7 @@
 #include <stdexcept>
 #include <thread>
 
-namespace sextant::replay {
+namespace sextant::tools {
 
 int64_t play_realtime(const std::string& log_path, double speed, const std::string& lcm_url,
                       runtime::LogDamage* damage) {
@@ -38,4 +38,4 @@ int64_t play_realtime(const std::string& log_path, double speed, const std::stri
   return published;
 }
 
-}  // namespace sextant::replay
+}  // namespace sextant::tools

@@ -6,7 +6,7 @@
 #include <cstdint>
 #include <string>
 
-namespace sextant::replay {
+namespace sextant::tools {
 
 /// Plays `log_path` at `speed` (2 = twice as fast) on `lcm_url`; returns the number of messages published.  The
 /// good events of a damaged log are played; what was skipped goes into `damage` when given (the caller reports it).
@@ -14,4 +14,4 @@ namespace sextant::replay {
 int64_t play_realtime(const std::string& log_path, double speed, const std::string& lcm_url,
                       runtime::LogDamage* damage = nullptr);
 
-}  // namespace sextant::replay
+}  // namespace sextant::tools

@@ -1,28 +1,28 @@
 #include "replay/replay_driver.hpp"
 
 #include "daemon/engine/engine.hpp"
-#include "daemon/engine/guarded_handle.hpp"
 #include "daemon/runtime/codec.hpp"
-#include "daemon/runtime/intake.hpp"
+#include "daemon/runtime/engine_driver.hpp"
 #include "daemon/runtime/lcm_log.hpp"
-#include "daemon/runtime/publisher.hpp"
-#include "replay/even_sample.hpp"
 #include "daemon/runtime/nearest_rank_percentile.hpp"
+#include "replay/even_sample.hpp"
 
 #include <sextant/truth_t.hpp>
 
 #include <algorithm>
+#include <chrono>
 #include <cstdlib>
 #include <fstream>
-#include <chrono>
 #include <numeric>
 
-namespace sextant::replay {
+namespace sextant::tools {
 
 namespace {
 
 /// Targets messages a bounded replay keeps (the newest): what the report plots (the last 20 scans) and a margin.
 constexpr size_t kNewestTargetsKept = 64;
+/// The channel of the simulator's and converters' ground truth (truth_t): read for the report, not an input.
+const std::string kTruthChannel = "GROUND_TRUTH";
 
 /// The process's resident set size in KB (VmRSS of /proc/self/status), 0 where unavailable.
 int64_t resident_kb() {
@@ -31,6 +31,188 @@ int64_t resident_kb() {
   while (std::getline(f, line))
     if (line.rfind("VmRSS:", 0) == 0) return std::atoll(line.c_str() + 6);
   return 0;
+}
+
+/// Pass 1, the order: rank[i] is the turn of the file's i-th record, by message utime with ties in file order;
+/// records that are not ours (or too short to carry a utime) keep their log stamp so that they still get counted.
+/// The reader skips damaged events (and reports them) the same way in both passes.
+std::vector<uint32_t> replay_order(const std::string& log_path, runtime::LogDamage& damage) {
+  std::vector<std::pair<int64_t, uint32_t>> keys;
+  runtime::LogReader reader(log_path);
+  while (auto r = reader.next()) keys.emplace_back(peek_utime(r->data).value_or(r->timestamp), static_cast<uint32_t>(keys.size()));
+  damage = reader.damage();
+  std::stable_sort(keys.begin(), keys.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+  std::vector<uint32_t> rank(keys.size());
+  for (size_t turn = 0; turn < keys.size(); ++turn) rank[keys[turn].second] = static_cast<uint32_t>(turn);
+  return rank;
+}
+
+/// Pass 2: the records in their turn; one read early waits (in memory) for its turn.
+template <class Step>
+void for_each_in_turn(const std::string& log_path, const std::vector<uint32_t>& rank, Step&& step) {
+  runtime::LogReader reader(log_path);
+  std::map<uint32_t, runtime::LogRecord> early;
+  uint32_t next_turn = 0, index = 0;
+  while (auto r = reader.next()) {
+    if (index >= rank.size()) break;  // the file grew since pass 1
+    const uint32_t turn = rank[index++];
+    if (turn != next_turn) {
+      early.emplace(turn, std::move(*r));
+      continue;
+    }
+    step(*r);
+    ++next_turn;
+    for (auto it = early.begin(); it != early.end() && it->first == next_turn; it = early.erase(it), ++next_turn)
+      step(it->second);
+  }
+}
+
+/// What a replay keeps of what it sees: outputs, ground truth, the stages' processing times, the segments.
+class ReplayCollector {
+ public:
+  ReplayCollector(ReplayResult& result, const ReplayOptions& options, const engine::Engine& engine)
+      : result_(result), options_(options), engine_(engine), keep_all_(options.max_kept == 0),
+        truth_sample_(options.max_kept), target_truth_sample_(options.max_kept),
+        segment_us_(static_cast<int64_t>(options.segment_seconds * 1e6)) {
+    for (const auto& s : engine.stages()) {
+      StageReport report;
+      report.name = std::string(s->name());
+      result_.stages.push_back(std::move(report));
+      latency_samples_.emplace_back(options.max_kept);
+      graph_stage_.push_back(s->kind() == engine::StageKind::kGraph);
+    }
+    segment_latency_.resize(result_.stages.size());
+  }
+
+  void published(const std::string& channel, const std::vector<uint8_t>& bytes, int64_t utime);
+  void output(const engine::Output& o);
+  void truth(const runtime::LogRecord& r);
+  void handled(size_t stage, double ms);
+  /// Before an event of `utime` goes to the stages: closes the segments it ends.
+  void event_at(int64_t utime);
+  void close_segment(int64_t end_utime);
+  void finish(runtime::EngineDriver& driver);
+
+ private:
+  void fused_pose(const engine::FusedPose& x);
+
+  ReplayResult& result_;
+  const ReplayOptions& options_;
+  const engine::Engine& engine_;
+  const bool keep_all_;
+  std::map<std::string, EvenSample> fused_samples_;
+  EvenSample truth_sample_, target_truth_sample_;
+  std::vector<EvenSample> latency_samples_;
+  std::vector<bool> graph_stage_;
+  // Segments: per stretch of data time, each stage's processing times and the wall time.
+  const int64_t segment_us_;
+  std::vector<std::vector<double>> segment_latency_;
+  std::chrono::steady_clock::time_point segment_start_wall_ = std::chrono::steady_clock::now();
+  int64_t segment_start_utime_ = 0;
+};
+
+void ReplayCollector::published(const std::string& channel, const std::vector<uint8_t>& bytes, int64_t utime) {
+  if (options_.on_publish) options_.on_publish(channel, bytes, utime);
+  if (keep_all_) result_.published.push_back({channel, utime, bytes});
+}
+
+void ReplayCollector::fused_pose(const engine::FusedPose& x) {
+  ++result_.fused_pose_counts[x.estimator];
+  result_.last_fused_poses[x.estimator] = x;
+  if (options_.on_fused_pose) options_.on_fused_pose(x);
+  fused_samples_.try_emplace(x.estimator, options_.max_kept).first->second.push(result_.fused_poses[x.estimator], x);
+}
+
+void ReplayCollector::output(const engine::Output& o) {
+  if (options_.on_output) options_.on_output(o);
+  std::visit(
+      [&](const auto& x) {
+        using T = std::decay_t<decltype(x)>;
+        if constexpr (std::is_same_v<T, engine::FusedPose>) {
+          fused_pose(x);
+        } else if constexpr (std::is_same_v<T, engine::Trajectory>) {
+          ++result_.trajectory_messages;
+          if (keep_all_) result_.trajectories.push_back(x);
+        } else if constexpr (std::is_same_v<T, engine::Targets>) {
+          ++result_.target_messages;
+          result_.targets.push_back(x);
+          if (!keep_all_ && result_.targets.size() > kNewestTargetsKept) result_.targets.erase(result_.targets.begin());
+        } else {
+          ++result_.match_request_messages;
+          if (keep_all_) result_.match_requests.push_back(x);
+        }
+      },
+      o);
+}
+
+void ReplayCollector::truth(const runtime::LogRecord& r) {
+  sextant::truth_t t;
+  if (!runtime::decode_message(r.data, t)) return;
+  if (t.kind == "robot") {
+    engine::Pose p;
+    p.position = {t.position[0], t.position[1], t.position[2]};
+    p.orientation = Eigen::Quaterniond(t.orientation[0], t.orientation[1], t.orientation[2], t.orientation[3]);
+    truth_sample_.push(result_.truth_poses, TruthPose{t.utime, t.source, p});
+    return;
+  }
+  TruthPoint point{t.utime, t.kind, t.id, {t.position[0], t.position[1], t.position[2]}};
+  if (t.kind == "target") target_truth_sample_.push(result_.truth_points, std::move(point));  // moving: sampled
+  else result_.truth_points.push_back(std::move(point));
+}
+
+void ReplayCollector::handled(size_t stage, double ms) {
+  StageReport& report = result_.stages[stage];
+  latency_samples_[stage].push(report.latency_ms, ms);
+  if (segment_us_ > 0) segment_latency_[stage].push_back(ms);
+  report.latency_max_ms = std::max(report.latency_max_ms, ms);
+  ++report.processed;
+}
+
+void ReplayCollector::event_at(int64_t utime) {
+  if (result_.first_utime == 0) result_.first_utime = segment_start_utime_ = utime;
+  if (segment_us_ > 0 && utime >= segment_start_utime_ + segment_us_) close_segment(segment_start_utime_ + segment_us_);
+  result_.last_utime = std::max(result_.last_utime, utime);
+}
+
+void ReplayCollector::close_segment(int64_t end_utime) {
+  SegmentReport seg;
+  seg.start_s = static_cast<double>(segment_start_utime_ - result_.first_utime) * 1e-6;
+  seg.data_s = static_cast<double>(end_utime - segment_start_utime_) * 1e-6;
+  const auto now = std::chrono::steady_clock::now();
+  seg.wall_s = std::chrono::duration<double>(now - segment_start_wall_).count();
+  seg.rss_kb = resident_kb();
+  for (size_t i = 0; i < result_.stages.size(); ++i) {
+    auto& l = segment_latency_[i];
+    std::sort(l.begin(), l.end());
+    SegmentReport::Stage st;
+    st.name = result_.stages[i].name;
+    st.events = static_cast<int64_t>(l.size());
+    if (!l.empty())
+      st.p50_ms = runtime::nearest_rank_percentile(l, 0.5), st.p99_ms = runtime::nearest_rank_percentile(l, 0.99),
+      st.max_ms = l.back();
+    seg.stages.push_back(st);
+    l.clear();
+    if (graph_stage_[i]) seg.graph_counters = engine_.stages()[i]->counters();
+  }
+  result_.segments.push_back(std::move(seg));
+  segment_start_wall_ = now;
+  segment_start_utime_ = end_utime;
+}
+
+void ReplayCollector::finish(runtime::EngineDriver& driver) {
+  if (segment_us_ > 0 && result_.last_utime > segment_start_utime_) close_segment(result_.last_utime);
+  const auto status = driver.stage_status();
+  for (size_t i = 0; i < result_.stages.size() && i < status.size(); ++i) {
+    StageReport& report = result_.stages[i];
+    report.counters = status[i].counters;
+    report.last_failure = status[i].last_failure;
+    for (const auto& [name, value] : report.counters) {
+      if (name == "stage_failures") report.failures = value;
+      if (name == "stage_recoveries") report.recoveries = value;
+    }
+  }
+  result_.channels = driver.stats().snapshot();
+  result_.published_counts = driver.publisher().counts();
 }
 
 }  // namespace
@@ -45,187 +227,42 @@ std::optional<int64_t> peek_utime(const std::vector<uint8_t>& b) {
 ReplayResult replay_log(const std::string& log_path, const config::DaemonConfig& cfg, const Progress& progress,
                         const ReplayOptions& options) {
   const auto wall_start = std::chrono::steady_clock::now();
-  // Pass 1: the order.  By message utime, ties in file order; records that are not ours (or too short to carry a
-  // utime) keep their log stamp so that they still get counted.  rank[i]: the turn of the file's i-th record.  The
-  // reader skips damaged events (and reports them) the same way in both passes.
-  std::vector<std::pair<int64_t, uint32_t>> keys;
-  runtime::LogDamage damage;
-  {
-    runtime::LogReader reader(log_path);
-    while (auto r = reader.next()) keys.emplace_back(peek_utime(r->data).value_or(r->timestamp), static_cast<uint32_t>(keys.size()));
-    damage = reader.damage();
-  }
-  std::stable_sort(keys.begin(), keys.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
-  std::vector<uint32_t> rank(keys.size());
-  for (size_t turn = 0; turn < keys.size(); ++turn) rank[keys[turn].second] = static_cast<uint32_t>(turn);
-  keys = {};
-
   ReplayResult result;
-  result.log_damage = std::move(damage);
+  const std::vector<uint32_t> rank = replay_order(log_path, result.log_damage);
   result.records = static_cast<int64_t>(rank.size());
+
   engine::Engine engine(cfg.engine);
   result.primary_estimator = engine.primary_estimator();
+  ReplayCollector collector(result, options, engine);
+  runtime::DriverOptions o;
+  o.lanes = runtime::StageLanes::kInline;
+  o.zero_solve_time = true;
+  o.on_accepted = [&](const engine::Event& e) { collector.event_at(engine::event_utime(e)); };
+  o.on_published = [&](const engine::Output& out) { collector.output(out); };
+  o.on_handled = [&](size_t stage, double ms) { collector.handled(stage, ms); };
+  runtime::EngineDriver driver(
+      cfg, engine,
+      [&](const std::string& channel, const std::vector<uint8_t>& bytes, int64_t utime) {
+        collector.published(channel, bytes, utime);
+      },
+      std::move(o));
 
-  runtime::ChannelStats stats;
-  runtime::Intake intake(stats, {}, runtime::intake_options(cfg, /*live=*/false));
-  const auto& ch = cfg.channels;
-  intake.add_channel(ch.full(ch.odometry), runtime::InputKind::kOdometry);
-  intake.add_channel(ch.full(ch.landmarks), runtime::InputKind::kLandmarks);
-  intake.add_channel(ch.full(ch.bearings), runtime::InputKind::kBearings);
-  intake.add_channel(ch.full(ch.loop_closures), runtime::InputKind::kLoopClosures);
-  const std::string truth_channel = "GROUND_TRUTH";
-
-  const bool keep_all = options.max_kept == 0;
-  runtime::Publisher publisher(cfg.channels, cfg.name, result.primary_estimator,
-                               [&](const std::string& channel, const std::vector<uint8_t>& bytes, int64_t utime) {
-                                 if (options.on_publish) options.on_publish(channel, bytes, utime);
-                                 if (keep_all) result.published.push_back({channel, utime, bytes});
-                               });
-  std::map<std::string, EvenSample> fused_samples;
-  EvenSample truth_sample(options.max_kept), target_truth_sample(options.max_kept);
-  const engine::Emit emit = [&](engine::Output o) {
-    // A solve's wall-clock time differs from run to run; replay's outputs must not (the stage latencies of the
-    // report keep the timing).
-    if (auto* t = std::get_if<engine::Trajectory>(&o)) t->solve_ms = 0;
-    if (options.on_output) options.on_output(o);
-    std::visit(
-        [&](const auto& x) {
-          using T = std::decay_t<decltype(x)>;
-          if constexpr (std::is_same_v<T, engine::FusedPose>) {
-            ++result.fused_pose_counts[x.estimator];
-            result.last_fused_poses[x.estimator] = x;
-            if (options.on_fused_pose) options.on_fused_pose(x);
-            fused_samples.try_emplace(x.estimator, options.max_kept).first->second.push(result.fused_poses[x.estimator], x);
-          } else if constexpr (std::is_same_v<T, engine::Trajectory>) {
-            ++result.trajectory_messages;
-            if (keep_all) result.trajectories.push_back(x);
-          } else if constexpr (std::is_same_v<T, engine::Targets>) {
-            ++result.target_messages;
-            result.targets.push_back(x);
-            if (!keep_all && result.targets.size() > kNewestTargetsKept) result.targets.erase(result.targets.begin());
-          } else {
-            ++result.match_request_messages;
-            if (keep_all) result.match_requests.push_back(x);
-          }
-        },
-        o);
-    publisher.publish(o);
-  };
-
-  std::vector<StageReport> stage_reports;
-  std::vector<EvenSample> latency_samples;
-  for (const auto& s : engine.stages()) {
-    StageReport report;
-    report.name = std::string(s->name());
-    stage_reports.push_back(std::move(report));
-    latency_samples.emplace_back(options.max_kept);
-  }
-
-  // Segments: per stretch of data time, each stage's processing times and the wall time.
-  std::vector<std::vector<double>> segment_latency(stage_reports.size());
-  auto segment_start_wall = std::chrono::steady_clock::now();
-  int64_t segment_start_utime = 0;
-  const auto segment_us = static_cast<int64_t>(options.segment_seconds * 1e6);
-  auto close_segment = [&](int64_t end_utime) {
-    SegmentReport seg;
-    seg.start_s = static_cast<double>(segment_start_utime - result.first_utime) * 1e-6;
-    seg.data_s = static_cast<double>(end_utime - segment_start_utime) * 1e-6;
-    const auto now = std::chrono::steady_clock::now();
-    seg.wall_s = std::chrono::duration<double>(now - segment_start_wall).count();
-    seg.rss_kb = resident_kb();
-    for (size_t i = 0; i < stage_reports.size(); ++i) {
-      auto& l = segment_latency[i];
-      std::sort(l.begin(), l.end());
-      SegmentReport::Stage st;
-      st.name = stage_reports[i].name;
-      st.events = static_cast<int64_t>(l.size());
-      if (!l.empty()) st.p50_ms = runtime::nearest_rank_percentile(l, 0.5), st.p99_ms = runtime::nearest_rank_percentile(l, 0.99), st.max_ms = l.back();
-      seg.stages.push_back(st);
-      l.clear();
-      if (engine.stages()[i]->kind() == engine::StageKind::kGraph) seg.graph_counters = engine.stages()[i]->counters();
+  int64_t done = 0;
+  for_each_in_turn(log_path, rank, [&](const runtime::LogRecord& r) {
+    if (r.channel == kTruthChannel) {
+      collector.truth(r);
+    } else {
+      // The log's time is the clock: the intake's idle expiry goes by it, not by how fast the replay runs.
+      const int64_t utime = peek_utime(r.data).value_or(r.timestamp);
+      driver.input(r.channel, r.data.data(), r.data.size(), runtime::Arrival::at_log_time(utime));
     }
-    result.segments.push_back(std::move(seg));
-    segment_start_wall = now;
-    segment_start_utime = end_utime;
-  };
-
-  auto process = [&](const runtime::LogRecord& r) {
-    if (r.channel == truth_channel) {
-      sextant::truth_t t;
-      if (runtime::decode_message(r.data, t)) {
-        if (t.kind == "robot") {
-          engine::Pose p;
-          p.position = {t.position[0], t.position[1], t.position[2]};
-          p.orientation = Eigen::Quaterniond(t.orientation[0], t.orientation[1], t.orientation[2], t.orientation[3]);
-          truth_sample.push(result.truth_poses, TruthPose{t.utime, t.source, p});
-        } else {
-          TruthPoint point{t.utime, t.kind, t.id, {t.position[0], t.position[1], t.position[2]}};
-          if (t.kind == "target") target_truth_sample.push(result.truth_points, std::move(point));  // moving: sampled
-          else result.truth_points.push_back(std::move(point));
-        }
-      }
-    } else if (auto event = intake.accept(r.channel, r.data.data(), r.data.size())) {
-      const int64_t utime = engine::event_utime(*event);
-      if (result.first_utime == 0) result.first_utime = segment_start_utime = utime;
-      if (segment_us > 0 && utime >= segment_start_utime + segment_us) close_segment(segment_start_utime + segment_us);
-      result.last_utime = std::max(result.last_utime, utime);
-      auto& stages = engine.stages();
-      for (size_t i = 0; i < stages.size(); ++i) {
-        if (!stages[i]->accepts(*event)) continue;
-        const auto t0 = std::chrono::steady_clock::now();
-        if (auto failure = engine::handle_guarded(*stages[i], *event, emit)) {
-          // As the daemon's stage thread: counted, and the stage recovered before the next event.
-          StageReport& report = stage_reports[i];
-          ++report.failures;
-          report.recoveries += failure->recovered ? 1 : 0;
-          report.last_failure = failure->recovered ? failure->message : failure->recover_message;
-        }
-        const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-        latency_samples[i].push(stage_reports[i].latency_ms, ms);
-        if (segment_us > 0) segment_latency[i].push_back(ms);
-        stage_reports[i].latency_max_ms = std::max(stage_reports[i].latency_max_ms, ms);
-        ++stage_reports[i].processed;
-      }
-    }
-  };
-
-  // Pass 2: the records in their turn; one read early waits (in memory) for its turn.
-  {
-    runtime::LogReader reader(log_path);
-    std::map<uint32_t, runtime::LogRecord> early;
-    uint32_t next_turn = 0, index = 0;
-    int64_t done = 0;
-    auto step = [&](const runtime::LogRecord& r) {
-      process(r);
-      ++next_turn;
-      if (progress && (++done % 4096 == 0)) progress(done, result.records);
-    };
-    while (auto r = reader.next()) {
-      if (index >= rank.size()) break;  // the file grew since pass 1
-      const uint32_t turn = rank[index++];
-      if (turn != next_turn) {
-        early.emplace(turn, std::move(*r));
-        continue;
-      }
-      step(*r);
-      for (auto it = early.begin(); it != early.end() && it->first == next_turn; it = early.erase(it)) step(it->second);
-    }
-  }
-  engine.finish(emit);
-  if (segment_us > 0 && result.last_utime > segment_start_utime) close_segment(result.last_utime);
+    if (progress && (++done % 4096 == 0)) progress(done, result.records);
+  });
+  driver.finish();
+  collector.finish(driver);
   if (progress) progress(result.records, result.records);
-
-  for (size_t i = 0; i < stage_reports.size(); ++i) {
-    StageReport& report = stage_reports[i];
-    report.counters = engine.stages()[i]->counters();
-    report.counters.push_back({"stage_failures", report.failures});  // named as on the daemon's status
-    report.counters.push_back({"stage_recoveries", report.recoveries});
-  }
-  result.stages = std::move(stage_reports);
-  result.channels = stats.snapshot();
-  result.published_counts = publisher.counts();
   result.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
   return result;
 }
 
-}  // namespace sextant::replay
+}  // namespace sextant::tools

@@ -14,7 +14,7 @@
 #include <string>
 #include <vector>
 
-namespace sextant::replay {
+namespace sextant::tools {
 
 struct PublishedMessage {
   std::string channel;
@@ -120,4 +120,4 @@ ReplayResult replay_log(const std::string& log_path, const config::DaemonConfig&
 /// fingerprint.  nullopt when the buffer is too short.
 std::optional<int64_t> peek_utime(const std::vector<uint8_t>& bytes);
 
-}  // namespace sextant::replay
+}  // namespace sextant::tools

@@ -6,11 +6,15 @@ set -euo pipefail
 packages=(
   build-essential cmake pkg-config make
   liblcm-dev liblcm-bin liblcm-java libjchart2d-java libglib2.0-dev default-jdk-headless
-  libeigen3-dev libsuitesparse-dev
+  libeigen3-dev libsuitesparse-dev libgeographiclib-dev
   libspdlog-dev libyaml-cpp-dev libcli11-dev doctest-dev libbenchmark-dev
   iproute2 util-linux procps python3
   pybind11-dev python3-dev python3-pytest   # the sextant Python module and its tests
   chromium   # the report test renders the HTML report in headless Chromium
+  # `sextant convert rosbag`: ROS 1's bag reader and message headers (cmake/rosbag.cmake says why the ROS 2
+  # pluginlib and class_loader headers are here); python3-rosbag is the test's independent reader.
+  librosbag-storage-dev libsensor-msgs-dev libnav-msgs-dev libgeometry-msgs-dev
+  pluginlib-dev libclass-loader-dev librcpputils-dev librcutils-dev libament-index-cpp-dev python3-rosbag
 )
 # Optional extras: installed when asked for (benchmarks against Ceres).
 if [[ "${SEXTANT_WITH_BENCH:-0}" == 1 ]]; then packages+=(libceres-dev libopenblas0 time); fi

@@ -30,7 +30,7 @@
 #include "daemon/runtime/latency_recorder.hpp"
 #include "daemon/runtime/lcm_log.hpp"
 #include "daemon/runtime/raw_subscription.hpp"
-#include "replay/json_writer.hpp"
+#include "report/json_writer.hpp"
 
 #include <sextant/status_t.hpp>
 
@@ -458,7 +458,7 @@ int run_measure(const MeasureOptions& o) {
                 static_cast<long long>(receiver.undecodable), static_cast<long long>(receiver.unknown_time));
 
   if (!o.json.empty()) {
-    sextant::replay::JsonWriter j;
+    sextant::tools::JsonWriter j;
     j.begin_object().field("samples_sent", sent).field("rate_hz", o.rate_hz).field("window_s", window_ms * 1e-3)
         .field("load_begin", load_begin).field("load_end", load_end);
     auto put = [&](const ChannelResult& c) {

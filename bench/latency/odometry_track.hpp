@@ -5,7 +5,7 @@
 //   step k     delta_k = Exp([v dt, 0, 0, 0, 0, w(t_k) dt])   (body frame of the previous pose)
 //   pose       T_k = T_{k-1} delta_k,  T_0 = identity
 //   covariance P_k = Ad(delta_k^-1) P_{k-1} Ad(delta_k^-1)' + Q,  Q = diag(s_t^2 d, s_t^2 d, 0, 0, 0, s_r^2 d), d = v dt
-// (the same propagation as replay/g2o_converter.cpp), Q also sent as the increment covariance.
+// (the same propagation as convert/g2o_converter.cpp), Q also sent as the increment covariance.
 // Times: utime_k = start_utime + k * period_us, strictly increasing.
 #include "daemon/engine/events.hpp"
 #include "estimators/lie/se3.hpp"

@@ -2,7 +2,7 @@
 // Typed input events of the engine: what the bus (or a log) delivers, already decoded and validated.
 // Plain C++ and Eigen only; the daemon's codec turns LCM messages into these (daemon/runtime/codec.hpp).
 //
-// Conventions (DESIGN.md): times are utime, int64 microseconds; poses are a position in metres and a unit
+// Conventions (as in lcmtypes/sextant/*.lcm): times are utime, int64 microseconds; poses are a position in metres and a unit
 // quaternion (Eigen stores it as x,y,z,w but its constructor takes w,x,y,z); tangent vectors and covariances are
 // ordered translation first, then rotation, with the perturbation on the right (T = T_hat * exp(xi)).
 #include <Eigen/Core>

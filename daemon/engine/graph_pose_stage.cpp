@@ -9,14 +9,6 @@ namespace sextant::engine {
 
 void GraphPoseStage::handle(const Event& e, const Emit& emit) {
   const auto& o = std::get<Odometry>(e);
-  auto [it, first] = last_utime_.try_emplace(o.source, o.utime);
-  if (!first) {
-    if (o.utime <= it->second) {
-      ++out_of_order_;
-      return;
-    }
-    it->second = o.utime;
-  }
   FusedPose out;
   out.utime = o.utime;
   out.source = o.source;
@@ -38,7 +30,7 @@ void GraphPoseStage::handle(const Event& e, const Emit& emit) {
   Eigen::Matrix<double, 7, 1> pose;
   pose << out.pose.position, out.pose.orientation.coeffs();
   if (const filter::Health h = filter::estimate_health(pose, out.covariance, 6); h != filter::Health::kHealthy) {
-    refusals_.count(h);  // the odometry's time still counts as seen: published times never go back
+    refusals_.count(h);
     return;
   }
   ++published_;
@@ -46,12 +38,12 @@ void GraphPoseStage::handle(const Event& e, const Emit& emit) {
 }
 
 void GraphPoseStage::save(archive::ArchiveWriter& w) {
-  w(last_utime_)(published_)(out_of_order_)(before_correction_)(correction_ages_)(static_cast<uint64_t>(age_next_));
+  w(published_)(before_correction_)(correction_ages_)(static_cast<uint64_t>(age_next_));
   w(refusals_.non_finite)(refusals_.indefinite);
 }
 
 void GraphPoseStage::load(archive::ArchiveReader& r) {
-  r(last_utime_)(published_)(out_of_order_)(before_correction_)(correction_ages_);
+  r(published_)(before_correction_)(correction_ages_);
   age_next_ = static_cast<size_t>(r.get<uint64_t>());
   r(refusals_.non_finite)(refusals_.indefinite);
   // Filling, the next slot is the one after the last (== size); full, any slot of the ring.

@@ -4,8 +4,9 @@
 //     T_map(t) = T_map(kf) (T_odom(kf)^-1 T_odom(t)),
 // with covariance Ad(D^-1) P_kf Ad(D^-1)' + Q_D, D = T_odom(kf)^-1 T_odom(t), P_kf the keyframe's marginal and Q_D the
 // odometry's own growth since the keyframe (its pose covariance minus the transported one, PSD-projected).  Before
-// the first correction a body's odometry frame is its map frame.  Never publishes a utime at or before the last one
-// of the same body.  A pose that is not finite or whose covariance is indefinite (estimate_health.hpp: a
+// the first correction a body's odometry frame is its map frame.  The intake gives each body's odometry in strictly
+// increasing time, and the publisher refuses a pose at or before the last one published (its one rule), so the
+// stage keeps no per-body time.  A pose that is not finite or whose covariance is indefinite (estimate_health.hpp: a
 // correction or an odometry message gone wrong) is not published and is counted ("refused_non_finite",
 // "refused_indefinite").  A stage of its own so that it runs on its own thread in the daemon, never behind a solve.
 #include "daemon/engine/graph_correction.hpp"
@@ -13,10 +14,8 @@
 #include "estimators/filter/estimate_health.hpp"
 
 #include <algorithm>
-#include <vector>
-
-#include <map>
 #include <memory>
+#include <vector>
 
 namespace sextant::engine {
 
@@ -27,15 +26,13 @@ class GraphPoseStage final : public Stage {
   std::optional<PrimaryEstimator> estimator_kind() const override { return PrimaryEstimator::kGraph; }
   bool accepts(const Event& e) const override { return std::holds_alternative<Odometry>(e); }
   void handle(const Event& e, const Emit& emit) override;
-  void forget(const std::string& source) override { last_utime_.erase(source); }
-  /// The state directory: each body's last published time (the correction itself is the graph stage's), counters.
+  /// The state directory: the counters (the correction itself is the graph stage's).
   void save(archive::ArchiveWriter& w) override;
   void load(archive::ArchiveReader& r) override;
   Counters counters() const override {
     int64_t age_max = 0;
     for (int64_t a : correction_ages_) age_max = std::max(age_max, a);
     return {{"published", published_},
-            {"out_of_order", out_of_order_},
             {"before_correction", before_correction_},
             {"correction_age_us", correction_ages_.empty() ? 0 : correction_ages_[(age_next_ + correction_ages_.size() - 1) % correction_ages_.size()]},
             {"correction_age_us_max", age_max},
@@ -45,8 +42,7 @@ class GraphPoseStage final : public Stage {
 
  private:
   std::shared_ptr<const GraphCorrectionBoard> corrections_;
-  std::map<std::string, int64_t> last_utime_;
-  int64_t published_ = 0, out_of_order_ = 0, before_correction_ = 0;
+  int64_t published_ = 0, before_correction_ = 0;
   /// Data time from the correction's keyframe to the odometry it was applied to (how far the graph lags the fused
   /// pose): the last value and the largest of the last 1024 (status: correction_age_us, correction_age_us_max).
   static constexpr size_t kAgeRing = 1024;

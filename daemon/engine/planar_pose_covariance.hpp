@@ -1,7 +1,7 @@
 #pragma once
 // The covariance a planar filter publishes in a FusedPose.  Planar filters (EKF, particle filter) estimate
 // (x, y, theta) in the map frame with a covariance P over those global coordinates; sextant's convention
-// (events.hpp, DESIGN.md) is a 6x6 covariance over the right perturbation [dx dy dz | rx ry rz] in the body frame.
+// (events.hpp) is a 6x6 covariance over the right perturbation [dx dy dz | rx ry rz] in the body frame.
 // For SE(2), T = T_hat * Exp(delta_body) gives, to first order, delta_global = blockdiag(R(theta), 1) delta_body, so
 //   delta_body = J delta_global,  J = blockdiag(R(theta)^T, 1),  P_body = J P J^T,
 // placed on the x, y and yaw rows/columns (0, 1, 5); z, roll and pitch are left at zero.

@@ -264,7 +264,7 @@ Decoded to_event(const sextant::loop_closure_t& m) {
 
 namespace {
 
-// Every message starts the same way (DESIGN.md): its time, the sender's name and the sender's sequence number.
+// Every message starts the same way (lcmtypes/sextant/*.lcm): its time, the sender's name and the sender's sequence number.
 template <class Message>
 Message message_header(int64_t utime, const std::string& sender, int64_t seq) {
   Message m{};

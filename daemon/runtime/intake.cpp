@@ -26,12 +26,17 @@ StreamKey stream_of(const std::string& channel, const engine::Event& e) {
       e);
 }
 
-int64_t wall_utime() {
-  return std::chrono::duration_cast<std::chrono::microseconds>(std::chrono::system_clock::now().time_since_epoch())
-      .count();
+}  // namespace
+
+Arrival Arrival::now() {
+  return {std::chrono::steady_clock::now(),
+          std::chrono::duration_cast<std::chrono::microseconds>(std::chrono::system_clock::now().time_since_epoch())
+              .count()};
 }
 
-}  // namespace
+Arrival Arrival::at_log_time(int64_t utime) {
+  return {std::chrono::steady_clock::time_point(std::chrono::microseconds(utime)), utime};
+}
 
 IntakeOptions intake_options(const config::DaemonConfig& c, bool live) {
   IntakeOptions o;
@@ -62,13 +67,14 @@ void Intake::reject(const std::string& channel, const std::string& reason, const
   if (on_reject_) on_reject_(channel, reason, message);
 }
 
-std::optional<engine::Event> Intake::accept(const std::string& channel, const void* data, size_t size) {
+std::optional<engine::Event> Intake::accept(const std::string& channel, const void* data, size_t size,
+                                            Arrival arrival) {
   auto it = channels_.find(channel);
   if (it == channels_.end()) return std::nullopt;
   stats_.received(channel);
   resynced_body_.clear();
   try {
-    return accept_unguarded(channel, it->second, data, size);
+    return accept_unguarded(channel, it->second, data, size, arrival);
   } catch (const std::exception& e) {
     reject(channel, "internal", channel + ": " + e.what());
     return std::nullopt;
@@ -76,7 +82,7 @@ std::optional<engine::Event> Intake::accept(const std::string& channel, const vo
 }
 
 std::optional<engine::Event> Intake::accept_unguarded(const std::string& channel, InputKind kind, const void* data,
-                                                      size_t size) {
+                                                      size_t size, Arrival arrival) {
   MessageOrigin origin{{}, -1};
   Decoded d = decode_event(kind, data, size, &origin);
   // When the message decoded, its sender's sequence number tells what was lost before it (even if it is invalid).
@@ -95,9 +101,9 @@ std::optional<engine::Event> Intake::accept_unguarded(const std::string& channel
     return std::nullopt;
   }
   std::optional<TimeOrderGuard::LiveClock> live;
-  if (options_.live) live = TimeOrderGuard::LiveClock{wall_utime(), std::chrono::steady_clock::now()};
+  if (options_.live) live = TimeOrderGuard::LiveClock{arrival.wall_utime, arrival.steady};
   const int64_t resyncs = order_.resyncs();
-  if (auto why = order_.check(key.stream, engine::event_utime(event), key.strict, key.signature, live)) {
+  if (auto why = order_.check(key.stream, engine::event_utime(event), key.strict, key.signature, live, arrival.steady)) {
     reject(channel, why->reason, channel + ": " + why->message);
     return std::nullopt;
   }

@@ -11,12 +11,25 @@
 #include "daemon/runtime/sequence_gaps.hpp"
 #include "daemon/runtime/time_order_guard.hpp"
 
+#include <chrono>
 #include <functional>
 #include <map>
 #include <optional>
 #include <string>
 
 namespace sextant::runtime {
+
+/// When a message arrived.  Live: the bus's clocks (the monotonic one for idle expiry and the slack of a paused
+/// sender, the wall clock for far-future stamps).  Replay: the log's time on both, so that what the intake decides
+/// depends on the data alone, never on how fast the replay runs.
+struct Arrival {
+  std::chrono::steady_clock::time_point steady;
+  int64_t wall_utime = 0;
+  /// Now, by the machine's clocks (a live daemon).
+  static Arrival now();
+  /// At a log time (microseconds): replay.
+  static Arrival at_log_time(int64_t utime);
+};
 
 struct IntakeOptions {
   TimeGuardOptions time;  // time_order_guard.hpp (its max_streams bounds bodies and sensors, idle_s expires them)
@@ -38,8 +51,9 @@ class Intake {
   void add_channel(const std::string& channel, InputKind kind);
   const std::map<std::string, InputKind>& channels() const { return channels_; }
 
-  /// Decodes, validates, time-checks and plausibility-checks one message; nullopt when it was rejected (and counted).
-  std::optional<engine::Event> accept(const std::string& channel, const void* data, size_t size);
+  /// Decodes, validates, time-checks and plausibility-checks one message that arrived at `arrival`; nullopt when it
+  /// was rejected (and counted).
+  std::optional<engine::Event> accept(const std::string& channel, const void* data, size_t size, Arrival arrival);
 
   /// The body (odometry source) whose clock the last accepted message re-synchronised, empty when it did not: the
   /// daemon has every stage forget that body just before this message (its state belongs to the old clock).
@@ -59,7 +73,8 @@ class Intake {
   std::vector<std::string> take_expired_bodies();
 
  private:
-  std::optional<engine::Event> accept_unguarded(const std::string& channel, InputKind kind, const void* data, size_t size);
+  std::optional<engine::Event> accept_unguarded(const std::string& channel, InputKind kind, const void* data, size_t size,
+                                                Arrival arrival);
   void reject(const std::string& channel, const std::string& reason, const std::string& message);
 
   ChannelStats& stats_;

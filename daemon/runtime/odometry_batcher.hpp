@@ -56,6 +56,17 @@ class OdometryBatcher {
   /// False: the event was dropped (the queue refused it or its token, or a bound was reached).
   bool offer(const QueuedEvent& event, const EnqueueEvent& enqueue_event, const EnqueueToken& enqueue_token);
 
+  /// Intake thread: queues `marker` (through `enqueue`) as an event of `body` that is not odometry: once queued it
+  /// closes the body's batch, so the body's later odometry goes into a new batch behind it.  False when the queue
+  /// refused it.
+  template <class Enqueue>
+  bool offer_marker(const std::string& body, const Enqueue& enqueue) {
+    std::lock_guard lock(mutex_);
+    if (!enqueue()) return false;
+    if (auto it = bodies_.find(body); it != bodies_.end()) it->second.open.reset();
+    return true;
+  }
+
   /// Stage thread: the messages of a popped token's batch, in arrival order.  The batch is closed: the body's next
   /// message opens a new one.
   std::deque<QueuedEvent> take(const Token& token);

@@ -30,9 +30,9 @@ void Publisher::send(const std::string& channel, Msg msg) {
   raw_(channel, bytes, msg.utime);
 }
 
-void Publisher::publish(const engine::Output& output) {
+bool Publisher::publish(const engine::Output& output) {
   std::lock_guard lock(mutex_);
-  std::visit(
+  return std::visit(
       [&](const auto& o) {
         using T = std::decay_t<decltype(o)>;
         if constexpr (std::is_same_v<T, engine::FusedPose>) {
@@ -49,7 +49,7 @@ void Publisher::publish(const engine::Output& output) {
           if (!inserted) {
             if (o.utime <= it->second) {
               ++not_monotonic_;
-              return;
+              return false;
             }
             it->second = o.utime;
           }
@@ -65,6 +65,7 @@ void Publisher::publish(const engine::Output& output) {
         } else if constexpr (std::is_same_v<T, engine::Targets>) {
           send(channels_.full(channels_.targets), to_message(o, sender_, 0));
         }
+        return true;
       },
       output);
 }

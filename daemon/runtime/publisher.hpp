@@ -38,7 +38,8 @@ class Publisher {
   Publisher(config::Channels channels, std::string sender, std::string primary_estimator, RawSink raw,
             size_t max_tracked = kDefaultMaxTracked);
 
-  void publish(const engine::Output& output);
+  /// Publishes one engine output; false when it was not published (a FusedPose not after the last one).
+  bool publish(const engine::Output& output);
   void publish(const sextant::status_t& status);
 
   /// Messages published per channel.

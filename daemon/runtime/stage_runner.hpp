@@ -3,14 +3,16 @@
 // the event and counts it.  Latency is measured from the moment the event was received to the end of `handle`.
 // With odometry batching (the graph stage's, odometry_batcher.hpp) a body's odometry waits in batches behind one
 // queue slot each; the thread hands every message of a batch to `handle` on its own, as replay does.
-// Nothing leaves the thread: an exception from the stage (a CHOLMOD failure in the smoother, an allocation) is
-// caught, counted ("stage_failures", the message kept as `last_failure` and logged), and the stage is asked to
-// recover (Stage::recover: reset the body, rebuild a factorization) before the next event.
+// Each event is handled through the stage's StageHost (stage_host.hpp), as replay handles it: nothing leaves the
+// thread (an exception from the stage is caught, counted as "stage_failures", kept as `last_failure` and logged, and
+// the stage recovers before the next event), and a forgotten body is forgotten by the publisher after the stage's
+// earlier outputs.
 #include "daemon/engine/stage.hpp"
 #include "daemon/runtime/bounded_queue.hpp"
 #include "daemon/runtime/latency_recorder.hpp"
 #include "daemon/runtime/odometry_batcher.hpp"
 #include "daemon/runtime/queued_event.hpp"
+#include "daemon/runtime/stage_host.hpp"
 
 #include <atomic>
 #include <chrono>
@@ -52,18 +54,17 @@ class StageRunner {
   /// Offers an event the stage accepts (one thread at a time: the intake's); false when it was dropped (the queue was
   /// full, or a bound of the batcher was reached).
   bool offer(const QueuedEvent& event);
-  bool accepts(const engine::Event& event) const { return stage_.accepts(event); }
-  /// Has the stage forget a body (Stage::forget) on its own thread, before it handles its next event (any thread).
-  /// Every body asked for is forgotten: they are the bodies the intake forgot since the stage's last event, each
-  /// once (the intake tracks at most daemon.max_sources at a time).
-  void forget(const std::string& source) {
-    std::lock_guard lock(forget_mutex_);
-    forget_.insert(source);
-  }
+  bool accepts(const engine::Event& event) const { return host_.stage().accepts(event); }
+  /// Has the stage forget a body (Stage::forget) on its own thread, in order with the events offered before (one
+  /// thread at a time: the intake's): the order takes a queue slot (and closes the body's odometry batch), so the
+  /// body's earlier events are handled first.  When the queue is full the order is kept aside and carried out before
+  /// the stage's next event, counted as "forget_out_of_order" (the bodies the intake forgets are at most
+  /// daemon.max_sources at a time, so the orders kept aside are bounded too).
+  void forget(const std::string& source);
   /// Called on the stage's thread each time the stage forgot a body (after idling, or before the first message of a
   /// re-synchronised clock, QueuedEvent::forget_first), after the stage's earlier outputs: how the publisher forgets
   /// what it keeps for that body.  Set before start.
-  void on_forget(std::function<void(const std::string&)> hook) { on_forget_ = std::move(hook); }
+  void on_forget(StageHost::ForgetHook hook) { host_.on_forget(std::move(hook)); }
 
   void start();
   /// Refuses further events (what is queued stays).
@@ -80,7 +81,7 @@ class StageRunner {
   template <class F>
   void with_stage(F&& f) {
     std::lock_guard lock(stage_mutex_);
-    f(stage_);
+    f(host_.stage());
   }
   const LatencyRecorder& latency() const { return latency_; }
 
@@ -88,29 +89,28 @@ class StageRunner {
   void loop();
   // Hands one event to the stage (the stage's lock held) and records its latency.
   void handle_one(const QueuedEvent& event);
-  // A call into the stage threw: counted, logged (the first ten, then every power of two), kept as the last failure.
-  void count_failure(const std::string& message);
-  // Has the stage (and the on_forget hook) forget a body; the stage's lock held.
-  void forget_now(const std::string& source);
+  // Copies the stage's counters out for status() (the stage's lock held).
+  void copy_counters();
 
-  engine::Stage& stage_;
+  StageHost host_;
   std::mutex stage_mutex_;  // held while the stage works on an event (and by with_stage)
-  engine::Emit emit_;
-  // A queue slot: one event, or the token of a batch of one body's odometry.
-  using Slot = std::variant<QueuedEvent, OdometryBatcher::Token>;
+  // The order to forget a body, in the queue.
+  struct ForgetOrder {
+    std::string body;
+  };
+  // A queue slot: one event, the token of a batch of one body's odometry, or an order to forget a body.
+  using Slot = std::variant<QueuedEvent, OdometryBatcher::Token, ForgetOrder>;
   BoundedQueue<Slot> queue_;
   std::unique_ptr<OdometryBatcher> batcher_;  // null without batching
   LatencyRecorder latency_;
   std::thread thread_;
   std::atomic<int64_t> processed_{0};
-  std::atomic<int64_t> failures_{0}, recoveries_{0}, drain_discarded_{0};
+  std::atomic<int64_t> drain_discarded_{0};
   mutable std::mutex counters_mutex_;
   engine::Counters counters_;  // copied from the stage after each event (the stage is not thread-safe)
-  std::string last_failure_;   // under counters_mutex_
   std::mutex forget_mutex_;
-  std::unordered_set<std::string> forget_;  // bodies to forget before the next event (under forget_mutex_)
-  std::function<void(const std::string&)> on_forget_;
-  std::atomic<int64_t> resync_forgets_{0};
+  std::unordered_set<std::string> forget_;  // orders the full queue refused, carried out before the next event
+  std::atomic<int64_t> forget_out_of_order_{0};
 };
 
 }  // namespace sextant::runtime

@@ -80,8 +80,9 @@ bool TimeOrderGuard::evict(SteadyTime now) {
 }
 
 std::optional<TimeOrderGuard::Refusal> TimeOrderGuard::check(const std::string& stream, int64_t utime, bool strict,
-                                                             uint64_t signature, std::optional<LiveClock> live) {
-  const SteadyTime now = live ? live->now : std::chrono::steady_clock::now();
+                                                             uint64_t signature, std::optional<LiveClock> live,
+                                                             SteadyTime replay_now) {
+  const SteadyTime now = live ? live->now : replay_now;
   const auto max_ahead = static_cast<int64_t>(options_.max_ahead_s * 1e6);
   if (live && utime > live->wall_utime &&
       utime - live->wall_utime > static_cast<int64_t>(options_.max_ahead_of_wall_s * 1e6))

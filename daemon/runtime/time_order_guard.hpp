@@ -19,8 +19,8 @@
 //    clock) is forgotten, which frees its place.  Live, a full table also makes room by eviction: a new stream takes
 //    the place of the stream that sent the fewest messages among those silent for at least `evict_idle_s` (the
 //    longest silent of them on a tie), so a flood of one-off names cannot lock a real body out for longer than that,
-//    and a real body that merely paused is the last to go.  Replay never evicts (its answers must not depend on how
-//    fast it runs).
+//    and a real body that merely paused is the last to go.  Replay never evicts, and its idle expiry goes by the
+//    log's time (its answers must not depend on how fast it runs).
 #include "daemon/engine/jump_run.hpp"
 
 #include <chrono>
@@ -60,9 +60,12 @@ class TimeOrderGuard {
 
   /// nullopt when `utime` is acceptable for `stream` (and records it), else why not.  `signature` tells apart
   /// messages of one stream that may share a stamp (a loop closure's from/to); `live` gives the clocks of a live
-  /// run (nullopt in replay: no far-future check, idle expiry by the steady clock).
+  /// run; in replay (nullopt) there is no far-future check and no eviction, and idle expiry goes by `replay_now`, the
+  /// log's time as the caller maps it onto the steady clock's type, so that replay answers do not depend on how fast
+  /// the replay runs.
   std::optional<Refusal> check(const std::string& stream, int64_t utime, bool strictly_increasing,
-                               uint64_t signature = 0, std::optional<LiveClock> live = std::nullopt);
+                               uint64_t signature = 0, std::optional<LiveClock> live = std::nullopt,
+                               SteadyTime replay_now = SteadyTime{});
 
   int64_t resyncs() const { return resyncs_; }
   /// Streams forgotten: after idling (`idle_s`) or evicted from a full table (also counted in `evicted()`).

@@ -20,6 +20,7 @@ constexpr std::pair<UpdateReason, const char*> kUpdateReasons[] = {
     {UpdateReason::kNoTwist, "no_twist"},
     {UpdateReason::kUnknownLandmark, "unknown_landmark"},
     {UpdateReason::kMapFull, "map_full"},
+    {UpdateReason::kTooOld, "too_old"},
     {UpdateReason::kIndefinite, "indefinite"}};
 }  // namespace
 

@@ -22,10 +22,11 @@ enum class UpdateReason {
   kNoTwist,          // refused: velocities to fuse but no twist in the message or its predecessor
   kUnknownLandmark,  // refused: a landmark the state does not hold and may not add (not SLAM, or no id)
   kMapFull,          // refused: the state holds max_landmarks already
+  kTooOld,           // refused: stamped before the filter's history (inertial/lagged_eskf.hpp)
   kIndefinite,       // refused: the update would leave the covariance indefinite (estimate_health.hpp); undone
 };
 /// The reason's spelling for counters and logs: "none", "new_landmark", "gate", "non_finite", "singular",
-/// "no_components", "no_twist", "unknown_landmark", "map_full", "indefinite".
+/// "no_components", "no_twist", "unknown_landmark", "map_full", "too_old", "indefinite".
 const char* update_reason_name(UpdateReason reason);
 
 struct UpdateResult {

@@ -4,7 +4,7 @@
 //
 // A 3-D RelativePoseFactor's residual is g2o's [t_E; vec(q_E)] with vec(q_E) ~ phi / 2, so [t; phi] ~ T [t_E; vec(q_E)],
 // T = diag(I, 2 I), and its information is T Omega T: the rotation block times 4, the cross blocks times 2 (the
-// inverse of replay::g2o_information_to_sextant).  Passing Omega unchanged weighted every rotation 4 times too little.
+// inverse of tools::g2o_information_to_sextant).  Passing Omega unchanged weighted every rotation 4 times too little.
 #include "estimators/graph/factor.hpp"
 #include "estimators/lie/se3.hpp"
 

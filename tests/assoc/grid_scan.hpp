@@ -16,7 +16,7 @@ inline double wrap_angle(double a) {
   return a <= -M_PI ? a + 2 * M_PI : a;
 }
 
-// The grid case of replay/assoc_experiment.hpp: the paper's three sensors (km), 20 targets on a 5 x 4 grid of
+// The grid case of sim/assoc_experiment.hpp: the paper's three sensors (km), 20 targets on a 5 x 4 grid of
 // spacing d km at z = 5 centred at (15, 15), P_D 0.9, sigma 5 mrad, Poisson(5) false alarms per sensor uniform in
 // its field of view over [5, 25] x [5, 25] x [2, 8]; the costs' false-alarm density 5 / that field's area.  The
 // same random draws as the experiment's: `rng` seeded as its --seed gives its scans in turn.

@@ -16,7 +16,7 @@
 using namespace sextant::assoc;
 
 namespace {
-// The passive-association paper's sensors (replay/assoc_experiment.hpp).
+// The passive-association paper's sensors (sim/assoc_experiment.hpp).
 const Eigen::Vector3d kSensors[3] = {{30, 0, 0.1}, {0, 30, 0.1}, {0, 0, 0}};
 
 std::vector<BearingObservation> observe(const Eigen::Vector3d& target, double sigma, std::mt19937* rng) {

@@ -1,7 +1,7 @@
 // Fuzz harness: the MRCLAM converter.  The input is split at NUL bytes into the five files of one robot (barcodes,
 // landmark truth, robot truth, odometry, measurements).  Contract checked: a conversion or a std::runtime_error
 // (a barcode of 1e11 used to be cast to int: undefined behaviour, silently landmark 6).
-#include "replay/mrclam_converter.hpp"
+#include "convert/mrclam_converter.hpp"
 #include "temp_file.hpp"
 
 #include <cstdlib>
@@ -20,7 +20,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   }
   const std::string dir = sextant::fuzz::temp_dir();
   try {
-    (void)sextant::replay::convert_mrclam(dir, 1, dir + "/out.lcm", dir + "/gt.txt");
+    (void)sextant::tools::convert_mrclam(dir, 1, dir + "/out.lcm", dir + "/gt.txt");
   } catch (const std::runtime_error&) {
   }
   return 0;

@@ -23,7 +23,7 @@ for f in bin/sextantd bin/sextant lib/libsextant_estimators.a lib/libsextant_ass
          share/sextant/config/mrclam.yaml lib/systemd/system/sextantd.service; do
   [ -e "$p/$f" ] || fail "not installed: $f"
 done
-[ ! -e "$p/include/sextant/replay/cli" ] || fail "the CLI's private headers were installed"
+[ ! -e "$p/include/sextant/cli/command.hpp" ] || fail "the CLI's private headers were installed"
 [ ! -e "$p/include/sextant/estimators/graph/smoother" ] || fail "the smoother's internal headers were installed"
 [ -e "$p/include/sextant/estimators/graph/incremental_smoother.hpp" ] || fail "not installed: the smoother's public header"
 # The public graph headers a consumer includes reach no internal smoother header and no CHOLMOD (their dependency

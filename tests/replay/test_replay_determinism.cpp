@@ -1,8 +1,8 @@
 // Simulation and replay are deterministic: the same seed gives the same log, the same log the same outputs.
 #include "daemon/runtime/lcm_log.hpp"
 #include "replay/replay_driver.hpp"
-#include "replay/simulator.hpp"
-#include "replay/trajectory_io.hpp"
+#include "sim/simulator.hpp"
+#include "eval/trajectory_io.hpp"
 
 #include <doctest/doctest.h>
 
@@ -27,13 +27,13 @@ std::string file_bytes(const std::string& path) {
   return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
 }
 
-replay::SimulationSummary simulate_to(const std::string& path, const std::string& scenario, uint64_t seed) {
-  replay::SimulationOptions o;
-  o.scenario = replay::scenario_from_name(scenario);
+tools::SimulationSummary simulate_to(const std::string& path, const std::string& scenario, uint64_t seed) {
+  tools::SimulationOptions o;
+  o.scenario = tools::scenario_from_name(scenario);
   o.seed = seed;
   o.duration_s = 12;
   runtime::LogWriter w(path);
-  auto s = replay::simulate(o, w);
+  auto s = tools::simulate(o, w);
   w.flush();
   return s;
 }
@@ -53,17 +53,17 @@ TEST_CASE("the same seed gives a byte-identical simulated log, another seed a di
     for (const auto& p : {a, b, c}) std::remove(p.c_str());
   }
   // The scenario's spellings (`sextant simulate SCENARIO`): an unknown one names itself and the spellings.
-  CHECK(replay::scenario_names() == std::vector<std::string>{"planar", "spatial"});
-  CHECK(std::string(replay::scenario_name(replay::Scenario::kSpatial)) == "spatial");
-  CHECK_THROWS_WITH_AS(replay::scenario_from_name("3d"), "unknown scenario '3d' (planar or spatial)", std::invalid_argument);
+  CHECK(tools::scenario_names() == std::vector<std::string>{"planar", "spatial"});
+  CHECK(std::string(tools::scenario_name(tools::Scenario::kSpatial)) == "spatial");
+  CHECK_THROWS_WITH_AS(tools::scenario_from_name("3d"), "unknown scenario '3d' (planar or spatial)", std::invalid_argument);
 }
 
 TEST_CASE("replaying a log twice publishes the same bytes, and the ground truth is read back") {
   const auto log = temp_path("replay.lcm");
   const auto sim = simulate_to(log, "planar", 3);
   config::DaemonConfig cfg;
-  const auto r1 = replay::replay_log(log, cfg);
-  const auto r2 = replay::replay_log(log, cfg);
+  const auto r1 = tools::replay_log(log, cfg);
+  const auto r2 = tools::replay_log(log, cfg);
   REQUIRE(r1.published.size() == r2.published.size());
   bool same = true;
   for (size_t i = 0; i < r1.published.size(); ++i)
@@ -97,8 +97,8 @@ TEST_CASE("replay orders by message utime, not by the log's stamps") {
     for (auto it = records.rbegin(); it != records.rend(); ++it) w.write_raw(++stamp, it->channel, it->data.data(), it->data.size());
   }
   config::DaemonConfig cfg;
-  const auto forward = replay::replay_log(sim_log, cfg);
-  const auto reversed = replay::replay_log(log, cfg);
+  const auto forward = tools::replay_log(sim_log, cfg);
+  const auto reversed = tools::replay_log(log, cfg);
   CHECK(reversed.channels.at("ODOMETRY").rejected == 0);
   CHECK(reversed.published.size() == forward.published.size());
   std::remove(log.c_str());
@@ -107,14 +107,14 @@ TEST_CASE("replay orders by message utime, not by the log's stamps") {
 
 TEST_CASE("TUM files: written poses read back, and comments, commas, duplicates and bad rows") {
   const auto path = temp_path("traj.txt");
-  std::vector<replay::StampedPose> poses(3);
+  std::vector<tools::StampedPose> poses(3);
   for (int i = 0; i < 3; ++i) {
     poses[i].t = 100.0 + i * 0.5;
     poses[i].pose.position = {1.0 * i, -2.0 * i, 0.25};
     poses[i].pose.orientation = Eigen::Quaterniond(Eigen::AngleAxisd(0.3 * i, Eigen::Vector3d::UnitZ()));
   }
-  replay::write_tum(path, poses);
-  const auto back = replay::read_tum(path);
+  tools::write_tum(path, poses);
+  const auto back = tools::read_tum(path);
   REQUIRE(back.size() == 3);
   CHECK(back[2].t == doctest::Approx(101.0));
   CHECK((back[2].pose.position - poses[2].pose.position).norm() < 1e-8);
@@ -123,13 +123,13 @@ TEST_CASE("TUM files: written poses read back, and comments, commas, duplicates 
     std::ofstream f(path);
     f << "# timestamp tx ty tz qx qy qz qw\n\n1.0,1,2,3,0,0,0,1\n2.0\t4 5 6 0 0 0 1\n1.0 7 8 9 0 0 0 1\n";
   }
-  const auto mixed = replay::read_tum(path);
+  const auto mixed = tools::read_tum(path);
   REQUIRE(mixed.size() == 2);
   CHECK(mixed[0].pose.position.x() == 7);  // the later row with the same stamp wins
   {
     std::ofstream f(path);
     f << "1 2 3 4 0 0 0 1\n2 3 4 five 0 0 0 1\n";
   }
-  CHECK_THROWS_WITH(replay::read_tum(path), doctest::Contains(":2: not a number: 'five'"));
+  CHECK_THROWS_WITH(tools::read_tum(path), doctest::Contains(":2: not a number: 'five'"));
   std::remove(path.c_str());
 }

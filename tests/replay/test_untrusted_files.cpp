@@ -3,10 +3,10 @@
 // clear error naming FILE:LINE, or reads on.
 #include "daemon/config/daemon_config.hpp"
 #include "daemon/runtime/lcm_log.hpp"
-#include "replay/mrclam_converter.hpp"
+#include "convert/mrclam_converter.hpp"
 #include "replay/replay_driver.hpp"
-#include "replay/simulator.hpp"
-#include "replay/tum_converter.hpp"
+#include "sim/simulator.hpp"
+#include "convert/tum_converter.hpp"
 
 #include <doctest/doctest.h>
 
@@ -30,15 +30,15 @@ TEST_CASE("TUM -> LCM: a 9e12-second gap converts at once (frame-time stepping l
   const auto gt = temp("gap.txt"), log = temp("gap.lcm");
   std::ofstream(gt) << "1.0 0 0 0 0 0 0 1\n1.05 0.01 0 0 0 0 0 1\n9e12 1 0 0 0 0 0 1\n9e12 1 0 0 0 0 0 1\n";
   const auto t0 = std::chrono::steady_clock::now();
-  replay::TumConversionOptions o;
+  tools::TumConversionOptions o;
   o.frame_rate_hz = 30;
-  const auto r = replay::convert_tum(gt, log, o);
+  const auto r = tools::convert_tum(gt, log, o);
   CHECK(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() < 5.0);
   CHECK(r.odometry == 3);
   std::ofstream(gt) << "1.0 0 0 0 0 0 0 1\n1e300 1 0 0 0 0 0 1\n";
-  CHECK_THROWS_WITH(replay::convert_tum(gt, log, o), doctest::Contains((gt + ":2: timestamp").c_str()));
+  CHECK_THROWS_WITH(tools::convert_tum(gt, log, o), doctest::Contains((gt + ":2: timestamp").c_str()));
   std::ofstream(gt) << "1.0 0 0 0 0 0 0 1\nnan 1 0 0 0 0 0 1\n";
-  CHECK_THROWS_WITH(replay::convert_tum(gt, log, o), doctest::Contains((gt + ":2: value 1 is not finite").c_str()));
+  CHECK_THROWS_WITH(tools::convert_tum(gt, log, o), doctest::Contains((gt + ":2: value 1 is not finite").c_str()));
   std::remove(gt.c_str());
   std::remove(log.c_str());
 }
@@ -53,24 +53,24 @@ TEST_CASE("MRCLAM: a barcode or landmark id outside int's range is an error nami
   write("Robot1_Groundtruth.dat", "1.0 0 0 0\n1.1 0.01 0 0\n");
   write("Robot1_Odometry.dat", "1.0 0.1 0\n1.1 0.1 0\n");
   write("Robot1_Measurement.dat", "1.05 27 2.0 0.5\n");
-  CHECK_THROWS_WITH(replay::convert_mrclam(dir, 1, dir + "/out.lcm", ""),
+  CHECK_THROWS_WITH(tools::convert_mrclam(dir, 1, dir + "/out.lcm", ""),
                     doctest::Contains((dir + "/Barcodes.dat:6: not an integer in int's range").c_str()));
   write("Barcodes.dat", "6 27\n");
   write("Robot1_Measurement.dat", "1.05 27 2.0 0.5\n1.07 4.5 2.0 0.5\n");
-  CHECK_THROWS_WITH(replay::convert_mrclam(dir, 1, dir + "/out.lcm", ""),
+  CHECK_THROWS_WITH(tools::convert_mrclam(dir, 1, dir + "/out.lcm", ""),
                     doctest::Contains((dir + "/Robot1_Measurement.dat:6: not an integer").c_str()));
   write("Robot1_Measurement.dat", "1.05 27 2.0 0.5\n");
-  CHECK_NOTHROW(replay::convert_mrclam(dir, 1, dir + "/out.lcm", ""));
+  CHECK_NOTHROW(tools::convert_mrclam(dir, 1, dir + "/out.lcm", ""));
   std::filesystem::remove_all(dir);
 }
 
 TEST_CASE("replay of a log with a corrupt event mid-file replays the rest and reports the damage") {
   const auto log = temp("sim.lcm"), damaged = temp("damaged.lcm");
-  replay::SimulationOptions so;
+  tools::SimulationOptions so;
   so.duration_s = 20;
   {
     runtime::LogWriter w(log);
-    replay::simulate(so, w);
+    tools::simulate(so, w);
     w.flush();
   }
   std::vector<uint8_t> b;
@@ -91,8 +91,8 @@ TEST_CASE("replay of a log with a corrupt event mid-file replays the rest and re
   b[mid + 24] = 0x01, b[mid + 25] = 0x00, b[mid + 26] = 0x00, b[mid + 27] = 0x00;
   std::ofstream(damaged, std::ios::binary).write(reinterpret_cast<const char*>(b.data()), static_cast<std::streamsize>(b.size()));
   const config::DaemonConfig cfg;
-  const auto clean = replay::replay_log(log, cfg);
-  const auto r = replay::replay_log(damaged, cfg);
+  const auto clean = tools::replay_log(log, cfg);
+  const auto r = tools::replay_log(damaged, cfg);
   CHECK(clean.records == static_cast<int64_t>(events));
   CHECK_FALSE(clean.log_damage.damaged());
   CHECK(r.records == static_cast<int64_t>(events) - 1);  // before: replay stopped at the damage, half the file

@@ -4,7 +4,7 @@
 #include "daemon/engine/events.hpp"
 #include "daemon/runtime/codec.hpp"
 #include "daemon/runtime/lcm_log.hpp"
-#include "replay/simulator.hpp"
+#include "sim/simulator.hpp"
 
 #include <cstdio>
 #include <filesystem>
@@ -14,14 +14,14 @@
 
 namespace sextant::test {
 
-inline std::vector<engine::Event> simulated_events(const replay::SimulationOptions& sim, bool bearings = true) {
+inline std::vector<engine::Event> simulated_events(const tools::SimulationOptions& sim, bool bearings = true) {
   const auto log = (std::filesystem::temp_directory_path() /
-                    ("sextant_events_" + std::to_string(::getpid()) + "_" + replay::scenario_name(sim.scenario) + "_" + sim.source + "_" +
+                    ("sextant_events_" + std::to_string(::getpid()) + "_" + tools::scenario_name(sim.scenario) + "_" + sim.source + "_" +
                      std::to_string(sim.seed) + ".lcm"))
                        .string();
   {
     runtime::LogWriter w(log);
-    replay::simulate(sim, w);
+    tools::simulate(sim, w);
   }
   const auto records = runtime::LogReader::read_all(log);
   std::remove(log.c_str());

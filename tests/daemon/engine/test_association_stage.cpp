@@ -4,7 +4,7 @@
 #include "daemon/config/daemon_config.hpp"
 #include "daemon/runtime/lcm_log.hpp"
 #include "replay/replay_driver.hpp"
-#include "replay/simulator.hpp"
+#include "sim/simulator.hpp"
 
 #include <doctest/doctest.h>
 
@@ -21,7 +21,7 @@ struct TargetScore {
 };
 
 // Targets within 1 m of a true position (found) and estimates farther than 1 m from every truth (ghosts).
-TargetScore score(const replay::ReplayResult& r) {
+TargetScore score(const tools::ReplayResult& r) {
   TargetScore s;
   s.scans = r.targets.size();
   for (const auto& scan : r.targets) {
@@ -49,15 +49,15 @@ TargetScore score(const replay::ReplayResult& r) {
 
 // A 30 s simulated run (4 sensors, 4 targets, P_D 0.9, 1 false alarm per sensor and scan unless `o` says
 // otherwise) replayed with `config`.
-replay::ReplayResult replay_simulated(const config::DaemonConfig& config, replay::SimulationOptions o = {}) {
+tools::ReplayResult replay_simulated(const config::DaemonConfig& config, tools::SimulationOptions o = {}) {
   const auto log = (std::filesystem::temp_directory_path() / ("sextant_assoc_" + std::to_string(::getpid()) + ".lcm")).string();
   o.duration_s = 30;
   o.seed = 5;
   {
     runtime::LogWriter w(log);
-    replay::simulate(o, w);
+    tools::simulate(o, w);
   }
-  auto r = replay::replay_log(log, config);
+  auto r = tools::replay_log(log, config);
   std::remove(log.c_str());
   return r;
 }
@@ -101,7 +101,7 @@ TEST_CASE("per-sensor false-alarm densities over a region and the target prior: 
 TEST_CASE("false alarms simulated in the sensors' fields of view: targets still found, the region's density cuts ghosts") {
   // Two false alarms per sensor and scan inside the view of the targets' region (the simulator's clutter region,
   // the box the config names): they compete with the targets' detections, unlike clutter over all azimuths.
-  replay::SimulationOptions o;
+  tools::SimulationOptions o;
   o.clutter = 2;
   o.clutter_region_min = {-30, -20, 4}, o.clutter_region_max = {30, 20, 16};
   const auto plain = score(replay_simulated(config::DaemonConfig{}, o));

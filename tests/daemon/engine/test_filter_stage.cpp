@@ -5,8 +5,8 @@
 #include "daemon/runtime/codec.hpp"
 #include "daemon/runtime/lcm_log.hpp"
 #include "replay/replay_driver.hpp"
-#include "replay/simulator.hpp"
-#include "replay/trajectory_eval.hpp"
+#include "sim/simulator.hpp"
+#include "eval/trajectory_eval.hpp"
 
 #include <doctest/doctest.h>
 
@@ -19,25 +19,25 @@ using namespace sextant;
 
 TEST_CASE("EKF-SLAM beats dead reckoning on a simulated planar run") {
   const auto log = (std::filesystem::temp_directory_path() / ("sextant_filter_" + std::to_string(::getpid()) + ".lcm")).string();
-  replay::SimulationOptions o;
+  tools::SimulationOptions o;
   o.duration_s = 60;
   o.seed = 4;
   {
     runtime::LogWriter w(log);
-    replay::simulate(o, w);
+    tools::simulate(o, w);
   }
   config::DaemonConfig cfg;
-  const auto r = replay::replay_log(log, cfg);
+  const auto r = tools::replay_log(log, cfg);
   REQUIRE(r.fused_poses.contains("ekf"));
   const auto& ekf = r.fused_poses.at("ekf");
   const auto& dr = r.fused_poses.at("dead_reckoning");
   CHECK(ekf.size() == dr.size());
-  std::vector<replay::StampedPose> truth, e, d;
+  std::vector<tools::StampedPose> truth, e, d;
   for (const auto& t : r.truth_poses) truth.push_back({t.utime * 1e-6, t.pose});
   for (const auto& p : ekf) e.push_back({p.utime * 1e-6, p.pose});
   for (const auto& p : dr) d.push_back({p.utime * 1e-6, p.pose});
-  const double ate_ekf = replay::absolute_trajectory_error(truth, e).error.rmse;
-  const double ate_dr = replay::absolute_trajectory_error(truth, d).error.rmse;
+  const double ate_ekf = tools::absolute_trajectory_error(truth, e).error.rmse;
+  const double ate_dr = tools::absolute_trajectory_error(truth, d).error.rmse;
   MESSAGE("ATE ekf " << ate_ekf << " m, dead reckoning " << ate_dr << " m");
   CHECK(ate_ekf < 0.5 * ate_dr);
   CHECK(ate_ekf < 0.1);
@@ -49,16 +49,16 @@ TEST_CASE("EKF-SLAM beats dead reckoning on a simulated planar run") {
 
 TEST_CASE("landmarks without ids: JCBB association and tentative landmarks recover the map") {
   const auto log = (std::filesystem::temp_directory_path() / ("sextant_filter_unk_" + std::to_string(::getpid()) + ".lcm")).string();
-  replay::SimulationOptions o;
+  tools::SimulationOptions o;
   o.duration_s = 60;
   o.seed = 6;
   o.unknown_ids = true;
   {
     runtime::LogWriter w(log);
-    replay::simulate(o, w);
+    tools::simulate(o, w);
   }
   config::DaemonConfig cfg;
-  const auto r = replay::replay_log(log, cfg);
+  const auto r = tools::replay_log(log, cfg);
   std::map<std::string, int64_t> c;
   for (const auto& s : r.stages)
     if (s.name == "filter")
@@ -69,22 +69,22 @@ TEST_CASE("landmarks without ids: JCBB association and tentative landmarks recov
   CHECK(c["associated"] > 1000);
   CHECK(c["new_landmarks"] <= seen_landmarks);       // no duplicates or spurious permanent landmarks
   CHECK(c["new_landmarks"] >= seen_landmarks / 2);   // most of the landmarks the robot passes are mapped
-  std::vector<replay::StampedPose> truth, e, d;
+  std::vector<tools::StampedPose> truth, e, d;
   for (const auto& t : r.truth_poses) truth.push_back({t.utime * 1e-6, t.pose});
   for (const auto& p : r.fused_poses.at("ekf")) e.push_back({p.utime * 1e-6, p.pose});
   for (const auto& p : r.fused_poses.at("dead_reckoning")) d.push_back({p.utime * 1e-6, p.pose});
-  CHECK(replay::absolute_trajectory_error(truth, e).error.rmse < 0.5 * replay::absolute_trajectory_error(truth, d).error.rmse);
+  CHECK(tools::absolute_trajectory_error(truth, e).error.rmse < 0.5 * tools::absolute_trajectory_error(truth, d).error.rmse);
   std::remove(log.c_str());
 }
 
 namespace {
 
 // The odometry and landmark events of a simulated planar run, in log order.
-std::vector<engine::Event> simulated_events(const replay::SimulationOptions& o) {
+std::vector<engine::Event> simulated_events(const tools::SimulationOptions& o) {
   const auto log = (std::filesystem::temp_directory_path() / ("sextant_filter_ev_" + std::to_string(::getpid()) + ".lcm")).string();
   {
     runtime::LogWriter w(log);
-    replay::simulate(o, w);
+    tools::simulate(o, w);
   }
   std::vector<engine::Event> out;
   for (const auto& r : runtime::LogReader::read_all(log)) {
@@ -106,7 +106,7 @@ std::map<std::string, int64_t> counters_of(const engine::Stage& s) {
 }  // namespace
 
 TEST_CASE("filter stage: late odometry and sightings inside the window give the in-order state") {
-  replay::SimulationOptions o;
+  tools::SimulationOptions o;
   o.duration_s = 20;
   o.seed = 8;
   const auto events = simulated_events(o);
@@ -143,7 +143,7 @@ TEST_CASE("filter stage: late odometry and sightings inside the window give the 
 }
 
 TEST_CASE("filter stage: too late, duplicate and backwards stamps are counted and dropped") {
-  replay::SimulationOptions o;
+  tools::SimulationOptions o;
   o.duration_s = 4;
   o.seed = 9;
   const auto events = simulated_events(o);
@@ -177,7 +177,7 @@ TEST_CASE("filter stage: too late, duplicate and backwards stamps are counted an
 }
 
 TEST_CASE("filter stage: a second odometry source of the same body is fused, timed out and reported") {
-  replay::SimulationOptions o;
+  tools::SimulationOptions o;
   o.duration_s = 10;
   o.seed = 10;
   const auto events = simulated_events(o);
@@ -217,7 +217,7 @@ TEST_CASE("filter stage: a second odometry source of the same body is fused, tim
 }
 
 TEST_CASE("filter stage: sightings after the newest prediction wait for the next one, at most 64 batches") {
-  replay::SimulationOptions o;
+  tools::SimulationOptions o;
   o.duration_s = 1;
   o.seed = 12;
   const auto events = simulated_events(o);
@@ -243,27 +243,27 @@ TEST_CASE("filter stage: sightings after the newest prediction wait for the next
 
 TEST_CASE("filter stage: a 3-D body gets the 3-D EKF-SLAM, better than dead reckoning") {
   const auto log = (std::filesystem::temp_directory_path() / ("sextant_filter_3d_" + std::to_string(::getpid()) + ".lcm")).string();
-  replay::SimulationOptions o;
-  o.scenario = replay::Scenario::kSpatial;
+  tools::SimulationOptions o;
+  o.scenario = tools::Scenario::kSpatial;
   o.duration_s = 60;
   o.seed = 5;
   {
     runtime::LogWriter w(log);
-    replay::simulate(o, w);
+    tools::simulate(o, w);
   }
   config::DaemonConfig cfg;
-  const auto r = replay::replay_log(log, cfg);
+  const auto r = tools::replay_log(log, cfg);
   std::remove(log.c_str());
   REQUIRE(r.fused_poses.contains("ekf"));
   const auto& ekf = r.fused_poses.at("ekf");
   CHECK(ekf.size() == r.fused_poses.at("dead_reckoning").size());
   CHECK_FALSE(ekf.back().planar);
-  std::vector<replay::StampedPose> truth, e, d;
+  std::vector<tools::StampedPose> truth, e, d;
   for (const auto& t : r.truth_poses) truth.push_back({t.utime * 1e-6, t.pose});
   for (const auto& p : ekf) e.push_back({p.utime * 1e-6, p.pose});
   for (const auto& p : r.fused_poses.at("dead_reckoning")) d.push_back({p.utime * 1e-6, p.pose});
-  const double ate_ekf = replay::absolute_trajectory_error(truth, e).error.rmse;
-  const double ate_dr = replay::absolute_trajectory_error(truth, d).error.rmse;
+  const double ate_ekf = tools::absolute_trajectory_error(truth, e).error.rmse;
+  const double ate_dr = tools::absolute_trajectory_error(truth, d).error.rmse;
   MESSAGE("3-D: ATE ekf " << ate_ekf << " m, dead reckoning " << ate_dr << " m");
   // Better than dead reckoning, by less than in the plane: 3-D SLAM without a map over 60 s (its consistency is
   // checked in test_filter_consistency).
@@ -282,15 +282,15 @@ TEST_CASE("filter stage: a 3-D body gets the 3-D EKF-SLAM, better than dead reck
 
 TEST_CASE("filter stage: two replays of a log give identical EKF poses") {
   const auto log = (std::filesystem::temp_directory_path() / ("sextant_filter_det_" + std::to_string(::getpid()) + ".lcm")).string();
-  replay::SimulationOptions o;
+  tools::SimulationOptions o;
   o.duration_s = 12;
   o.seed = 3;
   {
     runtime::LogWriter w(log);
-    replay::simulate(o, w);
+    tools::simulate(o, w);
   }
   config::DaemonConfig cfg;
-  const auto a = replay::replay_log(log, cfg), b = replay::replay_log(log, cfg);
+  const auto a = tools::replay_log(log, cfg), b = tools::replay_log(log, cfg);
   std::remove(log.c_str());
   const auto& pa = a.fused_poses.at("ekf");
   const auto& pb = b.fused_poses.at("ekf");
@@ -303,7 +303,7 @@ TEST_CASE("filter stage: two replays of a log give identical EKF poses") {
 }
 
 TEST_CASE("filter stage: recover after a failed event forgets that body only, which restarts from its next odometry") {
-  replay::SimulationOptions o;
+  tools::SimulationOptions o;
   o.duration_s = 2;
   o.seed = 9;
   const auto events = simulated_events(o);
@@ -334,7 +334,7 @@ TEST_CASE("filter stage: recover after a failed event forgets that body only, wh
 }
 
 TEST_CASE("graph stage: recover refactorizes from the graph and keeps every keyframe, and the stage goes on") {
-  replay::SimulationOptions o;
+  tools::SimulationOptions o;
   o.duration_s = 20;
   o.seed = 3;
   const auto events = simulated_events(o);

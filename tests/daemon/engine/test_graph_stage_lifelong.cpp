@@ -6,8 +6,8 @@
 #include "daemon/engine/trajectory_rebuild.hpp"
 #include "daemon/runtime/lcm_log.hpp"
 #include "replay/replay_driver.hpp"
-#include "replay/simulator.hpp"
-#include "replay/trajectory_eval.hpp"
+#include "sim/simulator.hpp"
+#include "eval/trajectory_eval.hpp"
 
 #include <doctest/doctest.h>
 
@@ -46,11 +46,11 @@ config::DaemonConfig graph_config(bool lifelong) {
   return cfg;
 }
 
-double ate_of(const replay::ReplayResult& r) {
-  std::vector<replay::StampedPose> truth, est;
+double ate_of(const tools::ReplayResult& r) {
+  std::vector<tools::StampedPose> truth, est;
   for (const auto& t : r.truth_poses) truth.push_back({static_cast<double>(t.utime) * 1e-6, t.pose});
   for (const auto& p : r.fused_poses.at("graph")) est.push_back({static_cast<double>(p.utime) * 1e-6, p.pose});
-  return replay::absolute_trajectory_error(truth, est).error.rmse;
+  return tools::absolute_trajectory_error(truth, est).error.rmse;
 }
 
 }  // namespace
@@ -59,29 +59,29 @@ TEST_CASE("lifelong: graph size and memory stay flat over a long run, loops stil
   // 480 s of laps (a lap of the simulator's 90 m course is 45 s): about 3200 keyframes, eight times the budget.
   const auto log = temp_path("lifelong.lcm");
   {
-    replay::SimulationOptions o;
+    tools::SimulationOptions o;
     o.duration_s = 480;
     o.seed = 4;
     o.sensors = 2;
     o.targets = 1;
     runtime::LogWriter w(log);
-    replay::simulate(o, w);
+    tools::simulate(o, w);
     w.flush();
   }
   // Streamed as the command-line replay does: bounded samples in memory, the rest seen once.  A subscriber rebuilds
   // TRAJECTORY from the messages as they come, and the fused poses are kept compactly for the ATE.
-  replay::ReplayOptions ro;
+  tools::ReplayOptions ro;
   ro.segment_seconds = 120;  // four quarters
   ro.max_kept = 1000;
   engine::TrajectoryRebuild rebuild;
-  std::vector<replay::StampedPose> life_poses;  // every 10th (the ATE's sample; the memory check is the engine's)
+  std::vector<tools::StampedPose> life_poses;  // every 10th (the ATE's sample; the memory check is the engine's)
   int64_t fused_seen = 0;
   ro.on_output = [&](const engine::Output& o) {
     if (const auto* p = std::get_if<engine::FusedPose>(&o); p && p->estimator == "graph" && fused_seen++ % 10 == 0)
       life_poses.push_back({static_cast<double>(p->utime) * 1e-6, p->pose});
     if (const auto* t = std::get_if<engine::Trajectory>(&o)) rebuild.add(*t);
   };
-  const auto life = replay::replay_log(log, graph_config(true), {}, ro);
+  const auto life = tools::replay_log(log, graph_config(true), {}, ro);
   REQUIRE(life.segments.size() == 4);
   for (const auto& seg : life.segments)
     MESSAGE("t " << seg.start_s << " s: graph keyframes " << counter(seg.graph_counters, "graph_keyframes") << ", factors "
@@ -100,8 +100,8 @@ TEST_CASE("lifelong: graph size and memory stay flat over a long run, loops stil
   CHECK(static_cast<double>(life.segments[3].rss_kb) <= 1.10 * static_cast<double>(life.segments[1].rss_kb));
 
   // The full-history graph on the same run: loops close as often, and the fused pose is about as accurate.
-  const auto full = replay::replay_log(log, graph_config(false));
-  const auto graph_counters = [](const replay::ReplayResult& r) {
+  const auto full = tools::replay_log(log, graph_config(false));
+  const auto graph_counters = [](const tools::ReplayResult& r) {
     for (const auto& s : r.stages)
       if (s.name == "graph") return s.counters;
     return engine::Counters{};
@@ -110,9 +110,9 @@ TEST_CASE("lifelong: graph size and memory stay flat over a long run, loops stil
   MESSAGE("loops accepted: lifelong " << loops_life << ", full " << loops_full);
   CHECK(loops_full > 50);
   CHECK(loops_life >= 0.9 * static_cast<double>(loops_full));
-  std::vector<replay::StampedPose> truth;
+  std::vector<tools::StampedPose> truth;
   for (const auto& t : full.truth_poses) truth.push_back({static_cast<double>(t.utime) * 1e-6, t.pose});
-  const double ate_life = replay::absolute_trajectory_error(truth, life_poses).error.rmse, ate_full = ate_of(full);
+  const double ate_life = tools::absolute_trajectory_error(truth, life_poses).error.rmse, ate_full = ate_of(full);
   MESSAGE("graph fused-pose ATE: lifelong " << ate_life << " m, full history " << ate_full << " m");
   CHECK(ate_life < 1.5 * ate_full);
   CHECK(ate_life < 0.1);

@@ -3,8 +3,8 @@
 #include "daemon/config/daemon_config.hpp"
 #include "daemon/runtime/lcm_log.hpp"
 #include "replay/replay_driver.hpp"
-#include "replay/simulator.hpp"
-#include "replay/trajectory_eval.hpp"
+#include "sim/simulator.hpp"
+#include "eval/trajectory_eval.hpp"
 
 #include <doctest/doctest.h>
 
@@ -17,20 +17,20 @@ namespace {
 
 std::string simulated_log(const std::string& name, uint64_t seed, bool unknown_ids) {
   const auto log = (std::filesystem::temp_directory_path() / (name + std::to_string(::getpid()) + ".lcm")).string();
-  replay::SimulationOptions o;
+  tools::SimulationOptions o;
   o.duration_s = 60;
   o.seed = seed;
   o.unknown_ids = unknown_ids;
   runtime::LogWriter w(log);
-  replay::simulate(o, w);
+  tools::simulate(o, w);
   return log;
 }
 
-double ate(const replay::ReplayResult& r, const std::string& estimator) {
-  std::vector<replay::StampedPose> truth, e;
+double ate(const tools::ReplayResult& r, const std::string& estimator) {
+  std::vector<tools::StampedPose> truth, e;
   for (const auto& t : r.truth_poses) truth.push_back({t.utime * 1e-6, t.pose});
   for (const auto& p : r.fused_poses.at(estimator)) e.push_back({p.utime * 1e-6, p.pose});
-  return replay::absolute_trajectory_error(truth, e).error.rmse;
+  return tools::absolute_trajectory_error(truth, e).error.rmse;
 }
 
 }  // namespace
@@ -41,7 +41,7 @@ TEST_CASE("particle filter stage: FastSLAM 2.0 poses at the odometry rate, far b
   cfg.engine.filter.type = engine::FilterType::kPf;
   cfg.engine.filter.pf.particles = 30;
   cfg.engine.filter.pf.seed = 5;
-  const auto r = replay::replay_log(log, cfg);
+  const auto r = tools::replay_log(log, cfg);
   const auto& pf = r.fused_poses.at("pf");
   CHECK(pf.size() == r.fused_poses.at("dead_reckoning").size());
   const double a_pf = ate(r, "pf"), a_dr = ate(r, "dead_reckoning");
@@ -58,13 +58,13 @@ TEST_CASE("particle filter stage: FastSLAM 2.0 poses at the odometry rate, far b
   CHECK(c["updates"] > 100);
   CHECK(c["rejected"] == 0);
   // Same seed, same poses; another seed, other poses.
-  const auto again = replay::replay_log(log, cfg);
+  const auto again = tools::replay_log(log, cfg);
   REQUIRE(again.fused_poses.at("pf").size() == pf.size());
   bool same = true;
   for (size_t i = 0; i < pf.size(); ++i) same = same && again.fused_poses.at("pf")[i].pose.position == pf[i].pose.position;
   CHECK(same);
   cfg.engine.filter.pf.seed = 6;
-  const auto other = replay::replay_log(log, cfg);
+  const auto other = tools::replay_log(log, cfg);
   CHECK(other.fused_poses.at("pf").back().pose.position != pf.back().pose.position);
   std::remove(log.c_str());
 }
@@ -74,7 +74,7 @@ TEST_CASE("particle filter stage: landmarks without ids are associated per parti
   config::DaemonConfig cfg;
   cfg.engine.filter.type = engine::FilterType::kPf;
   cfg.engine.filter.pf.particles = 20;
-  const auto r = replay::replay_log(log, cfg);
+  const auto r = tools::replay_log(log, cfg);
   std::map<std::string, int64_t> c;
   for (const auto& s : r.stages)
     if (s.name == "particle_filter")

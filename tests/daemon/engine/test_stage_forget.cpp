@@ -19,7 +19,7 @@ namespace {
 
 // Odometry, landmarks and loops of a simulated planar run of body `source`.
 std::vector<Event> run_of(const std::string& source, uint64_t seed, double seconds) {
-  replay::SimulationOptions sim;
+  tools::SimulationOptions sim;
   sim.seed = seed;
   sim.duration_s = seconds;
   sim.source = source;

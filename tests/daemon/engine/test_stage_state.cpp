@@ -22,8 +22,8 @@ using namespace sextant::engine;
 namespace {
 
 std::vector<Event> simulated_events(const std::string& scenario, double seconds, uint64_t seed) {
-  replay::SimulationOptions sim;
-  sim.scenario = replay::scenario_from_name(scenario);
+  tools::SimulationOptions sim;
+  sim.scenario = tools::scenario_from_name(scenario);
   sim.seed = seed;
   sim.duration_s = seconds;
   return test::simulated_events(sim);

@@ -27,14 +27,14 @@ const Emit ignore = [](Output) {};
 // re-anchors), and at `drop_at` an increment covariance that makes the keyframe edge's covariance indefinite
 // (the next increment makes it positive again), so the stage drops that keyframe and goes back to the one before.
 std::vector<Event> two_bodies(int64_t drop_at) {
-  replay::SimulationOptions a;
-  a.scenario = replay::Scenario::kPlanar;
+  tools::SimulationOptions a;
+  a.scenario = tools::Scenario::kPlanar;
   a.source = "robot1";
   a.seed = 5;
   a.duration_s = 70;
   a.odometry_rate_hz = 200;
-  replay::SimulationOptions b = a;
-  b.scenario = replay::Scenario::kSpatial;
+  tools::SimulationOptions b = a;
+  b.scenario = tools::Scenario::kSpatial;
   b.source = "robot2";
   b.seed = 6;
   std::vector<Event> events = test::simulated_events(a, false), other = test::simulated_events(b, false);

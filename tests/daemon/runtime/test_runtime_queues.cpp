@@ -87,14 +87,14 @@ TEST_CASE("intake rejects duplicate and backwards odometry per source, counts pe
   auto a_dup = odometry_bytes(100, "a");
   auto a_back = odometry_bytes(50, "a");
   auto a_next = odometry_bytes(200, "a");
-  CHECK(intake.accept("ODOMETRY", a.data(), a.size()).has_value());
-  CHECK(intake.accept("ODOMETRY", b.data(), b.size()).has_value());  // another source may share the time
-  CHECK_FALSE(intake.accept("ODOMETRY", a_dup.data(), a_dup.size()).has_value());
-  CHECK_FALSE(intake.accept("ODOMETRY", a_back.data(), a_back.size()).has_value());
-  CHECK(intake.accept("ODOMETRY", a_next.data(), a_next.size()).has_value());
+  CHECK(intake.accept("ODOMETRY", a.data(), a.size(), runtime::Arrival::now()).has_value());
+  CHECK(intake.accept("ODOMETRY", b.data(), b.size(), runtime::Arrival::now()).has_value());  // another source may share the time
+  CHECK_FALSE(intake.accept("ODOMETRY", a_dup.data(), a_dup.size(), runtime::Arrival::now()).has_value());
+  CHECK_FALSE(intake.accept("ODOMETRY", a_back.data(), a_back.size(), runtime::Arrival::now()).has_value());
+  CHECK(intake.accept("ODOMETRY", a_next.data(), a_next.size(), runtime::Arrival::now()).has_value());
   const uint8_t junk[] = {0xde, 0xad, 0xbe, 0xef, 0, 0, 0, 0, 1};
-  CHECK_FALSE(intake.accept("ODOMETRY", junk, sizeof junk).has_value());
-  CHECK_FALSE(intake.accept("OTHER", a.data(), a.size()).has_value());  // not an input channel: ignored, not counted
+  CHECK_FALSE(intake.accept("ODOMETRY", junk, sizeof junk, runtime::Arrival::now()).has_value());
+  CHECK_FALSE(intake.accept("OTHER", a.data(), a.size(), runtime::Arrival::now()).has_value());  // not an input channel: ignored, not counted
   const auto snap = stats.snapshot();
   const auto& c = snap.at("ODOMETRY");
   CHECK(c.received == 6);

@@ -132,26 +132,43 @@ class ForgettingStage final : public engine::Stage {
   engine::StageKind kind() const override { return engine::StageKind::kOther; }
   std::string_view name() const override { return "forgetting"; }
   bool accepts(const engine::Event& e) const override { return std::holds_alternative<engine::Odometry>(e); }
-  void handle(const engine::Event&, const engine::Emit&) override { ++handled; }
-  void forget(const std::string& source) override { forgotten.push_back(source); }
+  void handle(const engine::Event& e, const engine::Emit&) override {
+    ++handled;
+    calls.push_back("handle " + std::to_string(engine::event_utime(e)));
+  }
+  void forget(const std::string& source) override {
+    forgotten.push_back(source);
+    calls.push_back("forget " + source);
+  }
   int64_t handled = 0;
-  std::vector<std::string> forgotten;
+  std::vector<std::string> forgotten, calls;
 };
 }  // namespace
 
-TEST_CASE("a stage runner forgets every body it is told to, beyond 4096, each once, and tells its forget hook") {
+TEST_CASE("a stage runner forgets a body in order with the events before, and keeps the orders a full queue refuses") {
+  {
+    ForgettingStage stage;
+    runtime::StageRunner runner(stage, 16, [](engine::Output) {});
+    REQUIRE(runner.offer(odometry(1)));
+    runner.forget("a");
+    REQUIRE(runner.offer(odometry(2)));
+    runner.start();
+    runner.drain_and_stop();
+    CHECK(stage.calls == std::vector<std::string>{"handle 1", "forget a", "handle 2"});
+    CHECK(counter(runner.status(), "forget_out_of_order") == -1);  // none
+  }
   ForgettingStage stage;
   runtime::StageRunner runner(stage, 16, [](engine::Output) {});
   std::vector<std::string> told;
   runner.on_forget([&](const std::string& s) { told.push_back(s); });
-  for (int k = 0; k < 5000; ++k) runner.forget("body" + std::to_string(k));
-  runner.forget("body7");  // asked twice before the stage's next event: forgotten once
   REQUIRE(runner.offer(odometry(1)));
+  for (int k = 0; k < 5000; ++k) runner.forget("body" + std::to_string(k));
   runner.start();
   runner.drain_and_stop();
   CHECK(stage.forgotten.size() == 5000);  // a cap of 4096 used to drop the rest silently
   CHECK(told.size() == 5000);
   CHECK(stage.handled == 1);
+  CHECK(counter(runner.status(), "forget_out_of_order") == 5000 - 15);  // the queue held the event and 15 orders
   // A message that re-synchronised its body's clock: the body is forgotten just before it, and counted.
   ForgettingStage second;
   runtime::StageRunner resync(second, 16, [](engine::Output) {});

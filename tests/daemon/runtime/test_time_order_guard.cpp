@@ -68,10 +68,10 @@ TEST_CASE("one odometry message dated 2100 (or INT64_MAX) is refused and does no
     int accepted = 0;
     for (int k = 0; k < 100; ++k) {
       const auto b = odometry(kT0 + k * 20'000, "robot");
-      accepted += intake.accept("ODOMETRY", b.data(), b.size()).has_value() ? 1 : 0;
+      accepted += intake.accept("ODOMETRY", b.data(), b.size(), runtime::Arrival::now()).has_value() ? 1 : 0;
       if (k == 10) {
         const auto f = odometry(future, "robot");
-        CHECK_FALSE(intake.accept("ODOMETRY", f.data(), f.size()).has_value());
+        CHECK_FALSE(intake.accept("ODOMETRY", f.data(), f.size(), runtime::Arrival::now()).has_value());
       }
     }
     CHECK(accepted == 100);  // before the guard: 11 (every later message "before the previous 4102444800000000")
@@ -133,10 +133,10 @@ TEST_CASE("a future bearing scan no longer blocks its sensor, landmarks and loop
   for (int k = 0; k < 61; ++k) {
     if (k == 1) {
       const auto f = scan(k2100, 3);
-      CHECK_FALSE(intake.accept("BEARINGS", f.data(), f.size()).has_value());
+      CHECK_FALSE(intake.accept("BEARINGS", f.data(), f.size(), runtime::Arrival::now()).has_value());
     }
     const auto b = scan(kT0 + k * 100'000, 3);
-    accepted += intake.accept("BEARINGS", b.data(), b.size()).has_value() ? 1 : 0;
+    accepted += intake.accept("BEARINGS", b.data(), b.size(), runtime::Arrival::now()).has_value() ? 1 : 0;
   }
   CHECK(accepted == 61);
 
@@ -217,7 +217,7 @@ TEST_CASE("live, a full table makes room from the quietest source silent for evi
   CHECK(replay.evicted() == 0);
 }
 
-TEST_CASE("the intake names the bodies whose odometry stream expired (not sensors, not other channels)") {
+TEST_CASE("the intake names the bodies whose odometry stream expired (not sensors, not other channels), by the clock it is given") {
   runtime::ChannelStats stats;
   runtime::IntakeOptions o;
   o.time.idle_s = 0.05;
@@ -225,12 +225,12 @@ TEST_CASE("the intake names the bodies whose odometry stream expired (not sensor
   intake.add_channel("R/ODOMETRY", runtime::InputKind::kOdometry);
   const auto a = odometry(kT0, "robot/a", 0, "robot/a");
   const auto b = odometry(kT0, "b", 0, "b");
-  REQUIRE(intake.accept("R/ODOMETRY", a.data(), a.size()));
-  REQUIRE(intake.accept("R/ODOMETRY", b.data(), b.size()));
+  REQUIRE(intake.accept("R/ODOMETRY", a.data(), a.size(), runtime::Arrival::at_log_time(kT0)));
+  REQUIRE(intake.accept("R/ODOMETRY", b.data(), b.size(), runtime::Arrival::at_log_time(kT0)));
   CHECK(intake.take_expired_bodies().empty());
-  std::this_thread::sleep_for(std::chrono::milliseconds(1100));  // idle, and past the once-a-second sweep
+  // 1.1 s later by the given clock (a replay's log time): idle, and past the once-a-second sweep.  No wall time passes.
   const auto c = odometry(kT0 + 1, "b", 1, "b");
-  REQUIRE(intake.accept("R/ODOMETRY", c.data(), c.size()));
+  REQUIRE(intake.accept("R/ODOMETRY", c.data(), c.size(), runtime::Arrival::at_log_time(kT0 + 1'100'000)));
   const auto gone = intake.take_expired_bodies();
   REQUIRE(gone.size() == 2);  // both were idle at the sweep (b came back after it)
   CHECK(std::find(gone.begin(), gone.end(), "robot/a") != gone.end());
@@ -243,7 +243,7 @@ TEST_CASE("the intake counts sequence gaps per channel and sender as lost") {
   intake.add_channel("ODOMETRY", runtime::InputKind::kOdometry);
   auto send = [&](int64_t utime, int64_t seq, const std::string& sender) {
     const auto b = odometry(utime, sender, seq, sender);
-    intake.accept("ODOMETRY", b.data(), b.size());
+    intake.accept("ODOMETRY", b.data(), b.size(), runtime::Arrival::now());
   };
   send(kT0 + 1, 0, "a");
   send(kT0 + 2, 1, "a");

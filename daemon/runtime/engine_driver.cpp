@@ -1,0 +1,122 @@
+#include "daemon/runtime/engine_driver.hpp"
+
+#include <algorithm>
+
+namespace sextant::runtime {
+namespace {
+
+// The graph stage's odometry is batched per body on its thread (engine.graph.coalesce_odometry): the stage keeps
+// each body's state apart, so batching (which keeps each body's order but not the order across bodies) changes
+// nothing it computes.  The other stages see every message in arrival order (a filter may fuse several sources of
+// one body).
+std::optional<OdometryBatcherOptions> odometry_batching(const engine::Stage& stage, const engine::EngineConfig& config) {
+  if (stage.kind() != engine::StageKind::kGraph || !config.graph.coalesce_odometry) return std::nullopt;
+  OdometryBatcherOptions o;
+  o.max_batch = static_cast<size_t>(config.graph.odometry_batch_max);
+  o.max_waiting_per_body = static_cast<size_t>(config.graph.odometry_waiting_max);
+  o.max_waiting = static_cast<size_t>(config.graph.odometry_waiting_total_max);
+  return o;
+}
+
+}  // namespace
+
+EngineDriver::EngineDriver(const config::DaemonConfig& config, engine::Engine& engine, Publisher::RawSink raw,
+                           DriverOptions options)
+    : engine_(engine), options_(std::move(options)),
+      intake_(stats_, options_.on_reject, intake_options(config, options_.live)),
+      // The last FusedPose time per estimator channel and body: the bodies are bounded by max_sources.
+      publisher_(config.channels, config.name, engine.primary_estimator(), std::move(raw),
+                 static_cast<size_t>(std::max(config.max_sources, 1)) * 8),
+      emit_([this](engine::Output o) { publish(std::move(o)); }) {
+  const auto& ch = config.channels;
+  intake_.add_channel(ch.full(ch.odometry), InputKind::kOdometry);
+  intake_.add_channel(ch.full(ch.landmarks), InputKind::kLandmarks);
+  intake_.add_channel(ch.full(ch.bearings), InputKind::kBearings);
+  intake_.add_channel(ch.full(ch.loop_closures), InputKind::kLoopClosures);
+  make_lanes(config);
+}
+
+EngineDriver::~EngineDriver() {
+  for (auto& r : runners_) r->drain_and_stop();
+}
+
+void EngineDriver::make_lanes(const config::DaemonConfig& config) {
+  for (auto& stage : engine_.stages()) {
+    // A body the stage forgets is forgotten by the publisher for the stage's estimator too, after its earlier outputs.
+    StageHost::ForgetHook forget_published;
+    if (const std::string estimator(stage->estimator()); !estimator.empty())
+      forget_published = [this, estimator](const std::string& body) { publisher_.forget(estimator, body); };
+    if (options_.lanes == StageLanes::kInline) {
+      hosts_.push_back(std::make_unique<StageHost>(*stage, emit_));
+      hosts_.back()->on_forget(std::move(forget_published));
+      processed_.push_back(0);
+    } else {
+      runners_.push_back(std::make_unique<StageRunner>(*stage, static_cast<size_t>(config.queue_capacity), emit_,
+                                                       odometry_batching(*stage, config.engine)));
+      runners_.back()->on_forget(std::move(forget_published));
+    }
+  }
+}
+
+void EngineDriver::publish(engine::Output output) {
+  if (options_.zero_solve_time)
+    if (auto* t = std::get_if<engine::Trajectory>(&output)) t->solve_ms = 0;
+  if (publisher_.publish(output) && options_.on_published) options_.on_published(output);
+}
+
+void EngineDriver::forget_expired() {
+  for (const std::string& body : intake_.take_expired_bodies()) {
+    for (auto& h : hosts_) h->forget(body);
+    for (auto& r : runners_) r->forget(body);
+  }
+}
+
+void EngineDriver::route(const std::string& channel, const QueuedEvent& queued) {
+  for (size_t i = 0; i < hosts_.size(); ++i) {
+    if (!hosts_[i]->stage().accepts(queued.event)) continue;
+    const auto t0 = std::chrono::steady_clock::now();
+    hosts_[i]->handle(queued);
+    ++processed_[i];
+    if (options_.on_handled)
+      options_.on_handled(i, std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
+  }
+  for (auto& r : runners_)
+    if (r->accepts(queued.event) && !r->offer(queued)) stats_.dropped(channel);
+}
+
+bool EngineDriver::input(const std::string& channel, const void* data, size_t size, Arrival arrival) {
+  auto event = intake_.accept(channel, data, size, arrival);
+  forget_expired();
+  if (!event) return false;
+  if (options_.on_accepted) options_.on_accepted(*event);
+  route(channel, QueuedEvent{std::move(*event), std::chrono::steady_clock::now(), intake_.resynced_body()});
+  return true;
+}
+
+void EngineDriver::start() {
+  for (auto& r : runners_) r->start();
+}
+
+int64_t EngineDriver::finish(std::chrono::steady_clock::time_point deadline) {
+  for (auto& h : hosts_) h->finish();
+  for (auto& r : runners_) r->stop_intake();
+  int64_t discarded = 0;
+  for (auto& r : runners_) discarded += r->drain_and_stop(deadline);
+  return discarded;
+}
+
+std::vector<StageStatus> EngineDriver::stage_status() {
+  std::vector<StageStatus> all;
+  for (const auto& r : runners_) all.push_back(r->status());
+  for (size_t i = 0; i < hosts_.size(); ++i) {
+    StageStatus s;
+    s.name = std::string(hosts_[i]->stage().name());
+    s.processed = processed_[i];
+    s.counters = hosts_[i]->with_host_counters(hosts_[i]->stage_counters().value_or(engine::Counters{}));
+    s.last_failure = hosts_[i]->last_failure();
+    all.push_back(std::move(s));
+  }
+  return all;
+}
+
+}  // namespace sextant::runtime
