@@ -167,7 +167,8 @@ TEST_CASE("state: saved at any moment (the first events included), every stage r
   EngineConfig config;
   config.primary_estimator = PrimaryEstimator::kGraph;
   std::mt19937_64 rng(5);
-  std::vector<size_t> points{1, 7, 200, 1500};
+  REQUIRE(events.size() > 400);
+  std::vector<size_t> points{1, 7, 200, events.size() * 3 / 4};
   for (int i = 0; i < 3; ++i) points.push_back(std::uniform_int_distribution<size_t>(1, events.size() / 2)(rng));
   for (size_t at : points) {
     CAPTURE(at);

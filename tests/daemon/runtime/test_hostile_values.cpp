@@ -9,7 +9,7 @@
 #include "daemon/runtime/intake.hpp"
 #include "daemon/runtime/lcm_log.hpp"
 #include "estimators/filter/estimate_health.hpp"
-#include "replay/simulator.hpp"
+#include "sim/simulator.hpp"
 #include "daemon/runtime/encode_message.hpp"
 
 #include <doctest/doctest.h>
@@ -33,7 +33,7 @@ struct Record {
 
 // A simulated planar run of `source` as the bus would carry it.
 std::vector<Record> simulated_run(const std::string& source, double duration_s, uint64_t seed, bool unknown_ids = false) {
-  replay::SimulationOptions sim;
+  tools::SimulationOptions sim;
   sim.duration_s = duration_s;
   sim.seed = seed;
   sim.source = source;
@@ -42,7 +42,7 @@ std::vector<Record> simulated_run(const std::string& source, double duration_s, 
                      ("sextant_hostile_" + std::to_string(::getpid()) + "_" + source + ".lcm")).string();
   {
     runtime::LogWriter w(path);
-    replay::simulate(sim, w);
+    tools::simulate(sim, w);
   }
   std::vector<Record> out;
   for (auto& r : runtime::LogReader::read_all(path))
@@ -84,7 +84,7 @@ struct Run {
     engine = std::make_unique<engine::Engine>(cfg.engine);
   }
   void feed(const Record& r) {
-    auto event = intake->accept(r.channel, r.bytes.data(), r.bytes.size());
+    auto event = intake->accept(r.channel, r.bytes.data(), r.bytes.size(), runtime::Arrival::now());
     if (!event) return;
     const engine::Emit emit = [&](engine::Output o) {
       if (auto* p = std::get_if<engine::FusedPose>(&o)) {

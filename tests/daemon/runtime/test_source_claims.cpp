@@ -32,7 +32,7 @@ TEST_CASE("source claims: a second sender of an active source is refused and cou
   for (int k = 0; k < 100; ++k) {
     const bool a = k % 2 == 0;
     const auto bytes = odometry(a ? "driver_a" : "driver_b", k / 2, t0 + k * 10'000, a ? 1.5 + 0.001 * k : 101.5);
-    if (intake.accept("ODOMETRY", bytes.data(), bytes.size())) (a ? accepted_a : accepted_b)++;
+    if (intake.accept("ODOMETRY", bytes.data(), bytes.size(), Arrival::now())) (a ? accepted_a : accepted_b)++;
   }
   CHECK(accepted_a == 50);
   CHECK(accepted_b == 0);
@@ -41,9 +41,9 @@ TEST_CASE("source claims: a second sender of an active source is refused and cou
   // driver_a stops; after source_handover_s (2 s of data time) driver_b holds the source, and driver_a is refused.
   const int64_t later = t0 + 1'000'000 + 2'000'000;
   auto b = odometry("driver_b", 100, later, 1.6);
-  CHECK(intake.accept("ODOMETRY", b.data(), b.size()));
+  CHECK(intake.accept("ODOMETRY", b.data(), b.size(), Arrival::now()));
   auto a = odometry("driver_a", 100, later + 10'000, 1.6);
-  CHECK_FALSE(intake.accept("ODOMETRY", a.data(), a.size()));
+  CHECK_FALSE(intake.accept("ODOMETRY", a.data(), a.size(), Arrival::now()));
 }
 
 TEST_CASE("source claims: the table is bounded; the claim silent longest gives its place") {
