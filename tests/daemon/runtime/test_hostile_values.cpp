@@ -1,8 +1,8 @@
 // Hostile values: valid messages (they decode, every number finite) whose values are physically impossible, through
 // the intake (bytes, as the bus delivers them) into every stage of the engine.  Nothing published may be non-finite
 // or carry an indefinite covariance, a clean body beside the hostile one must come out as it would alone, and no
-// event may take longer than its budget.  The last case is the value fuzzer (short here; `make fuzz` runs no longer
-// version of it: its length is SEXTANT_VALUE_FUZZ_MESSAGES).
+// event may take longer than its budget.  The value fuzzer is short here (400 mutated messages); a longer run:
+// SEXTANT_VALUE_FUZZ_MESSAGES=N build/bin/test_daemon -tc='value fuzzer*'.
 #include "daemon/config/daemon_config.hpp"
 #include "daemon/engine/engine.hpp"
 #include "daemon/engine/guarded_handle.hpp"
