@@ -6,6 +6,7 @@
 
 #include <filesystem>
 #include <fstream>
+#include <set>
 #include <sstream>
 
 namespace sextant::config {
@@ -69,7 +70,9 @@ void check_channels(Section& s, const Channels& c) {
 }
 
 void read_channels(Section s, Channels& c) {
-  s.get("prefix", c.prefix);
+  s.get("prefix", c.prefix, Check<std::string>([](const std::string& v) -> std::optional<std::string> {
+          return v.empty() ? std::nullopt : channel_name()(v);  // empty: no prefix
+        }));
   for (auto [key, field] : {std::pair{"odometry", &c.odometry}, {"landmarks", &c.landmarks}, {"bearings", &c.bearings},
                             {"loop_closures", &c.loop_closures}, {"imu", &c.imu}, {"gnss", &c.gnss},
                             {"fused_pose", &c.fused_pose},
@@ -112,12 +115,27 @@ void read_engine_config(Section& s, engine::EngineConfig& c) {
   s.reject_unknown_keys();
 }
 
+static void read_plausibility(Section p, Plausibility& c) {
+  p.get("max_position_m", c.max_position_m, in_range(1, 1e12));
+  p.get("max_speed_planar_mps", c.max_speed_planar_mps, in_range(1e-3, 1e6));
+  p.get("max_speed_spatial_mps", c.max_speed_spatial_mps, in_range(1e-3, 1e6));
+  p.get("max_jump_m", c.max_jump_m, in_range(0, 1e9));
+  p.get("max_planar_tilt_rad", c.max_planar_tilt_rad, in_range(0, M_PI));
+  p.get("max_range_m", c.max_range_m, in_range(1e-3, 1e12));
+  p.get("min_variance", c.min_variance, in_range(1e-300, 1));
+  p.get("max_variance", c.max_variance, in_range(1, 1e300));
+  p.get("max_condition", c.max_condition, in_range(1, 1e300));
+  p.reject_unknown_keys();
+}
+
 static void read_daemon_config(const YAML::Node& root, const std::string& file, DaemonConfig& c) {
   Section top(root, "", file);
   {
     Section d = top.child("daemon");
     d.get("name", c.name, Check<std::string>([](const std::string& v) -> std::optional<std::string> {
             if (v.empty() || v.size() > 64) return "must be 1 to 64 characters";
+            for (unsigned char ch : v)
+              if (ch < 0x20 || ch == 0x7f) return "must not contain control characters";
             return std::nullopt;
           }));
     d.get("lcm_url", c.lcm_url);
@@ -135,6 +153,8 @@ static void read_daemon_config(const YAML::Node& root, const std::string& file, 
     d.get("drain_timeout_s", c.drain_timeout_s, non_negative());
     d.get("state_dir", c.state_dir);
     d.get("state_period_s", c.state_period_s, in_range(0.1, 86400));
+    d.get("source_handover_s", c.source_handover_s, non_negative());
+    read_plausibility(d.child("plausibility"), c.plausibility);
     d.reject_unknown_keys();
   }
   read_channels(top.child("channels"), c.channels);
@@ -146,15 +166,65 @@ static void read_daemon_config(const YAML::Node& root, const std::string& file, 
   c.engine_fingerprint = engine_fingerprint(c.engine);
 }
 
+namespace {
+
+// A control character (other than tab, newline and carriage return) anywhere in the text: a NUL in a name, an
+// escape sequence in a log.  Named by line and column.
+void refuse_control_characters(const std::string& text, const std::string& file) {
+  int line = 1, column = 1;
+  for (unsigned char ch : text) {
+    if (ch < 0x20 && ch != '\t' && ch != '\n' && ch != '\r') {
+      std::ostringstream s;
+      s << file << ":" << line << ":" << column << ": control character 0x" << std::hex << static_cast<int>(ch)
+        << " in the config (only tab, newline and carriage return are allowed)";
+      throw ConfigError(s.str());
+    }
+    if (ch == '\n') ++line, column = 1;
+    else ++column;
+  }
+}
+
+// A key written twice in one mapping (yaml-cpp keeps the first and ignores the rest): an error at the second.
+void refuse_duplicate_keys(const YAML::Node& node, const std::string& file) {
+  if (node.IsSequence()) {
+    for (const auto& child : node) refuse_duplicate_keys(child, file);
+    return;
+  }
+  if (!node.IsMap()) return;
+  std::set<std::string> seen;
+  for (const auto& kv : node) {
+    if (kv.first.IsScalar() && !seen.insert(kv.first.Scalar()).second) {
+      std::ostringstream s;
+      s << file << ":" << kv.first.Mark().line + 1 << ":" << kv.first.Mark().column + 1 << ": key '" << kv.first.Scalar()
+        << "' written twice in one section (the second would be ignored)";
+      throw ConfigError(s.str());
+    }
+    refuse_duplicate_keys(kv.second, file);
+  }
+}
+
+}  // namespace
+
 DaemonConfig parse_daemon_config(const std::string& yaml_text, const std::string& file) {
+  if (yaml_text.size() > kMaxConfigBytes)
+    throw ConfigError(file + ": " + std::to_string(yaml_text.size()) + " bytes; a config is at most " +
+                      std::to_string(kMaxConfigBytes));
+  refuse_control_characters(yaml_text, file);
   YAML::Node root;
   try {
-    root = YAML::Load(yaml_text);
+    const std::vector<YAML::Node> documents = YAML::LoadAll(yaml_text);
+    if (documents.size() > 1) {
+      std::ostringstream s;
+      s << file << ":" << documents[1].Mark().line + 1 << ": a second YAML document; a config is one document";
+      throw ConfigError(s.str());
+    }
+    if (!documents.empty()) root = documents[0];
   } catch (const YAML::Exception& e) {
     std::ostringstream s;
     s << file << ":" << e.mark.line + 1 << ":" << e.mark.column + 1 << ": YAML syntax error: " << e.msg;
     throw ConfigError(s.str());
   }
+  refuse_duplicate_keys(root, file);
   DaemonConfig c;
   try {
     read_daemon_config(root, file, c);
@@ -171,12 +241,18 @@ DaemonConfig parse_daemon_config(const std::string& yaml_text, const std::string
 }
 
 DaemonConfig load_daemon_config(const std::string& path) {
-  std::ifstream in(path);
+  // Only a regular file (not a FIFO that blocks for ever, not /dev/zero), read up to the size limit.
+  std::error_code ec;
+  const auto status = std::filesystem::status(path, ec);
+  if (ec || !std::filesystem::exists(status)) throw ConfigError(path + ": cannot open config file");
+  if (std::filesystem::is_directory(status)) throw ConfigError(path + ": a directory, not a config file");
+  if (!std::filesystem::is_regular_file(status)) throw ConfigError(path + ": not a regular file");
+  std::ifstream in(path, std::ios::binary);
   if (!in) throw ConfigError(path + ": cannot open config file");
-  if (std::filesystem::is_directory(path)) throw ConfigError(path + ": a directory, not a config file");
-  std::stringstream buf;
-  buf << in.rdbuf();
-  return parse_daemon_config(buf.str(), path);
+  std::string text(kMaxConfigBytes + 1, '\0');
+  in.read(text.data(), static_cast<std::streamsize>(text.size()));
+  text.resize(static_cast<size_t>(in.gcount()));
+  return parse_daemon_config(text, path);
 }
 
 }  // namespace sextant::config

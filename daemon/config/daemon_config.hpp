@@ -26,6 +26,21 @@ struct Channels {
   std::string full(const std::string& name) const { return prefix + name; }
 };
 
+/// Plausibility by physics (daemon/runtime/plausibility.hpp): what a decoded, finite input may still not say.  A
+/// message outside these bounds is refused at intake and counted by reason; the defaults fit robots, drones and
+/// aircraft on or near the Earth, and each says what it costs a legitimate sender.
+struct Plausibility {
+  double max_position_m = 1.0e8;        // any position, sensor position or loop translation: |p| <= this (15 Earth radii)
+  double max_speed_planar_mps = 50.0;   // a planar (ground) body's odometry: |dp| <= speed * dt + max_jump_m
+  double max_speed_spatial_mps = 350.0; // a 3-D body's (an airliner's cruise speed)
+  double max_jump_m = 1.0;              // what an odometry position may jump beyond its speed (noise, a small reset)
+  double max_planar_tilt_rad = 0.1;     // planar messages: roll/pitch above this are refused; below, projected away
+  double max_range_m = 1.0e5;           // a landmark sighting's range
+  double min_variance = 1.0e-12;        // every covariance's smallest eigenvalue (its meaningful block) >= this
+  double max_variance = 1.0e12;         // ... its largest <= this (a loop's information: the inverses)
+  double max_condition = 1.0e12;        // ... and their ratio <= this (beyond, updates cancel every digit)
+};
+
 struct DaemonConfig {
   std::string name = "sextantd";        // sender name in every published message
   std::string lcm_url;                  // empty: LCM's default (LCM_DEFAULT_URL or udpm://239.255.76.67:7667)
@@ -45,6 +60,8 @@ struct DaemonConfig {
   double state_period_s = 10.0;         // wall-clock seconds between two saves of the state (and one at shutdown)
   bool discard_bad_state = false;       // --discard-bad-state: set a bad state file aside and start fresh
   uint64_t engine_fingerprint = 0;      // of the parsed engine config (state files of another config are refused)
+  Plausibility plausibility;            // daemon.plausibility
+  double source_handover_s = 2.0;       // a stream's second sender is refused until its first is silent this long
   Channels channels;
   engine::EngineConfig engine;
 };
@@ -52,7 +69,10 @@ struct DaemonConfig {
 /// The fingerprint of a parsed engine config, by its values (aggregate_fields.hpp): the same whether a default is
 /// written or left out; the state directory refuses a state saved under another.
 uint64_t engine_fingerprint(const engine::EngineConfig& engine);
-/// Parses and validates a YAML config file.
+/// A config file's largest size (a documented config is a few kilobytes): read in bounded memory and time.
+inline constexpr size_t kMaxConfigBytes = 1 << 20;
+/// Parses and validates a YAML config file: only a regular file, at most kMaxConfigBytes, one YAML document, no
+/// control characters, no key written twice in one section.
 DaemonConfig load_daemon_config(const std::string& path);
 /// The same from YAML text (`file` names it in errors).
 DaemonConfig parse_daemon_config(const std::string& yaml_text, const std::string& file);

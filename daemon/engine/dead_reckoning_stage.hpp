@@ -7,8 +7,12 @@
 // that grew since the previous message (Sigma_k - Ad(Delta^-1) Sigma_(k-1) Ad(Delta^-1)^T, projected onto the
 // positive semi-definite cone).  The map frame of a source is its odometry frame at its first message.
 // Planar sources use the same SE(3) algebra with zero z, roll and pitch: their x, y, yaw block is SE(2)'s.
+// A message whose step would leave the pose non-finite or its covariance indefinite (estimate_health.hpp) is
+// refused: nothing is published, the track stays as it was (the next message's increment starts from the last
+// accepted one), and it is counted ("refused_non_finite", "refused_indefinite").
 #include "daemon/engine/dead_reckoning_stage_config.hpp"
 #include "daemon/engine/stage.hpp"
+#include "estimators/filter/estimate_health.hpp"
 #include "estimators/lie/se3.hpp"
 
 #include <map>
@@ -46,6 +50,7 @@ class DeadReckoningStage final : public Stage {
   std::map<std::string, Track> tracks_;
   int64_t gaps_ = 0;
   int64_t processed_ = 0;
+  filter::Refusals refusals_;
 };
 
 }  // namespace sextant::engine

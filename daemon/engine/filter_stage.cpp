@@ -180,9 +180,14 @@ void FilterStage::apply_landmarks(Track& t, const LandmarkSightings& s) const {
 void FilterStage::update_with(Track& t, const LandmarkSightings& s) const {
   filter::PlanarEkf& ekf = t.fusion.ekf();
   std::vector<filter::Sighting> unidentified;
+  filter::UpdateBudget budget = ekf.new_update_budget();  // bounded work per batch (PlanarEkfOptions::update_budget)
   for (const auto& ob : s.observations) {
     if (ob.id < 0) {
       unidentified.push_back({ob.range, ob.azimuth, ob.covariance.topLeftCorner<2, 2>()});
+      continue;
+    }
+    if (!budget.spend(ekf.state().size())) {
+      ++t.over_budget;
       continue;
     }
     const auto r = ekf.observe(ob.id, ob.range, ob.azimuth, ob.covariance.topLeftCorner<2, 2>());
@@ -192,11 +197,13 @@ void FilterStage::update_with(Track& t, const LandmarkSightings& s) const {
     else ++t.rejected;
   }
   if (!unidentified.empty()) {
-    const auto a = ekf.observe_unidentified(unidentified);
+    const auto a = ekf.observe_unidentified(unidentified, budget);
     t.associated += a.paired;
     t.gated += a.gated;
     t.tentative += a.tentative;
     t.new_landmarks += a.confirmed;
+    t.over_budget += a.over_budget;
+    t.exhausted += a.exhausted ? 1 : 0;
   }
 }
 
@@ -251,9 +258,14 @@ void FilterStage::apply(SpatialTrack& t, const Input& in) const {
 }
 
 void FilterStage::update_with(SpatialTrack& t, const LandmarkSightings& s) const {
+  filter::UpdateBudget budget = t.fusion.ekf().new_update_budget();
   for (const auto& ob : s.observations) {
     if (ob.id < 0) {
       ++t.unidentified;
+      continue;
+    }
+    if (!budget.spend(t.fusion.ekf().size())) {
+      ++t.over_budget;
       continue;
     }
     const auto r = t.fusion.ekf().observe(ob.id, Eigen::Vector3d(ob.range, ob.azimuth, ob.elevation), ob.covariance);
@@ -283,21 +295,25 @@ const filter::SpatialEkf* FilterStage::spatial_ekf(const std::string& body) cons
 
 Counters FilterStage::counters() const {
   int64_t predictions = 0, updates = 0, gated = 0, new_landmarks = 0, unknown = 0, rejected = 0, before = 0, associated = 0,
-          tentative = 0, duplicates = 0, unknown_sources = 0, stale = 0;
+          tentative = 0, duplicates = 0, unknown_sources = 0, stale = 0, over_budget = 0, exhausted = 0;
   std::map<std::string, filter::SourceCounters> sources;
+  filter::Refusals refused;
   for (const auto& [body, h] : histories_) {
     const Track& t = h.state();
+    refused += t.fusion.ekf().refusals();
     predictions += t.predictions, updates += t.updates, gated += t.gated, new_landmarks += t.new_landmarks;
     unknown += t.unknown, rejected += t.rejected, before += t.before_odometry, associated += t.associated;
     tentative += t.tentative, duplicates += t.duplicates, unknown_sources += t.unknown_sources, stale += t.stale_sightings;
+    over_budget += t.over_budget, exhausted += t.exhausted;
     for (const auto& [name, c] : t.fusion.counters()) sources[name] = c;
   }
   int64_t unidentified = 0, unfused = 0;
   for (const auto& [body, h] : spatial_) {
     const SpatialTrack& t = h.state();
+    refused += t.fusion.ekf().refusals();
     predictions += t.predictions, updates += t.updates, gated += t.gated, new_landmarks += t.new_landmarks;
     rejected += t.rejected, before += t.before_odometry, duplicates += t.duplicates, stale += t.stale_sightings;
-    unidentified += t.unidentified, unfused += t.unfused;
+    unidentified += t.unidentified, unfused += t.unfused, over_budget += t.over_budget;
   }
   Counters out = {{"predictions", predictions},
                   {"updates", updates},
@@ -315,7 +331,11 @@ Counters FilterStage::counters() const {
                   {"unknown_sources", unknown_sources},
                   {"sightings_without_prediction", stale},
                   {"too_late", too_late_},
-                  {"late_reapplied", reapplied_}};
+                  {"late_reapplied", reapplied_},
+                  {"refused_non_finite", refused.non_finite},
+                  {"refused_indefinite", refused.indefinite},
+                  {"association_over_budget", over_budget},
+                  {"association_budget_exhausted", exhausted}};
   // Per configured source (the measurement sources of multi-source bodies): fused, gated, rejected, timeouts, and
   // whether it is silent now.
   for (const auto& [name, cfg] : config_.sources) {

@@ -23,6 +23,9 @@
 // FusedPose with the full 6x6 covariance.  Only the predicting source of a 3-D body is used (its other sources are
 // counted as "unfused_3d"); a body that mixes planar and 3-D messages keeps the kind it started with and counts
 // the others as "mixed_dimensions".
+// Every prediction, update and landmark addition that would leave a body's estimate non-finite or its covariance
+// indefinite is undone by the filter and counted ("refused_non_finite", "refused_indefinite"; estimate_health.hpp):
+// the body continues from its last healthy state and nothing unhealthy is published.
 #include "daemon/engine/filter_stage_config.hpp"
 #include "daemon/engine/stage.hpp"
 #include "estimators/filter/measurement_history.hpp"
@@ -74,7 +77,7 @@ class FilterStage final : public Stage {
     std::vector<LandmarkSightings> pending;  // taken after the newest prediction: applied inside the next one
     int64_t predictions = 0, updates = 0, gated = 0, new_landmarks = 0, unknown = 0, rejected = 0,
             before_odometry = 0, associated = 0, tentative = 0, duplicates = 0, unknown_sources = 0,
-            stale_sightings = 0;
+            stale_sightings = 0, over_budget = 0, exhausted = 0;
     void save(archive::ArchiveWriter& w) const;
     void load(archive::ArchiveReader& r);
   };
@@ -85,7 +88,7 @@ class FilterStage final : public Stage {
     filter::SpatialFusion fusion;
     std::vector<LandmarkSightings> pending;  // taken after the newest prediction: applied inside the next one
     int64_t predictions = 0, updates = 0, gated = 0, new_landmarks = 0, rejected = 0, before_odometry = 0,
-            duplicates = 0, unidentified = 0, unfused = 0, stale_sightings = 0;
+            duplicates = 0, unidentified = 0, unfused = 0, stale_sightings = 0, over_budget = 0;
     void save(archive::ArchiveWriter& w) const;
     void load(archive::ArchiveReader& r);
   };

@@ -27,19 +27,28 @@ void GraphPoseStage::handle(const Event& e, const Emit& emit) {
     out.pose = o.pose;
     out.covariance = o.covariance;
   }
+  Eigen::Matrix<double, 7, 1> pose;
+  pose << out.pose.position, out.pose.orientation.coeffs();
+  if (const filter::Health h = filter::estimate_health(pose, out.covariance, 6); h != filter::Health::kHealthy) {
+    refusals_.count(h);
+    return;
+  }
   ++published_;
   emit(out);
 }
 
 void GraphPoseStage::save(archive::ArchiveWriter& w) {
   w(published_)(before_correction_)(correction_ages_)(static_cast<uint64_t>(age_next_));
+  w(refusals_.non_finite)(refusals_.indefinite);
 }
 
 void GraphPoseStage::load(archive::ArchiveReader& r) {
   r(published_)(before_correction_)(correction_ages_);
   age_next_ = static_cast<size_t>(r.get<uint64_t>());
-  if (correction_ages_.size() > 1024 || (!correction_ages_.empty() && age_next_ >= correction_ages_.size()) ||
-      (correction_ages_.empty() && age_next_ != 0))
+  r(refusals_.non_finite)(refusals_.indefinite);
+  // Filling, the next slot is the one after the last (== size); full, any slot of the ring.
+  const size_t n = correction_ages_.size();
+  if (n > kAgeRing || (n < kAgeRing && age_next_ != n) || (n == kAgeRing && age_next_ >= kAgeRing))
     r.fail("graph_pose: correction ages out of range");
 }
 

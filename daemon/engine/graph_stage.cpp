@@ -2,6 +2,7 @@
 
 #include "daemon/engine/event_archive.hpp"
 #include "daemon/engine/pose_conversion.hpp"
+#include "estimators/filter/estimate_health.hpp"
 
 namespace sextant::engine {
 namespace {
@@ -41,6 +42,13 @@ class GraphStage::Outputs final : public slam::SlamListener {
     c.keyframe_map = newest.estimate;
     c.keyframe_covariance = newest.covariance;
     c.keyframe_odom_covariance = newest.keyframe->odom_covariance;
+    // A solve gone wrong never reaches FUSED_POSE: the previous correction stays.
+    Eigen::Matrix<double, 7, 1> pose;
+    pose << c.keyframe_map.translation(), c.keyframe_map.rotation().quaternion().coeffs();
+    if (filter::estimate_health(pose, c.keyframe_covariance, 6) != filter::Health::kHealthy) {
+      ++stage_.counters_.corrections_refused;
+      return;
+    }
     stage_.corrections_->set(body, c);
   }
 
@@ -150,11 +158,13 @@ Counters GraphStage::counters() const {
           {"graph_keyframes", graph_keyframes()},
           {"graph_landmarks", graph_landmarks()},
           {"graph_factors", graph_factors()},
-          {"trajectory_keyframe_bytes", counters_.trajectory_keyframe_bytes}};
+          {"trajectory_keyframe_bytes", counters_.trajectory_keyframe_bytes},
+          {"corrections_refused", counters_.corrections_refused}};
 }
 
 void GraphStage::save(archive::ArchiveWriter& w) {
-  w(next_request_id_)(counters_.match_requests)(counters_.trajectory_messages)(counters_.trajectory_keyframe_bytes);
+  w(next_request_id_)(counters_.match_requests)(counters_.trajectory_messages)(counters_.trajectory_keyframe_bytes)(
+      counters_.corrections_refused);
   slam_.save(w);
   for (const std::string& source : slam_.bodies()) {
     const Feed& f = feed_of(source);
@@ -164,7 +174,8 @@ void GraphStage::save(archive::ArchiveWriter& w) {
 
 void GraphStage::load(archive::ArchiveReader& r) {
   if (!feeds_.empty()) throw std::logic_error("GraphStage::load into a used stage");
-  r(next_request_id_)(counters_.match_requests)(counters_.trajectory_messages)(counters_.trajectory_keyframe_bytes);
+  r(next_request_id_)(counters_.match_requests)(counters_.trajectory_messages)(counters_.trajectory_keyframe_bytes)(
+      counters_.corrections_refused);
   slam_.load(r);
   for (const std::string& source : slam_.bodies()) {
     Feed& f = feed_of(source);

@@ -28,6 +28,7 @@ struct GraphStageCounters {
   int64_t match_requests = 0;             // MATCH_REQUESTS published
   int64_t trajectory_messages = 0;        // TRAJECTORY messages published
   int64_t trajectory_keyframe_bytes = 0;  // their keyframes (72 bytes each) and removed ids (8 bytes each)
+  int64_t corrections_refused = 0;        // solves whose newest keyframe was not finite or not PSD: not published
 };
 
 class GraphStage final : public Stage {

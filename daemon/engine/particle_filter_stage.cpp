@@ -35,8 +35,14 @@ void ParticleFilterStage::on_odometry(const Odometry& o, const Emit& emit) {
       return;
     }
     const SE2 delta = t.last_odom.between(odom);
+    const filter::FastSlam before = t.pf;  // O(particles): the maps are shared, copy-on-write
     if (!t.pf.predict(delta, planar_increment_covariance(o, t.last_covariance, delta, config_.min_increment_variance))) {
       ++bad_odometry_;
+      return;
+    }
+    if (const filter::Health h = t.pf.health(); h != filter::Health::kHealthy) {
+      t.pf = before;
+      refusals_.count(h);
       return;
     }
     ++predictions_;
@@ -73,7 +79,14 @@ void ParticleFilterStage::on_landmarks(const LandmarkSightings& s) {
   std::vector<filter::RangeBearing> batch;
   batch.reserve(s.observations.size());
   for (const auto& ob : s.observations) batch.push_back({ob.id, ob.range, ob.azimuth, ob.covariance.topLeftCorner<2, 2>()});
-  const auto r = it->second.pf.observe(batch);
+  filter::FastSlam& pf = it->second.pf;
+  const filter::FastSlam before = pf;
+  const auto r = pf.observe(batch);
+  if (const filter::Health h = pf.health(); h != filter::Health::kHealthy) {
+    pf = before;
+    refusals_.count(h);
+    return;
+  }
   updates_ += r.updated;
   new_landmarks_ += r.created;
   associated_ += r.associated;
@@ -81,6 +94,7 @@ void ParticleFilterStage::on_landmarks(const LandmarkSightings& s) {
   rejected_ += r.rejected;
   unknown_ += r.unknown;
   removed_ += r.removed;
+  over_budget_ += r.over_budget;
   resamplings_ += r.resampled;
 }
 
@@ -91,7 +105,10 @@ Counters ParticleFilterStage::counters() const {
           {"gated", gated_},                     {"rejected", rejected_},
           {"unknown_landmarks", unknown_},       {"removed_tentative", removed_},
           {"resamplings", resamplings_},         {"not_planar", not_planar_},
-          {"landmarks_before_odometry", before_odometry_}};
+          {"landmarks_before_odometry", before_odometry_},
+          {"refused_non_finite", refusals_.non_finite},
+          {"refused_indefinite", refusals_.indefinite},
+          {"association_over_budget", over_budget_}};
 }
 
 std::map<int64_t, Eigen::Vector2d> ParticleFilterStage::landmarks(const std::string& source) const {
@@ -121,7 +138,7 @@ void ParticleFilterStage::save(archive::ArchiveWriter& w) {
   w(static_cast<uint64_t>(tracks_.size()));
   for (const auto& [source, t] : tracks_) w(source)(t.pf)(t.last_odom)(t.last_covariance)(t.utime);
   w(predictions_)(bad_odometry_)(out_of_order_)(updates_)(new_landmarks_)(associated_)(gated_)(rejected_)(unknown_)(
-      removed_)(resamplings_)(not_planar_)(before_odometry_);
+      removed_)(resamplings_)(not_planar_)(before_odometry_)(refusals_.non_finite)(refusals_.indefinite)(over_budget_);
 }
 
 void ParticleFilterStage::load(archive::ArchiveReader& r) {
@@ -134,7 +151,7 @@ void ParticleFilterStage::load(archive::ArchiveReader& r) {
     tracks_.emplace(source, std::move(t));
   }
   r(predictions_)(bad_odometry_)(out_of_order_)(updates_)(new_landmarks_)(associated_)(gated_)(rejected_)(unknown_)(
-      removed_)(resamplings_)(not_planar_)(before_odometry_);
+      removed_)(resamplings_)(not_planar_)(before_odometry_)(refusals_.non_finite)(refusals_.indefinite)(over_budget_);
 }
 
 }  // namespace sextant::engine

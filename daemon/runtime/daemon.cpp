@@ -80,12 +80,13 @@ class Daemon {
   void subscribe();
   void start_periodic_threads();
   int handle_until(const std::atomic<bool>& stop);
-  void shut_down();
+  /// kExitOk, or kExitState when the last state save failed (it is never reported as saved).
+  int shut_down();
   /// The LCM thread's handler of every message (raw_subscription.hpp).
   void on_message(const lcm_recv_buf_t& rbuf, const std::string& channel);
 
  private:
-  void save_state();
+  bool save_state();
   void publish_status();
   engine::Counters runtime_counters() const;
   void every(double period_s, const std::function<void()>& f);
@@ -173,6 +174,10 @@ void Daemon::start_driver() {
       },
       std::move(o));
   report_ = std::make_unique<StatusReport>(cfg_.name);
+  driver_->publisher().measure_lag([] {
+    return std::chrono::duration_cast<std::chrono::microseconds>(std::chrono::system_clock::now().time_since_epoch())
+        .count();
+  });
   driver_->start();
 }
 
@@ -208,7 +213,7 @@ void Daemon::subscribe() {
                primary.empty() ? "none" : primary);
 }
 
-void Daemon::save_state() {
+bool Daemon::save_state() {
   try {
     const StateSave s = save_stages(state_path_, cfg_.engine_fingerprint, driver_->runners());
     if (state_saves_.fetch_add(1) == 0)
@@ -216,9 +221,11 @@ void Daemon::save_state() {
                    s.collect_ms, s.write_ms);
     state_bytes_ = static_cast<int64_t>(s.bytes);
     state_save_us_ = static_cast<int64_t>(1000 * (s.collect_ms + s.write_ms));
+    return true;
   } catch (const std::exception& e) {
     const int64_t n = ++state_failures_;
     if (n <= 10 || (n & (n - 1)) == 0) spdlog::error("state not saved ({} failure(s) so far): {}", n, e.what());
+    return false;
   }
 }
 
@@ -233,6 +240,11 @@ engine::Counters Daemon::runtime_counters() const {
                      {"sources_expired", expired_.load()},
                      {"sources_evicted", evicted_.load()}};
   if (const auto drops = udp_receive_drops()) c.push_back({"udp_receive_drops", *drops - drops_at_start_});
+  const Publisher::Lag lag = driver_->publisher().take_lag();
+  c.push_back({"publish_lag_us", lag.last_us});
+  c.push_back({"publish_lag_us_max", lag.max_us});
+  if (lag.max_us > 1'000'000)
+    spdlog::warn("published up to {:.1f} s behind real time since the last status (a stall, or a backlog)", lag.max_us * 1e-6);
   if (!state_path_.empty()) {
     c.push_back({"state_saves", state_saves_.load()});
     c.push_back({"state_save_failures", state_failures_.load()});
@@ -288,7 +300,7 @@ int Daemon::handle_until(const std::atomic<bool>& stop) {
 
 // Intake stops, the queues drain within drain_timeout_s, the stages finish; then the last state save, the recording
 // flushed and closed, and a last status.
-void Daemon::shut_down() {
+int Daemon::shut_down() {
   intake_stopped_ = true;
   spdlog::info("shutting down: draining {} stage queue(s) (at most {} s)", driver_->runners().size(),
                cfg_.drain_timeout_s);
@@ -298,15 +310,23 @@ void Daemon::shut_down() {
     spdlog::warn("{} queued event(s) discarded at the drain timeout ({} s)", left, cfg_.drain_timeout_s);
   status_thread_.join();
   if (state_thread_.joinable()) state_thread_.join();
+  int rc = kExitOk;
   if (!state_path_.empty()) {
-    save_state();  // every stage drained and finished: the state a restart continues from
-    spdlog::info("state saved to {} at shutdown ({} bytes)", state_path_, state_bytes_.load());
+    // Every stage drained and finished: the state a restart continues from.  A failed save is said, never hidden.
+    if (save_state()) {
+      spdlog::info("state saved to {} at shutdown ({} bytes)", state_path_, state_bytes_.load());
+    } else {
+      spdlog::error("state NOT saved at shutdown: {} holds the last successful save ({} of {} saves failed)",
+                    state_path_, state_failures_.load(), state_saves_.load() + state_failures_.load());
+      rc = kExitState;
+    }
   }
   if (recorder_) {
     recorder_->close();
     spdlog::info("recording closed: {} messages in {}", recorder_->written(), recorder_->path());
   }
   publish_status();
+  return rc;
 }
 
 }  // namespace
@@ -324,8 +344,8 @@ int run_daemon(const config::DaemonConfig& cfg, const std::atomic<bool>& stop) {
   daemon.subscribe();
   daemon.start_periodic_threads();
   const int rc = daemon.handle_until(stop);
-  daemon.shut_down();
-  return rc;
+  const int shutdown_rc = daemon.shut_down();
+  return rc != kExitOk ? rc : shutdown_rc;
 }
 
 }  // namespace sextant::runtime

@@ -45,11 +45,18 @@ IntakeOptions intake_options(const config::DaemonConfig& c, bool live) {
   o.live = live;
   o.time = TimeGuardOptions{c.max_ahead_s, c.time_resync_messages, c.max_ahead_of_wall_s, c.max_sources, c.source_idle_s,
                             c.source_evict_idle_s};
+  o.plausibility = c.plausibility;
+  o.source_handover_s = c.source_handover_s;
   return o;
 }
 
 Intake::Intake(ChannelStats& stats, RejectHook on_reject, IntakeOptions options)
-    : stats_(stats), on_reject_(std::move(on_reject)), options_(options), order_(options.time) {}
+    : stats_(stats),
+      on_reject_(std::move(on_reject)),
+      options_(options),
+      order_(options.time),
+      plausible_(options.plausibility, options.time.resync_after, static_cast<size_t>(std::max(options.time.max_streams, 1))),
+      claims_(options.source_handover_s, static_cast<size_t>(std::max(options.time.max_streams, 1)) * 4) {}
 
 void Intake::add_channel(const std::string& channel, InputKind kind) {
   channels_[channel] = kind;
@@ -90,6 +97,11 @@ std::optional<engine::Event> Intake::accept_unguarded(const std::string& channel
   }
   engine::Event event = std::get<engine::Event>(std::move(d));
   const StreamKey key = stream_of(channel, event);
+  if (!claims_.claim(key.stream, origin.sender, engine::event_utime(event))) {
+    reject(channel, "source_claimed",
+           channel + ": '" + engine::event_source(event) + "' is held by another sender; '" + origin.sender + "' refused");
+    return std::nullopt;
+  }
   std::optional<TimeOrderGuard::LiveClock> live;
   if (options_.live) live = TimeOrderGuard::LiveClock{arrival.wall_utime, arrival.steady};
   const int64_t resyncs = order_.resyncs();
@@ -97,7 +109,13 @@ std::optional<engine::Event> Intake::accept_unguarded(const std::string& channel
     reject(channel, why->reason, channel + ": " + why->message);
     return std::nullopt;
   }
-  if (order_.resyncs() != resyncs)
+  // A stream whose clock was re-synchronised starts afresh: its motion before the jump says nothing about after.
+  if (order_.resyncs() != resyncs) plausible_.forget(key.stream);
+  if (auto why = plausible_.check(key.stream, event)) {
+    reject(channel, why->reason, channel + ": " + why->message);
+    return std::nullopt;
+  }
+  if (order_.resyncs() != resyncs || plausible_.resynced())
     if (const auto* o = std::get_if<engine::Odometry>(&event)) resynced_body_ = o->source;
   stats_.decoded(channel);
   return event;
@@ -105,11 +123,14 @@ std::optional<engine::Event> Intake::accept_unguarded(const std::string& channel
 
 std::vector<std::string> Intake::take_expired_bodies() {
   std::vector<std::string> bodies;
-  for (const std::string& stream : order_.take_expired())
+  for (const std::string& stream : order_.take_expired()) {
+    plausible_.forget(stream);
+    claims_.forget(stream);
     for (const auto& [channel, kind] : channels_)
       if (kind == InputKind::kOdometry && stream.size() > channel.size() && stream.compare(0, channel.size(), channel) == 0 &&
           stream[channel.size()] == '/')
         bodies.push_back(stream.substr(channel.size() + 1));
+  }
   return bodies;
 }
 

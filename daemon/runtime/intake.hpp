@@ -6,6 +6,8 @@
 #include "daemon/config/daemon_config.hpp"
 #include "daemon/runtime/channel_stats.hpp"
 #include "daemon/runtime/codec.hpp"
+#include "daemon/runtime/plausibility.hpp"
+#include "daemon/runtime/source_claims.hpp"
 #include "daemon/runtime/sequence_gaps.hpp"
 #include "daemon/runtime/time_order_guard.hpp"
 
@@ -32,6 +34,8 @@ struct Arrival {
 struct IntakeOptions {
   TimeGuardOptions time;  // time_order_guard.hpp (its max_streams bounds bodies and sensors, idle_s expires them)
   bool live = false;      // check stamps against the wall clock too (sextantd; not replay)
+  config::Plausibility plausibility;  // plausibility.hpp: bounds by physics, after the time guard
+  double source_handover_s = 2.0;     // source_claims.hpp: a second sender of a stream waits this long for the first
 };
 
 /// The intake options of a daemon config (daemon.max_ahead_s, time_resync_messages, ...).
@@ -47,8 +51,8 @@ class Intake {
   void add_channel(const std::string& channel, InputKind kind);
   const std::map<std::string, InputKind>& channels() const { return channels_; }
 
-  /// Decodes, validates and time-checks one message that arrived at `arrival`; nullopt when it was rejected (and
-  /// counted).
+  /// Decodes, validates, time-checks and plausibility-checks one message that arrived at `arrival`; nullopt when it
+  /// was rejected (and counted).
   std::optional<engine::Event> accept(const std::string& channel, const void* data, size_t size, Arrival arrival);
 
   /// The body (odometry source) whose clock the last accepted message re-synchronised, empty when it did not: the
@@ -62,6 +66,8 @@ class Intake {
   size_t sources() const { return order_.streams(); }
   int64_t sources_expired() const { return order_.expired(); }
   int64_t sources_evicted() const { return order_.evicted(); }
+  /// Messages refused because another sender holds their stream (source_claims.hpp).
+  int64_t source_claimed() const { return claims_.refused(); }
   /// The bodies whose odometry stream was forgotten after idling since the last call (their odometry source names):
   /// the daemon has the stages forget them too (Stage::forget), so that expiry frees all their per-body state.
   std::vector<std::string> take_expired_bodies();
@@ -76,6 +82,8 @@ class Intake {
   IntakeOptions options_;
   std::map<std::string, InputKind> channels_;
   TimeOrderGuard order_;
+  Plausibility plausible_;
+  SourceClaims claims_;
   std::map<std::string, SequenceGaps> sequences_;  // per channel
   std::string resynced_body_;
 };

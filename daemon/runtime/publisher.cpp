@@ -54,6 +54,10 @@ bool Publisher::publish(const engine::Output& output) {
             it->second = o.utime;
           }
           send(channel, to_message(o, sender_, 0));
+          if (wall_) {
+            lag_.last_us = wall_() - o.utime;
+            lag_.max_us = std::max(lag_.max_us, lag_.last_us);
+          }
         } else if constexpr (std::is_same_v<T, engine::Trajectory>) {
           send(channels_.full(channels_.trajectory), to_message(o, sender_, 0));
         } else if constexpr (std::is_same_v<T, engine::MatchRequest>) {
@@ -64,6 +68,18 @@ bool Publisher::publish(const engine::Output& output) {
         return true;
       },
       output);
+}
+
+void Publisher::measure_lag(std::function<int64_t()> wall_utime) {
+  std::lock_guard lock(mutex_);
+  wall_ = std::move(wall_utime);
+}
+
+Publisher::Lag Publisher::take_lag() {
+  std::lock_guard lock(mutex_);
+  const Lag out = lag_;
+  lag_.max_us = lag_.last_us;
+  return out;
 }
 
 void Publisher::publish(const sextant::status_t& status) {

@@ -9,6 +9,10 @@
 // That last time is kept per channel and source for at most `max_tracked` of them (a new one beyond evicts the one
 // published longest ago in data time, counted); a body the stages forget (idle, or its clock re-synchronised) is
 // forgotten here too (`forget`), so that its new clock is not refused.
+// Lag (sextantd): given a wall clock (`measure_lag`), each FusedPose published is compared with it; how far behind
+// real time the daemon publishes (wall clock minus the pose's utime: the sender's latency, the queues, a stall) is
+// on the status channel (publish_lag_us, publish_lag_us_max since the previous status), so a backlog published
+// after a stall says that it is late.
 // Thread-safe.
 #include "daemon/config/daemon_config.hpp"
 #include "daemon/engine/outputs.hpp"
@@ -50,6 +54,14 @@ class Publisher {
   int64_t fused_pose_sources_forgotten() const;
   int64_t fused_pose_sources_evicted() const;
   const std::string& sender() const { return sender_; }
+  /// Measures each FusedPose's lag against `wall_utime()` (microseconds since the epoch) from now on.
+  void measure_lag(std::function<int64_t()> wall_utime);
+  struct Lag {
+    int64_t last_us = 0;  // of the last FusedPose published
+    int64_t max_us = 0;   // the largest since the previous take_lag
+  };
+  /// The lag since the previous call (its maximum restarts).
+  Lag take_lag();
   /// The channel a FusedPose of `estimator` is published on.
   std::string fused_pose_channel(const std::string& estimator) const;
 
@@ -67,6 +79,8 @@ class Publisher {
   const size_t max_tracked_;
   std::map<std::string, int64_t> last_fused_utime_;  // by channel + "/" + source, at most max_tracked_
   int64_t not_monotonic_ = 0, forgotten_ = 0, evicted_ = 0;
+  std::function<int64_t()> wall_;
+  Lag lag_;
 };
 
 }  // namespace sextant::runtime

@@ -87,24 +87,27 @@ void write_file_atomically(const std::string& path, const std::string& bytes) {
   const std::string tmp = path + ".tmp";
   const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
   if (fd < 0) throw StateFileError(tmp + ": cannot create: " + errno_text());
+  // Any failure removes the partial file: PATH keeps the last complete state, nothing else is left behind.
+  const auto fail = [&](const std::string& what, bool open) {
+    const std::string why = errno_text();
+    if (open) ::close(fd);
+    ::unlink(tmp.c_str());
+    throw StateFileError(tmp + ": " + what + " failed: " + why);
+  };
   size_t done = 0;
   while (done < bytes.size()) {
     const ssize_t n = ::write(fd, bytes.data() + done, bytes.size() - done);
     if (n < 0 && errno == EINTR) continue;
-    if (n <= 0) {
-      const std::string why = errno_text();
-      ::close(fd);
-      throw StateFileError(tmp + ": write failed: " + why);
-    }
+    if (n <= 0) fail("write", true);
     done += static_cast<size_t>(n);
   }
-  if (::fsync(fd) != 0) {
+  if (::fsync(fd) != 0) fail("fsync", true);
+  if (::close(fd) != 0) fail("close", false);
+  if (::rename(tmp.c_str(), path.c_str()) != 0) {
     const std::string why = errno_text();
-    ::close(fd);
-    throw StateFileError(tmp + ": fsync failed: " + why);
+    ::unlink(tmp.c_str());
+    throw StateFileError(path + ": rename failed: " + why);
   }
-  ::close(fd);
-  if (::rename(tmp.c_str(), path.c_str()) != 0) throw StateFileError(path + ": rename failed: " + errno_text());
   const std::string dir = std::filesystem::path(path).parent_path().string();
   const int dfd = ::open(dir.empty() ? "." : dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
   if (dfd >= 0) {

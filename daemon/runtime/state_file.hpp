@@ -29,7 +29,9 @@ struct StateSection {
 /// Version 3: the graph pose stage keeps no per-body publication time (the publisher's rule is the only one).
 /// Version 2: the graph stage's section is the SLAM layer's state (estimators/slam/slam_graph.hpp) between the stage's
 /// counters and its per-body TRAJECTORY feeds.  Files of another version are refused.
-inline constexpr uint32_t kStateFormatVersion = 3;
+/// Version 4: every estimator also keeps the steps it refused as unhealthy (estimators/filter/estimate_health.hpp)
+/// and its association budget counters.
+inline constexpr uint32_t kStateFormatVersion = 4;
 /// The state file inside a state directory.
 inline constexpr const char* kStateFileName = "sextantd.state";
 

@@ -80,6 +80,18 @@ void FastSlam::initialize(const SE2& pose, const Eigen::Matrix3d& covariance) {
   initialized_ = true;
 }
 
+Health FastSlam::health() const {
+  for (const Particle& p : particles_) {
+    if (!p.pose.mean.allFinite() || !std::isfinite(p.log_weight) || !p.pose.covariance.allFinite()) return Health::kNonFinite;
+    if ((p.pose.covariance.diagonal().array() < 0).any()) return Health::kIndefinite;
+  }
+  SE2 mean;
+  Eigen::Matrix3d covariance;
+  mixture(&mean, &covariance);
+  Eigen::Vector3d m(mean.translation().x(), mean.translation().y(), mean.angle());
+  return estimate_health(m, covariance, 3);
+}
+
 bool FastSlam::predict(const SE2& delta, const Eigen::Matrix3d& Q) {
   if (!initialized_ || !Q.allFinite() || !delta.translation().allFinite() || !std::isfinite(delta.angle())) return false;
   const Eigen::Matrix3d Qs = symmetrized(Q);
@@ -191,6 +203,7 @@ FastSlamBatchOutcome FastSlam::observe(const std::vector<RangeBearing>& sighting
     batch.push_back(s);
     slot.push_back(sl);
   }
+  drop_over_budget(batch, slot, out);
   if (batch.empty()) return out;
   size_t best = 0;
   for (size_t i = 1; i < particles_.size(); ++i)
@@ -209,6 +222,30 @@ FastSlamBatchOutcome FastSlam::observe(const std::vector<RangeBearing>& sighting
     out.resampled = true;
   }
   return out;
+}
+
+void FastSlam::drop_over_budget(std::vector<RangeBearing>& batch, std::vector<int>& slot, FastSlamBatchOutcome& out) const {
+  int64_t landmarks = static_cast<int64_t>(known_.size() + identified_slot_.size());
+  int64_t unidentified = 0;
+  for (const Particle& p : particles_) unidentified = std::max<int64_t>(unidentified, p.unidentified.slots());
+  // One sighting without id: every particle considers every landmark it holds (and each one it adds in this batch).
+  const int64_t per_sighting = static_cast<int64_t>(particles_.size()) * (landmarks + unidentified + 1);
+  int64_t spent = 0;
+  size_t kept = 0;
+  for (size_t j = 0; j < batch.size(); ++j) {
+    if (batch[j].id < 0) {
+      if (spent + per_sighting > options_.association_budget) {
+        ++out.over_budget;
+        continue;
+      }
+      spent += per_sighting + static_cast<int64_t>(particles_.size());  // the next one may meet this one's landmark
+    }
+    batch[kept] = batch[j];
+    slot[kept] = slot[j];
+    ++kept;
+  }
+  batch.resize(kept);
+  slot.resize(kept);
 }
 
 // One particle's proposal over a batch, built sighting by sighting: the pose Gaussian refined by each associated

@@ -36,10 +36,15 @@
 //     by p0, used for nothing; otherwise the 1 % of true sightings beyond the gate would seed duplicates).  A tentative
 //     landmark that is not seen `confirmations` times within `tentative_lifetime` images is removed, so a
 //     spurious sighting does not stay in the map.
+// Bounded work: the association of sightings without id costs particles x landmarks per sighting.  A batch takes
+// only as many of them (in their order) as `association_budget` candidate evaluations allow; the others are dropped
+// before any particle sees them (the same in every particle, so the weights stay comparable) and counted as
+// `over_budget`.  Sightings with ids cost one evaluation each and are never dropped.
 // Outliers: a sighting whose d2 exceeds `gate` in a particle does not update that particle, whose weight is
 // multiplied by the same p0 (a robust likelihood); a sighting gated in every particle is counted as gated.
 // Bad input (non-finite numbers, non-positive range, covariances that are not symmetric positive definite) is
 // counted and refused; it never changes the particles.  Deterministic for a seed (std::mt19937_64).
+#include "estimators/filter/estimate_health.hpp"
 #include "estimators/filter/landmark_map_tree.hpp"
 #include "estimators/lie/se2.hpp"
 
@@ -62,6 +67,7 @@ struct FastSlamOptions {
   int max_landmarks = 4096;         // per particle
   int confirmations = 3;            // sightings that make a landmark without id permanent
   int tentative_lifetime = 50;      // images after which an unconfirmed landmark without id is dropped
+  int64_t association_budget = 2'000'000;  // candidate evaluations per batch for sightings without id (~0.2 s)
 };
 
 /// One range-bearing sighting; id < 0 when the landmark is not identified.
@@ -81,6 +87,7 @@ struct FastSlamBatchOutcome {
   int rejected = 0;        // bad input
   int unknown = 0;         // id not in the known map in localization mode, or the map is full
   int removed = 0;         // tentative landmarks dropped
+  int over_budget = 0;     // sightings without id dropped: their association would exceed association_budget
   bool resampled = false;
   double effective_sample_size = 0;  // before resampling
 };
@@ -122,6 +129,10 @@ class FastSlam {
   void mixture(SE2* mean, Eigen::Matrix3d* covariance) const;
 
   const std::vector<Particle>& particles() const { return particles_; }
+  /// Whether the filter's estimate may be kept (estimate_health.hpp): every particle's pose and weight finite, its
+  /// pose covariance with no negative variance, and the mixture's covariance positive semi-definite.  O(particles);
+  /// the landmark maps are not walked (their updates refuse a non-positive innovation covariance).
+  Health health() const;
   std::vector<double> weights() const;
   double effective_sample_size() const;
   int resamplings() const { return resamplings_; }
@@ -151,6 +162,7 @@ class FastSlam {
   struct Pending;
   struct Proposal;
   bool valid(const RangeBearing& s) const;
+  void drop_over_budget(std::vector<RangeBearing>& batch, std::vector<int>& slot, FastSlamBatchOutcome& out) const;
   void observe_particle(Particle& p, const std::vector<RangeBearing>& batch, const std::vector<int>& identified_slot,
                         std::vector<char>& gated_here, FastSlamBatchOutcome* stats);
   // observe_particle's steps (fastslam.cpp).

@@ -23,9 +23,10 @@ enum class UpdateReason {
   kUnknownLandmark,  // refused: a landmark the state does not hold and may not add (not SLAM, or no id)
   kMapFull,          // refused: the state holds max_landmarks already
   kTooOld,           // refused: stamped before the filter's history (inertial/lagged_eskf.hpp)
+  kIndefinite,       // refused: the update would leave the covariance indefinite (estimate_health.hpp); undone
 };
 /// The reason's spelling for counters and logs: "none", "new_landmark", "gate", "non_finite", "singular",
-/// "no_components", "no_twist", "unknown_landmark", "map_full", "too_old".
+/// "no_components", "no_twist", "unknown_landmark", "map_full", "too_old", "indefinite".
 const char* update_reason_name(UpdateReason reason);
 
 struct UpdateResult {
@@ -34,7 +35,10 @@ struct UpdateResult {
   UpdateReason reason = UpdateReason::kNone;
 };
 
-/// Updates (x, P) in place unless the innovation fails the gate (`gate` <= 0 disables gating).
+/// Updates (x, P) in place unless the innovation fails the gate (`gate` <= 0 disables gating).  An update whose
+/// result would not be finite, or whose covariance would have a negative variance (estimate_health.hpp; e.g. a
+/// noise of 1e300 beside one of 1e-3 cancels every digit), is undone: (x, P) are left as they were and the reason
+/// is kNonFinite or kIndefinite.
 UpdateResult kalman_update(Eigen::VectorXd& x, Eigen::MatrixXd& P, const Eigen::VectorXd& innovation,
                            const Eigen::MatrixXd& H, const Eigen::MatrixXd& R, double gate);
 
@@ -43,6 +47,26 @@ UpdateResult kalman_update(Eigen::VectorXd& x, Eigen::MatrixXd& P, const Eigen::
 UpdateResult kalman_update_from(Eigen::VectorXd& x, Eigen::MatrixXd& P, const Eigen::VectorXd& innovation,
                                 const Eigen::MatrixXd& PHt, const Eigen::MatrixXd& HPHt, const Eigen::MatrixXd& R,
                                 double gate);
+
+/// The work the updates of one batch of measurements may still cost, in floating-point operations: an update (or a
+/// landmark added) of a state of size n costs about 8 n^2 (the Joseph form's rank-2m update, m = 2, and its
+/// checks).  The first update of a batch is always allowed, so that a large map still learns from every batch.
+class UpdateBudget {
+ public:
+  explicit UpdateBudget(double flops) : left_(flops) {}
+  /// Whether one more update of a state of size n fits; charges it when it does.
+  bool spend(Eigen::Index n) {
+    const double cost = 8.0 * static_cast<double>(n) * static_cast<double>(n);
+    if (used_ && cost > left_) return false;
+    left_ -= cost;
+    used_ = true;
+    return true;
+  }
+
+ private:
+  double left_;
+  bool used_ = false;
+};
 
 /// The chi-square quantile for `dof` degrees of freedom at probability 0.99 (dof 1..6), for gates.
 double chi2_gate_99(int dof);

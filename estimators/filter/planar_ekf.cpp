@@ -44,17 +44,34 @@ Eigen::Vector2d PlanarEkf::observation(const Eigen::Vector3d& r, const Eigen::Ve
   return {sq, wrap_angle(std::atan2(d.y(), d.x()) - r[2])};
 }
 
-void PlanarEkf::predict(const SE2& delta, const Eigen::Matrix3d& Q) {
+Health PlanarEkf::predict(const SE2& delta, const Eigen::Matrix3d& Q) {
   Eigen::Matrix3d F, G;
-  x_.head<3>() = motion(x_.head<3>(), delta, &F, &G);
+  const Eigen::Vector3d robot = motion(x_.head<3>(), delta, &F, &G);
   const Eigen::Index n = x_.size();
-  // Only the robot rows and columns change: P_rr = F P_rr F' + G Q G', P_rl = F P_rl.
-  const Eigen::Matrix3d Prr = F * P_.topLeftCorner<3, 3>() * F.transpose() + G * Q * G.transpose();
-  P_.topLeftCorner<3, 3>() = symmetrized(Prr);
-  if (n > 3) {
-    P_.topRightCorner(3, n - 3) = F * P_.topRightCorner(3, n - 3);
-    P_.bottomLeftCorner(n - 3, 3) = P_.topRightCorner(3, n - 3).transpose();
+  // Only the robot rows and columns change: P_rr = F P_rr F' + G Q G', P_rl = F P_rl.  Both are computed aside and
+  // checked before they replace the state's.
+  Eigen::Matrix3d Prr = F * P_.topLeftCorner<3, 3>() * F.transpose() + G * Q * G.transpose();
+  Prr = symmetrized(Prr);
+  const Eigen::MatrixXd Prl = F * P_.topRightCorner(3, n - 3);
+  Health h = estimate_health(robot, Prr, 3);
+  if (h == Health::kHealthy && !Prl.allFinite()) h = Health::kNonFinite;
+  if (h != Health::kHealthy) {
+    refusals_.count(h);
+    return h;
   }
+  x_.head<3>() = robot;
+  P_.topLeftCorner<3, 3>() = Prr;
+  if (n > 3) {
+    P_.topRightCorner(3, n - 3) = Prl;
+    P_.bottomLeftCorner(n - 3, 3) = Prl.transpose();
+  }
+  return h;
+}
+
+UpdateResult PlanarEkf::counted(UpdateResult r) {
+  if (r.reason == UpdateReason::kNonFinite) refusals_.count(Health::kNonFinite);
+  else if (r.reason == UpdateReason::kIndefinite) refusals_.count(Health::kIndefinite);
+  return r;
 }
 
 UpdateResult PlanarEkf::observe(int64_t id, double range, double bearing, const Eigen::Matrix2d& R) {
@@ -78,8 +95,8 @@ UpdateResult PlanarEkf::observe(int64_t id, double range, double bearing, const 
     PHt = P_.leftCols<3>() * Hx.transpose() + P_.middleCols<2>(s->second) * Hl.transpose();
     HPHt = Hx * PHt.topRows<3>() + Hl * PHt.middleRows<2>(s->second);
   } else {
-    return admit_new_landmark(options_.slam, id, slot_.size(), options_.max_landmarks,
-                              [&] { augment(id, range, bearing, R); });
+    return counted(admit_new_landmark(options_.slam, id, slot_.size(), options_.max_landmarks,
+                                      [&] { return augment(id, range, bearing, R); }));
   }
   if (predicted[0] < 1e-6) {
     out.reason = UpdateReason::kSingular;
@@ -87,7 +104,7 @@ UpdateResult PlanarEkf::observe(int64_t id, double range, double bearing, const 
   }
   Eigen::VectorXd r = z - predicted;
   r[1] = wrap_angle(r[1]);
-  out = kalman_update_from(x_, P_, r, PHt, HPHt, R, options_.gate);
+  out = counted(kalman_update_from(x_, P_, r, PHt, HPHt, R, options_.gate));
   x_[2] = wrap_angle(x_[2]);
   return out;
 }
@@ -189,13 +206,13 @@ UpdateResult PlanarEkf::update_rows(const Eigen::Vector3d& r, const Eigen::Matri
   if (other >= 0) PHt += P_.middleCols<3>(other) * Ho_m.transpose();
   Eigen::MatrixXd HPHt = Hx_m * PHt.topRows<3>();
   if (other >= 0) HPHt += Ho_m * PHt.middleRows<3>(other);
-  out = kalman_update_from(x_, P_, r_m, PHt, HPHt, R_m, gate);
+  out = counted(kalman_update_from(x_, P_, r_m, PHt, HPHt, R_m, gate));
   x_[2] = wrap_angle(x_[2]);
   if (other >= 0) x_[other + 2] = wrap_angle(x_[other + 2]);
   return out;
 }
 
-void PlanarEkf::augment(int64_t id, double range, double bearing, const Eigen::Matrix2d& R) {
+Health PlanarEkf::augment(int64_t id, double range, double bearing, const Eigen::Matrix2d& R) {
   const Eigen::Index n = x_.size();
   const double a = x_[2] + bearing, c = std::cos(a), s = std::sin(a);
   const Eigen::Vector2d l(x_[0] + range * c, x_[1] + range * s);
@@ -203,20 +220,25 @@ void PlanarEkf::augment(int64_t id, double range, double bearing, const Eigen::M
   Jx << 1, 0, -range * s, 0, 1, range * c;
   Eigen::Matrix2d Jz;
   Jz << c, -range * s, s, range * c;
+  Eigen::MatrixXd P = augmented_covariance(P_, Jx, Jz, R);
+  // Only the new rows are new: their block must be a covariance and every number finite.
+  Health h = estimate_health(l, P.bottomRightCorner<2, 2>(), 2);
+  if (h == Health::kHealthy && !P.bottomRows<2>().allFinite()) h = Health::kNonFinite;
+  if (h != Health::kHealthy) return h;
   x_.conservativeResize(n + 2);
   x_.tail<2>() = l;
-  P_ = augmented_covariance(P_, Jx, Jz, R);
+  P_ = std::move(P);
   slot_[id] = static_cast<int>(n);
+  return h;
 }
 
-AssociationOutcome PlanarEkf::observe_unidentified(const std::vector<Sighting>& sightings) {
+AssociationOutcome PlanarEkf::observe_unidentified(const std::vector<Sighting>& sightings, UpdateBudget& budget) {
   AssociationOutcome out;
   if (sightings.empty()) return out;
   // Every landmark, known or in the state, as an index for the association.
   std::vector<std::pair<int64_t, bool>> ids;  // (id, in state)
   for (const auto& [id, p] : known_) ids.push_back({id, false});
   for (const auto& [id, k] : slot_) ids.push_back({id, true});
-  const Eigen::Index n = x_.size();
   assoc::AssociationProblem problem;
   problem.sightings = static_cast<int>(sightings.size());
   problem.landmarks = static_cast<int>(ids.size());
@@ -232,18 +254,36 @@ AssociationOutcome PlanarEkf::observe_unidentified(const std::vector<Sighting>& 
     if (h[0] < 1e-6) return std::nullopt;
     assoc::Candidate c;
     c.innovation = Eigen::Vector2d(sightings[static_cast<size_t>(i)].range - h[0], wrap_angle(sightings[static_cast<size_t>(i)].bearing - h[1]));
-    c.jacobian = Eigen::MatrixXd::Zero(2, n);
+    // H is zero but for the robot's 3 columns and the landmark's 2: given sparse, each test costs O(1), not O(n^2).
+    c.jacobian.resize(2, in_state ? 5 : 3);
     c.jacobian.leftCols<3>() = Hx;
-    if (in_state) c.jacobian.middleCols<2>(slot_.at(id)) = Hl;
+    c.columns = {0, 1, 2};
+    if (in_state) {
+      c.jacobian.rightCols<2>() = Hl;
+      c.columns.push_back(slot_.at(id));
+      c.columns.push_back(slot_.at(id) + 1);
+    }
     return c;
   };
-  const assoc::Hypothesis h = problem.landmarks > 0 ? assoc::joint_compatibility_branch_and_bound(problem, 20000)
-                                                    : assoc::Hypothesis(sightings.size(), -1);
+  problem.work_budget = options_.association_budget;
+  assoc::BoundedAssociation a;
+  if (problem.landmarks > 0) a = assoc::associate_bounded(problem, 20000);
+  else a.pairing.assign(sightings.size(), -1), a.examined = problem.sightings;
+  const assoc::Hypothesis& h = a.pairing;
+  out.exhausted = a.exhausted;
   // The paired sightings update one after the other (equal to the joint update for a linearized model).
   std::vector<size_t> unpaired;
   for (size_t i = 0; i < sightings.size(); ++i) {
+    if (h[i] < 0 && static_cast<int>(i) >= a.examined) {
+      ++out.over_budget;  // never compared with the map: neither paired nor a new landmark
+      continue;
+    }
     if (h[i] < 0) {
       unpaired.push_back(i);
+      continue;
+    }
+    if (!budget.spend(x_.size())) {
+      ++out.over_budget;
       continue;
     }
     const auto r = observe(ids[static_cast<size_t>(h[i])].first, sightings[i].range, sightings[i].bearing, sightings[i].covariance);
@@ -261,6 +301,10 @@ AssociationOutcome PlanarEkf::observe_unidentified(const std::vector<Sighting>& 
       if ((t.position - p).norm() < options_.tentative_radius && (!match || (t.position - p).norm() < (match->position - p).norm()))
         match = &t;
     if (match == nullptr) {
+      if (static_cast<int>(tentative_.size()) >= options_.max_landmarks) {
+        ++out.over_budget;  // as many candidates as the map may hold: a flood of new sightings is not hoarded
+        continue;
+      }
       tentative_.push_back({p, 1, 0, s});
       ++out.tentative;
       continue;
@@ -269,10 +313,15 @@ AssociationOutcome PlanarEkf::observe_unidentified(const std::vector<Sighting>& 
     ++match->seen;
     match->idle = 0;
     match->last = s;
-    if (match->seen >= options_.confirmations && static_cast<int>(slot_.size()) < options_.max_landmarks) {
-      augment(next_id_++, s.range, s.bearing, s.covariance);
+    if (match->seen >= options_.confirmations && static_cast<int>(slot_.size()) < options_.max_landmarks &&
+        budget.spend(x_.size())) {
+      if (const Health h = augment(next_id_, s.range, s.bearing, s.covariance); h != Health::kHealthy) {
+        refusals_.count(h);
+      } else {
+        ++next_id_;
+        ++out.confirmed;
+      }
       match->seen = -1;  // consumed
-      ++out.confirmed;
     }
   }
   std::erase_if(tentative_, [&](const Tentative& t) { return t.seen < 0 || t.idle > options_.tentative_lifetime; });
@@ -286,13 +335,13 @@ std::map<int64_t, Eigen::Vector2d> PlanarEkf::landmarks() const {
 }
 
 void PlanarEkf::save(archive::ArchiveWriter& w) const {
-  w(initialized_)(x_)(P_)(known_)(slot_)(next_id_);
+  w(initialized_)(x_)(P_)(known_)(slot_)(next_id_)(refusals_.non_finite)(refusals_.indefinite);
   w(static_cast<uint64_t>(tentative_.size()));
   for (const Tentative& t : tentative_) w(t.position)(t.seen)(t.idle)(t.last.range)(t.last.bearing)(t.last.covariance);
 }
 
 void PlanarEkf::load(archive::ArchiveReader& r) {
-  r(initialized_)(x_)(P_)(known_)(slot_)(next_id_);
+  r(initialized_)(x_)(P_)(known_)(slot_)(next_id_)(refusals_.non_finite)(refusals_.indefinite);
   if (x_.size() < 3 || P_.rows() != x_.size() || P_.cols() != x_.size()) r.fail("an EKF state whose covariance does not match it");
   for (const auto& [id, slot] : slot_)
     if (slot < 3 || slot + 2 > x_.size()) r.fail("an EKF landmark slot outside the state");

@@ -12,7 +12,9 @@
 //    since a clone of an earlier pose, h = C^-1 X (relative; the clone is a copy of the robot pose kept in the
 //    state, "stochastic cloning", Roumeliotis & Burdick, ICRA 2002).  Innovation r = Log(h^-1 Z), on any subset
 //    of its [x, y, theta] rows.
+#include "assoc/landmark/jcbb.hpp"
 #include "estimators/archive/binary_archive.hpp"
+#include "estimators/filter/estimate_health.hpp"
 #include "estimators/filter/kalman_update.hpp"
 #include "estimators/lie/se2.hpp"
 
@@ -31,6 +33,14 @@ struct PlanarEkfOptions {
   int confirmations = 3;
   double tentative_radius = 0.5;
   int tentative_lifetime = 50;
+  // The work one batch of sightings without id may cost in association (assoc/landmark/jcbb.hpp, in floating-point
+  // operations; 5e7 is about 50 ms).  Beyond it the association degrades to nearest neighbour, and sightings it
+  // could not examine are dropped (counted as over_budget).
+  double association_budget = 5e7;
+  // The work the updates of one batch of sightings may cost (kalman_update.hpp, UpdateBudget): each EKF-SLAM update
+  // or new landmark is O(n^2) in the state's size n; what does not fit is dropped and counted as over_budget.
+  // 5e8 is about 0.3 s: with 500 landmarks, about 60 sightings a batch.
+  double update_budget = 5e8;
 };
 
 /// A range-bearing sighting of a landmark whose id is unknown.
@@ -42,6 +52,8 @@ struct Sighting {
 /// What happened to a batch of unidentified sightings.
 struct AssociationOutcome {
   int paired = 0, gated = 0, tentative = 0, confirmed = 0;
+  int over_budget = 0;     // sightings dropped unexamined (budget) or beyond the tentative list's size (max_landmarks)
+  bool exhausted = false;  // the association budget ran out: nearest neighbour instead of JCBB
 };
 
 class PlanarEkf {
@@ -53,7 +65,9 @@ class PlanarEkf {
   /// A landmark of the known map: fixed, not part of the state.
   void set_known_landmark(int64_t id, const Eigen::Vector2d& position) { known_[id] = position; }
 
-  void predict(const SE2& delta, const Eigen::Matrix3d& Q);
+  /// The motion model above.  A prediction whose result is not finite, or whose robot covariance is not positive
+  /// semi-definite (estimate_health.hpp), is refused: the state stays as it was, the refusal is counted and returned.
+  Health predict(const SE2& delta, const Eigen::Matrix3d& Q);
   /// One range-bearing sighting of landmark `id` (covariance R over [range, bearing]).  A known landmark updates;
   /// a landmark in the state updates; a new one is added (SLAM mode).  Refused when gated or degenerate.
   UpdateResult observe(int64_t id, double range, double bearing, const Eigen::Matrix2d& R);
@@ -70,7 +84,14 @@ class PlanarEkf {
 
   /// Sightings without ids: associated by JCBB (assoc/landmark/jcbb.hpp) against every landmark of the map and
   /// the state, then updated jointly; the unpaired ones go through the tentative-landmark rule above.
-  AssociationOutcome observe_unidentified(const std::vector<Sighting>& sightings);
+  /// Each update or new landmark is charged to `budget`; those that do not fit count as over_budget.
+  AssociationOutcome observe_unidentified(const std::vector<Sighting>& sightings, UpdateBudget& budget);
+  AssociationOutcome observe_unidentified(const std::vector<Sighting>& sightings) {
+    UpdateBudget budget = new_update_budget();
+    return observe_unidentified(sightings, budget);
+  }
+  /// A batch's budget (the options' update_budget).
+  UpdateBudget new_update_budget() const { return UpdateBudget(options_.update_budget); }
 
   SE2 pose() const { return SE2(x_[0], x_[1], x_[2]); }
   Eigen::Matrix3d pose_covariance() const { return P_.topLeftCorner<3, 3>(); }
@@ -78,6 +99,9 @@ class PlanarEkf {
   const Eigen::MatrixXd& covariance() const { return P_; }
   std::map<int64_t, Eigen::Vector2d> landmarks() const;
   size_t landmark_count() const { return slot_.size(); }
+  /// Predictions and updates refused because of what they would have done to the estimate (every update, landmark
+  /// addition and prediction is checked; the state is the one before the refused step).
+  const Refusals& refusals() const { return refusals_; }
 
   /// The models and their Jacobians, exposed for tests.
   static Eigen::Vector3d motion(const Eigen::Vector3d& x, const SE2& delta, Eigen::Matrix3d* F, Eigen::Matrix3d* G);
@@ -96,7 +120,8 @@ class PlanarEkf {
   void load(archive::ArchiveReader& r);
 
  private:
-  void augment(int64_t id, double range, double bearing, const Eigen::Matrix2d& R);
+  Health augment(int64_t id, double range, double bearing, const Eigen::Matrix2d& R);
+  UpdateResult counted(UpdateResult r);
   UpdateResult update_rows(const Eigen::Vector3d& r, const Eigen::Matrix3d& H_robot, int other, const Eigen::Matrix3d& H_other,
                            const Eigen::Matrix3d& R, const std::array<bool, 3>& rows, double gate);
 
@@ -113,6 +138,7 @@ class PlanarEkf {
   };
   std::vector<Tentative> tentative_;
   int64_t next_id_ = int64_t{1} << 40;  // ids given to confirmed landmarks that came without one
+  Refusals refusals_;
 };
 
 }  // namespace sextant::filter

@@ -19,16 +19,34 @@ void SpatialEkf::initialize(const SE3& pose, const Matrix6& covariance) {
   initialized_ = true;
 }
 
-void SpatialEkf::predict(const SE3& delta, const Matrix6& Q) {
+Health SpatialEkf::predict(const SE3& delta, const Matrix6& Q) {
   const Matrix6 F = delta.inverse().adjoint();
-  pose_ = pose_ * delta;
+  const SE3 pose = pose_ * delta;
   const Eigen::Index n = P_.rows();
-  const Matrix6 Prr = F * P_.topLeftCorner<6, 6>() * F.transpose() + Q;
-  P_.topLeftCorner<6, 6>() = symmetrized(Prr);
-  if (n > 6) {
-    P_.topRightCorner(6, n - 6) = F * P_.topRightCorner(6, n - 6);
-    P_.bottomLeftCorner(n - 6, 6) = P_.topRightCorner(6, n - 6).transpose();
+  Matrix6 Prr = F * P_.topLeftCorner<6, 6>() * F.transpose() + Q;
+  Prr = symmetrized(Prr);
+  const Eigen::MatrixXd Prl = F * P_.topRightCorner(6, n - 6);
+  Eigen::Matrix<double, 7, 1> p;
+  p << pose.translation(), pose.rotation().quaternion().coeffs();
+  Health h = estimate_health(p, Prr, 6);
+  if (h == Health::kHealthy && !Prl.allFinite()) h = Health::kNonFinite;
+  if (h != Health::kHealthy) {
+    refusals_.count(h);
+    return h;
   }
+  pose_ = pose;
+  P_.topLeftCorner<6, 6>() = Prr;
+  if (n > 6) {
+    P_.topRightCorner(6, n - 6) = Prl;
+    P_.bottomLeftCorner(n - 6, 6) = Prl.transpose();
+  }
+  return h;
+}
+
+UpdateResult SpatialEkf::counted(UpdateResult r) {
+  if (r.reason == UpdateReason::kNonFinite) refusals_.count(Health::kNonFinite);
+  else if (r.reason == UpdateReason::kIndefinite) refusals_.count(Health::kIndefinite);
+  return r;
 }
 
 Eigen::Vector3d SpatialEkf::observation(const SE3& X, const Eigen::Vector3d& l, Eigen::Matrix<double, 3, 6>* Hx, Eigen::Matrix3d* Hl) {
@@ -74,7 +92,8 @@ UpdateResult SpatialEkf::observe(int64_t id, const Eigen::Vector3d& z, const Eig
   }
   auto s = slot_.find(id);
   if (s == slot_.end())
-    return admit_new_landmark(options_.slam, id, slot_.size(), options_.max_landmarks, [&] { augment(id, z, R); });
+    return counted(
+        admit_new_landmark(options_.slam, id, slot_.size(), options_.max_landmarks, [&] { return augment(id, z, R); }));
   const int k = s->second;
   Eigen::Matrix<double, 3, 6> Hx;
   Eigen::Matrix3d Hl;
@@ -89,7 +108,7 @@ UpdateResult SpatialEkf::observe(int64_t id, const Eigen::Vector3d& z, const Eig
   const Eigen::MatrixXd PHt = P_.leftCols<6>() * Hx.transpose() + P_.middleCols<3>(k) * Hl.transpose();
   const Eigen::MatrixXd HPHt = Hx * PHt.topRows<6>() + Hl * PHt.middleRows<3>(k);
   Eigen::VectorXd dx = Eigen::VectorXd::Zero(P_.rows());
-  out = kalman_update_from(dx, P_, r, PHt, HPHt, R, options_.gate);
+  out = counted(kalman_update_from(dx, P_, r, PHt, HPHt, R, options_.gate));
   if (out.accepted) {
     pose_ = pose_ * SE3::exp(dx.head<6>());
     landmarks_ += dx.tail(dx.size() - 6);
@@ -97,15 +116,21 @@ UpdateResult SpatialEkf::observe(int64_t id, const Eigen::Vector3d& z, const Eig
   return out;
 }
 
-void SpatialEkf::augment(int64_t id, const Eigen::Vector3d& z, const Eigen::Matrix3d& R) {
+Health SpatialEkf::augment(int64_t id, const Eigen::Vector3d& z, const Eigen::Matrix3d& R) {
   const Eigen::Index n = P_.rows();
   Eigen::Matrix<double, 3, 6> Jx;
   Eigen::Matrix3d Jz;
   const Eigen::Vector3d l = inverse_observation(pose_, z, &Jx, &Jz);
+  Eigen::MatrixXd P = augmented_covariance(P_, Jx, Jz, R);
+  // Only the new rows are new: their block must be a covariance and every number finite.
+  Health h = estimate_health(l, P.bottomRightCorner<3, 3>(), 3);
+  if (h == Health::kHealthy && !P.bottomRows<3>().allFinite()) h = Health::kNonFinite;
+  if (h != Health::kHealthy) return h;
   landmarks_.conservativeResize(landmarks_.size() + 3);
   landmarks_.tail<3>() = l;
-  P_ = augmented_covariance(P_, Jx, Jz, R);
+  P_ = std::move(P);
   slot_[id] = static_cast<int>(n);
+  return h;
 }
 
 std::map<int64_t, Eigen::Vector3d> SpatialEkf::landmarks() const {
@@ -114,10 +139,12 @@ std::map<int64_t, Eigen::Vector3d> SpatialEkf::landmarks() const {
   return out;
 }
 
-void SpatialEkf::save(archive::ArchiveWriter& w) const { w(initialized_)(pose_)(landmarks_)(P_)(slot_); }
+void SpatialEkf::save(archive::ArchiveWriter& w) const {
+  w(initialized_)(pose_)(landmarks_)(P_)(slot_)(refusals_.non_finite)(refusals_.indefinite);
+}
 
 void SpatialEkf::load(archive::ArchiveReader& r) {
-  r(initialized_)(pose_)(landmarks_)(P_)(slot_);
+  r(initialized_)(pose_)(landmarks_)(P_)(slot_)(refusals_.non_finite)(refusals_.indefinite);
   if (landmarks_.size() % 3 != 0 || P_.rows() != 6 + landmarks_.size() || P_.cols() != P_.rows())
     r.fail("a 3-D EKF state whose covariance does not match it");
   for (const auto& [id, slot] : slot_)

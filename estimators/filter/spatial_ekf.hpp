@@ -13,9 +13,11 @@
 // The sensor is taken at the body origin (landmarks_t.sensor_in_body is not applied, as in the planar filter).
 // Update: the error state dx = K r is applied as X <- X Exp(dxi), l <- l + dl (the error state is reset to 0).
 #include "estimators/archive/binary_archive.hpp"
+#include "estimators/filter/estimate_health.hpp"
 #include "estimators/filter/kalman_update.hpp"
 #include "estimators/lie/se3.hpp"
 
+#include <algorithm>
 #include <map>
 
 namespace sextant::filter {
@@ -24,6 +26,7 @@ struct SpatialEkfOptions {
   double gate = 11.34;  // chi-square (3 dof) threshold on the normalized innovation; 11.34 = 99 %
   bool slam = true;     // new landmark ids are added to the state
   int max_landmarks = 4096;
+  double update_budget = 5e8;  // as PlanarEkfOptions::update_budget (kalman_update.hpp, UpdateBudget)
 };
 
 class SpatialEkf {
@@ -34,7 +37,9 @@ class SpatialEkf {
   void initialize(const SE3& pose, const Matrix6& covariance);
   bool initialized() const { return initialized_; }
 
-  void predict(const SE3& delta, const Matrix6& Q);
+  /// The motion model above; refused (state unchanged, counted, returned) when its result would not be finite or
+  /// its pose covariance not positive semi-definite (estimate_health.hpp).
+  Health predict(const SE3& delta, const Matrix6& Q);
   /// A range/azimuth/elevation sighting of landmark `id` (R over [range, azimuth, elevation]).  A landmark in the
   /// state updates; a new one is added (SLAM mode).  Refused ("gate", "non_finite", "singular", "unknown_landmark",
   /// "map_full") otherwise.
@@ -45,6 +50,11 @@ class SpatialEkf {
   const Eigen::MatrixXd& covariance() const { return P_; }
   std::map<int64_t, Eigen::Vector3d> landmarks() const;
   size_t landmark_count() const { return slot_.size(); }
+  /// Predictions, updates and landmark additions refused because of what they would have done to the estimate.
+  const Refusals& refusals() const { return refusals_; }
+  /// A batch's budget (the options' update_budget); `size()` is what an update is charged by.
+  UpdateBudget new_update_budget() const { return UpdateBudget(options_.update_budget); }
+  Eigen::Index size() const { return P_.rows(); }
 
   /// The models and their Jacobians (for tests).  `observation`: H_pose = dh/dxi, H_landmark = dh/dl.
   static Eigen::Vector3d observation(const SE3& pose, const Eigen::Vector3d& landmark, Eigen::Matrix<double, 3, 6>* H_pose,
@@ -59,7 +69,8 @@ class SpatialEkf {
   void load(archive::ArchiveReader& r);
 
  private:
-  void augment(int64_t id, const Eigen::Vector3d& z, const Eigen::Matrix3d& R);
+  Health augment(int64_t id, const Eigen::Vector3d& z, const Eigen::Matrix3d& R);
+  UpdateResult counted(UpdateResult r);
 
   SpatialEkfOptions options_;
   bool initialized_ = false;
@@ -67,6 +78,7 @@ class SpatialEkf {
   Eigen::VectorXd landmarks_;  // [l1, l2, ...], 3 each; covariance index = 6 + index here
   Eigen::MatrixXd P_ = Eigen::MatrixXd::Identity(6, 6);
   std::map<int64_t, int> slot_;  // landmark id -> index of its x in the covariance
+  Refusals refusals_;
 };
 
 }  // namespace sextant::filter

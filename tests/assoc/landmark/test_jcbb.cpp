@@ -4,6 +4,7 @@
 
 #include <doctest/doctest.h>
 
+#include <chrono>
 #include <random>
 
 using namespace sextant::assoc;
@@ -113,4 +114,80 @@ TEST_CASE("a common pose error fools nearest neighbour, not JCBB") {
   CHECK(nn[0] == 1);  // fooled
   CHECK(jc == Hypothesis{0, 1});
   CHECK(joint_distance(p, jc) < joint_distance(p, Hypothesis{1, -1}) + 1.0);
+}
+
+TEST_CASE("JCBB's work budget: a batch of thousands of sightings ends within it, with nearest neighbour's pairing") {
+  // 300 landmarks on a grid 1 m apart, 2000 sightings of them (each landmark several times): every sighting is
+  // compatible with several landmarks, so the exact search is hopeless.  The budget bounds the work and the answer
+  // is nearest neighbour over the individually compatible pairs: sound (each pair passes the individual gate).
+  World w;
+  w.landmarks = 300;
+  const int dim = 2 + 2 * w.landmarks;
+  w.P = Eigen::MatrixXd::Identity(dim, dim) * 0.25;
+  w.x = Eigen::VectorXd::Zero(dim);
+  for (int j = 0; j < w.landmarks; ++j) w.x.segment<2>(2 + 2 * j) = Eigen::Vector2d(j % 20, j / 20);
+  std::mt19937 rng(4);
+  for (int i = 0; i < 2000; ++i) {
+    const int j = static_cast<int>(rng() % 300);
+    w.z.push_back(w.x.segment<2>(2 + 2 * j) + Eigen::Vector2d(0.05, -0.05));
+    w.R.push_back(Eigen::Matrix2d::Identity() * 0.04);
+  }
+  AssociationProblem p = w.problem();
+  // The same problem with sparse Jacobians (the robot's and the landmark's columns only).
+  p.candidate = [&w](int i, int j) -> std::optional<Candidate> {
+    Candidate c;
+    c.jacobian.resize(2, 4);
+    c.jacobian << -Eigen::Matrix2d::Identity(), Eigen::Matrix2d::Identity();
+    c.columns = {0, 1, 2 + 2 * j, 3 + 2 * j};
+    c.innovation = w.z[static_cast<size_t>(i)] - (w.x.segment<2>(2 + 2 * j) - w.x.head<2>());
+    return c;
+  };
+  p.work_budget = 2e7;
+  const auto t0 = std::chrono::steady_clock::now();
+  const BoundedAssociation a = associate_bounded(p);
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  CHECK(a.exhausted);
+  CHECK(a.work <= p.work_budget * 1.01 + 1e5);
+  CHECK(seconds < 2.0);
+  // Every pair it makes passes the individual gate; those examined are paired as nearest neighbour pairs them.
+  int paired = 0;
+  for (int i = 0; i < p.sightings; ++i) {
+    const int j = a.pairing[static_cast<size_t>(i)];
+    if (i >= a.examined) CHECK(j == -1);
+    if (j < 0) continue;
+    ++paired;
+    CHECK(individual_distance(p, i, j) < p.individual_gate);
+  }
+  CHECK(paired > 0);
+  CHECK(a.examined > 0);
+  CHECK(a.examined < p.sightings);
+}
+
+TEST_CASE("sparse and dense Jacobians give the same distances and the same JCBB answer") {
+  World w;
+  w.landmarks = 5;
+  const int dim = 2 + 2 * w.landmarks;
+  Eigen::MatrixXd A = Eigen::MatrixXd::Random(dim, dim) * 0.3;
+  w.P = A * A.transpose() + 0.05 * Eigen::MatrixXd::Identity(dim, dim);
+  w.x = Eigen::VectorXd::Zero(dim);
+  for (int j = 0; j < w.landmarks; ++j) w.x.segment<2>(2 + 2 * j) = Eigen::Vector2d(1.5 * j, 0.5 * j);
+  for (int j : {3, 1, 4}) {
+    w.z.push_back(w.x.segment<2>(2 + 2 * j) + Eigen::Vector2d(0.1, -0.1));
+    w.R.push_back(Eigen::Matrix2d::Identity() * 0.04);
+  }
+  const AssociationProblem dense = w.problem();
+  AssociationProblem sparse = dense;
+  sparse.candidate = [&w](int i, int j) -> std::optional<Candidate> {
+    Candidate c;
+    c.jacobian.resize(2, 4);
+    c.jacobian << -Eigen::Matrix2d::Identity(), Eigen::Matrix2d::Identity();
+    c.columns = {0, 1, 2 + 2 * j, 3 + 2 * j};
+    c.innovation = w.z[static_cast<size_t>(i)] - (w.x.segment<2>(2 + 2 * j) - w.x.head<2>());
+    return c;
+  };
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < w.landmarks; ++j) CHECK(individual_distance(sparse, i, j) == doctest::Approx(individual_distance(dense, i, j)));
+  const Hypothesis h{3, 1, 4};
+  CHECK(joint_distance(sparse, h) == doctest::Approx(joint_distance(dense, h)));
+  CHECK(joint_compatibility_branch_and_bound(sparse) == joint_compatibility_branch_and_bound(dense));
 }

@@ -10,6 +10,8 @@
 #include <doctest/doctest.h>
 
 #include <cmath>
+#include <sys/stat.h>
+#include <unistd.h>
 #include <memory>
 #include <stdexcept>
 #include <string>
@@ -420,4 +422,44 @@ TEST_CASE("engine.graph.lifelong: a budget per kind of body, the old shared keys
   const std::string bad = error_of("engine:\n  graph:\n    lifelong:\n      spatial: {window: 0}\n");
   CHECK(bad.find("test.yaml:4:") == 0);
   CHECK(bad.find("engine.graph.lifelong.spatial.window") != std::string::npos);
+}
+
+TEST_CASE("config: daemon.plausibility and source_handover_s are read and checked with file:line") {
+  const auto c = sextant::config::parse_daemon_config("daemon:\n  source_handover_s: 5\n  plausibility:\n    max_speed_planar_mps: 3\n    max_range_m: 80\n", "t.yaml");
+  CHECK(c.source_handover_s == 5);
+  CHECK(c.plausibility.max_speed_planar_mps == 3);
+  CHECK(c.plausibility.max_range_m == 80);
+  CHECK(c.plausibility.max_speed_spatial_mps == 350);
+  CHECK(sextant::test::config_error_of("daemon:\n  plausibility:\n    max_range_m: -1\n").find("test.yaml:3:") == 0);
+  CHECK(sextant::test::config_error_of("daemon:\n  plausibility:\n    max_rnge_m: 1\n").find("test.yaml:3:") == 0);
+}
+
+TEST_CASE("config: strict reading: duplicate keys, several documents, control characters, bad prefixes, non-regular files") {
+  using sextant::test::config_error_of;
+  CHECK(config_error_of("daemon:\n  name: a\n  name: b\n").find("test.yaml:3:3: key 'name' written twice") == 0);
+  CHECK(config_error_of("daemon:\n  name: a\ndaemon:\n  name: b\n").find("test.yaml:3:1: key 'daemon' written twice") == 0);
+  CHECK(config_error_of("daemon:\n  name: a\n---\ndaemon:\n  name: b\n").find("test.yaml:4: a second YAML document") == 0);
+  CHECK(config_error_of(std::string("daemon:\n  name: \"a\\0b\"\n") + std::string(1, '\0')).find("test.yaml:3:1: control character 0x0") == 0);
+  CHECK(config_error_of("daemon:\n  name: a\x1b[2Jb\n").find("test.yaml:2:10: control character 0x1b") == 0);
+  CHECK(config_error_of("channels:\n  prefix: \"ROBOT 1_\"\n").find("test.yaml:2:11:") == 0);
+  CHECK(config_error_of("channels:\n  prefix: \"R\xc3\xa9_\"\n").find("test.yaml:2:11:") == 0);
+  CHECK(config_error_of("channels:\n  prefix: \"ROBOT1_\"\n").empty());
+  CHECK(config_error_of(std::string(sextant::config::kMaxConfigBytes + 1, '#')).find("bytes; a config is at most") != std::string::npos);
+  const auto load_error = [](const std::string& path) {
+    try {
+      sextant::config::load_daemon_config(path);
+    } catch (const ConfigError& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  CHECK(load_error("/dev/zero") == "/dev/zero: not a regular file");
+  const std::string fifo = "/tmp/sextant_config_fifo_" + std::to_string(::getpid());
+  REQUIRE(::mkfifo(fifo.c_str(), 0600) == 0);
+  CHECK(load_error(fifo) == fifo + ": not a regular file");  // would block for ever if it were opened
+  ::unlink(fifo.c_str());
+}
+
+TEST_CASE("config: a control character written as a YAML escape in daemon.name is refused too") {
+  CHECK(sextant::test::config_error_of("daemon:\n  name: \"a\\0b\"\n").find("test.yaml:2:9: 'daemon.name': must not contain control characters") == 0);
 }

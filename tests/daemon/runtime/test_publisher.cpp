@@ -39,3 +39,32 @@ TEST_CASE("the publisher's last FusedPose times are forgotten with their body an
   CHECK(publisher.not_monotonic() == 3);
   CHECK(sent == 3 + 100 + 1);
 }
+
+TEST_CASE("the publisher says how far behind real time it publishes: a backlog after a stall shows its lag") {
+  config::Channels channels;
+  runtime::Publisher publisher(channels, "t", "ekf", [](const std::string&, const std::vector<uint8_t>&, int64_t) {});
+  int64_t wall = 1'000'000'000;
+  publisher.measure_lag([&wall] { return wall; });
+  engine::FusedPose p;
+  p.source = "robot";
+  p.estimator = "ekf";
+  p.covariance = engine::Matrix6::Identity();
+  // Live: each pose published 5 ms after its stamp.
+  for (int i = 1; i <= 10; ++i) {
+    p.utime = wall - 5'000;
+    publisher.publish(p);
+    wall += 10'000;
+  }
+  CHECK(publisher.take_lag().max_us == 5'000);
+  // Stopped for 20 s: the backlog (stamped during the stall) is published late, and says so.
+  const int64_t stalled_from = wall;
+  wall += 20'000'000;
+  for (int i = 0; i < 5; ++i) {
+    p.utime = stalled_from + i * 10'000;
+    publisher.publish(p);
+  }
+  const auto lag = publisher.take_lag();
+  CHECK(lag.max_us == 20'000'000);
+  CHECK(lag.last_us == 20'000'000 - 40'000);
+  CHECK(publisher.take_lag().max_us == lag.last_us);  // the maximum restarts at each status
+}

@@ -5,7 +5,9 @@
 
 #include <doctest/doctest.h>
 
+#include <csignal>
 #include <filesystem>
+#include <sys/resource.h>
 #include <string>
 #include <unistd.h>
 
@@ -51,7 +53,7 @@ TEST_CASE("state file: sections round-trip, every flipped byte and every truncat
   CHECK(error_of("hello", 42).find("too short") != std::string::npos);
   std::string other_version = bytes;
   other_version[16] = 1;  // the version before the graph stage's state became the SLAM layer's
-  CHECK(error_of(other_version, 42).find("state format version 1, this sextantd reads version 3") != std::string::npos);
+  CHECK(error_of(other_version, 42).find("state format version 1, this sextantd reads version 4") != std::string::npos);
 }
 
 TEST_CASE("state file: written atomically, replacing the previous one, no temporary left") {
@@ -64,5 +66,31 @@ TEST_CASE("state file: written atomically, replacing the previous one, no tempor
   CHECK_FALSE(std::filesystem::exists(path + ".tmp"));
   CHECK_THROWS_AS(write_file_atomically((dir / "missing" / "x").string(), "y"), StateFileError);
   CHECK_THROWS_AS(read_whole_file((dir / "missing").string()), StateFileError);
+  std::filesystem::remove_all(dir);
+}
+
+TEST_CASE("state file: a write that fails half way (a full disk) leaves the previous file whole and no temporary") {
+  const auto dir = std::filesystem::temp_directory_path() / ("sextant_state_full_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  const std::string path = (dir / kStateFileName).string();
+  write_file_atomically(path, encode_state(1, {{"a", "first"}}));
+  // A file size limit makes write() fail with EFBIG part way, as ENOSPC does on a full disk.
+  struct rlimit old {};
+  REQUIRE(::getrlimit(RLIMIT_FSIZE, &old) == 0);
+  const auto old_handler = std::signal(SIGXFSZ, SIG_IGN);
+  struct rlimit small = old;
+  small.rlim_cur = 4096;
+  REQUIRE(::setrlimit(RLIMIT_FSIZE, &small) == 0);
+  std::string error;
+  try {
+    write_file_atomically(path, encode_state(1, {{"a", std::string(100000, 'x')}}));
+  } catch (const StateFileError& e) {
+    error = e.what();
+  }
+  REQUIRE(::setrlimit(RLIMIT_FSIZE, &old) == 0);
+  std::signal(SIGXFSZ, old_handler);
+  CHECK(error.find("write failed") != std::string::npos);
+  CHECK_FALSE(std::filesystem::exists(path + ".tmp"));
+  CHECK(decode_state(read_whole_file(path), 1, path)[0].bytes == "first");
   std::filesystem::remove_all(dir);
 }
