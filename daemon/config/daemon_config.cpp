@@ -125,6 +125,8 @@ static void read_plausibility(Section p, Plausibility& c) {
   p.get("min_variance", c.min_variance, in_range(1e-300, 1));
   p.get("max_variance", c.max_variance, in_range(1, 1e300));
   p.get("max_condition", c.max_condition, in_range(1, 1e300));
+  p.get("max_angular_rate_radps", c.max_angular_rate_radps, in_range(1e-3, 1e6));
+  p.get("max_acceleration_mps2", c.max_acceleration_mps2, in_range(1e-3, 1e9));
   p.reject_unknown_keys();
 }
 

@@ -39,6 +39,8 @@ struct Plausibility {
   double min_variance = 1.0e-12;        // every covariance's smallest eigenvalue (its meaningful block) >= this
   double max_variance = 1.0e12;         // ... its largest <= this (a loop's information: the inverses)
   double max_condition = 1.0e12;        // ... and their ratio <= this (beyond, updates cancel every digit)
+  double max_angular_rate_radps = 100.0;  // an IMU's |angular velocity| (consumer gyroscopes saturate near 35 rad/s)
+  double max_acceleration_mps2 = 1000.0;  // an IMU's |specific force| (about 100 g)
 };
 
 struct DaemonConfig {

@@ -90,10 +90,40 @@ std::optional<Rejection> Plausibility::check(const std::string& stream, const en
     }
     return std::nullopt;
   }
+  if (const auto* m = std::get_if<engine::ImuSample>(&event)) return check_imu(*m);
+  if (const auto* g = std::get_if<engine::GnssFix>(&event)) return check_gnss(*g);
   const auto& c = std::get<engine::LoopClosure>(event);
   if (auto r = check_position(c.relative.position, l, "loop_closure_t.position")) return r;
   if (auto r = check_tilt(c.planar, c.relative.orientation, l, "loop_closure_t.orientation")) return r;
   return check_spread<6>(c.information, pose_active(c.planar), l, "loop_closure_t.information", true);
+}
+
+std::optional<Rejection> Plausibility::check_imu(const engine::ImuSample& m) const {
+  const config::Plausibility& l = limits_;
+  if (m.angular_velocity && m.angular_velocity->norm() > l.max_angular_rate_radps)
+    return implausible("rate", "imu_t.angular_velocity: " + number(m.angular_velocity->norm()) +
+                                   " rad/s (max_angular_rate_radps " + number(l.max_angular_rate_radps) + ")");
+  if (m.linear_acceleration && m.linear_acceleration->norm() > l.max_acceleration_mps2)
+    return implausible("acceleration", "imu_t.linear_acceleration: " + number(m.linear_acceleration->norm()) +
+                                           " m/s^2 (max_acceleration_mps2 " + number(l.max_acceleration_mps2) + ")");
+  // A stated covariance (zero means none) must be usable like any other.
+  const auto stated = [&](const Eigen::Matrix3d& c, const std::string& f) -> std::optional<Rejection> {
+    if (c.isZero(0)) return std::nullopt;
+    return check_spread<3>(c, {0, 1, 2}, l, f);
+  };
+  if (auto r = stated(m.angular_velocity_covariance, "imu_t.angular_velocity_covariance")) return r;
+  if (auto r = stated(m.linear_acceleration_covariance, "imu_t.linear_acceleration_covariance")) return r;
+  return stated(m.orientation_covariance, "imu_t.orientation_covariance");
+}
+
+std::optional<Rejection> Plausibility::check_gnss(const engine::GnssFix& g) const {
+  const config::Plausibility& l = limits_;
+  if (!g.position_covariance.isZero(0))
+    if (auto r = check_spread<3>(g.position_covariance, {0, 1, 2}, l, "gnss_t.position_covariance")) return r;
+  if (g.velocity && g.velocity->norm() > l.max_speed_spatial_mps)
+    return implausible("speed", "gnss_t.velocity: " + number(g.velocity->norm()) + " m/s (max_speed_spatial_mps " +
+                                    number(l.max_speed_spatial_mps) + ")");
+  return std::nullopt;
 }
 
 std::optional<Rejection> Plausibility::check_odometry(const std::string& stream, const engine::Odometry& o) {

@@ -9,6 +9,8 @@
 //   implausible_covariance  a covariance (odometry pose, increment, twist; sighting; bearing sigmas; the inverse of a
 //                           loop's information) whose meaningful block has an eigenvalue outside [min_variance,
 //                           max_variance] or a condition number above max_condition;
+//   implausible_rate, implausible_acceleration  an IMU sample beyond max_angular_rate_radps / max_acceleration_mps2
+//                           (and its stated covariances as above); a GNSS velocity beyond the 3-D speed;
 //   implausible_speed       an odometry position farther from the source's previous accepted one than
 //                           speed * dt + max_jump_m (speed by the body's kind: planar or 3-D).
 // A source whose odometry keeps "jumping" consistently — `resync_messages` refused messages in a row, each plausible
@@ -44,6 +46,8 @@ class Plausibility {
     int64_t refused_utime = 0;
     Eigen::Vector3d refused_position = Eigen::Vector3d::Zero();
   };
+  std::optional<Rejection> check_imu(const engine::ImuSample& m) const;
+  std::optional<Rejection> check_gnss(const engine::GnssFix& g) const;
   std::optional<Rejection> check_odometry(const std::string& stream, const engine::Odometry& o);
   std::optional<Rejection> check_speed(const std::string& stream, const engine::Odometry& o);
   bool within_speed(int64_t from_utime, const Eigen::Vector3d& from, const engine::Odometry& o) const;

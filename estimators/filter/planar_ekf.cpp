@@ -232,13 +232,17 @@ Health PlanarEkf::augment(int64_t id, double range, double bearing, const Eigen:
   return h;
 }
 
-AssociationOutcome PlanarEkf::observe_unidentified(const std::vector<Sighting>& sightings, UpdateBudget& budget) {
-  AssociationOutcome out;
-  if (sightings.empty()) return out;
-  // Every landmark, known or in the state, as an index for the association.
-  std::vector<std::pair<int64_t, bool>> ids;  // (id, in state)
+// Every landmark, known or in the state, as an index for the association: (id, in state).
+std::vector<std::pair<int64_t, bool>> PlanarEkf::association_index() const {
+  std::vector<std::pair<int64_t, bool>> ids;
   for (const auto& [id, p] : known_) ids.push_back({id, false});
   for (const auto& [id, k] : slot_) ids.push_back({id, true});
+  return ids;
+}
+
+// Joint compatibility over the sightings and the indexed landmarks, within the work budget (assoc/landmark/jcbb.hpp).
+assoc::BoundedAssociation PlanarEkf::associate(const std::vector<Sighting>& sightings,
+                                               const std::vector<std::pair<int64_t, bool>>& ids) const {
   assoc::AssociationProblem problem;
   problem.sightings = static_cast<int>(sightings.size());
   problem.landmarks = static_cast<int>(ids.size());
@@ -269,28 +273,12 @@ AssociationOutcome PlanarEkf::observe_unidentified(const std::vector<Sighting>& 
   assoc::BoundedAssociation a;
   if (problem.landmarks > 0) a = assoc::associate_bounded(problem, 20000);
   else a.pairing.assign(sightings.size(), -1), a.examined = problem.sightings;
-  const assoc::Hypothesis& h = a.pairing;
-  out.exhausted = a.exhausted;
-  // The paired sightings update one after the other (equal to the joint update for a linearized model).
-  std::vector<size_t> unpaired;
-  for (size_t i = 0; i < sightings.size(); ++i) {
-    if (h[i] < 0 && static_cast<int>(i) >= a.examined) {
-      ++out.over_budget;  // never compared with the map: neither paired nor a new landmark
-      continue;
-    }
-    if (h[i] < 0) {
-      unpaired.push_back(i);
-      continue;
-    }
-    if (!budget.spend(x_.size())) {
-      ++out.over_budget;
-      continue;
-    }
-    const auto r = observe(ids[static_cast<size_t>(h[i])].first, sightings[i].range, sightings[i].bearing, sightings[i].covariance);
-    r.accepted ? ++out.paired : ++out.gated;
-  }
-  if (!options_.slam) return out;
-  // Tentative landmarks: matched by distance in the map frame, confirmed after enough sightings.
+  return a;
+}
+
+// Tentative landmarks: matched by distance in the map frame, confirmed after enough sightings.
+void PlanarEkf::admit_tentative(const std::vector<Sighting>& sightings, const std::vector<size_t>& unpaired,
+                                UpdateBudget& budget, AssociationOutcome& out) {
   for (auto& t : tentative_) ++t.idle;
   for (size_t i : unpaired) {
     const auto& s = sightings[i];
@@ -325,6 +313,34 @@ AssociationOutcome PlanarEkf::observe_unidentified(const std::vector<Sighting>& 
     }
   }
   std::erase_if(tentative_, [&](const Tentative& t) { return t.seen < 0 || t.idle > options_.tentative_lifetime; });
+}
+
+AssociationOutcome PlanarEkf::observe_unidentified(const std::vector<Sighting>& sightings, UpdateBudget& budget) {
+  AssociationOutcome out;
+  if (sightings.empty()) return out;
+  const auto ids = association_index();
+  const assoc::BoundedAssociation a = associate(sightings, ids);
+  const assoc::Hypothesis& h = a.pairing;
+  out.exhausted = a.exhausted;
+  // The paired sightings update one after the other (equal to the joint update for a linearized model).
+  std::vector<size_t> unpaired;
+  for (size_t i = 0; i < sightings.size(); ++i) {
+    if (h[i] < 0 && static_cast<int>(i) >= a.examined) {
+      ++out.over_budget;  // never compared with the map: neither paired nor a new landmark
+      continue;
+    }
+    if (h[i] < 0) {
+      unpaired.push_back(i);
+      continue;
+    }
+    if (!budget.spend(x_.size())) {
+      ++out.over_budget;
+      continue;
+    }
+    const auto r = observe(ids[static_cast<size_t>(h[i])].first, sightings[i].range, sightings[i].bearing, sightings[i].covariance);
+    r.accepted ? ++out.paired : ++out.gated;
+  }
+  if (options_.slam) admit_tentative(sightings, unpaired, budget, out);
   return out;
 }
 

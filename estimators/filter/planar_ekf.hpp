@@ -120,6 +120,13 @@ class PlanarEkf {
   void load(archive::ArchiveReader& r);
 
  private:
+  // observe_unidentified's steps: the landmarks as an index, their association, the unpaired sightings' tentative
+  // landmarks.
+  std::vector<std::pair<int64_t, bool>> association_index() const;
+  assoc::BoundedAssociation associate(const std::vector<Sighting>& sightings,
+                                      const std::vector<std::pair<int64_t, bool>>& ids) const;
+  void admit_tentative(const std::vector<Sighting>& sightings, const std::vector<size_t>& unpaired, UpdateBudget& budget,
+                       AssociationOutcome& out);
   Health augment(int64_t id, double range, double bearing, const Eigen::Matrix2d& R);
   UpdateResult counted(UpdateResult r);
   UpdateResult update_rows(const Eigen::Vector3d& r, const Eigen::Matrix3d& H_robot, int other, const Eigen::Matrix3d& H_other,
