@@ -170,6 +170,8 @@ static void read_daemon_config(const YAML::Node& root, const std::string& file, 
 
 namespace {
 
+constexpr int64_t kMaxConfigNodes = 1'000'000;  // nodes walked, aliases counted each time they are reached
+
 // A control character (other than tab, newline and carriage return) anywhere in the text: a NUL in a name, an
 // escape sequence in a log.  Named by line and column.
 void refuse_control_characters(const std::string& text, const std::string& file) {
@@ -186,10 +188,40 @@ void refuse_control_characters(const std::string& text, const std::string& file)
   }
 }
 
+// A second YAML document (yaml-cpp's Load reads the first and ignores the rest): a "---" line after content, or
+// content after a "..." line.  Found in the text: yaml-cpp's LoadAll does not return on some malformed input.
+void refuse_second_document(const std::string& text, const std::string& file) {
+  bool content = false, ended = false;
+  int line = 0;
+  std::istringstream in(text);
+  for (std::string l; std::getline(in, l);) {
+    ++line;
+    const auto marker = [&](const char* m) {
+      return l.rfind(m, 0) == 0 && (l.size() == 3 || l[3] == ' ' || l[3] == '\t' || l[3] == '#' || l[3] == '\r');
+    };
+    const bool blank = l.find_first_not_of(" \t\r") == std::string::npos || l[l.find_first_not_of(" \t\r")] == '#';
+    if ((marker("---") && content) || (ended && !blank && !marker("..."))) {
+      std::ostringstream s;
+      s << file << ":" << line << ": a second YAML document; a config is one document";
+      throw ConfigError(s.str());
+    }
+    if (marker("...")) ended = true;
+    else if (!blank && !marker("---")) content = true;
+  }
+}
+
 // A key written twice in one mapping (yaml-cpp keeps the first and ignores the rest): an error at the second.
-void refuse_duplicate_keys(const YAML::Node& node, const std::string& file) {
+// Aliases make a node reachable many times (a "billion laughs" document): past `budget` visits the walk stops with
+// an error instead of taking exponential time.
+void refuse_duplicate_keys(const YAML::Node& node, const std::string& file, int64_t& budget) {
+  if (--budget < 0) {
+    std::ostringstream s;
+    s << file << ":" << node.Mark().line + 1 << ": the document expands beyond " << kMaxConfigNodes
+      << " nodes (aliases of aliases?)";
+    throw ConfigError(s.str());
+  }
   if (node.IsSequence()) {
-    for (const auto& child : node) refuse_duplicate_keys(child, file);
+    for (const auto& child : node) refuse_duplicate_keys(child, file, budget);
     return;
   }
   if (!node.IsMap()) return;
@@ -201,7 +233,7 @@ void refuse_duplicate_keys(const YAML::Node& node, const std::string& file) {
         << "' written twice in one section (the second would be ignored)";
       throw ConfigError(s.str());
     }
-    refuse_duplicate_keys(kv.second, file);
+    refuse_duplicate_keys(kv.second, file, budget);
   }
 }
 
@@ -212,21 +244,17 @@ DaemonConfig parse_daemon_config(const std::string& yaml_text, const std::string
     throw ConfigError(file + ": " + std::to_string(yaml_text.size()) + " bytes; a config is at most " +
                       std::to_string(kMaxConfigBytes));
   refuse_control_characters(yaml_text, file);
+  refuse_second_document(yaml_text, file);
   YAML::Node root;
   try {
-    const std::vector<YAML::Node> documents = YAML::LoadAll(yaml_text);
-    if (documents.size() > 1) {
-      std::ostringstream s;
-      s << file << ":" << documents[1].Mark().line + 1 << ": a second YAML document; a config is one document";
-      throw ConfigError(s.str());
-    }
-    if (!documents.empty()) root = documents[0];
+    root = YAML::Load(yaml_text);
   } catch (const YAML::Exception& e) {
     std::ostringstream s;
     s << file << ":" << e.mark.line + 1 << ":" << e.mark.column + 1 << ": YAML syntax error: " << e.msg;
     throw ConfigError(s.str());
   }
-  refuse_duplicate_keys(root, file);
+  int64_t budget = kMaxConfigNodes;
+  refuse_duplicate_keys(root, file, budget);
   DaemonConfig c;
   try {
     read_daemon_config(root, file, c);

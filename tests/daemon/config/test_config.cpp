@@ -438,7 +438,7 @@ TEST_CASE("config: strict reading: duplicate keys, several documents, control ch
   using sextant::test::config_error_of;
   CHECK(config_error_of("daemon:\n  name: a\n  name: b\n").find("test.yaml:3:3: key 'name' written twice") == 0);
   CHECK(config_error_of("daemon:\n  name: a\ndaemon:\n  name: b\n").find("test.yaml:3:1: key 'daemon' written twice") == 0);
-  CHECK(config_error_of("daemon:\n  name: a\n---\ndaemon:\n  name: b\n").find("test.yaml:4: a second YAML document") == 0);
+  CHECK(config_error_of("daemon:\n  name: a\n---\ndaemon:\n  name: b\n").find("test.yaml:3: a second YAML document") == 0);
   CHECK(config_error_of(std::string("daemon:\n  name: \"a\\0b\"\n") + std::string(1, '\0')).find("test.yaml:3:1: control character 0x0") == 0);
   CHECK(config_error_of("daemon:\n  name: a\x1b[2Jb\n").find("test.yaml:2:10: control character 0x1b") == 0);
   CHECK(config_error_of("channels:\n  prefix: \"ROBOT 1_\"\n").find("test.yaml:2:11:") == 0);
@@ -462,4 +462,11 @@ TEST_CASE("config: strict reading: duplicate keys, several documents, control ch
 
 TEST_CASE("config: a control character written as a YAML escape in daemon.name is refused too") {
   CHECK(sextant::test::config_error_of("daemon:\n  name: \"a\\0b\"\n").find("test.yaml:2:9: 'daemon.name': must not contain control characters") == 0);
+}
+
+TEST_CASE("config: document markers: a leading '---' and a final '...' are one document; content after them is a second") {
+  using sextant::test::config_error_of;
+  CHECK(config_error_of("---\ndaemon:\n  name: a\n...\n").empty());
+  CHECK(config_error_of("daemon:\n  name: a\n...\ndaemon:\n  name: b\n").find("test.yaml:4: a second YAML document") == 0);
+  CHECK(config_error_of(",").find("test.yaml:") == 0);  // malformed: an error, and it returns (yaml-cpp's LoadAll did not)
 }
