@@ -67,7 +67,9 @@ Assignment2D solve_assignment_2d(const Eigen::MatrixXd& C) {
     out.v.assign(v.begin() + 1, v.end());
   } else {
     out.column_of_row.assign(static_cast<size_t>(m), -1);
-    for (int i = 0; i < n; ++i) out.column_of_row[static_cast<size_t>(col[static_cast<size_t>(i)])] = i, out.cost += a(i, col[static_cast<size_t>(i)]);
+    for (int i = 0; i < n; ++i)
+      out.column_of_row[static_cast<size_t>(col[static_cast<size_t>(i)])] = i,
+      out.cost += a(i, col[static_cast<size_t>(i)]);
     out.u.assign(v.begin() + 1, v.end());
     out.v.assign(u.begin() + 1, u.end());
   }

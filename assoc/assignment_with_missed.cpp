@@ -33,14 +33,16 @@ const MissedAssignment& MissedAssignmentSolver::solve(const std::vector<double>&
   seen_.assign(N, -1);  // the search (row) that last reached the column
   final_.assign(N, 0);
   for (int r = 0; r < R_; ++r)
-    if (begin_[static_cast<size_t>(r)] != begin_[static_cast<size_t>(r) + 1]) augment_from_row(r);  // else: no improving pairing, stays unpaired
+    if (begin_[static_cast<size_t>(r)] != begin_[static_cast<size_t>(r) + 1])
+      augment_from_row(r);  // else: no improving pairing, stays unpaired
   read_matching();
   map_duals();
   return out_;
 }
 
 // Every row and column unpaired: `value` their summed costs (which must be finite).
-void MissedAssignmentSolver::start_unpaired(const std::vector<double>& row_missed, const std::vector<double>& column_missed) {
+void MissedAssignmentSolver::start_unpaired(const std::vector<double>& row_missed,
+                                            const std::vector<double>& column_missed) {
   out_.value = 0;
   out_.column_of_row.assign(static_cast<size_t>(R_), -1);
   out_.row_of_column.assign(static_cast<size_t>(C_), -1);
@@ -55,13 +57,15 @@ void MissedAssignmentSolver::start_unpaired(const std::vector<double>& row_misse
 }
 
 // Improving pairings, as gains w = cost - missed(row) - missed(column) < 0.
-void MissedAssignmentSolver::collect_gains(const std::vector<double>& row_missed, const std::vector<double>& column_missed,
+void MissedAssignmentSolver::collect_gains(const std::vector<double>& row_missed,
+                                           const std::vector<double>& column_missed,
                                            const std::vector<PairCost>& pairs) {
   gains_.clear();
   for (const auto& p : pairs) {
     if (p.row < 0 || p.row >= R_ || p.column < 0 || p.column >= C_)
-      throw std::invalid_argument("assign_with_missed: pair (" + std::to_string(p.row) + ", " + std::to_string(p.column) +
-                                  ") outside " + std::to_string(R_) + " x " + std::to_string(C_));
+      throw std::invalid_argument("assign_with_missed: pair (" + std::to_string(p.row) + ", " +
+                                  std::to_string(p.column) + ") outside " + std::to_string(R_) + " x " +
+                                  std::to_string(C_));
     if (!std::isfinite(p.cost)) throw std::invalid_argument("assign_with_missed: non-finite pair cost");
     const double w = p.cost - row_missed[static_cast<size_t>(p.row)] - column_missed[static_cast<size_t>(p.column)];
     if (w < 0) gains_.push_back({p.row, p.column, w});
@@ -90,8 +94,10 @@ void MissedAssignmentSolver::index_gains_by_row() {
 void MissedAssignmentSolver::relax(int search, int i, int j, double w, double base) {
   const double nd = base + w - u_[static_cast<size_t>(i)] - v_[static_cast<size_t>(j)];
   bool seen_now = false;
-  if (seen_[static_cast<size_t>(j)] != search) seen_[static_cast<size_t>(j)] = search, final_[static_cast<size_t>(j)] = 0, seen_now = true;
-  else if (final_[static_cast<size_t>(j)] || !(nd < d_[static_cast<size_t>(j)])) return;
+  if (seen_[static_cast<size_t>(j)] != search)
+    seen_[static_cast<size_t>(j)] = search, final_[static_cast<size_t>(j)] = 0, seen_now = true;
+  else if (final_[static_cast<size_t>(j)] || !(nd < d_[static_cast<size_t>(j)]))
+    return;
   if (seen_now) frontier_.push_back(j);
   d_[static_cast<size_t>(j)] = nd, way_[static_cast<size_t>(j)] = i;
 }
@@ -101,7 +107,8 @@ void MissedAssignmentSolver::relax(int search, int i, int j, double w, double ba
 void MissedAssignmentSolver::augment_from_row(int r) {
   const int C = C_, b = begin_[static_cast<size_t>(r)], e = begin_[static_cast<size_t>(r) + 1];
   double ur = -v_[static_cast<size_t>(C + r)];
-  for (int k = b; k < e; ++k) ur = std::min(ur, gain_[static_cast<size_t>(k)] - v_[static_cast<size_t>(column_[static_cast<size_t>(k)])]);
+  for (int k = b; k < e; ++k)
+    ur = std::min(ur, gain_[static_cast<size_t>(k)] - v_[static_cast<size_t>(column_[static_cast<size_t>(k)])]);
   u_[static_cast<size_t>(r)] = ur;
   scanned_.clear();
   frontier_.clear();
@@ -163,7 +170,8 @@ void MissedAssignmentSolver::read_matching() {
 // column_dual = missed(k) + v_k are then feasible for the original problem, and their sum equals `value` by
 // complementary slackness (a row's slot column is matched to it or untouched).
 void MissedAssignmentSolver::map_duals() {
-  for (int r = 0; r < R_; ++r) out_.row_dual[static_cast<size_t>(r)] += u_[static_cast<size_t>(r)] + v_[static_cast<size_t>(C_ + r)];
+  for (int r = 0; r < R_; ++r)
+    out_.row_dual[static_cast<size_t>(r)] += u_[static_cast<size_t>(r)] + v_[static_cast<size_t>(C_ + r)];
   for (int k = 0; k < C_; ++k) out_.column_dual[static_cast<size_t>(k)] += v_[static_cast<size_t>(k)];
 }
 

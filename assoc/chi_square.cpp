@@ -15,7 +15,8 @@ constexpr double kTiny = std::numeric_limits<double>::min() / kEpsilon;  // Lent
 int max_terms(double a) { return 100 + static_cast<int>(20 * std::sqrt(a)); }
 
 void check_domain(double a, double x) {
-  if (!(a > 0) || !std::isfinite(a)) throw std::invalid_argument("incomplete gamma: a = " + std::to_string(a) + " is not positive and finite");
+  if (!(a > 0) || !std::isfinite(a))
+    throw std::invalid_argument("incomplete gamma: a = " + std::to_string(a) + " is not positive and finite");
   if (!(x >= 0)) throw std::invalid_argument("incomplete gamma: x = " + std::to_string(x) + " is negative or NaN");
 }
 
@@ -32,7 +33,8 @@ double series_p(double a, double x) {
     sum += term;
     if (std::abs(term) < std::abs(sum) * kEpsilon) return sum * std::exp(log_prefactor(a, x));
   }
-  throw std::runtime_error("incomplete gamma: the series did not converge for a = " + std::to_string(a) + ", x = " + std::to_string(x));
+  throw std::runtime_error("incomplete gamma: the series did not converge for a = " + std::to_string(a) +
+                           ", x = " + std::to_string(x));
 }
 
 // Q(a, x) by its continued fraction (Numerical Recipes eq. 6.2.7, even part), evaluated by the modified Lentz
@@ -58,16 +60,18 @@ double continued_fraction_q(double a, double x) {
 
 // Standard normal quantile (Acklam's rational approximation, |error| < 1.2e-9): the Wilson-Hilferty start.
 double normal_quantile(double p) {
-  static const double a[] = {-3.969683028665376e+01, 2.209460984245205e+02, -2.759285104469687e+02,
-                             1.383577518672690e+02, -3.066479806614716e+01, 2.506628277459239e+00};
+  static const double a[] = {-3.969683028665376e+01, 2.209460984245205e+02,  -2.759285104469687e+02,
+                             1.383577518672690e+02,  -3.066479806614716e+01, 2.506628277459239e+00};
   static const double b[] = {-5.447609879822406e+01, 1.615858368580409e+02, -1.556989798598866e+02,
                              6.680131188771972e+01, -1.328068155288572e+01};
   static const double c[] = {-7.784894002430293e-03, -3.223964580411365e-01, -2.400758277161838e+00,
-                             -2.549732539343734e+00, 4.374664141464968e+00, 2.938163982698783e+00};
-  static const double d[] = {7.784695709041462e-03, 3.224671290700398e-01, 2.445134137142996e+00, 3.754408661907416e+00};
+                             -2.549732539343734e+00, 4.374664141464968e+00,  2.938163982698783e+00};
+  static const double d[] = {7.784695709041462e-03, 3.224671290700398e-01, 2.445134137142996e+00,
+                             3.754408661907416e+00};
   if (p < 0.02425) {
     const double q = std::sqrt(-2 * std::log(p));
-    return (((((c[0] * q + c[1]) * q + c[2]) * q + c[3]) * q + c[4]) * q + c[5]) / ((((d[0] * q + d[1]) * q + d[2]) * q + d[3]) * q + 1);
+    return (((((c[0] * q + c[1]) * q + c[2]) * q + c[3]) * q + c[4]) * q + c[5]) /
+           ((((d[0] * q + d[1]) * q + d[2]) * q + d[3]) * q + 1);
   }
   if (p > 1 - 0.02425) return -normal_quantile(1 - p);
   const double q = p - 0.5, r = q * q;

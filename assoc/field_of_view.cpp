@@ -16,10 +16,12 @@ double wrap(double a) {
 
 }  // namespace
 
-FieldOfView field_of_view(const Eigen::Vector3d& sensor, const Eigen::Vector3d& lo, const Eigen::Vector3d& hi, double pad) {
+FieldOfView field_of_view(const Eigen::Vector3d& sensor, const Eigen::Vector3d& lo, const Eigen::Vector3d& hi,
+                          double pad) {
   if (!sensor.allFinite() || !lo.allFinite() || !hi.allFinite() || !std::isfinite(pad))
     throw std::invalid_argument("field_of_view: non-finite sensor, region or padding");
-  if (!(lo.array() <= hi.array()).all()) throw std::invalid_argument("field_of_view: empty region (lower bound above upper)");
+  if (!(lo.array() <= hi.array()).all())
+    throw std::invalid_argument("field_of_view: empty region (lower bound above upper)");
   FieldOfView f;
   const auto centre = bearing(sensor, 0.5 * (lo + hi));
   f.centre_azimuth = centre ? (*centre)[0] : 0.0;

@@ -8,8 +8,8 @@
 namespace sextant::assoc {
 
 struct FieldOfView {
-  double centre_azimuth = 0;  // azimuth of the region's centre, rad; the azimuth bounds are relative to it
-  double azimuth_lo = 0, azimuth_hi = 0;      // rad, relative to centre_azimuth, width at most 2 pi
+  double centre_azimuth = 0;              // azimuth of the region's centre, rad; the azimuth bounds are relative to it
+  double azimuth_lo = 0, azimuth_hi = 0;  // rad, relative to centre_azimuth, width at most 2 pi
   double elevation_lo = 0, elevation_hi = 0;  // rad, within [-pi/2, pi/2]
   double area() const { return (azimuth_hi - azimuth_lo) * (elevation_hi - elevation_lo); }  // rad^2
 };

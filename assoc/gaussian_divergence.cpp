@@ -41,7 +41,7 @@ double kl_divergence(const Eigen::VectorXd& mu1, const Eigen::MatrixXd& S1, cons
 }
 
 double symmetric_kl_divergence(const Eigen::VectorXd& mu1, const Eigen::MatrixXd& S1, const Eigen::VectorXd& mu2,
-                                const Eigen::MatrixXd& S2) {
+                               const Eigen::MatrixXd& S2) {
   return 0.5 * (kl_divergence(mu1, S1, mu2, S2) + kl_divergence(mu2, S2, mu1, S1));
 }
 

@@ -24,7 +24,7 @@ double renyi_divergence(const Eigen::VectorXd& mu1, const Eigen::MatrixXd& S1, c
 double kl_divergence(const Eigen::VectorXd& mu1, const Eigen::MatrixXd& S1, const Eigen::VectorXd& mu2,
                      const Eigen::MatrixXd& S2);
 double symmetric_kl_divergence(const Eigen::VectorXd& mu1, const Eigen::MatrixXd& S1, const Eigen::VectorXd& mu2,
-                                const Eigen::MatrixXd& S2);
+                               const Eigen::MatrixXd& S2);
 double symmetric_renyi_divergence(const Eigen::VectorXd& mu1, const Eigen::MatrixXd& S1, const Eigen::VectorXd& mu2,
                                   const Eigen::MatrixXd& S2, double alpha);
 

@@ -40,8 +40,16 @@ void equal_share_multipliers(const RelaxationProblem& P, Multipliers& u) {
 class RelaxationRun {
  public:
   RelaxationRun(const RelaxationProblem& P, double gap_tolerance)
-      : P_(P), S_(P.sensors()), n1_(P.n[0]), n2_(P.n[1]), gap_tolerance_(gap_tolerance), groups_(P.pair_groups()),
-        u_(P.zero_multipliers()), g_(u_), direction_(u_), recovery_(P) {
+      : P_(P),
+        S_(P.sensors()),
+        n1_(P.n[0]),
+        n2_(P.n[1]),
+        gap_tolerance_(gap_tolerance),
+        groups_(P.pair_groups()),
+        u_(P.zero_multipliers()),
+        g_(u_),
+        direction_(u_),
+        recovery_(P) {
     equal_share_multipliers(P, u_);
   }
 
@@ -89,14 +97,17 @@ class RelaxationRun {
       int arg = gr.lo;
       for (int t = gr.lo; t < gr.hi; ++t) {
         if (reduced_[static_cast<size_t>(t)] < reduced_[static_cast<size_t>(arg)]) arg = t;
-        if (gr.a == 0 && gr.b == 0 && reduced_[static_cast<size_t>(t)] < 0) dummy_pair_ += reduced_[static_cast<size_t>(t)], relaxed_.push_back(t);
+        if (gr.a == 0 && gr.b == 0 && reduced_[static_cast<size_t>(t)] < 0)
+          dummy_pair_ += reduced_[static_cast<size_t>(t)], relaxed_.push_back(t);
       }
       const double r = reduced_[static_cast<size_t>(arg)];
       if (gr.a == 0 && gr.b == 0) continue;
       if (gr.b == 0) {
-        if (r < row_missed_[static_cast<size_t>(gr.a - 1)]) row_missed_[static_cast<size_t>(gr.a - 1)] = r, row_tuple_[static_cast<size_t>(gr.a - 1)] = arg;
+        if (r < row_missed_[static_cast<size_t>(gr.a - 1)])
+          row_missed_[static_cast<size_t>(gr.a - 1)] = r, row_tuple_[static_cast<size_t>(gr.a - 1)] = arg;
       } else if (gr.a == 0) {
-        if (r < column_missed_[static_cast<size_t>(gr.b - 1)]) column_missed_[static_cast<size_t>(gr.b - 1)] = r, column_tuple_[static_cast<size_t>(gr.b - 1)] = arg;
+        if (r < column_missed_[static_cast<size_t>(gr.b - 1)])
+          column_missed_[static_cast<size_t>(gr.b - 1)] = r, column_tuple_[static_cast<size_t>(gr.b - 1)] = arg;
       } else {
         pairs_.push_back({gr.a - 1, gr.b - 1, r});
         pair_tuple_.push_back(arg);
@@ -117,11 +128,14 @@ class RelaxationRun {
   // The step factor is halved after kStallLimit iterations without a better bound; a better one is kept with its
   // multipliers and dual solution (for reduced-cost fixing).
   void record_lower_bound(double lb, const MissedAssignment& a) {
-    if (lb > best_lb_) stalled_ = 0;
-    else if (++stalled_ >= kStallLimit) factor_ *= 0.5, stalled_ = 0;
+    if (lb > best_lb_)
+      stalled_ = 0;
+    else if (++stalled_ >= kStallLimit)
+      factor_ *= 0.5, stalled_ = 0;
     if (lb > best_lb_) {
       out_.u = u_;
-      out_.dual.reduced = reduced_, out_.dual.row_dual = a.row_dual, out_.dual.column_dual = a.column_dual, out_.dual.bound = lb;
+      out_.dual.reduced = reduced_, out_.dual.row_dual = a.row_dual, out_.dual.column_dual = a.column_dual,
+      out_.dual.bound = lb;
       best_lb_ = lb;
       fixing_due_ = true;
     }
@@ -131,13 +145,17 @@ class RelaxationRun {
   void collect_relaxed_tuples(const MissedAssignment& a) {
     pair_of_row_.assign(static_cast<size_t>(n1_), -1);
     for (size_t i = 0; i < pairs_.size(); ++i)
-      if (a.column_of_row[static_cast<size_t>(pairs_[i].row)] == pairs_[i].column) pair_of_row_[static_cast<size_t>(pairs_[i].row)] = pair_tuple_[i];
+      if (a.column_of_row[static_cast<size_t>(pairs_[i].row)] == pairs_[i].column)
+        pair_of_row_[static_cast<size_t>(pairs_[i].row)] = pair_tuple_[i];
     for (int r = 0; r < n1_; ++r) {
-      if (a.column_of_row[static_cast<size_t>(r)] >= 0) relaxed_.push_back(pair_of_row_[static_cast<size_t>(r)]);
-      else if (row_tuple_[static_cast<size_t>(r)] >= 0) relaxed_.push_back(row_tuple_[static_cast<size_t>(r)]);
+      if (a.column_of_row[static_cast<size_t>(r)] >= 0)
+        relaxed_.push_back(pair_of_row_[static_cast<size_t>(r)]);
+      else if (row_tuple_[static_cast<size_t>(r)] >= 0)
+        relaxed_.push_back(row_tuple_[static_cast<size_t>(r)]);
     }
     for (int k = 0; k < n2_; ++k)
-      if (a.row_of_column[static_cast<size_t>(k)] < 0 && column_tuple_[static_cast<size_t>(k)] >= 0) relaxed_.push_back(column_tuple_[static_cast<size_t>(k)]);
+      if (a.row_of_column[static_cast<size_t>(k)] < 0 && column_tuple_[static_cast<size_t>(k)] >= 0)
+        relaxed_.push_back(column_tuple_[static_cast<size_t>(k)]);
   }
 
   // Subgradient of the relaxed constraints, g = 1 - uses (the singleton counts as a use); returns |g|^2 and notes
@@ -153,7 +171,8 @@ class RelaxationRun {
       }
       for (int k = 1; k <= P_.n[s]; ++k) {
         g2 += g_[s][static_cast<size_t>(k)] * g_[s][static_cast<size_t>(k)];
-        relaxed_feasible_ = relaxed_feasible_ && (u_[s][static_cast<size_t>(k)] > 0 ? 0.0 : 1.0) - g_[s][static_cast<size_t>(k)] <= 1;
+        relaxed_feasible_ =
+            relaxed_feasible_ && (u_[s][static_cast<size_t>(k)] > 0 ? 0.0 : 1.0) - g_[s][static_cast<size_t>(k)] <= 1;
       }
     }
     return g2;
@@ -208,8 +227,10 @@ class RelaxationRun {
   // Reduced-cost fixing at the best multipliers (recounted when a bound improved); the branch and bound once few
   // tuples remain (again only when fewer remain than at its last failure).  True when it proved the optimum.
   bool fix_reduced_costs(int it) {
-    if (fixing_due_ && it >= kFixingFirstIteration) survivors_ = reduced_cost_survivors(groups_, out_.dual, best_ub_, best_), fixing_due_ = false;
-    const size_t limit = std::min(kFixingTuples, kFixingTuplesStart + kFixingTuplesPerIteration * static_cast<size_t>(it));
+    if (fixing_due_ && it >= kFixingFirstIteration)
+      survivors_ = reduced_cost_survivors(groups_, out_.dual, best_ub_, best_), fixing_due_ = false;
+    const size_t limit =
+        std::min(kFixingTuples, kFixingTuplesStart + kFixingTuplesPerIteration * static_cast<size_t>(it));
     if (survivors_.empty() || survivors_.size() > limit || survivors_.size() >= fixing_failed_) return false;
     const auto sol = solve_on_survivors(P_, out_.u, survivors_, best_, kFixingNodes);
     if (sol.cost < best_ub_) best_ub_ = sol.cost, best_ = sol.chosen;
@@ -227,7 +248,8 @@ class RelaxationRun {
     double gd = 0, dd = 0;
     for (size_t s = 2; s < S_; ++s)
       for (int k = 1; k <= P_.n[s]; ++k)
-        gd += g_[s][static_cast<size_t>(k)] * direction_[s][static_cast<size_t>(k)], dd += direction_[s][static_cast<size_t>(k)] * direction_[s][static_cast<size_t>(k)];
+        gd += g_[s][static_cast<size_t>(k)] * direction_[s][static_cast<size_t>(k)],
+            dd += direction_[s][static_cast<size_t>(k)] * direction_[s][static_cast<size_t>(k)];
     const double beta = gd < 0 && dd > 0 ? -gd / dd : 0.0;
     double h2 = 0;
     for (size_t s = 2; s < S_; ++s)
@@ -238,7 +260,8 @@ class RelaxationRun {
     const bool deflect = h2 > 1e-12 * g2;
     for (size_t s = 2; s < S_; ++s)
       for (int k = 1; k <= P_.n[s]; ++k)
-        direction_[s][static_cast<size_t>(k)] = g_[s][static_cast<size_t>(k)] + (deflect ? beta * direction_[s][static_cast<size_t>(k)] : 0.0);
+        direction_[s][static_cast<size_t>(k)] =
+            g_[s][static_cast<size_t>(k)] + (deflect ? beta * direction_[s][static_cast<size_t>(k)] : 0.0);
     const double step = factor_ * std::max(best_ub_ - lb, 1e-9 * std::abs(best_ub_)) / (deflect ? h2 : g2);
     for (size_t s = 2; s < S_; ++s)
       for (int k = 1; k <= P_.n[s]; ++k) u_[s][static_cast<size_t>(k)] += step * direction_[s][static_cast<size_t>(k)];
@@ -253,7 +276,7 @@ class RelaxationRun {
   Multipliers u_, g_, direction_;
   double best_ub_ = 0, best_lb_ = -kInf, factor_ = 1;
   int stalled_ = 0;
-  std::vector<int> best_;  // empty: every detection a false alarm, cost 0
+  std::vector<int> best_;                           // empty: every detection a false alarm, cost 0
   std::optional<SensorReassignment> reassignment_;  // built at the first promising recovery
   RelaxationRecovery recovery_;
   MissedAssignmentSolver relaxed_solver_;
@@ -263,9 +286,9 @@ class RelaxationRun {
   std::vector<PairCost> pairs_;
   std::vector<int> pair_tuple_, row_tuple_, column_tuple_, relaxed_, pair_of_row_, feasible_, survivors_;
   double dummy_pair_ = 0;
-  bool relaxed_feasible_ = true;  // no relaxed detection used twice
-  double best_recovery_ = 0;      // the best recovery's cost before local search
-  bool fixing_due_ = false;       // a bound improved since the tuples were last counted
+  bool relaxed_feasible_ = true;              // no relaxed detection used twice
+  double best_recovery_ = 0;                  // the best recovery's cost before local search
+  bool fixing_due_ = false;                   // a bound improved since the tuples were last counted
   size_t fixing_failed_ = kFixingTuples + 1;  // survivors when the branch and bound last ran out of nodes
 };
 

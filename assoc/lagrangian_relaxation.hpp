@@ -49,9 +49,9 @@ struct ComponentResult {
   std::vector<int> chosen;  // positions in the component's group
   double ub = 0, lb = 0;
   int iterations = 0;
-  Multipliers u;            // the relaxation's multipliers at its best lower bound
-  RelaxedDual dual;         // the relaxed problem's solution there
-  bool proven = false;      // lb == ub proven by an exact method
+  Multipliers u;        // the relaxation's multipliers at its best lower bound
+  RelaxedDual dual;     // the relaxed problem's solution there
+  bool proven = false;  // lb == ub proven by an exact method
 };
 
 /// Runs the relaxation on P for at most `max_iterations` iterations; `gap_tolerance` in cost units.

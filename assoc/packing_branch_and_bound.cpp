@@ -57,8 +57,10 @@ double maximize_packing_lagrangian(const TuplePacking& p, std::vector<double>& v
         for (int d : m) g[static_cast<size_t>(d)] -= 1;
       }
     }
-    if (L > best) best = L, best_v = v, stalled = 0;
-    else if (++stalled >= kStallLimit) factor *= 0.5, stalled = 0;
+    if (L > best)
+      best = L, best_v = v, stalled = 0;
+    else if (++stalled >= kStallLimit)
+      factor *= 0.5, stalled = 0;
     if (best >= upper - tolerance(upper)) break;
     // Projected direction: a multiplier at 0 cannot rise.
     double g2 = 0;
@@ -82,8 +84,8 @@ namespace {
 // cannot beat the best solution.
 class PackingSearch {
  public:
-  PackingSearch(const TuplePacking& p, const std::vector<int>& incumbent, const std::vector<double>& v_in, long max_nodes,
-                const NodeBound& stronger)
+  PackingSearch(const TuplePacking& p, const std::vector<int>& incumbent, const std::vector<double>& v_in,
+                long max_nodes, const NodeBound& stronger)
       : p_(p), D_(static_cast<size_t>(p.detections)), T_(p.size()), max_nodes_(max_nodes), stronger_(stronger) {
     set_multipliers(v_in);
     index_tuples_by_detection();
@@ -162,7 +164,8 @@ class PackingSearch {
       if (blocked_[t]++ != 0) continue;
       N_ -= neg_[t];
       for (int m : p_.members(t))
-        if (--avail_[static_cast<size_t>(m)] == 0 && !covered_[static_cast<size_t>(m)]) V_ -= v_[static_cast<size_t>(m)];
+        if (--avail_[static_cast<size_t>(m)] == 0 && !covered_[static_cast<size_t>(m)])
+          V_ -= v_[static_cast<size_t>(m)];
     }
   }
 
@@ -173,7 +176,8 @@ class PackingSearch {
       if (--blocked_[t] != 0) continue;
       N_ += neg_[t];
       for (int m : p_.members(t))
-        if (avail_[static_cast<size_t>(m)]++ == 0 && !covered_[static_cast<size_t>(m)]) V_ += v_[static_cast<size_t>(m)];
+        if (avail_[static_cast<size_t>(m)]++ == 0 && !covered_[static_cast<size_t>(m)])
+          V_ += v_[static_cast<size_t>(m)];
     }
     covered_[du] = 0;
     if (avail_[du] > 0) V_ += v_[du];
@@ -235,7 +239,9 @@ class PackingSearch {
     for (int i = of_begin_[pu]; i < of_begin_[pu + 1] && !out_of_budget_; ++i) {
       const int t = of_[static_cast<size_t>(i)];
       if (blocked_[static_cast<size_t>(t)]) continue;
-      if (stronger_ && cost + bound_here + increase_at_[level][static_cast<size_t>(t)] >= best_cost_ - tolerance(best_cost_)) continue;
+      if (stronger_ &&
+          cost + bound_here + increase_at_[level][static_cast<size_t>(t)] >= best_cost_ - tolerance(best_cost_))
+        continue;
       const auto m = p_.members(static_cast<size_t>(t));
       for (int x : m) cover(x);
       const double c = cost + p_.cost[static_cast<size_t>(t)];
@@ -260,11 +266,13 @@ class PackingSearch {
   std::vector<int> of_begin_, of_;
   std::vector<char> covered_;
   std::vector<int> blocked_, avail_;
-  double V_ = 0, N_ = 0;  // sum of v over uncovered detections with an available tuple; sum of neg over available tuples
+  double V_ = 0,
+         N_ = 0;  // sum of v over uncovered detections with an available tuple; sum of neg over available tuples
   PackingSolution out_;
-  std::vector<double> increase_ = std::vector<double>(T_, 0.0);  // filled by the stronger bound of the node cut() evaluated last
-  std::vector<std::vector<double>> increase_at_;                 // per depth of the search, its node's
-  double node_bound_ = 0;                                        // the stronger bound of the node cut() evaluated last
+  std::vector<double> increase_ =
+      std::vector<double>(T_, 0.0);               // filled by the stronger bound of the node cut() evaluated last
+  std::vector<std::vector<double>> increase_at_;  // per depth of the search, its node's
+  double node_bound_ = 0;                         // the stronger bound of the node cut() evaluated last
   double best_cost_ = 0;
   std::vector<int> best_, chosen_;
   bool out_of_budget_ = false;
@@ -274,8 +282,8 @@ class PackingSearch {
 
 }  // namespace
 
-PackingSolution solve_packing_exactly(const TuplePacking& p, const std::vector<int>& incumbent, const std::vector<double>& v_in,
-                                      long max_nodes, const NodeBound& stronger) {
+PackingSolution solve_packing_exactly(const TuplePacking& p, const std::vector<int>& incumbent,
+                                      const std::vector<double>& v_in, long max_nodes, const NodeBound& stronger) {
   return PackingSearch(p, incumbent, v_in, max_nodes, stronger).solve();
 }
 

@@ -44,9 +44,9 @@ std::vector<double> equal_share_multipliers(const TuplePacking& p);
 struct PackingSolution {
   std::vector<int> chosen;  // tuple indices, sorted
   double cost = 0;
-  double lower_bound = 0;   // the optimum when proven, else the root bound
+  double lower_bound = 0;  // the optimum when proven, else the root bound
   long nodes = 0;
-  bool proven = false;      // the search finished within its budget: `cost` is the optimum
+  bool proven = false;  // the search finished within its budget: `cost` is the optimum
 };
 
 /// A stronger lower bound on the cost of a node's remaining sub-problem, given which detections are covered and,
@@ -59,7 +59,7 @@ using NodeBound = std::function<double(const std::vector<char>& covered, const s
 
 /// Branch and bound from the feasible solution `incumbent` (pairwise disjoint tuples; may be empty) with the
 /// multipliers `v` (<= 0, one per detection) and, when given, `stronger` as a second bound.
-PackingSolution solve_packing_exactly(const TuplePacking& p, const std::vector<int>& incumbent, const std::vector<double>& v,
-                                      long max_nodes, const NodeBound& stronger = {});
+PackingSolution solve_packing_exactly(const TuplePacking& p, const std::vector<int>& incumbent,
+                                      const std::vector<double>& v, long max_nodes, const NodeBound& stronger = {});
 
 }  // namespace sextant::assoc

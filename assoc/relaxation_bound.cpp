@@ -17,15 +17,17 @@ double forcing_increase(const RelaxationProblem::PairGroup& g, double reduced, c
   return std::max(0.0, reduced - base);  // >= 0 up to rounding (dual feasibility)
 }
 
-std::vector<int> reduced_cost_survivors(const std::vector<RelaxationProblem::PairGroup>& groups, const RelaxedDual& dual,
-                                        double upper, const std::vector<int>& incumbent) {
+std::vector<int> reduced_cost_survivors(const std::vector<RelaxationProblem::PairGroup>& groups,
+                                        const RelaxedDual& dual, double upper, const std::vector<int>& incumbent) {
   std::vector<int> survivors;
   const double room = upper - dual.bound + 1e-9 * std::max(1.0, std::abs(upper));
   for (const auto& g : groups)
     for (int t = g.lo; t < g.hi; ++t)
-      if (forcing_increase(g, dual.reduced[static_cast<size_t>(t)], dual.row_dual, dual.column_dual) <= room) survivors.push_back(t);
+      if (forcing_increase(g, dual.reduced[static_cast<size_t>(t)], dual.row_dual, dual.column_dual) <= room)
+        survivors.push_back(t);
   for (int t : incumbent)
-    if (!std::binary_search(survivors.begin(), survivors.end(), t)) survivors.insert(std::upper_bound(survivors.begin(), survivors.end(), t), t);
+    if (!std::binary_search(survivors.begin(), survivors.end(), t))
+      survivors.insert(std::upper_bound(survivors.begin(), survivors.end(), t), t);
   return survivors;
 }
 
@@ -49,7 +51,8 @@ RelaxationBound::RelaxationBound(const RelaxationProblem& P, const Multipliers& 
   }
 }
 
-double RelaxationBound::operator()(const std::vector<char>& covered, const std::vector<int>& blocked, std::vector<double>* increase) {
+double RelaxationBound::operator()(const std::vector<char>& covered, const std::vector<int>& blocked,
+                                   std::vector<double>* increase) {
   constexpr double kInf = std::numeric_limits<double>::infinity();
   double lb = 0;
   for (size_t q = 2; q < P_.sensors(); ++q)
@@ -66,9 +69,12 @@ double RelaxationBound::operator()(const std::vector<char>& covered, const std::
       best = std::min(best, r);
     }
     if (best == kInf || (g.a == 0 && g.b == 0)) continue;
-    if (g.b == 0) row_missed_[static_cast<size_t>(g.a - 1)] = std::min(row_missed_[static_cast<size_t>(g.a - 1)], best);
-    else if (g.a == 0) column_missed_[static_cast<size_t>(g.b - 1)] = std::min(column_missed_[static_cast<size_t>(g.b - 1)], best);
-    else pairs_.push_back({g.a - 1, g.b - 1, best});
+    if (g.b == 0)
+      row_missed_[static_cast<size_t>(g.a - 1)] = std::min(row_missed_[static_cast<size_t>(g.a - 1)], best);
+    else if (g.a == 0)
+      column_missed_[static_cast<size_t>(g.b - 1)] = std::min(column_missed_[static_cast<size_t>(g.b - 1)], best);
+    else
+      pairs_.push_back({g.a - 1, g.b - 1, best});
   }
   const auto& a = solver_.solve(row_missed_, column_missed_, pairs_);
   if (increase) {
@@ -76,7 +82,8 @@ double RelaxationBound::operator()(const std::vector<char>& covered, const std::
     for (const auto& g : groups_)
       for (int i = g.lo; i < g.hi; ++i)
         if (!blocked[static_cast<size_t>(i)])
-          (*increase)[static_cast<size_t>(i)] = forcing_increase(g, reduced_[static_cast<size_t>(i)], a.row_dual, a.column_dual);
+          (*increase)[static_cast<size_t>(i)] =
+              forcing_increase(g, reduced_[static_cast<size_t>(i)], a.row_dual, a.column_dual);
   }
   return lb + a.value;
 }

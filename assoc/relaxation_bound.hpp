@@ -27,9 +27,9 @@ namespace sextant::assoc {
 /// The relaxed problem's solution at one u, what reduced-cost fixing needs: each tuple's reduced cost, the 2-D
 /// assignment's dual and the bound L(u).
 struct RelaxedDual {
-  std::vector<double> reduced;                  // per tuple of P
-  std::vector<double> row_dual, column_dual;    // of sensor 1's / sensor 2's detections (0-based)
-  double bound = 0;                             // L(u)
+  std::vector<double> reduced;                // per tuple of P
+  std::vector<double> row_dual, column_dual;  // of sensor 1's / sensor 2's detections (0-based)
+  double bound = 0;                           // L(u)
 };
 
 /// The lower bound on the cost of any solution using tuple t of group g, above dual.bound.
@@ -39,8 +39,8 @@ double forcing_increase(const RelaxationProblem::PairGroup& g, double reduced, c
 /// Positions (ascending) of the tuples of P (grouped as P.pair_groups()) that can be in a solution of cost at most
 /// `upper` (up to 1e-9 relative), dual.bound + increase_t <= upper, and those of `incumbent` (a solution of cost
 /// `upper`, kept whatever the rounding).
-std::vector<int> reduced_cost_survivors(const std::vector<RelaxationProblem::PairGroup>& groups, const RelaxedDual& dual,
-                                        double upper, const std::vector<int>& incumbent);
+std::vector<int> reduced_cost_survivors(const std::vector<RelaxationProblem::PairGroup>& groups,
+                                        const RelaxedDual& dual, double upper, const std::vector<int>& incumbent);
 
 class RelaxationBound {
  public:
@@ -56,7 +56,7 @@ class RelaxationBound {
   const RelaxationProblem& P_;
   const Multipliers& u_;
   std::vector<int> subset_;
-  std::vector<double> reduced_;  // per subset tuple
+  std::vector<double> reduced_;                       // per subset tuple
   std::vector<RelaxationProblem::PairGroup> groups_;  // lo, hi: subset positions
   std::vector<double> row_missed_, column_missed_;
   std::vector<PairCost> pairs_;
@@ -66,7 +66,7 @@ class RelaxationBound {
 struct SurvivorSolution {
   std::vector<int> chosen;  // positions in P, sorted
   double cost = 0;
-  double lower_bound = 0;   // the optimum when proven, else a valid bound
+  double lower_bound = 0;  // the optimum when proven, else a valid bound
   long nodes = 0;
   bool proven = false;
 };

@@ -21,7 +21,8 @@ RelaxationProblem::RelaxationProblem(const std::vector<Tuple>& tuples, const std
     if (used[s] > 0) sensors.push_back(s);
   }
   std::stable_sort(sensors.begin(), sensors.end(), [&](size_t a, size_t b) { return used[a] > used[b]; });
-  if (!sensors.empty()) std::rotate(sensors.begin(), sensors.begin() + static_cast<long>(rotation % sensors.size()), sensors.end());
+  if (!sensors.empty())
+    std::rotate(sensors.begin(), sensors.begin() + static_cast<long>(rotation % sensors.size()), sensors.end());
   S = sensors.size();
   for (size_t s : sensors) n.push_back(used[s]);
   const size_t T = group.size();
@@ -64,14 +65,18 @@ std::pair<int, int> RelaxationProblem::range(const int* prefix, size_t L, int fi
   const size_t window_end = hi;
   while (lo < hi) {  // first row not below
     const size_t mid = (lo + hi) / 2;
-    if (below(mid)) lo = mid + 1;
-    else hi = mid;
+    if (below(mid))
+      lo = mid + 1;
+    else
+      hi = mid;
   }
   size_t end = lo, top = window_end;
   while (end < top) {  // first row above
     const size_t mid = (end + top) / 2;
-    if (above(mid)) top = mid;
-    else end = mid + 1;
+    if (above(mid))
+      top = mid;
+    else
+      end = mid + 1;
   }
   return {static_cast<int>(lo), static_cast<int>(end)};
 }

@@ -17,13 +17,13 @@ namespace sextant::assoc {
 using Multipliers = std::vector<std::vector<double>>;
 
 struct RelaxationProblem {
-  size_t S = 0;                // sensors
-  std::vector<int> n;          // detections per (reordered) sensor
-  std::vector<int> index;      // per tuple, S indices; rows sorted
+  size_t S = 0;            // sensors
+  std::vector<int> n;      // detections per (reordered) sensor
+  std::vector<int> index;  // per tuple, S indices; rows sorted
   std::vector<double> cost;
-  std::vector<int> original;   // position in the component's group
-  std::vector<int> offset;     // detection k >= 1 of sensor q is detection offset[q] + k - 1 of `packing`
-  TuplePacking packing;        // the same tuples (same order) as detection sets
+  std::vector<int> original;  // position in the component's group
+  std::vector<int> offset;    // detection k >= 1 of sensor q is detection offset[q] + k - 1 of `packing`
+  TuplePacking packing;       // the same tuples (same order) as detection sets
 
   /// The tuples `group` (indices into `tuples`; `detections[s]` = n_s of the scan).  `rotation`: the sensors,
   /// ordered by decreasing detection count, are rotated left by this many places (the first two are the relaxed

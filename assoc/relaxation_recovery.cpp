@@ -14,7 +14,8 @@ RelaxationRecovery::RelaxationRecovery(const RelaxationProblem& P) : P_(P) {
 
 std::pair<int, int> RelaxationRecovery::range(const int* prefix, size_t L) const {
   if (pair_range_.empty()) return P_.range(prefix, L);
-  const auto window = pair_range_[static_cast<size_t>(prefix[0]) * static_cast<size_t>(P_.n[1] + 1) + static_cast<size_t>(prefix[1])];
+  const auto window =
+      pair_range_[static_cast<size_t>(prefix[0]) * static_cast<size_t>(P_.n[1] + 1) + static_cast<size_t>(prefix[1])];
   if (L == 2 || window.first == window.second) return window;
   return P_.range(prefix, L, window.first, window.second);
 }
@@ -27,7 +28,8 @@ void RelaxationRecovery::recover(const Multipliers& u, const MissedAssignment& r
     partial_.resize(partial_.size() + S, 0);
     partial_[partial_.size() - S + s] = k;
   };
-  for (int a = 0; a < P_.n[0]; ++a) start(0, a + 1), partial_[partial_.size() - S + 1] = relaxed.column_of_row[static_cast<size_t>(a)] + 1;
+  for (int a = 0; a < P_.n[0]; ++a)
+    start(0, a + 1), partial_[partial_.size() - S + 1] = relaxed.column_of_row[static_cast<size_t>(a)] + 1;
   for (int b = 0; b < P_.n[1]; ++b)
     if (relaxed.row_of_column[static_cast<size_t>(b)] < 0) start(1, b + 1);
   for (size_t s = 2; s < S; ++s) {
@@ -44,8 +46,10 @@ void RelaxationRecovery::recover(const Multipliers& u, const MissedAssignment& r
           for (size_t q = s + 1; q < S; ++q) r -= u[q][static_cast<size_t>(P_.at(static_cast<size_t>(t), q))];
           best = std::min(best, r);
         }
-        if (k == 0) row_missed_[p] = std::min(0.0, best);
-        else pairs_.push_back({static_cast<int>(p), k - 1, best});
+        if (k == 0)
+          row_missed_[p] = std::min(0.0, best);
+        else
+          pairs_.push_back({static_cast<int>(p), k - 1, best});
       }
     }
     column_missed_.assign(static_cast<size_t>(P_.n[s]), 0.0);

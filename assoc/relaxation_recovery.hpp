@@ -34,7 +34,7 @@ class RelaxationRecovery {
 
   const RelaxationProblem& P_;
   std::vector<std::pair<int, int>> pair_range_;  // per (a, b), a = 0..n_1, b = 0..n_2: its tuples ({0, 0}: none)
-  std::vector<int> partial_;  // partial tuples, S entries each (the later ones 0 until assigned)
+  std::vector<int> partial_;                     // partial tuples, S entries each (the later ones 0 until assigned)
   std::vector<PairCost> pairs_;
   std::vector<double> row_missed_, column_missed_;
   MissedAssignmentSolver solver_;

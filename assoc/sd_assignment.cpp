@@ -42,7 +42,9 @@ constexpr int kExactIterations = 300;
 constexpr double kExactGap = 1e-9;
 
 // Clamped at 0: when the bounds meet, rounding can put the lower one a few ulps above the upper one.
-double relative_gap(double ub, double lb) { return std::abs(ub) > 1e-12 ? std::max(0.0, (ub - lb) / std::abs(ub)) : 0.0; }
+double relative_gap(double ub, double lb) {
+  return std::abs(ub) > 1e-12 ? std::max(0.0, (ub - lb) / std::abs(ub)) : 0.0;
+}
 
 // The caller's tuples as detection sets (detection (s, k >= 1) has id offset[s] + k - 1).
 TuplePacking packing_of(const std::vector<Tuple>& tuples, const std::vector<int>& n) {
@@ -86,15 +88,19 @@ TuplePacking restrict_to(const TuplePacking& all, const std::vector<int>& group)
 // One component exactly (packing_branch_and_bound.hpp): the incumbent is `start` (or, when empty, the greedy
 // cheapest-first packing) improved by exchange moves; the multipliers are the equal shares raised by
 // `dual_iterations` subgradient steps on the packing's Lagrangian.  `nodes` counts against the caller's budget.
-PackingSolution solve_exactly(const TuplePacking& p, std::vector<int> start, long max_nodes, long& nodes, int dual_iterations) {
+PackingSolution solve_exactly(const TuplePacking& p, std::vector<int> start, long max_nodes, long& nodes,
+                              int dual_iterations) {
   if (start.empty()) {
     std::vector<int> order(p.size());
     for (size_t t = 0; t < p.size(); ++t) order[t] = static_cast<int>(t);
-    std::sort(order.begin(), order.end(), [&](int a, int b) { return p.cost[static_cast<size_t>(a)] < p.cost[static_cast<size_t>(b)]; });
+    std::sort(order.begin(), order.end(),
+              [&](int a, int b) { return p.cost[static_cast<size_t>(a)] < p.cost[static_cast<size_t>(b)]; });
     std::vector<char> used(static_cast<size_t>(p.detections), 0);
     for (int t : order) {
       const auto m = p.members(static_cast<size_t>(t));
-      if (p.cost[static_cast<size_t>(t)] >= 0 || std::any_of(m.begin(), m.end(), [&](int d) { return used[static_cast<size_t>(d)]; })) continue;
+      if (p.cost[static_cast<size_t>(t)] >= 0 ||
+          std::any_of(m.begin(), m.end(), [&](int d) { return used[static_cast<size_t>(d)]; }))
+        continue;
       for (int d : m) used[static_cast<size_t>(d)] = 1;
       start.push_back(t);
     }
@@ -115,9 +121,12 @@ ComponentResult solve_two_sensors(const RelaxationProblem& P) {
   std::vector<PairCost> pairs;
   for (size_t t = 0; t < P.size(); ++t) {
     const int a = P.at(t, 0) - 1, b = P.at(t, 1) - 1;
-    if (a >= 0 && b >= 0) pairs.push_back({a, b, P.cost[t]}), pair_tuple.push_back(static_cast<int>(t));
-    else if (a >= 0 && P.cost[t] < row_missed[static_cast<size_t>(a)]) row_missed[static_cast<size_t>(a)] = P.cost[t], row_tuple[static_cast<size_t>(a)] = static_cast<int>(t);
-    else if (b >= 0 && P.cost[t] < column_missed[static_cast<size_t>(b)]) column_missed[static_cast<size_t>(b)] = P.cost[t], column_tuple[static_cast<size_t>(b)] = static_cast<int>(t);
+    if (a >= 0 && b >= 0)
+      pairs.push_back({a, b, P.cost[t]}), pair_tuple.push_back(static_cast<int>(t));
+    else if (a >= 0 && P.cost[t] < row_missed[static_cast<size_t>(a)])
+      row_missed[static_cast<size_t>(a)] = P.cost[t], row_tuple[static_cast<size_t>(a)] = static_cast<int>(t);
+    else if (b >= 0 && P.cost[t] < column_missed[static_cast<size_t>(b)])
+      column_missed[static_cast<size_t>(b)] = P.cost[t], column_tuple[static_cast<size_t>(b)] = static_cast<int>(t);
   }
   const auto a = assign_with_missed(row_missed, column_missed, pairs);
   std::vector<int> chosen;
@@ -154,8 +163,9 @@ void close_gap(const RelaxationProblem& P, ComponentResult& r, long max_nodes) {
 // A component of at least two tuples by the relaxation (three or more sensors; again with other sensors relaxed
 // while its gap stays above the tolerance, then the branch and bound within `max_nodes` while it is still open),
 // the 2-D assignment (two sensors) or the branch and bound (one detection).
-ComponentResult solve_component(const std::vector<Tuple>& tuples, const std::vector<int>& group, const std::vector<int>& n,
-                                const TuplePacking& all, int max_iterations, double gap_tolerance, long max_nodes) {
+ComponentResult solve_component(const std::vector<Tuple>& tuples, const std::vector<int>& group,
+                                const std::vector<int>& n, const TuplePacking& all, int max_iterations,
+                                double gap_tolerance, long max_nodes) {
   ComponentResult r;
   const RelaxationProblem P(tuples, group, n);
   if (P.sensors() >= 3) {
@@ -177,7 +187,8 @@ ComponentResult solve_component(const std::vector<Tuple>& tuples, const std::vec
         rotated.emplace(std::move(Q));
       }
     }
-    if (r.ub - r.lb > gap_tolerance && max_nodes > 0 && !r.dual.reduced.empty()) close_gap(rotated ? *rotated : P, r, max_nodes);
+    if (r.ub - r.lb > gap_tolerance && max_nodes > 0 && !r.dual.reduced.empty())
+      close_gap(rotated ? *rotated : P, r, max_nodes);
   } else if (P.sensors() == 2) {
     r = solve_two_sensors(P);
     r.proven = true;

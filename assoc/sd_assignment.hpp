@@ -35,15 +35,15 @@ namespace sextant::assoc {
 inline constexpr double kDefaultGapTolerance = 0.01;
 
 struct SdSolution {
-  std::vector<int> tuples;  // indices into the tuple list
-  double cost = 0;          // upper bound (the solution's cost)
-  double lower_bound = 0;   // best dual value (exact: equal to cost)
-  double gap = 0;           // (cost - lower_bound) / |cost|, 0 when cost is 0 (reported; not the stopping rule)
-  double absolute_gap = 0;  // cost - lower_bound, in cost units
-  int iterations = 0;       // the most relaxation iterations any component took (summed over its rotations)
-  int components = 0;       // independent components
+  std::vector<int> tuples;    // indices into the tuple list
+  double cost = 0;            // upper bound (the solution's cost)
+  double lower_bound = 0;     // best dual value (exact: equal to cost)
+  double gap = 0;             // (cost - lower_bound) / |cost|, 0 when cost is 0 (reported; not the stopping rule)
+  double absolute_gap = 0;    // cost - lower_bound, in cost units
+  int iterations = 0;         // the most relaxation iterations any component took (summed over its rotations)
+  int components = 0;         // independent components
   int largest_component = 0;  // tuples in the largest one
-  bool exact = false;       // proven optimal: lower_bound equals cost (within 1e-9 relative)
+  bool exact = false;         // proven optimal: lower_bound equals cost (within 1e-9 relative)
 };
 
 /// `detections_per_sensor[s]` = n_s.  `max_nodes` bounds the search of each component; `exact` is false when one

@@ -27,8 +27,10 @@ void SensorReassignment::sort_runs(size_t s) {
         for (size_t t = lo; t < hi; ++t) {
           const int* r = row(t);
           unsigned long long key = 0;
-          for (size_t q = s + 1; q < S_; ++q) key = key * static_cast<unsigned long long>(n_[q] + 1) + static_cast<unsigned long long>(r[q]);
-          keys_.push_back({key * static_cast<unsigned long long>(n_[s] + 1) + static_cast<unsigned long long>(r[s]), static_cast<int>(t)});
+          for (size_t q = s + 1; q < S_; ++q)
+            key = key * static_cast<unsigned long long>(n_[q] + 1) + static_cast<unsigned long long>(r[q]);
+          keys_.push_back({key * static_cast<unsigned long long>(n_[s] + 1) + static_cast<unsigned long long>(r[s]),
+                           static_cast<int>(t)});
         }
         std::sort(keys_.begin(), keys_.end());
         for (size_t i = lo; i < hi; ++i) o[i] = keys_[i - lo].second;
@@ -148,8 +150,10 @@ double SensorReassignment::improve(std::vector<int>& chosen, int max_rounds) {
   // Sensor s is tried again only after another sensor's re-assignment changed the solution.
   size_t since_change = 0;
   for (int step = 0; step < max_rounds * static_cast<int>(S_) && since_change < S_; ++step) {
-    if (reassign(static_cast<size_t>(step) % S_, chosen, cost)) since_change = 1;
-    else ++since_change;
+    if (reassign(static_cast<size_t>(step) % S_, chosen, cost))
+      since_change = 1;
+    else
+      ++since_change;
   }
   return cost;
 }

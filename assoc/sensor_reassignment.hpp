@@ -52,10 +52,10 @@ class SensorReassignment {
   std::vector<std::vector<int>> single_group_;  // per sensor, per detection id: the group whose rest is that
                                                 // detection alone, or -1
   // Working memory, reused between calls.
-  std::vector<int> rows_;                       // per rest: its group
-  std::vector<int> unpaired_tuple_;             // per rest: the tuple (rest, missed at s), or -1
-  std::vector<int> pair_tuple_;                 // per pair: its tuple
-  std::vector<char> covered_;                   // per detection id: held by a chosen tuple
+  std::vector<int> rows_;            // per rest: its group
+  std::vector<int> unpaired_tuple_;  // per rest: the tuple (rest, missed at s), or -1
+  std::vector<int> pair_tuple_;      // per pair: its tuple
+  std::vector<char> covered_;        // per detection id: held by a chosen tuple
   std::vector<double> row_missed_, column_missed_;
   std::vector<PairCost> pairs_;
   std::vector<std::pair<unsigned long long, int>> keys_;

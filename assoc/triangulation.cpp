@@ -20,8 +20,12 @@ double residual_angle(double y, double x) {
 }  // namespace
 
 PreparedBearing::PreparedBearing(const BearingObservation& o, const Eigen::Matrix2d& inverse_covariance)
-    : sensor(o.sensor), sin_azimuth(std::sin(o.azimuth)), cos_azimuth(std::cos(o.azimuth)),
-      sin_elevation(std::sin(o.elevation)), cos_elevation(std::cos(o.elevation)), information(inverse_covariance) {
+    : sensor(o.sensor),
+      sin_azimuth(std::sin(o.azimuth)),
+      cos_azimuth(std::cos(o.azimuth)),
+      sin_elevation(std::sin(o.elevation)),
+      cos_elevation(std::cos(o.elevation)),
+      information(inverse_covariance) {
   // Step 1's two rows (the passive-association paper's eq. 9-12).
   const Eigen::Vector3d rows[2] = {{sin_azimuth, -cos_azimuth, 0},
                                    {cos_azimuth * sin_elevation, sin_azimuth * sin_elevation, -cos_elevation}};
@@ -75,8 +79,10 @@ bool add_observation(NormalEquations& n, const PreparedBearing& o, const Eigen::
   const double a0 = -d.y() * inv_rho2, a1 = d.x() * inv_rho2;
   const double e0 = -d.x() * s, e1 = -d.y() * s, e2 = rho * inv_r2;
   // z - h: azimuth between (cos az, sin az) and (dx, dy); elevation between (cos el, sin el) and (rho, dz).
-  const double nu0 = residual_angle(o.sin_azimuth * d.x() - o.cos_azimuth * d.y(), o.cos_azimuth * d.x() + o.sin_azimuth * d.y());
-  const double nu1 = residual_angle(o.sin_elevation * rho - o.cos_elevation * d.z(), o.cos_elevation * rho + o.sin_elevation * d.z());
+  const double nu0 =
+      residual_angle(o.sin_azimuth * d.x() - o.cos_azimuth * d.y(), o.cos_azimuth * d.x() + o.sin_azimuth * d.y());
+  const double nu1 =
+      residual_angle(o.sin_elevation * rho - o.cos_elevation * d.z(), o.cos_elevation * rho + o.sin_elevation * d.z());
   // J' R^-1 = [c0 c1] with R^-1 = [p q; q w]: c0 = p a + q e, c1 = q a + w e.
   const double p = o.information(0, 0), q = 0.5 * (o.information(0, 1) + o.information(1, 0)), w = o.information(1, 1);
   const double c00 = p * a0 + q * e0, c01 = p * a1 + q * e1, c02 = q * e2;
@@ -93,7 +99,8 @@ bool add_observation(NormalEquations& n, const PreparedBearing& o, const Eigen::
   return true;
 }
 
-bool add_observation(NormalEquations& n, const BearingObservation& o, const Eigen::Matrix2d& Ri, const Eigen::Vector3d& x) {
+bool add_observation(NormalEquations& n, const BearingObservation& o, const Eigen::Matrix2d& Ri,
+                     const Eigen::Vector3d& x) {
   return add_observation(n, PreparedBearing(o, Ri), x);
 }
 

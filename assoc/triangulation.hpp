@@ -18,8 +18,8 @@
 namespace sextant::assoc {
 
 struct BearingObservation {
-  Eigen::Vector3d sensor = Eigen::Vector3d::Zero();  // sensor position, metres
-  double azimuth = 0, elevation = 0;                 // radians
+  Eigen::Vector3d sensor = Eigen::Vector3d::Zero();          // sensor position, metres
+  double azimuth = 0, elevation = 0;                         // radians
   Eigen::Matrix2d covariance = Eigen::Matrix2d::Identity();  // over [azimuth, elevation]
 };
 
@@ -28,8 +28,8 @@ struct Triangulation {
   std::string reason;  // why not valid: "fewer than 2 sensors", "ill-conditioned geometry", ...
   Eigen::Vector3d position = Eigen::Vector3d::Zero();
   Eigen::Matrix3d covariance = Eigen::Matrix3d::Identity();
-  double residual = 0;  // sum nu' R^-1 nu at the estimate (chi-square with 2S - 3 dof)
-  double condition = 0; // condition number of the information matrix
+  double residual = 0;   // sum nu' R^-1 nu at the estimate (chi-square with 2S - 3 dof)
+  double condition = 0;  // condition number of the information matrix
 };
 
 /// The Gauss-Newton normal equations of sum nu' R^-1 nu linearized at a position x: information = sum J' R^-1 J,
@@ -46,7 +46,7 @@ struct NormalEquations {
 struct PreparedBearing {
   Eigen::Vector3d sensor = Eigen::Vector3d::Zero();
   double sin_azimuth = 0, cos_azimuth = 1, sin_elevation = 0, cos_elevation = 1;
-  Eigen::Matrix2d information = Eigen::Matrix2d::Identity();  // R^-1
+  Eigen::Matrix2d information = Eigen::Matrix2d::Identity();     // R^-1
   Eigen::Matrix3d linear_information = Eigen::Matrix3d::Zero();  // H'H of its two rows of step 1
   Eigen::Vector3d linear_rhs = Eigen::Vector3d::Zero();          // H'Y of its two rows
 

@@ -30,8 +30,9 @@ std::vector<BearingObservation> observations_of(const Scan& scan, const std::vec
   for (size_t s = 0; s < upto; ++s) {
     if (index[s] == 0) continue;
     const auto& d = scan.detections[s][static_cast<size_t>(index[s] - 1)];
-    obs.push_back({scan.sensors[s], d.azimuth, d.elevation,
-                   Eigen::Vector2d(d.sigma_azimuth * d.sigma_azimuth, d.sigma_elevation * d.sigma_elevation).asDiagonal()});
+    obs.push_back(
+        {scan.sensors[s], d.azimuth, d.elevation,
+         Eigen::Vector2d(d.sigma_azimuth * d.sigma_azimuth, d.sigma_elevation * d.sigma_elevation).asDiagonal()});
   }
   return obs;
 }
@@ -66,9 +67,12 @@ CostKind cost_kind_from_string(const std::string& s) {
 
 const char* cost_kind_name(CostKind kind) {
   switch (kind) {
-    case CostKind::kClassic: return "classic";
-    case CostKind::kKl: return "kl";
-    case CostKind::kRenyi: return "renyi";
+    case CostKind::kClassic:
+      return "classic";
+    case CostKind::kKl:
+      return "kl";
+    case CostKind::kRenyi:
+      return "renyi";
   }
   return "?";
 }
@@ -85,8 +89,10 @@ double cost_at(const Scan& scan, const std::vector<int>& index, const CostOption
       continue;
     }
     const auto& d = scan.detections[s][static_cast<size_t>(index[s] - 1)];
-    const Eigen::Matrix2d R = Eigen::Vector2d(d.sigma_azimuth * d.sigma_azimuth, d.sigma_elevation * d.sigma_elevation).asDiagonal();
-    c += -std::log(o.p_detect / (clutter_density(o, s) * 2 * M_PI * d.sigma_azimuth * d.sigma_elevation));  // sqrt|2 pi R|
+    const Eigen::Matrix2d R =
+        Eigen::Vector2d(d.sigma_azimuth * d.sigma_azimuth, d.sigma_elevation * d.sigma_elevation).asDiagonal();
+    c += -std::log(o.p_detect /
+                   (clutter_density(o, s) * 2 * M_PI * d.sigma_azimuth * d.sigma_elevation));  // sqrt|2 pi R|
     if (o.kind == CostKind::kClassic) continue;
     Eigen::Matrix<double, 2, 3> J;
     const auto h = bearing(scan.sensors[s], t.position, &J);
@@ -94,7 +100,8 @@ double cost_at(const Scan& scan, const std::vector<int>& index, const CostOption
     const Eigen::Vector2d z(d.azimuth, d.elevation);
     const Eigen::Vector2d zh(d.azimuth - wrap(d.azimuth - (*h)[0]), (*h)[1]);  // h with its azimuth unwrapped next to z
     const Eigen::Matrix2d Sh = J * t.covariance * J.transpose();
-    c += o.kind == CostKind::kKl ? symmetric_kl_divergence(z, R, zh, Sh) : symmetric_renyi_divergence(z, R, zh, Sh, o.alpha) / o.alpha;
+    c += o.kind == CostKind::kKl ? symmetric_kl_divergence(z, R, zh, Sh)
+                                 : symmetric_renyi_divergence(z, R, zh, Sh, o.alpha) / o.alpha;
   }
   if (o.kind == CostKind::kClassic) c += 0.5 * t.residual;
   if (o.target_density > 0) c -= std::log(o.target_density * std::sqrt((2 * M_PI * t.covariance).determinant()));
@@ -123,7 +130,8 @@ void check_scan_and_options(const Scan& scan, const CostOptions& o) {
     throw std::invalid_argument("build_tuples: " + std::to_string(o.sensor_clutter_density.size()) +
                                 " per-sensor clutter densities for " + std::to_string(S) + " sensors");
   for (size_t s = 0; s < S; ++s)
-    if (!(clutter_density(o, s) > 0)) throw std::invalid_argument("build_tuples: clutter density of sensor " + std::to_string(s) + " is not positive");
+    if (!(clutter_density(o, s) > 0))
+      throw std::invalid_argument("build_tuples: clutter density of sensor " + std::to_string(s) + " is not positive");
 }
 
 // The tuples of one scan: the pair gate over every two sensors, then a depth-first search over the sensors that
@@ -137,14 +145,21 @@ void check_scan_and_options(const Scan& scan, const CostOptions& o) {
 class TupleBuilder {
  public:
   TupleBuilder(const Scan& scan, const CostOptions& o)
-      : scan_(scan), o_(o), S_(scan.sensors.size()), pair_residual_gate_(chi2_quantile(1, o.gate_probability)),
-        fit_of_(S_ + 1), gate_(gates_by_size(S_, o.gate_probability)), index_(S_, 0), candidates_(S_) {
+      : scan_(scan),
+        o_(o),
+        S_(scan.sensors.size()),
+        pair_residual_gate_(chi2_quantile(1, o.gate_probability)),
+        fit_of_(S_ + 1),
+        gate_(gates_by_size(S_, o.gate_probability)),
+        index_(S_, 0),
+        candidates_(S_) {
     prepare_detections();
   }
 
   std::vector<Tuple> build() {
     gate_pairs();
-    out_.reserve(2 * pair_positions_.size());  // capacity hint (tuples are mostly pairs and their extensions): no growth copies
+    out_.reserve(
+        2 * pair_positions_.size());  // capacity hint (tuples are mostly pairs and their extensions): no growth copies
     members_.clear();
     search(0);
     return std::move(out_);
@@ -180,7 +195,8 @@ class TupleBuilder {
 
   // x_to = x_from + one Gauss-Newton step from the normal equations at x_from.
   static bool step(const Eigen::Vector3d& x_from, const NormalEquations& at_from, Eigen::Vector3d& x_to) {
-    x_to = x_from + at_from.information.inverse() * at_from.gradient;  // closed-form 3 x 3 (conditioning is checked at the end)
+    x_to = x_from +
+           at_from.information.inverse() * at_from.gradient;  // closed-form 3 x 3 (conditioning is checked at the end)
     return x_to.allFinite();
   }
 
@@ -188,7 +204,8 @@ class TupleBuilder {
   bool fit_from(const Eigen::Vector3d& start, const NormalEquations& at_start, Fit& f) const {
     Eigen::Vector3d x1;
     NormalEquations at_x1;
-    if (!step(start, at_start, x1) || !linearize(x1, at_x1) || !step(x1, at_x1, f.x) || !linearize(f.x, f.at_x)) return false;
+    if (!step(start, at_start, x1) || !linearize(x1, at_x1) || !step(x1, at_x1, f.x) || !linearize(f.x, f.at_x))
+      return false;
     f.t = triangulation_at(f.x, f.at_x);
     return f.t.valid;
   }
@@ -198,7 +215,8 @@ class TupleBuilder {
   bool gate_pair(Eigen::Vector3d& x2) const {
     const PreparedBearing& a = observation_[members_[0].first][static_cast<size_t>(members_[0].second)];
     const PreparedBearing& b = observation_[members_[1].first][static_cast<size_t>(members_[1].second)];
-    const Triangulation lin = triangulate_linear(a.linear_information + b.linear_information, a.linear_rhs + b.linear_rhs);
+    const Triangulation lin =
+        triangulate_linear(a.linear_information + b.linear_information, a.linear_rhs + b.linear_rhs);
     Eigen::Vector3d x1;
     NormalEquations at_x0, at_x1;
     return lin.valid && linearize(lin.position, at_x0) && step(lin.position, at_x0, x1) && linearize(x1, at_x1) &&
@@ -329,7 +347,7 @@ class TupleBuilder {
   const std::vector<double> gate_;  // residual gate by number of detections
   std::vector<Tuple> out_;
   std::vector<int> index_;
-  std::vector<size_t> real_;  // sensors with a detection in the partial tuple
+  std::vector<size_t> real_;                                  // sensors with a detection in the partial tuple
   std::vector<std::vector<std::pair<int, int>>> candidates_;  // per depth: (detection, its pair fit or -1)
 };
 

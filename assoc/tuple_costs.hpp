@@ -40,12 +40,12 @@ enum class CostKind { kClassic, kKl, kRenyi };
 
 struct CostOptions {
   CostKind kind = CostKind::kClassic;
-  double alpha = 0.5;              // Renyi order, in (0, 1)
-  double p_detect = 0.9;           // in (0, 1]
-  double clutter_density = 1.0;    // false alarms per rad^2 (lambda); > 0
+  double alpha = 0.5;                          // Renyi order, in (0, 1)
+  double p_detect = 0.9;                       // in (0, 1]
+  double clutter_density = 1.0;                // false alarms per rad^2 (lambda); > 0
   std::vector<double> sensor_clutter_density;  // per sensor (lambda_s, per rad^2); when non-empty it replaces
-                                                // clutter_density and must have one entry per sensor
-  double target_density = 0;       // mu_T, expected targets per unit volume (the position unit cubed); 0: no prior term
+                                               // clutter_density and must have one entry per sensor
+  double target_density = 0;  // mu_T, expected targets per unit volume (the position unit cubed); 0: no prior term
   double gate_probability = 0.9999;  // chi-square gate on the triangulation residual (2m - 3 dof)
 };
 
@@ -71,7 +71,8 @@ struct Tuple {
 std::vector<Tuple> build_tuples(const Scan& scan, const CostOptions& options);
 
 /// The cost of one tuple (+infinity when it fails the gate or the geometry is degenerate).
-double tuple_cost(const Scan& scan, const std::vector<int>& index, const CostOptions& options, Triangulation* t = nullptr);
+double tuple_cost(const Scan& scan, const std::vector<int>& index, const CostOptions& options,
+                  Triangulation* t = nullptr);
 
 CostKind cost_kind_from_string(const std::string& s);  // "classic", "kl", "renyi"; throws std::invalid_argument
 const char* cost_kind_name(CostKind kind);             // the spelling cost_kind_from_string reads

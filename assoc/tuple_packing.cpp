@@ -9,7 +9,8 @@ std::vector<std::vector<int>> independent_components(const TuplePacking& p) {
   std::vector<int> parent(static_cast<size_t>(p.detections));
   std::iota(parent.begin(), parent.end(), 0);
   auto root = [&](int x) {
-    while (parent[static_cast<size_t>(x)] != x) x = parent[static_cast<size_t>(x)] = parent[static_cast<size_t>(parent[static_cast<size_t>(x)])];
+    while (parent[static_cast<size_t>(x)] != x)
+      x = parent[static_cast<size_t>(x)] = parent[static_cast<size_t>(parent[static_cast<size_t>(x)])];
     return x;
   };
   for (size_t t = 0; t < p.size(); ++t) {
@@ -31,7 +32,8 @@ std::vector<std::vector<int>> independent_components(const TuplePacking& p) {
   return groups;
 }
 
-ExchangeImprover::ExchangeImprover(const TuplePacking& p, int refill_candidates) : refill_candidates_(refill_candidates) {
+ExchangeImprover::ExchangeImprover(const TuplePacking& p, int refill_candidates)
+    : refill_candidates_(refill_candidates) {
   const size_t T = p.size(), D = static_cast<size_t>(p.detections);
   tuple_of_rank_.resize(T);
   std::iota(tuple_of_rank_.begin(), tuple_of_rank_.end(), 0);
@@ -145,7 +147,8 @@ double ExchangeImprover::refill_freed(int t, long stamp, double delta, double bo
     rest -= cheapest_[static_cast<size_t>(d)];
     counted_[static_cast<size_t>(d)] = stamp;
     int looked = 0;
-    for (int j = of_detection_begin_[static_cast<size_t>(d)]; j < of_detection_begin_[static_cast<size_t>(d) + 1]; ++j) {
+    for (int j = of_detection_begin_[static_cast<size_t>(d)]; j < of_detection_begin_[static_cast<size_t>(d) + 1];
+         ++j) {
       const int c = of_detection_[static_cast<size_t>(j)];
       if (++looked > refill_candidates_) break;
       if (c == t || in_[static_cast<size_t>(c)]) continue;
@@ -159,7 +162,8 @@ double ExchangeImprover::refill_freed(int t, long stamp, double delta, double bo
       refill_.push_back(c), delta += cost_[static_cast<size_t>(c)];
       for (int i = begin[c]; i < begin[c + 1]; ++i) {
         const auto m = static_cast<size_t>(mem[i]);
-        if (freed_[m] == stamp && counted_[m] != stamp) rest -= cheapest_[m], counted_[m] = stamp;  // refilled along with d
+        if (freed_[m] == stamp && counted_[m] != stamp)
+          rest -= cheapest_[m], counted_[m] = stamp;  // refilled along with d
         blocked_[m] = stamp;
       }
       break;

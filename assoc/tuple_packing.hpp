@@ -18,7 +18,7 @@ struct TuplePacking {
   int detections = 0;            // detection ids are 0..detections-1
   std::vector<int> begin = {0};  // per tuple, where its ids start; one more entry than tuples
   std::vector<int> ids;
-  std::vector<double> cost;      // per tuple
+  std::vector<double> cost;  // per tuple
 
   /// Appends a tuple (distinct ids in 0..detections-1) of cost `tuple_cost`.
   void add(std::span<const int> members, double tuple_cost) {
@@ -26,7 +26,9 @@ struct TuplePacking {
     begin.push_back(static_cast<int>(ids.size()));
     cost.push_back(tuple_cost);
   }
-  void add(std::initializer_list<int> members, double tuple_cost) { add(std::span<const int>(members.begin(), members.size()), tuple_cost); }
+  void add(std::initializer_list<int> members, double tuple_cost) {
+    add(std::span<const int>(members.begin(), members.size()), tuple_cost);
+  }
   size_t size() const { return cost.size(); }
   std::span<const int> members(size_t t) const {
     return {ids.data() + begin[t], static_cast<size_t>(begin[t + 1] - begin[t])};
@@ -65,15 +67,15 @@ class ExchangeImprover {
   int refill_candidates_;
   int negative_ = 0;
   std::vector<int> tuple_of_rank_, rank_of_tuple_;
-  std::vector<double> cost_;                    // by rank
-  std::vector<int> member_begin_, members_;     // by rank: members_[member_begin_[r] .. member_begin_[r + 1])
+  std::vector<double> cost_;                            // by rank
+  std::vector<int> member_begin_, members_;             // by rank: members_[member_begin_[r] .. member_begin_[r + 1])
   std::vector<int> of_detection_begin_, of_detection_;  // per detection, the ranks of its negative tuples, ascending
-  std::vector<double> cheapest_;                // per detection, min(0, the cheapest tuple containing it)
-  std::vector<int> owner_;                      // per detection, the rank of the chosen tuple holding it, or -1
-  std::vector<char> in_, look_;                 // by rank: chosen; to be evaluated in the next sweep
-  std::vector<long> dropped_;                   // by rank: stamp of the evaluation that drops it
-  std::vector<long> blocked_, freed_, counted_; // per detection: stamp of the evaluation that takes / frees it /
-                                                // has taken its refill bound
+  std::vector<double> cheapest_;                        // per detection, min(0, the cheapest tuple containing it)
+  std::vector<int> owner_;                              // per detection, the rank of the chosen tuple holding it, or -1
+  std::vector<char> in_, look_;                         // by rank: chosen; to be evaluated in the next sweep
+  std::vector<long> dropped_;                           // by rank: stamp of the evaluation that drops it
+  std::vector<long> blocked_, freed_, counted_;  // per detection: stamp of the evaluation that takes / frees it /
+                                                 // has taken its refill bound
   long stamp_ = 0;
   std::vector<int> conflicts_, freed_ids_, refill_;  // of the move being evaluated
 };

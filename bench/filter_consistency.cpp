@@ -17,7 +17,9 @@ int main(int argc, char** argv) {
   const double duration = argc > 2 ? std::stod(argv[2]) : 60;
   const std::string svg = argc > 3 ? argv[3] : "";
   tools::SvgPlot plot("Pose ANEES over " + std::to_string(runs) + " runs (3 dof)", "time [s]", "ANEES");
-  std::printf("| case | runs | duration [s] | mean ANEES | 95 %% bounds | samples inside | final position RMSE [m] | wall [s] |\n|---|---|---|---|---|---|---|---|\n");
+  std::printf(
+      "| case | runs | duration [s] | mean ANEES | 95 %% bounds | samples inside | final position RMSE [m] | wall [s] "
+      "|\n|---|---|---|---|---|---|---|---|\n");
   for (const int kind : {0, 1, 2}) {  // localization, SLAM, 3-D SLAM
     const bool slam = kind > 0;
     tools::ConsistencyOptions o;
@@ -32,8 +34,8 @@ int main(int argc, char** argv) {
     const auto r = tools::pose_nees_over_runs(o);
     const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     const char* name = kind == 0 ? "EKF localization" : kind == 1 ? "EKF-SLAM" : "3-D EKF-SLAM (6 dof)";
-    std::printf("| %s | %d | %.0f | %.2f | [%.2f, %.2f] | %.1f %% | %.3f | %.1f |\n", name, runs,
-                duration, r.mean_anees, r.lower, r.upper, 100 * r.fraction_inside, r.final_position_rmse, wall);
+    std::printf("| %s | %d | %.0f | %.2f | [%.2f, %.2f] | %.1f %% | %.3f | %.1f |\n", name, runs, duration,
+                r.mean_anees, r.lower, r.upper, 100 * r.fraction_inside, r.final_position_rmse, wall);
     std::vector<Eigen::Vector2d> line, lo, hi;
     for (size_t i = 0; i < r.anees.size(); ++i) {
       line.push_back({r.time_s[i], r.anees[i]});

@@ -21,7 +21,8 @@ using namespace sextant;
 int main(int argc, char** argv) {
   const int reps = argc > 1 ? std::stoi(argv[1]) : 5;
   const double lag = argc > 2 ? std::stod(argv[2]) : 0.4;
-  const auto log = (std::filesystem::temp_directory_path() / ("sextant_late_" + std::to_string(::getpid()) + ".lcm")).string();
+  const auto log =
+      (std::filesystem::temp_directory_path() / ("sextant_late_" + std::to_string(::getpid()) + ".lcm")).string();
   tools::SimulationOptions o;
   o.seed = 1;
   {
@@ -31,7 +32,9 @@ int main(int argc, char** argv) {
   std::vector<engine::Event> events;
   for (const auto& r : runtime::LogReader::read_all(log)) {
     if (r.channel != "ODOMETRY" && r.channel != "LANDMARKS") continue;
-    auto d = runtime::decode_event(r.channel == "ODOMETRY" ? runtime::InputKind::kOdometry : runtime::InputKind::kLandmarks, r.data.data(), r.data.size());
+    auto d =
+        runtime::decode_event(r.channel == "ODOMETRY" ? runtime::InputKind::kOdometry : runtime::InputKind::kLandmarks,
+                              r.data.data(), r.data.size());
     if (auto* e = std::get_if<engine::Event>(&d)) events.push_back(*e);
   }
   std::remove(log.c_str());
@@ -39,7 +42,9 @@ int main(int argc, char** argv) {
   std::vector<std::pair<int64_t, size_t>> arrival;
   for (size_t i = 0; i < events.size(); ++i) {
     const bool odo = std::holds_alternative<engine::Odometry>(events[i]);
-    arrival.push_back({engine::event_utime(events[i]) + static_cast<int64_t>(std::uniform_real_distribution<double>(0, (odo ? 0.25 : 1.0) * lag * 1e6)(rng)), i});
+    arrival.push_back({engine::event_utime(events[i]) + static_cast<int64_t>(std::uniform_real_distribution<double>(
+                                                            0, (odo ? 0.25 : 1.0) * lag * 1e6)(rng)),
+                       i});
   }
   std::stable_sort(arrival.begin(), arrival.end());
   engine::FilterConfig cfg;
@@ -47,8 +52,10 @@ int main(int argc, char** argv) {
   const auto run = [&](bool late, int64_t* reapplied) {
     engine::FilterStage stage(cfg);
     const auto t0 = std::chrono::steady_clock::now();
-    for (size_t k = 0; k < events.size(); ++k) stage.handle(events[late ? arrival[k].second : k], [](engine::Output) {});
-    const double us = std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - t0).count() / static_cast<double>(events.size());
+    for (size_t k = 0; k < events.size(); ++k)
+      stage.handle(events[late ? arrival[k].second : k], [](engine::Output) {});
+    const double us = std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - t0).count() /
+                      static_cast<double>(events.size());
     for (const auto& [name, v] : stage.counters())
       if (name == "late_reapplied") *reapplied = v;
     return us;
@@ -62,7 +69,8 @@ int main(int argc, char** argv) {
   std::sort(in_order.begin(), in_order.end());
   std::sort(late.begin(), late.end());
   const double a = in_order[in_order.size() / 2], b = late[late.size() / 2];
-  std::printf("inputs %zu, late re-applications %lld (lag up to %.2f s)\n", events.size(), static_cast<long long>(reapplied), lag);
+  std::printf("inputs %zu, late re-applications %lld (lag up to %.2f s)\n", events.size(),
+              static_cast<long long>(reapplied), lag);
   std::printf("median per input: in order %.1f us, late %.1f us, ratio %.2f\n", a, b, b / a);
   return 0;
 }

@@ -92,7 +92,8 @@ void BM_EskfWheelVelocityUpdate(benchmark::State& state) {
   f.initialize(0, EskfState{}, ErrorStateEkf::Matrix15::Identity() * 1e-2);
   f.add_imu(0, BodyImuSample{Eigen::Vector3d::Zero(), Eigen::Vector3d(0, 0, 9.80665)});
   for (auto _ : state) {
-    const auto r = f.update_body_velocity(Eigen::Vector3d(0.01, 0, 0), Eigen::Matrix3d::Identity() * 1e-2, SensorMounting{});
+    const auto r =
+        f.update_body_velocity(Eigen::Vector3d(0.01, 0, 0), Eigen::Matrix3d::Identity() * 1e-2, SensorMounting{});
     benchmark::DoNotOptimize(r);
   }
 }

@@ -71,11 +71,16 @@ int main(int argc, char** argv) {
   int64_t last = 0;
   while (auto r = reader.next()) {
     runtime::InputKind kind;
-    if (r->channel == "ODOMETRY") kind = runtime::InputKind::kOdometry;
-    else if (r->channel == "LANDMARKS") kind = runtime::InputKind::kLandmarks;
-    else if (r->channel == "LOOP_CLOSURES") kind = runtime::InputKind::kLoopClosures;
-    else if (r->channel == "BEARINGS") kind = runtime::InputKind::kBearings;
-    else continue;
+    if (r->channel == "ODOMETRY")
+      kind = runtime::InputKind::kOdometry;
+    else if (r->channel == "LANDMARKS")
+      kind = runtime::InputKind::kLandmarks;
+    else if (r->channel == "LOOP_CLOSURES")
+      kind = runtime::InputKind::kLoopClosures;
+    else if (r->channel == "BEARINGS")
+      kind = runtime::InputKind::kBearings;
+    else
+      continue;
     auto d = runtime::decode_event(kind, r->data.data(), r->data.size());
     auto* e = std::get_if<engine::Event>(&d);
     if (e == nullptr) continue;

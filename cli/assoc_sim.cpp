@@ -27,10 +27,15 @@ struct Point {
 void put(JsonWriter& j, const Point& p) {
   const auto& r = p.result;
   j.field("sigma_mrad", p.sigma_mrad).field("cost", p.cost).field("solver", p.solver);
-  j.field("spacing", p.options.spacing).field("correct_rate", r.correct_rate).field("correct_rate_stderr", r.correct_rate_stderr);
+  j.field("spacing", p.options.spacing)
+      .field("correct_rate", r.correct_rate)
+      .field("correct_rate_stderr", r.correct_rate_stderr);
   j.field("observable_targets", r.observable_targets).field("ghosts_per_scan", r.ghosts_per_scan);
   j.field("position_rmse", r.position_rmse).field("mean_ms", r.mean_ms).field("median_ms", r.median_ms);
-  j.field("p95_ms", r.p95_ms).field("median_cpu_ms", r.median_cpu_ms).field("build_median_ms", r.build_median_ms).field("gap_mean", r.gap_mean);
+  j.field("p95_ms", r.p95_ms)
+      .field("median_cpu_ms", r.median_cpu_ms)
+      .field("build_median_ms", r.build_median_ms)
+      .field("gap_mean", r.gap_mean);
   j.field("gap_max", r.gap_max).field("tuples_mean", r.tuples_mean).field("iterations_mean", r.iterations_mean);
   j.field("absolute_gap_mean", r.absolute_gap_mean);
   if (p.options.compare_exact) j.field("exact_compared", r.exact_compared).field("lr_optimal", r.lr_optimal);
@@ -50,19 +55,22 @@ void write_plots(const std::string& csv, const std::vector<Point>& points, const
     const auto& o = points.front().options;
     std::ostringstream sub;
     sub << o.sensors << " sensors, " << o.targets << " targets, sigma " << sigma << " mrad, P_D " << o.p_detect << ", "
-        << o.clutter << " false alarms/sensor" << (o.uniform_layout ? ", uniform" : "") << (o.target_prior ? ", target prior" : "");
+        << o.clutter << " false alarms/sensor" << (o.uniform_layout ? ", uniform" : "")
+        << (o.target_prior ? ", target prior" : "");
     SvgPlot plot("Correct association rate", "target separation d [km]", "correct rate");
     plot.set_subtitle(sub.str());
     plot.set_legend_bottom(true);  // the rates rise with the separation: the bottom right is free
     std::vector<std::pair<std::string, std::string>> series;  // (cost, solver) in first-seen order
     for (const auto& p : points)
-      if (p.sigma_mrad == sigma && std::find(series.begin(), series.end(), std::make_pair(p.cost, p.solver)) == series.end())
+      if (p.sigma_mrad == sigma &&
+          std::find(series.begin(), series.end(), std::make_pair(p.cost, p.solver)) == series.end())
         series.push_back({p.cost, p.solver});
     int color = 0;
     for (const auto& [cost, solver] : series) {
       std::vector<Eigen::Vector2d> line;
       for (const auto& p : points)
-        if (p.sigma_mrad == sigma && p.cost == cost && p.solver == solver) line.push_back({p.options.spacing, p.result.correct_rate});
+        if (p.sigma_mrad == sigma && p.cost == cost && p.solver == solver)
+          line.push_back({p.options.spacing, p.result.correct_rate});
       const std::string label = cost + (solver == "exact" ? " (exact)" : " (LR)");
       plot.polyline(line, kColors[color % 6], label, solver == "exact" ? 1.0 : 1.8);
       plot.points(line, kColors[color % 6], "");
@@ -94,15 +102,20 @@ void add_options(CLI::App* cmd, Args& a) {
   cmd->add_option("--runs", o->runs, "Monte Carlo runs")->check(CLI::PositiveNumber);
   cmd->add_option("--cost", a.costs, "classic, kl, renyi, a comma-separated list of them, or all");
   cmd->add_option("--alpha", o->alpha, "Renyi order in (0, 1)")->check(CLI::Range(0.01, 0.99));
-  cmd->add_option("--solver", a.solver, "lr (Lagrangian relaxation), exact, or both")->check(CLI::IsMember({"lr", "exact", "both"}));
+  cmd->add_option("--solver", a.solver, "lr (Lagrangian relaxation), exact, or both")
+      ->check(CLI::IsMember({"lr", "exact", "both"}));
   cmd->add_option("--pd", o->p_detect, "detection probability")->check(CLI::Range(0.01, 1.0));
   cmd->add_option("--clutter", o->clutter, "mean false alarms per sensor per scan")->check(CLI::NonNegativeNumber);
-  cmd->add_option("--layout", a.layout, "more than 2 targets: grid (coplanar, spacing d) or uniform (minimum separation d)")
+  cmd->add_option("--layout", a.layout,
+                  "more than 2 targets: grid (coplanar, spacing d) or uniform (minimum separation d)")
       ->check(CLI::IsMember({"grid", "uniform"}));
   cmd->add_flag("--target-prior", o->target_prior, "add the target-prior term to the cost");
   cmd->add_flag("--compare-exact", o->compare_exact, "also solve every scan exactly and count LR optimality");
-  cmd->add_option("--max-iterations", o->max_iterations, "Lagrangian relaxation iterations")->check(CLI::PositiveNumber);
-  cmd->add_option("--gap", o->gap_tolerance, "Lagrangian relaxation: stop when the duality gap UB - LB is below this, in cost units (nats)")->check(CLI::NonNegativeNumber);
+  cmd->add_option("--max-iterations", o->max_iterations, "Lagrangian relaxation iterations")
+      ->check(CLI::PositiveNumber);
+  cmd->add_option("--gap", o->gap_tolerance,
+                  "Lagrangian relaxation: stop when the duality gap UB - LB is below this, in cost units (nats)")
+      ->check(CLI::NonNegativeNumber);
   cmd->add_option("--seed", o->seed, "random seed");
   cmd->add_option("--sweep-to", a.sweep_to, "also run spacings from --spacing to this value");
   cmd->add_option("--step", a.step, "spacing step of the sweep")->check(CLI::PositiveNumber);
@@ -124,11 +137,15 @@ std::vector<std::string> cost_names(const std::string& costs) {
 void print_point(const Point& point) {
   const auto& p = point.options;
   const auto& r = point.result;
-  std::printf("sigma %g mrad, %s (%s), d %.2f: correct %.4f +- %.4f, ghosts/scan %.3f, rmse %.4f km, median %.3f ms/scan wall, "
-              "%.3f CPU (build %.3f), gap mean %.2g max %.2g, tuples %.1f",
-              point.sigma_mrad, point.cost.c_str(), point.solver.c_str(), p.spacing, r.correct_rate, r.correct_rate_stderr, r.ghosts_per_scan,
-              r.position_rmse, r.median_ms, r.median_cpu_ms, r.build_median_ms, r.gap_mean, r.gap_max, r.tuples_mean);
-  if (p.compare_exact) std::printf(", LR optimal %lld/%lld", static_cast<long long>(r.lr_optimal), static_cast<long long>(r.exact_compared));
+  std::printf(
+      "sigma %g mrad, %s (%s), d %.2f: correct %.4f +- %.4f, ghosts/scan %.3f, rmse %.4f km, median %.3f ms/scan wall, "
+      "%.3f CPU (build %.3f), gap mean %.2g max %.2g, tuples %.1f",
+      point.sigma_mrad, point.cost.c_str(), point.solver.c_str(), p.spacing, r.correct_rate, r.correct_rate_stderr,
+      r.ghosts_per_scan, r.position_rmse, r.median_ms, r.median_cpu_ms, r.build_median_ms, r.gap_mean, r.gap_max,
+      r.tuples_mean);
+  if (p.compare_exact)
+    std::printf(", LR optimal %lld/%lld", static_cast<long long>(r.lr_optimal),
+                static_cast<long long>(r.exact_compared));
   if (p.compare_exact || p.exact)
     std::printf(", %lld scan%s not proven optimal within the budget%s", static_cast<long long>(r.exact_unproven),
                 r.exact_unproven == 1 ? "" : "s", p.exact ? " (not scored)" : " (not compared)");
@@ -140,7 +157,8 @@ void print_point(const Point& point) {
 // finish unless --json).
 std::vector<Point> run_points(const Args& a) {
   const std::vector<std::string> cost_list = cost_names(a.costs);
-  const std::vector<std::string> solvers = a.solver == "both" ? std::vector<std::string>{"lr", "exact"} : std::vector<std::string>{a.solver};
+  const std::vector<std::string> solvers =
+      a.solver == "both" ? std::vector<std::string>{"lr", "exact"} : std::vector<std::string>{a.solver};
   std::vector<Point> points;
   const double last = a.sweep_to >= a.o.spacing ? a.sweep_to : a.o.spacing;
   for (double sigma : a.sigmas)
@@ -162,14 +180,15 @@ std::vector<Point> run_points(const Args& a) {
 
 void write_csv(const std::string& csv, const std::vector<Point>& points) {
   std::ofstream f(csv);
-  f << "sigma_mrad,cost,solver,spacing,correct_rate,correct_rate_stderr,ghosts_per_scan,position_rmse,mean_ms,median_ms,"
+  f << "sigma_mrad,cost,solver,spacing,correct_rate,correct_rate_stderr,ghosts_per_scan,position_rmse,mean_ms,median_"
+       "ms,"
        "median_cpu_ms,gap_mean,gap_max,tuples_mean,lr_optimal,exact_compared,exact_unproven,absolute_gap_mean\n";
   for (const auto& p : points) {
     const auto& r = p.result;
     f << p.sigma_mrad << "," << p.cost << "," << p.solver << "," << p.options.spacing << "," << r.correct_rate << ","
       << r.correct_rate_stderr << "," << r.ghosts_per_scan << "," << r.position_rmse << "," << r.mean_ms << ","
-      << r.median_ms << "," << r.median_cpu_ms << "," << r.gap_mean << "," << r.gap_max << "," << r.tuples_mean << "," << r.lr_optimal << ","
-      << r.exact_compared << "," << r.exact_unproven << "," << r.absolute_gap_mean << "\n";
+      << r.median_ms << "," << r.median_cpu_ms << "," << r.gap_mean << "," << r.gap_max << "," << r.tuples_mean << ","
+      << r.lr_optimal << "," << r.exact_compared << "," << r.exact_unproven << "," << r.absolute_gap_mean << "\n";
   }
 }
 
@@ -200,11 +219,13 @@ void run(Args& a) {
   if (a.json) print_json(a.o, points);
 }
 
-sextant::cli::RegisterCommand reg{"assoc-sim", [](CLI::App& app) {
-  auto* cmd = app.add_subcommand("assoc-sim", "Monte Carlo of multi-sensor passive association (the passive-association paper's experiment)");
-  auto args = std::make_shared<Args>();
-  add_options(cmd, *args);
-  cmd->callback([args] { run(*args); });
-}};
+sextant::cli::RegisterCommand reg{
+    "assoc-sim", [](CLI::App& app) {
+      auto* cmd = app.add_subcommand(
+          "assoc-sim", "Monte Carlo of multi-sensor passive association (the passive-association paper's experiment)");
+      auto args = std::make_shared<Args>();
+      add_options(cmd, *args);
+      cmd->callback([args] { run(*args); });
+    }};
 
 }  // namespace

@@ -11,8 +11,8 @@
 namespace sextant::cli {
 
 struct Command {
-  std::string name;                          // subcommand name, for ordering the help text
-  std::function<void(CLI::App& app)> add;    // adds the subcommand, its options and its callback to `app`
+  std::string name;                        // subcommand name, for ordering the help text
+  std::function<void(CLI::App& app)> add;  // adds the subcommand, its options and its callback to `app`
 };
 
 std::vector<Command>& command_registry();

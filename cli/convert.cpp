@@ -47,10 +47,14 @@ std::string counts(const std::map<std::string, int64_t>& m) {
 }
 
 void add_euroc(CLI::App* cmd) {
-  auto* eu = cmd->add_subcommand("euroc", "a EuRoC MAV folder (ASL CSV: imu0, ground truth) -> imu_t samples and truth");
-  auto dir = std::make_shared<std::string>(), out = std::make_shared<std::string>(), gt = std::make_shared<std::string>();
+  auto* eu =
+      cmd->add_subcommand("euroc", "a EuRoC MAV folder (ASL CSV: imu0, ground truth) -> imu_t samples and truth");
+  auto dir = std::make_shared<std::string>(), out = std::make_shared<std::string>(),
+       gt = std::make_shared<std::string>();
   auto opt = std::make_shared<EurocConversionOptions>();
-  eu->add_option("dir", *dir, "folder with imu0/data.csv (or mav0/imu0/data.csv)")->required()->check(CLI::ExistingDirectory);
+  eu->add_option("dir", *dir, "folder with imu0/data.csv (or mav0/imu0/data.csv)")
+      ->required()
+      ->check(CLI::ExistingDirectory);
   eu->add_option("-o,--output", *out, "output LCM log")->required();
   eu->add_option("--gt-out", *gt, "the ground truth as a TUM trajectory");
   eu->add_option("--source", opt->source, "body name (imu_t.source)");
@@ -64,14 +68,16 @@ void add_euroc(CLI::App* cmd) {
 }
 
 void add_rosbag(CLI::App* cmd) {
-  auto* rb = cmd->add_subcommand("rosbag", "a ROS 1 bag (Imu, Odometry, NavSatFix, PoseWithCovarianceStamped) -> sextant's messages");
+  auto* rb = cmd->add_subcommand(
+      "rosbag", "a ROS 1 bag (Imu, Odometry, NavSatFix, PoseWithCovarianceStamped) -> sextant's messages");
   auto in = std::make_shared<std::string>(), out = std::make_shared<std::string>();
   auto topics = std::make_shared<std::vector<std::string>>(), frames = std::make_shared<std::vector<std::string>>();
   auto yaw_free = std::make_shared<std::vector<std::string>>();
   rb->add_option("file", *in, "ROS 1 bag")->required()->check(CLI::ExistingFile);
   rb->add_option("-o,--output", *out, "output LCM log")->required();
-  rb->add_option("--topic", *topics, "TOPIC=CHANNEL; when given, only the listed topics are converted (default: IMU, "
-                                     "ODOMETRY, GNSS by type)");
+  rb->add_option("--topic", *topics,
+                 "TOPIC=CHANNEL; when given, only the listed topics are converted (default: IMU, "
+                 "ODOMETRY, GNSS by type)");
   rb->add_option("--frame", *frames, "FRAME=BODY: a ROS frame_id's body name (default: the frame_id itself)");
   rb->add_option("--yaw-free", *yaw_free, "an IMU topic whose orientation has no meaningful yaw");
   rb->callback([=] {
@@ -87,69 +93,79 @@ void add_rosbag(CLI::App* cmd) {
   });
 }
 
-sextant::cli::RegisterCommand reg{"convert", [](CLI::App& app) {
-  auto* cmd = app.add_subcommand("convert", "convert real data sets into LCM logs");
-  cmd->require_subcommand(1);
+sextant::cli::RegisterCommand reg{
+    "convert", [](CLI::App& app) {
+      auto* cmd = app.add_subcommand("convert", "convert real data sets into LCM logs");
+      cmd->require_subcommand(1);
 
-  auto* g2o = cmd->add_subcommand("g2o", "a g2o pose graph -> odometry and loop closures");
-  auto g_in = std::make_shared<std::string>(), g_out = std::make_shared<std::string>(), g_gt = std::make_shared<std::string>();
-  auto g_opt = std::make_shared<G2oConversionOptions>();
-  g2o->add_option("file", *g_in, "g2o file")->required()->check(CLI::ExistingFile);
-  g2o->add_option("-o,--output", *g_out, "output LCM log")->required();
-  g2o->add_option("--gt-out", *g_gt, "write the file's vertex estimates as a TUM trajectory");
-  g2o->add_option("--period", g_opt->period_us, "microseconds between vertices")->check(CLI::PositiveNumber);
-  g2o->callback([=] {
-    guarded("g2o", [&] {
-      const auto r = convert_g2o(*g_in, *g_out, *g_gt, *g_opt);
-      std::printf("%s: %lld odometry, %lld loop closures (%lld edges of other kinds skipped)\n", g_out->c_str(),
-                  (long long)r.odometry, (long long)r.loop_closures, (long long)r.skipped_edges);
-    });
-  });
+      auto* g2o = cmd->add_subcommand("g2o", "a g2o pose graph -> odometry and loop closures");
+      auto g_in = std::make_shared<std::string>(), g_out = std::make_shared<std::string>(),
+           g_gt = std::make_shared<std::string>();
+      auto g_opt = std::make_shared<G2oConversionOptions>();
+      g2o->add_option("file", *g_in, "g2o file")->required()->check(CLI::ExistingFile);
+      g2o->add_option("-o,--output", *g_out, "output LCM log")->required();
+      g2o->add_option("--gt-out", *g_gt, "write the file's vertex estimates as a TUM trajectory");
+      g2o->add_option("--period", g_opt->period_us, "microseconds between vertices")->check(CLI::PositiveNumber);
+      g2o->callback([=] {
+        guarded("g2o", [&] {
+          const auto r = convert_g2o(*g_in, *g_out, *g_gt, *g_opt);
+          std::printf("%s: %lld odometry, %lld loop closures (%lld edges of other kinds skipped)\n", g_out->c_str(),
+                      (long long)r.odometry, (long long)r.loop_closures, (long long)r.skipped_edges);
+        });
+      });
 
-  auto* mr = cmd->add_subcommand("mrclam", "a UTIAS MRCLAM data set folder -> one robot's odometry, landmark sightings and truth");
-  auto m_dir = std::make_shared<std::string>(), m_out = std::make_shared<std::string>(), m_gt = std::make_shared<std::string>();
-  auto m_robot = std::make_shared<int>(1);
-  mr->add_option("dir", *m_dir, "folder with Barcodes.dat, Landmark_Groundtruth.dat, RobotN_*.dat")->required()->check(CLI::ExistingDirectory);
-  mr->add_option("--robot", *m_robot, "robot number, 1 to 5")->required()->check(CLI::Range(1, 5));
-  mr->add_option("-o,--output", *m_out, "output LCM log")->required();
-  mr->add_option("--gt-out", *m_gt, "the robot's ground truth as a TUM trajectory");
-  auto m_opt = std::make_shared<MrclamOptions>();
-  mr->add_option("--command-delay", m_opt->command_delay_s, "seconds between a velocity command's stamp and the motion it causes")
-      ->check(CLI::Range(-1.0, 1.0));
-  mr->add_option("--range-sigma-per-metre", m_opt->range_sigma_per_metre, "range noise, m per m of range")->check(CLI::PositiveNumber);
-  mr->add_option("--bearing-sigma", m_opt->bearing_sigma, "bearing noise, rad")->check(CLI::PositiveNumber);
-  mr->callback([=] {
-    guarded("mrclam", [&] {
-      const auto r = convert_mrclam(*m_dir, *m_robot, *m_out, *m_gt, *m_opt);
-      std::printf("%s: %lld odometry, %lld landmark messages (%lld sightings; %lld robot sightings and %lld unknown "
-                  "barcodes left out), %lld truth\n",
-                  m_out->c_str(), (long long)r.odometry, (long long)r.landmark_messages, (long long)r.landmark_observations,
-                  (long long)r.robot_sightings, (long long)r.unknown_barcodes, (long long)r.truth);
-    });
-  });
+      auto* mr = cmd->add_subcommand(
+          "mrclam", "a UTIAS MRCLAM data set folder -> one robot's odometry, landmark sightings and truth");
+      auto m_dir = std::make_shared<std::string>(), m_out = std::make_shared<std::string>(),
+           m_gt = std::make_shared<std::string>();
+      auto m_robot = std::make_shared<int>(1);
+      mr->add_option("dir", *m_dir, "folder with Barcodes.dat, Landmark_Groundtruth.dat, RobotN_*.dat")
+          ->required()
+          ->check(CLI::ExistingDirectory);
+      mr->add_option("--robot", *m_robot, "robot number, 1 to 5")->required()->check(CLI::Range(1, 5));
+      mr->add_option("-o,--output", *m_out, "output LCM log")->required();
+      mr->add_option("--gt-out", *m_gt, "the robot's ground truth as a TUM trajectory");
+      auto m_opt = std::make_shared<MrclamOptions>();
+      mr->add_option("--command-delay", m_opt->command_delay_s,
+                     "seconds between a velocity command's stamp and the motion it causes")
+          ->check(CLI::Range(-1.0, 1.0));
+      mr->add_option("--range-sigma-per-metre", m_opt->range_sigma_per_metre, "range noise, m per m of range")
+          ->check(CLI::PositiveNumber);
+      mr->add_option("--bearing-sigma", m_opt->bearing_sigma, "bearing noise, rad")->check(CLI::PositiveNumber);
+      mr->callback([=] {
+        guarded("mrclam", [&] {
+          const auto r = convert_mrclam(*m_dir, *m_robot, *m_out, *m_gt, *m_opt);
+          std::printf(
+              "%s: %lld odometry, %lld landmark messages (%lld sightings; %lld robot sightings and %lld unknown "
+              "barcodes left out), %lld truth\n",
+              m_out->c_str(), (long long)r.odometry, (long long)r.landmark_messages, (long long)r.landmark_observations,
+              (long long)r.robot_sightings, (long long)r.unknown_barcodes, (long long)r.truth);
+        });
+      });
 
-  auto* tum = cmd->add_subcommand("tum", "TUM ground truth -> noisy, drifting odometry (plus the ground truth)");
-  auto t_in = std::make_shared<std::string>(), t_out = std::make_shared<std::string>(), t_gt = std::make_shared<std::string>();
-  auto t_opt = std::make_shared<TumConversionOptions>();
-  tum->add_option("file", *t_in, "ground truth, TUM format")->required()->check(CLI::ExistingFile);
-  tum->add_option("-o,--output", *t_out, "output LCM log")->required();
-  tum->add_option("--gt-out", *t_gt, "copy the ground truth (TUM) here");
-  tum->add_option("--seed", t_opt->seed, "random seed");
-  tum->add_option("--noise-trans", t_opt->trans_noise, "translation noise, m per sqrt(m) travelled (per axis)");
-  tum->add_option("--noise-rot", t_opt->rot_noise, "rotation noise, rad per sqrt(rad) turned (per axis)");
-  tum->add_option("--frame-rate", t_opt->frame_rate_hz, "odometry rate, Hz (0: every ground-truth sample)");
-  tum->add_option("--drift-yaw", t_opt->yaw_drift, "heading bias, rad per m travelled");
-  tum->add_option("--drift-scale", t_opt->scale_drift, "translation scale error");
-  tum->callback([=] {
-    guarded("tum", [&] {
-      const auto r = convert_tum(*t_in, *t_out, *t_opt);
-      if (!t_gt->empty()) sextant::tools::write_tum(*t_gt, sextant::tools::read_tum(*t_in));
-      std::printf("%s: %lld odometry messages with ground truth\n", t_out->c_str(), (long long)r.odometry);
-    });
-  });
+      auto* tum = cmd->add_subcommand("tum", "TUM ground truth -> noisy, drifting odometry (plus the ground truth)");
+      auto t_in = std::make_shared<std::string>(), t_out = std::make_shared<std::string>(),
+           t_gt = std::make_shared<std::string>();
+      auto t_opt = std::make_shared<TumConversionOptions>();
+      tum->add_option("file", *t_in, "ground truth, TUM format")->required()->check(CLI::ExistingFile);
+      tum->add_option("-o,--output", *t_out, "output LCM log")->required();
+      tum->add_option("--gt-out", *t_gt, "copy the ground truth (TUM) here");
+      tum->add_option("--seed", t_opt->seed, "random seed");
+      tum->add_option("--noise-trans", t_opt->trans_noise, "translation noise, m per sqrt(m) travelled (per axis)");
+      tum->add_option("--noise-rot", t_opt->rot_noise, "rotation noise, rad per sqrt(rad) turned (per axis)");
+      tum->add_option("--frame-rate", t_opt->frame_rate_hz, "odometry rate, Hz (0: every ground-truth sample)");
+      tum->add_option("--drift-yaw", t_opt->yaw_drift, "heading bias, rad per m travelled");
+      tum->add_option("--drift-scale", t_opt->scale_drift, "translation scale error");
+      tum->callback([=] {
+        guarded("tum", [&] {
+          const auto r = convert_tum(*t_in, *t_out, *t_opt);
+          if (!t_gt->empty()) sextant::tools::write_tum(*t_gt, sextant::tools::read_tum(*t_in));
+          std::printf("%s: %lld odometry messages with ground truth\n", t_out->c_str(), (long long)r.odometry);
+        });
+      });
 
-  add_euroc(cmd);
-  add_rosbag(cmd);
-}};
+      add_euroc(cmd);
+      add_rosbag(cmd);
+    }};
 
 }  // namespace

@@ -18,13 +18,17 @@ namespace sextant::tools {
 namespace {
 
 constexpr std::pair<graph::Method, const char*> kSolvers[] = {{graph::Method::kGaussNewton, "gn"},
-                                                             {graph::Method::kLevenbergMarquardt, "lm"}};
-constexpr std::pair<InitialEstimate, const char*> kInits[] = {
-    {InitialEstimate::kAuto, "auto"}, {InitialEstimate::kFile, "file"}, {InitialEstimate::kOdometry, "odometry"},
-    {InitialEstimate::kChordal, "chordal"}, {InitialEstimate::kSgd, "sgd"}};
-constexpr std::pair<graph::Ordering, const char*> kOrderings[] = {
-    {graph::Ordering::kBlockAmd, "block-amd"}, {graph::Ordering::kAmd, "amd"}, {graph::Ordering::kColamd, "colamd"},
-    {graph::Ordering::kMetis, "metis"}, {graph::Ordering::kAuto, "auto"}};
+                                                              {graph::Method::kLevenbergMarquardt, "lm"}};
+constexpr std::pair<InitialEstimate, const char*> kInits[] = {{InitialEstimate::kAuto, "auto"},
+                                                              {InitialEstimate::kFile, "file"},
+                                                              {InitialEstimate::kOdometry, "odometry"},
+                                                              {InitialEstimate::kChordal, "chordal"},
+                                                              {InitialEstimate::kSgd, "sgd"}};
+constexpr std::pair<graph::Ordering, const char*> kOrderings[] = {{graph::Ordering::kBlockAmd, "block-amd"},
+                                                                  {graph::Ordering::kAmd, "amd"},
+                                                                  {graph::Ordering::kColamd, "colamd"},
+                                                                  {graph::Ordering::kMetis, "metis"},
+                                                                  {graph::Ordering::kAuto, "auto"}};
 
 // The file's factors fed in order to the incremental smoother (feed_in_order.hpp), then a batch Gauss-Newton solve
 // of the same graph from the same start for the final chi2 ratio.
@@ -52,7 +56,8 @@ GraphOptimizationResult run_incremental(const graph::G2oGraph& g, const GraphOpt
   bo.relative_tolerance = o.tolerance;
   const auto batch = graph::optimize(r.start, bo);
   const double mean = r.step_ms.empty() ? 0
-                      : std::accumulate(r.step_ms.begin(), r.step_ms.end(), 0.0) / static_cast<double>(r.step_ms.size());
+                                        : std::accumulate(r.step_ms.begin(), r.step_ms.end(), 0.0) /
+                                              static_cast<double>(r.step_ms.size());
   const double ratio = batch.usable() && batch.final_chi2 > 0 ? final_chi2 / batch.final_chi2 : 0;
   if (!output.empty()) graph::write_g2o(output, smoother.graph());
 
@@ -92,12 +97,14 @@ std::vector<std::string> ordering_names() { return kind_names(kOrderings); }
 GraphOptimizationResult optimize_graph(graph::G2oGraph& g, const GraphOptimizationOptions& o,
                                        const std::string& output) {
   if (o.max_iters < 1) throw std::invalid_argument("max_iters must be at least 1");
-  if (!(o.kernel_width > 0) || !(o.tolerance > 0)) throw std::invalid_argument("kernel_width and tolerance must be > 0");
+  if (!(o.kernel_width > 0) || !(o.tolerance > 0))
+    throw std::invalid_argument("kernel_width and tolerance must be > 0");
   if (o.incremental) {
     // auto, the default, means the file here: the incremental smoother starts each pose from its edges.
     const bool file_start = o.init == InitialEstimate::kFile || o.init == InitialEstimate::kAuto;
     if (!file_start || o.solver != graph::Method::kGaussNewton)
-      throw std::invalid_argument("incremental initializes each pose from its first edge; init and solver do not apply");
+      throw std::invalid_argument(
+          "incremental initializes each pose from its first edge; init and solver do not apply");
     if (!(o.relin_translation > 0) || !(o.relin_rotation > 0) || o.relin_skip < 1)
       throw std::invalid_argument("relinearization thresholds must be > 0 and relin_skip at least 1");
     return run_incremental(g, o, output);

@@ -27,9 +27,9 @@ enum class InitialEstimate {
 /// The spellings of the kinds `sextant optimize` and the Python module's optimize() take, one table per kind
 /// (graph_optimization.cpp; the robust kernels' is graph::robust_kernel_from_name, robust_kernel.hpp).  *_from_name throws std::invalid_argument naming the option and its spellings for any
 /// other name; *_names lists the spellings (for the command line's checks).
-graph::Method solver_from_name(const std::string& name);                // gn | lm
-InitialEstimate initial_estimate_from_name(const std::string& name);    // auto | file | odometry | chordal | sgd
-graph::Ordering ordering_from_name(const std::string& name);            // block-amd | amd | colamd | metis | auto
+graph::Method solver_from_name(const std::string& name);              // gn | lm
+InitialEstimate initial_estimate_from_name(const std::string& name);  // auto | file | odometry | chordal | sgd
+graph::Ordering ordering_from_name(const std::string& name);          // block-amd | amd | colamd | metis | auto
 const char* name_of(graph::Method solver);
 const char* name_of(InitialEstimate init);
 const char* name_of(graph::Ordering ordering);
@@ -43,11 +43,11 @@ struct GraphOptimizationOptions {
   graph::RobustKernel robust = graph::RobustKernel::kNone;
   graph::Ordering ordering = graph::Ordering::kBlockAmd;
   int max_iters = 100;
-  double kernel_width = 1.0;            // Huber/Cauchy delta or DCS phi
-  double tolerance = 1e-6;              // stop when chi2 decreases by less than this fraction
-  bool incremental = false;             // one pose per update through the incremental smoother
+  double kernel_width = 1.0;                             // Huber/Cauchy delta or DCS phi
+  double tolerance = 1e-6;                               // stop when chi2 decreases by less than this fraction
+  bool incremental = false;                              // one pose per update through the incremental smoother
   double relin_translation = 0.1, relin_rotation = 0.1;  // incremental: relinearization thresholds (m, rad)
-  int relin_skip = 1;                   // incremental: look for variables to relinearize every this many updates
+  int relin_skip = 1;  // incremental: look for variables to relinearize every this many updates
 };
 
 struct GraphOptimizationResult {

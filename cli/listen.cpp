@@ -20,27 +20,30 @@ struct Printer {
   }
 };
 
-sextant::cli::RegisterCommand reg{"listen", [](CLI::App& app) {
-  auto* cmd = app.add_subcommand("listen", "print decoded sextant messages live (all channels, or the ones named)");
-  auto channels = std::make_shared<std::vector<std::string>>();
-  auto url = std::make_shared<std::string>();
-  auto count = std::make_shared<int64_t>(-1);
-  auto seconds = std::make_shared<double>(0);
-  cmd->add_option("channels", *channels, "channels (LCM regular expressions); default: all");
-  cmd->add_option("--lcm-url", *url, "LCM URL");
-  cmd->add_option("-n,--count", *count, "exit after this many messages");
-  cmd->add_option("--seconds", *seconds, "exit after this many seconds");
-  cmd->callback([=] {
-    lcm::LCM lcm(*url);
-    if (!lcm.good()) {
-      std::fprintf(stderr, "sextant listen: cannot start LCM on '%s' (is there a multicast route? "
-                           "sudo ip route add 224.0.0.0/4 dev lo)\n", url->c_str());
-      throw CLI::RuntimeError(3);
-    }
-    Printer printer{*count};
-    if (channels->empty()) sextant::runtime::subscribe_raw(lcm, ".*", &printer);
-    for (const auto& c : *channels) sextant::runtime::subscribe_raw(lcm, c, &printer);
-    sextant::cli::handle_until_stopped(lcm, *seconds, [&printer] { return printer.remaining == 0; });
-  });
-}};
+sextant::cli::RegisterCommand reg{
+    "listen", [](CLI::App& app) {
+      auto* cmd = app.add_subcommand("listen", "print decoded sextant messages live (all channels, or the ones named)");
+      auto channels = std::make_shared<std::vector<std::string>>();
+      auto url = std::make_shared<std::string>();
+      auto count = std::make_shared<int64_t>(-1);
+      auto seconds = std::make_shared<double>(0);
+      cmd->add_option("channels", *channels, "channels (LCM regular expressions); default: all");
+      cmd->add_option("--lcm-url", *url, "LCM URL");
+      cmd->add_option("-n,--count", *count, "exit after this many messages");
+      cmd->add_option("--seconds", *seconds, "exit after this many seconds");
+      cmd->callback([=] {
+        lcm::LCM lcm(*url);
+        if (!lcm.good()) {
+          std::fprintf(stderr,
+                       "sextant listen: cannot start LCM on '%s' (is there a multicast route? "
+                       "sudo ip route add 224.0.0.0/4 dev lo)\n",
+                       url->c_str());
+          throw CLI::RuntimeError(3);
+        }
+        Printer printer{*count};
+        if (channels->empty()) sextant::runtime::subscribe_raw(lcm, ".*", &printer);
+        for (const auto& c : *channels) sextant::runtime::subscribe_raw(lcm, c, &printer);
+        sextant::cli::handle_until_stopped(lcm, *seconds, [&printer] { return printer.remaining == 0; });
+      });
+    }};
 }  // namespace

@@ -37,7 +37,8 @@ std::string pose_text(const double p[3], const double q[4]) {
 
 std::string describe(const sextant::odometry_t& m) {
   return fmt("odometry_t %s seq %lld t=%.6f source=%s ", m.sender.c_str(), (long long)m.seq, m.utime * 1e-6,
-             m.source.c_str()) + pose_text(m.position, m.orientation);
+             m.source.c_str()) +
+         pose_text(m.position, m.orientation);
 }
 std::string describe(const sextant::fused_pose_t& m) {
   return fmt("fused_pose_t %s seq %lld t=%.6f %s/%s ", m.sender.c_str(), (long long)m.seq, m.utime * 1e-6,
@@ -50,18 +51,16 @@ std::string describe(const sextant::landmarks_t& m) {
              m.utime * 1e-6, m.source.c_str(), m.num_observations);
 }
 std::string describe(const sextant::bearing_scan_t& m) {
-  return fmt("bearing_scan_t %s seq %lld t=%.6f sensor=%d scan=%lld detections=%d", m.sender.c_str(),
-             (long long)m.seq, m.utime * 1e-6, m.sensor_id, (long long)m.scan_id, m.num_detections);
+  return fmt("bearing_scan_t %s seq %lld t=%.6f sensor=%d scan=%lld detections=%d", m.sender.c_str(), (long long)m.seq,
+             m.utime * 1e-6, m.sensor_id, (long long)m.scan_id, m.num_detections);
 }
 std::string describe(const sextant::loop_closure_t& m) {
-  return fmt("loop_closure_t %s seq %lld %s %.3f -> %.3f request=%lld score=%.2f", m.sender.c_str(),
-             (long long)m.seq, m.source.c_str(), m.utime_from * 1e-6, m.utime_to * 1e-6, (long long)m.request_id,
-             m.score);
+  return fmt("loop_closure_t %s seq %lld %s %.3f -> %.3f request=%lld score=%.2f", m.sender.c_str(), (long long)m.seq,
+             m.source.c_str(), m.utime_from * 1e-6, m.utime_to * 1e-6, (long long)m.request_id, m.score);
 }
 std::string describe(const sextant::match_request_t& m) {
-  return fmt("match_request_t %s seq %lld request=%lld %s keyframes %lld <-> %lld", m.sender.c_str(),
-             (long long)m.seq, (long long)m.request_id, m.kind.c_str(), (long long)m.keyframe_a,
-             (long long)m.keyframe_b);
+  return fmt("match_request_t %s seq %lld request=%lld %s keyframes %lld <-> %lld", m.sender.c_str(), (long long)m.seq,
+             (long long)m.request_id, m.kind.c_str(), (long long)m.keyframe_a, (long long)m.keyframe_b);
 }
 std::string describe(const sextant::trajectory_t& m) {
   return fmt("trajectory_t %s seq %lld %s keyframes=%d chi2=%.4g iterations=%d solve=%.2f ms", m.sender.c_str(),
@@ -69,8 +68,7 @@ std::string describe(const sextant::trajectory_t& m) {
 }
 std::string describe(const sextant::targets_t& m) {
   return fmt("targets_t %s seq %lld scan=%lld sensors=%d targets=%d cost=%.3f gap=%.2g%%", m.sender.c_str(),
-             (long long)m.seq, (long long)m.scan_id, m.num_sensors, m.num_targets, m.total_cost,
-             100 * m.duality_gap);
+             (long long)m.seq, (long long)m.scan_id, m.num_sensors, m.num_targets, m.total_cost, 100 * m.duality_gap);
 }
 std::string describe(const sextant::truth_t& m) {
   return fmt("truth_t t=%.6f %s %s id=%lld (%.3f, %.3f, %.3f)", m.utime * 1e-6, m.kind.c_str(), m.source.c_str(),
@@ -79,8 +77,8 @@ std::string describe(const sextant::truth_t& m) {
 std::string describe(const sextant::status_t& m) {
   std::string s = fmt("status_t %s %s uptime %.1f s", m.sender.c_str(), m.version.c_str(), m.uptime_s);
   for (const auto& c : m.channels)
-    s += fmt(" | %s rx %lld ok %lld rej %lld drop %lld", c.channel.c_str(), (long long)c.received,
-             (long long)c.decoded, (long long)c.rejected, (long long)c.dropped);
+    s += fmt(" | %s rx %lld ok %lld rej %lld drop %lld", c.channel.c_str(), (long long)c.received, (long long)c.decoded,
+             (long long)c.rejected, (long long)c.dropped);
   for (const auto& st : m.stages)
     if (st.name != "runtime")
       s += fmt(" | %s q %d/%d p99 %.2f ms", st.name.c_str(), st.queue_depth, st.queue_capacity, st.latency_ms_p99);
@@ -109,9 +107,9 @@ std::string describe_message(const void* data, size_t size) {
   if (try_describe<sextant::odometry_t>(data, size, out) || try_describe<sextant::fused_pose_t>(data, size, out) ||
       try_describe<sextant::landmarks_t>(data, size, out) || try_describe<sextant::bearing_scan_t>(data, size, out) ||
       try_describe<sextant::loop_closure_t>(data, size, out) ||
-      try_describe<sextant::match_request_t>(data, size, out) ||
-      try_describe<sextant::trajectory_t>(data, size, out) || try_describe<sextant::targets_t>(data, size, out) ||
-      try_describe<sextant::truth_t>(data, size, out) || try_describe<sextant::status_t>(data, size, out))
+      try_describe<sextant::match_request_t>(data, size, out) || try_describe<sextant::trajectory_t>(data, size, out) ||
+      try_describe<sextant::targets_t>(data, size, out) || try_describe<sextant::truth_t>(data, size, out) ||
+      try_describe<sextant::status_t>(data, size, out))
     return out;
   return "unknown type (" + std::to_string(size) + " bytes)";
 }

@@ -41,8 +41,9 @@ class ProgressBar {
     const double rate = elapsed > 0 ? static_cast<double>(done) / elapsed : 0;
     const double eta = rate > 0 ? static_cast<double>(total - done) / rate : 0;
     const int width = 30, filled = static_cast<int>(width * done / total);
-    std::fprintf(stderr, "\r[%-*s] %3d%% %8.0f msg/s ETA %5.1f s", width, std::string(static_cast<size_t>(filled), '#').c_str(),
-                 static_cast<int>(100 * done / total), rate, eta);
+    std::fprintf(stderr, "\r[%-*s] %3d%% %8.0f msg/s ETA %5.1f s", width,
+                 std::string(static_cast<size_t>(filled), '#').c_str(), static_cast<int>(100 * done / total), rate,
+                 eta);
     if (done == total) std::fprintf(stderr, "\n");
   }
 
@@ -65,7 +66,8 @@ void print_json(const Options& o, const tools::ReplayResult& r, const std::strin
   j.field("primary_estimator", r.primary_estimator);
   j.field("duration_s", static_cast<double>(r.last_utime - r.first_utime) * 1e-6);
   j.field("wall_seconds", r.wall_seconds);
-  j.field("realtime_factor", r.wall_seconds > 0 ? static_cast<double>(r.last_utime - r.first_utime) * 1e-6 / r.wall_seconds : 0.0);
+  j.field("realtime_factor",
+          r.wall_seconds > 0 ? static_cast<double>(r.last_utime - r.first_utime) * 1e-6 / r.wall_seconds : 0.0);
   j.key("inputs").begin_object();
   for (const auto& [channel, c] : r.channels) {
     j.key(channel).begin_object();
@@ -138,12 +140,14 @@ void add_options(CLI::App* cmd, Options& o) {
   cmd->add_option("--kitti-out", o.kitti_out, "the same as KITTI 3x4 poses");
   cmd->add_option("--g2o-out", o.g2o_out, "the same as a g2o graph");
   cmd->add_option("--out-log", o.out_log, "write everything the engine published to an LCM log");
-  cmd->add_option("--mcap-out", o.mcap_out, "write the log's inputs and everything published to an MCAP file for "
-                                            "Foxglove (the topics of `sextant foxglove`)");
+  cmd->add_option("--mcap-out", o.mcap_out,
+                  "write the log's inputs and everything published to an MCAP file for "
+                  "Foxglove (the topics of `sextant foxglove`)");
   cmd->add_option("--estimator", o.estimator, "which estimator's poses to export (default: the primary)");
   cmd->add_flag("--json", o.json, "print a JSON summary on stdout");
-  cmd->add_option("--segment-seconds", o.segment_seconds,
-                  "with --json: report each stretch of this many seconds of data time (replay speed, stage times, memory)")
+  cmd->add_option(
+         "--segment-seconds", o.segment_seconds,
+         "with --json: report each stretch of this many seconds of data time (replay speed, stage times, memory)")
       ->check(CLI::NonNegativeNumber);
   cmd->add_option("--report", o.report, "write an HTML report with plots (and report.json) into this folder");
   cmd->add_flag("--realtime", o.realtime, "republish the log to the live bus at the pace of message utimes");
@@ -186,9 +190,12 @@ class StreamedOutputs {
         if (out_log_) out_log_->write_raw(utime, channel, bytes.data(), bytes.size());
         if (mcap_) mcap_->published(channel, bytes, utime);
       };
-    if (!o.tum_out.empty()) writers_.push_back(std::make_unique<tools::TrajectoryWriter>(o.tum_out, tools::TrajectoryFormat::kTum));
-    if (!o.kitti_out.empty()) writers_.push_back(std::make_unique<tools::TrajectoryWriter>(o.kitti_out, tools::TrajectoryFormat::kKitti));
-    if (!o.g2o_out.empty()) writers_.push_back(std::make_unique<tools::TrajectoryWriter>(o.g2o_out, tools::TrajectoryFormat::kG2o));
+    if (!o.tum_out.empty())
+      writers_.push_back(std::make_unique<tools::TrajectoryWriter>(o.tum_out, tools::TrajectoryFormat::kTum));
+    if (!o.kitti_out.empty())
+      writers_.push_back(std::make_unique<tools::TrajectoryWriter>(o.kitti_out, tools::TrajectoryFormat::kKitti));
+    if (!o.g2o_out.empty())
+      writers_.push_back(std::make_unique<tools::TrajectoryWriter>(o.g2o_out, tools::TrajectoryFormat::kG2o));
     // The estimator to export is known once the engine is built (the primary one by default): its name is matched
     // against each pose's.
     export_estimator_ = o.estimator;
@@ -221,17 +228,20 @@ void print_summary_line(const tools::ReplayResult& result, const std::string& es
   int64_t rejected = 0;
   for (const auto& [c, counts] : result.channels) rejected += counts.rejected;
   std::printf("replayed %lld log events (%.1f s of data) in %.2f s; %zu %s poses; %lld inputs rejected\n",
-              static_cast<long long>(result.records), static_cast<double>(result.last_utime - result.first_utime) * 1e-6,
-              result.wall_seconds, static_cast<size_t>(exported), estimator.c_str(), static_cast<long long>(rejected));
+              static_cast<long long>(result.records),
+              static_cast<double>(result.last_utime - result.first_utime) * 1e-6, result.wall_seconds,
+              static_cast<size_t>(exported), estimator.c_str(), static_cast<long long>(rejected));
 }
 
 // Stages that failed on an event (and recovered: the replay went on), on stderr.
 void report_stage_failures(const tools::ReplayResult& result) {
   for (const auto& s : result.stages)
     if (s.failures > 0)
-      std::fprintf(stderr, "sextant replay: stage '%s' failed on %lld event(s) and recovered from %lld (the replay went on); "
-                           "last: %s\n", s.name.c_str(), static_cast<long long>(s.failures),
-                   static_cast<long long>(s.recoveries), s.last_failure.c_str());
+      std::fprintf(stderr,
+                   "sextant replay: stage '%s' failed on %lld event(s) and recovered from %lld (the replay went on); "
+                   "last: %s\n",
+                   s.name.c_str(), static_cast<long long>(s.failures), static_cast<long long>(s.recoveries),
+                   s.last_failure.c_str());
 }
 
 void run(const Options& o) {
@@ -242,7 +252,8 @@ void run(const Options& o) {
   ro.max_kept = 8192;
   ro.segment_seconds = o.segment_seconds;
   StreamedOutputs outputs(o, cfg, ro);
-  const auto result = tools::replay_log(o.log, cfg, [&bar](int64_t d, int64_t t) { bar(d, t); }, ro);
+  const auto result = tools::replay_log(
+      o.log, cfg, [&bar](int64_t d, int64_t t) { bar(d, t); }, ro);
   const std::string estimator = o.estimator.empty() ? result.primary_estimator : o.estimator;
   outputs.close();
   if (!o.report.empty()) {
@@ -252,18 +263,22 @@ void run(const Options& o) {
       std::printf("report: %s/index.html\n", o.report.c_str());
     }
   }
-  if (o.json) print_json(o, result, estimator);
-  else print_summary_line(result, estimator);
+  if (o.json)
+    print_json(o, result, estimator);
+  else
+    print_summary_line(result, estimator);
   report_stage_failures(result);
   cli::report_log_damage("sextant replay", o.log, result.log_damage, o.tolerate_damage);
 }
 
 sextant::cli::RegisterCommand reg{"replay", [](CLI::App& app) {
-  auto* cmd = app.add_subcommand("replay", "run a log through the engine deterministically (message utime order), "
-                                           "or republish it in real time with --realtime");
-  auto o = std::make_shared<Options>();
-  add_options(cmd, *o);
-  cmd->callback([o] { run(*o); });
-}};
+                                    auto* cmd = app.add_subcommand(
+                                        "replay",
+                                        "run a log through the engine deterministically (message utime order), "
+                                        "or republish it in real time with --realtime");
+                                    auto o = std::make_shared<Options>();
+                                    add_options(cmd, *o);
+                                    cmd->callback([o] { run(*o); });
+                                  }};
 
 }  // namespace

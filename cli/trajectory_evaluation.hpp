@@ -13,15 +13,15 @@
 namespace sextant::tools {
 
 struct EvaluationOptions {
-  bool scale = false;                    // Sim(3) alignment (monocular runs)
-  double delta = 1.0;                    // RPE delta
+  bool scale = false;  // Sim(3) alignment (monocular runs)
+  double delta = 1.0;  // RPE delta
   DeltaUnit delta_unit = DeltaUnit::kSeconds;
-  double max_difference = 0.02;          // association window, seconds
+  double max_difference = 0.02;  // association window, seconds
 };
 
 struct Evaluation {
   AteResult ate;
-  std::optional<RpeResult> rpe;          // none when no pose pair has ground truth at both ends
+  std::optional<RpeResult> rpe;             // none when no pose pair has ground truth at both ends
   std::optional<KittiOdometryError> kitti;  // none when the associated ground truth is shorter than 100 m
   size_t estimated_poses = 0;
   /// The `sextant eval --json` keys (RPE keys null and rpe_pairs 0 without RPE; KITTI keys null and kitti_segments 0

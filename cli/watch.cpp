@@ -102,31 +102,34 @@ struct Watcher {
   }
 };
 
-sextant::cli::RegisterCommand reg{"watch", [](CLI::App& app) {
-  auto* cmd = app.add_subcommand("watch", "a live one-line view of a running sextantd (rates, pose, targets, drops)");
-  auto url = std::make_shared<std::string>();
-  auto prefix = std::make_shared<std::string>();
-  auto seconds = std::make_shared<double>(0);
-  cmd->add_option("--lcm-url", *url, "LCM URL");
-  cmd->add_option("--prefix", *prefix, "channel prefix of the daemon (channels.prefix)");
-  cmd->add_option("--seconds", *seconds, "stop after this many seconds (default: until SIGINT/SIGTERM)");
-  cmd->callback([=] {
-    lcm::LCM lcm(*url);
-    if (!lcm.good()) {
-      std::fprintf(stderr, "sextant watch: cannot start LCM (no multicast route? sudo ip route add 224.0.0.0/4 dev lo)\n");
-      throw CLI::RuntimeError(3);
-    }
-    Watcher w;
-    w.fused_channel = *prefix + "FUSED_POSE";
-    w.status_channel = *prefix + "SEXTANT_STATUS";
-    w.targets_channel = *prefix + "TARGETS";
-    w.trajectory_channel = *prefix + "TRAJECTORY";
-    w.tty = isatty(STDOUT_FILENO) != 0;
-    for (const auto* c : {&w.fused_channel, &w.status_channel, &w.targets_channel, &w.trajectory_channel})
-      sextant::runtime::subscribe_raw(lcm, *c, &w);
-    sextant::cli::handle_until_stopped(lcm, *seconds);
-    w.print_summary();
-  });
-}};
+sextant::cli::RegisterCommand reg{
+    "watch", [](CLI::App& app) {
+      auto* cmd =
+          app.add_subcommand("watch", "a live one-line view of a running sextantd (rates, pose, targets, drops)");
+      auto url = std::make_shared<std::string>();
+      auto prefix = std::make_shared<std::string>();
+      auto seconds = std::make_shared<double>(0);
+      cmd->add_option("--lcm-url", *url, "LCM URL");
+      cmd->add_option("--prefix", *prefix, "channel prefix of the daemon (channels.prefix)");
+      cmd->add_option("--seconds", *seconds, "stop after this many seconds (default: until SIGINT/SIGTERM)");
+      cmd->callback([=] {
+        lcm::LCM lcm(*url);
+        if (!lcm.good()) {
+          std::fprintf(stderr,
+                       "sextant watch: cannot start LCM (no multicast route? sudo ip route add 224.0.0.0/4 dev lo)\n");
+          throw CLI::RuntimeError(3);
+        }
+        Watcher w;
+        w.fused_channel = *prefix + "FUSED_POSE";
+        w.status_channel = *prefix + "SEXTANT_STATUS";
+        w.targets_channel = *prefix + "TARGETS";
+        w.trajectory_channel = *prefix + "TRAJECTORY";
+        w.tty = isatty(STDOUT_FILENO) != 0;
+        for (const auto* c : {&w.fused_channel, &w.status_channel, &w.targets_channel, &w.trajectory_channel})
+          sextant::runtime::subscribe_raw(lcm, *c, &w);
+        sextant::cli::handle_until_stopped(lcm, *seconds);
+        w.print_summary();
+      });
+    }};
 
 }  // namespace

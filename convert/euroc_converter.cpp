@@ -42,14 +42,19 @@ std::vector<Row> read_asl_csv(const fs::path& path, size_t columns) {
     for (p = end; *p == ',' || *p == ' '; p = end) {
       ++p;
       const double v = std::strtod(p, &end);
-      if (end == p) throw std::runtime_error(where + "field " + std::to_string(r.values.size() + 2) + " is not a number");
-      if (!std::isfinite(v)) throw std::runtime_error(where + "field " + std::to_string(r.values.size() + 2) + " is not finite");
+      if (end == p)
+        throw std::runtime_error(where + "field " + std::to_string(r.values.size() + 2) + " is not a number");
+      if (!std::isfinite(v))
+        throw std::runtime_error(where + "field " + std::to_string(r.values.size() + 2) + " is not finite");
       r.values.push_back(v);
     }
-    if (*p != '\0') throw std::runtime_error(where + "unexpected text after field " + std::to_string(r.values.size() + 1));
+    if (*p != '\0')
+      throw std::runtime_error(where + "unexpected text after field " + std::to_string(r.values.size() + 1));
     if (r.values.size() != columns)
-      throw std::runtime_error(where + std::to_string(r.values.size() + 1) + " fields, expected " + std::to_string(columns + 1));
-    if (!rows.empty() && r.ns <= rows.back().ns) throw std::runtime_error(where + "timestamp not after the previous row's");
+      throw std::runtime_error(where + std::to_string(r.values.size() + 1) + " fields, expected " +
+                               std::to_string(columns + 1));
+    if (!rows.empty() && r.ns <= rows.back().ns)
+      throw std::runtime_error(where + "timestamp not after the previous row's");
     rows.push_back(std::move(r));
   }
   return rows;
@@ -106,7 +111,8 @@ EurocConversion convert_euroc(const std::string& dir, const std::string& out_lcm
   if (imu.size() < 2) throw std::runtime_error(imu_path.string() + ": fewer than two samples");
   const fs::path gt_path = find_first(dir, {"state_groundtruth_estimate0/data.csv", "gt0/data.csv"});
   const std::vector<Row> gt = gt_path.empty() ? std::vector<Row>{} : read_asl_csv(gt_path, 16);
-  const double rate_hz = static_cast<double>(imu.size() - 1) / (static_cast<double>(imu.back().ns - imu.front().ns) * 1e-9);
+  const double rate_hz =
+      static_cast<double>(imu.size() - 1) / (static_cast<double>(imu.back().ns - imu.front().ns) * 1e-9);
 
   // Both streams in time order (a merge of two sorted lists; IMU first at equal stamps).
   runtime::LogWriter out(out_lcm);

@@ -26,8 +26,12 @@ namespace {
 class G2oConverter {
  public:
   G2oConverter(const std::string& g2o_path, const G2oConversionOptions& o)
-      : path_(g2o_path), o_(o), file_(graph::read_g2o(g2o_path)), vars_(file_.graph.variables()),
-        planar_(file_.dimension == 2), active_(pose_axes(planar_)) {}
+      : path_(g2o_path),
+        o_(o),
+        file_(graph::read_g2o(g2o_path)),
+        vars_(file_.graph.variables()),
+        planar_(file_.dimension == 2),
+        active_(pose_axes(planar_)) {}
 
   G2oConversion convert(const std::string& out_lcm, const std::string& gt_tum) {
     order_vertices();
@@ -48,8 +52,10 @@ class G2oConverter {
   void order_vertices() {
     for (size_t i = 0; i < vars_.size(); ++i)
       if (vars_[i].is_pose()) order_.push_back(static_cast<int>(i));
-    std::sort(order_.begin(), order_.end(), [&](int a, int b) { return vars_[static_cast<size_t>(a)].id < vars_[static_cast<size_t>(b)].id; });
-    for (size_t k = 0; k < order_.size(); ++k) utime_[order_[k]] = o_.start_utime + static_cast<int64_t>(k) * o_.period_us;
+    std::sort(order_.begin(), order_.end(),
+              [&](int a, int b) { return vars_[static_cast<size_t>(a)].id < vars_[static_cast<size_t>(b)].id; });
+    for (size_t k = 0; k < order_.size(); ++k)
+      utime_[order_[k]] = o_.start_utime + static_cast<int64_t>(k) * o_.period_us;
   }
 
   // The odometry chain: for each vertex, the first edge (in file order) to the next id; the other pose edges are
@@ -64,12 +70,16 @@ class G2oConverter {
       const int a = rp->variables()[0], b = rp->variables()[1];
       const int64_t ia = vars_[static_cast<size_t>(a)].id, ib = vars_[static_cast<size_t>(b)].id;
       const bool consecutive = std::abs(ia - ib) == 1 && !chain_.count(std::min(ia, ib) == ia ? a : b);
-      if (consecutive) chain_[std::min(ia, ib) == ia ? a : b] = rp;
-      else loops_by_time_.emplace(std::max(utime_[a], utime_[b]), rp);
+      if (consecutive)
+        chain_[std::min(ia, ib) == ia ? a : b] = rp;
+      else
+        loops_by_time_.emplace(std::max(utime_[a], utime_[b]), rp);
     }
   }
 
-  SE3 relative(const graph::RelativePoseFactor* rp) const { return planar_ ? rp->measurement2().to_se3() : rp->measurement3(); }
+  SE3 relative(const graph::RelativePoseFactor* rp) const {
+    return planar_ ? rp->measurement2().to_se3() : rp->measurement3();
+  }
 
   // The increment covariance of a chain edge: its information (in sextant's tangent) inverted on the active axes.
   Eigen::Matrix<double, 6, 6> increment_covariance(const graph::RelativePoseFactor* rp) const {
@@ -80,10 +90,12 @@ class G2oConverter {
       for (int c : active_) q(r, c) = 0;
     Eigen::MatrixXd sub(active_.size(), active_.size());
     for (size_t r = 0; r < active_.size(); ++r)
-      for (size_t c = 0; c < active_.size(); ++c) sub(static_cast<Eigen::Index>(r), static_cast<Eigen::Index>(c)) = info(active_[r], active_[c]);
+      for (size_t c = 0; c < active_.size(); ++c)
+        sub(static_cast<Eigen::Index>(r), static_cast<Eigen::Index>(c)) = info(active_[r], active_[c]);
     const Eigen::MatrixXd subcov = sub.inverse();
     for (size_t r = 0; r < active_.size(); ++r)
-      for (size_t c = 0; c < active_.size(); ++c) q(active_[r], active_[c]) = subcov(static_cast<Eigen::Index>(r), static_cast<Eigen::Index>(c));
+      for (size_t c = 0; c < active_.size(); ++c)
+        q(active_[r], active_[c]) = subcov(static_cast<Eigen::Index>(r), static_cast<Eigen::Index>(c));
     q = 0.5 * (q + q.transpose()).eval();
     return q;
   }
@@ -102,8 +114,9 @@ class G2oConverter {
       const int prev = order_[k - 1];
       auto it = chain_.find(vars_[static_cast<size_t>(prev)].id < vars_[static_cast<size_t>(v)].id ? prev : v);
       if (it == chain_.end() || (it->second->variables()[0] != prev && it->second->variables()[1] != prev))
-        throw std::runtime_error(path_ + ": no odometry edge between vertices " + std::to_string(vars_[static_cast<size_t>(prev)].id) +
-                                 " and " + std::to_string(vars_[static_cast<size_t>(v)].id) + " (the chain has a gap)");
+        throw std::runtime_error(path_ + ": no odometry edge between vertices " +
+                                 std::to_string(vars_[static_cast<size_t>(prev)].id) + " and " +
+                                 std::to_string(vars_[static_cast<size_t>(v)].id) + " (the chain has a gap)");
       const auto* rp = it->second;
       SE3 delta = relative(rp);
       if (rp->variables()[0] != prev) delta = delta.inverse();
@@ -161,9 +174,9 @@ class G2oConverter {
   const std::vector<graph::Variable>& vars_;
   const bool planar_;
   const std::span<const int> active_;
-  std::vector<int> order_;                                       // pose vertices by id
-  std::map<int, int64_t> utime_;                                 // by vertex index
-  std::map<int, const graph::RelativePoseFactor*> chain_;        // from vertex index -> edge
+  std::vector<int> order_;                                 // pose vertices by id
+  std::map<int, int64_t> utime_;                           // by vertex index
+  std::map<int, const graph::RelativePoseFactor*> chain_;  // from vertex index -> edge
   std::multimap<int64_t, const graph::RelativePoseFactor*> loops_by_time_;
   G2oConversion result_;
   int64_t seq_odo_ = 0, seq_loop_ = 0;

@@ -41,8 +41,8 @@ std::vector<std::pair<int, std::vector<double>>> read_rows(const std::string& pa
       v.push_back(x);
     }
     if (v.size() != columns)
-      throw std::runtime_error(path + ":" + std::to_string(number) + ": expected " + std::to_string(columns) + " values, got " +
-                               std::to_string(v.size()));
+      throw std::runtime_error(path + ":" + std::to_string(number) + ": expected " + std::to_string(columns) +
+                               " values, got " + std::to_string(v.size()));
     rows.emplace_back(number, std::move(v));
   }
   return rows;
@@ -57,7 +57,8 @@ int64_t utime_of(double t) {
 // 1e11 silently became landmark 6).
 int integer_at(const std::string& path, int line, double v) {
   if (!(v >= -2147483648.0 && v <= 2147483647.0) || v != std::floor(v))
-    throw std::runtime_error(path + ":" + std::to_string(line) + ": not an integer in int's range: " + std::to_string(v));
+    throw std::runtime_error(path + ":" + std::to_string(line) +
+                             ": not an integer in int's range: " + std::to_string(v));
   return static_cast<int>(v);
 }
 
@@ -72,7 +73,10 @@ namespace {
 class MrclamConverter {
  public:
   MrclamConverter(const std::string& dir, int robot, const MrclamOptions& o)
-      : dir_(dir), r_(dir + "/Robot" + std::to_string(robot)), source_("robot" + std::to_string(robot)), o_(o),
+      : dir_(dir),
+        r_(dir + "/Robot" + std::to_string(robot)),
+        source_("robot" + std::to_string(robot)),
+        o_(o),
         barcodes_(read_rows(dir + "/Barcodes.dat", 2)),
         landmarks_(read_rows(dir + "/Landmark_Groundtruth.dat", 5)),
         truth_(read_rows(r_ + "_Groundtruth.dat", 4)),
@@ -80,15 +84,17 @@ class MrclamConverter {
         measurements_(read_rows(r_ + "_Measurement.dat", 4)) {
     if (truth_.empty() || odometry_.size() < 2) throw std::runtime_error(r_ + ": no ground truth or odometry rows");
     for (const auto& [line, v] : barcodes_)
-      subject_of_barcode_[integer_at(dir + "/Barcodes.dat", line, v[1])] = integer_at(dir + "/Barcodes.dat", line, v[0]);
+      subject_of_barcode_[integer_at(dir + "/Barcodes.dat", line, v[1])] =
+          integer_at(dir + "/Barcodes.dat", line, v[0]);
   }
 
   MrclamConversion convert(const std::string& out_lcm, const std::string& gt_tum) {
     add_truth();
     add_odometry();
     add_sightings();
-    std::stable_sort(records_.begin(), records_.end(),
-                     [](const Record& a, const Record& b) { return std::tie(a.utime, a.order) < std::tie(b.utime, b.order); });
+    std::stable_sort(records_.begin(), records_.end(), [](const Record& a, const Record& b) {
+      return std::tie(a.utime, a.order) < std::tie(b.utime, b.order);
+    });
     runtime::LogWriter out(out_lcm);
     for (const auto& rec : records_) out.write_raw(rec.utime, rec.channel, rec.bytes.data(), rec.bytes.size());
     out.flush();
@@ -161,7 +167,8 @@ class MrclamConverter {
       const auto& row = odometry_[k].second;
       const double dt = odometry_[k + 1].second[0] - row[0];
       if (dt < 0)
-        throw std::runtime_error(r_ + "_Odometry.dat:" + std::to_string(odometry_[k + 1].first) + ": time goes backwards");
+        throw std::runtime_error(r_ + "_Odometry.dat:" + std::to_string(odometry_[k + 1].first) +
+                                 ": time goes backwards");
       if (utime_of(odometry_[k + 1].second[0]) == utime_of(row[0])) continue;  // duplicated stamp: nothing elapsed
       const double ds = row[1] * dt, dth = row[2] * dt;
       const SE2 delta = SE2::exp(Eigen::Vector3d(ds, 0, dth));
@@ -232,16 +239,17 @@ class MrclamConverter {
   std::vector<Record> records_;
   MrclamConversion result_;
   std::vector<StampedPose> gt_;
-  SE2 pose_;                                                  // the odometry's pose
-  engine::Matrix6 cov_ = engine::Matrix6::Zero();             // and its covariance
+  SE2 pose_;                                       // the odometry's pose
+  engine::Matrix6 cov_ = engine::Matrix6::Zero();  // and its covariance
   int64_t seq_odo_ = 0;
 };
 
 }  // namespace
 
-MrclamConversion convert_mrclam(const std::string& dir, int robot, const std::string& out_lcm, const std::string& gt_tum,
-                                const MrclamOptions& o) {
-  if (robot < 1 || robot > 5) throw std::runtime_error("MRCLAM robots are numbered 1 to 5, not " + std::to_string(robot));
+MrclamConversion convert_mrclam(const std::string& dir, int robot, const std::string& out_lcm,
+                                const std::string& gt_tum, const MrclamOptions& o) {
+  if (robot < 1 || robot > 5)
+    throw std::runtime_error("MRCLAM robots are numbered 1 to 5, not " + std::to_string(robot));
   return MrclamConverter(dir, robot, o).convert(out_lcm, gt_tum);
 }
 

@@ -19,9 +19,9 @@ namespace sextant::tools {
 struct MrclamOptions {
   // Odometry increment variances grow with the motion (Thrun et al.'s alpha model): the rows are velocity
   // commands, not encoder readings, so the robot's real motion departs from them by far more than wheel noise.
-  double trans_var_per_metre = 0.01;   // m^2 per metre travelled
-  double rot_var_per_radian = 0.05;    // rad^2 per radian turned
-  double rot_var_per_metre = 0.05;     // rad^2 per metre travelled
+  double trans_var_per_metre = 0.01;  // m^2 per metre travelled
+  double rot_var_per_radian = 0.05;   // rad^2 per radian turned
+  double rot_var_per_metre = 0.05;    // rad^2 per metre travelled
   double min_sigma = 1e-4;
   // The robots carry out a velocity command about this long after its stamp: the Vicon heading rate matches the
   // commanded omega best 0.15-0.2 s later on all five robots of Dataset 7 (bench/history/2026-11-22_to_2026-11-25.md,
@@ -41,13 +41,13 @@ struct MrclamOptions {
 };
 
 struct MrclamConversion {
-  int64_t odometry = 0, landmark_messages = 0, landmark_observations = 0, robot_sightings = 0,
-          unknown_barcodes = 0, truth = 0;
+  int64_t odometry = 0, landmark_messages = 0, landmark_observations = 0, robot_sightings = 0, unknown_barcodes = 0,
+          truth = 0;
 };
 
 /// `dir` holds Barcodes.dat, Landmark_Groundtruth.dat and RobotN_{Odometry,Measurement,Groundtruth}.dat.
 /// Throws std::runtime_error naming the file and line of a malformed row.
-MrclamConversion convert_mrclam(const std::string& dir, int robot, const std::string& out_lcm, const std::string& gt_tum,
-                                const MrclamOptions& options = {});
+MrclamConversion convert_mrclam(const std::string& dir, int robot, const std::string& out_lcm,
+                                const std::string& gt_tum, const MrclamOptions& options = {});
 
 }  // namespace sextant::tools

@@ -26,7 +26,8 @@ TumConversion convert_tum(const std::string& gt_tum, const std::string& out_lcm,
   for (int i : active) cov(i, i) = 1e-8;
   SE3 previous;
   int64_t last_utime = 0, seq = 0, seq_truth = 0;
-  const auto frame_period_us = o.frame_rate_hz > 0 ? static_cast<int64_t>(std::llround(1e6 / o.frame_rate_hz)) : int64_t{0};
+  const auto frame_period_us =
+      o.frame_rate_hz > 0 ? static_cast<int64_t>(std::llround(1e6 / o.frame_rate_hz)) : int64_t{0};
   int64_t next_frame = 0;
   for (size_t k = 0; k < gt.size(); ++k) {
     const int64_t utime = static_cast<int64_t>(std::llround(gt[k].t * 1e6));
@@ -49,7 +50,8 @@ TumConversion convert_tum(const std::string& gt_tum, const std::string& out_lcm,
     }
     next_frame = (k == 0 ? utime : next_frame) + frame_period_us;
     // The first frame time after `utime`, in one step (a gap of 9e12 s used to take 10^14 iterations).
-    if (frame_period_us > 0 && next_frame <= utime) next_frame += ((utime - next_frame) / frame_period_us + 1) * frame_period_us;
+    if (frame_period_us > 0 && next_frame <= utime)
+      next_frame += ((utime - next_frame) / frame_period_us + 1) * frame_period_us;
     engine::Matrix6 q = engine::Matrix6::Zero();
     if (k == 0) {
       odom = truth;

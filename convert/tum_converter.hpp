@@ -48,6 +48,7 @@ struct TumConversion {
 };
 
 /// Throws std::runtime_error naming the line of a bad row of `gt_tum`.
-TumConversion convert_tum(const std::string& gt_tum, const std::string& out_lcm, const TumConversionOptions& options = {});
+TumConversion convert_tum(const std::string& gt_tum, const std::string& out_lcm,
+                          const TumConversionOptions& options = {});
 
 }  // namespace sextant::tools

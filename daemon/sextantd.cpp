@@ -24,8 +24,7 @@ int check_config(const std::string& path) {
     const auto config = sextant::config::load_daemon_config(path);
     const sextant::engine::Engine engine(config.engine);
     std::string stages;
-    for (const auto& stage : engine.stages())
-      stages += (stages.empty() ? "" : ", ") + std::string(stage->name());
+    for (const auto& stage : engine.stages()) stages += (stages.empty() ? "" : ", ") + std::string(stage->name());
     std::printf("%s: ok (stages: %s; primary estimator: %s)\n", path.c_str(), stages.empty() ? "none" : stages.c_str(),
                 engine.primary_estimator().c_str());
     return sextant::runtime::kExitOk;

@@ -20,8 +20,8 @@ InterpolatedTrajectory::InterpolatedTrajectory(std::vector<std::pair<int64_t, SE
 std::optional<SE3> InterpolatedTrajectory::at(int64_t utime) const {
   if (samples_.empty() || utime < samples_.front().first || utime > samples_.back().first) return std::nullopt;
   // The first sample at or after utime.
-  const auto hi = std::lower_bound(samples_.begin(), samples_.end(), utime,
-                                   [](const auto& s, int64_t t) { return s.first < t; });
+  const auto hi =
+      std::lower_bound(samples_.begin(), samples_.end(), utime, [](const auto& s, int64_t t) { return s.first < t; });
   if (hi->first == utime) return hi->second;
   const auto lo = hi - 1;
   const double s = static_cast<double>(utime - lo->first) / static_cast<double>(hi->first - lo->first);

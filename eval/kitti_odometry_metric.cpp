@@ -24,7 +24,8 @@ KittiOdometryError kitti_odometry_error(const std::vector<engine::Pose>& gt, con
   if (options.lengths.empty() || options.step == 0)
     throw std::invalid_argument("KITTI error: needs at least one segment length and a step of at least one frame");
   for (double L : options.lengths)
-    if (!(L > 0)) throw std::invalid_argument("KITTI error: segment length " + std::to_string(L) + " m is not positive");
+    if (!(L > 0))
+      throw std::invalid_argument("KITTI error: segment length " + std::to_string(L) + " m is not positive");
 
   if (gt.size() < 2) throw std::invalid_argument("KITTI error: needs at least two poses");
   std::vector<double> distance(gt.size(), 0.0);
@@ -34,8 +35,8 @@ KittiOdometryError kitti_odometry_error(const std::vector<engine::Pose>& gt, con
   for (size_t first = 0; first < gt.size(); first += options.step) {
     for (double L : options.lengths) {
       // The first frame whose path distance exceeds the start's by more than L (distance is non-decreasing).
-      const auto it = std::upper_bound(distance.begin() + static_cast<std::ptrdiff_t>(first), distance.end(),
-                                       distance[first] + L);
+      const auto it =
+          std::upper_bound(distance.begin() + static_cast<std::ptrdiff_t>(first), distance.end(), distance[first] + L);
       if (it == distance.end()) continue;
       const size_t last = static_cast<size_t>(it - distance.begin());
       const Eigen::Isometry3d delta_gt = isometry(gt[first]).inverse() * isometry(gt[last]);

@@ -19,20 +19,20 @@ namespace sextant::tools {
 
 struct KittiSegmentError {
   size_t first_frame = 0;
-  double length = 0;          // metres (the nominal L)
-  double translation = 0;     // |t_E| / L, dimensionless (0.01 = 1 %)
-  double rotation = 0;        // angle(R_E) / L, radians per metre
+  double length = 0;       // metres (the nominal L)
+  double translation = 0;  // |t_E| / L, dimensionless (0.01 = 1 %)
+  double rotation = 0;     // angle(R_E) / L, radians per metre
 };
 
 struct KittiOdometryError {
-  double translation_percent = 0;    // mean over segments of |t_E| / L, x 100
-  double rotation_deg_per_m = 0;     // mean over segments of angle(R_E) / L, in degrees per metre
+  double translation_percent = 0;  // mean over segments of |t_E| / L, x 100
+  double rotation_deg_per_m = 0;   // mean over segments of angle(R_E) / L, in degrees per metre
   std::vector<KittiSegmentError> segments;
 };
 
 struct KittiMetricOptions {
   std::vector<double> lengths{100, 200, 300, 400, 500, 600, 700, 800};  // metres
-  size_t step = 10;                                                    // frames between segment starts
+  size_t step = 10;                                                     // frames between segment starts
 };
 
 /// The KITTI error of `est` against `gt`, pose i with pose i.  Throws std::invalid_argument when the two differ in

@@ -36,8 +36,10 @@ size_t find_closest_index(const std::vector<double>& L, double t) {
       best = middle;
     }
     if (t == L[middle]) return middle;
-    if (L[middle] > t) end = middle;
-    else beginning = middle + 1;
+    if (L[middle] > t)
+      end = middle;
+    else
+      beginning = middle + 1;
   }
   return best;
 }
@@ -50,8 +52,9 @@ double median_of(std::vector<double> v) {
 
 }  // namespace
 
-std::vector<std::pair<size_t, size_t>> associate(const std::vector<StampedPose>& gt, const std::vector<StampedPose>& est,
-                                                 double max_difference, double offset) {
+std::vector<std::pair<size_t, size_t>> associate(const std::vector<StampedPose>& gt,
+                                                 const std::vector<StampedPose>& est, double max_difference,
+                                                 double offset) {
   // Candidates (|a - (b + offset)|, a, b), sorted like Python sorts the tuples.
   std::vector<std::tuple<double, double, double, size_t, size_t>> cand;
   size_t lo = 0;
@@ -140,7 +143,8 @@ RpeResult relative_pose_error(const std::vector<StampedPose>& gt, const std::vec
   for (size_t i = 0; i < est.size(); ++i) stamps_est[i] = est[i].t;
   for (size_t i = 0; i < gt.size(); ++i) stamps_gt[i] = gt[i].t;
   std::vector<double> index(est.size());
-  for (size_t i = 0; i < est.size(); ++i) index[i] = unit == DeltaUnit::kSeconds ? stamps_est[i] : static_cast<double>(i);
+  for (size_t i = 0; i < est.size(); ++i)
+    index[i] = unit == DeltaUnit::kSeconds ? stamps_est[i] : static_cast<double>(i);
   std::vector<std::pair<size_t, size_t>> pairs;
   for (size_t i = 0; i < est.size(); ++i) {
     const size_t j = find_closest_index(index, index[i] + delta);
@@ -152,7 +156,8 @@ RpeResult relative_pose_error(const std::vector<StampedPose>& gt, const std::vec
   std::vector<double> trans, rot, stamps;
   for (const auto& [i, j] : pairs) {
     const size_t g0 = find_closest_index(stamps_gt, stamps_est[i]), g1 = find_closest_index(stamps_gt, stamps_est[j]);
-    if (std::abs(stamps_gt[g0] - stamps_est[i]) > 2 * gt_interval || std::abs(stamps_gt[g1] - stamps_est[j]) > 2 * gt_interval)
+    if (std::abs(stamps_gt[g0] - stamps_est[i]) > 2 * gt_interval ||
+        std::abs(stamps_gt[g1] - stamps_est[j]) > 2 * gt_interval)
       continue;
     Eigen::Matrix4d dp = inverse_rigid(matrix_of(est[j].pose)) * matrix_of(est[i].pose);
     dp.topRightCorner<3, 1>() *= scale;

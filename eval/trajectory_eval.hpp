@@ -16,8 +16,9 @@
 namespace sextant::tools {
 
 /// Index pairs (gt, est) of the one-to-one association, sorted by gt stamp.
-std::vector<std::pair<size_t, size_t>> associate(const std::vector<StampedPose>& gt, const std::vector<StampedPose>& est,
-                                                 double max_difference = 0.02, double offset = 0.0);
+std::vector<std::pair<size_t, size_t>> associate(const std::vector<StampedPose>& gt,
+                                                 const std::vector<StampedPose>& est, double max_difference = 0.02,
+                                                 double offset = 0.0);
 
 struct ErrorStatistics {
   double rmse = 0, mean = 0, median = 0, std = 0, min = 0, max = 0;
@@ -28,7 +29,7 @@ struct ErrorStatistics {
 ErrorStatistics statistics_of(std::vector<double> errors);
 
 struct AteResult {
-  ErrorStatistics error;    // metres
+  ErrorStatistics error;  // metres
   Eigen::Matrix3d rotation = Eigen::Matrix3d::Identity();
   Eigen::Vector3d translation = Eigen::Vector3d::Zero();
   double scale = 1.0;
@@ -42,8 +43,8 @@ AteResult absolute_trajectory_error(const std::vector<StampedPose>& gt, const st
                                     bool estimate_scale = false, double max_difference = 0.02);
 
 struct RpeResult {
-  ErrorStatistics translation;  // metres per delta
-  ErrorStatistics rotation_deg; // degrees per delta
+  ErrorStatistics translation;   // metres per delta
+  ErrorStatistics rotation_deg;  // degrees per delta
   size_t pairs = 0;
   std::vector<double> stamps, translation_errors, rotation_errors_deg;  // per pair, at the stamp of its first pose
 };
@@ -51,7 +52,7 @@ struct RpeResult {
 enum class DeltaUnit { kSeconds, kFrames };
 
 /// RPE in the TUM tool's --fixed_delta mode.  Throws std::invalid_argument when no pair can be formed.
-RpeResult relative_pose_error(const std::vector<StampedPose>& gt, const std::vector<StampedPose>& est, double delta = 1.0,
-                              DeltaUnit unit = DeltaUnit::kSeconds, double scale = 1.0);
+RpeResult relative_pose_error(const std::vector<StampedPose>& gt, const std::vector<StampedPose>& est,
+                              double delta = 1.0, DeltaUnit unit = DeltaUnit::kSeconds, double scale = 1.0);
 
 }  // namespace sextant::tools

@@ -49,8 +49,8 @@ std::vector<StampedPose> read_tum(const std::string& path) {
     if (first == std::string::npos || line[first] == '#') continue;
     const std::vector<double> v = finite_numbers(line, path, number);
     if (v.size() < 8)
-      throw std::runtime_error(path + ":" + std::to_string(number) + ": expected 8 values (t tx ty tz qx qy qz qw), got " +
-                               std::to_string(v.size()));
+      throw std::runtime_error(path + ":" + std::to_string(number) +
+                               ": expected 8 values (t tx ty tz qx qy qz qw), got " + std::to_string(v.size()));
     // Stamps become int64 microseconds: beyond +-9.2e12 s they cannot.
     if (std::abs(v[0]) > 9.2e12)
       throw std::runtime_error(path + ":" + std::to_string(number) + ": timestamp " + std::to_string(v[0]) +
@@ -77,7 +77,8 @@ std::vector<StampedPose> read_kitti(const std::string& path, const std::string& 
     if (blank(line)) continue;
     const std::vector<double> v = finite_numbers(line, path, number);
     if (v.size() != 12)
-      throw std::runtime_error(path + ":" + std::to_string(number) + ": expected 12 values (the 3x4 matrix [R | t] row-major), got " +
+      throw std::runtime_error(path + ":" + std::to_string(number) +
+                               ": expected 12 values (the 3x4 matrix [R | t] row-major), got " +
                                std::to_string(v.size()));
     Eigen::Matrix3d R;
     R << v[0], v[1], v[2], v[4], v[5], v[6], v[8], v[9], v[10];
@@ -133,7 +134,8 @@ void TrajectoryWriter::add(const StampedPose& s) {
   const auto q = s.pose.orientation.normalized();
   switch (format_) {
     case TrajectoryFormat::kTum:
-      std::fprintf(file_, "%.6f %.9f %.9f %.9f %.9f %.9f %.9f %.9f\n", s.t, p.x(), p.y(), p.z(), q.x(), q.y(), q.z(), q.w());
+      std::fprintf(file_, "%.6f %.9f %.9f %.9f %.9f %.9f %.9f %.9f\n", s.t, p.x(), p.y(), p.z(), q.x(), q.y(), q.z(),
+                   q.w());
       break;
     case TrajectoryFormat::kKitti: {
       const Eigen::Matrix3d R = q.toRotationMatrix();
@@ -142,16 +144,16 @@ void TrajectoryWriter::add(const StampedPose& s) {
       break;
     }
     case TrajectoryFormat::kG2o: {
-      std::fprintf(file_, "VERTEX_SE3:QUAT %lld %.9f %.9f %.9f %.9f %.9f %.9f %.9f\n", static_cast<long long>(count_), p.x(),
-                   p.y(), p.z(), q.x(), q.y(), q.z(), q.w());
+      std::fprintf(file_, "VERTEX_SE3:QUAT %lld %.9f %.9f %.9f %.9f %.9f %.9f %.9f\n", static_cast<long long>(count_),
+                   p.x(), p.y(), p.z(), q.x(), q.y(), q.z(), q.w());
       if (count_ > 0) {
         const Eigen::Isometry3d a = Eigen::Translation3d(previous_.position) * previous_.orientation;
         const Eigen::Isometry3d b = Eigen::Translation3d(s.pose.position) * s.pose.orientation;
         const Eigen::Isometry3d d = a.inverse() * b;
         const Eigen::Quaterniond dq(d.linear());
-        std::fprintf(file_, "EDGE_SE3:QUAT %lld %lld %.9f %.9f %.9f %.9f %.9f %.9f %.9f", static_cast<long long>(count_ - 1),
-                     static_cast<long long>(count_), d.translation().x(), d.translation().y(), d.translation().z(), dq.x(),
-                     dq.y(), dq.z(), dq.w());
+        std::fprintf(file_, "EDGE_SE3:QUAT %lld %lld %.9f %.9f %.9f %.9f %.9f %.9f %.9f",
+                     static_cast<long long>(count_ - 1), static_cast<long long>(count_), d.translation().x(),
+                     d.translation().y(), d.translation().z(), dq.x(), dq.y(), dq.z(), dq.w());
         for (int r = 0; r < 6; ++r)
           for (int c = r; c < 6; ++c) std::fprintf(file_, " %g", r == c ? 1.0 : 0.0);
         std::fprintf(file_, "\n");
@@ -179,7 +181,9 @@ void write_all(const std::string& path, const std::vector<StampedPose>& poses, T
 }
 }  // namespace
 
-void write_tum(const std::string& path, const std::vector<StampedPose>& poses) { write_all(path, poses, TrajectoryFormat::kTum); }
+void write_tum(const std::string& path, const std::vector<StampedPose>& poses) {
+  write_all(path, poses, TrajectoryFormat::kTum);
+}
 
 void write_kitti(const std::string& path, const std::vector<StampedPose>& poses) {
   write_all(path, poses, TrajectoryFormat::kKitti);

@@ -90,7 +90,8 @@ class Bus {
         throw *e;
       }
       if (PyErr_CheckSignals() != 0) throw py::error_already_set();
-      if (rc < 0) throw std::runtime_error("LCM: handling failed on " + (url_.empty() ? std::string("the default URL") : url_));
+      if (rc < 0)
+        throw std::runtime_error("LCM: handling failed on " + (url_.empty() ? std::string("the default URL") : url_));
       if (rc > 0) return true;
       if (timeout && Clock::now() >= deadline) return false;
     }
@@ -128,8 +129,7 @@ class Bus {
         try {
           msg = t->decode(rbuf->data, rbuf->data_size);
           type = py::str(t->name);
-        } catch (const std::invalid_argument&) {
-        }
+        } catch (const std::invalid_argument&) {}
       }
       s->callback(channel, type, msg);
     } catch (py::error_already_set& e) {
@@ -147,8 +147,9 @@ class Bus {
 }  // namespace
 
 void register_bus(py::module_& m) {
-  py::class_<Bus>(m, "Bus", "A live LCM bus through liblcm; a context manager.  URL '' = LCM's default "
-                            "(LCM_DEFAULT_URL or udpm://239.255.76.67:7667).")
+  py::class_<Bus>(m, "Bus",
+                  "A live LCM bus through liblcm; a context manager.  URL '' = LCM's default "
+                  "(LCM_DEFAULT_URL or udpm://239.255.76.67:7667).")
       .def(py::init<const std::string&>(), py::arg("url") = "")
       .def("publish", &Bus::publish, py::arg("channel"), py::arg("data"), "Publishes raw bytes.")
       .def("publish_message", &Bus::publish_message, py::arg("channel"), py::arg("type"), py::arg("message"),
@@ -165,7 +166,8 @@ void register_bus(py::module_& m) {
            "A callback's exception is raised here.")
       .def("fileno", &Bus::fileno, "The bus's file descriptor, for select().")
       .def("close", &Bus::close)
-      .def("__enter__", [](Bus& b) -> Bus& { return b; }, py::return_value_policy::reference_internal)
+      .def(
+          "__enter__", [](Bus& b) -> Bus& { return b; }, py::return_value_policy::reference_internal)
       .def("__exit__", [](Bus& b, py::args) { b.close(); });
 }
 

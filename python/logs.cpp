@@ -89,19 +89,24 @@ void register_logs(py::module_& m) {
                           "skipped (the reader resynchronises on the next one); at the end a RuntimeWarning names the "
                           "log and what was skipped, and `damage` has the counts.")
       .def(py::init<const std::string&>(), py::arg("path"))
-      .def("__iter__", [](PyLogReader& r) -> PyLogReader& { return r; }, py::return_value_policy::reference_internal)
+      .def(
+          "__iter__", [](PyLogReader& r) -> PyLogReader& { return r; }, py::return_value_policy::reference_internal)
       .def("__next__", &PyLogReader::next)
       .def_property_readonly("damage", &PyLogReader::damage,
                              "What was skipped so far: damaged, bad_events, skipped_bytes, missing_event_numbers, "
                              "truncated_tail_bytes, first_problems ('byte OFFSET: what'), summary.");
-  m.def("read_log", [](const std::string& path) {
-    py::list l;
-    runtime::LogDamage damage;
-    for (const auto& r : runtime::LogReader::read_all(path, &damage)) l.append(record_tuple(r));
-    warn_damage(path, damage);
-    return l;
-  }, py::arg("path"), "Every good event of an LCM log as (timestamp_us, channel, data), in file order; a RuntimeWarning "
-                      "names the log and what was skipped when it is damaged or its last event truncated.");
+  m.def(
+      "read_log",
+      [](const std::string& path) {
+        py::list l;
+        runtime::LogDamage damage;
+        for (const auto& r : runtime::LogReader::read_all(path, &damage)) l.append(record_tuple(r));
+        warn_damage(path, damage);
+        return l;
+      },
+      py::arg("path"),
+      "Every good event of an LCM log as (timestamp_us, channel, data), in file order; a RuntimeWarning "
+      "names the log and what was skipped when it is damaged or its last event truncated.");
   py::class_<PyLogWriter>(m, "LogWriter", "Writes an LCM log (lcm-logger's format); a context manager.")
       .def(py::init<const std::string&>(), py::arg("path"))
       .def("write", &PyLogWriter::write, py::arg("timestamp"), py::arg("channel"), py::arg("data"))
@@ -110,7 +115,8 @@ void register_logs(py::module_& m) {
       .def("flush", &PyLogWriter::flush)
       .def("close", &PyLogWriter::close)
       .def_property_readonly("events_written", &PyLogWriter::events_written)
-      .def("__enter__", [](PyLogWriter& w) -> PyLogWriter& { return w; }, py::return_value_policy::reference_internal)
+      .def(
+          "__enter__", [](PyLogWriter& w) -> PyLogWriter& { return w; }, py::return_value_policy::reference_internal)
       .def("__exit__", [](PyLogWriter& w, py::args) { w.close(); });
 }
 

@@ -28,11 +28,11 @@ struct FieldInfo {
 };
 
 struct MessageType {
-  std::string name;     // "odometry_t"
+  std::string name;  // "odometry_t"
   std::vector<FieldInfo> fields;
-  int64_t fingerprint;  // lcm-gen's getHash()
-  py::dict (*decode)(const void* data, size_t size);           // throws std::invalid_argument on bad bytes
-  std::vector<uint8_t> (*encode)(py::handle dict);              // throws std::invalid_argument naming the field
+  int64_t fingerprint;                                // lcm-gen's getHash()
+  py::dict (*decode)(const void* data, size_t size);  // throws std::invalid_argument on bad bytes
+  std::vector<uint8_t> (*encode)(py::handle dict);    // throws std::invalid_argument naming the field
 };
 
 /// Every message type of lcmtypes/sextant (generated).
@@ -53,7 +53,8 @@ inline py::list as_list(py::handle obj, const std::string& where, long size) {
     throw std::invalid_argument(where + ": expected a list, got " + type_name(obj));
   py::list l(py::reinterpret_borrow<py::object>(obj));
   if (size >= 0 && static_cast<long>(l.size()) != size)
-    throw std::invalid_argument(where + ": expected " + std::to_string(size) + " values, got " + std::to_string(l.size()));
+    throw std::invalid_argument(where + ": expected " + std::to_string(size) + " values, got " +
+                                std::to_string(l.size()));
   return l;
 }
 
@@ -89,7 +90,8 @@ T read_integer(py::handle obj, const std::string& where) {
 }
 
 inline int8_t read_bool(py::handle obj, const std::string& where) {
-  if (!py::isinstance<py::bool_>(obj)) throw std::invalid_argument(where + ": expected True or False, got " + type_name(obj));
+  if (!py::isinstance<py::bool_>(obj))
+    throw std::invalid_argument(where + ": expected True or False, got " + type_name(obj));
   return py::cast<bool>(obj) ? 1 : 0;
 }
 
@@ -104,8 +106,9 @@ inline size_t array_length(const py::dict& d, const char* length_key,
   const auto first = *arrays.begin();
   for (const auto& [name, n] : arrays)
     if (n != first.second)
-      throw std::invalid_argument(where + ": " + first.first + " has " + std::to_string(first.second) + " entries but " +
-                                  name + " has " + std::to_string(n) + " (both are sized by " + length_key + ")");
+      throw std::invalid_argument(where + ": " + first.first + " has " + std::to_string(first.second) +
+                                  " entries but " + name + " has " + std::to_string(n) + " (both are sized by " +
+                                  length_key + ")");
   if (has(d, length_key)) {
     const auto given = read_integer<int64_t>(d[length_key], where + "." + length_key);
     if (given != static_cast<int64_t>(first.second))

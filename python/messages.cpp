@@ -58,7 +58,9 @@ py::object message_type_of(const py::bytes& data) {
   return t ? py::object(py::str(t->name)) : py::object(py::none());
 }
 
-py::bytes encode(const std::string& type, const py::handle& message) { return to_bytes(type_by_name(type).encode(message)); }
+py::bytes encode(const std::string& type, const py::handle& message) {
+  return to_bytes(type_by_name(type).encode(message));
+}
 
 // The daemon's own validation of an input message (daemon/runtime/codec.hpp): None when it would be accepted, else
 // (reason, message) as counted on SEXTANT_STATUS.
@@ -79,18 +81,24 @@ py::object validate(const std::string& kind, const py::bytes& data) {
 }  // namespace
 
 void register_messages(py::module_& m) {
-  m.def("message_types", [] {
-    std::vector<std::string> names;
-    for (const auto& t : message_types()) names.push_back(t.name);
-    return names;
-  }, "Names of every sextant message type (lcmtypes/sextant/*.lcm).");
-  m.def("message_fields", [](const std::string& type) {
-    py::list l;
-    for (const auto& f : type_by_name(type).fields) l.append(py::make_tuple(f.name, f.type, f.dim));
-    return l;
-  }, py::arg("type"),
-        "The fields of a message type as the .lcm file declares them: (name, lcm_type, dim), dim '' for a scalar, "
-        "a number for a fixed array, the length field's name for a variable one.");
+  m.def(
+      "message_types",
+      [] {
+        std::vector<std::string> names;
+        for (const auto& t : message_types()) names.push_back(t.name);
+        return names;
+      },
+      "Names of every sextant message type (lcmtypes/sextant/*.lcm).");
+  m.def(
+      "message_fields",
+      [](const std::string& type) {
+        py::list l;
+        for (const auto& f : type_by_name(type).fields) l.append(py::make_tuple(f.name, f.type, f.dim));
+        return l;
+      },
+      py::arg("type"),
+      "The fields of a message type as the .lcm file declares them: (name, lcm_type, dim), dim '' for a scalar, "
+      "a number for a fixed array, the length field's name for a variable one.");
   m.def("decode", &decode, py::arg("data"), py::arg("type") = py::none(),
         "Decodes LCM bytes into a dict of the message's fields; the type comes from the bytes' fingerprint unless "
         "given.  ValueError for bytes that are no sextant message or do not decode.");

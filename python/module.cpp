@@ -5,8 +5,9 @@
 #include "python/module_parts.hpp"
 
 PYBIND11_MODULE(sextant, m) {
-  m.doc() = "sextant: LCM logs, sextant messages as dicts, a live LCM bus, pose-graph optimization and trajectory "
-            "evaluation (the `sextant` tool's optimize and eval)";
+  m.doc() =
+      "sextant: LCM logs, sextant messages as dicts, a live LCM bus, pose-graph optimization and trajectory "
+      "evaluation (the `sextant` tool's optimize and eval)";
   m.attr("__version__") = sextant::version();
   sextant::python::register_messages(m);
   sextant::python::register_logs(m);

@@ -37,11 +37,13 @@ graph::G2oGraph graph_from_records(const py::handle& records, const graph::G2oRe
   size_t k = 0;
   for (const py::handle rec : records) {
     if (!py::isinstance<py::sequence>(rec) || py::isinstance<py::str>(rec))
-      throw py::value_error("graph[" + std::to_string(k) + "]: expected a sequence like ('VERTEX_SE2', id, x, y, theta)");
+      throw py::value_error("graph[" + std::to_string(k) +
+                            "]: expected a sequence like ('VERTEX_SE2', id, x, y, theta)");
     bool first = true;
     for (const py::handle v : rec) {
       if (first) {
-        if (!py::isinstance<py::str>(v)) throw py::value_error("graph[" + std::to_string(k) + "]: the first item must be the g2o tag");
+        if (!py::isinstance<py::str>(v))
+          throw py::value_error("graph[" + std::to_string(k) + "]: the first item must be the g2o tag");
         text << py::cast<std::string>(v);
         first = false;
       } else if (py::isinstance<py::int_>(v) && !py::isinstance<py::bool_>(v)) {
@@ -51,8 +53,7 @@ graph::G2oGraph graph_from_records(const py::handle& records, const graph::G2oRe
         std::snprintf(buf, sizeof buf, "%.17g", py::cast<double>(v));
         text << ' ' << buf;
       } else {
-        throw py::value_error("graph[" + std::to_string(k) + "]: expected numbers after the tag, got " +
-                              type_name(v));
+        throw py::value_error("graph[" + std::to_string(k) + "]: expected numbers after the tag, got " + type_name(v));
       }
     }
     if (first) throw py::value_error("graph[" + std::to_string(k) + "]: empty record");
@@ -69,8 +70,7 @@ graph::G2oGraph graph_from_records(const py::handle& records, const graph::G2oRe
     if (msg.rfind("graph:", 0) == 0 && colon != std::string::npos) {
       try {
         msg = "graph[" + std::to_string(std::stol(msg.substr(6, colon - 6)) - 1) + "]" + msg.substr(colon);
-      } catch (const std::exception&) {
-      }
+      } catch (const std::exception&) {}
     }
     throw py::value_error(msg);
   }
@@ -107,9 +107,8 @@ py::dict optimize(const py::object& graph_or_path, const std::optional<std::stri
   } catch (const std::invalid_argument& e) {
     throw py::value_error(e.what());
   }
-  graph::G2oGraph g = is_path(graph_or_path)
-                          ? graph::read_g2o(py::cast<std::string>(py::str(graph_or_path)), read)
-                          : graph_from_records(graph_or_path, read);
+  graph::G2oGraph g = is_path(graph_or_path) ? graph::read_g2o(py::cast<std::string>(py::str(graph_or_path)), read)
+                                             : graph_from_records(graph_or_path, read);
   tools::GraphOptimizationResult r;
   {
     py::gil_scoped_release release;
@@ -149,8 +148,10 @@ std::vector<tools::StampedPose> trajectory(const py::object& obj, const char* wh
   std::stable_sort(poses.begin(), poses.end(), [](const auto& a, const auto& b) { return a.t < b.t; });
   std::vector<tools::StampedPose> unique;
   for (const auto& p : poses) {
-    if (!unique.empty() && unique.back().t == p.t) unique.back() = p;
-    else unique.push_back(p);
+    if (!unique.empty() && unique.back().t == p.t)
+      unique.back() = p;
+    else
+      unique.push_back(p);
   }
   return unique;
 }
@@ -160,8 +161,8 @@ py::dict evaluate(const py::object& gt, const py::object& est, bool scale, doubl
   if (delta_unit != "s" && delta_unit != "f") throw py::value_error("delta_unit: 's' (seconds) or 'f' (frames)");
   if (format != "tum" && format != "kitti") throw py::value_error("format: 'tum' or 'kitti'");
   if (!(delta > 0) || !(max_difference > 0)) throw py::value_error("delta and max_difference must be > 0");
-  const tools::EvaluationOptions o{scale, delta, delta_unit == "f" ? tools::DeltaUnit::kFrames : tools::DeltaUnit::kSeconds,
-                                    max_difference};
+  const tools::EvaluationOptions o{
+      scale, delta, delta_unit == "f" ? tools::DeltaUnit::kFrames : tools::DeltaUnit::kSeconds, max_difference};
   const auto g = trajectory(gt, "gt", format), e = trajectory(est, "est", format);
   return summary_dict(tools::evaluate_trajectory(g, e, o).summary(o));
 }
@@ -169,32 +170,33 @@ py::dict evaluate(const py::object& gt, const py::object& est, bool scale, doubl
 }  // namespace
 
 void register_solvers(py::module_& m) {
-  m.def("optimize",
-        [](const py::object& graph, const std::optional<std::string>& output, const std::string& solver,
-           const std::string& init, const std::string& robust, double kernel_width, int max_iters, double tolerance,
-           const std::string& ordering, bool incremental, double relin_translation, double relin_rotation,
-           int relin_skip, const std::string& information) {
-          tools::GraphOptimizationOptions o;
-          try {
-            o.solver = tools::solver_from_name(solver), o.init = tools::initial_estimate_from_name(init);
-            o.robust = graph::robust_kernel_from_name(robust), o.ordering = tools::ordering_from_name(ordering);
-          } catch (const std::invalid_argument& e) {
-            throw py::value_error(e.what());
-          }
-          o.kernel_width = kernel_width, o.max_iters = max_iters, o.tolerance = tolerance, o.incremental = incremental;
-          o.relin_translation = relin_translation, o.relin_rotation = relin_rotation, o.relin_skip = relin_skip;
-          return optimize(graph, output, o, information);
-        },
-        py::arg("graph"), py::arg("output") = py::none(), py::arg("solver") = "gn", py::arg("init") = "auto",
-        py::arg("robust") = "none", py::arg("kernel_width") = 1.0, py::arg("max_iters") = 100,
-        py::arg("tolerance") = 1e-6, py::arg("ordering") = "block-amd", py::arg("incremental") = false,
-        py::arg("relin_translation") = 0.1, py::arg("relin_rotation") = 0.1, py::arg("relin_skip") = 1,
-        py::arg("information") = "reject",
-        "`sextant optimize`: graph is a g2o file's path or a list of g2o records such as ('VERTEX_SE2', 0, x, y, "
-        "theta), ('EDGE_SE2', 0, 1, dx, dy, dtheta, *information_upper_triangle), ('FIX', 0).  Returns {'summary': "
-        "the keys of `sextant optimize --json`, 'poses': {id: values in g2o's vertex order}, 'ok', 'message'}; "
-        "output= also writes the optimized graph as g2o; information= 'reject' (the default), 'repair' or 'diagonal' "
-        "as `sextant optimize --information`.");
+  m.def(
+      "optimize",
+      [](const py::object& graph, const std::optional<std::string>& output, const std::string& solver,
+         const std::string& init, const std::string& robust, double kernel_width, int max_iters, double tolerance,
+         const std::string& ordering, bool incremental, double relin_translation, double relin_rotation, int relin_skip,
+         const std::string& information) {
+        tools::GraphOptimizationOptions o;
+        try {
+          o.solver = tools::solver_from_name(solver), o.init = tools::initial_estimate_from_name(init);
+          o.robust = graph::robust_kernel_from_name(robust), o.ordering = tools::ordering_from_name(ordering);
+        } catch (const std::invalid_argument& e) {
+          throw py::value_error(e.what());
+        }
+        o.kernel_width = kernel_width, o.max_iters = max_iters, o.tolerance = tolerance, o.incremental = incremental;
+        o.relin_translation = relin_translation, o.relin_rotation = relin_rotation, o.relin_skip = relin_skip;
+        return optimize(graph, output, o, information);
+      },
+      py::arg("graph"), py::arg("output") = py::none(), py::arg("solver") = "gn", py::arg("init") = "auto",
+      py::arg("robust") = "none", py::arg("kernel_width") = 1.0, py::arg("max_iters") = 100,
+      py::arg("tolerance") = 1e-6, py::arg("ordering") = "block-amd", py::arg("incremental") = false,
+      py::arg("relin_translation") = 0.1, py::arg("relin_rotation") = 0.1, py::arg("relin_skip") = 1,
+      py::arg("information") = "reject",
+      "`sextant optimize`: graph is a g2o file's path or a list of g2o records such as ('VERTEX_SE2', 0, x, y, "
+      "theta), ('EDGE_SE2', 0, 1, dx, dy, dtheta, *information_upper_triangle), ('FIX', 0).  Returns {'summary': "
+      "the keys of `sextant optimize --json`, 'poses': {id: values in g2o's vertex order}, 'ok', 'message'}; "
+      "output= also writes the optimized graph as g2o; information= 'reject' (the default), 'repair' or 'diagonal' "
+      "as `sextant optimize --information`.");
   m.def("eval", &evaluate, py::arg("gt"), py::arg("est"), py::arg("scale") = false, py::arg("delta") = 1.0,
         py::arg("delta_unit") = "s", py::arg("max_difference") = 0.02, py::arg("format") = "tum",
         "`sextant eval`: ATE and RPE (TUM benchmark semantics) and the KITTI odometry error of est against gt, each "

@@ -39,7 +39,8 @@ int64_t resident_kb() {
 std::vector<uint32_t> replay_order(const std::string& log_path, runtime::LogDamage& damage) {
   std::vector<std::pair<int64_t, uint32_t>> keys;
   runtime::LogReader reader(log_path);
-  while (auto r = reader.next()) keys.emplace_back(peek_utime(r->data).value_or(r->timestamp), static_cast<uint32_t>(keys.size()));
+  while (auto r = reader.next())
+    keys.emplace_back(peek_utime(r->data).value_or(r->timestamp), static_cast<uint32_t>(keys.size()));
   damage = reader.damage();
   std::stable_sort(keys.begin(), keys.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
   std::vector<uint32_t> rank(keys.size());
@@ -71,8 +72,12 @@ void for_each_in_turn(const std::string& log_path, const std::vector<uint32_t>& 
 class ReplayCollector {
  public:
   ReplayCollector(ReplayResult& result, const ReplayOptions& options, const engine::Engine& engine)
-      : result_(result), options_(options), engine_(engine), keep_all_(options.max_kept == 0),
-        truth_sample_(options.max_kept), target_truth_sample_(options.max_kept),
+      : result_(result),
+        options_(options),
+        engine_(engine),
+        keep_all_(options.max_kept == 0),
+        truth_sample_(options.max_kept),
+        target_truth_sample_(options.max_kept),
         segment_us_(static_cast<int64_t>(options.segment_seconds * 1e6)) {
     for (const auto& s : engine.stages()) {
       StageReport report;
@@ -156,8 +161,10 @@ void ReplayCollector::truth(const runtime::LogRecord& r) {
     return;
   }
   TruthPoint point{t.utime, t.kind, t.id, {t.position[0], t.position[1], t.position[2]}};
-  if (t.kind == "target") target_truth_sample_.push(result_.truth_points, std::move(point));  // moving: sampled
-  else result_.truth_points.push_back(std::move(point));
+  if (t.kind == "target")
+    target_truth_sample_.push(result_.truth_points, std::move(point));  // moving: sampled
+  else
+    result_.truth_points.push_back(std::move(point));
 }
 
 void ReplayCollector::handled(size_t stage, double ms) {

@@ -85,12 +85,12 @@ struct SegmentReport {
 
 struct ReplayResult {
   std::string primary_estimator;
-  int64_t records = 0;                 // log events read
-  runtime::LogDamage log_damage;       // corrupt events the reader skipped (resynchronising on the next one)
+  int64_t records = 0;            // log events read
+  runtime::LogDamage log_damage;  // corrupt events the reader skipped (resynchronising on the next one)
   int64_t first_utime = 0, last_utime = 0;
-  std::map<std::string, runtime::ChannelCounts> channels;  // per input channel
-  std::vector<PublishedMessage> published;                 // in publish order
-  std::map<std::string, int64_t> published_counts;         // per output channel
+  std::map<std::string, runtime::ChannelCounts> channels;             // per input channel
+  std::vector<PublishedMessage> published;                            // in publish order
+  std::map<std::string, int64_t> published_counts;                    // per output channel
   std::map<std::string, std::vector<engine::FusedPose>> fused_poses;  // by estimator
   std::vector<engine::Trajectory> trajectories;
   std::vector<engine::Targets> targets;

@@ -27,11 +27,17 @@ class JsonWriter {
     return *this;
   }
 
-  JsonWriter& value(const std::string& s) { return scalar([&] { write_string(s); }); }
+  JsonWriter& value(const std::string& s) {
+    return scalar([&] { write_string(s); });
+  }
   JsonWriter& value(const char* s) { return value(std::string(s)); }
-  JsonWriter& value(bool b) { return scalar([&] { out_ += b ? "true" : "false"; }); }
+  JsonWriter& value(bool b) {
+    return scalar([&] { out_ += b ? "true" : "false"; });
+  }
   JsonWriter& value(int v) { return value(static_cast<int64_t>(v)); }
-  JsonWriter& value(int64_t v) { return scalar([&] { out_ += std::to_string(v); }); }
+  JsonWriter& value(int64_t v) {
+    return scalar([&] { out_ += std::to_string(v); });
+  }
   JsonWriter& value(size_t v) { return value(static_cast<int64_t>(v)); }
   JsonWriter& value(double v) {
     return scalar([&] {
@@ -98,11 +104,21 @@ class JsonWriter {
     out_ += '"';
     for (unsigned char c : s) {
       switch (c) {
-        case '"': out_ += "\\\""; break;
-        case '\\': out_ += "\\\\"; break;
-        case '\n': out_ += "\\n"; break;
-        case '\t': out_ += "\\t"; break;
-        case '\r': out_ += "\\r"; break;
+        case '"':
+          out_ += "\\\"";
+          break;
+        case '\\':
+          out_ += "\\\\";
+          break;
+        case '\n':
+          out_ += "\\n";
+          break;
+        case '\t':
+          out_ += "\\t";
+          break;
+        case '\r':
+          out_ += "\\r";
+          break;
         default:
           if (c < 0x20) {
             char buf[8];

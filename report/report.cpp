@@ -35,7 +35,8 @@ std::vector<StampedPose> robot_truth(const ReplayResult& r) {
   std::vector<StampedPose> truth;
   for (const auto& t : r.truth_poses) truth.push_back({static_cast<double>(t.utime) * 1e-6, t.pose});
   std::sort(truth.begin(), truth.end(), [](const auto& a, const auto& b) { return a.t < b.t; });
-  truth.erase(std::unique(truth.begin(), truth.end(), [](const auto& a, const auto& b) { return a.t == b.t; }), truth.end());
+  truth.erase(std::unique(truth.begin(), truth.end(), [](const auto& a, const auto& b) { return a.t == b.t; }),
+              truth.end());
   return truth;
 }
 
@@ -56,7 +57,8 @@ SvgPlot top_view(const ReplayResult& r, const std::vector<StampedPose>& truth, c
   for (const auto& [name, poses] : r.fused_poses) {
     std::vector<Eigen::Vector2d> xy;
     for (const auto& p : poses) xy.push_back(p.pose.position.head<2>());
-    top.polyline(xy, kColors[color++ % 7], name + (name == estimator ? " (primary)" : ""), name == estimator ? 1.8 : 1.0);
+    top.polyline(xy, kColors[color++ % 7], name + (name == estimator ? " (primary)" : ""),
+                 name == estimator ? 1.8 : 1.0);
   }
   return top;
 }
@@ -81,8 +83,7 @@ std::map<std::string, Scores> score_estimators(const ReplayResult& r, const std:
     }
     try {
       sc.rpe = relative_pose_error(truth, sc.est, 1.0, DeltaUnit::kSeconds, sc.ate.scale);
-    } catch (const std::invalid_argument&) {
-    }
+    } catch (const std::invalid_argument&) {}
     scores.emplace(name, std::move(sc));
   }
   return scores;
@@ -103,7 +104,8 @@ ReportNumbers primary_numbers(const ReplayResult& r, const std::vector<StampedPo
     numbers.matched = ate.matched;
     const auto matches = associate(truth, primary->second.est);
     if (!matches.empty())
-      numbers.final_error = (truth[matches.back().first].pose.position - primary->second.est[matches.back().second].pose.position).norm();
+      numbers.final_error =
+          (truth[matches.back().first].pose.position - primary->second.est[matches.back().second].pose.position).norm();
   } else if (const auto it = r.fused_poses.find(estimator); it != r.fused_poses.end()) {
     numbers.poses = it->second.size();
   }
@@ -154,11 +156,13 @@ std::pair<SvgPlot, SvgPlot> errors_over_time(const std::map<std::string, Scores>
     std::vector<Eigen::Vector2d> curve;
     for (size_t k = 0; k < sc.ate.errors.size(); ++k) curve.emplace_back(sc.ate.stamps[k] - t0, sc.ate.errors[k]);
     char label[160];
-    std::snprintf(label, sizeof label, "%s%s: rmse %.3f m", name.c_str(), is_primary ? " (primary)" : "", sc.ate.error.rmse);
+    std::snprintf(label, sizeof label, "%s%s: rmse %.3f m", name.c_str(), is_primary ? " (primary)" : "",
+                  sc.ate.error.rmse);
     err.polyline(curve, c, label, is_primary ? 1.8 : 1.0);
     if (sc.rpe) {
       std::vector<Eigen::Vector2d> rc;
-      for (size_t k = 0; k < sc.rpe->stamps.size(); ++k) rc.emplace_back(sc.rpe->stamps[k] - t0, sc.rpe->translation_errors[k]);
+      for (size_t k = 0; k < sc.rpe->stamps.size(); ++k)
+        rc.emplace_back(sc.rpe->stamps[k] - t0, sc.rpe->translation_errors[k]);
       std::snprintf(label, sizeof label, "%s: rmse %.3f m, %.2f deg", name.c_str(), sc.rpe->translation.rmse,
                     sc.rpe->rotation_deg.rmse);
       rpe.polyline(rc, c, label, is_primary ? 1.8 : 1.0);
@@ -171,11 +175,14 @@ std::pair<SvgPlot, SvgPlot> errors_over_time(const std::map<std::string, Scores>
 
 std::string scores_table_html(const std::map<std::string, Scores>& scores, const std::string& estimator) {
   if (scores.empty()) return {};
-  std::string table = "<h2>Estimators against the truth</h2>\n<table><tr><th>estimator</th><th>poses</th><th>ATE rmse [m]</th>"
-                      "<th>mean</th><th>median</th><th>std</th><th>max</th><th>RPE rmse [m / 1 s]</th><th>RPE rot rmse [deg]</th></tr>\n";
+  std::string table =
+      "<h2>Estimators against the truth</h2>\n<table><tr><th>estimator</th><th>poses</th><th>ATE rmse [m]</th>"
+      "<th>mean</th><th>median</th><th>std</th><th>max</th><th>RPE rmse [m / 1 s]</th><th>RPE rot rmse "
+      "[deg]</th></tr>\n";
   for (const auto& [name, sc] : scores) {
     char row[512];
-    std::snprintf(row, sizeof row, "<td>%zu</td><td>%.4f</td><td>%.4f</td><td>%.4f</td><td>%.4f</td><td>%.4f</td><td>%s</td><td>%s</td>",
+    std::snprintf(row, sizeof row,
+                  "<td>%zu</td><td>%.4f</td><td>%.4f</td><td>%.4f</td><td>%.4f</td><td>%.4f</td><td>%s</td><td>%s</td>",
                   sc.ate.matched, sc.ate.error.rmse, sc.ate.error.mean, sc.ate.error.median, sc.ate.error.std,
                   sc.ate.error.max, sc.rpe ? std::to_string(sc.rpe->translation.rmse).c_str() : "-",
                   sc.rpe ? std::to_string(sc.rpe->rotation_deg.rmse).c_str() : "-");
@@ -214,7 +221,8 @@ SvgPlot targets_plot(const ReplayResult& r, std::string& note) {
   tg.set_view(view[0], view[1], view[2], view[3]);
   if (outside > 0) {
     char b[160];
-    std::snprintf(b, sizeof b, "%zu estimate(s) outside this frame, the farthest %.0f m from the origin", outside, farthest);
+    std::snprintf(b, sizeof b, "%zu estimate(s) outside this frame, the farthest %.0f m from the origin", outside,
+                  farthest);
     note = b;
   }
   return tg;
@@ -227,7 +235,8 @@ std::string latency_histograms(const ReplayResult& r) {
     if (s.latency_ms.empty()) continue;
     std::vector<double> l = s.latency_ms;
     std::sort(l.begin(), l.end());
-    const double hi = std::max(l[std::min(l.size() - 1, static_cast<size_t>(0.99 * static_cast<double>(l.size())))], 1e-6);
+    const double hi =
+        std::max(l[std::min(l.size() - 1, static_cast<size_t>(0.99 * static_cast<double>(l.size())))], 1e-6);
     const int bins = 30;
     std::vector<double> edges(bins + 1), counts(bins, 0);
     for (int b = 0; b <= bins; ++b) edges[static_cast<size_t>(b)] = hi * b / bins;
@@ -244,18 +253,22 @@ std::pair<SvgPlot, std::string> channel_messages(const ReplayResult& r, double d
   SvgPlot msgs("Input messages per channel", "", "messages");
   std::vector<std::string> channel_names;
   std::vector<double> edges, received, rejected;
-  std::string table = "<table><tr><th>#</th><th>channel</th><th>received</th><th>decoded</th><th>rejected</th><th>reasons</th><th>dropped</th><th>rate [Hz]</th></tr>\n";
+  std::string table =
+      "<table><tr><th>#</th><th>channel</th><th>received</th><th>decoded</th><th>rejected</th><th>reasons</"
+      "th><th>dropped</th><th>rate [Hz]</th></tr>\n";
   int idx = 0;
   for (const auto& [name, c] : r.channels) {
     channel_names.push_back(name);
-    edges.push_back(idx), received.push_back(static_cast<double>(c.received)), rejected.push_back(static_cast<double>(c.rejected));
+    edges.push_back(idx), received.push_back(static_cast<double>(c.received)),
+        rejected.push_back(static_cast<double>(c.rejected));
     std::string reasons;
     for (const auto& [reason, n] : c.reasons) reasons += reason + " " + std::to_string(n) + " ";
     char rate[32];
     std::snprintf(rate, sizeof rate, "%.1f", static_cast<double>(c.received) / duration);
-    table += "<tr><td>" + std::to_string(idx) + "</td><td>" + html_escape(name) + "</td><td>" + std::to_string(c.received) +
-             "</td><td>" + std::to_string(c.decoded) + "</td><td>" + std::to_string(c.rejected) + "</td><td>" +
-             html_escape(reasons) + "</td><td>" + std::to_string(c.dropped) + "</td><td>" + rate + "</td></tr>\n";
+    table += "<tr><td>" + std::to_string(idx) + "</td><td>" + html_escape(name) + "</td><td>" +
+             std::to_string(c.received) + "</td><td>" + std::to_string(c.decoded) + "</td><td>" +
+             std::to_string(c.rejected) + "</td><td>" + html_escape(reasons) + "</td><td>" + std::to_string(c.dropped) +
+             "</td><td>" + rate + "</td></tr>\n";
     ++idx;
   }
   table += "</table>\n";
@@ -279,8 +292,9 @@ std::string headline_html(const ReplayResult& r, const ReportNumbers& numbers, c
   std::string out = "<p>" + std::string(headline) + "</p>\n";
   if (numbers.have_truth) {
     char b[256];
-    std::snprintf(b, sizeof b, "<p>ATE (SE(3)-aligned, TUM definition): <b>%.4f m</b> RMSE, max %.4f m over %zu poses; "
-                               "unaligned error at the end %.4f m.</p>",
+    std::snprintf(b, sizeof b,
+                  "<p>ATE (SE(3)-aligned, TUM definition): <b>%.4f m</b> RMSE, max %.4f m over %zu poses; "
+                  "unaligned error at the end %.4f m.</p>",
                   numbers.ate_rmse, numbers.ate_max, numbers.matched, numbers.final_error);
     out += b;
   }
@@ -288,26 +302,37 @@ std::string headline_html(const ReplayResult& r, const ReportNumbers& numbers, c
 }
 
 // report.json: the figures of the page for scripts.
-std::string report_json(const ReplayResult& r, const ReportNumbers& numbers, const std::map<std::string, Scores>& scores,
-                        const std::string& log_name, const std::string& estimator, double duration) {
+std::string report_json(const ReplayResult& r, const ReportNumbers& numbers,
+                        const std::map<std::string, Scores>& scores, const std::string& log_name,
+                        const std::string& estimator, double duration) {
   JsonWriter j;
   j.begin_object();
   j.field("version", sextant::version());
   j.field("log", log_name).field("estimator", estimator).field("records", r.records).field("duration_s", duration);
   j.field("poses", numbers.poses).field("have_truth", numbers.have_truth);
-  if (numbers.have_truth) j.field("ate_rmse", numbers.ate_rmse).field("ate_max", numbers.ate_max).field("matched", numbers.matched);
+  if (numbers.have_truth)
+    j.field("ate_rmse", numbers.ate_rmse).field("ate_max", numbers.ate_max).field("matched", numbers.matched);
   j.key("estimators").begin_object();
   for (const auto& [name, sc] : scores) {
     j.key(name).begin_object();
-    j.field("ate_rmse", sc.ate.error.rmse).field("ate_mean", sc.ate.error.mean).field("ate_median", sc.ate.error.median);
+    j.field("ate_rmse", sc.ate.error.rmse)
+        .field("ate_mean", sc.ate.error.mean)
+        .field("ate_median", sc.ate.error.median);
     j.field("ate_std", sc.ate.error.std).field("ate_max", sc.ate.error.max).field("matched", sc.ate.matched);
-    if (sc.rpe) j.field("rpe_trans_rmse", sc.rpe->translation.rmse).field("rpe_rot_rmse_deg", sc.rpe->rotation_deg.rmse);
+    if (sc.rpe)
+      j.field("rpe_trans_rmse", sc.rpe->translation.rmse).field("rpe_rot_rmse_deg", sc.rpe->rotation_deg.rmse);
     j.end_object();
   }
   j.end_object();
   j.key("channels").begin_object();
   for (const auto& [name, c] : r.channels)
-    j.key(name).begin_object().field("received", c.received).field("decoded", c.decoded).field("rejected", c.rejected).field("dropped", c.dropped).end_object();
+    j.key(name)
+        .begin_object()
+        .field("received", c.received)
+        .field("decoded", c.decoded)
+        .field("rejected", c.rejected)
+        .field("dropped", c.dropped)
+        .end_object();
   j.end_object();
   j.key("published").begin_object();
   for (const auto& [name, n] : r.published_counts) j.field(name, n);
@@ -337,10 +362,11 @@ ReportNumbers write_report(const std::string& dir, const ReplayResult& r, const 
       "<!DOCTYPE html>\n<html><head><meta charset=\"utf-8\"><title>sextant report: " + html_escape(log_name) +
       "</title>\n<style>body{font-family:sans-serif;margin:24px;color:#222} .plot{margin:8px;border:1px solid #ddd}"
       " table{border-collapse:collapse} td,th{border:1px solid #ccc;padding:3px 8px;text-align:right}</style></head>\n"
-      "<body>\n<h1>sextant replay report</h1>\n<p>" + html_escape(log_name) + " &middot; sextant " + html_escape(sextant::version()) + "</p>\n" +
-      headline_html(r, numbers, estimator, duration) +
-      "<div>\n" + top.render() + colored.render() + "</div>\n<div>\n" + err.render() + rpe.render() + "</div>\n" +
-      scores_table_html(scores, estimator) + "<div>\n" + tg.render() + msgs.render() + "</div>\n" +
+      "<body>\n<h1>sextant replay report</h1>\n<p>" +
+      html_escape(log_name) + " &middot; sextant " + html_escape(sextant::version()) + "</p>\n" +
+      headline_html(r, numbers, estimator, duration) + "<div>\n" + top.render() + colored.render() + "</div>\n<div>\n" +
+      err.render() + rpe.render() + "</div>\n" + scores_table_html(scores, estimator) + "<div>\n" + tg.render() +
+      msgs.render() + "</div>\n" +
       (targets_note.empty() ? "" : "<p>Targets: " + html_escape(targets_note) + ".</p>\n") + table +
       "<h2>Latency</h2>\n<div>\n" + latency_histograms(r) + "</div>\n</body></html>\n";
   write_file(dir + "/index.html", html);

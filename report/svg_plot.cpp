@@ -20,8 +20,10 @@ std::string fmt(double v) {
 std::string tick_label(double v) {
   char b[32];
   if (std::abs(v) < 1e-12) return "0";
-  if (std::abs(v) >= 1e4 || (std::abs(v) < 1e-2 && v != 0)) std::snprintf(b, sizeof b, "%.1e", v);
-  else std::snprintf(b, sizeof b, "%g", std::round(v * 1000) / 1000);
+  if (std::abs(v) >= 1e4 || (std::abs(v) < 1e-2 && v != 0))
+    std::snprintf(b, sizeof b, "%.1e", v);
+  else
+    std::snprintf(b, sizeof b, "%g", std::round(v * 1000) / 1000);
   return b;
 }
 
@@ -46,13 +48,14 @@ std::string plot_id(const std::string& title, const std::string& x, const std::s
 }  // namespace
 
 std::string viridis(double t) {
-  static const double stops[9][3] = {{68, 1, 84},    {71, 44, 122},  {59, 81, 139},  {44, 113, 142}, {33, 144, 141},
-                                     {39, 173, 129}, {92, 200, 99},  {170, 220, 50}, {253, 231, 37}};
+  static const double stops[9][3] = {{68, 1, 84},    {71, 44, 122}, {59, 81, 139},  {44, 113, 142}, {33, 144, 141},
+                                     {39, 173, 129}, {92, 200, 99}, {170, 220, 50}, {253, 231, 37}};
   t = std::clamp(std::isfinite(t) ? t : 0.0, 0.0, 1.0) * 8;
   const int i = std::min(7, static_cast<int>(t));
   const double f = t - i;
   char b[8];
-  std::snprintf(b, sizeof b, "#%02x%02x%02x", static_cast<int>(std::lround(stops[i][0] + f * (stops[i + 1][0] - stops[i][0]))),
+  std::snprintf(b, sizeof b, "#%02x%02x%02x",
+                static_cast<int>(std::lround(stops[i][0] + f * (stops[i + 1][0] - stops[i][0]))),
                 static_cast<int>(std::lround(stops[i][1] + f * (stops[i + 1][1] - stops[i][1]))),
                 static_cast<int>(std::lround(stops[i][2] + f * (stops[i + 1][2] - stops[i][2]))));
   return b;
@@ -62,7 +65,8 @@ Eigen::Vector4d robust_view(const std::vector<Eigen::Vector2d>& must_show, const
                             double tail, double margin, double min_margin) {
   double x0 = std::numeric_limits<double>::infinity(), x1 = -x0, y0 = x0, y1 = -x0;
   for (const auto& p : must_show)
-    if (p.allFinite()) x0 = std::min(x0, p.x()), x1 = std::max(x1, p.x()), y0 = std::min(y0, p.y()), y1 = std::max(y1, p.y());
+    if (p.allFinite())
+      x0 = std::min(x0, p.x()), x1 = std::max(x1, p.x()), y0 = std::min(y0, p.y()), y1 = std::max(y1, p.y());
   std::vector<double> xs, ys;
   for (const auto& p : points)
     if (p.allFinite()) xs.push_back(p.x()), ys.push_back(p.y());
@@ -86,24 +90,39 @@ std::string html_escape(const std::string& s) {
   std::string o;
   for (char c : s) {
     switch (c) {
-      case '&': o += "&amp;"; break;
-      case '<': o += "&lt;"; break;
-      case '>': o += "&gt;"; break;
-      case '"': o += "&quot;"; break;
-      default: o += c;
+      case '&':
+        o += "&amp;";
+        break;
+      case '<':
+        o += "&lt;";
+        break;
+      case '>':
+        o += "&gt;";
+        break;
+      case '"':
+        o += "&quot;";
+        break;
+      default:
+        o += c;
     }
   }
   return o;
 }
 
 SvgPlot::SvgPlot(std::string title, std::string x_label, std::string y_label, int width, int height)
-    : title_(std::move(title)), x_label_(std::move(x_label)), y_label_(std::move(y_label)), width_(width), height_(height) {}
+    : title_(std::move(title)),
+      x_label_(std::move(x_label)),
+      y_label_(std::move(y_label)),
+      width_(width),
+      height_(height) {}
 
-void SvgPlot::polyline(const std::vector<Eigen::Vector2d>& p, const std::string& color, const std::string& label, double w) {
+void SvgPlot::polyline(const std::vector<Eigen::Vector2d>& p, const std::string& color, const std::string& label,
+                       double w) {
   if (!p.empty()) items_.push_back({Item::kLine, p, color, label, w, {}});
 }
 
-void SvgPlot::points(const std::vector<Eigen::Vector2d>& p, const std::string& color, const std::string& label, double r) {
+void SvgPlot::points(const std::vector<Eigen::Vector2d>& p, const std::string& color, const std::string& label,
+                     double r) {
   if (!p.empty()) items_.push_back({Item::kPoints, p, color, label, r, {}});
 }
 
@@ -157,14 +176,14 @@ struct SvgPlot::Frame {
 std::string SvgPlot::render() const {
   const Frame f = frame();
   std::string s = "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"" + std::to_string(width_) + "\" height=\"" +
-                  std::to_string(height_) + "\" viewBox=\"0 0 " + std::to_string(width_) + " " + std::to_string(height_) +
-                  "\" class=\"plot\" font-family=\"sans-serif\" font-size=\"11\">\n";
+                  std::to_string(height_) + "\" viewBox=\"0 0 " + std::to_string(width_) + " " +
+                  std::to_string(height_) + "\" class=\"plot\" font-family=\"sans-serif\" font-size=\"11\">\n";
   s += "<rect x=\"0\" y=\"0\" width=\"100%\" height=\"100%\" fill=\"white\"/>\n";
   s += "<text x=\"" + fmt(width_ / 2.0) + "\" y=\"20\" text-anchor=\"middle\" font-size=\"14\" font-weight=\"bold\">" +
        html_escape(title_) + "</text>\n";
   if (!subtitle_.empty())
-    s += "<text x=\"" + fmt(width_ / 2.0) + "\" y=\"36\" text-anchor=\"middle\" fill=\"#555\">" + html_escape(subtitle_) +
-         "</text>\n";
+    s += "<text x=\"" + fmt(width_ / 2.0) + "\" y=\"36\" text-anchor=\"middle\" fill=\"#555\">" +
+         html_escape(subtitle_) + "</text>\n";
   render_axes(s, f);
   s += "<clipPath id=\"" + f.id + "-clip\"><rect x=\"" + fmt(f.ml) + "\" y=\"" + fmt(f.mt) + "\" width=\"" + fmt(f.pw) +
        "\" height=\"" + fmt(f.ph) + "\"/></clipPath>\n";
@@ -243,16 +262,19 @@ void SvgPlot::render_axes(std::string& s, const Frame& f) const {
   } else {
     for (size_t k = 0; k < categories_.size(); ++k) {
       const double cx = f.X(static_cast<double>(k) + 0.45), cy = mt + ph + 12;
-      s += "<text class=\"category\" x=\"" + fmt(cx) + "\" y=\"" + fmt(cy) + "\" text-anchor=\"end\" transform=\"rotate(-35 " +
-           fmt(cx) + " " + fmt(cy) + ")\">" + html_escape(categories_[k]) + "</text>\n";
+      s += "<text class=\"category\" x=\"" + fmt(cx) + "\" y=\"" + fmt(cy) +
+           "\" text-anchor=\"end\" transform=\"rotate(-35 " + fmt(cx) + " " + fmt(cy) + ")\">" +
+           html_escape(categories_[k]) + "</text>\n";
     }
   }
   for (double t = std::ceil(f.y0 / sy) * sy; t <= f.y1; t += sy)
     s += "<line x1=\"" + fmt(ml) + "\" y1=\"" + fmt(f.Y(t)) + "\" x2=\"" + fmt(ml + pw) + "\" y2=\"" + fmt(f.Y(t)) +
          "\" stroke=\"#e4e4e4\"/><text x=\"" + fmt(ml - 6) + "\" y=\"" + fmt(f.Y(t) + 4) + "\" text-anchor=\"end\">" +
          tick_label(t) + "</text>\n";
-  s += "<text x=\"" + fmt(ml + pw / 2) + "\" y=\"" + fmt(height_ - 8.0) + "\" text-anchor=\"middle\">" + html_escape(x_label_) + "</text>\n";
-  s += "<text transform=\"translate(16," + fmt(mt + ph / 2) + ") rotate(-90)\" text-anchor=\"middle\">" + html_escape(y_label_) + "</text>\n";
+  s += "<text x=\"" + fmt(ml + pw / 2) + "\" y=\"" + fmt(height_ - 8.0) + "\" text-anchor=\"middle\">" +
+       html_escape(x_label_) + "</text>\n";
+  s += "<text transform=\"translate(16," + fmt(mt + ph / 2) + ") rotate(-90)\" text-anchor=\"middle\">" +
+       html_escape(y_label_) + "</text>\n";
 }
 
 // The items, in the order they were added.
@@ -264,8 +286,9 @@ void SvgPlot::render_items(std::string& s, const Frame& f) const {
       s += "<rect class=\"stat\" x=\"" + fmt(ml) + "\" y=\"" + fmt(ya) + "\" width=\"" + fmt(pw) + "\" height=\"" +
            fmt(yb - ya) + "\" fill=\"" + it.color + "\" fill-opacity=\"0.15\"/>\n";
     } else if (it.kind == Item::kHLine) {
-      s += "<line class=\"stat\" x1=\"" + fmt(ml) + "\" y1=\"" + fmt(f.Y(it.pts[0].y())) + "\" x2=\"" + fmt(ml + pw) + "\" y2=\"" +
-           fmt(f.Y(it.pts[0].y())) + "\" stroke=\"" + it.color + "\" stroke-width=\"1.5\" stroke-dasharray=\"6,4\"/>\n";
+      s += "<line class=\"stat\" x1=\"" + fmt(ml) + "\" y1=\"" + fmt(f.Y(it.pts[0].y())) + "\" x2=\"" + fmt(ml + pw) +
+           "\" y2=\"" + fmt(f.Y(it.pts[0].y())) + "\" stroke=\"" + it.color +
+           "\" stroke-width=\"1.5\" stroke-dasharray=\"6,4\"/>\n";
     } else if (it.kind == Item::kColoredLine) {
       // Runs of segments in the same one of 64 colour levels become one polyline.
       auto level = [&](size_t i) {
@@ -290,13 +313,14 @@ void SvgPlot::render_items(std::string& s, const Frame& f) const {
       s += "\"/>\n";
     } else if (it.kind == Item::kPoints) {
       for (const auto& p : it.pts)
-        s += "<circle class=\"series\" cx=\"" + fmt(f.X(p.x())) + "\" cy=\"" + fmt(f.Y(p.y())) + "\" r=\"" + fmt(it.size) +
-             "\" fill=\"" + it.color + "\"/>\n";
+        s += "<circle class=\"series\" cx=\"" + fmt(f.X(p.x())) + "\" cy=\"" + fmt(f.Y(p.y())) + "\" r=\"" +
+             fmt(it.size) + "\" fill=\"" + it.color + "\"/>\n";
     } else {
       for (size_t i = 0; i + 1 < it.pts.size(); ++i) {
         const double xa = f.X(it.pts[i].x()), xb = f.X(it.pts[i + 1].x()), yt = f.Y(it.pts[i].y()), yb = f.Y(0);
         s += "<rect class=\"series\" x=\"" + fmt(xa) + "\" y=\"" + fmt(std::min(yt, yb)) + "\" width=\"" +
-             fmt(std::max(0.5, xb - xa - 1)) + "\" height=\"" + fmt(std::abs(yb - yt)) + "\" fill=\"" + it.color + "\"/>\n";
+             fmt(std::max(0.5, xb - xa - 1)) + "\" height=\"" + fmt(std::abs(yb - yt)) + "\" fill=\"" + it.color +
+             "\"/>\n";
       }
     }
   }
@@ -306,10 +330,9 @@ void SvgPlot::render_items(std::string& s, const Frame& f) const {
 void SvgPlot::render_colour_bar(std::string& s, const Frame& f) const {
   const double bx = f.ml + f.pw + 18, bw = 14, mt = f.mt, ph = f.ph;
   s += "<defs><linearGradient id=\"" + f.id + "-scale\" x1=\"0\" y1=\"1\" x2=\"0\" y2=\"0\">";
-  for (int k = 0; k <= 8; ++k)
-    s += "<stop offset=\"" + fmt(k / 8.0) + "\" stop-color=\"" + viridis(k / 8.0) + "\"/>";
-  s += "</linearGradient></defs>\n<rect class=\"colorbar\" x=\"" + fmt(bx) + "\" y=\"" + fmt(mt) + "\" width=\"" + fmt(bw) +
-       "\" height=\"" + fmt(ph) + "\" fill=\"url(#" + f.id + "-scale)\"/>\n";
+  for (int k = 0; k <= 8; ++k) s += "<stop offset=\"" + fmt(k / 8.0) + "\" stop-color=\"" + viridis(k / 8.0) + "\"/>";
+  s += "</linearGradient></defs>\n<rect class=\"colorbar\" x=\"" + fmt(bx) + "\" y=\"" + fmt(mt) + "\" width=\"" +
+       fmt(bw) + "\" height=\"" + fmt(ph) + "\" fill=\"url(#" + f.id + "-scale)\"/>\n";
   s += "<text x=\"" + fmt(bx + bw + 3) + "\" y=\"" + fmt(mt + 8) + "\">" + tick_label(f.vmax) + "</text>\n";
   s += "<text x=\"" + fmt(bx + bw + 3) + "\" y=\"" + fmt(mt + ph) + "\">" + tick_label(f.vmin) + "</text>\n";
   s += "<text transform=\"translate(" + fmt(bx + bw + 14) + "," + fmt(mt + ph / 2) +
@@ -331,8 +354,8 @@ void SvgPlot::render_legend(std::string& s, const Frame& f) const {
   for (const auto& it : items_) {
     if (it.label.empty() || it.kind == Item::kColoredLine) continue;
     s += "<rect x=\"" + fmt(lx + 5) + "\" y=\"" + fmt(ly - 9) + "\" width=\"12\" height=\"" +
-         (it.kind == Item::kHLine ? "3" : "10") + "\" fill=\"" + it.color + "\"/><text x=\"" + fmt(lx + 22) + "\" y=\"" +
-         fmt(ly) + "\">" + html_escape(it.label) + "</text>\n";
+         (it.kind == Item::kHLine ? "3" : "10") + "\" fill=\"" + it.color + "\"/><text x=\"" + fmt(lx + 22) +
+         "\" y=\"" + fmt(ly) + "\">" + html_escape(it.label) + "</text>\n";
     ly += 16;
   }
 }

@@ -26,7 +26,8 @@ class SvgPlot {
   void points(const std::vector<Eigen::Vector2d>& points, const std::string& color, const std::string& label,
               double radius = 2.5);
   /// The 1-sigma... k-sigma ellipse of a 2x2 covariance around `centre`.
-  void ellipse(const Eigen::Vector2d& centre, const Eigen::Matrix2d& covariance, double k_sigma, const std::string& color);
+  void ellipse(const Eigen::Vector2d& centre, const Eigen::Matrix2d& covariance, double k_sigma,
+               const std::string& color);
   /// Bars of a histogram: edges (n+1 values) and counts (n values).
   void histogram(const std::vector<double>& edges, const std::vector<double>& counts, const std::string& color,
                  const std::string& label);
@@ -56,7 +57,7 @@ class SvgPlot {
     std::vector<Eigen::Vector2d> pts;  // ellipses: the sampled outline; hline/band: (0, y) per y value
     std::string color, label;
     double size = 1.5;
-    std::vector<double> values;        // coloured line: one per point
+    std::vector<double> values;  // coloured line: one per point
   };
   std::string title_, x_label_, y_label_, subtitle_;
   bool legend_bottom_ = false;

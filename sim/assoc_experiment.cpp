@@ -34,7 +34,8 @@ double thread_cpu_ms() {
 }  // namespace
 
 std::vector<Eigen::Vector3d> assoc_experiment_sensors(int count) {
-  std::vector<Eigen::Vector3d> s = {{30, 0, 0.1}, {0, 30, 0.1}, {0, 0, 0}, {30, 30, 0.1}, {15, -10, 0}, {-10, 15, 0.05}, {40, 15, 0.05}};
+  std::vector<Eigen::Vector3d> s = {{30, 0, 0.1}, {0, 30, 0.1},    {0, 0, 0},     {30, 30, 0.1},
+                                    {15, -10, 0}, {-10, 15, 0.05}, {40, 15, 0.05}};
   s.resize(static_cast<size_t>(std::min(count, 7)));
   for (int k = 7; k < count; ++k) {
     const double a = 2 * M_PI * (k - 7) / (count - 7) + 0.3;
@@ -97,11 +98,14 @@ class AssocExperiment {
     } else if (o_.uniform_layout) {
       for (int attempt = 0; static_cast<int>(truth.size()) < o_.targets && attempt < 1000 * o_.targets; ++attempt) {
         const Eigen::Vector3d x(5 + 20 * unit_(rng_), 5 + 20 * unit_(rng_), 2 + 6 * unit_(rng_));
-        if (std::all_of(truth.begin(), truth.end(), [&](const Eigen::Vector3d& y) { return (x - y).norm() >= o_.spacing; })) truth.push_back(x);
+        if (std::all_of(truth.begin(), truth.end(),
+                        [&](const Eigen::Vector3d& y) { return (x - y).norm() >= o_.spacing; }))
+          truth.push_back(x);
       }
     } else {
       for (int k = 0; k < o_.targets; ++k)
-        truth.push_back({15 + o_.spacing * (k % cols_ - (cols_ - 1) / 2.0), 15 + o_.spacing * (k / cols_ - (rows_ - 1) / 2.0), 5});
+        truth.push_back(
+            {15 + o_.spacing * (k % cols_ - (cols_ - 1) / 2.0), 15 + o_.spacing * (k / cols_ - (rows_ - 1) / 2.0), 5});
     }
     return truth;
   }
@@ -121,7 +125,8 @@ class AssocExperiment {
       const auto& f = fov_[s];
       for (int k = 0; k < n_false; ++k) {
         const double az = wrap(f.centre_azimuth + f.azimuth_lo + (f.azimuth_hi - f.azimuth_lo) * unit_(rng_));
-        list.push_back({{az, f.elevation_lo + (f.elevation_hi - f.elevation_lo) * unit_(rng_), o_.sigma, o_.sigma}, -1});
+        list.push_back(
+            {{az, f.elevation_lo + (f.elevation_hi - f.elevation_lo) * unit_(rng_), o_.sigma, o_.sigma}, -1});
       }
       std::shuffle(list.begin(), list.end(), rng_);
       std::vector<assoc::Detection> d;

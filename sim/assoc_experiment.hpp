@@ -34,17 +34,17 @@ namespace sextant::tools {
 struct AssocExperimentOptions {
   int sensors = 3;
   int targets = 2;
-  double spacing = 1.0;     // km
-  double sigma = 0.005;     // rad
+  double spacing = 1.0;  // km
+  double sigma = 0.005;  // rad
   int runs = 1000;
   assoc::CostKind cost = assoc::CostKind::kClassic;
   double alpha = 0.5;
-  bool exact = false;       // exact branch and bound instead of Lagrangian relaxation
-  bool compare_exact = false;  // also solve exactly and count where the relaxation reaches the optimum
+  bool exact = false;           // exact branch and bound instead of Lagrangian relaxation
+  bool compare_exact = false;   // also solve exactly and count where the relaxation reaches the optimum
   bool uniform_layout = false;  // more than 2 targets: uniform with minimum separation instead of the grid
-  bool target_prior = false;   // add the target-prior term (mu_T = targets / region volume)
+  bool target_prior = false;    // add the target-prior term (mu_T = targets / region volume)
   double p_detect = 1.0;
-  double clutter = 0.0;     // mean false alarms per sensor per scan
+  double clutter = 0.0;  // mean false alarms per sensor per scan
   int max_iterations = 100;
   double gap_tolerance = 0.01;  // absolute, cost units (assoc/sd_assignment.hpp)
   uint64_t seed = 1;
@@ -54,10 +54,10 @@ struct AssocExperimentResult {
   int64_t observable_targets = 0, correct = 0, ghost_tuples = 0, output_tuples = 0;
   double correct_rate = 0, correct_rate_stderr = 0;
   double ghosts_per_scan = 0;
-  double position_rmse = 0;    // km, over correctly associated targets
+  double position_rmse = 0;                       // km, over correctly associated targets
   double mean_ms = 0, median_ms = 0, p95_ms = 0;  // wall time per scan, tuple building + assignment
-  double median_cpu_ms = 0;    // the same in thread CPU time (what the algorithm costs on a loaded machine)
-  double build_median_ms = 0;  // thread CPU time per scan of tuple building (gating and costs) alone
+  double median_cpu_ms = 0;          // the same in thread CPU time (what the algorithm costs on a loaded machine)
+  double build_median_ms = 0;        // thread CPU time per scan of tuple building (gating and costs) alone
   double gap_mean = 0, gap_max = 0;  // relative duality gap (UB - LB) / |UB|
   double absolute_gap_mean = 0;      // UB - LB in cost units
   double tuples_mean = 0;

@@ -26,7 +26,8 @@ void one_run(const ConsistencyOptions& o, uint64_t seed, std::vector<double>& ne
   SimulationOptions sim = o.simulation;
   sim.seed = seed;
   const auto log = (std::filesystem::temp_directory_path() /
-                    ("sextant_nees_" + std::to_string(::getpid()) + "_" + std::to_string(seed) + ".lcm")).string();
+                    ("sextant_nees_" + std::to_string(::getpid()) + "_" + std::to_string(seed) + ".lcm"))
+                       .string();
   SimulationSummary summary;
   {
     runtime::LogWriter w(log);
@@ -46,10 +47,12 @@ void one_run(const ConsistencyOptions& o, uint64_t seed, std::vector<double>& ne
   for (const auto& r : records) {
     if (r.channel == "GROUND_TRUTH" && !o.slam) {
       sextant::truth_t t;
-      if (runtime::decode_message(r.data, t) && t.kind == "landmark") cfg.map.push_back({t.id, t.position[0], t.position[1]});
+      if (runtime::decode_message(r.data, t) && t.kind == "landmark")
+        cfg.map.push_back({t.id, t.position[0], t.position[1]});
     } else if (r.channel == "ODOMETRY" || r.channel == "LANDMARKS") {
-      auto d = runtime::decode_event(r.channel == "ODOMETRY" ? runtime::InputKind::kOdometry : runtime::InputKind::kLandmarks,
-                                     r.data.data(), r.data.size());
+      auto d = runtime::decode_event(
+          r.channel == "ODOMETRY" ? runtime::InputKind::kOdometry : runtime::InputKind::kLandmarks, r.data.data(),
+          r.data.size());
       if (auto* e = std::get_if<engine::Event>(&d)) events.push_back(*e);
     }
   }

@@ -18,19 +18,19 @@ namespace sextant::tools {
 
 struct ConsistencyOptions {
   int runs = 10;
-  uint64_t first_seed = 1;  // seeds first_seed .. first_seed + runs - 1
-  bool slam = false;        // false: localization against the true landmark map
-  int every = 10;           // a NEES sample every this many odometry messages
+  uint64_t first_seed = 1;       // seeds first_seed .. first_seed + runs - 1
+  bool slam = false;             // false: localization against the true landmark map
+  int every = 10;                // a NEES sample every this many odometry messages
   SimulationOptions simulation;  // seed ignored
   engine::FilterConfig filter;   // slam and map are set from the fields above
 };
 
 struct ConsistencyResult {
-  std::vector<double> time_s;  // since the start of the run
-  std::vector<double> anees;   // per sample, averaged over the runs
-  double lower = 0, upper = 0;  // 95 % bounds of ANEES_k for `runs` runs (3 dof planar, 6 dof 3-D)
-  double mean_anees = 0;        // ANEES averaged over the samples
-  double fraction_inside = 0;   // of samples with ANEES_k inside [lower, upper]
+  std::vector<double> time_s;      // since the start of the run
+  std::vector<double> anees;       // per sample, averaged over the runs
+  double lower = 0, upper = 0;     // 95 % bounds of ANEES_k for `runs` runs (3 dof planar, 6 dof 3-D)
+  double mean_anees = 0;           // ANEES averaged over the samples
+  double fraction_inside = 0;      // of samples with ANEES_k inside [lower, upper]
   double final_position_rmse = 0;  // m, over the runs, at the last sample
 };
 

@@ -46,7 +46,8 @@ TrueMotion InertialSensorSimulator::true_motion(const TruthFunction& truth, doub
 ImuReading InertialSensorSimulator::imu(double t) {
   if (last_imu_t_ && t > *last_imu_t_) {
     const double dt = t - *last_imu_t_;
-    const double sg = imu_.noise.gyro_bias_random_walk * std::sqrt(dt), sa = imu_.noise.accel_bias_random_walk * std::sqrt(dt);
+    const double sg = imu_.noise.gyro_bias_random_walk * std::sqrt(dt),
+                 sa = imu_.noise.accel_bias_random_walk * std::sqrt(dt);
     b_g_ += gauss3(sg, sg, sg);
     b_a_ += gauss3(sa, sa, sa);
   }

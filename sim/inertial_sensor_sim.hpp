@@ -59,8 +59,8 @@ struct TrueMotion {
 
 struct ImuReading {
   double t = 0;
-  Eigen::Vector3d gyro, accel;              // as the sensor reports them (its frame, biases and noise in)
-  Eigen::Vector3d gyro_bias, accel_bias;    // the true biases at t
+  Eigen::Vector3d gyro, accel;            // as the sensor reports them (its frame, biases and noise in)
+  Eigen::Vector3d gyro_bias, accel_bias;  // the true biases at t
 };
 
 struct GnssReading {

@@ -24,8 +24,8 @@ SimulatedMatcher::SimulatedMatcher(std::map<std::string, MatcherTruth> truth, co
     why << "simulated matcher: sigma_t and sigma_r must be finite and > 0, got " << o.sigma_t << ", " << o.sigma_r;
   else if (!(finite_nonnegative(o.failure_rate) && finite_nonnegative(o.wrong_rate) &&
              o.failure_rate + o.wrong_rate <= 1))
-    why << "simulated matcher: failure_rate and wrong_rate must be in [0, 1] with a sum <= 1, got "
-        << o.failure_rate << ", " << o.wrong_rate;
+    why << "simulated matcher: failure_rate and wrong_rate must be in [0, 1] with a sum <= 1, got " << o.failure_rate
+        << ", " << o.wrong_rate;
   else if (!(finite_nonnegative(o.wrong_min_translation) && finite_nonnegative(o.wrong_min_rotation)))
     why << "simulated matcher: wrong_min_translation and wrong_min_rotation must be finite and >= 0";
   if (!why.str().empty()) throw std::invalid_argument(why.str());
@@ -134,7 +134,8 @@ std::map<std::string, MatcherTruth> read_matcher_truth(const std::string& log_pa
     }
   }
   if (damage != nullptr) *damage = reader.damage();
-  if (samples.empty()) throw std::runtime_error(log_path + ": no robot ground truth (GROUND_TRUTH, truth_t kind \"robot\")");
+  if (samples.empty())
+    throw std::runtime_error(log_path + ": no robot ground truth (GROUND_TRUTH, truth_t kind \"robot\")");
   std::map<std::string, MatcherTruth> out;
   for (auto& [source, s] : samples) {
     MatcherTruth& m = out[source];

@@ -41,13 +41,13 @@
 namespace sextant::tools {
 
 struct SimulatedMatcherOptions {
-  double sigma_t = 0.05;        // m, standard deviation of each translation component of the noise
-  double sigma_r = 0.01;        // rad, of each rotation component
-  double failure_rate = 0.0;    // fraction of requests not answered
-  double wrong_rate = 0.0;      // fraction of requests answered wrongly (failure_rate + wrong_rate <= 1)
+  double sigma_t = 0.05;      // m, standard deviation of each translation component of the noise
+  double sigma_r = 0.01;      // rad, of each rotation component
+  double failure_rate = 0.0;  // fraction of requests not answered
+  double wrong_rate = 0.0;    // fraction of requests answered wrongly (failure_rate + wrong_rate <= 1)
   uint64_t seed = 1;
-  double wrong_min_translation = 1.0;  // m: a wrong answer is at least this far off the truth ...
-  double wrong_min_rotation = 0.5;     // rad: ... or at least this much rotated
+  double wrong_min_translation = 1.0;    // m: a wrong answer is at least this far off the truth ...
+  double wrong_min_rotation = 0.5;       // rad: ... or at least this much rotated
   std::string name = "sextant-matcher";  // loop_closure_t.matcher
 };
 

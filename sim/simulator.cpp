@@ -81,7 +81,8 @@ class Simulation {
       throw std::invalid_argument("clutter region: min and max need 3 numbers each (x, y, z), or neither");
     for (size_t i = 0; i < o.clutter_region_min.size(); ++i)
       if (!(o.clutter_region_min[i] < o.clutter_region_max[i]))
-        throw std::invalid_argument("clutter region: min must be below max on every axis (axis " + std::to_string(i) + ")");
+        throw std::invalid_argument("clutter region: min must be below max on every axis (axis " + std::to_string(i) +
+                                    ")");
     if (o.imu_rate_hz < 0 || o.gnss_rate_hz < 0) throw std::invalid_argument("IMU and GNSS rates must not be negative");
     planar_ = o.scenario == Scenario::kPlanar;
     if (o.imu_rate_hz > 0 || o.gnss_rate_hz > 0) {
@@ -209,7 +210,8 @@ class Simulation {
   }
 
   void write_landmark_truth(int64_t utime) {
-    for (size_t i = 0; i < landmarks_.size(); ++i) write_truth(utime, "landmark", static_cast<int64_t>(i), landmarks_[i]);
+    for (size_t i = 0; i < landmarks_.size(); ++i)
+      write_truth(utime, "landmark", static_cast<int64_t>(i), landmarks_[i]);
   }
 
   void odometry_step(int64_t t) {
@@ -234,7 +236,8 @@ class Simulation {
       Matrix6 q = Matrix6::Zero();
       Vector6 eta = Vector6::Zero();
       for (int i : active()) {
-        const double sigma = std::max(o_.odometry_min_sigma, (i < 3 ? o_.odometry_trans_noise : o_.odometry_rot_noise) * dist);
+        const double sigma =
+            std::max(o_.odometry_min_sigma, (i < 3 ? o_.odometry_trans_noise : o_.odometry_rot_noise) * dist);
         q(i, i) = sigma * sigma;
         eta[i] = gauss(sigma);
       }
@@ -293,8 +296,8 @@ class Simulation {
       for (int i = 0; i < o_.targets; ++i) {
         if (uniform(0, 1) >= o_.p_detect) continue;
         const Eigen::Vector3d d = target_position(i, t) - sp;
-        scan.detections.push_back({std::atan2(d.y(), d.x()) + gauss(sg),
-                                   std::atan(d.z() / std::hypot(d.x(), d.y())) + gauss(sg), sg, sg});
+        scan.detections.push_back(
+            {std::atan2(d.y(), d.x()) + gauss(sg), std::atan(d.z() / std::hypot(d.x(), d.y())) + gauss(sg), sg, sg});
         ++summary_.detections;
       }
       const int n_false = std::poisson_distribution<int>(o_.clutter)(rng_);
@@ -365,7 +368,7 @@ class Simulation {
   std::mt19937_64 rng_;
   bool planar_ = true;
   Course course_;
-  SimulatedImuOptions imu_;     // o_.imu and o_.gnss with their rates
+  SimulatedImuOptions imu_;  // o_.imu and o_.gnss with their rates
   SimulatedGnssOptions gnss_;
   std::optional<InertialSensorSimulator> inertial_;
   std::vector<Eigen::Vector3d> landmarks_, sensors_;
@@ -384,7 +387,8 @@ class Simulation {
 }  // namespace
 
 namespace {
-constexpr std::pair<Scenario, const char*> kScenarios[] = {{Scenario::kPlanar, "planar"}, {Scenario::kSpatial, "spatial"}};
+constexpr std::pair<Scenario, const char*> kScenarios[] = {{Scenario::kPlanar, "planar"},
+                                                           {Scenario::kSpatial, "spatial"}};
 }  // namespace
 
 Scenario scenario_from_name(const std::string& name) { return kind_from_name(kScenarios, name, "scenario"); }

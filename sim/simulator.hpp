@@ -45,7 +45,7 @@ struct SimulationOptions {
   std::string source = "robot1";
 
   // Robot and odometry.
-  double speed = 2.0;                // m/s along the course
+  double speed = 2.0;  // m/s along the course
   double odometry_rate_hz = 50;
   double odometry_trans_noise = 0.02;  // standard deviation per metre travelled, m/m (per axis)
   double odometry_rot_noise = 0.01;    // standard deviation per metre travelled, rad/m (per axis)
@@ -55,7 +55,7 @@ struct SimulationOptions {
   int landmarks = 40;
   double landmark_rate_hz = 10;
   double landmark_max_range = 12;
-  double landmark_fov = 3.14159265358979323846;  // total horizontal field of view, rad (centred ahead)
+  double landmark_fov = 3.14159265358979323846;     // total horizontal field of view, rad (centred ahead)
   double range_sigma = 0.05, bearing_sigma = 0.01;  // m, rad
   bool unknown_ids = false;
 
@@ -74,9 +74,9 @@ struct SimulationOptions {
   std::vector<double> clutter_region_min, clutter_region_max;
 
   // Loop closures.
-  double loop_distance = 2.0;     // m
-  double loop_min_age_s = 20;     // s
-  double loop_min_interval_s = 1; // s between two loop closures
+  double loop_distance = 2.0;      // m
+  double loop_min_age_s = 20;      // s
+  double loop_min_interval_s = 1;  // s between two loop closures
   double loop_trans_sigma = 0.05, loop_rot_sigma = 0.01;
 
   // IMU and GNSS (0 Hz: not simulated).  imu.rate_hz and gnss.rate_hz are set from these.

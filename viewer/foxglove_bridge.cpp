@@ -43,13 +43,18 @@ struct Frame {
 Frame control(const Json& j) { return Frame{false, {}, std::make_shared<const std::string>(j.dump())}; }
 
 Json advertisement(uint32_t id, const ViewerMessage& m) {
-  return Json{{"id", id}, {"topic", m.topic}, {"encoding", "json"}, {"schemaName", m.schema->name},
-              {"schema", m.schema->data}, {"schemaEncoding", m.schema->encoding}};
+  return Json{{"id", id},
+              {"topic", m.topic},
+              {"encoding", "json"},
+              {"schemaName", m.schema->name},
+              {"schema", m.schema->data},
+              {"schemaEncoding", m.schema->encoding}};
 }
 
 uint64_t now_ns() {
   return static_cast<uint64_t>(
-      std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::system_clock::now().time_since_epoch()).count());
+      std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::system_clock::now().time_since_epoch())
+          .count());
 }
 
 }  // namespace
@@ -79,9 +84,9 @@ struct FoxgloveBridge::Impl {
   tcp::acceptor acceptor{io};
   std::thread thread;
 
-  mutable std::mutex mutex;  // guards what follows
+  mutable std::mutex mutex;                                             // guards what follows
   std::map<std::pair<std::string, std::string>, uint32_t> channel_ids;  // (topic, schema) -> channel id
-  std::vector<Json> advertised;                                          // by channel id - 1
+  std::vector<Json> advertised;                                         // by channel id - 1
   std::vector<std::shared_ptr<Session>> sessions;
   FoxgloveBridgeStats totals;
 
@@ -103,7 +108,9 @@ class Session : public std::enable_shared_from_this<Session> {
     address_ = ec ? "?" : ep.address().to_string() + ":" + std::to_string(ep.port());
   }
 
-  void run() { net::dispatch(ws_.get_executor(), [self = shared_from_this()] { self->read_request(); }); }
+  void run() {
+    net::dispatch(ws_.get_executor(), [self = shared_from_this()] { self->read_request(); });
+  }
 
   /// Queues a control message (never dropped).
   void send(const Json& j) { enqueue(control(j), false); }
@@ -196,7 +203,8 @@ class Session : public std::enable_shared_from_this<Session> {
     res->set(http::field::content_type, "text/plain");
     res->body() = why + "\n";
     res->prepare_payload();
-    http::async_write(ws_.next_layer(), *res, [self = shared_from_this(), res](beast::error_code, size_t) { self->close(); });
+    http::async_write(ws_.next_layer(), *res,
+                      [self = shared_from_this(), res](beast::error_code, size_t) { self->close(); });
   }
 
   // ---- what the client asks: subscribe and unsubscribe; anything else is answered with a status message ----
@@ -211,7 +219,9 @@ class Session : public std::enable_shared_from_this<Session> {
     });
   }
 
-  void status(int level, const std::string& message) { send(Json{{"op", "status"}, {"level", level}, {"message", message}}); }
+  void status(int level, const std::string& message) {
+    send(Json{{"op", "status"}, {"level", level}, {"message", message}});
+  }
 
   void on_client_message(bool text, const std::string& data) {
     if (!text) return status(2, "this server accepts no client messages (no client publishing)");
@@ -224,7 +234,8 @@ class Session : public std::enable_shared_from_this<Session> {
     const std::string op = j.is_object() && j.contains("op") && j["op"].is_string() ? j["op"].get<std::string>() : "";
     try {
       if (op == "subscribe") {
-        for (const auto& s : j.at("subscriptions")) subscribe(s.at("id").get<uint32_t>(), s.at("channelId").get<uint32_t>());
+        for (const auto& s : j.at("subscriptions"))
+          subscribe(s.at("id").get<uint32_t>(), s.at("channelId").get<uint32_t>());
       } else if (op == "unsubscribe") {
         for (const auto& id : j.at("subscriptionIds")) unsubscribe(id.get<uint32_t>());
       } else {
@@ -238,12 +249,16 @@ class Session : public std::enable_shared_from_this<Session> {
   void subscribe(uint32_t id, uint32_t channel) {
     {
       std::lock_guard lock(bridge_.mutex);
-      if (channel == 0 || channel > bridge_.advertised.size()) return status(2, "unknown channel " + std::to_string(channel));
+      if (channel == 0 || channel > bridge_.advertised.size())
+        return status(2, "unknown channel " + std::to_string(channel));
     }
     std::lock_guard lock(mutex_);
     if (subscriptions_.count(id) || by_channel_.count(channel)) {
-      push(control(Json{{"op", "status"}, {"level", 2}, {"message", "subscription " + std::to_string(id) + " or channel " +
-                                                                       std::to_string(channel) + " already subscribed"}}), false);
+      push(control(Json{{"op", "status"},
+                        {"level", 2},
+                        {"message", "subscription " + std::to_string(id) + " or channel " + std::to_string(channel) +
+                                        " already subscribed"}}),
+           false);
       return;
     }
     subscriptions_[id] = channel;
@@ -325,15 +340,19 @@ void FoxgloveBridge::Impl::add_session(const std::shared_ptr<Session>& s) {
   std::lock_guard lock(mutex);
   sessions.push_back(s);
   ++totals.clients_connected;
-  s->send(Json{{"op", "serverInfo"}, {"name", options.name}, {"capabilities", Json::array()},
-               {"supportedEncodings", Json::array()}, {"metadata", Json{{"version", sextant::version()}}},
+  s->send(Json{{"op", "serverInfo"},
+               {"name", options.name},
+               {"capabilities", Json::array()},
+               {"supportedEncodings", Json::array()},
+               {"metadata", Json{{"version", sextant::version()}}},
                {"sessionId", std::to_string(now_ns())}});
   if (!advertised.empty()) s->send(Json{{"op", "advertise"}, {"channels", advertised}});
 }
 
 void FoxgloveBridge::Impl::remove_session(const Session* s) {
   std::lock_guard lock(mutex);
-  sessions.erase(std::remove_if(sessions.begin(), sessions.end(), [s](const auto& p) { return p.get() == s; }), sessions.end());
+  sessions.erase(std::remove_if(sessions.begin(), sessions.end(), [s](const auto& p) { return p.get() == s; }),
+                 sessions.end());
 }
 
 uint32_t FoxgloveBridge::Impl::channel_for(const ViewerMessage& m) {
@@ -348,7 +367,8 @@ uint32_t FoxgloveBridge::Impl::channel_for(const ViewerMessage& m) {
   return id;
 }
 
-FoxgloveBridge::FoxgloveBridge(FoxgloveBridgeOptions options, TopicMapperOptions mapping) : impl_(std::make_shared<Impl>()) {
+FoxgloveBridge::FoxgloveBridge(FoxgloveBridgeOptions options, TopicMapperOptions mapping)
+    : impl_(std::make_shared<Impl>()) {
   impl_->options = std::move(options);
   impl_->mapper = TopicMapper(mapping);
   const std::string where = impl_->options.bind_address + ":" + std::to_string(impl_->options.port);

@@ -23,28 +23,28 @@ namespace sextant::viewer {
 
 struct FoxgloveBridgeOptions {
   std::string bind_address = "127.0.0.1";
-  uint16_t port = 8765;                   // 0: any free port (port() tells which)
-  size_t max_queued_messages = 4096;      // per client
-  size_t max_queued_bytes = 64u << 20;    // per client, and for the messages received but not yet mapped
-  size_t max_input_messages = 1u << 16;   // received but not yet mapped (a burst); beyond, the oldest are dropped
-  std::string name = "sextant";           // the server name clients show
+  uint16_t port = 8765;                  // 0: any free port (port() tells which)
+  size_t max_queued_messages = 4096;     // per client
+  size_t max_queued_bytes = 64u << 20;   // per client, and for the messages received but not yet mapped
+  size_t max_input_messages = 1u << 16;  // received but not yet mapped (a burst); beyond, the oldest are dropped
+  std::string name = "sextant";          // the server name clients show
 };
 
 struct FoxgloveClientStats {
-  std::string address;         // "127.0.0.1:51234"
+  std::string address;  // "127.0.0.1:51234"
   int64_t subscriptions = 0;
-  int64_t sent = 0;            // messages written to the socket
-  int64_t dropped = 0;         // messages dropped from a full queue
+  int64_t sent = 0;     // messages written to the socket
+  int64_t dropped = 0;  // messages dropped from a full queue
   size_t queued = 0, queued_max = 0;
 };
 
 struct FoxgloveBridgeStats {
-  int64_t lcm_messages = 0;      // fed to on_lcm and mapped
-  int64_t input_dropped = 0;     // received faster than they could be mapped, past max_input_messages: dropped
-  int64_t mapping_failures = 0;  // messages whose mapping threw (lost)
-  int64_t without_json = 0;      // not a sextant message (nothing to show): dropped
-  int64_t channels = 0;          // advertised
-  int64_t clients_connected = 0; // since start
+  int64_t lcm_messages = 0;       // fed to on_lcm and mapped
+  int64_t input_dropped = 0;      // received faster than they could be mapped, past max_input_messages: dropped
+  int64_t mapping_failures = 0;   // messages whose mapping threw (lost)
+  int64_t without_json = 0;       // not a sextant message (nothing to show): dropped
+  int64_t channels = 0;           // advertised
+  int64_t clients_connected = 0;  // since start
   int64_t rejected_connections = 0;
   std::vector<FoxgloveClientStats> clients;  // connected now
 };

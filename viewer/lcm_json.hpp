@@ -23,9 +23,9 @@ using Json = nlohmann::ordered_json;
 
 /// One message type: its name, fingerprint, schema and the two conversions.
 struct LcmJsonType {
-  std::string name;        // "sextant.fused_pose_t" (the schema name viewers show)
-  int64_t fingerprint = 0; // lcm-gen's getHash(): the first 8 bytes of every encoded message, big-endian
-  std::string schema;      // JSON Schema of the JSON form
+  std::string name;         // "sextant.fused_pose_t" (the schema name viewers show)
+  int64_t fingerprint = 0;  // lcm-gen's getHash(): the first 8 bytes of every encoded message, big-endian
+  std::string schema;       // JSON Schema of the JSON form
   /// Encoded bytes -> JSON; nullopt, with `error` saying why, when the bytes are not a well-formed message of this
   /// type (lengths checked before decoding: daemon/runtime/wire_layout.hpp).  Never throws.
   std::function<std::optional<Json>(const uint8_t* data, size_t size, std::string* error)> decode;

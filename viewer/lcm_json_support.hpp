@@ -69,7 +69,8 @@ void read_value(const Json& j, T& v, const Where& at) {
       v = static_cast<T>(u);
     } else if (j.is_number_integer()) {
       const auto i = j.get<int64_t>();
-      if (i < static_cast<int64_t>(std::numeric_limits<T>::min()) || i > static_cast<int64_t>(std::numeric_limits<T>::max()))
+      if (i < static_cast<int64_t>(std::numeric_limits<T>::min()) ||
+          i > static_cast<int64_t>(std::numeric_limits<T>::max()))
         json_error(at, "integer out of range");
       v = static_cast<T>(i);
     } else {

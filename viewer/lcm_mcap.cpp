@@ -37,7 +37,8 @@ uint16_t McapRecorder::channel_for(const ViewerMessage& m) {
   if (m.schema) {
     auto s = schema_ids_.find(m.schema->name);
     if (s == schema_ids_.end())
-      s = schema_ids_.emplace(m.schema->name, writer_.add_schema(m.schema->name, m.schema->encoding, m.schema->data)).first;
+      s = schema_ids_.emplace(m.schema->name, writer_.add_schema(m.schema->name, m.schema->encoding, m.schema->data))
+              .first;
     schema_id = s->second;
   }
   std::map<std::string, std::string> metadata;
@@ -79,7 +80,8 @@ void ReplayMcapRecorder::close() {
   recorder_.close();
 }
 
-LcmToMcapResult convert_lcm_to_mcap(const std::string& lcm_path, const std::string& mcap_path, McapWriterOptions options) {
+LcmToMcapResult convert_lcm_to_mcap(const std::string& lcm_path, const std::string& mcap_path,
+                                    McapWriterOptions options) {
   runtime::LogReader reader(lcm_path);
   McapRecorder recorder(mcap_path, std::move(options));
   LcmToMcapResult r;
@@ -114,7 +116,8 @@ McapToLcmResult convert_mcap_to_lcm(const std::string& mcap_path, const std::str
       writer.write_raw(timestamp, lcm->second, m.data.data(), m.data.size());
     } else if (ch.message_encoding == "json") {
       const LcmJsonType* type = schema ? lcm_json_type_named(schema->name) : nullptr;
-      if (!type) throw std::runtime_error(where + ": schema " + (schema ? schema->name : "(none)") + " is not a sextant type");
+      if (!type)
+        throw std::runtime_error(where + ": schema " + (schema ? schema->name : "(none)") + " is not a sextant type");
       std::vector<uint8_t> bytes;
       try {
         bytes = type->encode(Json::parse(m.data.begin(), m.data.end()));

@@ -68,11 +68,12 @@ struct LcmToMcapResult {
   uint64_t bytes_in = 0, bytes_out = 0;
 };
 /// `sextant convert mcap IN.lcm -o OUT.mcap`.  Throws std::runtime_error naming the file on errors.
-LcmToMcapResult convert_lcm_to_mcap(const std::string& lcm_path, const std::string& mcap_path, McapWriterOptions options = {});
+LcmToMcapResult convert_lcm_to_mcap(const std::string& lcm_path, const std::string& mcap_path,
+                                    McapWriterOptions options = {});
 
 struct McapToLcmResult {
-  int64_t events = 0;          // LCM events written
-  int64_t views_skipped = 0;   // MCAP messages of the Foxglove views (not LCM channels)
+  int64_t events = 0;         // LCM events written
+  int64_t views_skipped = 0;  // MCAP messages of the Foxglove views (not LCM channels)
 };
 /// `sextant convert lcm IN.mcap -o OUT.lcm`.  Throws std::runtime_error naming the file, message and field on errors.
 McapToLcmResult convert_mcap_to_lcm(const std::string& mcap_path, const std::string& lcm_path);

@@ -12,8 +12,17 @@ namespace {
 
 constexpr char kMagic[8] = {'\x89', 'M', 'C', 'A', 'P', '0', '\r', '\n'};
 enum Op : uint8_t {
-  kHeader = 0x01, kFooter = 0x02, kSchema = 0x03, kChannel = 0x04, kMessage = 0x05, kChunk = 0x06,
-  kMessageIndex = 0x07, kChunkIndex = 0x08, kStatistics = 0x0B, kSummaryOffset = 0x0E, kDataEnd = 0x0F,
+  kHeader = 0x01,
+  kFooter = 0x02,
+  kSchema = 0x03,
+  kChannel = 0x04,
+  kMessage = 0x05,
+  kChunk = 0x06,
+  kMessageIndex = 0x07,
+  kChunkIndex = 0x08,
+  kStatistics = 0x0B,
+  kSummaryOffset = 0x0E,
+  kDataEnd = 0x0F,
 };
 constexpr size_t kFooterRecordSize = 1 + 8 + 8 + 8 + 4;
 
@@ -221,7 +230,8 @@ void McapWriter::write(uint16_t channel_id, uint64_t log_time, uint64_t publish_
 void McapWriter::flush_chunk() {
   if (chunk_.empty()) return;
   std::string compressed(ZSTD_compressBound(chunk_.size()), '\0');
-  const size_t n = ZSTD_compress(compressed.data(), compressed.size(), chunk_.data(), chunk_.size(), options_.zstd_level);
+  const size_t n =
+      ZSTD_compress(compressed.data(), compressed.size(), chunk_.data(), chunk_.size(), options_.zstd_level);
   if (ZSTD_isError(n)) throw std::runtime_error(path_ + ": zstd: " + ZSTD_getErrorName(n));
   compressed.resize(n);
 
@@ -388,14 +398,19 @@ std::vector<RawRecord> split_records(const std::string& bytes, uint64_t base, co
   return out;
 }
 
-std::string decompress(const std::string& compression, const std::string& data, uint64_t size, const std::string& where) {
+std::string decompress(const std::string& compression, const std::string& data, uint64_t size,
+                       const std::string& where) {
   if (compression.empty()) return data;
-  if (compression != "zstd") throw std::runtime_error(where + ": chunk compression '" + compression + "' is not supported (zstd or none)");
-  if (size > (uint64_t{1} << 34)) throw std::runtime_error(where + ": chunk claims " + std::to_string(size) + " bytes uncompressed");
+  if (compression != "zstd")
+    throw std::runtime_error(where + ": chunk compression '" + compression + "' is not supported (zstd or none)");
+  if (size > (uint64_t{1} << 34))
+    throw std::runtime_error(where + ": chunk claims " + std::to_string(size) + " bytes uncompressed");
   std::string out(size, '\0');
   const size_t n = ZSTD_decompress(out.data(), out.size(), data.data(), data.size());
   if (ZSTD_isError(n)) throw std::runtime_error(where + ": zstd: " + ZSTD_getErrorName(n));
-  if (n != size) throw std::runtime_error(where + ": chunk decompressed to " + std::to_string(n) + " bytes, its header says " + std::to_string(size));
+  if (n != size)
+    throw std::runtime_error(where + ": chunk decompressed to " + std::to_string(n) + " bytes, its header says " +
+                             std::to_string(size));
   return out;
 }
 
@@ -405,12 +420,14 @@ McapReader::McapReader(const std::string& path) : path_(path) {
   std::ifstream in(path, std::ios::binary | std::ios::ate);
   if (!in) throw std::runtime_error("cannot read " + path);
   size_ = static_cast<uint64_t>(in.tellg());
-  if (size_ < 8 + 9 + 8 + kFooterRecordSize + 8) throw std::runtime_error(path + ": too small to be an MCAP file (" + std::to_string(size_) + " bytes)");
+  if (size_ < 8 + 9 + 8 + kFooterRecordSize + 8)
+    throw std::runtime_error(path + ": too small to be an MCAP file (" + std::to_string(size_) + " bytes)");
   if (read_at(0, 8) != std::string(kMagic, 8)) throw std::runtime_error(path + ": byte 0: not an MCAP file (no magic)");
   if (read_at(size_ - 8, 8) != std::string(kMagic, 8))
     throw std::runtime_error(path + ": byte " + std::to_string(size_ - 8) + ": no closing magic (file cut short?)");
   const std::string header = read_at(8, 9);
-  if (header[0] != static_cast<char>(kHeader)) throw std::runtime_error(path + ": byte 8: the first record is not a Header");
+  if (header[0] != static_cast<char>(kHeader))
+    throw std::runtime_error(path + ": byte 8: the first record is not a Header");
   Cursor hc(header, 8, path, "Header");
   hc.get<uint8_t>();
   const uint64_t hlen = hc.get<uint64_t>();
@@ -423,12 +440,14 @@ McapReader::McapReader(const std::string& path) : path_(path) {
 
 std::string McapReader::read_at(uint64_t offset, uint64_t size) const {
   if (offset > size_ || size > size_ - offset)
-    throw std::runtime_error(path_ + ": byte " + std::to_string(offset) + ": " + std::to_string(size) + " bytes past the end of the file");
+    throw std::runtime_error(path_ + ": byte " + std::to_string(offset) + ": " + std::to_string(size) +
+                             " bytes past the end of the file");
   std::ifstream in(path_, std::ios::binary);
   in.seekg(static_cast<std::streamoff>(offset));
   std::string out(size, '\0');
   in.read(out.data(), static_cast<std::streamsize>(size));
-  if (!in) throw std::runtime_error(path_ + ": cannot read " + std::to_string(size) + " bytes at " + std::to_string(offset));
+  if (!in)
+    throw std::runtime_error(path_ + ": cannot read " + std::to_string(size) + " bytes at " + std::to_string(offset));
   return out;
 }
 
@@ -459,7 +478,8 @@ void McapReader::read_summary() {
     uint64_t len = 0;
     for (int i = 0; i < 8; ++i) len |= static_cast<uint64_t>(static_cast<uint8_t>(summary[pos + 1 + i])) << (8 * i);
     if (len > records_end - pos - 9)
-      throw std::runtime_error(path_ + ": byte " + std::to_string(summary_start + pos) + ": summary record past the summary's end");
+      throw std::runtime_error(path_ + ": byte " + std::to_string(summary_start + pos) +
+                               ": summary record past the summary's end");
     const std::string content = summary.substr(pos + 9, len);
     const uint64_t at = summary_start + pos + 9;
     if (op == kSchema) {
@@ -509,12 +529,14 @@ void McapReader::read_summary() {
 }
 
 // A linear scan of the data section: records outside chunks and inside them, in file order.
-void McapReader::for_each_message(const std::function<void(const McapChannel&, const McapSchema*, const McapMessage&)>& f) {
+void McapReader::for_each_message(
+    const std::function<void(const McapChannel&, const McapSchema*, const McapMessage&)>& f) {
   std::ifstream in(path_, std::ios::binary);
   uint64_t pos = 0;
   uint32_t data_crc = 0;
   auto read = [&](uint64_t n) {
-    if (n > size_ - pos) throw std::runtime_error(path_ + ": byte " + std::to_string(pos) + ": record past the end of the file");
+    if (n > size_ - pos)
+      throw std::runtime_error(path_ + ": byte " + std::to_string(pos) + ": record past the end of the file");
     std::string b(n, '\0');
     in.seekg(static_cast<std::streamoff>(pos));
     in.read(b.data(), static_cast<std::streamsize>(n));
@@ -532,7 +554,8 @@ void McapReader::for_each_message(const std::function<void(const McapChannel&, c
     } else if (op == kChannel) {
       auto ch = parse_channel(Cursor(content, at, path_, "Channel"));
       if (ch.schema_id != 0 && !schemas.count(ch.schema_id))
-        throw std::runtime_error(where + ": channel " + ch.topic + " names schema " + std::to_string(ch.schema_id) + " before it is declared");
+        throw std::runtime_error(where + ": channel " + ch.topic + " names schema " + std::to_string(ch.schema_id) +
+                                 " before it is declared");
       channels[ch.id] = ch;
     } else if (op == kMessage) {
       Cursor c(content, at, path_, "Message");
@@ -544,7 +567,8 @@ void McapReader::for_each_message(const std::function<void(const McapChannel&, c
       m.data.assign(content.begin() + 22, content.end());
       const auto ch = channels.find(m.channel_id);
       if (ch == channels.end())
-        throw std::runtime_error(where + ": message on channel " + std::to_string(m.channel_id) + " before the channel is declared");
+        throw std::runtime_error(where + ": message on channel " + std::to_string(m.channel_id) +
+                                 " before the channel is declared");
       const auto s = schemas.find(ch->second.schema_id);
       f(ch->second, s == schemas.end() ? nullptr : &s->second, m);
     }
@@ -560,7 +584,8 @@ void McapReader::for_each_message(const std::function<void(const McapChannel&, c
     if (op == kDataEnd) {
       Cursor c(content, at + 9, path_, "Data End");
       const uint32_t expected = c.get<uint32_t>();
-      if (expected != 0 && expected != data_crc) throw std::runtime_error(where + ": data section CRC mismatch (the data section is corrupt)");
+      if (expected != 0 && expected != data_crc)
+        throw std::runtime_error(where + ": data section CRC mismatch (the data section is corrupt)");
       return;
     }
     if (op == kFooter) return;  // a file without Data End (older writers)
@@ -576,7 +601,8 @@ void McapReader::for_each_message(const std::function<void(const McapChannel&, c
       const std::string records = decompress(compression, c.bytes(c.get<uint64_t>()), uncompressed_size, where);
       if (uncompressed_crc != 0 && crc32(records.data(), records.size()) != uncompressed_crc)
         throw std::runtime_error(where + ": chunk CRC mismatch (the chunk is corrupt)");
-      for (const auto& r : split_records(records, at, path_)) handle(r.op, r.content, at, where + " (chunk), record at " + std::to_string(r.offset));
+      for (const auto& r : split_records(records, at, path_))
+        handle(r.op, r.content, at, where + " (chunk), record at " + std::to_string(r.offset));
     } else {
       handle(op, content, at + 9, where);
     }

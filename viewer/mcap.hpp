@@ -104,11 +104,11 @@ class McapWriter {
   bool closed_ = false;
   std::vector<McapSchema> schemas_;
   std::vector<McapChannel> channels_;
-  std::vector<uint32_t> sequence_;                    // next sequence number per channel id
-  std::vector<bool> in_chunk_;                        // channel id declared in the open chunk
-  std::vector<bool> schema_in_chunk_;                 // schema id declared in the open chunk
-  std::string chunk_;                                 // the open chunk's uncompressed records
-  uint64_t chunk_start_ = 0, chunk_end_ = 0;          // message time range of the open chunk
+  std::vector<uint32_t> sequence_;            // next sequence number per channel id
+  std::vector<bool> in_chunk_;                // channel id declared in the open chunk
+  std::vector<bool> schema_in_chunk_;         // schema id declared in the open chunk
+  std::string chunk_;                         // the open chunk's uncompressed records
+  uint64_t chunk_start_ = 0, chunk_end_ = 0;  // message time range of the open chunk
   bool chunk_has_messages_ = false;
   std::map<uint16_t, std::vector<std::pair<uint64_t, uint64_t>>> chunk_index_;  // channel -> (log_time, offset)
   std::vector<McapChunkIndex> chunk_indexes_;

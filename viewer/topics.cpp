@@ -32,18 +32,27 @@ Eigen::Quaterniond quat_wxyz(const double* q) { return Eigen::Quaterniond(q[0], 
 
 /// A SceneEntity in the map frame with every primitive list present (the schema requires them all) and empty.
 Json entity(int64_t utime, const std::string& id) {
-  Json e{{"timestamp", stamp(utime)}, {"frame_id", "map"}, {"id", id}, {"lifetime", Json{{"sec", 0}, {"nsec", 0}}},
-         {"frame_locked", false}, {"metadata", Json::array()}};
-  for (const char* k : {"arrows", "cubes", "spheres", "cylinders", "lines", "triangles", "texts", "models"}) e[k] = Json::array();
+  Json e{
+      {"timestamp", stamp(utime)}, {"frame_id", "map"},        {"id", id}, {"lifetime", Json{{"sec", 0}, {"nsec", 0}}},
+      {"frame_locked", false},     {"metadata", Json::array()}};
+  for (const char* k : {"arrows", "cubes", "spheres", "cylinders", "lines", "triangles", "texts", "models"})
+    e[k] = Json::array();
   return e;
 }
 Json scene_update(Json entities) { return Json{{"deletions", Json::array()}, {"entities", std::move(entities)}}; }
 Json text(const Eigen::Vector3d& at, const std::string& s, const Json& c) {
-  return Json{{"pose", pose(at)}, {"billboard", true}, {"font_size", 14.0}, {"scale_invariant", true}, {"color", c}, {"text", s}};
+  return Json{{"pose", pose(at)},        {"billboard", true}, {"font_size", 14.0},
+              {"scale_invariant", true}, {"color", c},        {"text", s}};
 }
 Json line(int type, const Json& points, double thickness, const Json& c) {
-  return Json{{"type", type}, {"pose", pose(Eigen::Vector3d::Zero())}, {"thickness", thickness}, {"scale_invariant", false},
-              {"points", points}, {"color", c}, {"colors", Json::array()}, {"indices", Json::array()}};
+  return Json{{"type", type},
+              {"pose", pose(Eigen::Vector3d::Zero())},
+              {"thickness", thickness},
+              {"scale_invariant", false},
+              {"points", points},
+              {"color", c},
+              {"colors", Json::array()},
+              {"indices", Json::array()}};
 }
 Json sphere(const Eigen::Vector3d& at, const Eigen::Vector3d& size, const Json& c,
             const Eigen::Quaterniond& q = Eigen::Quaterniond::Identity()) {
@@ -105,8 +114,11 @@ struct TopicMapper::Views {
     out(o, "/sextant/" + m.source + "/" + m.estimator + "/pose", "foxglove.PoseInFrame",
         Json{{"timestamp", stamp(m.utime)}, {"frame_id", "map"}, {"pose", pose(p, q)}});
     auto transform = [&](const std::string& child) {
-      return Json{{"timestamp", stamp(m.utime)}, {"parent_frame_id", "map"}, {"child_frame_id", child},
-                  {"translation", vec3(p)}, {"rotation", quat(q)}};
+      return Json{{"timestamp", stamp(m.utime)},
+                  {"parent_frame_id", "map"},
+                  {"child_frame_id", child},
+                  {"translation", vec3(p)},
+                  {"rotation", quat(q)}};
     };
     Json transforms = Json::array({transform(m.source + "/" + m.estimator)});
     auto& body = bodies[m.source];
@@ -123,12 +135,14 @@ struct TopicMapper::Views {
   /// changes cost, not the whole trajectory.
   static constexpr int64_t kSegment = 256;
 
-  Json trajectory_segment(const engine::TrajectoryRebuild& rebuild, const std::string& source, int64_t segment, int64_t utime) {
+  Json trajectory_segment(const engine::TrajectoryRebuild& rebuild, const std::string& source, int64_t segment,
+                          int64_t utime) {
     const auto& kfs = rebuild.keyframes();
     Json points = Json::array();
     auto it = kfs.lower_bound(segment * kSegment);
     if (it != kfs.begin()) points.push_back(vec3(std::prev(it)->second.pose.position));
-    for (; it != kfs.end() && it->first < (segment + 1) * kSegment; ++it) points.push_back(vec3(it->second.pose.position));
+    for (; it != kfs.end() && it->first < (segment + 1) * kSegment; ++it)
+      points.push_back(vec3(it->second.pose.position));
     Json e = entity(utime, source + "/trajectory/" + std::to_string(segment));
     if (points.size() >= 2) e["lines"].push_back(line(kLineStrip, points, 0.05, color(0.1, 0.6, 1.0)));
     return e;
@@ -143,7 +157,8 @@ struct TopicMapper::Views {
       touched.insert(id / kSegment + 1);
     };
     if (t.kind == engine::Trajectory::Kind::kSnapshot)  // the keyframes it may erase (its range can be open-ended)
-      for (auto it = rebuild.keyframes().lower_bound(t.range_first); it != rebuild.keyframes().end() && it->first <= t.range_last; ++it)
+      for (auto it = rebuild.keyframes().lower_bound(t.range_first);
+           it != rebuild.keyframes().end() && it->first <= t.range_last; ++it)
         touch(it->first);
     rebuild.add(t);
     for (const auto& k : t.keyframes) touch(k.id);
@@ -153,7 +168,8 @@ struct TopicMapper::Views {
     if (!rebuild.keyframes().empty()) {
       Json label = entity(m.utime, m.source + "/trajectory/label");
       label["texts"].push_back(text(rebuild.keyframes().rbegin()->second.pose.position,
-                                    m.source + " (" + std::to_string(rebuild.keyframes().size()) + " keyframes)", color(1, 1, 1)));
+                                    m.source + " (" + std::to_string(rebuild.keyframes().size()) + " keyframes)",
+                                    color(1, 1, 1)));
       entities.push_back(label);
     }
     out(o, "/sextant/trajectories", "foxglove.SceneUpdate", scene_update(entities));
@@ -179,8 +195,8 @@ struct TopicMapper::Views {
     e["texts"].push_back(text(s, "sensor " + std::to_string(m.sensor_id), color(0.9, 0.8, 0.1)));
     Json rays = Json::array();
     for (const auto& d : m.detections) {
-      const Eigen::Vector3d dir(std::cos(d.elevation) * std::cos(d.azimuth), std::cos(d.elevation) * std::sin(d.azimuth),
-                                std::sin(d.elevation));
+      const Eigen::Vector3d dir(std::cos(d.elevation) * std::cos(d.azimuth),
+                                std::cos(d.elevation) * std::sin(d.azimuth), std::sin(d.elevation));
       rays.push_back(vec3(s));
       rays.push_back(vec3(s + options.bearing_ray_length_m * dir));
     }
@@ -192,12 +208,14 @@ struct TopicMapper::Views {
     const auto body = bodies.find(m.source);
     if (body == bodies.end()) return;  // no pose of the body yet: nowhere to place its sightings
     const Eigen::Isometry3d map_body = Eigen::Translation3d(body->second.position) * body->second.orientation;
-    const Eigen::Isometry3d map_sensor = map_body * (Eigen::Translation3d(vec(m.sensor_position)) * quat_wxyz(m.sensor_orientation));
+    const Eigen::Isometry3d map_sensor =
+        map_body * (Eigen::Translation3d(vec(m.sensor_position)) * quat_wxyz(m.sensor_orientation));
     Json e = entity(m.utime, m.source + "/sightings");
     Json rays = Json::array();
     for (const auto& s : m.observations) {
       const double el = m.planar ? 0.0 : s.elevation;
-      const Eigen::Vector3d in_sensor = s.range * Eigen::Vector3d(std::cos(el) * std::cos(s.azimuth), std::cos(el) * std::sin(s.azimuth), std::sin(el));
+      const Eigen::Vector3d in_sensor = s.range * Eigen::Vector3d(std::cos(el) * std::cos(s.azimuth),
+                                                                  std::cos(el) * std::sin(s.azimuth), std::sin(el));
       const Eigen::Vector3d p = map_sensor * in_sensor;
       rays.push_back(vec3(map_sensor.translation()));
       rays.push_back(vec3(p));
@@ -210,7 +228,9 @@ struct TopicMapper::Views {
   void truth(const sextant::truth_t& m, std::vector<ViewerMessage>& o) {
     if (m.kind == "robot") {
       out(o, "/sextant/" + m.source + "/truth/pose", "foxglove.PoseInFrame",
-          Json{{"timestamp", stamp(m.utime)}, {"frame_id", "map"}, {"pose", pose(vec(m.position), quat_wxyz(m.orientation))}});
+          Json{{"timestamp", stamp(m.utime)},
+               {"frame_id", "map"},
+               {"pose", pose(vec(m.position), quat_wxyz(m.orientation))}});
       return;
     }
     const std::string id = m.kind + " " + std::to_string(m.id);
@@ -271,7 +291,8 @@ void TopicMapper::map(const std::string& channel, const uint8_t* data, size_t si
   if (!json) {
     ++counts_.raw;
     if (options_.keep_raw)
-      out.push_back({"lcm_raw/" + channel, nullptr, "lcm", channel, std::string(reinterpret_cast<const char*>(data), size)});
+      out.push_back(
+          {"lcm_raw/" + channel, nullptr, "lcm", channel, std::string(reinterpret_cast<const char*>(data), size)});
     return;
   }
   out.push_back({channel, topic_schema(type->name), "json", channel, std::move(*json)});

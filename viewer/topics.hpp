@@ -59,9 +59,9 @@ struct TopicMapperOptions {
 };
 
 struct TopicMapperCounts {
-  int64_t messages = 0;    // LCM messages mapped
-  int64_t raw = 0;         // without a JSON form: kept raw (keep_raw) or dropped
-  int64_t view_errors = 0; // a Foxglove view that could not be built (the as-is topic still went out)
+  int64_t messages = 0;     // LCM messages mapped
+  int64_t raw = 0;          // without a JSON form: kept raw (keep_raw) or dropped
+  int64_t view_errors = 0;  // a Foxglove view that could not be built (the as-is topic still went out)
 };
 
 /// Turns LCM messages into viewer messages, in the order they arrive.  Stateful: trajectories are rebuilt, each

@@ -36,7 +36,8 @@ double mahalanobis(const AssociationProblem& p, const Stacked& s) {
     const auto k = static_cast<Eigen::Index>(s.cols.size());
     Eigen::MatrixXd Psub(k, k);
     for (Eigen::Index a = 0; a < k; ++a)
-      for (Eigen::Index b = 0; b < k; ++b) Psub(a, b) = (*p.covariance)(s.cols[static_cast<size_t>(a)], s.cols[static_cast<size_t>(b)]);
+      for (Eigen::Index b = 0; b < k; ++b)
+        Psub(a, b) = (*p.covariance)(s.cols[static_cast<size_t>(a)], s.cols[static_cast<size_t>(b)]);
     S = s.H * Psub * s.H.transpose() + s.R;
   }
   const Eigen::LLT<Eigen::MatrixXd> llt(S);
@@ -72,8 +73,8 @@ Stacked stack(const AssociationProblem& p, const std::vector<Candidate>& pairs, 
       s.H.middleRows(r, d) = c.jacobian;
     } else {
       for (size_t a = 0; a < c.columns.size(); ++a) {
-        const auto col = dense ? c.columns[a]
-                               : std::lower_bound(s.cols.begin(), s.cols.end(), c.columns[a]) - s.cols.begin();
+        const auto col =
+            dense ? c.columns[a] : std::lower_bound(s.cols.begin(), s.cols.end(), c.columns[a]) - s.cols.begin();
         s.H.block(r, col, d, 1) = c.jacobian.col(static_cast<Eigen::Index>(a));
       }
     }
@@ -214,11 +215,14 @@ BoundedAssociation associate_bounded(const AssociationProblem& p, int max_nodes)
       if (!c) continue;
       const Stacked one = stack(p, {*c}, {i});
       s.work += cost(one.nu.size(), width(p, one));
-      if (const double d2 = mahalanobis(p, one); d2 < p.individual_gate) s.compatible[static_cast<size_t>(i)].push_back({j, d2});
+      if (const double d2 = mahalanobis(p, one); d2 < p.individual_gate)
+        s.compatible[static_cast<size_t>(i)].push_back({j, d2});
       if (s.over_budget()) break;
     }
-    if (s.exhausted) s.compatible[static_cast<size_t>(i)].clear();  // not fully examined: no pairing
-    else out.examined = i + 1;
+    if (s.exhausted)
+      s.compatible[static_cast<size_t>(i)].clear();  // not fully examined: no pairing
+    else
+      out.examined = i + 1;
   }
   // Step 2: the search, or nearest neighbour when the budget is gone.
   s.best = s.current;

@@ -32,8 +32,8 @@ namespace sextant::assoc {
 /// The linearized prediction of sighting i as landmark j: innovation nu = z_i - h_j(x), Jacobian H (d x n).
 struct Candidate {
   Eigen::VectorXd innovation;
-  Eigen::MatrixXd jacobian;               // d x n, or d x columns.size() when `columns` is given
-  std::vector<Eigen::Index> columns;      // the state columns of a sparse Jacobian (empty: dense)
+  Eigen::MatrixXd jacobian;           // d x n, or d x columns.size() when `columns` is given
+  std::vector<Eigen::Index> columns;  // the state columns of a sparse Jacobian (empty: dense)
 };
 
 /// Returns the candidate for (i, j), or nullopt when it cannot be formed (e.g. landmark behind the sensor).
@@ -44,9 +44,9 @@ struct AssociationProblem {
   const Eigen::MatrixXd* covariance = nullptr;  // P, n x n
   std::vector<Eigen::MatrixXd> noise;           // R_i per sighting
   CandidateFn candidate;
-  double individual_gate = 9.21;                // chi-square, per sighting (2 dof at 99 %)
-  double joint_gate_probability = 0.99;         // for the joint test's chi-square with the stacked dimension
-  double work_budget = 5e7;                     // floating-point operations (about 50 ms); <= 0: unbounded
+  double individual_gate = 9.21;         // chi-square, per sighting (2 dof at 99 %)
+  double joint_gate_probability = 0.99;  // for the joint test's chi-square with the stacked dimension
+  double work_budget = 5e7;              // floating-point operations (about 50 ms); <= 0: unbounded
 };
 
 /// For each sighting, the landmark index it is paired with, or -1.

@@ -57,7 +57,9 @@ using sextant::runtime::LatencySummary;
 
 std::atomic<bool> g_interrupted{false};
 
-int64_t now_ns() { return std::chrono::duration_cast<std::chrono::nanoseconds>(Clock::now().time_since_epoch()).count(); }
+int64_t now_ns() {
+  return std::chrono::duration_cast<std::chrono::nanoseconds>(Clock::now().time_since_epoch()).count();
+}
 
 void handle_until(lcm::LCM& lcm, const std::atomic<bool>& stop) {
   while (!stop.load()) lcm.handleTimeout(20);
@@ -159,8 +161,7 @@ struct Monitor {
       for (const auto& k : m.keyframes) newest = std::max(newest, k.id);
       if (m.source == fed_source) {
         int64_t seen = newest_keyframe.load();
-        while (newest > seen && !newest_keyframe.compare_exchange_weak(seen, newest)) {
-        }
+        while (newest > seen && !newest_keyframe.compare_exchange_weak(seen, newest)) {}
         newest = std::max(newest, seen);
       }
       // One solve per publication: its UPDATE messages share the newest keyframe's time; SNAPSHOT chunks repeat
@@ -177,7 +178,8 @@ struct Monitor {
       Status s{t, {}, {}};
       for (const auto& st : m.stages) {
         auto& c = s.counters[st.name];
-        for (int i = 0; i < st.num_counters; ++i) c[st.counter_names[static_cast<size_t>(i)]] = st.counter_values[static_cast<size_t>(i)];
+        for (int i = 0; i < st.num_counters; ++i)
+          c[st.counter_names[static_cast<size_t>(i)]] = st.counter_values[static_cast<size_t>(i)];
         c["processed"] = st.processed;
         c["dropped"] = st.dropped;
         c["queue_depth"] = st.queue_depth;
@@ -209,8 +211,10 @@ void feed(lcm::LCM& lcm, const std::vector<sextant::runtime::LogRecord>& log, co
   for (const auto& r : log) {
     if (r.channel == "ODOMETRY") {
       const int64_t k = result.odometry;  // the vertex index = the keyframe id (every pose becomes a keyframe)
-      std::this_thread::sleep_until(start + std::chrono::duration_cast<Clock::duration>(period * static_cast<double>(k)));
-      while (!stop.load() && k - monitor.newest_keyframe.load() > o.window) std::this_thread::sleep_for(std::chrono::microseconds(200));
+      std::this_thread::sleep_until(start +
+                                    std::chrono::duration_cast<Clock::duration>(period * static_cast<double>(k)));
+      while (!stop.load() && k - monitor.newest_keyframe.load() > o.window)
+        std::this_thread::sleep_for(std::chrono::microseconds(200));
       if (stop.load()) return;
       lcm.publish(r.channel, r.data.data(), static_cast<unsigned>(r.data.size()));
       ++result.odometry;
@@ -297,7 +301,8 @@ int run_measure(const MeasureOptions& o) {
   const auto count = static_cast<size_t>(o.duration_s * o.rate_hz);
   const auto period_us = static_cast<int64_t>(std::llround(1e6 / o.rate_hz));
   const int64_t start_utime =
-      std::chrono::duration_cast<std::chrono::microseconds>(std::chrono::system_clock::now().time_since_epoch()).count();
+      std::chrono::duration_cast<std::chrono::microseconds>(std::chrono::system_clock::now().time_since_epoch())
+          .count();
 
   Receiver receiver;
   receiver.source = o.source;
@@ -305,7 +310,8 @@ int run_measure(const MeasureOptions& o) {
   receiver.start_utime = start_utime;
   receiver.period_us = period_us;
   receiver.count = count;
-  lcm_subscription_set_queue_capacity(sextant::runtime::subscribe_raw(rx_lcm, o.fused_prefix + ".*", &receiver), 100000);
+  lcm_subscription_set_queue_capacity(sextant::runtime::subscribe_raw(rx_lcm, o.fused_prefix + ".*", &receiver),
+                                      100000);
   lcm_subscription_set_queue_capacity(sextant::runtime::subscribe_raw(rx_lcm, o.pong, &receiver), 100000);
   Monitor monitor;
   monitor.fed_source = o.fed_source;
@@ -329,11 +335,13 @@ int run_measure(const MeasureOptions& o) {
   };
   // The optimizer must be running before the measurement starts.
   const auto deadline = Clock::now() + std::chrono::seconds(15);
-  while (!o.idle && monitor.newest_keyframe.load() < 0 && Clock::now() < deadline) std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  while (!o.idle && monitor.newest_keyframe.load() < 0 && Clock::now() < deadline)
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
   if (!o.idle && monitor.newest_keyframe.load() < 0) {
     shutdown();
-    std::fprintf(stderr, "daemon_latency: FAIL: no TRAJECTORY of '%s' within 15 s: the daemon's graph back end is not running\n",
-                 o.fed_source.c_str());
+    std::fprintf(
+        stderr, "daemon_latency: FAIL: no TRAJECTORY of '%s' within 15 s: the daemon's graph back end is not running\n",
+        o.fed_source.c_str());
     return 1;
   }
   std::this_thread::sleep_for(std::chrono::duration<double>(o.warmup_s));
@@ -378,8 +386,9 @@ int run_measure(const MeasureOptions& o) {
   for (const auto& e : o.expect)
     if (!receiver.arrivals.count(e)) channels.push_back(summarize(e, "daemon (nothing received)", {}, sent_odo, sent));
   const auto pong_it = receiver.arrivals.find(o.pong);
-  const ChannelResult raw = summarize(o.pong, "raw LCM round trip (echo)", pong_it == receiver.arrivals.end() ? std::vector<int64_t>{} : pong_it->second,
-                                      sent_ping, sent);
+  const ChannelResult raw =
+      summarize(o.pong, "raw LCM round trip (echo)",
+                pong_it == receiver.arrivals.end() ? std::vector<int64_t>{} : pong_it->second, sent_ping, sent);
 
   // The optimizer during the measurement [t_begin, t_end].
   const Monitor::Status* before = status_at(monitor.statuses, t_begin);
@@ -402,7 +411,9 @@ int run_measure(const MeasureOptions& o) {
   }
   const LatencySummary solve = solve_ms.summary();
   const double window_ms = static_cast<double>(t_end - t_begin) * 1e-6;
-  auto delta = [&](const std::string& stage, const std::string& name) { return counter(after, stage, name) - counter(before, stage, name); };
+  auto delta = [&](const std::string& stage, const std::string& name) {
+    return counter(after, stage, name) - counter(before, stage, name);
+  };
   int64_t graph_queue_max = 0, odometry_waiting_max = 0;
   for (const auto& s : monitor.statuses)
     if (s.at_ns >= t_begin && s.at_ns <= t_end) {
@@ -412,10 +423,13 @@ int run_measure(const MeasureOptions& o) {
   const double per_minute = 60e3 / window_ms;
 
   // Report.
-  std::printf("daemon latency: %zu odometry messages of '%s' at %.0f Hz over %.1f s; raw round trip: the same bytes at the same rate\n",
-              sent, o.source.c_str(), o.rate_hz, window_ms * 1e-3);
+  std::printf(
+      "daemon latency: %zu odometry messages of '%s' at %.0f Hz over %.1f s; raw round trip: the same bytes at the "
+      "same rate\n",
+      sent, o.source.c_str(), o.rate_hz, window_ms * 1e-3);
   std::printf("  1-minute load average at the start / end of the measurement: %.2f / %.2f\n", load_begin, load_end);
-  std::printf("  %-26s %-28s %8s %6s %8s %8s %8s\n", "channel", "path", "samples", "lost", "p50_ms", "p99_ms", "max_ms");
+  std::printf("  %-26s %-28s %8s %6s %8s %8s %8s\n", "channel", "path", "samples", "lost", "p50_ms", "p99_ms",
+              "max_ms");
   auto row = [](const ChannelResult& c) {
     std::printf("  %-26s %-28s %8lld %6lld %8.3f %8.3f %8.3f\n", c.channel.c_str(), c.label.c_str(),
                 static_cast<long long>(c.received), static_cast<long long>(c.lost), c.latency.p50_ms, c.latency.p99_ms,
@@ -425,64 +439,101 @@ int run_measure(const MeasureOptions& o) {
   row(raw);
   for (const auto& c : channels)
     if (raw.latency.p50_ms > 0 && c.received > 0)
-      std::printf("  %-26s daemon/raw: p50 x%.2f, p99 x%.2f\n", c.channel.c_str(), c.latency.p50_ms / raw.latency.p50_ms,
-                  c.latency.p99_ms / raw.latency.p99_ms);
+      std::printf("  %-26s daemon/raw: p50 x%.2f, p99 x%.2f\n", c.channel.c_str(),
+                  c.latency.p50_ms / raw.latency.p50_ms, c.latency.p99_ms / raw.latency.p99_ms);
   if (o.idle)
     std::printf("optimizer during the measurement (idle baseline: no background body):\n");
   else
-    std::printf("optimizer during the measurement (fed body '%s', %lld of %lld poses fed so far%s):\n", o.fed_source.c_str(),
-                static_cast<long long>(fed.odometry), static_cast<long long>(fed.total_odometry),
+    std::printf("optimizer during the measurement (fed body '%s', %lld of %lld poses fed so far%s):\n",
+                o.fed_source.c_str(), static_cast<long long>(fed.odometry), static_cast<long long>(fed.total_odometry),
                 fed.finished_ns >= 0 && fed.finished_ns < t_end ? ", the whole graph sent BEFORE the end" : "");
-  std::printf("  keyframes on TRAJECTORY %lld -> %lld; graph stage: keyframes +%lld, loops accepted +%lld, rejected +%lld, unmatched +%lld\n",
-              static_cast<long long>(first_kf), static_cast<long long>(last_kf), static_cast<long long>(delta("graph", "keyframes")),
-              static_cast<long long>(delta("graph", "loops_accepted")), static_cast<long long>(delta("graph", "loops_rejected")),
-              static_cast<long long>(delta("graph", "loops_unmatched")));
-  std::printf("  solves (TRAJECTORY) %lld of the fed body + %lld of '%s'; solve_ms p50 %.2f p99 %.2f max %.2f; busy %.0f %% of the time; chi2 %.1f\n",
-              static_cast<long long>(solves_fed), static_cast<long long>(solves_body), o.source.c_str(), solve.p50_ms,
-              solve.p99_ms, solve.max_ms, 100.0 * busy_ms / window_ms, last_chi2);
+  std::printf(
+      "  keyframes on TRAJECTORY %lld -> %lld; graph stage: keyframes +%lld, loops accepted +%lld, rejected +%lld, "
+      "unmatched +%lld\n",
+      static_cast<long long>(first_kf), static_cast<long long>(last_kf),
+      static_cast<long long>(delta("graph", "keyframes")), static_cast<long long>(delta("graph", "loops_accepted")),
+      static_cast<long long>(delta("graph", "loops_rejected")),
+      static_cast<long long>(delta("graph", "loops_unmatched")));
+  std::printf(
+      "  solves (TRAJECTORY) %lld of the fed body + %lld of '%s'; solve_ms p50 %.2f p99 %.2f max %.2f; busy %.0f %% of "
+      "the time; chi2 %.1f\n",
+      static_cast<long long>(solves_fed), static_cast<long long>(solves_body), o.source.c_str(), solve.p50_ms,
+      solve.p99_ms, solve.max_ms, 100.0 * busy_ms / window_ms, last_chi2);
   std::printf("  per minute: keyframes %.0f, loops accepted %.0f (graph stage counters over the measurement)\n",
               static_cast<double>(delta("graph", "keyframes")) * per_minute,
               static_cast<double>(delta("graph", "loops_accepted")) * per_minute);
-  std::printf("  graph queue depth max %lld; dropped: graph +%lld, graph_pose +%lld, filter +%lld\n", static_cast<long long>(graph_queue_max),
-              static_cast<long long>(delta("graph", "dropped")), static_cast<long long>(delta("graph_pose", "dropped")),
+  std::printf("  graph queue depth max %lld; dropped: graph +%lld, graph_pose +%lld, filter +%lld\n",
+              static_cast<long long>(graph_queue_max), static_cast<long long>(delta("graph", "dropped")),
+              static_cast<long long>(delta("graph_pose", "dropped")),
               static_cast<long long>(delta("filter", "dropped")));
-  std::printf("  graph odometry: coalesced +%lld (joined a batch waiting for the stage), waiting max %lld (messages in batches)\n",
-              static_cast<long long>(delta("graph", "odometry_coalesced")), static_cast<long long>(odometry_waiting_max));
-  const std::array<double, 3> graph_latency = after != nullptr && after->latency_ms.count("graph") ? after->latency_ms.at("graph") : std::array<double, 3>{};
-  std::printf("  graph stage, event in -> processed (the last 10 s of events, from SEXTANT_STATUS): p50 %.1f ms, p99 %.1f ms, max %.1f ms\n",
-              graph_latency[0], graph_latency[1], graph_latency[2]);
+  std::printf(
+      "  graph odometry: coalesced +%lld (joined a batch waiting for the stage), waiting max %lld (messages in "
+      "batches)\n",
+      static_cast<long long>(delta("graph", "odometry_coalesced")), static_cast<long long>(odometry_waiting_max));
+  const std::array<double, 3> graph_latency =
+      after != nullptr && after->latency_ms.count("graph") ? after->latency_ms.at("graph") : std::array<double, 3>{};
+  std::printf(
+      "  graph stage, event in -> processed (the last 10 s of events, from SEXTANT_STATUS): p50 %.1f ms, p99 %.1f ms, "
+      "max %.1f ms\n",
+      graph_latency[0], graph_latency[1], graph_latency[2]);
   if (!o.idle && fed.finished_ns >= 0)
-    std::printf("  the whole graph was fed %.1f s into the measurement\n", static_cast<double>(fed.finished_ns - t_begin) * 1e-9);
+    std::printf("  the whole graph was fed %.1f s into the measurement\n",
+                static_cast<double>(fed.finished_ns - t_begin) * 1e-9);
   if (receiver.duplicates + receiver.undecodable + receiver.unknown_time > 0)
-    std::printf("  receiver: %lld duplicates, %lld undecodable, %lld unknown times\n", static_cast<long long>(receiver.duplicates),
-                static_cast<long long>(receiver.undecodable), static_cast<long long>(receiver.unknown_time));
+    std::printf("  receiver: %lld duplicates, %lld undecodable, %lld unknown times\n",
+                static_cast<long long>(receiver.duplicates), static_cast<long long>(receiver.undecodable),
+                static_cast<long long>(receiver.unknown_time));
 
   if (!o.json.empty()) {
     sextant::tools::JsonWriter j;
-    j.begin_object().field("samples_sent", sent).field("rate_hz", o.rate_hz).field("window_s", window_ms * 1e-3)
-        .field("load_begin", load_begin).field("load_end", load_end);
+    j.begin_object()
+        .field("samples_sent", sent)
+        .field("rate_hz", o.rate_hz)
+        .field("window_s", window_ms * 1e-3)
+        .field("load_begin", load_begin)
+        .field("load_end", load_end);
     auto put = [&](const ChannelResult& c) {
-      j.key(c.channel).begin_object().field("received", c.received).field("lost", c.lost).field("p50_ms", c.latency.p50_ms)
-          .field("p99_ms", c.latency.p99_ms).field("max_ms", c.latency.max_ms).end_object();
+      j.key(c.channel)
+          .begin_object()
+          .field("received", c.received)
+          .field("lost", c.lost)
+          .field("p50_ms", c.latency.p50_ms)
+          .field("p99_ms", c.latency.p99_ms)
+          .field("max_ms", c.latency.max_ms)
+          .end_object();
     };
     j.key("latency").begin_object();
     for (const auto& c : channels) put(c);
     put(raw);
     j.end_object();
-    j.key("optimizer").begin_object().field("fed_poses", fed.odometry).field("total_poses", fed.total_odometry)
+    j.key("optimizer")
+        .begin_object()
+        .field("fed_poses", fed.odometry)
+        .field("total_poses", fed.total_odometry)
         .field("finished_before_end", fed.finished_ns >= 0 && fed.finished_ns < t_end)
-        .field("first_keyframe", first_kf).field("last_keyframe", last_kf)
-        .field("keyframes_added", delta("graph", "keyframes")).field("loops_accepted", delta("graph", "loops_accepted"))
-        .field("loops_rejected", delta("graph", "loops_rejected")).field("solves_fed", solves_fed).field("solves_body", solves_body)
-        .field("solve_ms_p50", solve.p50_ms).field("solve_ms_p99", solve.p99_ms).field("solve_ms_max", solve.max_ms)
-        .field("busy_fraction", busy_ms / window_ms).field("graph_queue_max", graph_queue_max)
-        .field("graph_dropped", delta("graph", "dropped")).field("graph_pose_dropped", delta("graph_pose", "dropped"))
+        .field("first_keyframe", first_kf)
+        .field("last_keyframe", last_kf)
+        .field("keyframes_added", delta("graph", "keyframes"))
+        .field("loops_accepted", delta("graph", "loops_accepted"))
+        .field("loops_rejected", delta("graph", "loops_rejected"))
+        .field("solves_fed", solves_fed)
+        .field("solves_body", solves_body)
+        .field("solve_ms_p50", solve.p50_ms)
+        .field("solve_ms_p99", solve.p99_ms)
+        .field("solve_ms_max", solve.max_ms)
+        .field("busy_fraction", busy_ms / window_ms)
+        .field("graph_queue_max", graph_queue_max)
+        .field("graph_dropped", delta("graph", "dropped"))
+        .field("graph_pose_dropped", delta("graph_pose", "dropped"))
         .field("filter_dropped", delta("filter", "dropped"))
-        .field("odometry_coalesced", delta("graph", "odometry_coalesced")).field("odometry_waiting_max", odometry_waiting_max)
+        .field("odometry_coalesced", delta("graph", "odometry_coalesced"))
+        .field("odometry_waiting_max", odometry_waiting_max)
         .field("keyframes_per_minute", static_cast<double>(delta("graph", "keyframes")) * per_minute)
         .field("loops_per_minute", static_cast<double>(delta("graph", "loops_accepted")) * per_minute)
-        .field("graph_event_latency_ms_p50", graph_latency[0]).field("graph_event_latency_ms_p99", graph_latency[1])
-        .field("feed_finished_s", fed.finished_ns >= 0 ? static_cast<double>(fed.finished_ns - t_begin) * 1e-9 : -1.0).end_object();
+        .field("graph_event_latency_ms_p50", graph_latency[0])
+        .field("graph_event_latency_ms_p99", graph_latency[1])
+        .field("feed_finished_s", fed.finished_ns >= 0 ? static_cast<double>(fed.finished_ns - t_begin) * 1e-9 : -1.0)
+        .end_object();
     j.end_object();
     std::ofstream(o.json) << j.str() << "\n";
   }
@@ -510,7 +561,8 @@ int run_measure(const MeasureOptions& o) {
       rc = 1;
     }
   if (channels.empty()) {
-    std::fprintf(stderr, "daemon_latency: FAIL: no fused pose of '%s' on any %s* channel\n", o.source.c_str(), o.fused_prefix.c_str());
+    std::fprintf(stderr, "daemon_latency: FAIL: no fused pose of '%s' on any %s* channel\n", o.source.c_str(),
+                 o.fused_prefix.c_str());
     rc = 1;
   }
   if (raw.received == 0) {
@@ -518,8 +570,10 @@ int run_measure(const MeasureOptions& o) {
     rc = 1;
   }
   if (!o.idle && (solves_fed == 0 || delta("graph", "keyframes") <= 0)) {
-    std::fprintf(stderr, "daemon_latency: FAIL: the optimizer did not run during the measurement (%lld solves, %lld keyframes)\n",
-                 static_cast<long long>(solves_fed), static_cast<long long>(delta("graph", "keyframes")));
+    std::fprintf(
+        stderr,
+        "daemon_latency: FAIL: the optimizer did not run during the measurement (%lld solves, %lld keyframes)\n",
+        static_cast<long long>(solves_fed), static_cast<long long>(delta("graph", "keyframes")));
     rc = 1;
   }
   return rc;
@@ -540,14 +594,20 @@ int main(int argc, char** argv) {
 
   MeasureOptions mo;
   auto* measure = app.add_subcommand("measure", "publish odometry, time the daemon's fused poses and the echo");
-  auto* feed_option = measure->add_option("--feed", mo.feed.path, "LCM log of the background body (sextant convert g2o)")->check(CLI::ExistingFile);
-  measure->add_flag("--idle", mo.idle, "no background body: the baseline with the optimizer idle")->excludes(feed_option);
+  auto* feed_option =
+      measure->add_option("--feed", mo.feed.path, "LCM log of the background body (sextant convert g2o)")
+          ->check(CLI::ExistingFile);
+  measure->add_flag("--idle", mo.idle, "no background body: the baseline with the optimizer idle")
+      ->excludes(feed_option);
   measure->add_option("--fed-source", mo.fed_source, "odometry source of the background body in that log");
-  measure->add_option("--window", mo.feed.window, "poses fed ahead of the newest optimized keyframe")->check(CLI::PositiveNumber);
-  measure->add_option("--feed-rate", mo.feed.max_rate, "largest feeding rate, poses per second")->check(CLI::PositiveNumber);
+  measure->add_option("--window", mo.feed.window, "poses fed ahead of the newest optimized keyframe")
+      ->check(CLI::PositiveNumber);
+  measure->add_option("--feed-rate", mo.feed.max_rate, "largest feeding rate, poses per second")
+      ->check(CLI::PositiveNumber);
   measure->add_option("--duration", mo.duration_s, "seconds of measurement")->check(CLI::Range(0.1, 600.0));
   measure->add_option("--rate", mo.rate_hz, "odometry (and ping) rate, Hz")->check(CLI::Range(1.0, 20000.0));
-  measure->add_option("--warmup", mo.warmup_s, "seconds of feeding before the measurement")->check(CLI::NonNegativeNumber);
+  measure->add_option("--warmup", mo.warmup_s, "seconds of feeding before the measurement")
+      ->check(CLI::NonNegativeNumber);
   measure->add_option("--source", mo.source, "odometry source of the measured body");
   measure->add_option("--expect", mo.expect, "fused-pose channels that must deliver (fail otherwise)");
   measure->add_option("--ping", mo.ping, "ping channel");

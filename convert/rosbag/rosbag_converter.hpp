@@ -37,9 +37,9 @@ struct RosbagConversionOptions {
 };
 
 struct RosbagConversion {
-  std::map<std::string, int64_t> written;   // per channel
-  std::map<std::string, int64_t> skipped;   // per topic: types sextant does not take, or topics not listed
-  std::map<std::string, int64_t> dropped;   // per topic: non-finite values
+  std::map<std::string, int64_t> written;  // per channel
+  std::map<std::string, int64_t> skipped;  // per topic: types sextant does not take, or topics not listed
+  std::map<std::string, int64_t> dropped;  // per topic: non-finite values
 };
 
 /// Receives each converted message: its utime, channel and lcm-gen encoding.
@@ -51,6 +51,7 @@ RosbagConversion read_rosbag(const std::string& bag, const RosbagConversionOptio
 
 /// read_rosbag into an LCM log (each event stamped with the message's utime); also throws when `out_lcm` cannot be
 /// written.
-RosbagConversion convert_rosbag(const std::string& bag, const std::string& out_lcm, const RosbagConversionOptions& options = {});
+RosbagConversion convert_rosbag(const std::string& bag, const std::string& out_lcm,
+                                const RosbagConversionOptions& options = {});
 
 }  // namespace sextant::tools

@@ -66,8 +66,9 @@ void body_frame_pose_covariance(const Eigen::Quaterniond& q, const boost::array<
 }
 
 void set_pose(sextant::odometry_t& m, const geometry_msgs::PoseWithCovariance& p) {
-  const Eigen::Quaterniond q = Eigen::Quaterniond(p.pose.orientation.w, p.pose.orientation.x, p.pose.orientation.y,
-                                                  p.pose.orientation.z).normalized();
+  const Eigen::Quaterniond q =
+      Eigen::Quaterniond(p.pose.orientation.w, p.pose.orientation.x, p.pose.orientation.y, p.pose.orientation.z)
+          .normalized();
   m.position[0] = p.pose.position.x, m.position[1] = p.pose.position.y, m.position[2] = p.pose.position.z;
   m.orientation[0] = q.w(), m.orientation[1] = q.x(), m.orientation[2] = q.y(), m.orientation[3] = q.z();
   body_frame_pose_covariance(q, p.covariance, m.covariance);
@@ -98,10 +99,10 @@ bool convert(Context& c, const std::string& channel, const std::string& topic, c
   if (m.has_angular_velocity) copy(m.angular_velocity_covariance, r.angular_velocity_covariance);
   if (m.has_linear_acceleration) copy(m.linear_acceleration_covariance, r.linear_acceleration_covariance);
   if (m.has_orientation) copy(m.orientation_covariance, r.orientation_covariance);
-  const bool ok = (!m.has_angular_velocity || (finite(m.angular_velocity) && finite(m.angular_velocity_covariance))) &&
-                  (!m.has_linear_acceleration ||
-                   (finite(m.linear_acceleration) && finite(m.linear_acceleration_covariance))) &&
-                  (!m.has_orientation || (finite(m.orientation) && finite(m.orientation_covariance)));
+  const bool ok =
+      (!m.has_angular_velocity || (finite(m.angular_velocity) && finite(m.angular_velocity_covariance))) &&
+      (!m.has_linear_acceleration || (finite(m.linear_acceleration) && finite(m.linear_acceleration_covariance))) &&
+      (!m.has_orientation || (finite(m.orientation) && finite(m.orientation_covariance)));
   if (!ok) return false;
   c.write(channel, m);
   return true;
@@ -158,7 +159,8 @@ bool try_convert(Context& c, const rosbag::MessageInstance& mi, const char* fall
   const auto msg = mi.instantiate<Ros>();
   if (!msg) return false;
   const auto it = c.options.channels.find(mi.getTopic());
-  if (!convert(c, it == c.options.channels.end() ? fallback : it->second, mi.getTopic(), *msg)) ++c.result.dropped[mi.getTopic()];
+  if (!convert(c, it == c.options.channels.end() ? fallback : it->second, mi.getTopic(), *msg))
+    ++c.result.dropped[mi.getTopic()];
   return true;
 }
 
@@ -180,7 +182,8 @@ RosbagConversion read_rosbag(const std::string& bag_path, const RosbagConversion
         ++result.skipped[mi.getTopic()];
         continue;
       }
-      const bool taken = try_convert<sensor_msgs::Imu>(c, mi, "IMU") || try_convert<nav_msgs::Odometry>(c, mi, "ODOMETRY") ||
+      const bool taken = try_convert<sensor_msgs::Imu>(c, mi, "IMU") ||
+                         try_convert<nav_msgs::Odometry>(c, mi, "ODOMETRY") ||
                          try_convert<sensor_msgs::NavSatFix>(c, mi, "GNSS") ||
                          try_convert<geometry_msgs::PoseWithCovarianceStamped>(c, mi, "ODOMETRY");
       if (!taken) ++result.skipped[mi.getTopic()];

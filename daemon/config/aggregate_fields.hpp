@@ -22,7 +22,9 @@ struct AnyField {
 };
 
 template <class T, class... A>
-constexpr bool brace_constructible = requires { T{std::declval<A>()...}; };
+constexpr bool brace_constructible = requires {
+  T{std::declval<A>()...};
+};
 
 template <class T, size_t... I>
 constexpr bool takes_fields(std::index_sequence<I...>) {
@@ -31,9 +33,12 @@ constexpr bool takes_fields(std::index_sequence<I...>) {
 
 template <class T, size_t N = 0>
 constexpr size_t field_count() {
-  if constexpr (N > 40) return 0;
-  else if constexpr (takes_fields<T>(std::make_index_sequence<N + 1>{})) return field_count<T, N + 1>();
-  else return N;
+  if constexpr (N > 40)
+    return 0;
+  else if constexpr (takes_fields<T>(std::make_index_sequence<N + 1>{}))
+    return field_count<T, N + 1>();
+  else
+    return N;
 }
 
 template <class T>
@@ -88,25 +93,44 @@ auto fields_of(T& t) {
   SEXTANT_FIELDS_CASE(19, f0, f1, f2, f3, f4, f5, f6, f7, f8, f9, f10, f11, f12, f13, f14, f15, f16, f17, f18)
   SEXTANT_FIELDS_CASE(20, f0, f1, f2, f3, f4, f5, f6, f7, f8, f9, f10, f11, f12, f13, f14, f15, f16, f17, f18, f19)
   SEXTANT_FIELDS_CASE(21, f0, f1, f2, f3, f4, f5, f6, f7, f8, f9, f10, f11, f12, f13, f14, f15, f16, f17, f18, f19, f20)
-  SEXTANT_FIELDS_CASE(22, f0, f1, f2, f3, f4, f5, f6, f7, f8, f9, f10, f11, f12, f13, f14, f15, f16, f17, f18, f19, f20, f21)
-  SEXTANT_FIELDS_CASE(23, f0, f1, f2, f3, f4, f5, f6, f7, f8, f9, f10, f11, f12, f13, f14, f15, f16, f17, f18, f19, f20, f21, f22)
-  SEXTANT_FIELDS_CASE(24, f0, f1, f2, f3, f4, f5, f6, f7, f8, f9, f10, f11, f12, f13, f14, f15, f16, f17, f18, f19, f20, f21, f22, f23)
-  SEXTANT_FIELDS_CASE(25, f0, f1, f2, f3, f4, f5, f6, f7, f8, f9, f10, f11, f12, f13, f14, f15, f16, f17, f18, f19, f20, f21, f22, f23, f24)
-  SEXTANT_FIELDS_CASE(26, f0, f1, f2, f3, f4, f5, f6, f7, f8, f9, f10, f11, f12, f13, f14, f15, f16, f17, f18, f19, f20, f21, f22, f23, f24, f25)
-  SEXTANT_FIELDS_CASE(27, f0, f1, f2, f3, f4, f5, f6, f7, f8, f9, f10, f11, f12, f13, f14, f15, f16, f17, f18, f19, f20, f21, f22, f23, f24, f25, f26)
-  SEXTANT_FIELDS_CASE(28, f0, f1, f2, f3, f4, f5, f6, f7, f8, f9, f10, f11, f12, f13, f14, f15, f16, f17, f18, f19, f20, f21, f22, f23, f24, f25, f26, f27)
-  SEXTANT_FIELDS_CASE(29, f0, f1, f2, f3, f4, f5, f6, f7, f8, f9, f10, f11, f12, f13, f14, f15, f16, f17, f18, f19, f20, f21, f22, f23, f24, f25, f26, f27, f28)
-  SEXTANT_FIELDS_CASE(30, f0, f1, f2, f3, f4, f5, f6, f7, f8, f9, f10, f11, f12, f13, f14, f15, f16, f17, f18, f19, f20, f21, f22, f23, f24, f25, f26, f27, f28, f29)
-  SEXTANT_FIELDS_CASE(31, f0, f1, f2, f3, f4, f5, f6, f7, f8, f9, f10, f11, f12, f13, f14, f15, f16, f17, f18, f19, f20, f21, f22, f23, f24, f25, f26, f27, f28, f29, f30)
-  SEXTANT_FIELDS_CASE(32, f0, f1, f2, f3, f4, f5, f6, f7, f8, f9, f10, f11, f12, f13, f14, f15, f16, f17, f18, f19, f20, f21, f22, f23, f24, f25, f26, f27, f28, f29, f30, f31)
-  SEXTANT_FIELDS_CASE(33, f0, f1, f2, f3, f4, f5, f6, f7, f8, f9, f10, f11, f12, f13, f14, f15, f16, f17, f18, f19, f20, f21, f22, f23, f24, f25, f26, f27, f28, f29, f30, f31, f32)
-  SEXTANT_FIELDS_CASE(34, f0, f1, f2, f3, f4, f5, f6, f7, f8, f9, f10, f11, f12, f13, f14, f15, f16, f17, f18, f19, f20, f21, f22, f23, f24, f25, f26, f27, f28, f29, f30, f31, f32, f33)
-  SEXTANT_FIELDS_CASE(35, f0, f1, f2, f3, f4, f5, f6, f7, f8, f9, f10, f11, f12, f13, f14, f15, f16, f17, f18, f19, f20, f21, f22, f23, f24, f25, f26, f27, f28, f29, f30, f31, f32, f33, f34)
-  SEXTANT_FIELDS_CASE(36, f0, f1, f2, f3, f4, f5, f6, f7, f8, f9, f10, f11, f12, f13, f14, f15, f16, f17, f18, f19, f20, f21, f22, f23, f24, f25, f26, f27, f28, f29, f30, f31, f32, f33, f34, f35)
-  SEXTANT_FIELDS_CASE(37, f0, f1, f2, f3, f4, f5, f6, f7, f8, f9, f10, f11, f12, f13, f14, f15, f16, f17, f18, f19, f20, f21, f22, f23, f24, f25, f26, f27, f28, f29, f30, f31, f32, f33, f34, f35, f36)
-  SEXTANT_FIELDS_CASE(38, f0, f1, f2, f3, f4, f5, f6, f7, f8, f9, f10, f11, f12, f13, f14, f15, f16, f17, f18, f19, f20, f21, f22, f23, f24, f25, f26, f27, f28, f29, f30, f31, f32, f33, f34, f35, f36, f37)
-  SEXTANT_FIELDS_CASE(39, f0, f1, f2, f3, f4, f5, f6, f7, f8, f9, f10, f11, f12, f13, f14, f15, f16, f17, f18, f19, f20, f21, f22, f23, f24, f25, f26, f27, f28, f29, f30, f31, f32, f33, f34, f35, f36, f37, f38)
-  SEXTANT_FIELDS_CASE(40, f0, f1, f2, f3, f4, f5, f6, f7, f8, f9, f10, f11, f12, f13, f14, f15, f16, f17, f18, f19, f20, f21, f22, f23, f24, f25, f26, f27, f28, f29, f30, f31, f32, f33, f34, f35, f36, f37, f38, f39)
+  SEXTANT_FIELDS_CASE(22, f0, f1, f2, f3, f4, f5, f6, f7, f8, f9, f10, f11, f12, f13, f14, f15, f16, f17, f18, f19, f20,
+                      f21)
+  SEXTANT_FIELDS_CASE(23, f0, f1, f2, f3, f4, f5, f6, f7, f8, f9, f10, f11, f12, f13, f14, f15, f16, f17, f18, f19, f20,
+                      f21, f22)
+  SEXTANT_FIELDS_CASE(24, f0, f1, f2, f3, f4, f5, f6, f7, f8, f9, f10, f11, f12, f13, f14, f15, f16, f17, f18, f19, f20,
+                      f21, f22, f23)
+  SEXTANT_FIELDS_CASE(25, f0, f1, f2, f3, f4, f5, f6, f7, f8, f9, f10, f11, f12, f13, f14, f15, f16, f17, f18, f19, f20,
+                      f21, f22, f23, f24)
+  SEXTANT_FIELDS_CASE(26, f0, f1, f2, f3, f4, f5, f6, f7, f8, f9, f10, f11, f12, f13, f14, f15, f16, f17, f18, f19, f20,
+                      f21, f22, f23, f24, f25)
+  SEXTANT_FIELDS_CASE(27, f0, f1, f2, f3, f4, f5, f6, f7, f8, f9, f10, f11, f12, f13, f14, f15, f16, f17, f18, f19, f20,
+                      f21, f22, f23, f24, f25, f26)
+  SEXTANT_FIELDS_CASE(28, f0, f1, f2, f3, f4, f5, f6, f7, f8, f9, f10, f11, f12, f13, f14, f15, f16, f17, f18, f19, f20,
+                      f21, f22, f23, f24, f25, f26, f27)
+  SEXTANT_FIELDS_CASE(29, f0, f1, f2, f3, f4, f5, f6, f7, f8, f9, f10, f11, f12, f13, f14, f15, f16, f17, f18, f19, f20,
+                      f21, f22, f23, f24, f25, f26, f27, f28)
+  SEXTANT_FIELDS_CASE(30, f0, f1, f2, f3, f4, f5, f6, f7, f8, f9, f10, f11, f12, f13, f14, f15, f16, f17, f18, f19, f20,
+                      f21, f22, f23, f24, f25, f26, f27, f28, f29)
+  SEXTANT_FIELDS_CASE(31, f0, f1, f2, f3, f4, f5, f6, f7, f8, f9, f10, f11, f12, f13, f14, f15, f16, f17, f18, f19, f20,
+                      f21, f22, f23, f24, f25, f26, f27, f28, f29, f30)
+  SEXTANT_FIELDS_CASE(32, f0, f1, f2, f3, f4, f5, f6, f7, f8, f9, f10, f11, f12, f13, f14, f15, f16, f17, f18, f19, f20,
+                      f21, f22, f23, f24, f25, f26, f27, f28, f29, f30, f31)
+  SEXTANT_FIELDS_CASE(33, f0, f1, f2, f3, f4, f5, f6, f7, f8, f9, f10, f11, f12, f13, f14, f15, f16, f17, f18, f19, f20,
+                      f21, f22, f23, f24, f25, f26, f27, f28, f29, f30, f31, f32)
+  SEXTANT_FIELDS_CASE(34, f0, f1, f2, f3, f4, f5, f6, f7, f8, f9, f10, f11, f12, f13, f14, f15, f16, f17, f18, f19, f20,
+                      f21, f22, f23, f24, f25, f26, f27, f28, f29, f30, f31, f32, f33)
+  SEXTANT_FIELDS_CASE(35, f0, f1, f2, f3, f4, f5, f6, f7, f8, f9, f10, f11, f12, f13, f14, f15, f16, f17, f18, f19, f20,
+                      f21, f22, f23, f24, f25, f26, f27, f28, f29, f30, f31, f32, f33, f34)
+  SEXTANT_FIELDS_CASE(36, f0, f1, f2, f3, f4, f5, f6, f7, f8, f9, f10, f11, f12, f13, f14, f15, f16, f17, f18, f19, f20,
+                      f21, f22, f23, f24, f25, f26, f27, f28, f29, f30, f31, f32, f33, f34, f35)
+  SEXTANT_FIELDS_CASE(37, f0, f1, f2, f3, f4, f5, f6, f7, f8, f9, f10, f11, f12, f13, f14, f15, f16, f17, f18, f19, f20,
+                      f21, f22, f23, f24, f25, f26, f27, f28, f29, f30, f31, f32, f33, f34, f35, f36)
+  SEXTANT_FIELDS_CASE(38, f0, f1, f2, f3, f4, f5, f6, f7, f8, f9, f10, f11, f12, f13, f14, f15, f16, f17, f18, f19, f20,
+                      f21, f22, f23, f24, f25, f26, f27, f28, f29, f30, f31, f32, f33, f34, f35, f36, f37)
+  SEXTANT_FIELDS_CASE(39, f0, f1, f2, f3, f4, f5, f6, f7, f8, f9, f10, f11, f12, f13, f14, f15, f16, f17, f18, f19, f20,
+                      f21, f22, f23, f24, f25, f26, f27, f28, f29, f30, f31, f32, f33, f34, f35, f36, f37, f38)
+  SEXTANT_FIELDS_CASE(40, f0, f1, f2, f3, f4, f5, f6, f7, f8, f9, f10, f11, f12, f13, f14, f15, f16, f17, f18, f19, f20,
+                      f21, f22, f23, f24, f25, f26, f27, f28, f29, f30, f31, f32, f33, f34, f35, f36, f37, f38, f39)
 }
 
 #undef SEXTANT_FIELDS_CASE
@@ -118,7 +142,9 @@ auto fields_of(T& t) {
 template <class T>
 struct aggregate_parts;
 template <class T>
-concept has_aggregate_parts = requires(const T& t) { aggregate_parts<T>::of(t); };
+concept has_aggregate_parts = requires(const T& t) {
+  aggregate_parts<T>::of(t);
+};
 
 /// The parts of an aggregate, as a tuple of references: aggregate_parts<T>::of when T lists them, else its fields.
 template <class T>

@@ -25,7 +25,8 @@ void read_stage_config(Section& s, engine::AssociationConfig& c) {
   s.get("max_scan_id_jump", c.max_scan_id_jump, int_in_range(0, 2147483647));
   s.get("scan_id_resync_after", c.scan_id_resync_after, int_in_range(1, 1000));
   const Check<std::vector<double>> point = [](const std::vector<double>& v) -> std::optional<std::string> {
-    if (v.empty() || (v.size() == 3 && std::isfinite(v[0]) && std::isfinite(v[1]) && std::isfinite(v[2]))) return std::nullopt;
+    if (v.empty() || (v.size() == 3 && std::isfinite(v[0]) && std::isfinite(v[1]) && std::isfinite(v[2])))
+      return std::nullopt;
     return "expected [x, y, z] (3 finite numbers, metres) or []";
   };
   s.get("region_min", c.region_min, point);
@@ -42,15 +43,19 @@ void read_stage_config(Section& s, engine::AssociationConfig& c) {
                      "'" + s.path() + ".region_min' and '" + s.path() + ".region_max' go together");
   for (size_t i = 0; i < c.region_min.size(); ++i)
     if (!(c.region_min[i] < c.region_max[i]))
-      throw s.error_at(at("region_max"), "'" + s.path() + ".region_max': must be above region_min on every axis (axis " +
-                                             std::to_string(i) + ": " + std::to_string(c.region_max[i]) + " <= " +
-                                             std::to_string(c.region_min[i]) + ")");
+      throw s.error_at(at("region_max"), "'" + s.path() +
+                                             ".region_max': must be above region_min on every axis (axis " +
+                                             std::to_string(i) + ": " + std::to_string(c.region_max[i]) +
+                                             " <= " + std::to_string(c.region_min[i]) + ")");
   if (c.false_alarms_per_scan > 0 && c.region_min.empty())
-    throw s.error_at(at("false_alarms_per_scan"), "'" + s.path() + ".false_alarms_per_scan': needs region_min and region_max "
-                                                   "(the density is per area of each sensor's field of view over the region)");
+    throw s.error_at(at("false_alarms_per_scan"),
+                     "'" + s.path() +
+                         ".false_alarms_per_scan': needs region_min and region_max "
+                         "(the density is per area of each sensor's field of view over the region)");
   if (c.target_prior && c.region_min.empty())
-    throw s.error_at(at("target_prior"), "'" + s.path() + ".target_prior': needs region_min and region_max (the prior density "
-                                          "is expected_targets / region volume)");
+    throw s.error_at(at("target_prior"), "'" + s.path() +
+                                             ".target_prior': needs region_min and region_max (the prior density "
+                                             "is expected_targets / region volume)");
 }
 
 }  // namespace sextant::config

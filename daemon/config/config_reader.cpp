@@ -20,8 +20,8 @@ void Section::reject_unknown_keys() const {
   if (!node_.IsMap()) return;
   for (const auto& kv : node_) {
     if (!kv.first.IsScalar())
-      throw error_at(kv.first, "'" + (path_.empty() ? std::string("<top>") : path_) + "': a key must be a plain name, got " +
-                                   scalar_text(kv.first));
+      throw error_at(kv.first, "'" + (path_.empty() ? std::string("<top>") : path_) +
+                                   "': a key must be a plain name, got " + scalar_text(kv.first));
     const auto key = kv.first.Scalar();
     if (known_.count(key)) continue;
     std::ostringstream known;

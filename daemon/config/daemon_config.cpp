@@ -32,16 +32,17 @@ void check_channels(Section& s, const Channels& c) {
     return n.IsDefined() ? n : s.node();
   };
   using Named = std::vector<std::pair<std::string, std::string>>;
-  Named inputs{
-      {"odometry", c.odometry}, {"landmarks", c.landmarks}, {"bearings", c.bearings}, {"loop_closures", c.loop_closures},
-      {"imu", c.imu},           {"gnss", c.gnss}};
+  Named inputs{{"odometry", c.odometry}, {"landmarks", c.landmarks},
+               {"bearings", c.bearings}, {"loop_closures", c.loop_closures},
+               {"imu", c.imu},           {"gnss", c.gnss}};
   Named outputs{{"fused_pose", c.fused_pose},
-                                                           {"trajectory", c.trajectory},
-                                                           {"targets", c.targets},
-                                                           {"match_requests", c.match_requests},
-                                                           {"status", c.status}};
+                {"trajectory", c.trajectory},
+                {"targets", c.targets},
+                {"match_requests", c.match_requests},
+                {"status", c.status}};
   // The estimators that are not primary publish on FUSED_POSE_<ESTIMATOR> (publisher.hpp).
-  for (const char* e : {"_DEAD_RECKONING", "_EKF", "_PF", "_GRAPH", "_INERTIAL"}) outputs.push_back({"fused_pose", c.fused_pose + e});
+  for (const char* e : {"_DEAD_RECKONING", "_EKF", "_PF", "_GRAPH", "_INERTIAL"})
+    outputs.push_back({"fused_pose", c.fused_pose + e});
   for (const Named* list : {&inputs, &outputs})
     for (const auto& [key, name] : *list)
       if (c.full(name).size() > kLcmMaxChannel)
@@ -73,11 +74,17 @@ void read_channels(Section s, Channels& c) {
   s.get("prefix", c.prefix, Check<std::string>([](const std::string& v) -> std::optional<std::string> {
           return v.empty() ? std::nullopt : channel_name()(v);  // empty: no prefix
         }));
-  for (auto [key, field] : {std::pair{"odometry", &c.odometry}, {"landmarks", &c.landmarks}, {"bearings", &c.bearings},
-                            {"loop_closures", &c.loop_closures}, {"imu", &c.imu}, {"gnss", &c.gnss},
+  for (auto [key, field] : {std::pair{"odometry", &c.odometry},
+                            {"landmarks", &c.landmarks},
+                            {"bearings", &c.bearings},
+                            {"loop_closures", &c.loop_closures},
+                            {"imu", &c.imu},
+                            {"gnss", &c.gnss},
                             {"fused_pose", &c.fused_pose},
-                            {"trajectory", &c.trajectory}, {"targets", &c.targets},
-                            {"match_requests", &c.match_requests}, {"status", &c.status}})
+                            {"trajectory", &c.trajectory},
+                            {"targets", &c.targets},
+                            {"match_requests", &c.match_requests},
+                            {"status", &c.status}})
     s.get(key, *field, channel_name());
   s.reject_unknown_keys();
   check_channels(s, c);
@@ -183,8 +190,10 @@ void refuse_control_characters(const std::string& text, const std::string& file)
         << " in the config (only tab, newline and carriage return are allowed)";
       throw ConfigError(s.str());
     }
-    if (ch == '\n') ++line, column = 1;
-    else ++column;
+    if (ch == '\n')
+      ++line, column = 1;
+    else
+      ++column;
   }
 }
 
@@ -205,8 +214,10 @@ void refuse_second_document(const std::string& text, const std::string& file) {
       s << file << ":" << line << ": a second YAML document; a config is one document";
       throw ConfigError(s.str());
     }
-    if (marker("...")) ended = true;
-    else if (!blank && !marker("---")) content = true;
+    if (marker("..."))
+      ended = true;
+    else if (!blank && !marker("---"))
+      content = true;
   }
 }
 
@@ -229,8 +240,8 @@ void refuse_duplicate_keys(const YAML::Node& node, const std::string& file, int6
   for (const auto& kv : node) {
     if (kv.first.IsScalar() && !seen.insert(kv.first.Scalar()).second) {
       std::ostringstream s;
-      s << file << ":" << kv.first.Mark().line + 1 << ":" << kv.first.Mark().column + 1 << ": key '" << kv.first.Scalar()
-        << "' written twice in one section (the second would be ignored)";
+      s << file << ":" << kv.first.Mark().line + 1 << ":" << kv.first.Mark().column + 1 << ": key '"
+        << kv.first.Scalar() << "' written twice in one section (the second would be ignored)";
       throw ConfigError(s.str());
     }
     refuse_duplicate_keys(kv.second, file, budget);

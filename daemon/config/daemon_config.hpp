@@ -30,40 +30,40 @@ struct Channels {
 /// message outside these bounds is refused at intake and counted by reason; the defaults fit robots, drones and
 /// aircraft on or near the Earth, and each says what it costs a legitimate sender.
 struct Plausibility {
-  double max_position_m = 1.0e8;        // any position, sensor position or loop translation: |p| <= this (15 Earth radii)
-  double max_speed_planar_mps = 50.0;   // a planar (ground) body's odometry: |dp| <= speed * dt + max_jump_m
-  double max_speed_spatial_mps = 350.0; // a 3-D body's (an airliner's cruise speed)
-  double max_jump_m = 1.0;              // what an odometry position may jump beyond its speed (noise, a small reset)
-  double max_planar_tilt_rad = 0.1;     // planar messages: roll/pitch above this are refused; below, projected away
-  double max_range_m = 1.0e5;           // a landmark sighting's range
-  double min_variance = 1.0e-12;        // every covariance's smallest eigenvalue (its meaningful block) >= this
-  double max_variance = 1.0e12;         // ... its largest <= this (a loop's information: the inverses)
-  double max_condition = 1.0e12;        // ... and their ratio <= this (beyond, updates cancel every digit)
+  double max_position_m = 1.0e8;  // any position, sensor position or loop translation: |p| <= this (15 Earth radii)
+  double max_speed_planar_mps = 50.0;     // a planar (ground) body's odometry: |dp| <= speed * dt + max_jump_m
+  double max_speed_spatial_mps = 350.0;   // a 3-D body's (an airliner's cruise speed)
+  double max_jump_m = 1.0;                // what an odometry position may jump beyond its speed (noise, a small reset)
+  double max_planar_tilt_rad = 0.1;       // planar messages: roll/pitch above this are refused; below, projected away
+  double max_range_m = 1.0e5;             // a landmark sighting's range
+  double min_variance = 1.0e-12;          // every covariance's smallest eigenvalue (its meaningful block) >= this
+  double max_variance = 1.0e12;           // ... its largest <= this (a loop's information: the inverses)
+  double max_condition = 1.0e12;          // ... and their ratio <= this (beyond, updates cancel every digit)
   double max_angular_rate_radps = 100.0;  // an IMU's |angular velocity| (consumer gyroscopes saturate near 35 rad/s)
   double max_acceleration_mps2 = 1000.0;  // an IMU's |specific force| (about 100 g)
 };
 
 struct DaemonConfig {
-  std::string name = "sextantd";        // sender name in every published message
-  std::string lcm_url;                  // empty: LCM's default (LCM_DEFAULT_URL or udpm://239.255.76.67:7667)
-  double status_period_s = 1.0;         // SEXTANT_STATUS period
-  int queue_capacity = 1024;            // events per stage queue; a full queue drops (and counts) new events
-  int publish_queue_capacity = 4096;    // outputs waiting for the publisher thread
-  std::string record;                   // record every received message to this LCM log ("" = off)
-  double log_rate_limit_s = 1.0;        // at most one warning per channel and reason per this many seconds
-  double max_ahead_s = 60.0;            // the time guard (daemon/runtime/time_order_guard.hpp)
+  std::string name = "sextantd";      // sender name in every published message
+  std::string lcm_url;                // empty: LCM's default (LCM_DEFAULT_URL or udpm://239.255.76.67:7667)
+  double status_period_s = 1.0;       // SEXTANT_STATUS period
+  int queue_capacity = 1024;          // events per stage queue; a full queue drops (and counts) new events
+  int publish_queue_capacity = 4096;  // outputs waiting for the publisher thread
+  std::string record;                 // record every received message to this LCM log ("" = off)
+  double log_rate_limit_s = 1.0;      // at most one warning per channel and reason per this many seconds
+  double max_ahead_s = 60.0;          // the time guard (daemon/runtime/time_order_guard.hpp)
   int time_resync_messages = 5;
   double max_ahead_of_wall_s = 60.0;
-  int max_sources = 256;                // bodies and sensors tracked
-  double source_idle_s = 0;             // forget a silent source after this long (0: never)
-  double source_evict_idle_s = 60.0;    // live, table full: a source silent this long may give its place (0: never)
-  double drain_timeout_s = 5.0;         // SIGTERM: how long stage queues may drain
-  std::string state_dir;                // state directory (README "State directory"; "" = off); --state-dir overrides
-  double state_period_s = 10.0;         // wall-clock seconds between two saves of the state (and one at shutdown)
-  bool discard_bad_state = false;       // --discard-bad-state: set a bad state file aside and start fresh
-  uint64_t engine_fingerprint = 0;      // of the parsed engine config (state files of another config are refused)
-  Plausibility plausibility;            // daemon.plausibility
-  double source_handover_s = 2.0;       // a stream's second sender is refused until its first is silent this long
+  int max_sources = 256;              // bodies and sensors tracked
+  double source_idle_s = 0;           // forget a silent source after this long (0: never)
+  double source_evict_idle_s = 60.0;  // live, table full: a source silent this long may give its place (0: never)
+  double drain_timeout_s = 5.0;       // SIGTERM: how long stage queues may drain
+  std::string state_dir;              // state directory (README "State directory"; "" = off); --state-dir overrides
+  double state_period_s = 10.0;       // wall-clock seconds between two saves of the state (and one at shutdown)
+  bool discard_bad_state = false;     // --discard-bad-state: set a bad state file aside and start fresh
+  uint64_t engine_fingerprint = 0;    // of the parsed engine config (state files of another config are refused)
+  Plausibility plausibility;          // daemon.plausibility
+  double source_handover_s = 2.0;     // a stream's second sender is refused until its first is silent this long
   Channels channels;
   engine::EngineConfig engine;
 };

@@ -26,7 +26,9 @@ void read_odometry_sources(Section& s, engine::FilterConfig& c) {
       o.fuse.fill(false);
       for (const auto& f : fuse) {
         const auto at = std::find(names.begin(), names.end(), f);
-        if (at == names.end()) throw e.error_at(e.node()["fuse"], "'" + e.path() + ".fuse': unknown component '" + f + "' (x, y, yaw, vx, vy, vyaw)");
+        if (at == names.end())
+          throw e.error_at(e.node()["fuse"],
+                           "'" + e.path() + ".fuse': unknown component '" + f + "' (x, y, yaw, vx, vy, vyaw)");
         o.fuse[static_cast<size_t>(at - names.begin())] = true;
       }
     }
@@ -40,9 +42,11 @@ void read_odometry_sources(Section& s, engine::FilterConfig& c) {
   // Each body's sources must make a valid filter; a body without a predicting source gets the unlisted source of
   // its own name as its predictor.
   std::map<std::string, std::map<std::string, filter::OdometrySourceOptions>> bodies;
-  for (const auto& [name, o] : c.sources) bodies[o.body][name] = {o.predict, o.fuse, o.differential, o.gate, o.timeout_s};
+  for (const auto& [name, o] : c.sources)
+    bodies[o.body][name] = {o.predict, o.fuse, o.differential, o.gate, o.timeout_s};
   for (auto& [body, sources] : bodies) {
-    const bool has_predictor = std::any_of(sources.begin(), sources.end(), [](const auto& kv) { return kv.second.predict; });
+    const bool has_predictor =
+        std::any_of(sources.begin(), sources.end(), [](const auto& kv) { return kv.second.predict; });
     if (!has_predictor && !c.sources.contains(body)) sources[body].predict = true;
     try {
       filter::MultiSourceEkf::validate(sources);
@@ -72,9 +76,11 @@ void read_stage_config(Section& s, engine::FilterConfig& c) {
     const auto& r = rows[i];
     const YAML::Node at = node.IsSequence() ? node[i] : node;
     if (r.size() != 3 || !std::isfinite(r[1]) || !std::isfinite(r[2]) || r[0] != std::floor(r[0]) || r[0] < 0)
-      throw s.error_at(at, "'" + s.path() + ".map[" + std::to_string(i) + "]': expected [id, x, y] with a non-negative integer id");
+      throw s.error_at(
+          at, "'" + s.path() + ".map[" + std::to_string(i) + "]': expected [id, x, y] with a non-negative integer id");
     if (!ids.insert(static_cast<int64_t>(r[0])).second)
-      throw s.error_at(at, "'" + s.path() + ".map[" + std::to_string(i) + "]': landmark id " + std::to_string(static_cast<int64_t>(r[0])) + " listed twice");
+      throw s.error_at(at, "'" + s.path() + ".map[" + std::to_string(i) + "]': landmark id " +
+                               std::to_string(static_cast<int64_t>(r[0])) + " listed twice");
     c.map.push_back({static_cast<int64_t>(r[0]), r[1], r[2]});
   }
   Section pf = s.child("pf");

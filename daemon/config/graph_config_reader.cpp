@@ -36,15 +36,17 @@ void read_loops(Section& s, engine::GraphConfig& c) {
   // number.
   std::string width;  // stays empty when the key is absent (the default stays)
   p.get("kernel_width", width, Check<std::string>([](const std::string& v) -> std::optional<std::string> {
-    if (v == "auto") return std::nullopt;
-    char* end = nullptr;
-    const double x = std::strtod(v.c_str(), &end);
-    if (end == v.c_str() || *end != '\0' || !std::isfinite(x) || !(x > 0))
-      return "expected 'auto' or a positive number, got '" + v + "'";
-    return std::nullopt;
-  }));
-  if (width == "auto") c.kernel_width.reset();
-  else if (!width.empty()) c.kernel_width = std::strtod(width.c_str(), nullptr);
+          if (v == "auto") return std::nullopt;
+          char* end = nullptr;
+          const double x = std::strtod(v.c_str(), &end);
+          if (end == v.c_str() || *end != '\0' || !std::isfinite(x) || !(x > 0))
+            return "expected 'auto' or a positive number, got '" + v + "'";
+          return std::nullopt;
+        }));
+  if (width == "auto")
+    c.kernel_width.reset();
+  else if (!width.empty())
+    c.kernel_width = std::strtod(width.c_str(), nullptr);
   p.get("gate_probability", c.loop_gate_probability, in_range(0.5, 0.999999999));
   p.get("gate_odometry_scale", c.loop_gate_odometry_scale, positive());
   p.get("time_tolerance_s", c.loop_time_tolerance_s, non_negative());
@@ -75,9 +77,9 @@ void read_smoother(Section& s, engine::GraphConfig& c) {
   m.get("min_update_factors", o.min_update_factors, int_in_range(1, 1 << 20));
   m.get("max_update_factors", o.max_update_factors, int_in_range(1, 1 << 20));
   m.get("refill_ratio", o.refill_ratio, Check<double>([](const double& v) -> std::optional<std::string> {
-    if (v > 1 && std::isfinite(v)) return std::nullopt;  // at 1 any fill-in would reorder at every update
-    return "must be a number > 1, got " + std::to_string(v);
-  }));
+          if (v > 1 && std::isfinite(v)) return std::nullopt;  // at 1 any fill-in would reorder at every update
+          return "must be a number > 1, got " + std::to_string(v);
+        }));
   m.get("nested_dissection_above", o.nested_dissection_above, int_in_range(0, std::numeric_limits<int>::max()));
   m.get("reorder_spread", o.reorder_spread, int_in_range(0, 1000));
   m.get("reorder_spread_above", o.reorder_spread_above, int_in_range(0, std::numeric_limits<int>::max()));
@@ -85,9 +87,12 @@ void read_smoother(Section& s, engine::GraphConfig& c) {
   if (o.max_update_factors < o.min_update_factors) {
     // The smoother would quietly take the larger; name the key that was set.
     const YAML::Node& n = m.node();
-    const YAML::Node at = n.IsMap() && n["max_update_factors"] ? n["max_update_factors"] : n.IsMap() ? n["min_update_factors"] : n;
+    const YAML::Node at = n.IsMap() && n["max_update_factors"] ? n["max_update_factors"]
+                          : n.IsMap()                          ? n["min_update_factors"]
+                                                               : n;
     throw m.error_at(at, "'" + m.path() + "': max_update_factors (" + std::to_string(o.max_update_factors) +
-                             ") must not be smaller than min_update_factors (" + std::to_string(o.min_update_factors) + ")");
+                             ") must not be smaller than min_update_factors (" + std::to_string(o.min_update_factors) +
+                             ")");
   }
   m.reject_unknown_keys();
 }
@@ -99,14 +104,17 @@ void reject_moved_smoother_keys(Section& s) {
     for (const auto& kv : s.node())
       for (const char* moved : {"relinearize_translation", "relinearize_rotation"})
         if (kv.first.as<std::string>() == moved)
-          throw s.error_at(kv.first, "'" + s.path() + "." + moved + "' has moved to '" + s.path() + ".smoother." + moved + "'");
+          throw s.error_at(kv.first,
+                           "'" + s.path() + "." + moved + "' has moved to '" + s.path() + ".smoother." + moved + "'");
 }
 
 void reject_gone_trajectory_key(Section& s) {
   if (s.node().IsMap() && s.node()["trajectory_max_keyframes"])
     throw s.error_at(s.node()["trajectory_max_keyframes"],
-                     "'" + s.path() + ".trajectory_max_keyframes' is gone: TRAJECTORY now sends new and moved keyframes and a "
-                     "rolling snapshot in bounded messages (see '" + s.path() + ".trajectory')");
+                     "'" + s.path() +
+                         ".trajectory_max_keyframes' is gone: TRAJECTORY now sends new and moved keyframes and a "
+                         "rolling snapshot in bounded messages (see '" +
+                         s.path() + ".trajectory')");
 }
 
 // The odometry's keys: regularization, history, batching.

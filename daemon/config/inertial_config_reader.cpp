@@ -9,7 +9,8 @@ namespace sextant::config {
 namespace {
 
 // A list of component names -> which of three are fused, e.g. [roll, pitch] of {roll, pitch, yaw}.
-void read_fields(Section& s, const std::string& key, const std::array<const char*, 3>& names, std::array<bool, 3>& out) {
+void read_fields(Section& s, const std::string& key, const std::array<const char*, 3>& names,
+                 std::array<bool, 3>& out) {
   std::vector<std::string> listed;
   s.get(key, listed);
   if (!s.node().IsMap()) return;  // no section: the defaults

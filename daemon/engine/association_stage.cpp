@@ -22,7 +22,8 @@ void AssociationStage::handle(const Event& e, const Emit& emit) {
   if (!group.emplace(scan.sensor_id, scan).second) ++duplicate_sensor_;
   // Older groups are complete once a newer scan_id shows up.
   while (!pending_.empty() && pending_.begin()->first < scan.scan_id) associate(pending_.begin()->first, emit);
-  if (config_.expected_sensors > 0 && static_cast<int>(group.size()) >= config_.expected_sensors) associate(scan.scan_id, emit);
+  if (config_.expected_sensors > 0 && static_cast<int>(group.size()) >= config_.expected_sensors)
+    associate(scan.scan_id, emit);
   while (static_cast<int>(pending_.size()) > config_.max_pending_scans) {
     ++forced_;
     associate(pending_.begin()->first, emit);
@@ -117,26 +118,32 @@ void AssociationStage::associate(int64_t scan_id, const Emit& emit) {
 }
 
 Counters AssociationStage::counters() const {
-  return {{"scans", scans_},           {"groups", groups_},
-          {"targets", targets_},       {"tuples", tuples_},
-          {"too_few_sensors", too_few_sensors_}, {"late_scans", late_scans_},
-          {"forced_groups", forced_},  {"duplicate_sensor_scans", duplicate_sensor_},
-          {"scan_id_jumps", scan_id_jumps_}, {"scan_id_resyncs", scan_id_resyncs_}};
+  return {{"scans", scans_},
+          {"groups", groups_},
+          {"targets", targets_},
+          {"tuples", tuples_},
+          {"too_few_sensors", too_few_sensors_},
+          {"late_scans", late_scans_},
+          {"forced_groups", forced_},
+          {"duplicate_sensor_scans", duplicate_sensor_},
+          {"scan_id_jumps", scan_id_jumps_},
+          {"scan_id_resyncs", scan_id_resyncs_}};
 }
 
 void AssociationStage::save(archive::ArchiveWriter& w) {
-  w(pending_)(last_associated_)(scans_)(groups_)(targets_)(tuples_)(too_few_sensors_)(late_scans_)(forced_)(
-      duplicate_sensor_);
+  w(pending_)(last_associated_)(
+      scans_)(groups_)(targets_)(tuples_)(too_few_sensors_)(late_scans_)(forced_)(duplicate_sensor_);
 }
 
 void AssociationStage::load(archive::ArchiveReader& r) {
-  r(pending_)(last_associated_)(scans_)(groups_)(targets_)(tuples_)(too_few_sensors_)(late_scans_)(forced_)(
-      duplicate_sensor_);
+  r(pending_)(last_associated_)(
+      scans_)(groups_)(targets_)(tuples_)(too_few_sensors_)(late_scans_)(forced_)(duplicate_sensor_);
   // The numbering goes on from the newest scan id the saved state knows (a state saved after a far scan id was
   // associated recovers through a renumbering run).
   newest_scan_id_.reset();
   if (last_associated_ != -1) newest_scan_id_ = last_associated_;
-  if (!pending_.empty()) newest_scan_id_ = std::max(newest_scan_id_.value_or(pending_.rbegin()->first), pending_.rbegin()->first);
+  if (!pending_.empty())
+    newest_scan_id_ = std::max(newest_scan_id_.value_or(pending_.rbegin()->first), pending_.rbegin()->first);
 }
 
 }  // namespace sextant::engine

@@ -39,8 +39,8 @@ class AssociationStage final : public Stage {
   std::optional<int64_t> newest_scan_id_;
   JumpRun scan_id_jump_;
   int64_t scan_id_jumps_ = 0, scan_id_resyncs_ = 0;  // not saved (the state's format stays)
-  int64_t scans_ = 0, groups_ = 0, targets_ = 0, tuples_ = 0, too_few_sensors_ = 0, late_scans_ = 0,
-          forced_ = 0, duplicate_sensor_ = 0;
+  int64_t scans_ = 0, groups_ = 0, targets_ = 0, tuples_ = 0, too_few_sensors_ = 0, late_scans_ = 0, forced_ = 0,
+          duplicate_sensor_ = 0;
 };
 
 }  // namespace sextant::engine

@@ -19,9 +19,9 @@ const char* association_solver_name(AssociationSolver solver);
 struct AssociationConfig {
   bool enabled = true;
   assoc::CostKind cost = assoc::CostKind::kClassic;  // classic | kl | renyi (assoc/tuple_costs.hpp)
-  double alpha = 0.5;              // Renyi order
+  double alpha = 0.5;                                // Renyi order
   double p_detect = 0.9;
-  double clutter_density = 1.0;    // false alarms per rad^2, the same for every sensor (when no region is given)
+  double clutter_density = 1.0;  // false alarms per rad^2, the same for every sensor (when no region is given)
   // The surveillance region, an axis-aligned box [region_min, region_max] (world frame, metres; both empty or both
   // 3 numbers).  With it, each sensor's false-alarm density is false_alarms_per_scan / the area of its field of
   // view over the region (assoc/field_of_view.hpp, padded by 5 times the sensor's largest detection sigma), and
@@ -34,8 +34,9 @@ struct AssociationConfig {
   AssociationSolver solver = AssociationSolver::kLagrangian;
   int max_iterations = 100;
   double gap_tolerance = 0.01;  // absolute duality gap, cost units (assoc/sd_assignment.hpp)
-  int expected_sensors = 0;        // associate a scan_id as soon as this many sensors reported (0: when the next scan_id arrives)
-  int max_pending_scans = 16;      // scan_ids waiting for sensors; beyond this the oldest is associated as it is
+  int expected_sensors =
+      0;  // associate a scan_id as soon as this many sensors reported (0: when the next scan_id arrives)
+  int max_pending_scans = 16;  // scan_ids waiting for sensors; beyond this the oldest is associated as it is
   // Scan ids are one numbering for all sensors, so one scan numbered far from the others (INT64_MAX, a far jump)
   // would make every later scan "late".  A scan_id more than `max_scan_id_jump` away from the newest accepted one
   // (ahead or behind) is refused and counted (scan_id_jumps) without moving the numbering; `scan_id_resync_after`

@@ -59,7 +59,8 @@ Counters DeadReckoningStage::counters() const {
 
 void DeadReckoningStage::save(archive::ArchiveWriter& w) {
   w(static_cast<uint64_t>(tracks_.size()));
-  for (const auto& [source, t] : tracks_) w(source)(t.utime)(t.last_odom)(t.last_odom_covariance)(t.map_pose)(t.covariance);
+  for (const auto& [source, t] : tracks_)
+    w(source)(t.utime)(t.last_odom)(t.last_odom_covariance)(t.map_pose)(t.covariance);
   w(gaps_)(processed_)(refusals_.non_finite)(refusals_.indefinite);
 }
 

@@ -36,12 +36,17 @@ namespace {
 // How capable an estimator is, for "auto": graph > inertial filter > filter > dead reckoning.
 int capability(PrimaryEstimator estimator) {
   switch (estimator) {
-    case PrimaryEstimator::kGraph: return 4;
-    case PrimaryEstimator::kInertial: return 3;
+    case PrimaryEstimator::kGraph:
+      return 4;
+    case PrimaryEstimator::kInertial:
+      return 3;
     case PrimaryEstimator::kEkf:
-    case PrimaryEstimator::kPf: return 2;
-    case PrimaryEstimator::kDeadReckoning: return 1;
-    case PrimaryEstimator::kAuto: break;
+    case PrimaryEstimator::kPf:
+      return 2;
+    case PrimaryEstimator::kDeadReckoning:
+      return 1;
+    case PrimaryEstimator::kAuto:
+      break;
   }
   return -1;
 }

@@ -52,7 +52,8 @@ inline void load(archive::ArchiveReader& r, LandmarkSightings& s) { fields(r, s)
 
 template <class Archive, class X>
 std::enable_if_t<std::is_same_v<std::remove_const_t<X>, LoopClosure>> fields(Archive& a, X& l) {
-  a(l.utime)(l.source)(l.planar)(l.utime_from)(l.utime_to)(l.keyframe_from)(l.keyframe_to)(l.request_id)(l.relative)(l.information)(l.matcher)(l.score);
+  a(l.utime)(l.source)(l.planar)(l.utime_from)(l.utime_to)(l.keyframe_from)(l.keyframe_to)(l.request_id)(l.relative)(
+      l.information)(l.matcher)(l.score);
 }
 inline void save(archive::ArchiveWriter& w, const LoopClosure& l) { fields(w, l); }
 inline void load(archive::ArchiveReader& r, LoopClosure& l) { fields(r, l); }

@@ -42,8 +42,8 @@ struct Odometry {
 };
 
 struct LandmarkObservation {
-  int64_t id = -1;  // -1: unknown, to be associated
-  double range = 0, azimuth = 0, elevation = 0;  // m, rad, rad (sensor frame)
+  int64_t id = -1;                                       // -1: unknown, to be associated
+  double range = 0, azimuth = 0, elevation = 0;          // m, rad, rad (sensor frame)
   Eigen::Matrix3d covariance = Eigen::Matrix3d::Zero();  // over [range, azimuth, elevation]
 };
 
@@ -90,11 +90,11 @@ struct ImuSample {
   int64_t utime = 0;
   std::string source;
   std::string frame;
-  std::optional<Eigen::Vector3d> angular_velocity;     // rad/s, sensor frame
+  std::optional<Eigen::Vector3d> angular_velocity;  // rad/s, sensor frame
   Eigen::Matrix3d angular_velocity_covariance = Eigen::Matrix3d::Zero();
   std::optional<Eigen::Vector3d> linear_acceleration;  // specific force, m/s^2, sensor frame, gravity not removed
   Eigen::Matrix3d linear_acceleration_covariance = Eigen::Matrix3d::Zero();
-  std::optional<Eigen::Quaterniond> orientation;       // sensor to world (ENU when orientation_has_yaw)
+  std::optional<Eigen::Quaterniond> orientation;  // sensor to world (ENU when orientation_has_yaw)
   bool orientation_has_yaw = false;
   Eigen::Matrix3d orientation_covariance = Eigen::Matrix3d::Zero();  // rad^2, [roll pitch yaw]
 };
@@ -104,10 +104,10 @@ struct GnssFix {
   int64_t utime = 0;
   std::string source;
   std::string frame;
-  int status = 0;                                  // gnss_t.STATUS_*
-  double latitude = 0, longitude = 0, altitude = 0;  // degrees, degrees, metres above the WGS84 ellipsoid
+  int status = 0;                                                 // gnss_t.STATUS_*
+  double latitude = 0, longitude = 0, altitude = 0;               // degrees, degrees, metres above the WGS84 ellipsoid
   Eigen::Matrix3d position_covariance = Eigen::Matrix3d::Zero();  // East-North-Up, m^2
-  std::optional<Eigen::Vector3d> velocity;          // East-North-Up, m/s
+  std::optional<Eigen::Vector3d> velocity;                        // East-North-Up, m/s
   Eigen::Matrix3d velocity_covariance = Eigen::Matrix3d::Zero();
 };
 
@@ -122,8 +122,10 @@ inline int64_t event_utime(const Event& e) {
 inline std::string event_source(const Event& e) {
   return std::visit(
       [](const auto& x) -> std::string {
-        if constexpr (std::is_same_v<std::decay_t<decltype(x)>, BearingScan>) return "sensor " + std::to_string(x.sensor_id);
-        else return x.source;
+        if constexpr (std::is_same_v<std::decay_t<decltype(x)>, BearingScan>)
+          return "sensor " + std::to_string(x.sensor_id);
+        else
+          return x.source;
       },
       e);
 }

@@ -46,12 +46,14 @@ FilterStage::Track FilterStage::new_track(const std::string& body) const {
   std::map<std::string, filter::OdometrySourceOptions> sources;
   for (const auto& [name, s] : config_.sources)
     if (body_of(name) == body) sources[name] = {s.predict, s.fuse, s.differential, s.gate, s.timeout_s};
-  const bool has_predictor = std::any_of(sources.begin(), sources.end(), [](const auto& kv) { return kv.second.predict; });
-  if (!has_predictor && !config_.sources.contains(body)) sources[body].predict = true;  // the body's own, unlisted source
+  const bool has_predictor =
+      std::any_of(sources.begin(), sources.end(), [](const auto& kv) { return kv.second.predict; });
+  if (!has_predictor && !config_.sources.contains(body))
+    sources[body].predict = true;  // the body's own, unlisted source
   const double sxy = config_.initial_sigma_xy, sth = config_.initial_sigma_theta;
   Track t;
-  t.fusion = filter::MultiSourceEkf(opt, Eigen::Vector3d(sxy * sxy, sxy * sxy, sth * sth).asDiagonal(), std::move(sources),
-                                    config_.min_increment_variance);
+  t.fusion = filter::MultiSourceEkf(opt, Eigen::Vector3d(sxy * sxy, sxy * sxy, sth * sth).asDiagonal(),
+                                    std::move(sources), config_.min_increment_variance);
   for (const auto& l : config_.map) t.fusion.ekf().set_known_landmark(l.id, {l.x, l.y});
   return t;
 }
@@ -101,8 +103,10 @@ void FilterStage::handle(const Event& e, const Emit& emit) {
 template <class H>
 void FilterStage::add(H& history, const std::string& body, int64_t utime, int rank, Input in, const Emit& emit) {
   const auto outcome = history.add(utime, rank, std::move(in), [this](auto& t, const Input& x) { apply(t, x); });
-  if (outcome == H::Outcome::too_late) ++too_late_;
-  else if (outcome == H::Outcome::reapplied) ++reapplied_;
+  if (outcome == H::Outcome::too_late)
+    ++too_late_;
+  else if (outcome == H::Outcome::reapplied)
+    ++reapplied_;
   const auto& t = history.state();
   if (rank != kPredictRank) return;
   int64_t newest = 0;
@@ -122,8 +126,10 @@ void FilterStage::add(H& history, const std::string& body, int64_t utime, int ra
 }
 
 void FilterStage::apply(Track& t, const Input& in) const {
-  if (const auto* o = std::get_if<Odometry>(&in)) apply_odometry(t, *o);
-  else apply_landmarks(t, std::get<LandmarkSightings>(in));
+  if (const auto* o = std::get_if<Odometry>(&in))
+    apply_odometry(t, *o);
+  else
+    apply_landmarks(t, std::get<LandmarkSightings>(in));
 }
 
 void FilterStage::apply_odometry(Track& t, const Odometry& o) const {
@@ -133,15 +139,23 @@ void FilterStage::apply_odometry(Track& t, const Odometry& o) const {
   }
   std::vector<LandmarkSightings> waiting;
   waiting.swap(t.pending);
-  const auto outcome = t.fusion.odometry(o.source, planar_odometry(o), stops, [&](size_t i) { update_with(t, waiting[i]); });
+  const auto outcome =
+      t.fusion.odometry(o.source, planar_odometry(o), stops, [&](size_t i) { update_with(t, waiting[i]); });
   // Sightings the prediction did not pass (duplicate stamp, a measurement source) wait for the next one.
   for (auto& p : waiting)
     if (outcome != filter::OdometryOutcome::predicted || p.utime >= o.utime) t.pending.push_back(std::move(p));
   switch (outcome) {
-    case filter::OdometryOutcome::predicted: ++t.predictions; break;
-    case filter::OdometryOutcome::duplicate: ++t.duplicates; break;
-    case filter::OdometryOutcome::unknown_source: ++t.unknown_sources; break;
-    default: break;  // the fusion counts per source
+    case filter::OdometryOutcome::predicted:
+      ++t.predictions;
+      break;
+    case filter::OdometryOutcome::duplicate:
+      ++t.duplicates;
+      break;
+    case filter::OdometryOutcome::unknown_source:
+      ++t.unknown_sources;
+      break;
+    default:
+      break;  // the fusion counts per source
   }
 }
 
@@ -191,10 +205,14 @@ void FilterStage::update_with(Track& t, const LandmarkSightings& s) const {
       continue;
     }
     const auto r = ekf.observe(ob.id, ob.range, ob.azimuth, ob.covariance.topLeftCorner<2, 2>());
-    if (r.accepted) (r.reason == filter::UpdateReason::kNewLandmark ? t.new_landmarks : t.updates)++;
-    else if (r.reason == filter::UpdateReason::kGate) ++t.gated;
-    else if (r.reason == filter::UpdateReason::kUnknownLandmark) ++t.unknown;
-    else ++t.rejected;
+    if (r.accepted)
+      (r.reason == filter::UpdateReason::kNewLandmark ? t.new_landmarks : t.updates)++;
+    else if (r.reason == filter::UpdateReason::kGate)
+      ++t.gated;
+    else if (r.reason == filter::UpdateReason::kUnknownLandmark)
+      ++t.unknown;
+    else
+      ++t.rejected;
   }
   if (!unidentified.empty()) {
     const auto a = ekf.observe_unidentified(unidentified, budget);
@@ -253,8 +271,10 @@ void FilterStage::apply(SpatialTrack& t, const Input& in) const {
   // Sightings the prediction did not pass (a duplicate stamp) wait for the next one.
   for (auto& p : waiting)
     if (outcome != filter::SpatialOdometryOutcome::kPredicted || p.utime >= o.utime) t.pending.push_back(std::move(p));
-  if (outcome == filter::SpatialOdometryOutcome::kPredicted) ++t.predictions;
-  else if (outcome == filter::SpatialOdometryOutcome::kDuplicate) ++t.duplicates;
+  if (outcome == filter::SpatialOdometryOutcome::kPredicted)
+    ++t.predictions;
+  else if (outcome == filter::SpatialOdometryOutcome::kDuplicate)
+    ++t.duplicates;
 }
 
 void FilterStage::update_with(SpatialTrack& t, const LandmarkSightings& s) const {
@@ -269,9 +289,12 @@ void FilterStage::update_with(SpatialTrack& t, const LandmarkSightings& s) const
       continue;
     }
     const auto r = t.fusion.ekf().observe(ob.id, Eigen::Vector3d(ob.range, ob.azimuth, ob.elevation), ob.covariance);
-    if (r.accepted) (r.reason == filter::UpdateReason::kNewLandmark ? t.new_landmarks : t.updates)++;
-    else if (r.reason == filter::UpdateReason::kGate) ++t.gated;
-    else ++t.rejected;
+    if (r.accepted)
+      (r.reason == filter::UpdateReason::kNewLandmark ? t.new_landmarks : t.updates)++;
+    else if (r.reason == filter::UpdateReason::kGate)
+      ++t.gated;
+    else
+      ++t.rejected;
   }
 }
 
@@ -294,8 +317,8 @@ const filter::SpatialEkf* FilterStage::spatial_ekf(const std::string& body) cons
 }
 
 Counters FilterStage::counters() const {
-  int64_t predictions = 0, updates = 0, gated = 0, new_landmarks = 0, unknown = 0, rejected = 0, before = 0, associated = 0,
-          tentative = 0, duplicates = 0, unknown_sources = 0, stale = 0, over_budget = 0, exhausted = 0;
+  int64_t predictions = 0, updates = 0, gated = 0, new_landmarks = 0, unknown = 0, rejected = 0, before = 0,
+          associated = 0, tentative = 0, duplicates = 0, unknown_sources = 0, stale = 0, over_budget = 0, exhausted = 0;
   std::map<std::string, filter::SourceCounters> sources;
   filter::Refusals refused;
   for (const auto& [body, h] : histories_) {
@@ -303,7 +326,8 @@ Counters FilterStage::counters() const {
     refused += t.fusion.ekf().refusals();
     predictions += t.predictions, updates += t.updates, gated += t.gated, new_landmarks += t.new_landmarks;
     unknown += t.unknown, rejected += t.rejected, before += t.before_odometry, associated += t.associated;
-    tentative += t.tentative, duplicates += t.duplicates, unknown_sources += t.unknown_sources, stale += t.stale_sightings;
+    tentative += t.tentative, duplicates += t.duplicates, unknown_sources += t.unknown_sources,
+        stale += t.stale_sightings;
     over_budget += t.over_budget, exhausted += t.exhausted;
     for (const auto& [name, c] : t.fusion.counters()) sources[name] = c;
   }

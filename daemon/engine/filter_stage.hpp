@@ -75,9 +75,9 @@ class FilterStage final : public Stage {
   struct Track {
     filter::MultiSourceEkf fusion;
     std::vector<LandmarkSightings> pending;  // taken after the newest prediction: applied inside the next one
-    int64_t predictions = 0, updates = 0, gated = 0, new_landmarks = 0, unknown = 0, rejected = 0,
-            before_odometry = 0, associated = 0, tentative = 0, duplicates = 0, unknown_sources = 0,
-            stale_sightings = 0, over_budget = 0, exhausted = 0;
+    int64_t predictions = 0, updates = 0, gated = 0, new_landmarks = 0, unknown = 0, rejected = 0, before_odometry = 0,
+            associated = 0, tentative = 0, duplicates = 0, unknown_sources = 0, stale_sightings = 0, over_budget = 0,
+            exhausted = 0;
     void save(archive::ArchiveWriter& w) const;
     void load(archive::ArchiveReader& r);
   };
@@ -109,9 +109,9 @@ class FilterStage final : public Stage {
   void add(H& history, const std::string& body, int64_t utime, int rank, Input in, const Emit& emit);
 
   FilterConfig config_;
-  std::map<std::string, History> histories_;  // by body
+  std::map<std::string, History> histories_;       // by body
   std::map<std::string, SpatialHistory> spatial_;  // 3-D bodies
-  std::map<std::string, int64_t> published_;  // newest utime published per body
+  std::map<std::string, int64_t> published_;       // newest utime published per body
   int64_t mixed_ = 0, before_odometry_ = 0, too_late_ = 0, reapplied_ = 0;
 };
 

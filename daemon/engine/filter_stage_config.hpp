@@ -31,8 +31,8 @@ const char* filter_type_name(FilterType type);
 /// the same slam/gate/initial sigma/map settings and the `pf` ones.
 struct FilterConfig {
   FilterType type = FilterType::kEkf;
-  bool slam = true;          // add landmarks that are not in `map` to the state
-  double gate = 9.21;        // chi-square threshold (2 dof) on the normalized innovation; 9.21 = 99 %
+  bool slam = true;                   // add landmarks that are not in `map` to the state
+  double gate = 9.21;                 // chi-square threshold (2 dof) on the normalized innovation; 9.21 = 99 %
   double initial_sigma_xy = 0.01;     // m, first pose (the first odometry pose anchors the map frame)
   double initial_sigma_theta = 0.01;  // rad
   double min_increment_variance = 1e-10;

@@ -5,23 +5,23 @@
 namespace sextant::engine {
 
 void FilterStage::Track::save(archive::ArchiveWriter& w) const {
-  w(fusion)(pending)(predictions)(updates)(gated)(new_landmarks)(unknown)(rejected)(before_odometry)(associated)(
-      tentative)(duplicates)(unknown_sources)(stale_sightings)(over_budget)(exhausted);
+  w(fusion)(pending)(
+      predictions)(updates)(gated)(new_landmarks)(unknown)(rejected)(before_odometry)(associated)(tentative)(duplicates)(unknown_sources)(stale_sightings)(over_budget)(exhausted);
 }
 
 void FilterStage::Track::load(archive::ArchiveReader& r) {
-  r(fusion)(pending)(predictions)(updates)(gated)(new_landmarks)(unknown)(rejected)(before_odometry)(associated)(
-      tentative)(duplicates)(unknown_sources)(stale_sightings)(over_budget)(exhausted);
+  r(fusion)(pending)(
+      predictions)(updates)(gated)(new_landmarks)(unknown)(rejected)(before_odometry)(associated)(tentative)(duplicates)(unknown_sources)(stale_sightings)(over_budget)(exhausted);
 }
 
 void FilterStage::SpatialTrack::save(archive::ArchiveWriter& w) const {
-  w(fusion)(pending)(predictions)(updates)(gated)(new_landmarks)(rejected)(
-      before_odometry)(duplicates)(unidentified)(unfused)(stale_sightings)(over_budget);
+  w(fusion)(pending)(
+      predictions)(updates)(gated)(new_landmarks)(rejected)(before_odometry)(duplicates)(unidentified)(unfused)(stale_sightings)(over_budget);
 }
 
 void FilterStage::SpatialTrack::load(archive::ArchiveReader& r) {
-  r(fusion)(pending)(predictions)(updates)(gated)(new_landmarks)(rejected)(
-      before_odometry)(duplicates)(unidentified)(unfused)(stale_sightings)(over_budget);
+  r(fusion)(pending)(
+      predictions)(updates)(gated)(new_landmarks)(rejected)(before_odometry)(duplicates)(unidentified)(unfused)(stale_sightings)(over_budget);
 }
 
 void FilterStage::save(archive::ArchiveWriter& w) {

@@ -17,10 +17,10 @@ namespace sextant::engine {
 
 struct GraphCorrection {
   int64_t keyframe_utime = 0;
-  SE3 keyframe_odom;                                  // the keyframe's pose in the odometry frame
-  SE3 keyframe_map;                                   // its optimized pose in the map frame
-  Matrix6 keyframe_covariance = Matrix6::Zero();      // marginal covariance of keyframe_map (right perturbation)
-  Matrix6 keyframe_odom_covariance = Matrix6::Zero(); // the odometry message's pose covariance at the keyframe
+  SE3 keyframe_odom;                                   // the keyframe's pose in the odometry frame
+  SE3 keyframe_map;                                    // its optimized pose in the map frame
+  Matrix6 keyframe_covariance = Matrix6::Zero();       // marginal covariance of keyframe_map (right perturbation)
+  Matrix6 keyframe_odom_covariance = Matrix6::Zero();  // the odometry message's pose covariance at the keyframe
 };
 
 /// Each body's latest correction: the graph stage writes, the graph pose stage reads.

@@ -21,7 +21,8 @@ namespace sextant::engine {
 
 class GraphPoseStage final : public Stage {
  public:
-  explicit GraphPoseStage(std::shared_ptr<const GraphCorrectionBoard> corrections) : corrections_(std::move(corrections)) {}
+  explicit GraphPoseStage(std::shared_ptr<const GraphCorrectionBoard> corrections)
+      : corrections_(std::move(corrections)) {}
   StageKind kind() const override { return StageKind::kGraphPose; }
   std::optional<PrimaryEstimator> estimator_kind() const override { return PrimaryEstimator::kGraph; }
   bool accepts(const Event& e) const override { return std::holds_alternative<Odometry>(e); }
@@ -34,7 +35,10 @@ class GraphPoseStage final : public Stage {
     for (int64_t a : correction_ages_) age_max = std::max(age_max, a);
     return {{"published", published_},
             {"before_correction", before_correction_},
-            {"correction_age_us", correction_ages_.empty() ? 0 : correction_ages_[(age_next_ + correction_ages_.size() - 1) % correction_ages_.size()]},
+            {"correction_age_us",
+             correction_ages_.empty()
+                 ? 0
+                 : correction_ages_[(age_next_ + correction_ages_.size() - 1) % correction_ages_.size()]},
             {"correction_age_us_max", age_max},
             {"refused_non_finite", refusals_.non_finite},
             {"refused_indefinite", refusals_.indefinite}};
@@ -47,8 +51,10 @@ class GraphPoseStage final : public Stage {
   /// pose): the last value and the largest of the last 1024 (status: correction_age_us, correction_age_us_max).
   static constexpr size_t kAgeRing = 1024;
   void record_correction_age(int64_t age_us) {
-    if (correction_ages_.size() < kAgeRing) correction_ages_.push_back(age_us), age_next_ = correction_ages_.size() % kAgeRing;
-    else correction_ages_[age_next_] = age_us, age_next_ = (age_next_ + 1) % kAgeRing;
+    if (correction_ages_.size() < kAgeRing)
+      correction_ages_.push_back(age_us), age_next_ = correction_ages_.size() % kAgeRing;
+    else
+      correction_ages_[age_next_] = age_us, age_next_ = (age_next_ + 1) % kAgeRing;
   }
   std::vector<int64_t> correction_ages_;
   size_t age_next_ = 0;

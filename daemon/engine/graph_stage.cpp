@@ -18,7 +18,8 @@ slam::LoopInput to_input(const LoopClosure& l) {
 slam::SightingsInput to_input(const LandmarkSightings& s) {
   slam::SightingsInput in{s.utime, s.planar, to_se3(s.sensor_in_body), {}};
   in.sightings.reserve(s.observations.size());
-  for (const LandmarkObservation& o : s.observations) in.sightings.push_back({o.id, o.range, o.azimuth, o.elevation, o.covariance});
+  for (const LandmarkObservation& o : s.observations)
+    in.sightings.push_back({o.id, o.range, o.azimuth, o.elevation, o.covariance});
   return in;
 }
 
@@ -81,9 +82,12 @@ GraphStage::Feed& GraphStage::feed_of(const std::string& source) {
 
 void GraphStage::handle(const Event& e, const Emit& emit) {
   Outputs out(*this, emit);
-  if (const auto* o = std::get_if<Odometry>(&e)) slam_.add_odometry(o->source, to_input(*o), out);
-  else if (const auto* l = std::get_if<LoopClosure>(&e)) slam_.add_loop(l->source, to_input(*l), out);
-  else if (const auto* s = std::get_if<LandmarkSightings>(&e)) slam_.add_sightings(s->source, to_input(*s), out);
+  if (const auto* o = std::get_if<Odometry>(&e))
+    slam_.add_odometry(o->source, to_input(*o), out);
+  else if (const auto* l = std::get_if<LoopClosure>(&e))
+    slam_.add_loop(l->source, to_input(*l), out);
+  else if (const auto* s = std::get_if<LandmarkSightings>(&e))
+    slam_.add_sightings(s->source, to_input(*s), out);
 }
 
 void GraphStage::publish_trajectory(const std::string& source, Feed& f, int64_t utime, int solves, bool flush,

@@ -17,10 +17,10 @@ struct GraphConfig : slam::SlamOptions {
   /// Daemon only (daemon/runtime/odometry_batcher.hpp): a body's odometry waiting for the stage's thread is batched,
   /// one queue slot per batch instead of per message; the stage still handles every message on its own.
   bool coalesce_odometry = true;
-  int odometry_batch_max = 256;              // messages per batch (a full batch takes one more queue slot)
-  int odometry_waiting_max = 16384;          // messages of one body waiting in batches (about 1.1 kB each)
-  int odometry_waiting_total_max = 65536;    // messages of all bodies waiting in batches
-  TrajectoryFeedOptions trajectory;       // what TRAJECTORY carries and how often (trajectory_feed.hpp)
+  int odometry_batch_max = 256;            // messages per batch (a full batch takes one more queue slot)
+  int odometry_waiting_max = 16384;        // messages of one body waiting in batches (about 1.1 kB each)
+  int odometry_waiting_total_max = 65536;  // messages of all bodies waiting in batches
+  TrajectoryFeedOptions trajectory;        // what TRAJECTORY carries and how often (trajectory_feed.hpp)
 };
 
 }  // namespace sextant::engine

@@ -46,16 +46,23 @@ const inertial::SensorMounting* InertialStage::mounting(const std::string& sourc
 }
 
 void InertialStage::handle(const Event& e, const Emit& emit) {
-  if (const auto* s = std::get_if<ImuSample>(&e)) on_imu(*s, emit);
-  else if (const auto* o = std::get_if<Odometry>(&e)) on_odometry(*o);
-  else if (const auto* g = std::get_if<GnssFix>(&e)) on_gnss(*g);
+  if (const auto* s = std::get_if<ImuSample>(&e))
+    on_imu(*s, emit);
+  else if (const auto* o = std::get_if<Odometry>(&e))
+    on_odometry(*o);
+  else if (const auto* g = std::get_if<GnssFix>(&e))
+    on_gnss(*g);
 }
 
 void InertialStage::count(const filter::UpdateResult& r) {
-  if (r.accepted) ++updates_;
-  else if (r.reason == filter::UpdateReason::kGate) ++gated_;
-  else if (r.reason == filter::UpdateReason::kTooOld) ++too_old_;
-  else ++refused_;
+  if (r.accepted)
+    ++updates_;
+  else if (r.reason == filter::UpdateReason::kGate)
+    ++gated_;
+  else if (r.reason == filter::UpdateReason::kTooOld)
+    ++too_old_;
+  else
+    ++refused_;
 }
 
 void InertialStage::start(Body& b, const ImuSample& s, const inertial::SensorMounting& m) {
@@ -99,9 +106,8 @@ void InertialStage::on_imu(const ImuSample& s, const Emit& emit) {
     const Eigen::Quaterniond q = *s.orientation;
     const Eigen::Matrix3d R = or_default(s.orientation_covariance, config_.default_orientation_variance);
     const inertial::SensorMounting mount = *m;
-    count(b.filter->add_measurement(t, [q, R, mount, fields](inertial::ErrorStateEkf& f) {
-      return f.update_orientation(q, R, mount, fields);
-    }));
+    count(b.filter->add_measurement(
+        t, [q, R, mount, fields](inertial::ErrorStateEkf& f) { return f.update_orientation(q, R, mount, fields); }));
   }
   publish(s.source, b, s.utime, emit);
 }
@@ -150,8 +156,8 @@ void InertialStage::on_gnss(const GnssFix& g) {
   }));
   if (g.velocity && (config_.gnss_velocity[0] || config_.gnss_velocity[1] || config_.gnss_velocity[2])) {
     const Eigen::Vector3d v = to_plane * *g.velocity;
-    const Eigen::Matrix3d Rv = to_plane * or_default(g.velocity_covariance, config_.default_velocity_variance) *
-                               to_plane.transpose();
+    const Eigen::Matrix3d Rv =
+        to_plane * or_default(g.velocity_covariance, config_.default_velocity_variance) * to_plane.transpose();
     const inertial::FieldMask vfields = config_.gnss_velocity;
     count(b.filter->add_measurement(t, [v, Rv, lever, vfields](inertial::ErrorStateEkf& f) {
       return f.update_gnss_velocity(v, Rv, lever, vfields);

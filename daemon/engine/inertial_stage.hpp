@@ -66,8 +66,7 @@ class InertialStage final : public Stage {
   std::map<std::pair<std::string, std::string>, inertial::SensorMounting> mountings_;  // (source or "", frame)
   std::map<std::string, Body> bodies_;
   int64_t imu_ = 0, started_ = 0, unmounted_ = 0, imu_refused_ = 0, updates_ = 0, refused_ = 0, gated_ = 0,
-          too_old_ = 0, published_ = 0, no_filter_yet_ = 0,
-          anchored_ = 0;
+          too_old_ = 0, published_ = 0, no_filter_yet_ = 0, anchored_ = 0;
 };
 
 }  // namespace sextant::engine

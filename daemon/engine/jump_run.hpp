@@ -13,7 +13,8 @@ namespace sextant::engine {
 
 /// |a - b| without signed overflow.
 inline uint64_t value_distance(int64_t a, int64_t b) {
-  return a >= b ? static_cast<uint64_t>(a) - static_cast<uint64_t>(b) : static_cast<uint64_t>(b) - static_cast<uint64_t>(a);
+  return a >= b ? static_cast<uint64_t>(a) - static_cast<uint64_t>(b)
+                : static_cast<uint64_t>(b) - static_cast<uint64_t>(a);
 }
 
 class JumpRun {

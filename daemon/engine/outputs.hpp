@@ -31,12 +31,12 @@ struct Trajectory {
   int iterations = 0;
   double solve_ms = 0;
   Kind kind = Kind::kUpdate;
-  int64_t snapshot_id = 0;               // kSnapshot: the cycle
-  int chunk = 0, num_chunks = 0;         // kSnapshot: this chunk of the cycle
+  int64_t snapshot_id = 0;                  // kSnapshot: the cycle
+  int chunk = 0, num_chunks = 0;            // kSnapshot: this chunk of the cycle
   int64_t range_first = 0, range_last = 0;  // kSnapshot: the id range the chunk is authoritative for
-  int total_keyframes = 0;               // the body's keyframes now
+  int total_keyframes = 0;                  // the body's keyframes now
   std::vector<Keyframe> keyframes;
-  std::vector<int64_t> removed_ids;      // kUpdate: keyframes that left the graph since the last publication
+  std::vector<int64_t> removed_ids;  // kUpdate: keyframes that left the graph since the last publication
 };
 
 /// Ask a front end to match keyframe a (new) against keyframe b (match_request_t).

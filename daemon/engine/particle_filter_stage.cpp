@@ -7,8 +7,10 @@
 namespace sextant::engine {
 
 void ParticleFilterStage::handle(const Event& e, const Emit& emit) {
-  if (const auto* o = std::get_if<Odometry>(&e)) on_odometry(*o, emit);
-  else if (const auto* s = std::get_if<LandmarkSightings>(&e)) on_landmarks(*s);
+  if (const auto* o = std::get_if<Odometry>(&e))
+    on_odometry(*o, emit);
+  else if (const auto* s = std::get_if<LandmarkSightings>(&e))
+    on_landmarks(*s);
 }
 
 void ParticleFilterStage::on_odometry(const Odometry& o, const Emit& emit) {
@@ -36,7 +38,8 @@ void ParticleFilterStage::on_odometry(const Odometry& o, const Emit& emit) {
     }
     const SE2 delta = t.last_odom.between(odom);
     const filter::FastSlam before = t.pf;  // O(particles): the maps are shared, copy-on-write
-    if (!t.pf.predict(delta, planar_increment_covariance(o, t.last_covariance, delta, config_.min_increment_variance))) {
+    if (!t.pf.predict(delta,
+                      planar_increment_covariance(o, t.last_covariance, delta, config_.min_increment_variance))) {
       ++bad_odometry_;
       return;
     }
@@ -78,7 +81,8 @@ void ParticleFilterStage::on_landmarks(const LandmarkSightings& s) {
   }
   std::vector<filter::RangeBearing> batch;
   batch.reserve(s.observations.size());
-  for (const auto& ob : s.observations) batch.push_back({ob.id, ob.range, ob.azimuth, ob.covariance.topLeftCorner<2, 2>()});
+  for (const auto& ob : s.observations)
+    batch.push_back({ob.id, ob.range, ob.azimuth, ob.covariance.topLeftCorner<2, 2>()});
   filter::FastSlam& pf = it->second.pf;
   const filter::FastSlam before = pf;
   const auto r = pf.observe(batch);
@@ -99,12 +103,18 @@ void ParticleFilterStage::on_landmarks(const LandmarkSightings& s) {
 }
 
 Counters ParticleFilterStage::counters() const {
-  return {{"predictions", predictions_},         {"bad_odometry", bad_odometry_},
-          {"out_of_order", out_of_order_},       {"updates", updates_},
-          {"new_landmarks", new_landmarks_},     {"associated", associated_},
-          {"gated", gated_},                     {"rejected", rejected_},
-          {"unknown_landmarks", unknown_},       {"removed_tentative", removed_},
-          {"resamplings", resamplings_},         {"not_planar", not_planar_},
+  return {{"predictions", predictions_},
+          {"bad_odometry", bad_odometry_},
+          {"out_of_order", out_of_order_},
+          {"updates", updates_},
+          {"new_landmarks", new_landmarks_},
+          {"associated", associated_},
+          {"gated", gated_},
+          {"rejected", rejected_},
+          {"unknown_landmarks", unknown_},
+          {"removed_tentative", removed_},
+          {"resamplings", resamplings_},
+          {"not_planar", not_planar_},
           {"landmarks_before_odometry", before_odometry_},
           {"refused_non_finite", refusals_.non_finite},
           {"refused_indefinite", refusals_.indefinite},
@@ -137,8 +147,10 @@ filter::FastSlamOptions ParticleFilterStage::fastslam_options() const {
 void ParticleFilterStage::save(archive::ArchiveWriter& w) {
   w(static_cast<uint64_t>(tracks_.size()));
   for (const auto& [source, t] : tracks_) w(source)(t.pf)(t.last_odom)(t.last_covariance)(t.utime);
-  w(predictions_)(bad_odometry_)(out_of_order_)(updates_)(new_landmarks_)(associated_)(gated_)(rejected_)(unknown_)(
-      removed_)(resamplings_)(not_planar_)(before_odometry_)(refusals_.non_finite)(refusals_.indefinite)(over_budget_);
+  w(predictions_)(bad_odometry_)(
+      out_of_order_)(updates_)(new_landmarks_)(associated_)(gated_)(rejected_)(unknown_)(removed_)(resamplings_)(not_planar_)(before_odometry_)(refusals_
+                                                                                                                                                    .non_finite)(
+      refusals_.indefinite)(over_budget_);
 }
 
 void ParticleFilterStage::load(archive::ArchiveReader& r) {
@@ -150,8 +162,10 @@ void ParticleFilterStage::load(archive::ArchiveReader& r) {
     r(t.pf)(t.last_odom)(t.last_covariance)(t.utime);
     tracks_.emplace(source, std::move(t));
   }
-  r(predictions_)(bad_odometry_)(out_of_order_)(updates_)(new_landmarks_)(associated_)(gated_)(rejected_)(unknown_)(
-      removed_)(resamplings_)(not_planar_)(before_odometry_)(refusals_.non_finite)(refusals_.indefinite)(over_budget_);
+  r(predictions_)(bad_odometry_)(
+      out_of_order_)(updates_)(new_landmarks_)(associated_)(gated_)(rejected_)(unknown_)(removed_)(resamplings_)(not_planar_)(before_odometry_)(refusals_
+                                                                                                                                                    .non_finite)(
+      refusals_.indefinite)(over_budget_);
 }
 
 }  // namespace sextant::engine

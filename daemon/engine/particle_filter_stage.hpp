@@ -50,11 +50,12 @@ class ParticleFilterStage final : public Stage {
 
   FilterConfig config_;
   std::map<std::string, Track> tracks_;
-  int64_t predictions_ = 0, bad_odometry_ = 0, out_of_order_ = 0, updates_ = 0, new_landmarks_ = 0,
-          associated_ = 0, gated_ = 0, rejected_ = 0, unknown_ = 0, removed_ = 0, resamplings_ = 0,
-          not_planar_ = 0, before_odometry_ = 0;
+  int64_t predictions_ = 0, bad_odometry_ = 0, out_of_order_ = 0, updates_ = 0, new_landmarks_ = 0, associated_ = 0,
+          gated_ = 0, rejected_ = 0, unknown_ = 0, removed_ = 0, resamplings_ = 0, not_planar_ = 0,
+          before_odometry_ = 0;
   filter::Refusals refusals_;
-  int64_t over_budget_ = 0;  // sightings without id dropped by FastSlamOptions::association_budget  // steps undone because they left the filter unhealthy (FastSlam::health)
+  int64_t over_budget_ =
+      0;  // sightings without id dropped by FastSlamOptions::association_budget  // steps undone because they left the filter unhealthy (FastSlam::health)
 };
 
 }  // namespace sextant::engine

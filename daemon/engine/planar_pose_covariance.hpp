@@ -24,8 +24,8 @@ inline Matrix6 planar_covariance_in_body_frame(const SE2& pose, const Eigen::Mat
 /// the one regularized increment covariance (pose_covariance.hpp: the message's increment covariance, or the growth
 /// of its pose covariance, with eigenvalues floored at `min_variance`), so the filter's prediction stays positive
 /// definite.
-inline Eigen::Matrix3d planar_increment_covariance(const Odometry& o, const Matrix6& previous_covariance, const SE2& delta,
-                                                   double min_variance) {
+inline Eigen::Matrix3d planar_increment_covariance(const Odometry& o, const Matrix6& previous_covariance,
+                                                   const SE2& delta, double min_variance) {
   return planar_block(regularized_increment_covariance(o.covariance, o.increment_covariance, /*planar=*/true,
                                                        delta.to_se3(), previous_covariance, min_variance));
 }

@@ -11,7 +11,8 @@ namespace sextant::engine {
 /// (sextant::stated_increment_covariance).
 inline Matrix6 stated_increment_covariance(const Odometry& odo, const SE3& delta,
                                            const Matrix6& previous_pose_covariance) {
-  return sextant::stated_increment_covariance(odo.covariance, odo.increment_covariance, delta, previous_pose_covariance);
+  return sextant::stated_increment_covariance(odo.covariance, odo.increment_covariance, delta,
+                                              previous_pose_covariance);
 }
 
 /// The increment covariance dead reckoning, the graph stage and the 3-D filter compose or predict with

@@ -14,18 +14,21 @@ namespace sextant::engine {
 namespace {
 
 constexpr std::pair<PrimaryEstimator, const char*> kPrimaryEstimators[] = {
-    {PrimaryEstimator::kAuto, "auto"}, {PrimaryEstimator::kDeadReckoning, "dead_reckoning"},
-    {PrimaryEstimator::kEkf, "ekf"}, {PrimaryEstimator::kPf, "pf"}, {PrimaryEstimator::kGraph, "graph"},
-    {PrimaryEstimator::kInertial, "inertial"}};
+    {PrimaryEstimator::kAuto, "auto"},   {PrimaryEstimator::kDeadReckoning, "dead_reckoning"},
+    {PrimaryEstimator::kEkf, "ekf"},     {PrimaryEstimator::kPf, "pf"},
+    {PrimaryEstimator::kGraph, "graph"}, {PrimaryEstimator::kInertial, "inertial"}};
 constexpr std::pair<FilterType, const char*> kFilterTypes[] = {
     {FilterType::kEkf, "ekf"}, {FilterType::kPf, "pf"}, {FilterType::kNone, "none"}};
-constexpr std::pair<AssociationSolver, const char*> kAssociationSolvers[] = {
-    {AssociationSolver::kLagrangian, "lr"}, {AssociationSolver::kExact, "exact"}};
-constexpr std::pair<StageKind, const char*> kStageKinds[] = {
-    {StageKind::kDeadReckoning, "dead_reckoning"}, {StageKind::kFilter, "filter"},
-    {StageKind::kParticleFilter, "particle_filter"}, {StageKind::kGraph, "graph"},
-    {StageKind::kGraphPose, "graph_pose"}, {StageKind::kAssociation, "association"}, {StageKind::kInertial, "inertial"},
-    {StageKind::kOther, "other"}};
+constexpr std::pair<AssociationSolver, const char*> kAssociationSolvers[] = {{AssociationSolver::kLagrangian, "lr"},
+                                                                             {AssociationSolver::kExact, "exact"}};
+constexpr std::pair<StageKind, const char*> kStageKinds[] = {{StageKind::kDeadReckoning, "dead_reckoning"},
+                                                             {StageKind::kFilter, "filter"},
+                                                             {StageKind::kParticleFilter, "particle_filter"},
+                                                             {StageKind::kGraph, "graph"},
+                                                             {StageKind::kGraphPose, "graph_pose"},
+                                                             {StageKind::kAssociation, "association"},
+                                                             {StageKind::kInertial, "inertial"},
+                                                             {StageKind::kOther, "other"}};
 
 }  // namespace
 

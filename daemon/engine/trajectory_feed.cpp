@@ -57,7 +57,8 @@ TrajectoryFeed::Changes TrajectoryFeed::compare_with_published(const std::vector
     const double dt = (pub->second.position - kf.pose.position).norm();
     const double dr = rotation_between(pub->second, kf.pose);
     const double score = std::max(dt / options_.move_translation, dr / options_.move_rotation);
-    if (flush ? (pub->second.position != kf.pose.position || pub->second.orientation.coeffs() != kf.pose.orientation.coeffs())
+    if (flush ? (pub->second.position != kf.pose.position ||
+                 pub->second.orientation.coeffs() != kf.pose.orientation.coeffs())
               : score > 1.0)
       c.moved.emplace_back(score, k);
     ++pub;
@@ -70,9 +71,11 @@ TrajectoryFeed::Changes TrajectoryFeed::compare_with_published(const std::vector
 // flushing); in id order.
 std::vector<size_t> TrajectoryFeed::choose_keyframes_to_send(const Changes& changes, bool flush) const {
   std::vector<std::pair<double, size_t>> moved = changes.moved;
-  std::sort(moved.begin(), moved.end(), [](const auto& a, const auto& b) { return a.first != b.first ? a.first > b.first : a.second < b.second; });
+  std::sort(moved.begin(), moved.end(),
+            [](const auto& a, const auto& b) { return a.first != b.first ? a.first > b.first : a.second < b.second; });
   std::vector<size_t> send = changes.fresh;
-  const size_t budget = flush ? std::numeric_limits<size_t>::max() : static_cast<size_t>(std::max(0, options_.max_keyframes_per_tick));
+  const size_t budget =
+      flush ? std::numeric_limits<size_t>::max() : static_cast<size_t>(std::max(0, options_.max_keyframes_per_tick));
   if (send.size() > budget) send.resize(budget);
   for (size_t i = 0; i < moved.size() && send.size() < budget; ++i) send.push_back(moved[i].second);
   std::sort(send.begin(), send.end());
@@ -80,8 +83,9 @@ std::vector<size_t> TrajectoryFeed::choose_keyframes_to_send(const Changes& chan
 }
 
 // UPDATE messages: keyframes and removed ids packed under the per-message byte budget.
-void TrajectoryFeed::add_updates(std::vector<Trajectory>& out, const Trajectory& first, const std::vector<Keyframe>& current,
-                                 const std::vector<size_t>& send, const std::vector<int64_t>& removed) {
+void TrajectoryFeed::add_updates(std::vector<Trajectory>& out, const Trajectory& first,
+                                 const std::vector<Keyframe>& current, const std::vector<size_t>& send,
+                                 const std::vector<int64_t>& removed) {
   const int64_t message_bytes = std::max(1, options_.max_keyframes_per_message) * kKeyframeBytes;
   size_t next_kf = 0, next_removed = 0;
   while (next_kf < send.size() || next_removed < removed.size()) {
@@ -101,8 +105,10 @@ void TrajectoryFeed::add_updates(std::vector<Trajectory>& out, const Trajectory&
 
 // One chunk of the rolling snapshot: the next keyframes from the cursor; the last chunk of a cycle says how many
 // the cycle had and starts the next one.
-void TrajectoryFeed::add_snapshot_chunk(std::vector<Trajectory>& out, const Trajectory& first, const std::vector<Keyframe>& current) {
-  const size_t chunk = static_cast<size_t>(std::min(options_.snapshot_chunk, std::max(1, options_.max_keyframes_per_message)));
+void TrajectoryFeed::add_snapshot_chunk(std::vector<Trajectory>& out, const Trajectory& first,
+                                        const std::vector<Keyframe>& current) {
+  const size_t chunk =
+      static_cast<size_t>(std::min(options_.snapshot_chunk, std::max(1, options_.max_keyframes_per_message)));
   if (snapshot_next_chunk_ == 0) {
     snapshot_cursor_ = std::numeric_limits<int64_t>::min();
     snapshot_chunks_ = static_cast<int>((current.size() + chunk - 1) / chunk);

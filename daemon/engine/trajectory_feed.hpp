@@ -21,11 +21,11 @@
 namespace sextant::engine {
 
 struct TrajectoryFeedOptions {
-  double rate_hz = 1.0;                // publications per second of data time; 0: after every graph update
-  double move_translation = 0.01;      // m: a keyframe that moved more than this since it was published is sent again
-  double move_rotation = 0.005;        // rad: ... or turned more than this
-  int max_keyframes_per_message = 512; // ~37 KB per message
-  int max_keyframes_per_tick = 1024;   // UPDATE keyframes per publication (new and moved); the rest wait
+  double rate_hz = 1.0;                 // publications per second of data time; 0: after every graph update
+  double move_translation = 0.01;       // m: a keyframe that moved more than this since it was published is sent again
+  double move_rotation = 0.005;         // rad: ... or turned more than this
+  int max_keyframes_per_message = 512;  // ~37 KB per message
+  int max_keyframes_per_tick = 1024;    // UPDATE keyframes per publication (new and moved); the rest wait
   /// Keyframes of the rolling snapshot per publication; 0: no snapshot.  The snapshot is most of the traffic of a
   /// steady trajectory (64: 4.6 KB per publication; 256 made 15.6 KB/s on the planar 60-minute run, 92 % of it the
   /// snapshot); a late subscriber has the whole trajectory after keyframes / snapshot_chunk publications.

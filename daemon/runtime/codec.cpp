@@ -141,12 +141,18 @@ Decoded guarded(F&& f) {
 Decoded decode_event(InputKind kind, const void* data, size_t size, MessageOrigin* origin) {
   try {
     switch (kind) {
-      case InputKind::kOdometry: return decode_as<sextant::odometry_t>(data, size, origin);
-      case InputKind::kLandmarks: return decode_as<sextant::landmarks_t>(data, size, origin);
-      case InputKind::kBearings: return decode_as<sextant::bearing_scan_t>(data, size, origin);
-      case InputKind::kLoopClosures: return decode_as<sextant::loop_closure_t>(data, size, origin);
-      case InputKind::kImu: return decode_as<sextant::imu_t>(data, size, origin);
-      case InputKind::kGnss: return decode_as<sextant::gnss_t>(data, size, origin);
+      case InputKind::kOdometry:
+        return decode_as<sextant::odometry_t>(data, size, origin);
+      case InputKind::kLandmarks:
+        return decode_as<sextant::landmarks_t>(data, size, origin);
+      case InputKind::kBearings:
+        return decode_as<sextant::bearing_scan_t>(data, size, origin);
+      case InputKind::kLoopClosures:
+        return decode_as<sextant::loop_closure_t>(data, size, origin);
+      case InputKind::kImu:
+        return decode_as<sextant::imu_t>(data, size, origin);
+      case InputKind::kGnss:
+        return decode_as<sextant::gnss_t>(data, size, origin);
     }
   } catch (const std::exception& e) {
     return Rejection{"decode", std::string("cannot decode: ") + e.what()};
@@ -191,8 +197,8 @@ Decoded to_event(const sextant::landmarks_t& m) {
     e.utime = m.utime;
     e.source = m.source;
     e.planar = m.planar;
-    e.sensor_in_body = check_pose(m.sensor_position, m.sensor_orientation, "landmarks_t.", "sensor_position",
-                                  "sensor_orientation");
+    e.sensor_in_body =
+        check_pose(m.sensor_position, m.sensor_orientation, "landmarks_t.", "sensor_position", "sensor_orientation");
     e.observations.reserve(static_cast<size_t>(m.num_observations));
     for (int i = 0; i < m.num_observations; ++i) {
       const auto& o = m.observations[static_cast<size_t>(i)];
@@ -288,7 +294,8 @@ Decoded to_event(const sextant::imu_t& m) {
     e.frame = m.frame;
     if (m.has_angular_velocity) {
       e.angular_velocity = check_vector3(m.angular_velocity, "imu_t.angular_velocity");
-      e.angular_velocity_covariance = check_stated_covariance(m.angular_velocity_covariance, "imu_t.angular_velocity_covariance");
+      e.angular_velocity_covariance =
+          check_stated_covariance(m.angular_velocity_covariance, "imu_t.angular_velocity_covariance");
     }
     if (m.has_linear_acceleration) {
       e.linear_acceleration = check_vector3(m.linear_acceleration, "imu_t.linear_acceleration");
@@ -490,7 +497,8 @@ sextant::trajectory_t to_message(const engine::Trajectory& o, const std::string&
   m.chi2 = o.chi2;
   m.iterations = o.iterations;
   m.solve_ms = o.solve_ms;
-  m.kind = o.kind == engine::Trajectory::Kind::kSnapshot ? sextant::trajectory_t::SNAPSHOT : sextant::trajectory_t::UPDATE;
+  m.kind =
+      o.kind == engine::Trajectory::Kind::kSnapshot ? sextant::trajectory_t::SNAPSHOT : sextant::trajectory_t::UPDATE;
   m.snapshot_id = o.snapshot_id;
   m.chunk = o.chunk;
   m.num_chunks = o.num_chunks;
@@ -564,7 +572,8 @@ engine::Trajectory to_output(const sextant::trajectory_t& m) {
   o.chi2 = m.chi2;
   o.iterations = m.iterations;
   o.solve_ms = m.solve_ms;
-  o.kind = m.kind == sextant::trajectory_t::SNAPSHOT ? engine::Trajectory::Kind::kSnapshot : engine::Trajectory::Kind::kUpdate;
+  o.kind = m.kind == sextant::trajectory_t::SNAPSHOT ? engine::Trajectory::Kind::kSnapshot
+                                                     : engine::Trajectory::Kind::kUpdate;
   o.snapshot_id = m.snapshot_id;
   o.chunk = m.chunk;
   o.num_chunks = m.num_chunks;

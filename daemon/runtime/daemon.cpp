@@ -132,8 +132,10 @@ int Daemon::restore_engine() {
     return kExitOk;
   } catch (const StateFileError& e) {
     if (!cfg_.discard_bad_state) {
-      spdlog::error("bad state file: {}\n  Move it away, or start with --discard-bad-state to set it aside and start "
-                    "fresh.", e.what());
+      spdlog::error(
+          "bad state file: {}\n  Move it away, or start with --discard-bad-state to set it aside and start "
+          "fresh.",
+          e.what());
       return kExitState;
     }
     try {
@@ -244,7 +246,8 @@ engine::Counters Daemon::runtime_counters() const {
   c.push_back({"publish_lag_us", lag.last_us});
   c.push_back({"publish_lag_us_max", lag.max_us});
   if (lag.max_us > 1'000'000)
-    spdlog::warn("published up to {:.1f} s behind real time since the last status (a stall, or a backlog)", lag.max_us * 1e-6);
+    spdlog::warn("published up to {:.1f} s behind real time since the last status (a stall, or a backlog)",
+                 lag.max_us * 1e-6);
   if (!state_path_.empty()) {
     c.push_back({"state_saves", state_saves_.load()});
     c.push_back({"state_save_failures", state_failures_.load()});
@@ -262,8 +265,9 @@ engine::Counters Daemon::runtime_counters() const {
 void Daemon::publish_status() {
   try {
     Publisher& p = driver_->publisher();
-    p.publish(report_->build(std::chrono::duration<double>(Clock::now() - started_).count(), driver_->stats().snapshot(),
-                             driver_->stage_status(), runtime_counters(), p.counts(), p.bytes()));
+    p.publish(report_->build(std::chrono::duration<double>(Clock::now() - started_).count(),
+                             driver_->stats().snapshot(), driver_->stage_status(), runtime_counters(), p.counts(),
+                             p.bytes()));
   } catch (const std::exception& e) {
     spdlog::error("status: {}", e.what());
   }

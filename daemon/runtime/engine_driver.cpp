@@ -9,7 +9,8 @@ namespace {
 // each body's state apart, so batching (which keeps each body's order but not the order across bodies) changes
 // nothing it computes.  The other stages see every message in arrival order (a filter may fuse several sources of
 // one body).
-std::optional<OdometryBatcherOptions> odometry_batching(const engine::Stage& stage, const engine::EngineConfig& config) {
+std::optional<OdometryBatcherOptions> odometry_batching(const engine::Stage& stage,
+                                                        const engine::EngineConfig& config) {
   if (stage.kind() != engine::StageKind::kGraph || !config.graph.coalesce_odometry) return std::nullopt;
   OdometryBatcherOptions o;
   o.max_batch = static_cast<size_t>(config.graph.odometry_batch_max);
@@ -22,7 +23,8 @@ std::optional<OdometryBatcherOptions> odometry_batching(const engine::Stage& sta
 
 EngineDriver::EngineDriver(const config::DaemonConfig& config, engine::Engine& engine, Publisher::RawSink raw,
                            DriverOptions options)
-    : engine_(engine), options_(std::move(options)),
+    : engine_(engine),
+      options_(std::move(options)),
       intake_(stats_, options_.on_reject, intake_options(config, options_.live)),
       // The last FusedPose time per estimator channel and body: the bodies are bounded by max_sources.
       publisher_(config.channels, config.name, engine.primary_estimator(), std::move(raw),

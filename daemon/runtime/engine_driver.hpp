@@ -102,9 +102,9 @@ class EngineDriver {
   Intake intake_;
   Publisher publisher_;
   engine::Emit emit_;
-  std::vector<std::unique_ptr<StageHost>> hosts_;       // kInline
-  std::vector<std::unique_ptr<StageRunner>> runners_;   // kStageThreads
-  std::vector<int64_t> processed_;                       // kInline: events per stage
+  std::vector<std::unique_ptr<StageHost>> hosts_;      // kInline
+  std::vector<std::unique_ptr<StageRunner>> runners_;  // kStageThreads
+  std::vector<int64_t> processed_;                     // kInline: events per stage
 };
 
 }  // namespace sextant::runtime

@@ -15,10 +15,12 @@ StreamKey stream_of(const std::string& channel, const engine::Event& e) {
   return std::visit(
       [&](const auto& x) -> StreamKey {
         using T = std::decay_t<decltype(x)>;
-        if constexpr (std::is_same_v<T, engine::Odometry>) return {channel + "/" + x.source, true, 0};
+        if constexpr (std::is_same_v<T, engine::Odometry>)
+          return {channel + "/" + x.source, true, 0};
         else if constexpr (std::is_same_v<T, engine::BearingScan>)
           return {channel + "/sensor " + std::to_string(x.sensor_id), true, 0};
-        else if constexpr (std::is_same_v<T, engine::LandmarkSightings>) return {channel + "/" + x.source, false, 0};
+        else if constexpr (std::is_same_v<T, engine::LandmarkSightings>)
+          return {channel + "/" + x.source, false, 0};
         else if constexpr (std::is_same_v<T, engine::ImuSample> || std::is_same_v<T, engine::GnssFix>)
           return {channel + "/" + x.source + "/" + x.frame, true, 0};  // one clock per sensor of a body
         else
@@ -43,8 +45,8 @@ Arrival Arrival::at_log_time(int64_t utime) {
 IntakeOptions intake_options(const config::DaemonConfig& c, bool live) {
   IntakeOptions o;
   o.live = live;
-  o.time = TimeGuardOptions{c.max_ahead_s, c.time_resync_messages, c.max_ahead_of_wall_s, c.max_sources, c.source_idle_s,
-                            c.source_evict_idle_s};
+  o.time = TimeGuardOptions{c.max_ahead_s, c.time_resync_messages, c.max_ahead_of_wall_s,
+                            c.max_sources, c.source_idle_s,        c.source_evict_idle_s};
   o.plausibility = c.plausibility;
   o.source_handover_s = c.source_handover_s;
   return o;
@@ -55,7 +57,8 @@ Intake::Intake(ChannelStats& stats, RejectHook on_reject, IntakeOptions options)
       on_reject_(std::move(on_reject)),
       options_(options),
       order_(options.time),
-      plausible_(options.plausibility, options.time.resync_after, static_cast<size_t>(std::max(options.time.max_streams, 1))),
+      plausible_(options.plausibility, options.time.resync_after,
+                 static_cast<size_t>(std::max(options.time.max_streams, 1))),
       claims_(options.source_handover_s, static_cast<size_t>(std::max(options.time.max_streams, 1)) * 4) {}
 
 void Intake::add_channel(const std::string& channel, InputKind kind) {
@@ -98,14 +101,16 @@ std::optional<engine::Event> Intake::accept_unguarded(const std::string& channel
   engine::Event event = std::get<engine::Event>(std::move(d));
   const StreamKey key = stream_of(channel, event);
   if (!claims_.claim(key.stream, origin.sender, engine::event_utime(event))) {
-    reject(channel, "source_claimed",
-           channel + ": '" + engine::event_source(event) + "' is held by another sender; '" + origin.sender + "' refused");
+    reject(
+        channel, "source_claimed",
+        channel + ": '" + engine::event_source(event) + "' is held by another sender; '" + origin.sender + "' refused");
     return std::nullopt;
   }
   std::optional<TimeOrderGuard::LiveClock> live;
   if (options_.live) live = TimeOrderGuard::LiveClock{arrival.wall_utime, arrival.steady};
   const int64_t resyncs = order_.resyncs();
-  if (auto why = order_.check(key.stream, engine::event_utime(event), key.strict, key.signature, live, arrival.steady)) {
+  if (auto why =
+          order_.check(key.stream, engine::event_utime(event), key.strict, key.signature, live, arrival.steady)) {
     reject(channel, why->reason, channel + ": " + why->message);
     return std::nullopt;
   }
@@ -127,8 +132,8 @@ std::vector<std::string> Intake::take_expired_bodies() {
     plausible_.forget(stream);
     claims_.forget(stream);
     for (const auto& [channel, kind] : channels_)
-      if (kind == InputKind::kOdometry && stream.size() > channel.size() && stream.compare(0, channel.size(), channel) == 0 &&
-          stream[channel.size()] == '/')
+      if (kind == InputKind::kOdometry && stream.size() > channel.size() &&
+          stream.compare(0, channel.size(), channel) == 0 && stream[channel.size()] == '/')
         bodies.push_back(stream.substr(channel.size() + 1));
   }
   return bodies;

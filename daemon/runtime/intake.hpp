@@ -73,8 +73,8 @@ class Intake {
   std::vector<std::string> take_expired_bodies();
 
  private:
-  std::optional<engine::Event> accept_unguarded(const std::string& channel, InputKind kind, const void* data, size_t size,
-                                                Arrival arrival);
+  std::optional<engine::Event> accept_unguarded(const std::string& channel, InputKind kind, const void* data,
+                                                size_t size, Arrival arrival);
   void reject(const std::string& channel, const std::string& reason, const std::string& message);
 
   ChannelStats& stats_;

@@ -13,8 +13,8 @@ namespace sextant::runtime {
 namespace {
 
 constexpr uint8_t kSync[4] = {0xED, 0xA1, 0xDA, 0x01};
-constexpr int64_t kHeaderBytes = 28;          // sync, event number, timestamp, channel length, data length
-constexpr int32_t kMaxChannelLength = 1000;   // liblcm's own bound (LCM channels are at most 63 characters)
+constexpr int64_t kHeaderBytes = 28;         // sync, event number, timestamp, channel length, data length
+constexpr int32_t kMaxChannelLength = 1000;  // liblcm's own bound (LCM channels are at most 63 characters)
 constexpr size_t kMaxProblemsKept = 8;
 
 uint32_t be32(const uint8_t* p) {
@@ -69,7 +69,8 @@ std::string LogDamage::summary() const {
     s << bad_events << " corrupt event header(s), " << skipped_bytes << " bytes skipped";
     if (missing_event_numbers > 0) s << ", about " << missing_event_numbers << " events lost (event-number gaps)";
   }
-  if (truncated_tail_bytes > 0) s << (damaged() ? "; " : "") << "last event truncated (" << truncated_tail_bytes << " bytes)";
+  if (truncated_tail_bytes > 0)
+    s << (damaged() ? "; " : "") << "last event truncated (" << truncated_tail_bytes << " bytes)";
   if (!first_problems.empty()) s << " (first: " << first_problems.front() << ")";
   return s.str();
 }
@@ -82,7 +83,8 @@ LogWriter::LogWriter(const std::string& path, bool exclusive) : path_(path) {
     ::close(fd);
   }
   log_ = std::make_unique<lcm::LogFile>(path, "w");
-  if (!log_->good()) throw std::runtime_error("cannot open log file for writing: " + path + ": " + std::strerror(errno));
+  if (!log_->good())
+    throw std::runtime_error("cannot open log file for writing: " + path + ": " + std::strerror(errno));
 }
 
 void LogWriter::write_raw(int64_t timestamp, const std::string& channel, const void* data, size_t size) {
@@ -172,7 +174,8 @@ std::optional<LogRecord> LogReader::next() {
     const auto channel_len = static_cast<int32_t>(be32(h + 20));
     const auto data_len = static_cast<int32_t>(be32(h + 24));
     if (channel_len <= 0 || channel_len >= kMaxChannelLength) {
-      resync("channel length " + std::to_string(channel_len) + " outside [1, " + std::to_string(kMaxChannelLength - 1) + "]");
+      resync("channel length " + std::to_string(channel_len) + " outside [1, " + std::to_string(kMaxChannelLength - 1) +
+             "]");
       continue;
     }
     if (data_len < 0) {

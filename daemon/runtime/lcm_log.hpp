@@ -32,10 +32,10 @@ struct LogRecord {
 /// What a reader found wrong in a log.  A damaged log had corrupt events (resynchronised over); a truncated tail
 /// alone (the last event cut short, as a killed recorder leaves it) is not damage.
 struct LogDamage {
-  int64_t bad_events = 0;            // event headers found corrupt (each followed by a resynchronisation)
-  int64_t skipped_bytes = 0;         // bytes skipped while resynchronising (not part of any good event)
-  int64_t missing_event_numbers = 0; // gaps in the event numbers of the good events (events lost in damage)
-  int64_t truncated_tail_bytes = 0;  // an incomplete last event
+  int64_t bad_events = 0;                   // event headers found corrupt (each followed by a resynchronisation)
+  int64_t skipped_bytes = 0;                // bytes skipped while resynchronising (not part of any good event)
+  int64_t missing_event_numbers = 0;        // gaps in the event numbers of the good events (events lost in damage)
+  int64_t truncated_tail_bytes = 0;         // an incomplete last event
   std::vector<std::string> first_problems;  // the first few, each "byte OFFSET: what"
   bool damaged() const { return bad_events > 0 || skipped_bytes > 0; }
   /// One line: "3 corrupt events, 1234 bytes skipped, ... (first: byte 52: data length ...)"; empty when clean.

@@ -15,7 +15,8 @@ OdometryBatcher::OdometryBatcher(const OdometryBatcherOptions& options) : option
     throw std::invalid_argument("odometry batcher: every bound (batch, per body, total) must be at least 1");
 }
 
-bool OdometryBatcher::offer(const QueuedEvent& event, const EnqueueEvent& enqueue_event, const EnqueueToken& enqueue_token) {
+bool OdometryBatcher::offer(const QueuedEvent& event, const EnqueueEvent& enqueue_event,
+                            const EnqueueToken& enqueue_token) {
   std::lock_guard lock(mutex_);
   const auto* o = std::get_if<engine::Odometry>(&event.event);
   if (o == nullptr) {

@@ -20,7 +20,8 @@ std::string number(double v) {
   return s.str();
 }
 
-std::optional<Rejection> check_position(const Eigen::Vector3d& p, const config::Plausibility& l, const std::string& field) {
+std::optional<Rejection> check_position(const Eigen::Vector3d& p, const config::Plausibility& l,
+                                        const std::string& field) {
   if (p.norm() <= l.max_position_m) return std::nullopt;
   return implausible("position", field + ": " + number(p.norm()) + " m from the origin (max_position_m " +
                                      number(l.max_position_m) + ")");
@@ -32,8 +33,9 @@ double tilt(const Eigen::Quaterniond& q) { return std::acos(std::clamp(q.toRotat
 std::optional<Rejection> check_tilt(bool planar, const Eigen::Quaterniond& q, const config::Plausibility& l,
                                     const std::string& field) {
   if (!planar || tilt(q) <= l.max_planar_tilt_rad) return std::nullopt;
-  return implausible("tilt", field + ": roll/pitch of " + number(tilt(q)) + " rad in a planar message (max_planar_tilt_rad " +
-                                 number(l.max_planar_tilt_rad) + ")");
+  return implausible("tilt", field + ": roll/pitch of " + number(tilt(q)) +
+                                 " rad in a planar message (max_planar_tilt_rad " + number(l.max_planar_tilt_rad) +
+                                 ")");
 }
 
 // The eigenvalues of the meaningful block (`active` rows and columns) against the variance and condition bounds;
@@ -49,15 +51,19 @@ std::optional<Rejection> check_spread(const Eigen::Matrix<double, N, N>& m, cons
   double lo = eig.eigenvalues().minCoeff(), hi = eig.eigenvalues().maxCoeff();
   if (inverse) std::tie(lo, hi) = std::pair{1.0 / hi, 1.0 / lo};
   std::string why;
-  if (!(lo >= l.min_variance)) why = "smallest variance " + number(lo) + " below min_variance " + number(l.min_variance);
-  else if (!(hi <= l.max_variance)) why = "largest variance " + number(hi) + " above max_variance " + number(l.max_variance);
+  if (!(lo >= l.min_variance))
+    why = "smallest variance " + number(lo) + " below min_variance " + number(l.min_variance);
+  else if (!(hi <= l.max_variance))
+    why = "largest variance " + number(hi) + " above max_variance " + number(l.max_variance);
   else if (!(hi <= l.max_condition * lo))
     why = "condition number " + number(hi / lo) + " above max_condition " + number(l.max_condition);
   if (why.empty()) return std::nullopt;
   return implausible("covariance", field + ": " + why + (inverse ? " (of its inverse)" : ""));
 }
 
-std::vector<int> pose_active(bool planar) { return planar ? std::vector<int>{0, 1, 5} : std::vector<int>{0, 1, 2, 3, 4, 5}; }
+std::vector<int> pose_active(bool planar) {
+  return planar ? std::vector<int>{0, 1, 5} : std::vector<int>{0, 1, 2, 3, 4, 5};
+}
 
 }  // namespace
 
@@ -76,7 +82,8 @@ std::optional<Rejection> Plausibility::check(const std::string& stream, const en
       const auto& ob = s->observations[i];
       const std::string f = "landmarks_t.observations[" + std::to_string(i) + "].";
       if (ob.range > l.max_range_m)
-        return implausible("range", f + "range: " + number(ob.range) + " m (max_range_m " + number(l.max_range_m) + ")");
+        return implausible("range",
+                           f + "range: " + number(ob.range) + " m (max_range_m " + number(l.max_range_m) + ")");
       if (auto r = check_spread<3>(ob.covariance, active, l, f + "covariance")) return r;
     }
     return std::nullopt;
@@ -85,8 +92,10 @@ std::optional<Rejection> Plausibility::check(const std::string& stream, const en
     if (auto r = check_position(b->sensor_position, l, "bearing_scan_t.sensor_position")) return r;
     for (size_t i = 0; i < b->detections.size(); ++i) {
       const auto& d = b->detections[i];
-      const Eigen::Matrix2d c = Eigen::Vector2d(d.sigma_azimuth * d.sigma_azimuth, d.sigma_elevation * d.sigma_elevation).asDiagonal();
-      if (auto r = check_spread<2>(c, {0, 1}, l, "bearing_scan_t.detections[" + std::to_string(i) + "].sigma")) return r;
+      const Eigen::Matrix2d c =
+          Eigen::Vector2d(d.sigma_azimuth * d.sigma_azimuth, d.sigma_elevation * d.sigma_elevation).asDiagonal();
+      if (auto r = check_spread<2>(c, {0, 1}, l, "bearing_scan_t.detections[" + std::to_string(i) + "].sigma"))
+        return r;
     }
     return std::nullopt;
   }

@@ -9,8 +9,11 @@ namespace sextant::runtime {
 
 Publisher::Publisher(config::Channels channels, std::string sender, std::string primary_estimator, RawSink raw,
                      size_t max_tracked)
-    : channels_(std::move(channels)), sender_(std::move(sender)), primary_(std::move(primary_estimator)),
-      raw_(std::move(raw)), max_tracked_(std::max<size_t>(max_tracked, 1)) {}
+    : channels_(std::move(channels)),
+      sender_(std::move(sender)),
+      primary_(std::move(primary_estimator)),
+      raw_(std::move(raw)),
+      max_tracked_(std::max<size_t>(max_tracked, 1)) {}
 
 std::string Publisher::fused_pose_channel(const std::string& estimator) const {
   if (estimator == primary_) return channels_.full(channels_.fused_pose);

@@ -35,8 +35,10 @@ void StageHost::handle(const QueuedEvent& event) {
   }
   if (auto failure = engine::handle_guarded(stage_, event.event, emit_)) {
     count_failure(failure->message);
-    if (failure->recovered) ++recoveries_;
-    else count_failure(failure->recover_message);
+    if (failure->recovered)
+      ++recoveries_;
+    else
+      count_failure(failure->recover_message);
   }
 }
 

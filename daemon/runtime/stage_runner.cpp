@@ -1,12 +1,13 @@
 #include "daemon/runtime/stage_runner.hpp"
 
-
 namespace sextant::runtime {
 
 StageRunner::StageRunner(engine::Stage& stage, size_t queue_capacity, engine::Emit emit,
                          std::optional<OdometryBatcherOptions> batching)
-    : host_(stage, std::move(emit)), queue_(queue_capacity),
-      batcher_(batching ? std::make_unique<OdometryBatcher>(*batching) : nullptr), latency_(4096, kLatencyWindowS),
+    : host_(stage, std::move(emit)),
+      queue_(queue_capacity),
+      batcher_(batching ? std::make_unique<OdometryBatcher>(*batching) : nullptr),
+      latency_(4096, kLatencyWindowS),
       counters_(stage.counters()) {}
 
 StageRunner::~StageRunner() { drain_and_stop(); }
@@ -41,8 +42,10 @@ int64_t StageRunner::drain_and_stop(std::chrono::steady_clock::time_point deadli
     std::this_thread::sleep_for(std::chrono::milliseconds(5));
   int64_t left = 0;
   for (const Slot& slot : queue_.discard()) {
-    if (const auto* token = std::get_if<OdometryBatcher::Token>(&slot)) left += static_cast<int64_t>(batcher_->take(*token).size());
-    else if (std::holds_alternative<QueuedEvent>(slot)) ++left;
+    if (const auto* token = std::get_if<OdometryBatcher::Token>(&slot))
+      left += static_cast<int64_t>(batcher_->take(*token).size());
+    else if (std::holds_alternative<QueuedEvent>(slot))
+      ++left;
   }
   drain_discarded_ += left;
   if (thread_.joinable()) thread_.join();

@@ -36,7 +36,7 @@ struct StageStatus {
   /// "odometry_waiting_dropped" (dropped at a bound of the batcher, also in `dropped`); "resync_forgets": bodies
   /// forgotten because their clock was re-synchronised.
   engine::Counters counters;
-  std::string last_failure;   // what the last exception said ("" when none)
+  std::string last_failure;  // what the last exception said ("" when none)
 };
 
 class StageRunner {

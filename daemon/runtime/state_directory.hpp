@@ -30,9 +30,9 @@ bool restore_stages(const std::string& path, uint64_t fingerprint, const std::ve
 std::string set_state_file_aside(const std::string& path);
 
 struct StateSave {
-  size_t bytes = 0;         // the file's size
-  double collect_ms = 0;    // stages saving their state (each between two of its events)
-  double write_ms = 0;      // encoding, writing, fsync, rename
+  size_t bytes = 0;       // the file's size
+  double collect_ms = 0;  // stages saving their state (each between two of its events)
+  double write_ms = 0;    // encoding, writing, fsync, rename
 };
 
 /// Saves every runner's stage (StageRunner::with_stage) to `path`, atomically.  Throws StateFileError.

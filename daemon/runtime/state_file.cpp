@@ -55,8 +55,9 @@ std::string encode_state(uint64_t fingerprint, const std::vector<StateSection>& 
 std::vector<StateSection> decode_state(const std::string& bytes, uint64_t fingerprint, const std::string& path) {
   const auto bad = [&](const std::string& why) { return StateFileError(path + ": " + why); };
   if (bytes.size() < kHeaderSize || std::memcmp(bytes.data(), kMagic, sizeof kMagic) != 0)
-    throw bad(bytes.size() < sizeof kMagic ? "too short to be a sextantd state file (" + std::to_string(bytes.size()) + " bytes)"
-                                           : "not a sextantd state file (no SEXTANT-STATE header)");
+    throw bad(bytes.size() < sizeof kMagic
+                  ? "too short to be a sextantd state file (" + std::to_string(bytes.size()) + " bytes)"
+                  : "not a sextantd state file (no SEXTANT-STATE header)");
   archive::ArchiveReader header(bytes.data() + sizeof kMagic, kHeaderSize - sizeof kMagic, path);
   const auto version = header.get<uint32_t>();
   const auto file_fingerprint = header.get<uint64_t>();

@@ -139,8 +139,8 @@ std::optional<TimeOrderGuard::Refusal> TimeOrderGuard::check(const std::string& 
   if (ahead)
     return Refusal{"time_future", "utime " + std::to_string(utime) + " is " + seconds(utime - s.clock) +
                                       " s ahead of the previous " + std::to_string(s.clock) + " for " + stream};
-  return Refusal{"time_order",
-                 "utime " + std::to_string(utime) + " before the previous " + std::to_string(s.clock) + " for " + stream};
+  return Refusal{"time_order", "utime " + std::to_string(utime) + " before the previous " + std::to_string(s.clock) +
+                                   " for " + stream};
 }
 
 }  // namespace sextant::runtime

@@ -35,18 +35,18 @@
 namespace sextant::runtime {
 
 struct TimeGuardOptions {
-  double max_ahead_s = 60.0;           // live: further ahead of its stream's clock (beyond real time) is refused
-  int resync_after = 5;                // consecutive consistent messages that move a jumped clock
-  double max_ahead_of_wall_s = 60.0;   // live only: a message further ahead of the wall clock is refused
-  int max_streams = 256;               // bodies and sensors tracked (per input side)
-  double idle_s = 0;                   // forget a stream silent this long (0: never; the stages keep their state)
-  double evict_idle_s = 60.0;          // live, table full: a stream silent this long may give its place (0: never)
+  double max_ahead_s = 60.0;          // live: further ahead of its stream's clock (beyond real time) is refused
+  int resync_after = 5;               // consecutive consistent messages that move a jumped clock
+  double max_ahead_of_wall_s = 60.0;  // live only: a message further ahead of the wall clock is refused
+  int max_streams = 256;              // bodies and sensors tracked (per input side)
+  double idle_s = 0;                  // forget a stream silent this long (0: never; the stages keep their state)
+  double evict_idle_s = 60.0;         // live, table full: a stream silent this long may give its place (0: never)
 };
 
 class TimeOrderGuard {
  public:
   struct Refusal {
-    std::string reason;   // "time_order", "time_future", "too_many_sources"
+    std::string reason;  // "time_order", "time_future", "too_many_sources"
     std::string message;
   };
   using SteadyTime = std::chrono::steady_clock::time_point;
@@ -83,8 +83,8 @@ class TimeOrderGuard {
 
  private:
   struct Stream {
-    int64_t clock = 0;          // newest accepted utime
-    engine::JumpRun jump;       // consecutive consistent refused stamps: a possible true jump
+    int64_t clock = 0;            // newest accepted utime
+    engine::JumpRun jump;         // consecutive consistent refused stamps: a possible true jump
     std::deque<uint64_t> recent;  // signatures of the last accepted messages (duplicates)
     SteadyTime seen{};            // last message of any kind (idle expiry)
     SteadyTime moved{};           // when `clock` last moved

@@ -111,8 +111,10 @@ class Walker {
 size_t WireLayout::min_size() const {
   size_t n = 0;
   for (const auto& f : fields) {
-    if (f.kind == Kind::kFixed || f.kind == Kind::kCount) n += f.bytes;
-    else if (f.kind == Kind::kString) n += 5;
+    if (f.kind == Kind::kFixed || f.kind == Kind::kCount)
+      n += f.bytes;
+    else if (f.kind == Kind::kString)
+      n += 5;
   }
   return n;
 }
@@ -127,12 +129,12 @@ std::optional<WireError> wire_error(const WireLayout& layout, const void* data, 
 
 template <>
 const WireLayout& wire_layout<sextant::odometry_t>() {
-  static const WireLayout l{"odometry_t",
-                            {i64("utime"), str("sender"), i64("seq"), str("source"), boolean("planar"),
-                             doubles("position", 3), doubles("orientation", 4), doubles("covariance", 36),
-                             boolean("has_increment_covariance"), doubles("increment_covariance", 36),
-                             boolean("has_twist"), doubles("linear_velocity", 3), doubles("angular_velocity", 3),
-                             doubles("twist_covariance", 36)}};
+  static const WireLayout l{
+      "odometry_t",
+      {i64("utime"), str("sender"), i64("seq"), str("source"), boolean("planar"), doubles("position", 3),
+       doubles("orientation", 4), doubles("covariance", 36), boolean("has_increment_covariance"),
+       doubles("increment_covariance", 36), boolean("has_twist"), doubles("linear_velocity", 3),
+       doubles("angular_velocity", 3), doubles("twist_covariance", 36)}};
   return l;
 }
 
@@ -141,10 +143,11 @@ const WireLayout& wire_layout<sextant::landmarks_t>() {
   static const WireLayout observation{
       "landmark_observation_t",
       {i64("id"), doubles("range", 1), doubles("azimuth", 1), doubles("elevation", 1), doubles("covariance", 9)}};
-  static const WireLayout l{"landmarks_t",
-                            {i64("utime"), str("sender"), i64("seq"), str("source"), boolean("planar"),
-                             doubles("sensor_position", 3), doubles("sensor_orientation", 4),
-                             count("num_observations", kMaxObservationsPerMessage), array("observations", observation)}};
+  static const WireLayout l{
+      "landmarks_t",
+      {i64("utime"), str("sender"), i64("seq"), str("source"), boolean("planar"), doubles("sensor_position", 3),
+       doubles("sensor_orientation", 4), count("num_observations", kMaxObservationsPerMessage),
+       array("observations", observation)}};
   return l;
 }
 
@@ -153,43 +156,42 @@ const WireLayout& wire_layout<sextant::bearing_scan_t>() {
   static const WireLayout detection{
       "bearing_detection_t",
       {doubles("azimuth", 1), doubles("elevation", 1), doubles("sigma_azimuth", 1), doubles("sigma_elevation", 1)}};
-  static const WireLayout l{"bearing_scan_t",
-                            {i64("utime"), str("sender"), i64("seq"), i32("sensor_id"), doubles("sensor_position", 3),
-                             i64("scan_id"), count("num_detections", kMaxDetectionsPerScan),
-                             array("detections", detection)}};
+  static const WireLayout l{
+      "bearing_scan_t",
+      {i64("utime"), str("sender"), i64("seq"), i32("sensor_id"), doubles("sensor_position", 3), i64("scan_id"),
+       count("num_detections", kMaxDetectionsPerScan), array("detections", detection)}};
   return l;
 }
 
 template <>
 const WireLayout& wire_layout<sextant::imu_t>() {
-  static const WireLayout l{"imu_t",
-                            {i64("utime"), str("sender"), i64("seq"), str("source"), str("frame"),
-                             boolean("has_angular_velocity"), doubles("angular_velocity", 3),
-                             doubles("angular_velocity_covariance", 9), boolean("has_linear_acceleration"),
-                             doubles("linear_acceleration", 3), doubles("linear_acceleration_covariance", 9),
-                             boolean("has_orientation"), boolean("orientation_has_yaw"), doubles("orientation", 4),
-                             doubles("orientation_covariance", 9)}};
+  static const WireLayout l{
+      "imu_t",
+      {i64("utime"), str("sender"), i64("seq"), str("source"), str("frame"), boolean("has_angular_velocity"),
+       doubles("angular_velocity", 3), doubles("angular_velocity_covariance", 9), boolean("has_linear_acceleration"),
+       doubles("linear_acceleration", 3), doubles("linear_acceleration_covariance", 9), boolean("has_orientation"),
+       boolean("orientation_has_yaw"), doubles("orientation", 4), doubles("orientation_covariance", 9)}};
   return l;
 }
 
 template <>
 const WireLayout& wire_layout<sextant::gnss_t>() {
-  static const WireLayout l{"gnss_t",
-                            {i64("utime"), str("sender"), i64("seq"), str("source"), str("frame"), i8("status"),
-                             doubles("latitude", 1), doubles("longitude", 1), doubles("altitude", 1),
-                             i8("covariance_type"), doubles("position_covariance", 9), boolean("has_velocity"),
-                             doubles("velocity", 3), doubles("velocity_covariance", 9), boolean("has_heading"),
-                             doubles("heading", 1), doubles("heading_variance", 1)}};
+  static const WireLayout l{
+      "gnss_t",
+      {i64("utime"), str("sender"), i64("seq"), str("source"), str("frame"), i8("status"), doubles("latitude", 1),
+       doubles("longitude", 1), doubles("altitude", 1), i8("covariance_type"), doubles("position_covariance", 9),
+       boolean("has_velocity"), doubles("velocity", 3), doubles("velocity_covariance", 9), boolean("has_heading"),
+       doubles("heading", 1), doubles("heading_variance", 1)}};
   return l;
 }
 
 template <>
 const WireLayout& wire_layout<sextant::loop_closure_t>() {
-  static const WireLayout l{"loop_closure_t",
-                            {i64("utime"), str("sender"), i64("seq"), str("source"), boolean("planar"),
-                             i64("utime_from"), i64("utime_to"), i64("keyframe_from"), i64("keyframe_to"),
-                             i64("request_id"), doubles("position", 3), doubles("orientation", 4),
-                             doubles("information", 36), str("matcher"), doubles("score", 1)}};
+  static const WireLayout l{
+      "loop_closure_t",
+      {i64("utime"), str("sender"), i64("seq"), str("source"), boolean("planar"), i64("utime_from"), i64("utime_to"),
+       i64("keyframe_from"), i64("keyframe_to"), i64("request_id"), doubles("position", 3), doubles("orientation", 4),
+       doubles("information", 36), str("matcher"), doubles("score", 1)}};
   return l;
 }
 
@@ -206,54 +208,52 @@ const WireLayout& wire_layout<sextant::match_request_t>() {
   static const WireLayout l{"match_request_t",
                             {i64("utime"), str("sender"), i64("seq"), str("source"), i64("request_id"), str("kind"),
                              i64("keyframe_a"), i64("utime_a"), doubles("position_a", 3), doubles("orientation_a", 4),
-                             i64("keyframe_b"), i64("utime_b"), doubles("position_b", 3),
-                             doubles("orientation_b", 4)}};
+                             i64("keyframe_b"), i64("utime_b"), doubles("position_b", 3), doubles("orientation_b", 4)}};
   return l;
 }
 
 template <>
 const WireLayout& wire_layout<sextant::fused_pose_t>() {
-  static const WireLayout l{"fused_pose_t",
-                            {i64("utime"), str("sender"), i64("seq"), str("source"), str("estimator"),
-                             boolean("planar"), doubles("position", 3), doubles("orientation", 4),
-                             doubles("covariance", 36)}};
+  static const WireLayout l{
+      "fused_pose_t",
+      {i64("utime"), str("sender"), i64("seq"), str("source"), str("estimator"), boolean("planar"),
+       doubles("position", 3), doubles("orientation", 4), doubles("covariance", 36)}};
   return l;
 }
 
 template <>
 const WireLayout& wire_layout<sextant::status_t>() {
-  static const WireLayout channel{"channel_status_t",
-                                  {str("channel"), i64("received"), i64("decoded"), i64("rejected"), i64("dropped"),
-                                   i64("lost"), count("num_reasons", kMaxListed), array("reasons", kStringElement),
-                                   array("reason_counts", kInt64Element), str("last_error"),
-                                   count("num_lost_senders", kMaxListed), array("lost_senders", kStringElement),
-                                   array("lost_counts", kInt64Element)}};
-  static const WireLayout stage{"stage_status_t",
-                                {str("name"), i32("queue_depth"), i32("queue_capacity"), i64("processed"),
-                                 i64("dropped"), doubles("latency_ms_p50", 1), doubles("latency_ms_p90", 1),
-                                 doubles("latency_ms_p99", 1), doubles("latency_ms_max", 1),
-                                 count("num_counters", kMaxListed), array("counter_names", kStringElement),
-                                 array("counter_values", kInt64Element), str("last_failure")}};
+  static const WireLayout channel{
+      "channel_status_t",
+      {str("channel"), i64("received"), i64("decoded"), i64("rejected"), i64("dropped"), i64("lost"),
+       count("num_reasons", kMaxListed), array("reasons", kStringElement), array("reason_counts", kInt64Element),
+       str("last_error"), count("num_lost_senders", kMaxListed), array("lost_senders", kStringElement),
+       array("lost_counts", kInt64Element)}};
+  static const WireLayout stage{
+      "stage_status_t",
+      {str("name"), i32("queue_depth"), i32("queue_capacity"), i64("processed"), i64("dropped"),
+       doubles("latency_ms_p50", 1), doubles("latency_ms_p90", 1), doubles("latency_ms_p99", 1),
+       doubles("latency_ms_max", 1), count("num_counters", kMaxListed), array("counter_names", kStringElement),
+       array("counter_values", kInt64Element), str("last_failure")}};
   static const WireLayout l{"status_t",
                             {i64("utime"), str("sender"), i64("seq"), str("version"), doubles("uptime_s", 1),
                              count("num_channels", kMaxListed), array("channels", channel),
-                             count("num_stages", kMaxListed), array("stages", stage),
-                             count("num_outputs", kMaxListed), array("output_channels", kStringElement),
-                             array("output_counts", kInt64Element), array("output_bytes", kInt64Element),
-                             array("output_bytes_per_s", kDoubleElement)}};
+                             count("num_stages", kMaxListed), array("stages", stage), count("num_outputs", kMaxListed),
+                             array("output_channels", kStringElement), array("output_counts", kInt64Element),
+                             array("output_bytes", kInt64Element), array("output_bytes_per_s", kDoubleElement)}};
   return l;
 }
 
 template <>
 const WireLayout& wire_layout<sextant::trajectory_t>() {
-  static const WireLayout keyframe{"keyframe_t", {i64("id"), i64("utime"), doubles("position", 3), doubles("orientation", 4)}};
-  static const WireLayout l{"trajectory_t",
-                            {i64("utime"), str("sender"), i64("seq"), str("source"), str("estimator"),
-                             doubles("chi2", 1), i32("iterations"), doubles("solve_ms", 1), fixed("kind", 1),
-                             i64("snapshot_id"), i32("chunk"), i32("num_chunks"), i64("range_first"),
-                             i64("range_last"), i32("total_keyframes"), count("num_keyframes", kMaxItems),
-                             array("keyframes", keyframe), count("num_removed", kMaxItems),
-                             array("removed_ids", kInt64Element)}};
+  static const WireLayout keyframe{"keyframe_t",
+                                   {i64("id"), i64("utime"), doubles("position", 3), doubles("orientation", 4)}};
+  static const WireLayout l{
+      "trajectory_t",
+      {i64("utime"), str("sender"), i64("seq"), str("source"), str("estimator"), doubles("chi2", 1), i32("iterations"),
+       doubles("solve_ms", 1), fixed("kind", 1), i64("snapshot_id"), i32("chunk"), i32("num_chunks"),
+       i64("range_first"), i64("range_last"), i32("total_keyframes"), count("num_keyframes", kMaxItems),
+       array("keyframes", keyframe), count("num_removed", kMaxItems), array("removed_ids", kInt64Element)}};
   return l;
 }
 
@@ -262,11 +262,11 @@ const WireLayout& wire_layout<sextant::targets_t>() {
   static const WireLayout target{"target_t",
                                  {doubles("position", 3), doubles("covariance", 9), count("num_sensors", kMaxListed),
                                   array("detection_indices", kInt32Element), doubles("cost", 1)}};
-  static const WireLayout l{"targets_t",
-                            {i64("utime"), str("sender"), i64("seq"), i64("scan_id"), str("cost_kind"),
-                             doubles("total_cost", 1), doubles("duality_gap", 1), count("num_sensors", kMaxListed),
-                             array("sensor_ids", kInt32Element), count("num_targets", kMaxItems),
-                             array("targets", target)}};
+  static const WireLayout l{
+      "targets_t",
+      {i64("utime"), str("sender"), i64("seq"), i64("scan_id"), str("cost_kind"), doubles("total_cost", 1),
+       doubles("duality_gap", 1), count("num_sensors", kMaxListed), array("sensor_ids", kInt32Element),
+       count("num_targets", kMaxItems), array("targets", target)}};
   return l;
 }
 

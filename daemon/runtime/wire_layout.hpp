@@ -71,34 +71,58 @@ std::optional<WireError> wire_error(const WireLayout& layout, const void* data, 
 /// Input array maxima are the codec's (kMaxObservationsPerMessage, kMaxDetectionsPerScan).
 template <class Msg>
 const WireLayout& wire_layout();
-template <> const WireLayout& wire_layout<sextant::odometry_t>();
-template <> const WireLayout& wire_layout<sextant::landmarks_t>();
-template <> const WireLayout& wire_layout<sextant::bearing_scan_t>();
-template <> const WireLayout& wire_layout<sextant::loop_closure_t>();
-template <> const WireLayout& wire_layout<sextant::imu_t>();
-template <> const WireLayout& wire_layout<sextant::gnss_t>();
-template <> const WireLayout& wire_layout<sextant::truth_t>();
-template <> const WireLayout& wire_layout<sextant::match_request_t>();
-template <> const WireLayout& wire_layout<sextant::fused_pose_t>();
-template <> const WireLayout& wire_layout<sextant::status_t>();
-template <> const WireLayout& wire_layout<sextant::trajectory_t>();
-template <> const WireLayout& wire_layout<sextant::targets_t>();
+template <>
+const WireLayout& wire_layout<sextant::odometry_t>();
+template <>
+const WireLayout& wire_layout<sextant::landmarks_t>();
+template <>
+const WireLayout& wire_layout<sextant::bearing_scan_t>();
+template <>
+const WireLayout& wire_layout<sextant::loop_closure_t>();
+template <>
+const WireLayout& wire_layout<sextant::imu_t>();
+template <>
+const WireLayout& wire_layout<sextant::gnss_t>();
+template <>
+const WireLayout& wire_layout<sextant::truth_t>();
+template <>
+const WireLayout& wire_layout<sextant::match_request_t>();
+template <>
+const WireLayout& wire_layout<sextant::fused_pose_t>();
+template <>
+const WireLayout& wire_layout<sextant::status_t>();
+template <>
+const WireLayout& wire_layout<sextant::trajectory_t>();
+template <>
+const WireLayout& wire_layout<sextant::targets_t>();
 
 /// Whether `wire_layout<Msg>()` exists (safe_decode needs it).
 template <class Msg>
 inline constexpr bool kHasWireLayout = false;
-template <> inline constexpr bool kHasWireLayout<sextant::odometry_t> = true;
-template <> inline constexpr bool kHasWireLayout<sextant::landmarks_t> = true;
-template <> inline constexpr bool kHasWireLayout<sextant::bearing_scan_t> = true;
-template <> inline constexpr bool kHasWireLayout<sextant::loop_closure_t> = true;
-template <> inline constexpr bool kHasWireLayout<sextant::imu_t> = true;
-template <> inline constexpr bool kHasWireLayout<sextant::gnss_t> = true;
-template <> inline constexpr bool kHasWireLayout<sextant::truth_t> = true;
-template <> inline constexpr bool kHasWireLayout<sextant::match_request_t> = true;
-template <> inline constexpr bool kHasWireLayout<sextant::fused_pose_t> = true;
-template <> inline constexpr bool kHasWireLayout<sextant::status_t> = true;
-template <> inline constexpr bool kHasWireLayout<sextant::trajectory_t> = true;
-template <> inline constexpr bool kHasWireLayout<sextant::targets_t> = true;
+template <>
+inline constexpr bool kHasWireLayout<sextant::odometry_t> = true;
+template <>
+inline constexpr bool kHasWireLayout<sextant::landmarks_t> = true;
+template <>
+inline constexpr bool kHasWireLayout<sextant::bearing_scan_t> = true;
+template <>
+inline constexpr bool kHasWireLayout<sextant::loop_closure_t> = true;
+template <>
+inline constexpr bool kHasWireLayout<sextant::imu_t> = true;
+template <>
+inline constexpr bool kHasWireLayout<sextant::gnss_t> = true;
+template <>
+inline constexpr bool kHasWireLayout<sextant::truth_t> = true;
+template <>
+inline constexpr bool kHasWireLayout<sextant::match_request_t> = true;
+template <>
+inline constexpr bool kHasWireLayout<sextant::fused_pose_t> = true;
+template <>
+inline constexpr bool kHasWireLayout<sextant::status_t> = true;
+template <>
+inline constexpr bool kHasWireLayout<sextant::trajectory_t> = true;
+template <>
+inline constexpr bool kHasWireLayout<sextant::targets_t> = true;
 
 /// Decodes untrusted bytes as `Msg`: the fingerprint, then the layout walk (for the types that have one), then
 /// lcm-gen's decode with anything it throws caught.  nullopt on success, else what is wrong ("fingerprint", "decode" or "too_large").

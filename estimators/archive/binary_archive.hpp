@@ -43,9 +43,13 @@ class ArchiveWriter;
 class ArchiveReader;
 
 template <class T>
-concept SavesItself = requires(const T& t, ArchiveWriter& w) { t.save(w); };
+concept SavesItself = requires(const T& t, ArchiveWriter& w) {
+  t.save(w);
+};
 template <class T>
-concept LoadsItself = requires(T& t, ArchiveReader& r) { t.load(r); };
+concept LoadsItself = requires(T& t, ArchiveReader& r) {
+  t.load(r);
+};
 
 template <class T>
 struct is_eigen_matrix : std::false_type {};
@@ -195,7 +199,8 @@ class ArchiveReader {
   template <class... T>
   ArchiveReader& operator()(std::variant<T...>& v) {
     const auto index = get<uint32_t>();
-    if (index >= sizeof...(T)) fail("a variant of alternative " + std::to_string(index) + " of " + std::to_string(sizeof...(T)));
+    if (index >= sizeof...(T))
+      fail("a variant of alternative " + std::to_string(index) + " of " + std::to_string(sizeof...(T)));
     load_alternative<0, T...>(index, v);
     return *this;
   }

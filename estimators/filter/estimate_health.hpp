@@ -26,9 +26,12 @@ enum class Health {
 /// "healthy", "non_finite", "indefinite": the counter keys estimators report refusals under.
 inline const char* health_name(Health h) {
   switch (h) {
-    case Health::kHealthy: return "healthy";
-    case Health::kNonFinite: return "non_finite";
-    case Health::kIndefinite: return "indefinite";
+    case Health::kHealthy:
+      return "healthy";
+    case Health::kNonFinite:
+      return "non_finite";
+    case Health::kIndefinite:
+      return "indefinite";
   }
   return "unknown";
 }
@@ -66,8 +69,10 @@ namespace sextant::filter {
 struct Refusals {
   int64_t non_finite = 0, indefinite = 0;
   void count(Health h) {
-    if (h == Health::kNonFinite) ++non_finite;
-    else if (h == Health::kIndefinite) ++indefinite;
+    if (h == Health::kNonFinite)
+      ++non_finite;
+    else if (h == Health::kIndefinite)
+      ++indefinite;
   }
   Refusals& operator+=(const Refusals& o) {
     non_finite += o.non_finite, indefinite += o.indefinite;

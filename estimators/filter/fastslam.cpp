@@ -82,7 +82,8 @@ void FastSlam::initialize(const SE2& pose, const Eigen::Matrix3d& covariance) {
 
 Health FastSlam::health() const {
   for (const Particle& p : particles_) {
-    if (!p.pose.mean.allFinite() || !std::isfinite(p.log_weight) || !p.pose.covariance.allFinite()) return Health::kNonFinite;
+    if (!p.pose.mean.allFinite() || !std::isfinite(p.log_weight) || !p.pose.covariance.allFinite())
+      return Health::kNonFinite;
     if ((p.pose.covariance.diagonal().array() < 0).any()) return Health::kIndefinite;
   }
   SE2 mean;
@@ -93,7 +94,8 @@ Health FastSlam::health() const {
 }
 
 bool FastSlam::predict(const SE2& delta, const Eigen::Matrix3d& Q) {
-  if (!initialized_ || !Q.allFinite() || !delta.translation().allFinite() || !std::isfinite(delta.angle())) return false;
+  if (!initialized_ || !Q.allFinite() || !delta.translation().allFinite() || !std::isfinite(delta.angle()))
+    return false;
   const Eigen::Matrix3d Qs = symmetrized(Q);
   if (Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(Qs, Eigen::EigenvaluesOnly).eigenvalues().minCoeff() <
       -1e-12 * (1 + Qs.cwiseAbs().maxCoeff()))
@@ -224,7 +226,8 @@ FastSlamBatchOutcome FastSlam::observe(const std::vector<RangeBearing>& sighting
   return out;
 }
 
-void FastSlam::drop_over_budget(std::vector<RangeBearing>& batch, std::vector<int>& slot, FastSlamBatchOutcome& out) const {
+void FastSlam::drop_over_budget(std::vector<RangeBearing>& batch, std::vector<int>& slot,
+                                FastSlamBatchOutcome& out) const {
   int64_t landmarks = static_cast<int64_t>(known_.size() + identified_slot_.size());
   int64_t unidentified = 0;
   for (const Particle& p : particles_) unidentified = std::max<int64_t>(unidentified, p.unidentified.slots());
@@ -361,7 +364,8 @@ void FastSlam::propose_without_id(Proposal& q, const Particle& p, const RangeBea
 }
 
 // The landmarks the batch created or updated, from the particle's sampled pose (EKF updates, Joseph form).
-void FastSlam::update_particle_map(Particle& p, const std::vector<RangeBearing>& batch, const std::vector<Pending>& pending) const {
+void FastSlam::update_particle_map(Particle& p, const std::vector<RangeBearing>& batch,
+                                   const std::vector<Pending>& pending) const {
   for (const Pending& u : pending) {
     const RangeBearing& s = batch[u.sighting];
     LandmarkMapTree& tree = u.in_unidentified ? p.unidentified : p.identified;
@@ -390,7 +394,8 @@ void FastSlam::drop_stale_tentatives(Particle& p, FastSlamBatchOutcome* stats) c
   if (p.unidentified.slots() == 0) return;
   std::vector<int32_t> stale;
   p.unidentified.for_each([&](int32_t k, const MapLandmark& lm) {
-    if (lm.observations < options_.confirmations && batches_ - lm.last_seen > options_.tentative_lifetime) stale.push_back(k);
+    if (lm.observations < options_.confirmations && batches_ - lm.last_seen > options_.tentative_lifetime)
+      stale.push_back(k);
   });
   for (int32_t k : stale) p.unidentified.erase(k);
   if (stats) stats->removed += static_cast<int>(stale.size());

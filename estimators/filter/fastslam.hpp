@@ -61,12 +61,12 @@ struct FastSlamOptions {
   int particles = 100;
   double resample_threshold = 0.5;  // resample when N_eff < resample_threshold * particles
   uint64_t seed = 1;
-  bool slam = true;                 // false: only the known map is used (localization)
-  double gate = 9.21;               // chi-square (2 dof) on d2 = nu' L^-1 nu; 9.21 = 99 %
-  double new_landmark_gate = 18.42; // a sighting without id makes a new landmark only beyond this d2 (99.99 %)
-  int max_landmarks = 4096;         // per particle
-  int confirmations = 3;            // sightings that make a landmark without id permanent
-  int tentative_lifetime = 50;      // images after which an unconfirmed landmark without id is dropped
+  bool slam = true;                        // false: only the known map is used (localization)
+  double gate = 9.21;                      // chi-square (2 dof) on d2 = nu' L^-1 nu; 9.21 = 99 %
+  double new_landmark_gate = 18.42;        // a sighting without id makes a new landmark only beyond this d2 (99.99 %)
+  int max_landmarks = 4096;                // per particle
+  int confirmations = 3;                   // sightings that make a landmark without id permanent
+  int tentative_lifetime = 50;             // images after which an unconfirmed landmark without id is dropped
   int64_t association_budget = 2'000'000;  // candidate evaluations per batch for sightings without id (~0.2 s)
 };
 
@@ -80,14 +80,14 @@ struct RangeBearing {
 /// What happened to one batch of sightings (counted in the particle of largest weight before the batch, except
 /// `gated`, `rejected` and `unknown`, which are the same for every particle).
 struct FastSlamBatchOutcome {
-  int updated = 0;         // identified sightings that updated a landmark (or the pose, for a known landmark)
-  int created = 0;         // new landmarks (identified, or tentative without id)
-  int associated = 0;      // sightings without id paired with a landmark
-  int gated = 0;           // outside the gate in every particle
-  int rejected = 0;        // bad input
-  int unknown = 0;         // id not in the known map in localization mode, or the map is full
-  int removed = 0;         // tentative landmarks dropped
-  int over_budget = 0;     // sightings without id dropped: their association would exceed association_budget
+  int updated = 0;      // identified sightings that updated a landmark (or the pose, for a known landmark)
+  int created = 0;      // new landmarks (identified, or tentative without id)
+  int associated = 0;   // sightings without id paired with a landmark
+  int gated = 0;        // outside the gate in every particle
+  int rejected = 0;     // bad input
+  int unknown = 0;      // id not in the known map in localization mode, or the map is full
+  int removed = 0;      // tentative landmarks dropped
+  int over_budget = 0;  // sightings without id dropped: their association would exceed association_budget
   bool resampled = false;
   double effective_sample_size = 0;  // before resampling
 };
@@ -170,7 +170,8 @@ class FastSlam {
                        std::vector<char>& gated_here, FastSlamBatchOutcome* stats) const;
   void propose_without_id(Proposal& q, const Particle& p, const RangeBearing& s, size_t j, int identified_count,
                           FastSlamBatchOutcome* stats) const;
-  void update_particle_map(Particle& p, const std::vector<RangeBearing>& batch, const std::vector<Pending>& pending) const;
+  void update_particle_map(Particle& p, const std::vector<RangeBearing>& batch,
+                           const std::vector<Pending>& pending) const;
   void drop_stale_tentatives(Particle& p, FastSlamBatchOutcome* stats) const;
   Eigen::Vector3d sample(const PoseGaussian& g);
 

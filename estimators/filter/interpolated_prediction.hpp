@@ -12,8 +12,8 @@ namespace sextant::filter {
 /// Calls predict(piece, noise) for each piece and at_stop(i) once the prediction has reached stops[i].  Stops
 /// outside (t0, t1) are skipped; repeated stops call at_stop without predicting; `stops` should be increasing.
 template <class Group, class Covariance, class Predict, class AtStop>
-void predict_through_stops(const Group& delta, const Covariance& Q, int64_t t0, int64_t t1, const std::vector<int64_t>& stops,
-                           Predict&& predict, AtStop&& at_stop) {
+void predict_through_stops(const Group& delta, const Covariance& Q, int64_t t0, int64_t t1,
+                           const std::vector<int64_t>& stops, Predict&& predict, AtStop&& at_stop) {
   const auto tau = delta.log();
   const auto span = static_cast<double>(t1 - t0);
   Group reached;  // identity: the part of delta predicted so far

@@ -10,18 +10,17 @@
 
 namespace sextant::filter {
 namespace {
-constexpr std::pair<UpdateReason, const char*> kUpdateReasons[] = {
-    {UpdateReason::kNone, "none"},
-    {UpdateReason::kNewLandmark, "new_landmark"},
-    {UpdateReason::kGate, "gate"},
-    {UpdateReason::kNonFinite, "non_finite"},
-    {UpdateReason::kSingular, "singular"},
-    {UpdateReason::kNoComponents, "no_components"},
-    {UpdateReason::kNoTwist, "no_twist"},
-    {UpdateReason::kUnknownLandmark, "unknown_landmark"},
-    {UpdateReason::kMapFull, "map_full"},
-    {UpdateReason::kTooOld, "too_old"},
-    {UpdateReason::kIndefinite, "indefinite"}};
+constexpr std::pair<UpdateReason, const char*> kUpdateReasons[] = {{UpdateReason::kNone, "none"},
+                                                                   {UpdateReason::kNewLandmark, "new_landmark"},
+                                                                   {UpdateReason::kGate, "gate"},
+                                                                   {UpdateReason::kNonFinite, "non_finite"},
+                                                                   {UpdateReason::kSingular, "singular"},
+                                                                   {UpdateReason::kNoComponents, "no_components"},
+                                                                   {UpdateReason::kNoTwist, "no_twist"},
+                                                                   {UpdateReason::kUnknownLandmark, "unknown_landmark"},
+                                                                   {UpdateReason::kMapFull, "map_full"},
+                                                                   {UpdateReason::kTooOld, "too_old"},
+                                                                   {UpdateReason::kIndefinite, "indefinite"}};
 }  // namespace
 
 const char* update_reason_name(UpdateReason reason) { return kind_name(kUpdateReasons, reason); }
@@ -39,8 +38,8 @@ Health joseph_health(const Eigen::MatrixXd& P, const Eigen::MatrixXd& K, const E
   if (!diagonal.allFinite()) return Health::kNonFinite;
   if ((diagonal.array() < 0).any()) return Health::kIndefinite;
   const Eigen::Index b = std::min<Eigen::Index>(P.rows(), 6);
-  const Eigen::MatrixXd block = P.topLeftCorner(b, b) - K.topRows(b) * C.topRows(b).transpose() -
-                                C.topRows(b) * K.topRows(b).transpose();
+  const Eigen::MatrixXd block =
+      P.topLeftCorner(b, b) - K.topRows(b) * C.topRows(b).transpose() - C.topRows(b) * K.topRows(b).transpose();
   return covariance_health(block, b);
 }
 

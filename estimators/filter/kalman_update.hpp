@@ -31,7 +31,7 @@ const char* update_reason_name(UpdateReason reason);
 
 struct UpdateResult {
   bool accepted = false;
-  double nis = 0;                           // r' S^-1 r
+  double nis = 0;  // r' S^-1 r
   UpdateReason reason = UpdateReason::kNone;
 };
 

@@ -1,6 +1,5 @@
 #include "estimators/filter/landmark_map_tree.hpp"
 
-
 #include <stdexcept>
 
 namespace sextant::filter {
@@ -86,14 +85,16 @@ void LandmarkMapTree::save(archive::ArchiveWriter& w) const {
   int64_t n = 0;
   for_each([&](int32_t, const MapLandmark&) { ++n; });
   w(slots_)(n);
-  for_each([&](int32_t slot, const MapLandmark& l) { w(slot)(l.mean)(l.covariance)(l.id)(l.observations)(l.last_seen); });
+  for_each(
+      [&](int32_t slot, const MapLandmark& l) { w(slot)(l.mean)(l.covariance)(l.id)(l.observations)(l.last_seen); });
 }
 
 void LandmarkMapTree::load(archive::ArchiveReader& r) {
   *this = LandmarkMapTree{};
   const auto slots = r.get<int32_t>();
   const auto n = r.get<int64_t>();
-  if (slots < 0 || n < 0 || n > slots || static_cast<uint64_t>(n) > r.remaining() / 64) r.fail("a landmark map of bad size");
+  if (slots < 0 || n < 0 || n > slots || static_cast<uint64_t>(n) > r.remaining() / 64)
+    r.fail("a landmark map of bad size");
   for (int64_t k = 0; k < n; ++k) {
     const auto slot = r.get<int32_t>();
     if (slot < 0 || slot >= slots) r.fail("a landmark map slot out of range");

@@ -24,9 +24,9 @@ namespace sextant::filter {
 struct MapLandmark {
   Eigen::Vector2d mean = Eigen::Vector2d::Zero();
   Eigen::Matrix2d covariance = Eigen::Matrix2d::Zero();
-  int64_t id = -1;       // the landmark id reported outside (sighting id, or one given at creation)
-  int observations = 0;  // sightings that updated or created it
-  int64_t last_seen = 0; // the owner's count of sighting batches when it was last seen (tentative-landmark rule)
+  int64_t id = -1;        // the landmark id reported outside (sighting id, or one given at creation)
+  int observations = 0;   // sightings that updated or created it
+  int64_t last_seen = 0;  // the owner's count of sighting batches when it was last seen (tentative-landmark rule)
 };
 
 class LandmarkMapTree {

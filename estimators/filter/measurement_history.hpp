@@ -31,9 +31,9 @@ template <class State, class Input>
 class MeasurementHistory {
  public:
   enum class Outcome {
-    applied,     // newest input: applied to the current state
-    reapplied,   // late input inside the window: inserted, the inputs after it re-applied
-    too_late,    // older than the window: refused, the state is unchanged
+    applied,    // newest input: applied to the current state
+    reapplied,  // late input inside the window: inserted, the inputs after it re-applied
+    too_late,   // older than the window: refused, the state is unchanged
   };
 
   /// `window_us` >= 0: how far behind the newest input a late one is still accepted.  `initial`: the state before
@@ -61,9 +61,11 @@ class MeasurementHistory {
     while (checkpoints_.size() > 1 && !(checkpoints_.back().last < key)) checkpoints_.pop_back();
     state_ = checkpoints_.back().state;
     const Key from = checkpoints_.back().last;
-    const auto at = std::upper_bound(inputs_.begin(), inputs_.end(), key, [](const Key& k, const Entry& e) { return k < e.key; });
+    const auto at =
+        std::upper_bound(inputs_.begin(), inputs_.end(), key, [](const Key& k, const Entry& e) { return k < e.key; });
     inputs_.insert(at, Entry{key, std::move(input)});
-    auto it = std::upper_bound(inputs_.begin(), inputs_.end(), from, [](const Key& k, const Entry& e) { return k < e.key; });
+    auto it =
+        std::upper_bound(inputs_.begin(), inputs_.end(), from, [](const Key& k, const Entry& e) { return k < e.key; });
     for (Key last = from; it != inputs_.end(); last = it->key, ++it) {
       if (!(last.utime == kBeforeAll.utime)) checkpoint_if_due(last);
       apply(state_, it->input);
@@ -134,7 +136,8 @@ class MeasurementHistory {
   void checkpoint_if_due(const Key& last) {
     const Key& previous = checkpoints_.back().last;
     if (!(previous < last)) return;
-    if (previous.utime == kBeforeAll.utime || last.utime - previous.utime >= interval_) checkpoints_.push_back({last, state_});
+    if (previous.utime == kBeforeAll.utime || last.utime - previous.utime >= interval_)
+      checkpoints_.push_back({last, state_});
   }
 
   // Keep the newest checkpoint older than the window start and the inputs after it.

@@ -34,19 +34,24 @@ void MultiSourceEkf::validate(const std::map<std::string, OdometrySourceOptions>
     if (o.predict) {
       ++predicting;
       if (!(o.fuse[0] && o.fuse[1] && o.fuse[2]) || any(o.fuse, 3, 6))
-        throw std::invalid_argument("odometry source '" + name + "' predicts: it must fuse x, y and yaw and no velocity");
+        throw std::invalid_argument("odometry source '" + name +
+                                    "' predicts: it must fuse x, y and yaw and no velocity");
     } else {
       if (!any(o.fuse, 0, 6)) throw std::invalid_argument("odometry source '" + name + "' fuses no component");
       if (o.differential && any(o.fuse, 0, 3) && any(o.fuse, 3, 6))
-        throw std::invalid_argument("odometry source '" + name + "': a differential pose and velocities fuse the same motion twice");
+        throw std::invalid_argument("odometry source '" + name +
+                                    "': a differential pose and velocities fuse the same motion twice");
     }
-    if (o.gate < 0 || o.timeout_s < 0) throw std::invalid_argument("odometry source '" + name + "': negative gate or timeout");
+    if (o.gate < 0 || o.timeout_s < 0)
+      throw std::invalid_argument("odometry source '" + name + "': negative gate or timeout");
   }
   if (predicting != 1)
-    throw std::invalid_argument("a body needs exactly one odometry source with predict (has " + std::to_string(predicting) + ")");
+    throw std::invalid_argument("a body needs exactly one odometry source with predict (has " +
+                                std::to_string(predicting) + ")");
 }
 
-Eigen::Matrix3d MultiSourceEkf::increment_noise(const PlanarOdometry& prev, const PlanarOdometry& cur, double min_variance) {
+Eigen::Matrix3d MultiSourceEkf::increment_noise(const PlanarOdometry& prev, const PlanarOdometry& cur,
+                                                double min_variance) {
   if (cur.increment_covariance) return floor_eigenvalues(*cur.increment_covariance, min_variance);
   const Eigen::Matrix3d A = prev.pose.between(cur.pose).inverse().adjoint();
   return floor_eigenvalues(cur.covariance - A * prev.covariance * A.transpose(), min_variance);
@@ -65,9 +70,12 @@ void MultiSourceEkf::advance(int64_t utime) {
   }
 }
 
-OdometryOutcome MultiSourceEkf::odometry(const std::string& name, const PlanarOdometry& m) { return odometry(name, m, {}, {}); }
+OdometryOutcome MultiSourceEkf::odometry(const std::string& name, const PlanarOdometry& m) {
+  return odometry(name, m, {}, {});
+}
 
-OdometryOutcome MultiSourceEkf::odometry(const std::string& name, const PlanarOdometry& m, const std::vector<int64_t>& stops,
+OdometryOutcome MultiSourceEkf::odometry(const std::string& name, const PlanarOdometry& m,
+                                         const std::vector<int64_t>& stops,
                                          const std::function<void(size_t)>& at_stop) {
   auto it = sources_.find(name);
   if (it == sources_.end()) return OdometryOutcome::unknown_source;
@@ -105,8 +113,10 @@ OdometryOutcome MultiSourceEkf::measure(Source& s, SourceCounters& c, const Plan
   const bool relative = any(f, 3, 6) || s.options.differential;
   if (!s.last) {  // anchor: nothing to fuse yet
     if (relative) {
-      if (s.clone < 0) s.clone = ekf_.add_pose_clone();
-      else ekf_.refresh_clone(s.clone);
+      if (s.clone < 0)
+        s.clone = ekf_.add_pose_clone();
+      else
+        ekf_.refresh_clone(s.clone);
     }
     if (any(f, 0, 3) && !s.options.differential) s.frame = ekf_.pose() * m.pose.inverse();
     s.last = m;
@@ -122,7 +132,8 @@ OdometryOutcome MultiSourceEkf::measure(Source& s, SourceCounters& c, const Plan
     if (m.twist && s.last->twist) {
       const double dt = static_cast<double>(m.utime - s.last->utime) * 1e-6;
       const Eigen::Vector3d v = 0.5 * (*m.twist + *s.last->twist);
-      const Eigen::Matrix3d R = floor_eigenvalues(0.5 * (m.twist_covariance + s.last->twist_covariance) * dt * dt, min_variance_);
+      const Eigen::Matrix3d R =
+          floor_eigenvalues(0.5 * (m.twist_covariance + s.last->twist_covariance) * dt * dt, min_variance_);
       combine(ekf_.observe_relative_pose(s.clone, SE2::exp(v * dt), R, {f[3], f[4], f[5]}, s.options.gate));
     } else {
       UpdateResult u;
@@ -133,7 +144,8 @@ OdometryOutcome MultiSourceEkf::measure(Source& s, SourceCounters& c, const Plan
   if (any(f, 0, 3)) {
     const std::array<bool, 3> rows{f[0], f[1], f[2]};
     if (s.options.differential)
-      combine(ekf_.observe_relative_pose(s.clone, s.last->pose.between(m.pose), increment_noise(*s.last, m, min_variance_), rows, s.options.gate));
+      combine(ekf_.observe_relative_pose(s.clone, s.last->pose.between(m.pose),
+                                         increment_noise(*s.last, m, min_variance_), rows, s.options.gate));
     else
       combine(ekf_.observe_pose(s.frame, m.pose, floor_eigenvalues(m.covariance, min_variance_), rows, s.options.gate));
   }

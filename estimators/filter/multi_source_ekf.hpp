@@ -55,14 +55,14 @@ struct PlanarOdometry {
 
 /// What happened to one odometry message.
 enum class OdometryOutcome {
-  initialized,       // first message of the predicting source: the body starts here
-  predicted,         // predicting source
-  fused,             // measurement source, accepted
-  anchored,          // measurement source: first message, or first after a timeout (nothing to fuse yet)
-  gated,             // rejected by the gate
-  rejected,          // degenerate (non-finite, singular)
-  duplicate,         // not newer than the source's previous message
-  before_start,      // a measurement source before the predicting source's first message
+  initialized,   // first message of the predicting source: the body starts here
+  predicted,     // predicting source
+  fused,         // measurement source, accepted
+  anchored,      // measurement source: first message, or first after a timeout (nothing to fuse yet)
+  gated,         // rejected by the gate
+  rejected,      // degenerate (non-finite, singular)
+  duplicate,     // not newer than the source's previous message
+  before_start,  // a measurement source before the predicting source's first message
   unknown_source,
 };
 
@@ -95,7 +95,7 @@ class MultiSourceEkf {
   void advance(int64_t utime);
 
   bool started() const { return started_; }
-  int64_t utime() const { return utime_; }           // of the newest prediction
+  int64_t utime() const { return utime_; }  // of the newest prediction
   PlanarEkf& ekf() { return ekf_; }
   const PlanarEkf& ekf() const { return ekf_; }
   const std::map<std::string, SourceCounters>& counters() const { return counters_; }
@@ -103,7 +103,8 @@ class MultiSourceEkf {
   /// The motion noise of an increment: the given increment covariance, or (differential fallback) the pose
   /// covariance minus the previous one carried through the motion, cov - Ad(delta^-1) cov_prev Ad(delta^-1)';
   /// symmetrized with eigenvalues at least `min_variance`.
-  static Eigen::Matrix3d increment_noise(const PlanarOdometry& previous, const PlanarOdometry& current, double min_variance);
+  static Eigen::Matrix3d increment_noise(const PlanarOdometry& previous, const PlanarOdometry& current,
+                                         double min_variance);
 
   /// The fusion's state (the EKF, each source's last message, clone and frame, the counters) in the binary archive;
   /// the options and the sources' settings are the constructor's (a saved source it does not have is an error).
@@ -115,8 +116,8 @@ class MultiSourceEkf {
     OdometrySourceOptions options;
     std::optional<PlanarOdometry> last;  // previous message (nullopt: not anchored)
     int64_t last_seen = 0;
-    int clone = -1;                      // index of the pose clone in the state (relative measurements)
-    SE2 frame;                           // absolute mode: the source's frame in the map
+    int clone = -1;  // index of the pose clone in the state (relative measurements)
+    SE2 frame;       // absolute mode: the source's frame in the map
   };
   OdometryOutcome measure(Source& s, SourceCounters& c, const PlanarOdometry& m);
 

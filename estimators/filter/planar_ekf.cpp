@@ -35,8 +35,8 @@ Eigen::Vector3d PlanarEkf::motion(const Eigen::Vector3d& x, const SE2& d, Eigen:
   return {x[0] + c * dx - s * dy, x[1] + s * dx + c * dy, wrap_angle(th)};
 }
 
-Eigen::Vector2d PlanarEkf::observation(const Eigen::Vector3d& r, const Eigen::Vector2d& l, Eigen::Matrix<double, 2, 3>* Hx,
-                                       Eigen::Matrix2d* Hl) {
+Eigen::Vector2d PlanarEkf::observation(const Eigen::Vector3d& r, const Eigen::Vector2d& l,
+                                       Eigen::Matrix<double, 2, 3>* Hx, Eigen::Matrix2d* Hl) {
   const Eigen::Vector2d d = l - r.head<2>();
   const double q = d.squaredNorm(), sq = std::sqrt(q);
   if (Hx) *Hx << -d.x() / sq, -d.y() / sq, 0, d.y() / q, -d.x() / q, -1;
@@ -69,8 +69,10 @@ Health PlanarEkf::predict(const SE2& delta, const Eigen::Matrix3d& Q) {
 }
 
 UpdateResult PlanarEkf::counted(UpdateResult r) {
-  if (r.reason == UpdateReason::kNonFinite) refusals_.count(Health::kNonFinite);
-  else if (r.reason == UpdateReason::kIndefinite) refusals_.count(Health::kIndefinite);
+  if (r.reason == UpdateReason::kNonFinite)
+    refusals_.count(Health::kNonFinite);
+  else if (r.reason == UpdateReason::kIndefinite)
+    refusals_.count(Health::kIndefinite);
   return r;
 }
 
@@ -141,7 +143,8 @@ Eigen::Vector3d PlanarEkf::relative_pose_innovation(const Eigen::Vector3d& c, co
   return r;
 }
 
-Eigen::Vector3d PlanarEkf::pose_innovation(const SE2& frame, const Eigen::Vector3d& x, const SE2& z, Eigen::Matrix3d* H_robot) {
+Eigen::Vector3d PlanarEkf::pose_innovation(const SE2& frame, const Eigen::Vector3d& x, const SE2& z,
+                                           Eigen::Matrix3d* H_robot) {
   Eigen::Matrix3d D;
   const Eigen::Vector3d r = right_innovation(frame.inverse() * SE2(x[0], x[1], x[2]), z, &D);
   if (H_robot) *H_robot = D * body_from_global(x[2]);
@@ -164,22 +167,23 @@ void PlanarEkf::refresh_clone(int index) {
   P_.block<3, 3>(index, index) = P_.topLeftCorner<3, 3>();
 }
 
-UpdateResult PlanarEkf::observe_relative_pose(int clone, const SE2& z, const Eigen::Matrix3d& R, const std::array<bool, 3>& rows,
-                                              double gate) {
+UpdateResult PlanarEkf::observe_relative_pose(int clone, const SE2& z, const Eigen::Matrix3d& R,
+                                              const std::array<bool, 3>& rows, double gate) {
   Eigen::Matrix3d Hc, Hx;
   const Eigen::Vector3d r = relative_pose_innovation(x_.segment<3>(clone), x_.head<3>(), z, &Hc, &Hx);
   return update_rows(r, Hx, clone, Hc, R, rows, gate);
 }
 
-UpdateResult PlanarEkf::observe_pose(const SE2& frame, const SE2& z, const Eigen::Matrix3d& R, const std::array<bool, 3>& rows,
-                                     double gate) {
+UpdateResult PlanarEkf::observe_pose(const SE2& frame, const SE2& z, const Eigen::Matrix3d& R,
+                                     const std::array<bool, 3>& rows, double gate) {
   Eigen::Matrix3d Hx;
   const Eigen::Vector3d r = pose_innovation(frame, x_.head<3>(), z, &Hx);
   return update_rows(r, Hx, -1, Eigen::Matrix3d::Zero(), R, rows, gate);
 }
 
-UpdateResult PlanarEkf::update_rows(const Eigen::Vector3d& r, const Eigen::Matrix3d& Hx, int other, const Eigen::Matrix3d& Ho,
-                                    const Eigen::Matrix3d& R, const std::array<bool, 3>& rows, double gate) {
+UpdateResult PlanarEkf::update_rows(const Eigen::Vector3d& r, const Eigen::Matrix3d& Hx, int other,
+                                    const Eigen::Matrix3d& Ho, const Eigen::Matrix3d& R,
+                                    const std::array<bool, 3>& rows, double gate) {
   UpdateResult out;
   if (!r.allFinite() || !R.allFinite() || !Hx.allFinite() || !Ho.allFinite()) {
     out.reason = UpdateReason::kNonFinite;
@@ -257,7 +261,8 @@ assoc::BoundedAssociation PlanarEkf::associate(const std::vector<Sighting>& sigh
     const Eigen::Vector2d h = observation(x_.head<3>(), l, &Hx, &Hl);
     if (h[0] < 1e-6) return std::nullopt;
     assoc::Candidate c;
-    c.innovation = Eigen::Vector2d(sightings[static_cast<size_t>(i)].range - h[0], wrap_angle(sightings[static_cast<size_t>(i)].bearing - h[1]));
+    c.innovation = Eigen::Vector2d(sightings[static_cast<size_t>(i)].range - h[0],
+                                   wrap_angle(sightings[static_cast<size_t>(i)].bearing - h[1]));
     // H is zero but for the robot's 3 columns and the landmark's 2: given sparse, each test costs O(1), not O(n^2).
     c.jacobian.resize(2, in_state ? 5 : 3);
     c.jacobian.leftCols<3>() = Hx;
@@ -271,8 +276,10 @@ assoc::BoundedAssociation PlanarEkf::associate(const std::vector<Sighting>& sigh
   };
   problem.work_budget = options_.association_budget;
   assoc::BoundedAssociation a;
-  if (problem.landmarks > 0) a = assoc::associate_bounded(problem, 20000);
-  else a.pairing.assign(sightings.size(), -1), a.examined = problem.sightings;
+  if (problem.landmarks > 0)
+    a = assoc::associate_bounded(problem, 20000);
+  else
+    a.pairing.assign(sightings.size(), -1), a.examined = problem.sightings;
   return a;
 }
 
@@ -286,7 +293,8 @@ void PlanarEkf::admit_tentative(const std::vector<Sighting>& sightings, const st
     const Eigen::Vector2d p(x_[0] + s.range * std::cos(a), x_[1] + s.range * std::sin(a));
     Tentative* match = nullptr;
     for (auto& t : tentative_)
-      if ((t.position - p).norm() < options_.tentative_radius && (!match || (t.position - p).norm() < (match->position - p).norm()))
+      if ((t.position - p).norm() < options_.tentative_radius &&
+          (!match || (t.position - p).norm() < (match->position - p).norm()))
         match = &t;
     if (match == nullptr) {
       if (static_cast<int>(tentative_.size()) >= options_.max_landmarks) {
@@ -337,7 +345,8 @@ AssociationOutcome PlanarEkf::observe_unidentified(const std::vector<Sighting>& 
       ++out.over_budget;
       continue;
     }
-    const auto r = observe(ids[static_cast<size_t>(h[i])].first, sightings[i].range, sightings[i].bearing, sightings[i].covariance);
+    const auto r = observe(ids[static_cast<size_t>(h[i])].first, sightings[i].range, sightings[i].bearing,
+                           sightings[i].covariance);
     r.accepted ? ++out.paired : ++out.gated;
   }
   if (options_.slam) admit_tentative(sightings, unpaired, budget, out);
@@ -358,7 +367,8 @@ void PlanarEkf::save(archive::ArchiveWriter& w) const {
 
 void PlanarEkf::load(archive::ArchiveReader& r) {
   r(initialized_)(x_)(P_)(known_)(slot_)(next_id_)(refusals_.non_finite)(refusals_.indefinite);
-  if (x_.size() < 3 || P_.rows() != x_.size() || P_.cols() != x_.size()) r.fail("an EKF state whose covariance does not match it");
+  if (x_.size() < 3 || P_.rows() != x_.size() || P_.cols() != x_.size())
+    r.fail("an EKF state whose covariance does not match it");
   for (const auto& [id, slot] : slot_)
     if (slot < 3 || slot + 2 > x_.size()) r.fail("an EKF landmark slot outside the state");
   tentative_.resize(r.count(1, "the tentative landmarks"));

@@ -24,8 +24,8 @@
 namespace sextant::filter {
 
 struct PlanarEkfOptions {
-  double gate = 9.21;   // chi-square (2 dof) threshold on the normalized innovation; 9.21 = 99 %
-  bool slam = true;     // unknown landmark ids are added to the state; false: only the known map is used
+  double gate = 9.21;  // chi-square (2 dof) threshold on the normalized innovation; 9.21 = 99 %
+  bool slam = true;    // unknown landmark ids are added to the state; false: only the known map is used
   int max_landmarks = 4096;
   // Sightings without an id: a sighting that JCBB pairs with no landmark becomes a tentative landmark (outside the
   // state); it joins the map after `confirmations` sightings within `tentative_radius` metres, and is forgotten
@@ -78,9 +78,11 @@ class PlanarEkf {
   void refresh_clone(int index);
   /// Z = C^-1 X Exp(v): the motion since the clone at `clone_index`, measured with covariance R over
   /// [dx, dy, dtheta] (right perturbation, body frame); only the rows with `rows[i]` true are fused.
-  UpdateResult observe_relative_pose(int clone_index, const SE2& z, const Eigen::Matrix3d& R, const std::array<bool, 3>& rows, double gate);
+  UpdateResult observe_relative_pose(int clone_index, const SE2& z, const Eigen::Matrix3d& R,
+                                     const std::array<bool, 3>& rows, double gate);
   /// Z = F^-1 X Exp(v): the robot pose in the frame F.
-  UpdateResult observe_pose(const SE2& frame, const SE2& z, const Eigen::Matrix3d& R, const std::array<bool, 3>& rows, double gate);
+  UpdateResult observe_pose(const SE2& frame, const SE2& z, const Eigen::Matrix3d& R, const std::array<bool, 3>& rows,
+                            double gate);
 
   /// Sightings without ids: associated by JCBB (assoc/landmark/jcbb.hpp) against every landmark of the map and
   /// the state, then updated jointly; the unpaired ones go through the tentative-landmark rule above.
@@ -109,10 +111,11 @@ class PlanarEkf {
                                      Eigen::Matrix<double, 2, 3>* H_robot, Eigen::Matrix2d* H_landmark);
   /// The innovation r = Log((C^-1 X)^-1 Z) of a relative pose measurement, for the clone C and the robot X given
   /// as [x, y, theta]; H_clone = -dr/dC and H_robot = -dr/dX (so that r(x + dx) ~ r - H dx, the EKF convention).
-  static Eigen::Vector3d relative_pose_innovation(const Eigen::Vector3d& clone, const Eigen::Vector3d& robot, const SE2& z,
-                                                  Eigen::Matrix3d* H_clone, Eigen::Matrix3d* H_robot);
+  static Eigen::Vector3d relative_pose_innovation(const Eigen::Vector3d& clone, const Eigen::Vector3d& robot,
+                                                  const SE2& z, Eigen::Matrix3d* H_clone, Eigen::Matrix3d* H_robot);
   /// The innovation of an absolute pose measurement Z of F^-1 X, with H_robot = -dr/dX.
-  static Eigen::Vector3d pose_innovation(const SE2& frame, const Eigen::Vector3d& robot, const SE2& z, Eigen::Matrix3d* H_robot);
+  static Eigen::Vector3d pose_innovation(const SE2& frame, const Eigen::Vector3d& robot, const SE2& z,
+                                         Eigen::Matrix3d* H_robot);
 
   /// The filter's state (estimate, covariance, landmarks) in the binary archive (the daemon's state directory); the
   /// options are the constructor's.
@@ -125,12 +128,13 @@ class PlanarEkf {
   std::vector<std::pair<int64_t, bool>> association_index() const;
   assoc::BoundedAssociation associate(const std::vector<Sighting>& sightings,
                                       const std::vector<std::pair<int64_t, bool>>& ids) const;
-  void admit_tentative(const std::vector<Sighting>& sightings, const std::vector<size_t>& unpaired, UpdateBudget& budget,
-                       AssociationOutcome& out);
+  void admit_tentative(const std::vector<Sighting>& sightings, const std::vector<size_t>& unpaired,
+                       UpdateBudget& budget, AssociationOutcome& out);
   Health augment(int64_t id, double range, double bearing, const Eigen::Matrix2d& R);
   UpdateResult counted(UpdateResult r);
-  UpdateResult update_rows(const Eigen::Vector3d& r, const Eigen::Matrix3d& H_robot, int other, const Eigen::Matrix3d& H_other,
-                           const Eigen::Matrix3d& R, const std::array<bool, 3>& rows, double gate);
+  UpdateResult update_rows(const Eigen::Vector3d& r, const Eigen::Matrix3d& H_robot, int other,
+                           const Eigen::Matrix3d& H_other, const Eigen::Matrix3d& R, const std::array<bool, 3>& rows,
+                           double gate);
 
   PlanarEkfOptions options_;
   bool initialized_ = false;

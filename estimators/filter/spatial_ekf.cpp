@@ -44,12 +44,15 @@ Health SpatialEkf::predict(const SE3& delta, const Matrix6& Q) {
 }
 
 UpdateResult SpatialEkf::counted(UpdateResult r) {
-  if (r.reason == UpdateReason::kNonFinite) refusals_.count(Health::kNonFinite);
-  else if (r.reason == UpdateReason::kIndefinite) refusals_.count(Health::kIndefinite);
+  if (r.reason == UpdateReason::kNonFinite)
+    refusals_.count(Health::kNonFinite);
+  else if (r.reason == UpdateReason::kIndefinite)
+    refusals_.count(Health::kIndefinite);
   return r;
 }
 
-Eigen::Vector3d SpatialEkf::observation(const SE3& X, const Eigen::Vector3d& l, Eigen::Matrix<double, 3, 6>* Hx, Eigen::Matrix3d* Hl) {
+Eigen::Vector3d SpatialEkf::observation(const SE3& X, const Eigen::Vector3d& l, Eigen::Matrix<double, 3, 6>* Hx,
+                                        Eigen::Matrix3d* Hl) {
   const Eigen::Matrix3d Rt = X.rotation().matrix().transpose();
   const Eigen::Vector3d q = Rt * (l - X.translation());
   const double sxy2 = q.x() * q.x() + q.y() * q.y(), sxy = std::sqrt(sxy2), r2 = q.squaredNorm(), r = std::sqrt(r2);

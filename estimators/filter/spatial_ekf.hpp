@@ -57,11 +57,11 @@ class SpatialEkf {
   Eigen::Index size() const { return P_.rows(); }
 
   /// The models and their Jacobians (for tests).  `observation`: H_pose = dh/dxi, H_landmark = dh/dl.
-  static Eigen::Vector3d observation(const SE3& pose, const Eigen::Vector3d& landmark, Eigen::Matrix<double, 3, 6>* H_pose,
-                                     Eigen::Matrix3d* H_landmark);
+  static Eigen::Vector3d observation(const SE3& pose, const Eigen::Vector3d& landmark,
+                                     Eigen::Matrix<double, 3, 6>* H_pose, Eigen::Matrix3d* H_landmark);
   /// The landmark seen at z from `pose`, with J_pose = dl/dxi and J_z = dl/dz.
-  static Eigen::Vector3d inverse_observation(const SE3& pose, const Eigen::Vector3d& z, Eigen::Matrix<double, 3, 6>* J_pose,
-                                             Eigen::Matrix3d* J_z);
+  static Eigen::Vector3d inverse_observation(const SE3& pose, const Eigen::Vector3d& z,
+                                             Eigen::Matrix<double, 3, 6>* J_pose, Eigen::Matrix3d* J_z);
 
   /// The filter's state (estimate, covariance, landmarks) in the binary archive (the daemon's state directory); the
   /// options are the constructor's.

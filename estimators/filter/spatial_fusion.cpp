@@ -17,7 +17,8 @@ SpatialOdometryOutcome SpatialFusion::odometry(const SpatialOdometry& m, const s
     const Matrix6 Q = regularized_increment_covariance(m.covariance, m.increment_covariance, /*planar=*/false, delta,
                                                        last_covariance_, min_variance_);
     predict_through_stops(
-        delta, Q, utime_, m.utime, stops, [this](const SE3& piece, const Matrix6& q) { ekf_.predict(piece, q); }, at_stop);
+        delta, Q, utime_, m.utime, stops, [this](const SE3& piece, const Matrix6& q) { ekf_.predict(piece, q); },
+        at_stop);
     outcome = SpatialOdometryOutcome::kPredicted;
   }
   last_pose_ = m.pose;

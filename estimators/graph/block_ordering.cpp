@@ -46,7 +46,8 @@ std::vector<int> block_amd_order(const std::vector<std::vector<int>>& upper_rows
   return order;
 }
 
-std::vector<int> block_nested_dissection_order(const std::vector<std::vector<int>>& upper_rows, cholmod_common& common) {
+std::vector<int> block_nested_dissection_order(const std::vector<std::vector<int>>& upper_rows,
+                                               cholmod_common& common) {
   std::vector<int> order(upper_rows.size());
   if (order.empty()) return order;
   cholmod_sparse* B = block_pattern(upper_rows, common);

@@ -51,8 +51,10 @@ RelativePoseFactor::RelativePoseFactor(int i, int j, const SE3& z, Matrix6d info
 void RelativePoseFactor::error(const std::vector<Variable>& vars, Eigen::VectorXd& e) const {
   const auto& a = vars[static_cast<size_t>(variables()[0])];
   const auto& b = vars[static_cast<size_t>(variables()[1])];
-  if (planar_) to_vector_2d(z2_.inverse() * (a.pose2.inverse() * b.pose2), e.data(), nullptr);
-  else to_vector_3d(z3_.inverse() * (a.pose3.inverse() * b.pose3), e.data(), nullptr);
+  if (planar_)
+    to_vector_2d(z2_.inverse() * (a.pose2.inverse() * b.pose2), e.data(), nullptr);
+  else
+    to_vector_3d(z3_.inverse() * (a.pose3.inverse() * b.pose3), e.data(), nullptr);
 }
 
 void RelativePoseFactor::linearize(const std::vector<Variable>& vars, Linearization& out) const {
@@ -80,8 +82,10 @@ PosePriorFactor::PosePriorFactor(int i, const SE3& z, Matrix6d information)
 
 void PosePriorFactor::error(const std::vector<Variable>& vars, Eigen::VectorXd& e) const {
   const auto& x = vars[static_cast<size_t>(variables()[0])];
-  if (planar_) to_vector_2d(z2_.inverse() * x.pose2, e.data(), nullptr);
-  else to_vector_3d(z3_.inverse() * x.pose3, e.data(), nullptr);
+  if (planar_)
+    to_vector_2d(z2_.inverse() * x.pose2, e.data(), nullptr);
+  else
+    to_vector_3d(z3_.inverse() * x.pose3, e.data(), nullptr);
 }
 
 void PosePriorFactor::linearize(const std::vector<Variable>& vars, Linearization& out) const {
@@ -103,10 +107,14 @@ PointObservationFactor::PointObservationFactor(int pose, int point, Model model,
 
 std::string PointObservationFactor::type() const {
   switch (model_) {
-    case Model::kPosition: return "point_position";
-    case Model::kRangeBearing: return "range_bearing";
-    case Model::kRangeAzimuthElevation: return "range_azimuth_elevation";
-    case Model::kBearing: return "bearing";
+    case Model::kPosition:
+      return "point_position";
+    case Model::kRangeBearing:
+      return "range_bearing";
+    case Model::kRangeAzimuthElevation:
+      return "range_azimuth_elevation";
+    case Model::kBearing:
+      return "bearing";
   }
   return "point";
 }

@@ -15,11 +15,11 @@
 namespace sextant::graph {
 
 struct FeedResult {
-  std::vector<double> step_ms;       // wall time of each update()
+  std::vector<double> step_ms;  // wall time of each update()
   int rebuilds = 0, relinearized_factors = 0, deferred_at_end = 0;
   bool ok = true;
-  std::string message;               // the first failed update's message
-  FactorGraph start;                 // the smoother's variables with the initial values they were given, and the factors
+  std::string message;  // the first failed update's message
+  FactorGraph start;    // the smoother's variables with the initial values they were given, and the factors
 };
 
 /// Feeds `graph` (variables and factors, e.g. from read_g2o) to `smoother`, which must be empty.  The variables'

@@ -30,7 +30,8 @@ struct LineReader {
     throw std::runtime_error(file + ":" + std::to_string(line) + ": " + msg);
   }
   double number() {
-    if (next >= tokens.size()) fail(tokens[0] + ": expected more values (got " + std::to_string(tokens.size() - 1) + ")");
+    if (next >= tokens.size())
+      fail(tokens[0] + ": expected more values (got " + std::to_string(tokens.size() - 1) + ")");
     const std::string& t = tokens[next++];
     char* end = nullptr;
     const double v = std::strtod(t.c_str(), &end);
@@ -41,11 +42,13 @@ struct LineReader {
     const double v = number();
     // The range first: casting a double outside int64's range is undefined behaviour.
     if (!(v >= -0x1p63 && v < 0x1p63)) fail(tokens[0] + ": id out of range: '" + tokens[next - 1] + "'");
-    if (v != static_cast<double>(static_cast<int64_t>(v))) fail(tokens[0] + ": not an integer id: '" + tokens[next - 1] + "'");
+    if (v != static_cast<double>(static_cast<int64_t>(v)))
+      fail(tokens[0] + ": not an integer id: '" + tokens[next - 1] + "'");
     return static_cast<int64_t>(v);
   }
   void done() const {
-    if (next != tokens.size()) fail(tokens[0] + ": " + std::to_string(tokens.size() - next) + " unexpected extra value(s)");
+    if (next != tokens.size())
+      fail(tokens[0] + ": " + std::to_string(tokens.size() - next) + " unexpected extra value(s)");
   }
   Eigen::MatrixXd upper_information(int n) {
     Eigen::MatrixXd I(n, n);
@@ -90,7 +93,8 @@ constexpr size_t kBadEdgesShown = 5;
 
 namespace {
 constexpr std::pair<InformationPolicy, const char*> kInformationPolicies[] = {
-    {InformationPolicy::kReject, "reject"}, {InformationPolicy::kRepair, "repair"},
+    {InformationPolicy::kReject, "reject"},
+    {InformationPolicy::kRepair, "repair"},
     {InformationPolicy::kDiagonal, "diagonal"}};
 }  // namespace
 
@@ -107,7 +111,8 @@ Eigen::MatrixXd repair_information(const Eigen::MatrixXd& I, InformationPolicy p
     const double floor = 1e-6 * std::max(S.diagonal().cwiseAbs().maxCoeff(), 1e-300);
     return S.diagonal().cwiseMax(floor).asDiagonal();
   }
-  const Eigen::VectorXd eigenvalues = Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(S, Eigen::EigenvaluesOnly).eigenvalues();
+  const Eigen::VectorXd eigenvalues =
+      Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(S, Eigen::EigenvaluesOnly).eigenvalues();
   const double floor = 1e-6 * std::max(eigenvalues.cwiseAbs().maxCoeff(), 1e-300);
   return symmetrized(floor_eigenvalues(S, floor));
 }
@@ -124,7 +129,8 @@ namespace {
 // is known, so edges may come first), then the bad information matrices reported, the edges and FIX lines applied.
 class G2oReader {
  public:
-  G2oReader(const std::string& path, const G2oReadOptions& options) : path_(path), options_(options), r_{path, 0, {}, 1} {}
+  G2oReader(const std::string& path, const G2oReadOptions& options)
+      : path_(path), options_(options), r_{path, 0, {}, 1} {}
 
   G2oGraph read(std::istream& in) {
     std::string text;
@@ -159,7 +165,8 @@ class G2oReader {
       out_.had_vertices = true;
       return;
     }
-    if (tag.rfind("EDGE_", 0) == 0) read_edge(tag);
+    if (tag.rfind("EDGE_", 0) == 0)
+      read_edge(tag);
     else if (tag == "PARAMS_SE3OFFSET") {
       const int64_t id = r_.integer();
       const Eigen::Vector3d t = r_.vector3();
@@ -205,29 +212,35 @@ class G2oReader {
       const SE2 z = r_.se2();
       const Eigen::Matrix3d I = information(r_.upper_information(3), a, b);
       saw2_ = true;
-      edges_.push_back({r_.line, tag, a, b, [z, I](int i, int j) { return std::make_unique<RelativePoseFactor>(i, j, z, I); }});
+      edges_.push_back(
+          {r_.line, tag, a, b, [z, I](int i, int j) { return std::make_unique<RelativePoseFactor>(i, j, z, I); }});
     } else if (tag == "EDGE_SE3:QUAT") {
       const int64_t a = r_.integer(), b = r_.integer();
       const Eigen::Vector3d t = r_.vector3();
       const SE3 z(r_.quaternion_xyzw(), t);
       const Matrix6d I = information(r_.upper_information(6), a, b);
       saw3_ = true;
-      edges_.push_back({r_.line, tag, a, b, [z, I](int i, int j) { return std::make_unique<RelativePoseFactor>(i, j, z, I); }});
+      edges_.push_back(
+          {r_.line, tag, a, b, [z, I](int i, int j) { return std::make_unique<RelativePoseFactor>(i, j, z, I); }});
     } else if (tag == "EDGE_SE2_XY") {
       const int64_t a = r_.integer(), b = r_.integer();
       const Eigen::VectorXd z = r_.numbers(2);
       const Eigen::MatrixXd I = information(r_.upper_information(2), a, b);
       edges_.push_back({r_.line, tag, a, b, [z, I](int i, int j) {
-                          return std::make_unique<PointObservationFactor>(i, j, PointObservationFactor::Model::kPosition, z, I);
+                          return std::make_unique<PointObservationFactor>(
+                              i, j, PointObservationFactor::Model::kPosition, z, I);
                         }});
     } else if (tag == "EDGE_SE3_TRACKXYZ") {
       const int64_t a = r_.integer(), b = r_.integer(), param = r_.integer();
       const Eigen::VectorXd z = r_.numbers(3);
       const Eigen::MatrixXd I = information(r_.upper_information(3), a, b);
-      if (!offsets_.count(param)) r_.fail("EDGE_SE3_TRACKXYZ: unknown parameter id " + std::to_string(param) + " (PARAMS_SE3OFFSET must come first)");
+      if (!offsets_.count(param))
+        r_.fail("EDGE_SE3_TRACKXYZ: unknown parameter id " + std::to_string(param) +
+                " (PARAMS_SE3OFFSET must come first)");
       const SE3 offset = offsets_.at(param);
       edges_.push_back({r_.line, tag, a, b, [z, I, offset](int i, int j) {
-                          return std::make_unique<PointObservationFactor>(i, j, PointObservationFactor::Model::kPosition, z, I, offset);
+                          return std::make_unique<PointObservationFactor>(
+                              i, j, PointObservationFactor::Model::kPosition, z, I, offset);
                         }});
     } else {
       r_.fail("unknown tag '" + tag + "'");
@@ -239,13 +252,16 @@ class G2oReader {
   Eigen::MatrixXd information(const Eigen::MatrixXd& I, int64_t a, int64_t b) {
     const DefinitenessCheck check = check_positive_definite(I);
     if (check.ok()) return I;
-    if (check.problem == DefinitenessCheck::Problem::kNotFinite) r_.fail(r_.tokens[0] + " " + std::to_string(a) + " " + std::to_string(b) + ": information matrix has a NaN or infinite entry");
+    if (check.problem == DefinitenessCheck::Problem::kNotFinite)
+      r_.fail(r_.tokens[0] + " " + std::to_string(a) + " " + std::to_string(b) +
+              ": information matrix has a NaN or infinite entry");
     if (options_.information != InformationPolicy::kReject) {
       ++out_.repaired_information;
       return repair_information(I, options_.information);
     }
     std::ostringstream m;
-    m << path_ << ":" << r_.line << " (" << r_.tokens[0] << " " << a << " " << b << ", smallest eigenvalue " << check.smallest_eigenvalue << ")";
+    m << path_ << ":" << r_.line << " (" << r_.tokens[0] << " " << a << " " << b << ", smallest eigenvalue "
+      << check.smallest_eigenvalue << ")";
     bad_.push_back(m.str());
     return I;
   }
@@ -254,8 +270,9 @@ class G2oReader {
   void throw_if_bad_information() const {
     if (bad_.empty()) return;
     std::ostringstream m;
-    m << path_ << ": " << bad_.size() << " edge" << (bad_.size() > 1 ? "s have information matrices" : " has an information matrix")
-      << " that " << (bad_.size() > 1 ? "are" : "is") << " not positive definite: ";
+    m << path_ << ": " << bad_.size() << " edge"
+      << (bad_.size() > 1 ? "s have information matrices" : " has an information matrix") << " that "
+      << (bad_.size() > 1 ? "are" : "is") << " not positive definite: ";
     for (size_t i = 0; i < std::min(bad_.size(), kBadEdgesShown); ++i) m << (i ? "; " : "") << bad_[i];
     if (bad_.size() > kBadEdgesShown) m << "; and " << bad_.size() - kBadEdgesShown << " more";
     IndefiniteInformationError e(m.str());
@@ -279,7 +296,9 @@ class G2oReader {
       v.kind = out_.dimension == 3 ? VariableKind::kPose3 : VariableKind::kPose2;
       *idx = g.add_variable(v);
     }
-    if (ia == ib) throw std::runtime_error(path_ + ":" + std::to_string(e.line) + ": " + e.tag + " joins vertex " + std::to_string(e.a) + " to itself");
+    if (ia == ib)
+      throw std::runtime_error(path_ + ":" + std::to_string(e.line) + ": " + e.tag + " joins vertex " +
+                               std::to_string(e.a) + " to itself");
     auto f = e.make(ia, ib);
     // Kinds must fit the edge.
     const auto ka = g.variables()[static_cast<size_t>(ia)].kind, kb = g.variables()[static_cast<size_t>(ib)].kind;
@@ -287,14 +306,17 @@ class G2oReader {
                     (e.tag == "EDGE_SE3:QUAT" && ka == VariableKind::kPose3 && kb == VariableKind::kPose3) ||
                     (e.tag == "EDGE_SE2_XY" && ka == VariableKind::kPose2 && kb == VariableKind::kPoint2) ||
                     (e.tag == "EDGE_SE3_TRACKXYZ" && ka == VariableKind::kPose3 && kb == VariableKind::kPoint3);
-    if (!ok) throw std::runtime_error(path_ + ":" + std::to_string(e.line) + ": " + e.tag + " between vertices of the wrong kinds");
+    if (!ok)
+      throw std::runtime_error(path_ + ":" + std::to_string(e.line) + ": " + e.tag +
+                               " between vertices of the wrong kinds");
     g.add_factor(std::move(f));
   }
 
   void apply_fixes() {
     for (const auto& [line, id] : fixes_) {
       const int i = out_.graph.index_of(id);
-      if (i < 0) throw std::runtime_error(path_ + ":" + std::to_string(line) + ": FIX of unknown vertex " + std::to_string(id));
+      if (i < 0)
+        throw std::runtime_error(path_ + ":" + std::to_string(line) + ": FIX of unknown vertex " + std::to_string(id));
       out_.graph.variables()[static_cast<size_t>(i)].fixed = true;
     }
   }
@@ -329,15 +351,16 @@ void write_g2o(const std::string& path, const FactorGraph& g) {
       case VariableKind::kPose3: {
         const auto& t = v.pose3.translation();
         const auto& q = v.pose3.rotation().quaternion();
-        std::fprintf(f.get(), "VERTEX_SE3:QUAT %lld %.17g %.17g %.17g %.17g %.17g %.17g %.17g\n", (long long)v.id, t.x(),
-                     t.y(), t.z(), q.x(), q.y(), q.z(), q.w());
+        std::fprintf(f.get(), "VERTEX_SE3:QUAT %lld %.17g %.17g %.17g %.17g %.17g %.17g %.17g\n", (long long)v.id,
+                     t.x(), t.y(), t.z(), q.x(), q.y(), q.z(), q.w());
         break;
       }
       case VariableKind::kPoint2:
         std::fprintf(f.get(), "VERTEX_XY %lld %.17g %.17g\n", (long long)v.id, v.point.x(), v.point.y());
         break;
       case VariableKind::kPoint3:
-        std::fprintf(f.get(), "VERTEX_TRACKXYZ %lld %.17g %.17g %.17g\n", (long long)v.id, v.point.x(), v.point.y(), v.point.z());
+        std::fprintf(f.get(), "VERTEX_TRACKXYZ %lld %.17g %.17g %.17g\n", (long long)v.id, v.point.x(), v.point.y(),
+                     v.point.z());
         break;
     }
   }
@@ -349,13 +372,14 @@ void write_g2o(const std::string& path, const FactorGraph& g) {
   std::vector<SE3> offsets;  // written so far; PARAMS_SE3OFFSET id = position
   auto offset_id = [&](const SE3& o) {
     for (size_t k = 0; k < offsets.size(); ++k)
-      if (offsets[k].translation() == o.translation() && offsets[k].rotation().quaternion().coeffs() == o.rotation().quaternion().coeffs())
+      if (offsets[k].translation() == o.translation() &&
+          offsets[k].rotation().quaternion().coeffs() == o.rotation().quaternion().coeffs())
         return static_cast<long long>(k);
     offsets.push_back(o);
     const auto& t = o.translation();
     const auto& q = o.rotation().quaternion();
-    std::fprintf(f.get(), "PARAMS_SE3OFFSET %zu %.17g %.17g %.17g %.17g %.17g %.17g %.17g\n", offsets.size() - 1, t.x(), t.y(), t.z(),
-                 q.x(), q.y(), q.z(), q.w());
+    std::fprintf(f.get(), "PARAMS_SE3OFFSET %zu %.17g %.17g %.17g %.17g %.17g %.17g %.17g\n", offsets.size() - 1, t.x(),
+                 t.y(), t.z(), q.x(), q.y(), q.z(), q.w());
     return static_cast<long long>(offsets.size() - 1);
   };
   for (const auto& fac : g.factors()) {
@@ -364,13 +388,14 @@ void write_g2o(const std::string& path, const FactorGraph& g) {
       const long long b = vars[static_cast<size_t>(fac->variables()[1])].id;
       if (rp->planar()) {
         const auto& z = rp->measurement2();
-        std::fprintf(f.get(), "EDGE_SE2 %lld %lld %.17g %.17g %.17g", a, b, z.translation().x(), z.translation().y(), z.angle());
+        std::fprintf(f.get(), "EDGE_SE2 %lld %lld %.17g %.17g %.17g", a, b, z.translation().x(), z.translation().y(),
+                     z.angle());
       } else {
         const auto& z = rp->measurement3();
         const auto& t = z.translation();
         const auto& q = z.rotation().quaternion();
-        std::fprintf(f.get(), "EDGE_SE3:QUAT %lld %lld %.17g %.17g %.17g %.17g %.17g %.17g %.17g", a, b, t.x(), t.y(), t.z(),
-                     q.x(), q.y(), q.z(), q.w());
+        std::fprintf(f.get(), "EDGE_SE3:QUAT %lld %lld %.17g %.17g %.17g %.17g %.17g %.17g %.17g", a, b, t.x(), t.y(),
+                     t.z(), q.x(), q.y(), q.z(), q.w());
       }
       info(fac->information());
     } else if (const auto* po = dynamic_cast<const PointObservationFactor*>(fac.get());

@@ -47,8 +47,8 @@ struct IndefiniteInformationError : std::runtime_error {
 
 struct G2oGraph {
   FactorGraph graph;
-  int dimension = 2;          // 2 or 3
-  bool had_vertices = false;  // false: every pose was created from the edges and needs initializing
+  int dimension = 2;             // 2 or 3
+  bool had_vertices = false;     // false: every pose was created from the edges and needs initializing
   int repaired_information = 0;  // edges whose information matrix was repaired (kRepair / kDiagonal)
 };
 

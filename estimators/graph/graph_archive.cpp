@@ -14,10 +14,16 @@ enum class FactorTag : uint8_t { kRelativePose2 = 1, kRelativePose3 = 2, kPointO
 void save(archive::ArchiveWriter& w, const Variable& v) {
   w(v.id)(v.kind)(v.fixed);
   switch (v.kind) {
-    case VariableKind::kPose2: w(v.pose2); break;
-    case VariableKind::kPose3: w(v.pose3); break;
+    case VariableKind::kPose2:
+      w(v.pose2);
+      break;
+    case VariableKind::kPose3:
+      w(v.pose3);
+      break;
     case VariableKind::kPoint2:
-    case VariableKind::kPoint3: w(v.point); break;
+    case VariableKind::kPoint3:
+      w(v.point);
+      break;
   }
 }
 
@@ -25,19 +31,28 @@ void load(archive::ArchiveReader& r, Variable& v) {
   v = Variable{};
   r(v.id)(v.kind)(v.fixed);
   switch (v.kind) {
-    case VariableKind::kPose2: r(v.pose2); break;
-    case VariableKind::kPose3: r(v.pose3); break;
+    case VariableKind::kPose2:
+      r(v.pose2);
+      break;
+    case VariableKind::kPose3:
+      r(v.pose3);
+      break;
     case VariableKind::kPoint2:
-    case VariableKind::kPoint3: r(v.point); break;
-    default: r.fail("a variable of unknown kind " + std::to_string(static_cast<int>(v.kind)));
+    case VariableKind::kPoint3:
+      r(v.point);
+      break;
+    default:
+      r.fail("a variable of unknown kind " + std::to_string(static_cast<int>(v.kind)));
   }
 }
 
 void save_factor(archive::ArchiveWriter& w, const Factor& f) {
   if (const auto* p = dynamic_cast<const RelativePoseFactor*>(&f)) {
     w(p->planar() ? FactorTag::kRelativePose2 : FactorTag::kRelativePose3)(f.variables())(f.information());
-    if (p->planar()) w(p->measurement2());
-    else w(p->measurement3());
+    if (p->planar())
+      w(p->measurement2());
+    else
+      w(p->measurement3());
   } else if (const auto* o = dynamic_cast<const PointObservationFactor*>(&f)) {
     w(FactorTag::kPointObservation)(f.variables())(f.information())(o->model())(o->measurement())(o->sensor_offset());
   } else {
@@ -49,15 +64,15 @@ std::unique_ptr<Factor> load_factor(archive::ArchiveReader& r) {
   const auto tag = r.get<FactorTag>();
   const auto vars = r.get<std::vector<int>>();
   const auto information = r.get<Eigen::MatrixXd>();
-  const size_t arity = tag == FactorTag::kRelativePose2 || tag == FactorTag::kRelativePose3 ||
-                               tag == FactorTag::kPointObservation
-                           ? 2
-                           : 0;
+  const size_t arity =
+      tag == FactorTag::kRelativePose2 || tag == FactorTag::kRelativePose3 || tag == FactorTag::kPointObservation ? 2
+                                                                                                                  : 0;
   if (arity == 0) r.fail("a factor of unknown type " + std::to_string(static_cast<int>(tag)));
   if (vars.size() != arity) r.fail("a factor with " + std::to_string(vars.size()) + " variables");
   switch (tag) {
     case FactorTag::kRelativePose2: {
-      if (information.rows() != 3 || information.cols() != 3) r.fail("a planar relative pose with a non-3x3 information");
+      if (information.rows() != 3 || information.cols() != 3)
+        r.fail("a planar relative pose with a non-3x3 information");
       const SE2 z = r.get<SE2>();
       return std::make_unique<RelativePoseFactor>(vars[0], vars[1], z, Eigen::Matrix3d(information));
     }
@@ -68,7 +83,8 @@ std::unique_ptr<Factor> load_factor(archive::ArchiveReader& r) {
     }
     case FactorTag::kPointObservation: {
       const auto model = r.get<PointObservationFactor::Model>();
-      if (static_cast<int>(model) < 0 || static_cast<int>(model) > static_cast<int>(PointObservationFactor::Model::kBearing))
+      if (static_cast<int>(model) < 0 ||
+          static_cast<int>(model) > static_cast<int>(PointObservationFactor::Model::kBearing))
         r.fail("a point observation of unknown model");
       const auto z = r.get<Eigen::VectorXd>();
       const SE3 offset = r.get<SE3>();

@@ -22,7 +22,8 @@ bool non_negative(double v) { return std::isfinite(v) && v >= 0; }
 std::string invalid_option(const IncrementalOptions& o) {
   if (!positive(o.relinearize_translation))
     return wrong("relinearize_translation", o.relinearize_translation, "a positive number (m)");
-  if (!positive(o.relinearize_rotation)) return wrong("relinearize_rotation", o.relinearize_rotation, "a positive number (rad)");
+  if (!positive(o.relinearize_rotation))
+    return wrong("relinearize_rotation", o.relinearize_rotation, "a positive number (rad)");
   if (o.relinearization_passes < 0) return wrong("relinearization_passes", o.relinearization_passes, ">= 0");
   if (o.relinearize_skip < 1) return wrong("relinearize_skip", o.relinearize_skip, ">= 1");
   if (!(non_negative(o.update_fraction) && o.update_fraction <= 1))
@@ -32,7 +33,8 @@ std::string invalid_option(const IncrementalOptions& o) {
     return wrong("max_update_factors", o.max_update_factors, ">= min_update_factors");
   if (o.rebuild_iterations < 1) return wrong("rebuild_iterations", o.rebuild_iterations, ">= 1");
   // At 1 any fill-in would reorder at every update.
-  if (!(std::isfinite(o.refill_ratio) && o.refill_ratio > 1)) return wrong("refill_ratio", o.refill_ratio, "a number > 1");
+  if (!(std::isfinite(o.refill_ratio) && o.refill_ratio > 1))
+    return wrong("refill_ratio", o.refill_ratio, "a number > 1");
   if (o.nested_dissection_above < 0) return wrong("nested_dissection_above", o.nested_dissection_above, ">= 0");
   if (!non_negative(o.capacity_growth)) return wrong("capacity_growth", o.capacity_growth, "a number >= 0");
   if (o.reorder_spread < 0) return wrong("reorder_spread", o.reorder_spread, ">= 0");

@@ -12,10 +12,10 @@
 namespace sextant::graph {
 
 struct IncrementalOptions {
-  double relinearize_translation = 0.1;   // m: relinearize a variable whose step exceeds this in a translation component
-  double relinearize_rotation = 0.1;      // rad: ... or this in a rotation component
-  int relinearization_passes = 2;         // relinearize + re-solve rounds per update
-  int relinearize_skip = 1;               // look for variables to relinearize every this many updates (iSAM2's relinearizeSkip)
+  double relinearize_translation = 0.1;  // m: relinearize a variable whose step exceeds this in a translation component
+  double relinearize_rotation = 0.1;     // rad: ... or this in a rotation component
+  int relinearization_passes = 2;        // relinearize + re-solve rounds per update
+  int relinearize_skip = 1;  // look for variables to relinearize every this many updates (iSAM2's relinearizeSkip)
   /// Factors changed by rank updates in one round (new ones or relinearized ones) beyond which a rebuild is cheaper:
   /// max(min_update_factors, update_fraction x factors in the system), at most max_update_factors.  The cap matters on
   /// large graphs, where each factor's path to the root is long: on city10000 relinearizing 158 factors by rank
@@ -23,15 +23,15 @@ struct IncrementalOptions {
   double update_fraction = 0.02;
   int min_update_factors = 32;
   int max_update_factors = 128;
-  int rebuild_iterations = 10;            // Gauss-Newton iterations of a rebuild for new factors that would cost more as
-                                          // rank updates (until no variable moves past the thresholds); a rebuild for
-                                          // relinearization or reordering takes one
-  double refill_ratio = 1.5;              // rebuild (reorder) when nnz(L) exceeds this multiple of its size after ordering
-                                          // (city10000: 1.5 takes 0.68 of the CPU time of 2.5, 1.25 0.62 with more rebuilds)
+  int rebuild_iterations = 10;  // Gauss-Newton iterations of a rebuild for new factors that would cost more as
+                                // rank updates (until no variable moves past the thresholds); a rebuild for
+                                // relinearization or reordering takes one
+  double refill_ratio = 1.5;    // rebuild (reorder) when nnz(L) exceeds this multiple of its size after ordering
+                                // (city10000: 1.5 takes 0.68 of the CPU time of 2.5, 1.25 0.62 with more rebuilds)
   /// Orderings at rebuilds: constrained AMD with the newest variables last up to this many variables, METIS nested
   /// dissection above (city10000: half the factorization flops; M3500: its ordering time outweighs the gain).
   int nested_dissection_above = 5000;
-  double capacity_growth = 1.0;           // reserved columns at a rebuild: this fraction of the used ones (and >= 64)
+  double capacity_growth = 1.0;  // reserved columns at a rebuild: this fraction of the used ones (and >= 64)
   /// Updates over which a fill-triggered reordering is spread (incremental_smoother.hpp); 0: reorder within the update.
   int reorder_spread = 8;
   /// Spread reorderings only in systems of more than this many variables: below, a reordering takes a few ms, and
@@ -68,14 +68,14 @@ enum class SmootherFailure {
 };
 
 struct IncrementalStatus {
-  bool ok = true;                    // failure == kNone: the estimates are this update's solution
+  bool ok = true;  // failure == kNone: the estimates are this update's solution
   SmootherFailure failure = SmootherFailure::kNone;
-  std::string message;               // why !ok
+  std::string message;  // why !ok
   int new_variables = 0, new_factors = 0;
-  int deferred_variables = 0;        // new variables not yet determined by their factors (kept pending)
+  int deferred_variables = 0;  // new variables not yet determined by their factors (kept pending)
   int relinearized_variables = 0, relinearized_factors = 0;
-  bool rebuilt = false;              // the system was reordered and refactorized in this update (or a spread
-                                     // reordering was put in place)
+  bool rebuilt = false;  // the system was reordered and refactorized in this update (or a spread
+                         // reordering was put in place)
   int solves = 0;
 };
 

@@ -81,16 +81,21 @@ IncrementalStatus IncrementalSmoother::update() {
   IncrementalStatus st;
   if (s.reorder.due(s.update_calls)) {
     switch (s.reorder.finish(s)) {
-      case smoother::ReorderScheduler::Finished::kInstalled: st.rebuilt = true, ++st.solves; break;
-      case smoother::ReorderScheduler::Finished::kFailed: return rebuild_with(1);  // which names the cause
-      case smoother::ReorderScheduler::Finished::kCholmodFailed: return cholmod_failed(s, st);
+      case smoother::ReorderScheduler::Finished::kInstalled:
+        st.rebuilt = true, ++st.solves;
+        break;
+      case smoother::ReorderScheduler::Finished::kFailed:
+        return rebuild_with(1);  // which names the cause
+      case smoother::ReorderScheduler::Finished::kCholmodFailed:
+        return cholmod_failed(s, st);
     }
   }
 
   // 1. Admission: the pending variables their factors determine, and the factors all of whose variables are in.
   const smoother::Admission admitted = smoother::admit(s);
-  if (admitted.factors_in.size() > smoother::update_limit(s)) return rebuild();  // a batch: iterate as a batch solve would
-  if (s.fx.used + admitted.new_dim > s.fx.reserve_end) return rebuild_with(1);   // only room is needed
+  if (admitted.factors_in.size() > smoother::update_limit(s))
+    return rebuild();  // a batch: iterate as a batch solve would
+  if (s.fx.used + admitted.new_dim > s.fx.reserve_end) return rebuild_with(1);  // only room is needed
   st.new_variables = static_cast<int>(admitted.vars_in.size());
   st.new_factors = static_cast<int>(admitted.factors_in.size());
   st.deferred_variables = static_cast<int>(admitted.vars_wait.size());
@@ -104,8 +109,10 @@ IncrementalStatus IncrementalSmoother::update() {
   }
 
   // 3. Fill-in: reorder now (small systems) or begin a reordering spread over the next updates.
-  const bool filled = static_cast<double>(s.fx.nonzeros()) > s.options.refill_ratio * static_cast<double>(s.fx.ordered_nnz);
-  const bool spread = s.options.reorder_spread > 0 && static_cast<int>(s.graph.variables().size()) > s.options.reorder_spread_above;
+  const bool filled =
+      static_cast<double>(s.fx.nonzeros()) > s.options.refill_ratio * static_cast<double>(s.fx.ordered_nnz);
+  const bool spread =
+      s.options.reorder_spread > 0 && static_cast<int>(s.graph.variables().size()) > s.options.reorder_spread_above;
   if (filled && !spread) return with_admission(rebuild_with(1), st);  // the new ordering is the point: one iteration
   const bool began_reordering =
       !s.reorder.under_way() && spread && (filled || 4 * (s.fx.reserve_end - s.fx.used) < s.fx.reserve_at_order);
@@ -120,10 +127,13 @@ IncrementalStatus IncrementalSmoother::update() {
     const std::vector<int> moved = smoother::moved_variables(s);
     if (moved.empty()) break;
     switch (smoother::relinearize(s, moved, st)) {
-      case smoother::Relinearized::kDone: break;
+      case smoother::Relinearized::kDone:
+        break;
       // Relinearizing everything at the estimate is the point: one iteration.
-      case smoother::Relinearized::kTooMany: return with_admission(rebuild_with(1), st);
-      case smoother::Relinearized::kCholmodFailed: return cholmod_failed(s, st);
+      case smoother::Relinearized::kTooMany:
+        return with_admission(rebuild_with(1), st);
+      case smoother::Relinearized::kCholmodFailed:
+        return cholmod_failed(s, st);
     }
     smoother::back_substitute(s, false);
     ++st.solves;

@@ -34,11 +34,15 @@ void place_points(FactorGraph& g, const std::vector<bool>& known) {
     const auto* po = dynamic_cast<const PointObservationFactor*>(f.get());
     if (!po || po->model() != PointObservationFactor::Model::kPosition) continue;
     const int pose = po->variables()[0], point = po->variables()[1];
-    if (!known[static_cast<size_t>(pose)] || placed[static_cast<size_t>(point)] || vars[static_cast<size_t>(point)].fixed) continue;
+    if (!known[static_cast<size_t>(pose)] || placed[static_cast<size_t>(point)] ||
+        vars[static_cast<size_t>(point)].fixed)
+      continue;
     const auto& x = vars[static_cast<size_t>(pose)];
     const auto& z = po->measurement();
-    if (x.kind == VariableKind::kPose2) vars[static_cast<size_t>(point)].point.head<2>() = x.pose2.act(z.head<2>());
-    else vars[static_cast<size_t>(point)].point = x.pose3 * Eigen::Vector3d(z[0], z[1], z[2]);
+    if (x.kind == VariableKind::kPose2)
+      vars[static_cast<size_t>(point)].point.head<2>() = x.pose2.act(z.head<2>());
+    else
+      vars[static_cast<size_t>(point)].point = x.pose3 * Eigen::Vector3d(z[0], z[1], z[2]);
     placed[static_cast<size_t>(point)] = true;
   }
 }
@@ -74,12 +78,16 @@ class ChordalRelaxation {
 
  private:
   MatD rotation(int v) const {
-    if constexpr (D == 2) return vars_[static_cast<size_t>(v)].pose2.rotation().matrix();
-    else return vars_[static_cast<size_t>(v)].pose3.rotation().matrix();
+    if constexpr (D == 2)
+      return vars_[static_cast<size_t>(v)].pose2.rotation().matrix();
+    else
+      return vars_[static_cast<size_t>(v)].pose3.rotation().matrix();
   }
   VecD translation(int v) const {
-    if constexpr (D == 2) return vars_[static_cast<size_t>(v)].pose2.translation();
-    else return vars_[static_cast<size_t>(v)].pose3.translation();
+    if constexpr (D == 2)
+      return vars_[static_cast<size_t>(v)].pose2.translation();
+    else
+      return vars_[static_cast<size_t>(v)].pose3.translation();
   }
 
   // Unknown poses numbered 0..n-1 in index_; the gauge (fixed poses, else the first pose) stays.
@@ -117,9 +125,11 @@ class ChordalRelaxation {
       double kappa, tau;
       weights(e.f, kappa, tau);
       MatD Z;
-      if constexpr (D == 2) Z = e.f->measurement2().rotation().matrix();
-      else Z = e.f->measurement3().rotation().matrix();
-      Eigen::Matrix<double, D * D, D * D> K = Eigen::Matrix<double, D * D, D * D>::Zero();
+      if constexpr (D == 2)
+        Z = e.f->measurement2().rotation().matrix();
+      else
+        Z = e.f->measurement3().rotation().matrix();
+      Eigen::Matrix<double, D * D, D* D> K = Eigen::Matrix<double, D * D, D * D>::Zero();
       for (int a = 0; a < D; ++a)
         for (int b = 0; b < D; ++b) K.template block<D, D>(a * D, b * D) = Z(b, a) * MatD::Identity();
       const int ii = index_[static_cast<size_t>(e.i)], jj = index_[static_cast<size_t>(e.j)];
@@ -151,7 +161,8 @@ class ChordalRelaxation {
     R_.resize(vars_.size());
     for (size_t v = 0; v < vars_.size(); ++v) {
       if (!vars_[v].is_pose()) continue;
-      R_[v] = index_[v] >= 0 ? project_to_so<D>(Eigen::Map<const MatD>(r.data() + index_[v] * nr)) : rotation(static_cast<int>(v));
+      R_[v] = index_[v] >= 0 ? project_to_so<D>(Eigen::Map<const MatD>(r.data() + index_[v] * nr))
+                             : rotation(static_cast<int>(v));
     }
     return true;
   }
@@ -166,14 +177,17 @@ class ChordalRelaxation {
       double kappa, tau;
       weights(e.f, kappa, tau);
       VecD tij;
-      if constexpr (D == 2) tij = e.f->measurement2().translation();
-      else tij = e.f->measurement3().translation();
+      if constexpr (D == 2)
+        tij = e.f->measurement2().translation();
+      else
+        tij = e.f->measurement3().translation();
       const VecD c = R_[static_cast<size_t>(e.i)] * tij;
       const int ii = index_[static_cast<size_t>(e.i)], jj = index_[static_cast<size_t>(e.j)];
       for (int a = 0; a < D; ++a) {
         if (ii >= 0) trip.emplace_back(ii * D + a, ii * D + a, tau), rt[ii * D + a] -= tau * c[a];
         if (jj >= 0) trip.emplace_back(jj * D + a, jj * D + a, tau), rt[jj * D + a] += tau * c[a];
-        if (ii >= 0 && jj >= 0) trip.emplace_back(ii * D + a, jj * D + a, -tau), trip.emplace_back(jj * D + a, ii * D + a, -tau);
+        if (ii >= 0 && jj >= 0)
+          trip.emplace_back(ii * D + a, jj * D + a, -tau), trip.emplace_back(jj * D + a, ii * D + a, -tau);
         if (ii < 0 && jj >= 0) rt[jj * D + a] += tau * translation(e.i)[a];
         if (jj < 0 && ii >= 0) rt[ii * D + a] += tau * translation(e.j)[a];
       }
@@ -186,8 +200,10 @@ class ChordalRelaxation {
     for (size_t v = 0; v < vars_.size(); ++v) {
       if (index_[v] < 0) continue;
       const VecD tv = t.segment<D>(index_[v] * D);
-      if constexpr (D == 2) vars_[v].pose2 = SE2(SO2(std::atan2(R_[v](1, 0), R_[v](0, 0))), tv);
-      else vars_[v].pose3 = SE3(SO3(Eigen::Matrix3d(R_[v])), tv);
+      if constexpr (D == 2)
+        vars_[v].pose2 = SE2(SO2(std::atan2(R_[v](1, 0), R_[v](0, 0))), tv);
+      else
+        vars_[v].pose3 = SE3(SO3(Eigen::Matrix3d(R_[v])), tv);
     }
     return true;
   }
@@ -244,12 +260,14 @@ std::string initialize_sgd(FactorGraph& g, int sweeps, uint64_t seed) {
   auto& vars = g.variables();
   std::vector<int> poses;
   for (size_t v = 0; v < vars.size(); ++v) {
-    if (vars[v].kind == VariableKind::kPose3) return "SGD initialization supports planar graphs; use --init chordal for 3-D";
+    if (vars[v].kind == VariableKind::kPose3)
+      return "SGD initialization supports planar graphs; use --init chordal for 3-D";
     if (vars[v].kind == VariableKind::kPose2) poses.push_back(static_cast<int>(v));
   }
   if (poses.size() < 2) return "";
   // Chain order by id; each pose's index in Olson's parameterization.
-  std::sort(poses.begin(), poses.end(), [&](int a, int b) { return vars[static_cast<size_t>(a)].id < vars[static_cast<size_t>(b)].id; });
+  std::sort(poses.begin(), poses.end(),
+            [&](int a, int b) { return vars[static_cast<size_t>(a)].id < vars[static_cast<size_t>(b)].id; });
   std::vector<int> rank(vars.size(), -1);
   for (size_t k = 0; k < poses.size(); ++k) rank[static_cast<size_t>(poses[k])] = static_cast<int>(k);
   const auto edges = pose_edges(g);
@@ -280,14 +298,16 @@ std::string initialize_sgd(FactorGraph& g, int sweeps, uint64_t seed) {
     std::shuffle(order.begin(), order.end(), rng);
     for (size_t idx : order) {
       const auto& e = edges[idx];
-      size_t a = static_cast<size_t>(rank[static_cast<size_t>(e.i)]), b = static_cast<size_t>(rank[static_cast<size_t>(e.j)]);
+      size_t a = static_cast<size_t>(rank[static_cast<size_t>(e.i)]),
+             b = static_cast<size_t>(rank[static_cast<size_t>(e.j)]);
       SE2 z = e.f->measurement2();
       if (a > b) std::swap(a, b), z = z.inverse();
       if (a == b) continue;
       const Eigen::Vector3d pa = pose_at(a), pb = pose_at(b);
       const SE2 xa(pa.x(), pa.y(), pa.z());
       const SE2 pred = xa * z;
-      Eigen::Vector3d r(pred.translation().x() - pb.x(), pred.translation().y() - pb.y(), wrap_angle(pred.angle() - pb.z()));
+      Eigen::Vector3d r(pred.translation().x() - pb.x(), pred.translation().y() - pb.y(),
+                        wrap_angle(pred.angle() - pb.z()));
       // Information in the global frame (translation block rotated by theta_a).
       Eigen::Matrix3d R = Eigen::Matrix3d::Identity();
       R.topLeftCorner<2, 2>() = xa.rotation().matrix();
@@ -346,8 +366,10 @@ int initialize_by_odometry(FactorGraph& g) {
     if (known[static_cast<size_t>(w)]) continue;
     auto& x = vars[static_cast<size_t>(w)];
     const auto& xu = vars[static_cast<size_t>(u)];
-    if (e.f->planar()) x.pose2 = e.i == u ? xu.pose2 * e.f->measurement2() : xu.pose2 * e.f->measurement2().inverse();
-    else x.pose3 = e.i == u ? xu.pose3 * e.f->measurement3() : xu.pose3 * e.f->measurement3().inverse();
+    if (e.f->planar())
+      x.pose2 = e.i == u ? xu.pose2 * e.f->measurement2() : xu.pose2 * e.f->measurement2().inverse();
+    else
+      x.pose3 = e.i == u ? xu.pose3 * e.f->measurement3() : xu.pose3 * e.f->measurement3().inverse();
     known[static_cast<size_t>(w)] = true;
     expand(w);
   }
@@ -359,7 +381,8 @@ int initialize_by_odometry(FactorGraph& g) {
 
 std::string initialize_chordal(FactorGraph& g) {
   bool planar = false, spatial = false;
-  for (const auto& v : g.variables()) planar |= v.kind == VariableKind::kPose2, spatial |= v.kind == VariableKind::kPose3;
+  for (const auto& v : g.variables())
+    planar |= v.kind == VariableKind::kPose2, spatial |= v.kind == VariableKind::kPose3;
   if (planar && spatial) return "chordal relaxation: the graph mixes 2-D and 3-D poses";
   const auto backup = g.variables();
   const std::string why = spatial ? chordal<3>(g) : chordal<2>(g);

@@ -40,18 +40,24 @@ std::string validate_factor(const std::vector<Variable>& vars, const Factor& f, 
     if (v < 0 || static_cast<size_t>(v) >= vars.size())
       return "factor " + std::to_string(index) + " (" + f.type() + ") refers to a variable that does not exist";
   const auto& I = f.information();
-  const std::string name = "factor " + std::to_string(index) + " (" + f.type() + " on variable " +
-                           std::to_string(vars[static_cast<size_t>(f.variables()[0])].id) +
-                           (f.variables().size() > 1 ? " and " + std::to_string(vars[static_cast<size_t>(f.variables()[1])].id) : "") + ")";
+  const std::string name =
+      "factor " + std::to_string(index) + " (" + f.type() + " on variable " +
+      std::to_string(vars[static_cast<size_t>(f.variables()[0])].id) +
+      (f.variables().size() > 1 ? " and " + std::to_string(vars[static_cast<size_t>(f.variables()[1])].id) : "") + ")";
   const DefinitenessCheck check = check_positive_definite(I);
   switch (check.problem) {
-    case DefinitenessCheck::Problem::kNone: return "";
-    case DefinitenessCheck::Problem::kNotFinite: return name + ": information matrix has a NaN or infinite entry";
-    case DefinitenessCheck::Problem::kNotSymmetric: return name + ": information matrix is not symmetric";
-    case DefinitenessCheck::Problem::kNotPositiveDefinite: break;
+    case DefinitenessCheck::Problem::kNone:
+      return "";
+    case DefinitenessCheck::Problem::kNotFinite:
+      return name + ": information matrix has a NaN or infinite entry";
+    case DefinitenessCheck::Problem::kNotSymmetric:
+      return name + ": information matrix is not symmetric";
+    case DefinitenessCheck::Problem::kNotPositiveDefinite:
+      break;
   }
   std::ostringstream s;
-  s << name << ": information matrix is not positive definite (smallest eigenvalue " << check.smallest_eigenvalue << ")";
+  s << name << ": information matrix is not positive definite (smallest eigenvalue " << check.smallest_eigenvalue
+    << ")";
   return s.str();
 }
 
@@ -207,8 +213,10 @@ class OptimizerRun {
       sum_.message = "the Gauss-Newton step produced a non-finite cost; stopped at the previous estimate";
       return Step::kStop;
     }
-    if (next.robust < best_cost_.robust) best_cost_ = next, best_ = {};
-    else if (best_.empty()) best_ = backup_, best_cost_ = cost_;
+    if (next.robust < best_cost_.robust)
+      best_cost_ = next, best_ = {};
+    else if (best_.empty())
+      best_ = backup_, best_cost_ = cost_;
     cost_ = next;
     relinearize_ = true;
     return decrease >= 0 && small_decrease(decrease, next) ? converged() : Step::kContinue;

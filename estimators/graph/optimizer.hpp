@@ -32,7 +32,7 @@ enum class Termination { kConverged, kMaxIterations, kNoProgress, kFailure };
 struct OptimizerSummary {
   Termination termination = Termination::kFailure;
   std::string message = "not run";
-  int iterations = 0;               // accepted steps plus rejected LM trials
+  int iterations = 0;  // accepted steps plus rejected LM trials
   double initial_chi2 = 0, final_chi2 = 0;
   double initial_cost = 0, final_cost = 0;  // robust cost (equal to chi2 without a kernel)
   double linearize_seconds = 0, factorize_seconds = 0, solve_seconds = 0, total_seconds = 0;

@@ -23,9 +23,12 @@ std::vector<std::string> robust_kernel_names();
 /// IRLS weight of a factor whose squared error is `s`.
 inline double robust_weight(RobustKernel k, double width, double s) {
   switch (k) {
-    case RobustKernel::kNone: return 1.0;
-    case RobustKernel::kHuber: return s <= width * width ? 1.0 : width / std::sqrt(s);
-    case RobustKernel::kCauchy: return 1.0 / (1.0 + s / (width * width));
+    case RobustKernel::kNone:
+      return 1.0;
+    case RobustKernel::kHuber:
+      return s <= width * width ? 1.0 : width / std::sqrt(s);
+    case RobustKernel::kCauchy:
+      return 1.0 / (1.0 + s / (width * width));
     case RobustKernel::kDcs: {
       const double scale = std::min(1.0, 2 * width / (width + s));
       return scale * scale;
@@ -37,10 +40,14 @@ inline double robust_weight(RobustKernel k, double width, double s) {
 /// The robust cost rho(s) (for DCS: k^2 s, the scaled squared error).
 inline double robust_cost(RobustKernel k, double width, double s) {
   switch (k) {
-    case RobustKernel::kNone: return s;
-    case RobustKernel::kHuber: return s <= width * width ? s : 2 * width * std::sqrt(s) - width * width;
-    case RobustKernel::kCauchy: return width * width * std::log1p(s / (width * width));
-    case RobustKernel::kDcs: return robust_weight(k, width, s) * s;
+    case RobustKernel::kNone:
+      return s;
+    case RobustKernel::kHuber:
+      return s <= width * width ? s : 2 * width * std::sqrt(s) - width * width;
+    case RobustKernel::kCauchy:
+      return width * width * std::log1p(s / (width * width));
+    case RobustKernel::kDcs:
+      return robust_weight(k, width, s) * s;
   }
   return s;
 }

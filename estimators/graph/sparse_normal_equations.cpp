@@ -60,8 +60,8 @@ SparseNormalEquations::BlockPattern SparseNormalEquations::block_pattern() const
 
 // Compressed columns of the upper triangle (colptr, rowind), each block pair's column starts and the diagonal's
 // positions.
-void SparseNormalEquations::lay_out_columns(const BlockPattern& rows, std::vector<int>& colptr, std::vector<int>& rowind,
-                                            std::map<std::pair<int, int>, int>& pair_index) {
+void SparseNormalEquations::lay_out_columns(const BlockPattern& rows, std::vector<int>& colptr,
+                                            std::vector<int>& rowind, std::map<std::pair<int, int>, int>& pair_index) {
   const int nb = static_cast<int>(block_var_.size());
   for (int b = 0; b < nb; ++b) {
     const int db = dim_[static_cast<size_t>(block_var_[static_cast<size_t>(b)])];
@@ -99,16 +99,25 @@ void SparseNormalEquations::map_factor_pairs(const std::map<std::pair<int, int>,
 }
 
 // CHOLMOD with the ordering asked for, H's pattern allocated (values zero), b zero.
-void SparseNormalEquations::start_cholmod(Ordering ordering, const std::vector<int>& colptr, const std::vector<int>& rowind) {
+void SparseNormalEquations::start_cholmod(Ordering ordering, const std::vector<int>& colptr,
+                                          const std::vector<int>& rowind) {
   cholmod_start(&common_);
   common_.supernodal = CHOLMOD_SUPERNODAL;
   common_.print = 0;
   switch (ordering) {
-    case Ordering::kBlockAmd: break;
-    case Ordering::kAmd: common_.nmethods = 1, common_.method[0].ordering = CHOLMOD_AMD; break;
-    case Ordering::kColamd: common_.nmethods = 1, common_.method[0].ordering = CHOLMOD_COLAMD; break;
-    case Ordering::kMetis: common_.nmethods = 1, common_.method[0].ordering = CHOLMOD_METIS; break;
-    case Ordering::kAuto: break;
+    case Ordering::kBlockAmd:
+      break;
+    case Ordering::kAmd:
+      common_.nmethods = 1, common_.method[0].ordering = CHOLMOD_AMD;
+      break;
+    case Ordering::kColamd:
+      common_.nmethods = 1, common_.method[0].ordering = CHOLMOD_COLAMD;
+      break;
+    case Ordering::kMetis:
+      common_.nmethods = 1, common_.method[0].ordering = CHOLMOD_METIS;
+      break;
+    case Ordering::kAuto:
+      break;
   }
   H_ = cholmod_allocate_sparse(static_cast<size_t>(n_), static_cast<size_t>(n_), rowind.size(), 1, 1, 1, CHOLMOD_REAL,
                                &common_);
@@ -126,7 +135,8 @@ void SparseNormalEquations::analyze(Ordering ordering, const BlockPattern& rows)
   if (ordering == Ordering::kBlockAmd) {
     const int nb = static_cast<int>(block_var_.size());
     std::vector<std::vector<int>> upper(static_cast<size_t>(nb));
-    for (int b = 0; b < nb; ++b) upper[static_cast<size_t>(b)].assign(rows[static_cast<size_t>(b)].begin(), rows[static_cast<size_t>(b)].end());
+    for (int b = 0; b < nb; ++b)
+      upper[static_cast<size_t>(b)].assign(rows[static_cast<size_t>(b)].begin(), rows[static_cast<size_t>(b)].end());
     const std::vector<int> block_perm = block_amd_order(upper, common_);
     std::vector<int> perm;
     perm.reserve(static_cast<size_t>(n_));
@@ -218,14 +228,16 @@ bool SparseNormalEquations::solve(double lambda, Eigen::VectorXd& dx, std::strin
       *why = common_.status == CHOLMOD_NOT_POSDEF || L_->minor < L_->n
                  ? "the normal equations are not positive definite: variable " +
                        (var >= 0 ? std::to_string(graph_.variables()[static_cast<size_t>(var)].id) : std::string("?")) +
-                       " (tangent component " + std::to_string(var >= 0 ? col - offset_[static_cast<size_t>(var)] : -1) +
+                       " (tangent component " +
+                       std::to_string(var >= 0 ? col - offset_[static_cast<size_t>(var)] : -1) +
                        ") is not determined by the factors (under-constrained, or disconnected from the gauge)"
                  : "CHOLMOD factorization failed (status " + std::to_string(common_.status) + ")";
     }
     return false;
   }
   const auto t1 = Clock::now();
-  cholmod_dense* rhs = cholmod_allocate_dense(static_cast<size_t>(n_), 1, static_cast<size_t>(n_), CHOLMOD_REAL, &common_);
+  cholmod_dense* rhs =
+      cholmod_allocate_dense(static_cast<size_t>(n_), 1, static_cast<size_t>(n_), CHOLMOD_REAL, &common_);
   double* r = static_cast<double*>(rhs->x);
   for (int i = 0; i < n_; ++i) r[i] = -b_[i];
   cholmod_dense* sol = cholmod_solve(CHOLMOD_A, L_, rhs, &common_);

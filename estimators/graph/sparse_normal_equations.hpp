@@ -55,9 +55,9 @@ class SparseNormalEquations {
 
   const FactorGraph& graph_;
   int n_ = 0;
-  std::vector<int> offset_, dim_;      // per variable
-  std::vector<int> block_var_;         // per block: the variable index
-  std::vector<int> var_block_;         // per variable: its block, or -1
+  std::vector<int> offset_, dim_;  // per variable
+  std::vector<int> block_var_;     // per block: the variable index
+  std::vector<int> var_block_;     // per variable: its block, or -1
   // For each block pair (a <= b): the position in H's values of element (row 0 of a, column k of b), per k.
   std::vector<std::vector<int>> pair_col_start_;
   std::vector<std::vector<int>> factor_pairs_;  // per factor: pair index for each (u, v) of its variables, u <= v

@@ -18,12 +18,18 @@ double wrap_angle(double a) { return std::remainder(a, 2 * M_PI); }
 
 const char* imu_result_name(ImuResult r) {
   switch (r) {
-    case ImuResult::propagated: return "propagated";
-    case ImuResult::started: return "started";
-    case ImuResult::gap: return "gap";
-    case ImuResult::out_of_order: return "out_of_order";
-    case ImuResult::non_finite: return "non_finite";
-    case ImuResult::not_initialized: return "not_initialized";
+    case ImuResult::propagated:
+      return "propagated";
+    case ImuResult::started:
+      return "started";
+    case ImuResult::gap:
+      return "gap";
+    case ImuResult::out_of_order:
+      return "out_of_order";
+    case ImuResult::non_finite:
+      return "non_finite";
+    case ImuResult::not_initialized:
+      return "not_initialized";
   }
   return "unknown";
 }

@@ -50,7 +50,8 @@ void ImuPreintegration::propagate_jacobians(const Eigen::Matrix3d& dR_step, cons
 }
 
 void ImuPreintegration::integrate(const Eigen::Vector3d& gyro, const Eigen::Vector3d& accel, double dt) {
-  if (!(dt > 0) || !std::isfinite(dt)) throw std::invalid_argument("imu preintegration: dt must be positive and finite");
+  if (!(dt > 0) || !std::isfinite(dt))
+    throw std::invalid_argument("imu preintegration: dt must be positive and finite");
   if (!gyro.allFinite() || !accel.allFinite())
     throw std::invalid_argument("imu preintegration: non-finite gyroscope or accelerometer sample");
   const Eigen::Vector3d w = gyro - bias_.gyro;

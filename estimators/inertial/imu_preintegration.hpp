@@ -27,8 +27,8 @@ namespace sextant::inertial {
 
 /// The continuous-time white-noise densities of an IMU (a data sheet's or Kalibr's "noise density").
 struct ImuNoise {
-  double gyro_noise_density = 1.7e-4;   // rad/s/sqrt(Hz) (EuRoC's ADIS16448)
-  double accel_noise_density = 2.0e-3;  // m/s^2/sqrt(Hz)
+  double gyro_noise_density = 1.7e-4;      // rad/s/sqrt(Hz) (EuRoC's ADIS16448)
+  double accel_noise_density = 2.0e-3;     // m/s^2/sqrt(Hz)
   double gyro_bias_random_walk = 1.9e-5;   // rad/s^2/sqrt(Hz)
   double accel_bias_random_walk = 3.0e-3;  // m/s^3/sqrt(Hz)
 };
@@ -99,8 +99,8 @@ class ImuPreintegration {
   /// One sample's propagation of the preintegrated error (eq. 62): d' = A d + B eta_g + C eta_a, with
   /// d = [d_phi, d_v, d_p] at the start of the sample, for the bias-corrected sample (w, a) held for dt, at the
   /// preintegrated rotation dR before the sample.  Public for the tests and for graph factors.
-  static void error_propagation(const Eigen::Matrix3d& dR, const Eigen::Vector3d& w, const Eigen::Vector3d& a, double dt,
-                                Matrix9* A, Matrix93* B, Matrix93* C);
+  static void error_propagation(const Eigen::Matrix3d& dR, const Eigen::Vector3d& w, const Eigen::Vector3d& a,
+                                double dt, Matrix9* A, Matrix93* B, Matrix93* C);
 
  private:
   /// The A of error_propagation from the sample's rotation increment dR_step = Exp(w dt).

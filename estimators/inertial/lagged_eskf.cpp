@@ -80,8 +80,8 @@ filter::UpdateResult LaggedEskf::add_measurement(double t, const Update& update)
 
 filter::UpdateResult LaggedEskf::add_late(Entry e) {
   // The first input stamped after e (inputs at the same time keep their arrival order).
-  const auto pos = std::upper_bound(history_.begin(), history_.end(), e.t,
-                                    [](double t, const Entry& x) { return t < x.t; });
+  const auto pos =
+      std::upper_bound(history_.begin(), history_.end(), e.t, [](double t, const Entry& x) { return t < x.t; });
   if (pos == history_.begin()) return too_old();
   ErrorStateEkf f = std::prev(pos)->after;
   const filter::UpdateResult r = apply(e, f);

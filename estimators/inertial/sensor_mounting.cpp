@@ -24,7 +24,8 @@ void SensorMounting::check(const char* what) const {
   const double orthogonality = (rotation.transpose() * rotation - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff();
   if (orthogonality > 1e-6 || std::abs(rotation.determinant() - 1) > 1e-6)
     throw std::invalid_argument(std::string(what) + ": rotation is not a rotation matrix (R^T R - I off by " +
-                                std::to_string(orthogonality) + ", det " + std::to_string(rotation.determinant()) + ")");
+                                std::to_string(orthogonality) + ", det " + std::to_string(rotation.determinant()) +
+                                ")");
 }
 
 BodyImuSample imu_to_body(const SensorMounting& m, const Eigen::Vector3d& gyro_sensor,

@@ -10,18 +10,20 @@
 namespace sextant {
 namespace {
 
-bool finite(const SE3& x) {
-  return x.translation().allFinite() && x.rotation().quaternion().coeffs().allFinite();
-}
+bool finite(const SE3& x) { return x.translation().allFinite() && x.rotation().quaternion().coeffs().allFinite(); }
 
 }  // namespace
 
 const char* to_string(KeyframeDecision d) {
   switch (d) {
-    case KeyframeDecision::kTooClose: return "too_close";
-    case KeyframeDecision::kKeyframe: return "keyframe";
-    case KeyframeDecision::kImplausible: return "implausible";
-    case KeyframeDecision::kReanchored: return "reanchored";
+    case KeyframeDecision::kTooClose:
+      return "too_close";
+    case KeyframeDecision::kKeyframe:
+      return "keyframe";
+    case KeyframeDecision::kImplausible:
+      return "implausible";
+    case KeyframeDecision::kReanchored:
+      return "reanchored";
   }
   return "unknown";
 }

@@ -10,7 +10,8 @@ namespace sextant {
 std::vector<char> keyframes_to_keep(const std::vector<ThinningCandidate>& keyframes, bool planar,
                                     const KeyframeThinningOptions& o) {
   if (o.window < 1) throw std::invalid_argument("keyframe thinning: window must be at least 1");
-  if (!(o.cell_size > 0) || !std::isfinite(o.cell_size)) throw std::invalid_argument("keyframe thinning: cell_size must be > 0");
+  if (!(o.cell_size > 0) || !std::isfinite(o.cell_size))
+    throw std::invalid_argument("keyframe thinning: cell_size must be > 0");
   if (!(o.heading_sector > 0) || !std::isfinite(o.heading_sector))
     throw std::invalid_argument("keyframe thinning: heading_sector must be > 0");
   const size_t n = keyframes.size();

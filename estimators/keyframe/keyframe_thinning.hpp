@@ -16,8 +16,8 @@
 namespace sextant {
 
 struct KeyframeThinningOptions {
-  int window = 1000;             // newest keyframes always kept (>= 1)
-  double cell_size = 1.0;        // m (> 0)
+  int window = 1000;                           // newest keyframes always kept (>= 1)
+  double cell_size = 1.0;                      // m (> 0)
   double heading_sector = 0.7853981633974483;  // rad (> 0): pi / 4
 };
 

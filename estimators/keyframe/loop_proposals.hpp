@@ -21,8 +21,8 @@
 namespace sextant {
 
 struct LoopProposalOptions {
-  int n1 = 3;         // local loops per keyframe, >= 0
-  int n2 = -1;        // random loops per keyframe, >= 0; -1: 2 n1
+  int n1 = 3;   // local loops per keyframe, >= 0
+  int n2 = -1;  // random loops per keyframe, >= 0; -1: 2 n1
   uint64_t seed = 1;
 };
 

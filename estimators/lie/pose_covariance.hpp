@@ -46,9 +46,11 @@ inline Matrix6d pose_covariance_growth(const Matrix6d& pose_covariance, const SE
 /// The covariance of the motion Delta = T_prev^-1 T of an odometry message as the sender states it: its increment
 /// covariance when it gives one (`stated_increment`), else the growth of its pose covariance since the previous
 /// message.  Unregularized: each user regularizes it as above.
-inline Matrix6d stated_increment_covariance(const Matrix6d& pose_covariance, const std::optional<Matrix6d>& stated_increment,
-                                            const SE3& delta, const Matrix6d& previous_pose_covariance) {
-  return stated_increment ? *stated_increment : pose_covariance_growth(pose_covariance, delta, previous_pose_covariance);
+inline Matrix6d stated_increment_covariance(const Matrix6d& pose_covariance,
+                                            const std::optional<Matrix6d>& stated_increment, const SE3& delta,
+                                            const Matrix6d& previous_pose_covariance) {
+  return stated_increment ? *stated_increment
+                          : pose_covariance_growth(pose_covariance, delta, previous_pose_covariance);
 }
 
 /// The increment covariance every estimator composes or predicts with (see above): the stated one, or the

@@ -90,9 +90,7 @@ Eigen::Matrix3d SE2::right_jacobian(const Eigen::Vector3d& tau) {
   return J;
 }
 
-SE3 SE2::to_se3() const {
-  return SE3(SO3::exp(Eigen::Vector3d(0, 0, R_.angle())), Eigen::Vector3d(t_.x(), t_.y(), 0));
-}
+SE3 SE2::to_se3() const { return SE3(SO3::exp(Eigen::Vector3d(0, 0, R_.angle())), Eigen::Vector3d(t_.x(), t_.y(), 0)); }
 
 SE2 SE2::from_se3(const SE3& x) {
   const Eigen::Matrix3d R = x.rotation().matrix();

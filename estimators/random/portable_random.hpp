@@ -16,7 +16,7 @@ namespace sextant::random {
 inline uint64_t uniform_index(std::mt19937_64& rng, uint64_t n) {
   if (n == 0) throw std::invalid_argument("uniform_index: empty range (n = 0)");
   const uint64_t rejected = (0 - n) % n;  // 2^64 mod n, computed in 64-bit arithmetic
-  const uint64_t limit = 0 - rejected;   // 2^64 - rejected (0 when rejected = 0: nothing is rejected)
+  const uint64_t limit = 0 - rejected;    // 2^64 - rejected (0 when rejected = 0: nothing is rejected)
   for (;;) {
     const uint64_t x = rng();
     if (rejected == 0 || x < limit) return x % n;

@@ -28,7 +28,8 @@ int64_t KeyframeTrack::add_keyframe(TrackKeyframe keyframe) {
   return keyframes_.back().id;
 }
 
-void KeyframeTrack::replace_keyframes(std::vector<TrackKeyframe> keyframes, const std::vector<ThinnedKeyframe>& thinned) {
+void KeyframeTrack::replace_keyframes(std::vector<TrackKeyframe> keyframes,
+                                      const std::vector<ThinnedKeyframe>& thinned) {
   keyframes_ = std::move(keyframes);
   by_utime_.clear();
   for (size_t i = 0; i < keyframes_.size(); ++i) by_utime_[keyframes_[i].utime] = i;
@@ -79,7 +80,8 @@ std::optional<TrackPoint> KeyframeTrack::resolve(int64_t keyframe_id, int64_t ut
   }
   // A time whose keyframes were thinned: the keyframe of the graph before it on the odometry chain, the odometry from
   // there, and the covariance of the whole (composed) edge from that keyframe to the next one of the graph.
-  if (!at_time || by_utime_.empty() || utime < by_utime_.begin()->first || utime > keyframes_.back().utime) return std::nullopt;
+  if (!at_time || by_utime_.empty() || utime < by_utime_.begin()->first || utime > keyframes_.back().utime)
+    return std::nullopt;
   const size_t k = std::prev(by_utime_.upper_bound(utime))->second;
   if (k + 1 >= keyframes_.size()) return std::nullopt;
   return TrackPoint{k, keyframes_[k].odom.between(*at_time), keyframes_[k + 1].edge_covariance};
@@ -130,7 +132,8 @@ std::pair<SE3, Matrix6d> KeyframeTrack::odometry_path(size_t from, size_t to) co
 void KeyframeTrack::save(archive::ArchiveWriter& w) const {
   w(last_utime_)(last_odom_)(last_odom_covariance_)(since_keyframe_);
   w(static_cast<uint64_t>(keyframes_.size()));
-  for (const TrackKeyframe& k : keyframes_) w(k.id)(k.utime)(k.variable)(k.odom)(k.odom_covariance)(k.edge_covariance)(k.edge);
+  for (const TrackKeyframe& k : keyframes_)
+    w(k.id)(k.utime)(k.variable)(k.odom)(k.odom_covariance)(k.edge_covariance)(k.edge);
   w(static_cast<uint64_t>(thinned_.size()));
   for (const ThinnedKeyframe& k : thinned_) w(k.id)(k.utime)(k.odom);
   w(next_keyframe_id_)(odometry_);

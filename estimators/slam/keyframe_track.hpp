@@ -29,10 +29,10 @@ namespace sextant::slam {
 
 /// A keyframe of the graph.
 struct TrackKeyframe {
-  int64_t id = 0;        // the body's keyframe id: 0, 1, 2, ... in order of creation
+  int64_t id = 0;  // the body's keyframe id: 0, 1, 2, ... in order of creation
   int64_t utime = 0;
-  int variable = -1;     // its pose variable in the smoother
-  SE3 odom;              // the odometry pose at its time
+  int variable = -1;                            // its pose variable in the smoother
+  SE3 odom;                                     // the odometry pose at its time
   Matrix6d odom_covariance = Matrix6d::Zero();  // that pose's covariance as the odometry stated it
   Matrix6d edge_covariance = Matrix6d::Zero();  // of the odometry from the previous keyframe of the graph
   SE3 edge;                                     // that odometry (composed across thinned keyframes)
@@ -110,10 +110,10 @@ class KeyframeTrack {
   SE3 last_odom_;
   Matrix6d last_odom_covariance_ = Matrix6d::Zero();
   Matrix6d since_keyframe_ = Matrix6d::Zero();
-  std::vector<TrackKeyframe> keyframes_;       // in the graph, by id (and time)
-  std::map<int64_t, size_t> by_utime_;         // -> position in keyframes_
-  std::vector<ThinnedKeyframe> thinned_;       // taken out by lifelong thinning, by id (and time); the newest
-                                               // kMaxThinnedRecords
+  std::vector<TrackKeyframe> keyframes_;  // in the graph, by id (and time)
+  std::map<int64_t, size_t> by_utime_;    // -> position in keyframes_
+  std::vector<ThinnedKeyframe> thinned_;  // taken out by lifelong thinning, by id (and time); the newest
+                                          // kMaxThinnedRecords
   int64_t next_keyframe_id_ = 0;
   std::vector<std::pair<int64_t, SE3>> odometry_;  // recent odometry poses (bounded)
 };

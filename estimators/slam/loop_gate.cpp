@@ -15,7 +15,8 @@ KeyframeLoop loop_on_keyframes(bool planar, const SE3& relative, const Matrix6d&
   out.information = information;
   if (!from.covariance.isZero() || !to.covariance.isZero()) {
     out.widened = true;
-    const Eigen::MatrixXd cov = (planar ? Eigen::MatrixXd(planar_block(information)) : Eigen::MatrixXd(information)).inverse();
+    const Eigen::MatrixXd cov =
+        (planar ? Eigen::MatrixXd(planar_block(information)) : Eigen::MatrixXd(information)).inverse();
     const Matrix6d extra = from.covariance + to.covariance;
     const Eigen::MatrixXd widened = cov + (planar ? Eigen::MatrixXd(planar_block(extra)) : Eigen::MatrixXd(extra));
     const Eigen::MatrixXd info = widened.inverse();

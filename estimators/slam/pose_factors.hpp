@@ -17,7 +17,8 @@ Matrix6d residual_information(const Matrix6d& tangent_information);
 
 /// The factor of an odometry edge `edge` from keyframe variable `from` to `to` with covariance `covariance`; nullptr
 /// when that covariance is not positive definite on the body's axes (spd_matrix.hpp's check: bad input, refused).
-std::unique_ptr<graph::Factor> odometry_factor(bool planar, int from, int to, const SE3& edge, const Matrix6d& covariance);
+std::unique_ptr<graph::Factor> odometry_factor(bool planar, int from, int to, const SE3& edge,
+                                               const Matrix6d& covariance);
 
 /// The factor of a loop z between keyframe variables with information `information` over the tangent.
 std::unique_ptr<graph::Factor> loop_factor(bool planar, int from, int to, const SE3& z, const Matrix6d& information);

@@ -20,8 +20,10 @@ SightingModel::SightingModel(bool planar, const SE3& keyframe_pose, const TrackP
   // Jacobian is dh/dD (a right perturbation of X_K D is one of D).
   local_[0].kind = planar ? graph::VariableKind::kPose2 : graph::VariableKind::kPose3;
   local_[1].kind = planar ? graph::VariableKind::kPoint2 : graph::VariableKind::kPoint3;
-  if (planar) local_[0].pose2 = SE2::from_se3(at_sighting_);
-  else local_[0].pose3 = at_sighting_;
+  if (planar)
+    local_[0].pose2 = SE2::from_se3(at_sighting_);
+  else
+    local_[0].pose3 = at_sighting_;
   sigma_d_ = planar ? Eigen::MatrixXd(planar_block(anchor.covariance)) : Eigen::MatrixXd(anchor.covariance);
   const Matrix6d ad6 = anchor.motion.inverse().adjoint();  // X_K Exp(xi) D = X_K D Exp(Ad(D^-1) xi)
   ad_ = planar ? Eigen::MatrixXd(planar_block(ad6)) : Eigen::MatrixXd(ad6);
@@ -65,12 +67,13 @@ SightingModel::Evaluation SightingModel::evaluate(const Eigen::VectorXd& z, cons
 }
 
 double SightingModel::mahalanobis(const Evaluation& ev, const Eigen::MatrixXd& R, double odometry_scale,
-                                  const Eigen::MatrixXd& landmark_marginal, const Eigen::MatrixXd& keyframe_marginal) const {
+                                  const Eigen::MatrixXd& landmark_marginal,
+                                  const Eigen::MatrixXd& keyframe_marginal) const {
   const double k2 = odometry_scale * odometry_scale;
-  Eigen::MatrixXd S = landmark_marginal.size() > 0
-                          ? Eigen::MatrixXd(R + k2 * ev.odometry_part +
-                                            ev.d_landmark * landmark_marginal * ev.d_landmark.transpose())
-                          : Eigen::MatrixXd(R + k2 * ev.odometry_part);
+  Eigen::MatrixXd S =
+      landmark_marginal.size() > 0
+          ? Eigen::MatrixXd(R + k2 * ev.odometry_part + ev.d_landmark * landmark_marginal * ev.d_landmark.transpose())
+          : Eigen::MatrixXd(R + k2 * ev.odometry_part);
   if (keyframe_marginal.size() > 0) {
     const Eigen::MatrixXd jk = ev.d_motion * ad_;
     S += jk * keyframe_marginal * jk.transpose();

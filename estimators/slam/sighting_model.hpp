@@ -40,9 +40,9 @@ class SightingModel {
   /// The sighting's residual e = h - z at a landmark position, its Jacobians, and the odometry's part of R'.
   struct Evaluation {
     Eigen::VectorXd error;
-    Eigen::MatrixXd d_motion;         // J_D = dh/dD (n x 3 planar, n x 6)
-    Eigen::MatrixXd d_landmark;       // J_p (n x 2 planar, n x 3)
-    Eigen::MatrixXd odometry_part;    // J_D Sigma_D J_D'
+    Eigen::MatrixXd d_motion;       // J_D = dh/dD (n x 3 planar, n x 6)
+    Eigen::MatrixXd d_landmark;     // J_p (n x 2 planar, n x 3)
+    Eigen::MatrixXd odometry_part;  // J_D Sigma_D J_D'
   };
   Evaluation evaluate(const Eigen::VectorXd& z, const Eigen::Vector3d& landmark) const;
   /// The gate's d2 (see above): `keyframe_marginal` / `landmark_marginal` empty when not determined (left out).

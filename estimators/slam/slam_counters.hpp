@@ -6,28 +6,28 @@
 namespace sextant::slam {
 
 struct SlamCounters {
-  int64_t updates = 0;                // smoother updates (every keyframe, accepted loop and message of sightings)
-  int64_t optimizer_failures = 0;     // updates (or refactorizations after forgetting a body) that failed
-  int64_t rebuilds = 0;               // updates that reordered and refactorized the system, and refactorizations on save
-  int64_t relinearized_factors = 0;   // summed over updates
-  int64_t keyframes = 0;              // keyframes added to the graph
-  int64_t keyframes_rejected = 0;     // implausible odometry poses (KeyframeSelector)
-  int64_t keyframes_reanchored = 0;   // keyframes after a real jump, linked across it by a weak edge
-  int64_t odometry_out_of_order = 0;  // odometry messages not newer than the body's previous one (dropped)
-  int64_t odometry_edges_rejected = 0;  // keyframes dropped: their odometry edge could not enter the graph
+  int64_t updates = 0;               // smoother updates (every keyframe, accepted loop and message of sightings)
+  int64_t optimizer_failures = 0;    // updates (or refactorizations after forgetting a body) that failed
+  int64_t rebuilds = 0;              // updates that reordered and refactorized the system, and refactorizations on save
+  int64_t relinearized_factors = 0;  // summed over updates
+  int64_t keyframes = 0;             // keyframes added to the graph
+  int64_t keyframes_rejected = 0;    // implausible odometry poses (KeyframeSelector)
+  int64_t keyframes_reanchored = 0;  // keyframes after a real jump, linked across it by a weak edge
+  int64_t odometry_out_of_order = 0;               // odometry messages not newer than the body's previous one (dropped)
+  int64_t odometry_edges_rejected = 0;             // keyframes dropped: their odometry edge could not enter the graph
   int64_t loops_accepted = 0, loops_rejected = 0;  // by the consistency gate (or refused by the smoother)
-  int64_t loops_unmatched = 0;        // an end not tied to a keyframe, or both ends on the same keyframe
-  int64_t loops_unknown_source = 0;   // about a body without odometry
-  int64_t loops_on_thinned = 0;       // accepted or not, an end landed through a thinned keyframe (widened)
+  int64_t loops_unmatched = 0;                     // an end not tied to a keyframe, or both ends on the same keyframe
+  int64_t loops_unknown_source = 0;                // about a body without odometry
+  int64_t loops_on_thinned = 0;  // accepted or not, an end landed through a thinned keyframe (widened)
   // Loops ahead of their body's odometry: waiting now (all bodies), and dropped at SlamOptions::max_waiting_loops.
   // Not saved: the waiting ones are counted again from the bodies on load, the dropped ones start from 0.
   int64_t loops_waiting = 0, loops_waiting_dropped = 0;
-  int64_t landmarks = 0;              // landmarks created
+  int64_t landmarks = 0;                                   // landmarks created
   int64_t sightings_accepted = 0, sightings_rejected = 0;  // by the sighting gate
-  int64_t sightings_without_id = 0;   // left to the filters' association
+  int64_t sightings_without_id = 0;                        // left to the filters' association
   int64_t sightings_unknown_source = 0, sightings_before_keyframe = 0, sightings_unmatched = 0;
-  int64_t sightings_malformed = 0;    // a bad value, a planar flag unlike the body's, or refused by the smoother
-  int64_t sightings_dropped = 0;      // waiting for the odometry beyond LandmarkOptions::max_waiting
+  int64_t sightings_malformed = 0;  // a bad value, a planar flag unlike the body's, or refused by the smoother
+  int64_t sightings_dropped = 0;    // waiting for the odometry beyond LandmarkOptions::max_waiting
   int64_t thinnings = 0, thinning_failures = 0;
   int64_t keyframes_thinned = 0, loops_thinned = 0, sightings_thinned = 0, landmarks_thinned = 0;
   // Wall clock (not saved): the last update, the last and the longest thinning, the last thinning's solve.

@@ -93,8 +93,9 @@ void SlamGraph::add_odometry(const std::string& name, const OdometryInput& o, Sl
   std::vector<std::pair<SightingsInput, TrackPoint>> due_sightings;
   if (!b.track.empty()) {
     const SE3 delta = b.track.last_odom().between(odom);
-    const Matrix6d q = regularized_increment_covariance(o.covariance, o.increment_covariance, o.planar, delta,
-                                                        b.track.last_odom_covariance(), options_.min_increment_variance);
+    const Matrix6d q =
+        regularized_increment_covariance(o.covariance, o.increment_covariance, o.planar, delta,
+                                         b.track.last_odom_covariance(), options_.min_increment_variance);
     const SE3 keyframe_to_last = b.track.newest().odom.between(b.track.last_odom());
     while (!b.early_sightings.empty() && b.early_sightings.front().utime <= o.utime) {
       const double a = static_cast<double>(b.early_sightings.front().utime - b.track.last_utime()) /
@@ -126,7 +127,8 @@ void SlamGraph::add_odometry(const std::string& name, const OdometryInput& o, Sl
   }
 }
 
-void SlamGraph::on_keyframe_candidate(const std::string& name, Body& b, const OdometryInput& o, SlamListener& listener) {
+void SlamGraph::on_keyframe_candidate(const std::string& name, Body& b, const OdometryInput& o,
+                                      SlamListener& listener) {
   const SE3& odom = o.pose;
   const KeyframeDecision d = b.selector.decide(odom);
   if (d == KeyframeDecision::kImplausible) ++counters_.keyframes_rejected;
@@ -159,8 +161,10 @@ void SlamGraph::on_keyframe_candidate(const std::string& name, Body& b, const Od
   } else {
     initial = estimate(b, b.track.newest().variable) * node.edge;
   }
-  if (b.planar) v.pose2 = SE2::from_se3(initial);
-  else v.pose3 = initial;
+  if (b.planar)
+    v.pose2 = SE2::from_se3(initial);
+  else
+    v.pose3 = initial;
   try {
     node.variable = b.smoother->add_variable(v);
     if (edge_factor)
@@ -288,7 +292,8 @@ std::vector<SlamLandmark> SlamGraph::landmarks(const std::string& name) const {
   auto it = bodies_.find(name);
   if (it == bodies_.end()) return out;
   for (const auto& [id, l] : it->second.landmarks)
-    out.push_back(SlamLandmark{id, it->second.smoother->graph().variables()[static_cast<size_t>(l.variable)].point, l.sightings});
+    out.push_back(
+        SlamLandmark{id, it->second.smoother->graph().variables()[static_cast<size_t>(l.variable)].point, l.sightings});
   return out;
 }
 

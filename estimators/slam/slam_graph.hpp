@@ -71,8 +71,8 @@ class SlamListener {
   /// keyframe's just added).  The estimates (keyframes(), newest_keyframe()) are this update's.
   virtual void updated(const std::string& body, int64_t utime, const graph::IncrementalStatus& status) = 0;
   /// A loop candidate for the new keyframe `a` (newest first) against the earlier keyframe `b`.
-  virtual void loop_proposed(const std::string& body, int64_t utime, const KeyframeEstimate& a, const KeyframeEstimate& b,
-                             bool random) = 0;
+  virtual void loop_proposed(const std::string& body, int64_t utime, const KeyframeEstimate& a,
+                             const KeyframeEstimate& b, bool random) = 0;
 };
 
 class SlamGraph {
@@ -146,15 +146,16 @@ class SlamGraph {
     graph::IncrementalSmoother* smoother = nullptr;  // smoothers_[planar]
     KeyframeSelector selector;
     KeyframeTrack track;
-    std::vector<LoopInput> early_loops;            // about times the odometry has not reached yet (bounded)
-    std::vector<SightingsInput> early_sightings;   // ahead of the odometry, in time order (bounded)
-    std::map<int64_t, Landmark> landmarks;         // by landmark id
+    std::vector<LoopInput> early_loops;           // about times the odometry has not reached yet (bounded)
+    std::vector<SightingsInput> early_sightings;  // ahead of the odometry, in time order (bounded)
+    std::map<int64_t, Landmark> landmarks;        // by landmark id
   };
 
   Body& body_for(const std::string& name, bool planar);
   graph::IncrementalSmoother& smoother_for(bool planar);
   /// Adds a factor to the body's smoother and its tag (throws what the smoother throws, and then adds no tag).
-  void add_factor(Body& b, std::unique_ptr<graph::Factor> factor, FactorRole role, bool robust, std::optional<double> width);
+  void add_factor(Body& b, std::unique_ptr<graph::Factor> factor, FactorRole role, bool robust,
+                  std::optional<double> width);
   SE3 estimate(const Body& b, int variable) const;
   void on_keyframe_candidate(const std::string& name, Body& b, const OdometryInput& o, SlamListener& listener);
   /// A keyframe candidate that cannot enter the graph (its odometry edge's covariance cannot be inverted, or the
@@ -184,14 +185,15 @@ class SlamGraph {
   SlamOptions options_;
   LoopProposer proposer_;
   std::unique_ptr<graph::IncrementalSmoother> smoothers_[2];  // [0] 3-D, [1] planar
-  std::vector<FactorTag> factor_tags_[2];                       // per smoother, per factor
+  std::vector<FactorTag> factor_tags_[2];                     // per smoother, per factor
   static constexpr int64_t kGateMarginalUpdates = 25;
-  std::map<int, std::pair<int64_t, Eigen::MatrixXd>> gate_marginals_[2];  // per variable: (updates when computed, marginal)
+  std::map<int, std::pair<int64_t, Eigen::MatrixXd>>
+      gate_marginals_[2];  // per variable: (updates when computed, marginal)
   int64_t keyframes_since_thinning_[2] = {0, 0};
   std::map<std::string, Body> bodies_;
   int64_t next_variable_id_ = 0;
   double loop_gate_[2] = {0, 0}, sighting_gate_[2] = {0, 0};  // chi-square thresholds, [0] 3-D, [1] planar
-  double sighting_width_[2] = {0, 0};                          // sighting_kernel_width_for
+  double sighting_width_[2] = {0, 0};                         // sighting_kernel_width_for
   SlamCounters counters_;
 };
 

@@ -60,8 +60,8 @@ void SlamGraph::add_sightings(const std::string& name, const SightingsInput& s, 
   add_anchored_sightings(name, b, s, *anchor, listener);
 }
 
-void SlamGraph::add_anchored_sightings(const std::string& name, Body& b, const SightingsInput& s, const TrackPoint& anchor,
-                                       SlamListener& listener) {
+void SlamGraph::add_anchored_sightings(const std::string& name, Body& b, const SightingsInput& s,
+                                       const TrackPoint& anchor, SlamListener& listener) {
   const TrackKeyframe& kf = b.track.keyframes()[anchor.keyframe];
   const SightingModel model(b.planar, estimate(b, kf.variable), anchor, s.sensor_in_body);
   const int kind = b.planar ? 1 : 0;
@@ -80,13 +80,14 @@ void SlamGraph::add_anchored_sightings(const std::string& name, Body& b, const S
     auto lm = b.landmarks.find(ob.id);
     const bool known = lm != b.landmarks.end();
     const Eigen::Vector3d position =
-        known ? b.smoother->graph().variables()[static_cast<size_t>(lm->second.variable)].point : model.landmark_from(ob);
+        known ? b.smoother->graph().variables()[static_cast<size_t>(lm->second.variable)].point
+              : model.landmark_from(ob);
     const SightingModel::Evaluation ev = model.evaluate(z, position);
     if (known) {
       const Eigen::MatrixXd p_landmark = gate_marginal(b, lm->second.variable);
       if (p_landmark.size() > 0) {  // determined: gate against the estimate
-        const double d2 = model.mahalanobis(ev, R, options_.landmarks.gate_odometry_scale, p_landmark,
-                                            gate_marginal(b, kf.variable));
+        const double d2 =
+            model.mahalanobis(ev, R, options_.landmarks.gate_odometry_scale, p_landmark, gate_marginal(b, kf.variable));
         if (!(d2 <= sighting_gate_[kind])) {
           ++counters_.sightings_rejected;
           continue;

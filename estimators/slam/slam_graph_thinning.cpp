@@ -29,20 +29,24 @@ void SlamGraph::maybe_thin(bool planar) {
 // What one thinning keeps and builds, filled step by step by thin().
 struct SlamGraph::ThinningPlan {
   ThinningPlan(bool planar_kind, graph::IncrementalSmoother& smoother, const std::vector<FactorTag>& factor_tags)
-      : planar(planar_kind), kind(planar_kind ? 1 : 0), old(smoother), vars(smoother.graph().variables()),
-        factors(smoother.graph().factors()), tags(factor_tags) {}
+      : planar(planar_kind),
+        kind(planar_kind ? 1 : 0),
+        old(smoother),
+        vars(smoother.graph().variables()),
+        factors(smoother.graph().factors()),
+        tags(factor_tags) {}
   bool planar;
   int kind;  // smoothers_[kind]
   graph::IncrementalSmoother& old;
   const std::vector<graph::Variable>& vars;
   const std::vector<std::unique_ptr<graph::Factor>>& factors;
   const std::vector<FactorTag>& tags;
-  std::vector<char> keep_var;                    // by old variable index
-  std::map<Body*, std::vector<char>> keep_of;    // per body of this kind: by keyframe
-  std::vector<char> keep_factor;                 // loops and sightings that stay (odometry is recomposed)
+  std::vector<char> keep_var;                  // by old variable index
+  std::map<Body*, std::vector<char>> keep_of;  // per body of this kind: by keyframe
+  std::vector<char> keep_factor;               // loops and sightings that stay (odometry is recomposed)
   std::unique_ptr<graph::IncrementalSmoother> fresh;
   std::vector<FactorTag> fresh_tags;
-  std::vector<int> remap;                        // old variable index -> new, -1 when it leaves
+  std::vector<int> remap;  // old variable index -> new, -1 when it leaves
   struct BodyPlan {
     Body* body;
     std::vector<TrackKeyframe> keyframes;
@@ -89,7 +93,8 @@ bool SlamGraph::choose_kept_keyframes(ThinningPlan& p) {
     if (b.planar != p.planar || b.track.empty()) continue;
     std::vector<ThinningCandidate> candidates;
     candidates.reserve(b.track.keyframes().size());
-    for (const auto& k : b.track.keyframes()) candidates.push_back({k.id, p.vars[static_cast<size_t>(k.variable)].as_se3()});
+    for (const auto& k : b.track.keyframes())
+      candidates.push_back({k.id, p.vars[static_cast<size_t>(k.variable)].as_se3()});
     KeyframeThinningOptions thinning = options_.lifelong.thinning;
     thinning.window = options_.lifelong.budget(p.planar).window;
     auto keep = keyframes_to_keep(candidates, p.planar, thinning);
@@ -110,7 +115,8 @@ void SlamGraph::choose_kept_factors(ThinningPlan& p) {
     bool all = true;
     for (int v : p.factors[f]->variables()) all = all && p.keep_var[static_cast<size_t>(v)];
     p.keep_factor[f] = all ? 1 : 0;
-    if (all && p.tags[f].role == FactorRole::kSighting) ++sightings_left[static_cast<size_t>(p.factors[f]->variables()[1])];
+    if (all && p.tags[f].role == FactorRole::kSighting)
+      ++sightings_left[static_cast<size_t>(p.factors[f]->variables()[1])];
   }
   std::vector<char> is_landmark(p.vars.size(), 0);
   for (auto& [name, b] : bodies_)
@@ -150,7 +156,8 @@ void SlamGraph::rebuild_smoother(ThinningPlan& p) {
       node.variable = p.remap[static_cast<size_t>(k.variable)];
       if (i > 0) {
         if (spanning) node.edge = edge, node.edge_covariance = covariance;
-        auto f = odometry_factor(p.planar, plan.keyframes.back().variable, node.variable, node.edge, node.edge_covariance);
+        auto f =
+            odometry_factor(p.planar, plan.keyframes.back().variable, node.variable, node.edge, node.edge_covariance);
         if (!f) throw std::invalid_argument("composed odometry covariance cannot be inverted");
         p.fresh->add_factor(std::move(f), false);
         p.fresh_tags.push_back({FactorRole::kOdometry, false, std::nullopt});
@@ -176,8 +183,10 @@ void SlamGraph::rebuild_smoother(ThinningPlan& p) {
 void SlamGraph::commit_thinning(ThinningPlan& p) {
   for (size_t f = 0; f < p.factors.size(); ++f) {
     if (p.keep_factor[f] || p.tags[f].role == FactorRole::kOdometry) continue;
-    if (p.tags[f].role == FactorRole::kLoop) ++counters_.loops_thinned;
-    else ++counters_.sightings_thinned;
+    if (p.tags[f].role == FactorRole::kLoop)
+      ++counters_.loops_thinned;
+    else
+      ++counters_.sightings_thinned;
   }
   for (auto& plan : p.plans) {
     Body& b = *plan.body;

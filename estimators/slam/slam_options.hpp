@@ -16,12 +16,12 @@ namespace sextant::slam {
 /// on its keyframes (sighting_anchor.hpp, sighting_gate.hpp).
 struct LandmarkOptions {
   bool enabled = true;
-  bool robust = true;                   // the loops' kernel (SlamOptions::robust) applies to them, at their own width
-                                        // (sighting_kernel_width_for)
-  double gate_probability = 0.999;      // chi-square gate of a sighting of a known landmark against the estimate
-  double gate_odometry_scale = 3.0;     // the odometry's standard deviations are taken this many times larger in the
-                                        // gate (the odometry between keyframe and sighting; biases are not in it)
-  int max_waiting = 256;                // sighting messages per body ahead of its odometry, kept until it gets there
+  bool robust = true;                // the loops' kernel (SlamOptions::robust) applies to them, at their own width
+                                     // (sighting_kernel_width_for)
+  double gate_probability = 0.999;   // chi-square gate of a sighting of a known landmark against the estimate
+  double gate_odometry_scale = 3.0;  // the odometry's standard deviations are taken this many times larger in the
+                                     // gate (the odometry between keyframe and sighting; biases are not in it)
+  int max_waiting = 256;             // sighting messages per body ahead of its odometry, kept until it gets there
 };
 
 /// Lifelong mode: a keyframe budget per kind of body.  When the graph of a kind of body holds more than its
@@ -43,18 +43,19 @@ struct LifelongOptions {
 };
 
 struct SlamOptions {
-  KeyframeSelectorOptions keyframes;   // k1, k2 (motion magnitude, metres/radians combined) and the weights
-  bool propose_loops = true;           // propose loop candidates for each new keyframe (SlamListener::loop_proposed)
-  LoopProposalOptions proposals;       // n1 local, n2 random (-1: 2 n1), seed
+  KeyframeSelectorOptions keyframes;  // k1, k2 (motion magnitude, metres/radians combined) and the weights
+  bool propose_loops = true;          // propose loop candidates for each new keyframe (SlamListener::loop_proposed)
+  LoopProposalOptions proposals;      // n1 local, n2 random (-1: 2 n1), seed
   graph::RobustKernel robust = graph::RobustKernel::kDcs;  // on loop closures (and landmark sightings): none | huber |
-                                                          // cauchy | dcs
+                                                           // cauchy | dcs
   /// Huber/Cauchy delta or DCS phi.  nullopt ("auto"): per body kind, from the chi-square quantile of the loop
   /// residual's dimension at loop_gate_probability, q = chi2_d(p), d = 3 planar / 6 spatial (kernel_width_for).
   std::optional<double> kernel_width;
-  double loop_gate_probability = 0.999;  // chi-square consistency gate of a loop against the current estimate
-  double loop_gate_odometry_scale = 3.0; // the odometry's standard deviations are taken this many times larger in the
-                                         // gate (odometry covariances are optimistic: biases are not in them)
-  double loop_time_tolerance_s = 1.0;    // a loop's times must be this close to keyframes' times (odometry bridges the gap)
+  double loop_gate_probability = 0.999;   // chi-square consistency gate of a loop against the current estimate
+  double loop_gate_odometry_scale = 3.0;  // the odometry's standard deviations are taken this many times larger in the
+                                          // gate (odometry covariances are optimistic: biases are not in them)
+  double loop_time_tolerance_s =
+      1.0;  // a loop's times must be this close to keyframes' times (odometry bridges the gap)
   /// Loops about times a body's odometry has not reached yet wait for it, at most this many per body; one beyond
   /// is dropped and counted (SlamCounters::loops_waiting_dropped).  0: none waits.
   int max_waiting_loops = 256;

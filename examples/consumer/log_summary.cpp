@@ -20,7 +20,8 @@ int main(int argc, char** argv) {
     while (auto r = reader.next()) {
       auto& [events, accepted] = channels[r->channel];
       ++events;
-      const auto d = sextant::runtime::decode_event(sextant::runtime::InputKind::kOdometry, r->data.data(), r->data.size());
+      const auto d =
+          sextant::runtime::decode_event(sextant::runtime::InputKind::kOdometry, r->data.data(), r->data.size());
       if (std::holds_alternative<sextant::engine::Event>(d)) ++accepted;
     }
   } catch (const std::exception& e) {

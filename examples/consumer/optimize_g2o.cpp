@@ -24,10 +24,11 @@ int main(int argc, char** argv) {
   sextant::graph::initialize_auto(g.graph);
   const sextant::graph::OptimizerOptions options;  // Gauss-Newton, at most 100 iterations, relative tolerance 1e-6
   const sextant::graph::OptimizerSummary s = sextant::graph::optimize(g.graph, options);
-  std::printf("{\"vertices\": %zu, \"edges\": %zu, \"dimension\": %d, \"iterations\": %d, \"initial_chi2\": %.17g, "
-              "\"final_chi2\": %.17g, \"converged\": %s}\n",
-              g.graph.variables().size(), g.graph.factors().size(), g.dimension, s.iterations, s.initial_chi2,
-              s.final_chi2, s.converged() ? "true" : "false");
+  std::printf(
+      "{\"vertices\": %zu, \"edges\": %zu, \"dimension\": %d, \"iterations\": %d, \"initial_chi2\": %.17g, "
+      "\"final_chi2\": %.17g, \"converged\": %s}\n",
+      g.graph.variables().size(), g.graph.factors().size(), g.dimension, s.iterations, s.initial_chi2, s.final_chi2,
+      s.converged() ? "true" : "false");
   if (argc == 3) sextant::graph::write_g2o(argv[2], g.graph);
   if (!s.usable()) {
     std::fprintf(stderr, "optimization failed: %s\n", s.message.c_str());

@@ -97,14 +97,17 @@ double brute_force_missed(const std::vector<double>& rm, const std::vector<doubl
   for (size_t k = 0; k < cm.size(); ++k) {
     if (used[k] || !std::isfinite(c(static_cast<Eigen::Index>(row), static_cast<Eigen::Index>(k)))) continue;
     used[k] = true;
-    best = std::min(best, c(static_cast<Eigen::Index>(row), static_cast<Eigen::Index>(k)) + brute_force_missed(rm, cm, c, row + 1, used));
+    best = std::min(best, c(static_cast<Eigen::Index>(row), static_cast<Eigen::Index>(k)) +
+                              brute_force_missed(rm, cm, c, row + 1, used));
     used[k] = false;
   }
   return best;
 }
 }  // namespace
 
-TEST_CASE("assignment with unpaired rows and columns equals brute force on sparse random instances, also with a reused solver") {
+TEST_CASE(
+    "assignment with unpaired rows and columns equals brute force on sparse random instances, also with a reused "
+    "solver") {
   std::mt19937 rng(21);
   MissedAssignmentSolver reused;  // one instance over all trials (sizes change from trial to trial)
   std::uniform_real_distribution<double> u(-6, 3);
@@ -119,7 +122,8 @@ TEST_CASE("assignment with unpaired rows and columns equals brute force on spars
     for (int r = 0; r < R; ++r)
       for (int k = 0; k < C; ++k)
         if (allowed(rng)) c(r, k) = u(rng) - 3, pairs.push_back({r, k, c(r, k)});
-    if (!pairs.empty()) pairs.push_back({pairs[0].row, pairs[0].column, pairs[0].cost + 1});  // a worse duplicate is ignored
+    if (!pairs.empty())
+      pairs.push_back({pairs[0].row, pairs[0].column, pairs[0].cost + 1});  // a worse duplicate is ignored
     std::vector<bool> used(static_cast<size_t>(C), false);
     const double expected = brute_force_missed(rm, cm, c, 0, used);
     const auto a = assign_with_missed(rm, cm, pairs);
@@ -217,7 +221,8 @@ TEST_CASE("the unpaired assignment's dual is feasible and sums to its value") {
       CHECK(a.column_dual[static_cast<size_t>(k)] <= cm[static_cast<size_t>(k)] + 1e-12);
       sum += a.column_dual[static_cast<size_t>(k)];
     }
-    for (const auto& p : pairs) CHECK(a.row_dual[static_cast<size_t>(p.row)] + a.column_dual[static_cast<size_t>(p.column)] <= p.cost + 1e-12);
+    for (const auto& p : pairs)
+      CHECK(a.row_dual[static_cast<size_t>(p.row)] + a.column_dual[static_cast<size_t>(p.column)] <= p.cost + 1e-12);
     CHECK(sum == doctest::Approx(a.value).epsilon(1e-12));
   }
 }

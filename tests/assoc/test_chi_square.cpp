@@ -59,7 +59,8 @@ TEST_CASE("the incomplete gamma functions agree with the closed forms and with e
       // 1 - q cancels where the CDF is tiny: there the agreement is absolute (its relative precision is checked by
       // the round trips below, through P).
       CHECK(chi2_cdf(k, x) == doctest::Approx(1 - q).epsilon(1e-11).scale(1e-3));
-      CHECK(regularized_gamma_p(0.5 * k, 0.5 * x) + regularized_gamma_q(0.5 * k, 0.5 * x) == doctest::Approx(1.0).epsilon(1e-14));
+      CHECK(regularized_gamma_p(0.5 * k, 0.5 * x) + regularized_gamma_q(0.5 * k, 0.5 * x) ==
+            doctest::Approx(1.0).epsilon(1e-14));
     }
   CHECK(regularized_gamma_p(2.5, 0) == 0.0);
   CHECK(regularized_gamma_q(2.5, 0) == 1.0);

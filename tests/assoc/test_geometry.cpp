@@ -89,7 +89,8 @@ TEST_CASE("prepared-bearing linearization equals the bearing model's residual an
   int small = 0, large = 0;
   for (int trial = 0; trial < 400; ++trial) {
     const Eigen::Vector3d sensor(10 * u(rng), 10 * u(rng), 0.1 * u(rng));
-    const Eigen::Vector3d x = sensor + Eigen::Vector3d(-20 + 2 * u(rng), 3 * u(rng), 5 + 2 * u(rng));  // azimuth near pi
+    const Eigen::Vector3d x =
+        sensor + Eigen::Vector3d(-20 + 2 * u(rng), 3 * u(rng), 5 + 2 * u(rng));  // azimuth near pi
     const auto h = *bearing(sensor, x);
     const double spread = trial % 2 ? 0.01 : 0.5;
     BearingObservation o{sensor, h[0] + spread * u(rng), h[1] + spread * u(rng), Eigen::Matrix2d::Identity()};
@@ -109,7 +110,8 @@ TEST_CASE("prepared-bearing linearization equals the bearing model's residual an
   CHECK(large > 100);
   // On the sensor's vertical: refused, the normal equations untouched.
   NormalEquations n;
-  CHECK_FALSE(add_observation(n, PreparedBearing({kSensors[0], 0.3, 0.2, Eigen::Matrix2d::Identity()}, Ri), kSensors[0] + Eigen::Vector3d(0, 0, 5)));
+  CHECK_FALSE(add_observation(n, PreparedBearing({kSensors[0], 0.3, 0.2, Eigen::Matrix2d::Identity()}, Ri),
+                              kSensors[0] + Eigen::Vector3d(0, 0, 5)));
   CHECK(n.residual == 0.0);
   CHECK(n.information.isZero());
 }

@@ -94,8 +94,10 @@ TEST_CASE("packing branch and bound equals a dynamic program over subsets, and i
     }
     // A budget of a few nodes: not proven unless it really finished; the answer feasible, the bound below the optimum.
     const auto cut = solve_packing_exactly(p, {}, equal_share_multipliers(p), 3);
-    if (cut.proven) CHECK(cut.cost == doctest::Approx(optimum).epsilon(1e-12));
-    else CHECK(cut.nodes > 3);
+    if (cut.proven)
+      CHECK(cut.cost == doctest::Approx(optimum).epsilon(1e-12));
+    else
+      CHECK(cut.nodes > 3);
     CHECK(cut.cost >= optimum - 1e-9);
     CHECK(cut.lower_bound <= optimum + 1e-9);
     CHECK(cost_of(p, cut.chosen) == doctest::Approx(cut.cost).epsilon(1e-12));

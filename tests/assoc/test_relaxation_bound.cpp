@@ -75,7 +75,8 @@ TEST_CASE("reduced-cost fixing: every tuple's forcing bound is below the optimum
         unsigned mask = 0;
         for (int d : P.packing.members(static_cast<size_t>(t))) mask |= 1u << d;
         const double forced = P.cost[static_cast<size_t>(t)] + best[full & ~mask];
-        const double bound = r.dual.bound + forcing_increase(g, r.dual.reduced[static_cast<size_t>(t)], r.dual.row_dual, r.dual.column_dual);
+        const double bound = r.dual.bound + forcing_increase(g, r.dual.reduced[static_cast<size_t>(t)], r.dual.row_dual,
+                                                             r.dual.column_dual);
         CHECK(bound <= forced + 1e-9);
         ++tuples_checked;
       }
@@ -114,8 +115,9 @@ TEST_CASE("the branch and bound over the survivors equals the one over all tuple
     for (int c : r.chosen) incumbent.push_back(position[static_cast<size_t>(c)]);
     std::sort(incumbent.begin(), incumbent.end());
     RelaxationBound bound(P, r.u);
-    const auto reference = solve_packing_exactly(P.packing, incumbent, equal_share_multipliers(P.packing), 2'000'000,
-                                                 [&](const std::vector<char>& c, const std::vector<int>& b, std::vector<double>*) { return bound(c, b); });
+    const auto reference = solve_packing_exactly(
+        P.packing, incumbent, equal_share_multipliers(P.packing), 2'000'000,
+        [&](const std::vector<char>& c, const std::vector<int>& b, std::vector<double>*) { return bound(c, b); });
     REQUIRE(reference.proven);
     const auto survivors = reduced_cost_survivors(P.pair_groups(), r.dual, r.ub, incumbent);
     const auto sol = solve_on_survivors(P, r.u, survivors, incumbent, 2'000'000);

@@ -104,7 +104,8 @@ TEST_CASE("tuple ranges by prefix, whole and within a window, equal a linear sca
             if (lo < 0) lo = static_cast<int>(x);
             hi = static_cast<int>(x) + 1;
           }
-        for (size_t x = static_cast<size_t>(lo); x < static_cast<size_t>(hi); ++x) REQUIRE(same_prefix(P, x, prefix, L));
+        for (size_t x = static_cast<size_t>(lo); x < static_cast<size_t>(hi); ++x)
+          REQUIRE(same_prefix(P, x, prefix, L));
         CHECK(P.range(prefix, L) == std::pair<int, int>(lo, hi));
         const auto window = P.range(prefix, 1);  // the tuples sharing the first index hold the whole range
         CHECK(P.range(prefix, L, window.first, window.second) == std::pair<int, int>(lo, hi));

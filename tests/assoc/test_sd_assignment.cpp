@@ -133,7 +133,9 @@ TEST_CASE("exact never reports a non-optimal solution as exact: a dynamic progra
   CHECK(checked >= 30);
 }
 
-TEST_CASE("the exact solver fixes tuples at the best bound of the relaxation's runs: dense grid scans proven within 5000 nodes") {
+TEST_CASE(
+    "the exact solver fixes tuples at the best bound of the relaxation's runs: dense grid scans proven within 5000 "
+    "nodes") {
   // The first six scans of the 3 x 20 grid at d = 0.5 km with false alarms (assoc-sim's seed 1).  On the sixth the
   // first relaxation run's bound is 0.67 below a rotated run's; fixing at the first run's multipliers left 515 tuples
   // to the branch and bound, which did not finish in 200 000 nodes; at the best run's, 315 tuples and 1343 nodes.
@@ -265,11 +267,13 @@ bool explained_by_gates(const Scan& scan, const std::vector<int>& index, const C
   for (size_t s = 0; s < index.size(); ++s)
     if (index[s] > 0) {
       const auto& d = scan.detections[s][static_cast<size_t>(index[s] - 1)];
-      all.push_back({scan.sensors[s], d.azimuth, d.elevation, Eigen::Matrix2d::Identity() * d.sigma_azimuth * d.sigma_azimuth});
+      all.push_back(
+          {scan.sensors[s], d.azimuth, d.elevation, Eigen::Matrix2d::Identity() * d.sigma_azimuth * d.sigma_azimuth});
     }
   for (size_t a = 0; a < all.size(); ++a)
     for (size_t b = a + 1; b < all.size(); ++b) {
-      const auto t = triangulate({all[a], all[b]}, 1);  // the pair gate: residual after one step from the linear solution
+      const auto t =
+          triangulate({all[a], all[b]}, 1);  // the pair gate: residual after one step from the linear solution
       if (!t.valid || t.residual > chi2_quantile(1, o.gate_probability)) return true;
     }
   if (index.size() == 4 && index[0] > 0 && index[1] > 0 && index[2] > 0) {
@@ -317,7 +321,7 @@ TEST_CASE("gated tuple building keeps the tuples of exhaustive enumeration that 
     built += tuples.size(), exhaustive += all.size();
   }
   MESSAGE("gated building kept " << built << " of " << exhaustive << " tuples; " << lost << " dropped by the gates; "
-          << "largest cost difference " << largest_difference);
+                                 << "largest cost difference " << largest_difference);
   CHECK(largest_difference < 1e-2);
   CHECK(exhaustive > 100);
   CHECK(static_cast<double>(built) >= 0.9 * static_cast<double>(exhaustive));

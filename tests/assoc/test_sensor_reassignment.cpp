@@ -93,8 +93,9 @@ double best_single_sensor(const List& l, const std::vector<int>& chosen, size_t 
 
 TEST_CASE("sensor re-assignment finds a rotation of one sensor's detections that exchange moves miss") {
   // Three targets seen by three sensors; the current solution pairs sensor 3's detections one step off.
-  const List l = make_list(3, {3, 3, 3},
-                           {{{1, 1, 1}, -5}, {{2, 2, 2}, -5}, {{3, 3, 3}, -5}, {{1, 1, 2}, -6}, {{2, 2, 3}, -6}, {{3, 3, 1}, -6}});
+  const List l =
+      make_list(3, {3, 3, 3},
+                {{{1, 1, 1}, -5}, {{2, 2, 2}, -5}, {{3, 3, 3}, -5}, {{1, 1, 2}, -6}, {{2, 2, 3}, -6}, {{3, 3, 1}, -6}});
   // Rows in map order: (1,1,1) 0, (1,1,2) 1, (2,2,2) 2, (2,2,3) 3, (3,3,1) 4, (3,3,3) 5.
   const std::vector<int> start = {0, 2, 5};  // cost -15
   TuplePacking p;
@@ -127,7 +128,8 @@ TEST_CASE("sensor re-assignment ends at a feasible solution that no single-senso
     for (int k = 0; k < 18; ++k) {
       std::vector<int> idx(S);
       int held = 0;
-      for (size_t s = 0; s < S; ++s) idx[s] = u(rng) < 0.75 ? 1 + static_cast<int>(rng() % static_cast<unsigned>(n[s])) : 0, held += idx[s] > 0;
+      for (size_t s = 0; s < S; ++s)
+        idx[s] = u(rng) < 0.75 ? 1 + static_cast<int>(rng() % static_cast<unsigned>(n[s])) : 0, held += idx[s] > 0;
       if (held >= 2) tuples[idx] = -0.1 - 5 * u(rng);
     }
     if (tuples.empty()) continue;

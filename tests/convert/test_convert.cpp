@@ -101,7 +101,8 @@ TEST_CASE("TUM ground truth -> odometry: exact without noise, drifting with it, 
   auto odo = events_of<engine::Odometry>(log, runtime::InputKind::kOdometry, "ODOMETRY");
   REQUIRE(odo.size() > 1000);
   double worst = 0;
-  for (size_t k = 0; k < odo.size(); k += 97) worst = std::max(worst, (odo[k].pose.position - truth[k].pose.position).norm());
+  for (size_t k = 0; k < odo.size(); k += 97)
+    worst = std::max(worst, (odo[k].pose.position - truth[k].pose.position).norm());
   CHECK(worst < 1e-6);
   o = tools::TumConversionOptions{};
   tools::convert_tum(gt, log, o);
@@ -116,7 +117,9 @@ TEST_CASE("TUM ground truth -> odometry: exact without noise, drifting with it, 
   std::remove(log.c_str());
 }
 
-TEST_CASE("MRCLAM: landmark, robot and unknown-barcode sightings as the data set defines them, and odometry starts on the truth") {
+TEST_CASE(
+    "MRCLAM: landmark, robot and unknown-barcode sightings as the data set defines them, and odometry starts on the "
+    "truth") {
   const std::string dir = std::string(SEXTANT_SHARED_DIR) + "/data/landmarks/MRCLAM_Dataset7";
   const auto log = temp("mrclam.lcm"), gt = temp("mrclam_gt.txt");
   const auto r3 = tools::convert_mrclam(dir, 3, log, gt);
@@ -143,7 +146,8 @@ TEST_CASE("MRCLAM: landmark, robot and unknown-barcode sightings as the data set
   std::remove(gt.c_str());
 }
 
-TEST_CASE("MRCLAM: the command delay shifts the odometry stamps only, and brings the commanded turns closer to the truth") {
+TEST_CASE(
+    "MRCLAM: the command delay shifts the odometry stamps only, and brings the commanded turns closer to the truth") {
   const std::string dir = std::string(SEXTANT_SHARED_DIR) + "/data/landmarks/MRCLAM_Dataset7";
   const auto log0 = temp("mrclam_d0.lcm"), log1 = temp("mrclam_d1.lcm"), gt = temp("mrclam_d_gt.txt");
   tools::MrclamOptions immediate;
@@ -185,8 +189,9 @@ TEST_CASE("MRCLAM: the command delay shifts the odometry stamps only, and brings
       const double t0 = odo[k].utime * 1e-6, t1 = odo[k + 65].utime * 1e-6;
       const auto a = yaw_at(t0), b = yaw_at(t1);
       if (!a || !b) continue;
-      const double d_odo = wrap_angle(SE2::from_se3(SE3(odo[k + 65].pose.orientation, odo[k + 65].pose.position)).angle() -
-                                      SE2::from_se3(SE3(odo[k].pose.orientation, odo[k].pose.position)).angle());
+      const double d_odo =
+          wrap_angle(SE2::from_se3(SE3(odo[k + 65].pose.orientation, odo[k + 65].pose.position)).angle() -
+                     SE2::from_se3(SE3(odo[k].pose.orientation, odo[k].pose.position)).angle());
       sum += std::pow(wrap_angle(d_odo - wrap_angle(*b - *a)), 2);
       ++n;
     }

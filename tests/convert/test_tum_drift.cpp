@@ -21,7 +21,8 @@ using namespace sextant;
 namespace {
 
 std::string temp(const std::string& n) {
-  return (std::filesystem::temp_directory_path() / ("sextant_tumdrift_" + std::to_string(::getpid()) + "_" + n)).string();
+  return (std::filesystem::temp_directory_path() / ("sextant_tumdrift_" + std::to_string(::getpid()) + "_" + n))
+      .string();
 }
 
 std::vector<engine::Odometry> odometry_of(const std::string& log) {
@@ -43,7 +44,8 @@ std::string write_truth(const std::string& name, int n, double rate_hz, double s
   f.precision(12);
   for (int k = 0; k <= n; ++k) {
     const double yaw = k * step_rad;
-    f << 1000.0 + k / rate_hz << ' ' << k * step_m << " 0 0 0 0 " << std::sin(yaw / 2) << ' ' << std::cos(yaw / 2) << '\n';
+    f << 1000.0 + k / rate_hz << ' ' << k * step_m << " 0 0 0 0 " << std::sin(yaw / 2) << ' ' << std::cos(yaw / 2)
+      << '\n';
   }
   return path;
 }

@@ -85,8 +85,8 @@ TEST_CASE("floor_eigenvalues: eigenvalues below the floor are raised to it, the 
   Eigen::Matrix<double, 6, 6> big = Eigen::Matrix<double, 6, 6>::Zero();
   big(0, 0) = -1;
   big(5, 5) = 3;
-  for (const Eigen::MatrixXd& f : {Eigen::MatrixXd(floor_eigenvalues(big, 1e-6)),
-                                   floor_eigenvalues(Eigen::MatrixXd(big), 1e-6)}) {
+  for (const Eigen::MatrixXd& f :
+       {Eigen::MatrixXd(floor_eigenvalues(big, 1e-6)), floor_eigenvalues(Eigen::MatrixXd(big), 1e-6)}) {
     Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(f);
     CHECK(eig.eigenvalues().minCoeff() == doctest::Approx(1e-6).epsilon(1e-9));
     CHECK(eig.eigenvalues().maxCoeff() == doctest::Approx(3.0));

@@ -57,7 +57,8 @@ TEST_CASE("ATE and RPE equal the TUM tools' values on every trajectory of METRIC
     CHECK(std::abs(rpe.rotation_deg.mean - r.rpe_rot_mean) <= 5e-5);
   }
   // The Sim(3) scales of METRICS.md.
-  CHECK(absolute_trajectory_error(read_tum(tum("fr1_xyz/groundtruth.txt")), read_tum(tum("fr1_xyz/orbslam_mono_keyframes.txt")), true)
+  CHECK(absolute_trajectory_error(read_tum(tum("fr1_xyz/groundtruth.txt")),
+                                  read_tum(tum("fr1_xyz/orbslam_mono_keyframes.txt")), true)
             .scale == doctest::Approx(1.1056).epsilon(1e-4));
 }
 

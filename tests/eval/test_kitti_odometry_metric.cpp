@@ -49,7 +49,8 @@ TEST_CASE("KITTI error of a run whose heading drifts at a constant rate: angle(R
   const double rate = 1e-4;  // rad per frame (1 m per frame)
   const auto gt = straight_run(n);
   auto est = gt;
-  for (size_t i = 0; i < n; ++i) est[i].orientation = Eigen::AngleAxisd(rate * static_cast<double>(i), Eigen::Vector3d::UnitZ());
+  for (size_t i = 0; i < n; ++i)
+    est[i].orientation = Eigen::AngleAxisd(rate * static_cast<double>(i), Eigen::Vector3d::UnitZ());
   const KittiOdometryError e = kitti_odometry_error(gt, est);
   double sum = 0;
   size_t count = 0;

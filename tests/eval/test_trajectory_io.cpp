@@ -16,7 +16,8 @@ using namespace sextant::tools;
 
 namespace {
 std::string temp_path(const std::string& name) {
-  return (std::filesystem::temp_directory_path() / ("sextant_trajectory_io_" + std::to_string(::getpid()) + "_" + name)).string();
+  return (std::filesystem::temp_directory_path() / ("sextant_trajectory_io_" + std::to_string(::getpid()) + "_" + name))
+      .string();
 }
 void write_text(const std::string& path, const std::string& text) { std::ofstream(path) << text; }
 std::string error_of(const std::string& path, const std::string& times = "") {

@@ -61,18 +61,42 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   const uint8_t which = data[0] & 0x7f;
   ++data, --size;
   switch (which % 12) {
-    case 0: decode_input<sextant::odometry_t>(runtime::InputKind::kOdometry, fp, data, size); break;
-    case 1: decode_input<sextant::landmarks_t>(runtime::InputKind::kLandmarks, fp, data, size); break;
-    case 2: decode_input<sextant::bearing_scan_t>(runtime::InputKind::kBearings, fp, data, size); break;
-    case 3: decode_input<sextant::loop_closure_t>(runtime::InputKind::kLoopClosures, fp, data, size); break;
-    case 4: decode_other<sextant::truth_t>(fp, data, size); break;
-    case 5: decode_other<sextant::match_request_t>(fp, data, size); break;
-    case 6: decode_other<sextant::fused_pose_t>(fp, data, size); break;
-    case 7: decode_other<sextant::status_t>(fp, data, size); break;
-    case 8: decode_other<sextant::trajectory_t>(fp, data, size); break;
-    case 9: decode_other<sextant::targets_t>(fp, data, size); break;
-    case 10: decode_input<sextant::imu_t>(runtime::InputKind::kImu, fp, data, size); break;
-    default: decode_input<sextant::gnss_t>(runtime::InputKind::kGnss, fp, data, size); break;
+    case 0:
+      decode_input<sextant::odometry_t>(runtime::InputKind::kOdometry, fp, data, size);
+      break;
+    case 1:
+      decode_input<sextant::landmarks_t>(runtime::InputKind::kLandmarks, fp, data, size);
+      break;
+    case 2:
+      decode_input<sextant::bearing_scan_t>(runtime::InputKind::kBearings, fp, data, size);
+      break;
+    case 3:
+      decode_input<sextant::loop_closure_t>(runtime::InputKind::kLoopClosures, fp, data, size);
+      break;
+    case 4:
+      decode_other<sextant::truth_t>(fp, data, size);
+      break;
+    case 5:
+      decode_other<sextant::match_request_t>(fp, data, size);
+      break;
+    case 6:
+      decode_other<sextant::fused_pose_t>(fp, data, size);
+      break;
+    case 7:
+      decode_other<sextant::status_t>(fp, data, size);
+      break;
+    case 8:
+      decode_other<sextant::trajectory_t>(fp, data, size);
+      break;
+    case 9:
+      decode_other<sextant::targets_t>(fp, data, size);
+      break;
+    case 10:
+      decode_input<sextant::imu_t>(runtime::InputKind::kImu, fp, data, size);
+      break;
+    default:
+      decode_input<sextant::gnss_t>(runtime::InputKind::kGnss, fp, data, size);
+      break;
   }
   return 0;
 }

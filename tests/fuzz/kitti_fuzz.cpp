@@ -26,8 +26,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     o.step = 1;
     try {
       (void)sextant::tools::kitti_odometry_error(p, p, o);
-    } catch (const std::invalid_argument&) {
-    }
+    } catch (const std::invalid_argument&) {}
   } catch (const std::runtime_error& e) {
     const std::string what = e.what();
     if (what.find(poses) == std::string::npos && (times.empty() || what.find(times) == std::string::npos)) std::abort();

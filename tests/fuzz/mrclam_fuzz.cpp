@@ -21,7 +21,6 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   const std::string dir = sextant::fuzz::temp_dir();
   try {
     (void)sextant::tools::convert_mrclam(dir, 1, dir + "/out.lcm", dir + "/gt.txt");
-  } catch (const std::runtime_error&) {
-  }
+  } catch (const std::runtime_error&) {}
   return 0;
 }

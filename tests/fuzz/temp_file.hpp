@@ -22,8 +22,9 @@ inline std::string temp_dir() {
     }
   };
   static const Dir dir{[] {
-    const std::filesystem::path base =
-        std::filesystem::is_directory("/dev/shm") ? std::filesystem::path("/dev/shm") : std::filesystem::temp_directory_path();
+    const std::filesystem::path base = std::filesystem::is_directory("/dev/shm")
+                                           ? std::filesystem::path("/dev/shm")
+                                           : std::filesystem::temp_directory_path();
     const auto d = base / ("sextant_fuzz_" + std::to_string(::getpid()));
     std::filesystem::create_directories(d);
     return d.string();

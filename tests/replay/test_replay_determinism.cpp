@@ -19,7 +19,8 @@ using namespace sextant;
 namespace {
 
 std::string temp_path(const std::string& name) {
-  return (std::filesystem::temp_directory_path() / ("sextant_test_" + std::to_string(::getpid()) + "_" + name)).string();
+  return (std::filesystem::temp_directory_path() / ("sextant_test_" + std::to_string(::getpid()) + "_" + name))
+      .string();
 }
 
 std::string file_bytes(const std::string& path) {
@@ -55,7 +56,8 @@ TEST_CASE("the same seed gives a byte-identical simulated log, another seed a di
   // The scenario's spellings (`sextant simulate SCENARIO`): an unknown one names itself and the spellings.
   CHECK(tools::scenario_names() == std::vector<std::string>{"planar", "spatial"});
   CHECK(std::string(tools::scenario_name(tools::Scenario::kSpatial)) == "spatial");
-  CHECK_THROWS_WITH_AS(tools::scenario_from_name("3d"), "unknown scenario '3d' (planar or spatial)", std::invalid_argument);
+  CHECK_THROWS_WITH_AS(tools::scenario_from_name("3d"), "unknown scenario '3d' (planar or spatial)",
+                       std::invalid_argument);
 }
 
 TEST_CASE("replaying a log twice publishes the same bytes, and the ground truth is read back") {
@@ -94,7 +96,8 @@ TEST_CASE("replay orders by message utime, not by the log's stamps") {
   {
     runtime::LogWriter w(log);
     int64_t stamp = 0;
-    for (auto it = records.rbegin(); it != records.rend(); ++it) w.write_raw(++stamp, it->channel, it->data.data(), it->data.size());
+    for (auto it = records.rbegin(); it != records.rend(); ++it)
+      w.write_raw(++stamp, it->channel, it->data.data(), it->data.size());
   }
   config::DaemonConfig cfg;
   const auto forward = tools::replay_log(sim_log, cfg);

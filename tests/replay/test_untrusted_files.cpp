@@ -22,7 +22,8 @@ using namespace sextant;
 
 namespace {
 std::string temp(const std::string& n) {
-  return (std::filesystem::temp_directory_path() / ("sextant_untrusted_" + std::to_string(::getpid()) + "_" + n)).string();
+  return (std::filesystem::temp_directory_path() / ("sextant_untrusted_" + std::to_string(::getpid()) + "_" + n))
+      .string();
 }
 }  // namespace
 
@@ -47,7 +48,9 @@ TEST_CASE("MRCLAM: a barcode or landmark id outside int's range is an error nami
   const auto dir = temp("mrclam");
   std::filesystem::create_directories(dir);
   const std::string hdr = "#\n#\n#\n#\n";
-  auto write = [&](const std::string& name, const std::string& body) { std::ofstream(dir + "/" + name) << hdr << body; };
+  auto write = [&](const std::string& name, const std::string& body) {
+    std::ofstream(dir + "/" + name) << hdr << body;
+  };
   write("Barcodes.dat", "6 27\n7 1e11\n");
   write("Landmark_Groundtruth.dat", "6 1.0 2.0 0.01 0.01\n");
   write("Robot1_Groundtruth.dat", "1.0 0 0 0\n1.1 0.01 0 0\n");
@@ -83,13 +86,16 @@ TEST_CASE("replay of a log with a corrupt event mid-file replays the rest and re
   std::vector<size_t> starts;
   while (pos + 28 <= b.size()) {
     starts.push_back(pos);
-    const auto be32 = [&](size_t at) { return (uint32_t{b[at]} << 24) | (uint32_t{b[at + 1]} << 16) | (uint32_t{b[at + 2]} << 8) | b[at + 3]; };
+    const auto be32 = [&](size_t at) {
+      return (uint32_t{b[at]} << 24) | (uint32_t{b[at + 1]} << 16) | (uint32_t{b[at + 2]} << 8) | b[at + 3];
+    };
     pos += 28 + be32(pos + 20) + be32(pos + 24);
     ++events;
   }
   const size_t mid = starts[events / 2];
   b[mid + 24] = 0x01, b[mid + 25] = 0x00, b[mid + 26] = 0x00, b[mid + 27] = 0x00;
-  std::ofstream(damaged, std::ios::binary).write(reinterpret_cast<const char*>(b.data()), static_cast<std::streamsize>(b.size()));
+  std::ofstream(damaged, std::ios::binary)
+      .write(reinterpret_cast<const char*>(b.data()), static_cast<std::streamsize>(b.size()));
   const config::DaemonConfig cfg;
   const auto clean = tools::replay_log(log, cfg);
   const auto r = tools::replay_log(damaged, cfg);

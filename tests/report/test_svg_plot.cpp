@@ -25,8 +25,8 @@ TEST_CASE("robust_view: the truth and the bulk of the estimates, not a far ghost
   est.emplace_back(230, 4);
   const Eigen::Vector4d v = robust_view(truth, est, 0.05, 0.15, 2.0);
   for (const auto& t : truth) CHECK((t.x() > v[0] && t.x() < v[1] && t.y() > v[2] && t.y() < v[3]));
-  CHECK(v[1] < 40);                      // the ghost is outside the frame...
-  CHECK(v[1] - v[0] < 80);               // ...and the frame is about the region (53 m wide) plus its margins
+  CHECK(v[1] < 40);         // the ghost is outside the frame...
+  CHECK(v[1] - v[0] < 80);  // ...and the frame is about the region (53 m wide) plus its margins
   // Between the truth's extent (x in [-28, 25]) and the estimates' ([-28.3, 25.3]), widened by 15 % on each side.
   CHECK(v[0] <= -28 - 0.15 * 53 + 1e-9);
   CHECK(v[0] >= -28.3 - 0.15 * 53.6 - 1e-9);

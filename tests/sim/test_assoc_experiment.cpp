@@ -77,8 +77,8 @@ TEST_CASE("the target-prior term cuts ghost tuples under clutter") {
   const auto plain = run_assoc_experiment(o);
   o.target_prior = true;
   const auto prior = run_assoc_experiment(o);
-  MESSAGE("ghosts per scan " << plain.ghosts_per_scan << " -> " << prior.ghosts_per_scan << ", correct " << plain.correct_rate
-                             << " -> " << prior.correct_rate);
+  MESSAGE("ghosts per scan " << plain.ghosts_per_scan << " -> " << prior.ghosts_per_scan << ", correct "
+                             << plain.correct_rate << " -> " << prior.correct_rate);
   CHECK(prior.ghosts_per_scan < 0.5 * plain.ghosts_per_scan);
   CHECK(prior.correct_rate > plain.correct_rate + 3 * plain.correct_rate_stderr);
 }
@@ -101,7 +101,8 @@ TEST_CASE("sensor layouts and the uniform target layout") {
   CHECK(r.gap_max <= 0.01);
 }
 
-TEST_CASE("coplanar grid, 3 x 20, P_D 1: the default relaxation reaches the optimum of its cost where a loose gap did not") {
+TEST_CASE(
+    "coplanar grid, 3 x 20, P_D 1: the default relaxation reaches the optimum of its cost where a loose gap did not") {
   // d = 0.5 km, 12 scans.  The old rule stopped at a relative gap of 1 % of |UB|, about 6.3 cost units on these
   // scans (|UB| ~ 635, nearly all of it the constant per-detection term); an absolute gap of 6.3 reproduces it.  The
   // default (0.01 units, then the branch and bound) finds the optimum on every scan, proven by the exact solver.

@@ -33,7 +33,8 @@ double wrap(double a) { return std::remainder(a, 2 * M_PI); }
 
 // Every detection of a simulated run (P_D = 0: all false alarms) tested against the box's view from its sensor.
 Clutter simulate_clutter(bool in_region) {
-  const auto log = (std::filesystem::temp_directory_path() / ("sextant_clutter_" + std::to_string(::getpid()) + ".lcm")).string();
+  const auto log =
+      (std::filesystem::temp_directory_path() / ("sextant_clutter_" + std::to_string(::getpid()) + ".lcm")).string();
   tools::SimulationOptions o;
   o.duration_s = 30, o.seed = 7, o.p_detect = 0, o.clutter = 3;
   if (in_region) o.clutter_region_min = {kLo.x(), kLo.y(), kLo.z()}, o.clutter_region_max = {kHi.x(), kHi.y(), kHi.z()};
@@ -57,9 +58,11 @@ Clutter simulate_clutter(bool in_region) {
     for (double x : {kLo.x(), kHi.x()})
       for (double y : {kLo.y(), kHi.y()}) {
         const double a = wrap(std::atan2(y - s.y(), x - s.x()) - centre);
-        az_lo = std::min(az_lo, a), az_hi = std::max(az_hi, a), d_max = std::max(d_max, std::hypot(x - s.x(), y - s.y()));
+        az_lo = std::min(az_lo, a), az_hi = std::max(az_hi, a),
+        d_max = std::max(d_max, std::hypot(x - s.x(), y - s.y()));
       }
-    const double d_min = std::hypot(std::max({kLo.x() - s.x(), 0.0, s.x() - kHi.x()}), std::max({kLo.y() - s.y(), 0.0, s.y() - kHi.y()}));
+    const double d_min = std::hypot(std::max({kLo.x() - s.x(), 0.0, s.x() - kHi.x()}),
+                                    std::max({kLo.y() - s.y(), 0.0, s.y() - kHi.y()}));
     const double el_lo = std::atan2(kLo.z() - s.z(), d_max), el_hi = std::atan2(kHi.z() - s.z(), d_min);
     for (const auto& d : m.detections) {
       ++c.detections;
@@ -100,7 +103,9 @@ TEST_CASE("without a clutter region most simulated false alarms point away from 
 }
 
 TEST_CASE("a malformed clutter region is an error") {
-  runtime::LogWriter w((std::filesystem::temp_directory_path() / ("sextant_clutter_bad_" + std::to_string(::getpid()) + ".lcm")).string());
+  runtime::LogWriter w(
+      (std::filesystem::temp_directory_path() / ("sextant_clutter_bad_" + std::to_string(::getpid()) + ".lcm"))
+          .string());
   tools::SimulationOptions o;
   o.clutter_region_min = {0, 0, 0};
   CHECK_THROWS_AS(tools::simulate(o, w), std::invalid_argument);  // max missing

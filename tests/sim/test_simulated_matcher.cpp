@@ -26,7 +26,8 @@ namespace {
 constexpr int64_t kT0 = 1'700'000'000'000'000;
 
 std::string temp(const std::string& n) {
-  return (std::filesystem::temp_directory_path() / ("sextant_matcher_" + std::to_string(::getpid()) + "_" + n)).string();
+  return (std::filesystem::temp_directory_path() / ("sextant_matcher_" + std::to_string(::getpid()) + "_" + n))
+      .string();
 }
 
 // A climbing helix with a pitch oscillation: the pose at t seconds after kT0.
@@ -171,7 +172,8 @@ TEST_CASE("simulated matcher: an answer between truth stamps uses the interpolat
 }
 
 TEST_CASE("simulated matcher: failure and wrong-match fractions within binomial bounds, wrong answers are wrong") {
-  const SimulatedMatcherOptions o{.sigma_t = 0.01, .sigma_r = 0.001, .failure_rate = 0.2, .wrong_rate = 0.1, .seed = 99};
+  const SimulatedMatcherOptions o{
+      .sigma_t = 0.01, .sigma_r = 0.001, .failure_rate = 0.2, .wrong_rate = 0.1, .seed = 99};
   auto m = matcher_for(helix_truth(), o);
   const int n = 6000;
   int none = 0, far = 0, near = 0;
@@ -184,8 +186,10 @@ TEST_CASE("simulated matcher: failure and wrong-match fractions within binomial 
     }
     const SE3 d = helix(tb).between(helix(ta)).between(to_se3(lc->relative));
     const double et = d.translation().norm(), er = d.rotation().log().norm();
-    if (et > 0.9 || er > 0.45) ++far;  // wrong: at least 1 m or 0.5 rad off (noise is ~0.02 m, 0.002 rad)
-    else if (et < 0.1 && er < 0.01) ++near;
+    if (et > 0.9 || er > 0.45)
+      ++far;  // wrong: at least 1 m or 0.5 rad off (noise is ~0.02 m, 0.002 rad)
+    else if (et < 0.1 && er < 0.01)
+      ++near;
     CHECK((lc->information.diagonal()[0] == doctest::Approx(1e4)));  // wrong ones look the same on the wire
   }
   const auto& c = m.counts();
@@ -194,7 +198,9 @@ TEST_CASE("simulated matcher: failure and wrong-match fractions within binomial 
   CHECK(c.wrong == far);
   CHECK(c.answered == near);
   CHECK(c.answered + c.wrong + c.failed == n);
-  const auto within = [n](int64_t count, double p) { return std::abs(count - n * p) < 4.5 * std::sqrt(n * p * (1 - p)); };
+  const auto within = [n](int64_t count, double p) {
+    return std::abs(count - n * p) < 4.5 * std::sqrt(n * p * (1 - p));
+  };
   CHECK(within(c.failed, 0.2));
   CHECK(within(c.wrong, 0.1));
 }
@@ -298,9 +304,7 @@ TEST_CASE("simulated matcher: deterministic for a seed, different for another") 
 }
 
 TEST_CASE("simulated matcher: options are validated") {
-  const auto bad = [](SimulatedMatcherOptions o) {
-    CHECK_THROWS_AS(SimulatedMatcher({}, o), std::invalid_argument);
-  };
+  const auto bad = [](SimulatedMatcherOptions o) { CHECK_THROWS_AS(SimulatedMatcher({}, o), std::invalid_argument); };
   SimulatedMatcherOptions o;
   o.sigma_t = 0;
   bad(o);

@@ -60,7 +60,8 @@ TEST_CASE("simulate spatial with IMU and GNSS: other streams unchanged, and the 
   for (const auto& r : records)
     if (r.channel != "IMU" && r.channel != "GNSS") others.push_back(r);
   REQUIRE(others.size() == plain.size());
-  for (size_t i = 0; i < plain.size(); ++i) REQUIRE((others[i].channel == plain[i].channel && others[i].data == plain[i].data));
+  for (size_t i = 0; i < plain.size(); ++i)
+    REQUIRE((others[i].channel == plain[i].channel && others[i].data == plain[i].data));
   CHECK(summary.imu == 180 * 200 + 1);
   CHECK(summary.gnss == 2 * 60 * 5 + 1);  // 60 s of each 90 s period, and the fix at t = 180 s
   CHECK(summary.gnss_outliers > 0);
@@ -104,10 +105,10 @@ TEST_CASE("simulate spatial with IMU and GNSS: other streams unchanged, and the 
         const double dt = static_cast<double>(m.utime - a.utime) * 1e-6;
         const Eigen::Quaterniond qa(a.orientation[0], a.orientation[1], a.orientation[2], a.orientation[3]);
         const Eigen::Vector3d v = qa.conjugate() * (Eigen::Vector3d(m.position) - Eigen::Vector3d(a.position)) / dt;
-        const Eigen::Matrix3d R =
-            Eigen::Map<const Eigen::Matrix<double, 6, 6, Eigen::RowMajor>>(m.increment_covariance).topLeftCorner<3, 3>() /
-                (dt * dt) +
-            Eigen::Matrix3d::Identity() * 1e-4;
+        const Eigen::Matrix3d R = Eigen::Map<const Eigen::Matrix<double, 6, 6, Eigen::RowMajor>>(m.increment_covariance)
+                                          .topLeftCorner<3, 3>() /
+                                      (dt * dt) +
+                                  Eigen::Matrix3d::Identity() * 1e-4;
         f.propagate_to(static_cast<double>(m.utime) * 1e-6);
         f.update_body_velocity(v, R, inertial::SensorMounting{});
       }
@@ -125,7 +126,8 @@ TEST_CASE("simulate spatial with IMU and GNSS: other streams unchanged, and the 
       const auto tr = truth.find(m.utime);
       if (tr == truth.end() || t - t0 < 10) continue;  // errors after 10 s of convergence
       const double e = (f.state().p - tr->second.position).norm();
-      const bool outage = std::fmod(t - t0, o.gnss.outage_period_s) >= o.gnss.outage_period_s - o.gnss.outage_duration_s;
+      const bool outage =
+          std::fmod(t - t0, o.gnss.outage_period_s) >= o.gnss.outage_period_s - o.gnss.outage_duration_s;
       if (outage) {
         worst_in_outage = std::max(worst_in_outage, e);
       } else {
@@ -152,15 +154,19 @@ TEST_CASE("simulate spatial with IMU and GNSS: other streams unchanged, and the 
   for (size_t k = 0; k < 4; k += 2) {
     const int64_t s0 = mark_times[k], s1 = mark_times[k + 1];
     const Eigen::Vector3d truth_move = truth.at(s1).position - truth.at(s0).position;
-    const Eigen::Vector3d odo_move = truth.at(s0).orientation * (marks[s0].odometry_q.conjugate() *
-                                                                 (marks[s1].odometry_p - marks[s0].odometry_p));
+    const Eigen::Vector3d odo_move =
+        truth.at(s0).orientation * (marks[s0].odometry_q.conjugate() * (marks[s1].odometry_p - marks[s0].odometry_p));
     filter_drift = std::max(filter_drift, (marks[s1].filter - marks[s0].filter - truth_move).norm());
     odometry_drift = std::max(odometry_drift, (odo_move - truth_move).norm());
   }
-  MESSAGE("simulated spatial 180 s, IMU 200 Hz + wheel odometry 50 Hz + GNSS 5 Hz (30 s outages, 5 % multipath): "
-          "position RMS with GNSS ", rms, " m; worst error in an outage ", worst_in_outage, " m; drift over an outage: "
-          "filter ", filter_drift, " m, odometry alone ", odometry_drift, " m; GNSS fused ", fused, ", gated ", gated,
-          " (", summary.gnss_outliers, " outliers simulated)");
+  MESSAGE(
+      "simulated spatial 180 s, IMU 200 Hz + wheel odometry 50 Hz + GNSS 5 Hz (30 s outages, 5 % multipath): "
+      "position RMS with GNSS ",
+      rms, " m; worst error in an outage ", worst_in_outage,
+      " m; drift over an outage: "
+      "filter ",
+      filter_drift, " m, odometry alone ", odometry_drift, " m; GNSS fused ", fused, ", gated ", gated, " (",
+      summary.gnss_outliers, " outliers simulated)");
   CHECK(rms < 0.3);
   CHECK(filter_drift <= 0.5 * odometry_drift);
   CHECK(worst_in_outage < 1);

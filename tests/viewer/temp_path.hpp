@@ -8,7 +8,8 @@
 namespace sextant::viewer::test {
 
 inline std::string temp_path(const std::string& name) {
-  return (std::filesystem::temp_directory_path() / ("sextant_viewer_" + std::to_string(::getpid()) + "_" + name)).string();
+  return (std::filesystem::temp_directory_path() / ("sextant_viewer_" + std::to_string(::getpid()) + "_" + name))
+      .string();
 }
 
 }  // namespace sextant::viewer::test

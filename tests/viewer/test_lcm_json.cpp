@@ -63,7 +63,8 @@ TEST_CASE("fused_pose_t: JSON field by field, and back to the same bytes") {
   CHECK((*j)["planar"] == true);
   CHECK((*j)["position"][1] == -2.25);
   CHECK((*j)["covariance"].size() == 36);
-  CHECK(j->dump().find("\"utime\":1700000000123456,\"sender\":\"sextantd\"") != std::string::npos);  // declaration order
+  CHECK(j->dump().find("\"utime\":1700000000123456,\"sender\":\"sextantd\"") !=
+        std::string::npos);  // declaration order
   CHECK(type->encode(Json::parse(j->dump())) == bytes);
 }
 

@@ -59,7 +59,11 @@ TEST_CASE("LCM -> MCAP -> LCM loses nothing") {
 
 TEST_CASE("convert lcm refuses a file that is not MCAP, naming it") {
   const auto path = temp_path("not.mcap");
-  { runtime::LogWriter w(path); w.write_raw(1, "X", "abc", 3); }
-  CHECK_THROWS_WITH_AS(viewer::convert_mcap_to_lcm(path, temp_path("never.lcm")), doctest::Contains(path.c_str()), std::runtime_error);
+  {
+    runtime::LogWriter w(path);
+    w.write_raw(1, "X", "abc", 3);
+  }
+  CHECK_THROWS_WITH_AS(viewer::convert_mcap_to_lcm(path, temp_path("never.lcm")), doctest::Contains(path.c_str()),
+                       std::runtime_error);
   std::remove(path.c_str());
 }

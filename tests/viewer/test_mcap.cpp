@@ -90,7 +90,7 @@ TEST_CASE("the summary's statistics and chunk indexes describe the data section"
   CHECK(s.chunk_count > 3);  // 4 KiB chunks: the messages span several
   uint64_t prev_end = 0;
   for (const auto& ci : r.chunk_indexes()) {
-    CHECK(bytes[ci.chunk_start_offset] == '\x06');                        // a Chunk record
+    CHECK(bytes[ci.chunk_start_offset] == '\x06');                         // a Chunk record
     CHECK(le64(bytes, ci.chunk_start_offset + 1) + 9 == ci.chunk_length);  // whose length the index gives
     CHECK(ci.chunk_start_offset >= prev_end);
     prev_end = ci.chunk_start_offset + ci.chunk_length;
@@ -133,8 +133,8 @@ TEST_CASE("a flipped byte is caught by the CRC of its section, a cut file by its
     bad[at + 9 + 2 + 4 + 3] ^= 0x01;  // a timestamp in the first message index
     dump(path, bad);
     McapReader reader(path);
-    CHECK_THROWS_WITH_AS(reader.for_each_message([](auto&, auto*, auto&) {}), doctest::Contains("data section CRC mismatch"),
-                         std::runtime_error);
+    CHECK_THROWS_WITH_AS(reader.for_each_message([](auto&, auto*, auto&) {}),
+                         doctest::Contains("data section CRC mismatch"), std::runtime_error);
   }
   SUBCASE("cut short") {
     dump(path, good.substr(0, good.size() - 100));

@@ -103,11 +103,13 @@ std::map<std::string, std::vector<std::pair<double, double>>> strips(const Json&
 
 }  // namespace
 
-TEST_CASE("trajectory messages rebuild each body's trajectory as trajectory_t.lcm says, redrawing the segments they touch") {
+TEST_CASE(
+    "trajectory messages rebuild each body's trajectory as trajectory_t.lcm says, redrawing the segments they touch") {
   TopicMapper mapper;
   std::vector<int64_t> ids(600);
   for (int64_t i = 0; i < 600; ++i) ids[static_cast<size_t>(i)] = i;
-  const auto first = strips(Json::parse(on(map(mapper, "TRAJECTORY", trajectory_update(ids, 0)), "/sextant/trajectories").data));
+  const auto first =
+      strips(Json::parse(on(map(mapper, "TRAJECTORY", trajectory_update(ids, 0)), "/sextant/trajectories").data));
   // 600 keyframes: segments [0,256), [256,512), [512,600), each strip joined to the previous one's last keyframe.
   REQUIRE(first.count("robot1/trajectory/0"));
   CHECK(first.at("robot1/trajectory/0").size() == 256);
@@ -127,7 +129,8 @@ TEST_CASE("trajectory messages rebuild each body's trajectory as trajectory_t.lc
   const auto& seg = second.at("robot1/trajectory/1");
   CHECK(seg.size() == 257 - 10);
   CHECK(std::count(seg.begin(), seg.end(), std::make_pair(305.0, 7.0)) == 1);
-  CHECK(std::none_of(seg.begin(), seg.end(), [](const auto& p) { return p.first >= 300 && p.first <= 310 && p.first != 305; }));
+  CHECK(std::none_of(seg.begin(), seg.end(),
+                     [](const auto& p) { return p.first >= 300 && p.first <= 310 && p.first != 305; }));
   CHECK(second.count("robot1/trajectory/label"));
 
   // An open-ended snapshot range (to the largest id) erases the keyframes from its start on, quickly.

@@ -16,9 +16,9 @@ void hold_gauge(SmootherState& s);
 
 /// Which of the pending variables and factors enter at an update.
 struct Admission {
-  std::vector<int> vars_in, vars_wait;        // pending variables that enter now, and those that wait
+  std::vector<int> vars_in, vars_wait;  // pending variables that enter now, and those that wait
   std::vector<size_t> factors_in, factors_wait;
-  int new_dim = 0;                             // columns the entering free variables take
+  int new_dim = 0;  // columns the entering free variables take
 };
 Admission admit(const SmootherState& s);
 

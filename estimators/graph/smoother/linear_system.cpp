@@ -18,7 +18,8 @@ bool order_blocks(SmootherState& s, const std::vector<char>& in, System& sys) {
   // Blocks: the free variables in the system, in insertion order; the newest ones are constrained to come last.
   std::vector<int> block_var, var_block(vars.size(), -1);
   for (size_t v = 0; v < in.size(); ++v)
-    if (in[v] && !vars[v].fixed) var_block[v] = static_cast<int>(block_var.size()), block_var.push_back(static_cast<int>(v));
+    if (in[v] && !vars[v].fixed)
+      var_block[v] = static_cast<int>(block_var.size()), block_var.push_back(static_cast<int>(v));
   const size_t nb = block_var.size();
   std::vector<std::vector<int>> upper(nb);
   for (size_t b = 0; b < nb; ++b) upper[b].push_back(static_cast<int>(b));
@@ -83,7 +84,8 @@ bool order_blocks(SmootherState& s, const std::vector<char>& in, System& sys) {
   }
   sys.col_var.assign(static_cast<size_t>(sys.capacity), -1);
   for (size_t v = 0; v < sys.pos.size(); ++v)
-    for (int k = 0; sys.pos[v] >= 0 && k < vars[v].dim(); ++k) sys.col_var[static_cast<size_t>(sys.pos[v] + k)] = static_cast<int>(v);
+    for (int k = 0; sys.pos[v] >= 0 && k < vars[v].dim(); ++k)
+      sys.col_var[static_cast<size_t>(sys.pos[v] + k)] = static_cast<int>(v);
   return true;
 }
 
@@ -96,7 +98,8 @@ std::unique_ptr<System> begin_system(SmootherState& s, const std::vector<char>& 
     if (s.weight[f] > 0) sys->factors.push_back(f);
   bool ok = true;
   if (keep_ordering) {
-    sys->pos = s.pos, sys->col_var = s.fx.col_var, sys->used = s.fx.used, sys->reserve_end = s.fx.reserve_end, sys->capacity = s.fx.capacity;
+    sys->pos = s.pos, sys->col_var = s.fx.col_var, sys->used = s.fx.used, sys->reserve_end = s.fx.reserve_end,
+    sys->capacity = s.fx.capacity;
   } else {
     ok = order_blocks(s, in, *sys);
   }

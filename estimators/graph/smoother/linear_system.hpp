@@ -33,14 +33,14 @@ struct System {
   // H's column pattern by variable: the variables before it in the ordering that share a factor with it, by position
   // (flat: before[first[v] .. first[v] + count[v])); its own block comes last in each of its columns.
   std::vector<int> first, count, before;
-  SparsePtr H;                  // upper triangle; freed once factorized
+  SparsePtr H;  // upper triangle; freed once factorized
   Eigen::VectorXd g;
   FactorPtr L;
-  DensePtr y;                   // L^-1 (-g)
-  size_t assembled = 0;         // factors linearized into H and g
-  size_t factorized = 0;        // rows of L computed
+  DensePtr y;             // L^-1 (-g)
+  size_t assembled = 0;   // factors linearized into H and g
+  size_t factorized = 0;  // rows of L computed
   bool done = false;
-  std::string error;            // why it failed (when done)
+  std::string error;  // why it failed (when done)
   SmootherFailure failure = SmootherFailure::kNone;
 };
 

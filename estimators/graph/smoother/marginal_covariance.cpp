@@ -29,7 +29,8 @@ Eigen::MatrixXd marginal_covariance(SmootherState& s, int index) {
   for (size_t r = 0; r < path.size(); ++r) slot[static_cast<size_t>(path[r])] = static_cast<int>(r);
   std::vector<double> Y(path.size() * static_cast<size_t>(d), 0.0);  // row r: Y's row at column path[r]
   const size_t ud = static_cast<size_t>(d);
-  for (int k = 0; k < d; ++k) Y[static_cast<size_t>(slot[static_cast<size_t>(p + k)]) * ud + static_cast<size_t>(k)] = 1.0;
+  for (int k = 0; k < d; ++k)
+    Y[static_cast<size_t>(slot[static_cast<size_t>(p + k)]) * ud + static_cast<size_t>(k)] = 1.0;
   Eigen::MatrixXd out = Eigen::MatrixXd::Zero(d, d);
   bool ok = true;
   for (size_t r = 0; r < path.size(); ++r) {

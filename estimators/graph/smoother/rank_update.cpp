@@ -73,18 +73,21 @@ bool make_room(SmootherState& s, const cholmod_sparse* C) {
   for (size_t k = 0; k < C->ncol; ++k)
     for (int j = Ci[Cp[k]]; j >= 0 && !on_path[static_cast<size_t>(j)]; j = fx.parent_of(j)) {
       on_path[static_cast<size_t>(j)] = 1;
-      const double grown = grow1 * static_cast<double>(static_cast<size_t>(Lnz[j]) + rows) + static_cast<double>(s.workspace->grow2);
+      const double grown =
+          grow1 * static_cast<double>(static_cast<size_t>(Lnz[j]) + rows) + static_cast<double>(s.workspace->grow2);
       need += std::min(static_cast<size_t>(grown) + 16, n - static_cast<size_t>(j));
     }
   for (size_t k = 0; k < C->ncol; ++k)
-    for (int j = Ci[Cp[k]]; j >= 0 && on_path[static_cast<size_t>(j)]; j = fx.parent_of(j)) on_path[static_cast<size_t>(j)] = 0;
+    for (int j = Ci[Cp[k]]; j >= 0 && on_path[static_cast<size_t>(j)]; j = fx.parent_of(j))
+      on_path[static_cast<size_t>(j)] = 0;
   int* Lp = static_cast<int*>(L->p);
   if (static_cast<size_t>(Lp[n]) + need <= L->nzmax) return true;
   if (!cholmod_pack_factor(L, s.workspace.get())) return failed(s, "CHOLMOD could not pack the factor");
   // The end of the storage (Lp[n]) is left where it was by the packing; the last column in storage order keeps
   // what it uses plus grow2, as packing gives every column.
   const int last = static_cast<const int*>(L->prev)[n];
-  Lp[n] = Lp[last] + static_cast<int>(std::min(static_cast<size_t>(Lnz[last]) + s.workspace->grow2, n - static_cast<size_t>(last)));
+  Lp[n] = Lp[last] + static_cast<int>(
+                         std::min(static_cast<size_t>(Lnz[last]) + s.workspace->grow2, n - static_cast<size_t>(last)));
   const size_t end = static_cast<size_t>(Lp[n]);
   if (end + need > L->nzmax && !cholmod_reallocate_factor(end + need + end / 2, L, s.workspace.get()))
     return failed(s, "CHOLMOD could not grow the factor");
@@ -101,8 +104,9 @@ bool apply(SmootherState& s, const std::vector<Contribution>& cs, bool add, bool
   for (const Contribution& c : cs)
     if (!c.cols.empty()) r += static_cast<size_t>(c.Ct.rows()), nz += static_cast<size_t>(c.Ct.rows()) * c.cols.size();
   if (r == 0) return true;
-  SparsePtr C = own(cholmod_allocate_sparse(static_cast<size_t>(fx.capacity), r, nz, 1, 1, 0, CHOLMOD_REAL, s.workspace.get()),
-                    s.workspace);
+  SparsePtr C =
+      own(cholmod_allocate_sparse(static_cast<size_t>(fx.capacity), r, nz, 1, 1, 0, CHOLMOD_REAL, s.workspace.get()),
+          s.workspace);
   if (C == nullptr) return failed(s, "CHOLMOD could not allocate an update");
   int* p = static_cast<int*>(C->p);
   int* i = static_cast<int*>(C->i);
@@ -128,14 +132,15 @@ bool apply(SmootherState& s, const std::vector<Contribution>& cs, bool add, bool
       db[c.cols[j]] -= d;
     }
   if (!within_pattern && !make_room(s, C.get())) return false;
-  const bool ok = !s.workspace.take_fault() &&
-                  cholmod_updown_solve(add ? 1 : 0, C.get(), fx.L.get(), fx.y.get(), fx.delta_b.get(), s.workspace.get());
+  const bool ok = !s.workspace.take_fault() && cholmod_updown_solve(add ? 1 : 0, C.get(), fx.L.get(), fx.y.get(),
+                                                                    fx.delta_b.get(), s.workspace.get());
   if (!ok) return failed(s, "CHOLMOD's update of the factor failed");
   // The columns CHOLMOD modified: the elimination-tree paths from each column's first row to the root.
   const int* Ci = static_cast<const int*>(C->i);
   const int* Cp = static_cast<const int*>(C->p);
   for (size_t k = 0; k < r; ++k)
-    for (int j = Ci[Cp[k]]; j >= 0 && !fx.dirty[static_cast<size_t>(j)]; j = fx.parent_of(j)) fx.dirty[static_cast<size_t>(j)] = 1;
+    for (int j = Ci[Cp[k]]; j >= 0 && !fx.dirty[static_cast<size_t>(j)]; j = fx.parent_of(j))
+      fx.dirty[static_cast<size_t>(j)] = 1;
   return true;
 }
 

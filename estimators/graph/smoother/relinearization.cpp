@@ -15,7 +15,8 @@ std::vector<int> moved_variables(const SmootherState& s) {
     if (p < 0) continue;
     for (int i = 0; i < vars[v].dim(); ++i) {
       const double step = std::abs(s.fx.dx[p + i]);
-      const double limit = is_rotation_component(vars[v].kind, i) ? s.options.relinearize_rotation : s.options.relinearize_translation;
+      const double limit =
+          is_rotation_component(vars[v].kind, i) ? s.options.relinearize_rotation : s.options.relinearize_translation;
       if (step > limit) {
         moved.push_back(static_cast<int>(v));
         break;

@@ -40,7 +40,8 @@ void ReorderScheduler::work(SmootherState& s, bool began_now) {
   const double own = std::chrono::duration<double, std::milli>(now - update_started_).count();
   const int64_t left = std::max<int64_t>(1, due_ - s.update_calls);
   const double share = began_now ? 0.0 : std::max(0.0, 1.25 * work_ms_ - spent_ms_) / static_cast<double>(left);
-  const auto deadline = now + std::chrono::duration<double, std::milli>(std::max(s.options.reorder_slice_ms - own, share));
+  const auto deadline =
+      now + std::chrono::duration<double, std::milli>(std::max(s.options.reorder_slice_ms - own, share));
   advance(s, *system_, [&] { return Clock::now() >= deadline; });
   spent_ms_ += ms_since(now);
 }

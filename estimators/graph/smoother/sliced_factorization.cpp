@@ -54,10 +54,11 @@ bool advance(SmootherState& s, System& sys, const std::function<bool()>& out_of_
       if (common.status == CHOLMOD_NOT_POSDEF || sys.L->minor < sys.L->n) {
         const size_t col = sys.L->minor < sys.L->n ? sys.L->minor : sys.factorized;
         const int var = col < sys.col_var.size() ? sys.col_var[col] : -1;
-        return fail("the normal equations are not positive definite: variable " +
-                        (var >= 0 ? std::to_string(s.graph.variables()[static_cast<size_t>(var)].id) : std::string("?")) +
-                        " is not determined by the factors (under-constrained, or disconnected from the gauge)",
-                    SmootherFailure::kUnderdetermined);
+        return fail(
+            "the normal equations are not positive definite: variable " +
+                (var >= 0 ? std::to_string(s.graph.variables()[static_cast<size_t>(var)].id) : std::string("?")) +
+                " is not determined by the factors (under-constrained, or disconnected from the gauge)",
+            SmootherFailure::kUnderdetermined);
       }
       sys.factorized = end;
     } else {

@@ -20,16 +20,20 @@ bool assemble_pattern(SmootherState& s, System& sys) {
     for (size_t f : sys.factors)
       for (int a : factors[f]->variables())
         for (int b : factors[f]->variables())
-          if (sys.pos[static_cast<size_t>(a)] >= 0 && sys.pos[static_cast<size_t>(a)] < sys.pos[static_cast<size_t>(b)]) visit(a, b);
+          if (sys.pos[static_cast<size_t>(a)] >= 0 && sys.pos[static_cast<size_t>(a)] < sys.pos[static_cast<size_t>(b)])
+            visit(a, b);
   };
   each_pair([&](int, int b) { ++sys.first[static_cast<size_t>(b) + 1]; });
   for (size_t v = 0; v < nv; ++v) sys.first[v + 1] += sys.first[v];
   sys.before.assign(static_cast<size_t>(sys.first[nv]), 0);
-  each_pair([&](int a, int b) { sys.before[static_cast<size_t>(sys.first[static_cast<size_t>(b)] + sys.count[static_cast<size_t>(b)]++)] = a; });
+  each_pair([&](int a, int b) {
+    sys.before[static_cast<size_t>(sys.first[static_cast<size_t>(b)] + sys.count[static_cast<size_t>(b)]++)] = a;
+  });
   size_t nnz = static_cast<size_t>(sys.reserve_end - sys.used);
   for (size_t v = 0; v < nv; ++v) {
     int* r = sys.before.data() + sys.first[v];
-    std::sort(r, r + sys.count[v], [&](int a, int b) { return sys.pos[static_cast<size_t>(a)] < sys.pos[static_cast<size_t>(b)]; });
+    std::sort(r, r + sys.count[v],
+              [&](int a, int b) { return sys.pos[static_cast<size_t>(a)] < sys.pos[static_cast<size_t>(b)]; });
     sys.count[v] = static_cast<int>(std::unique(r, r + sys.count[v]) - r);
     if (sys.pos[v] < 0) continue;
     size_t above = 0;
@@ -37,8 +41,8 @@ bool assemble_pattern(SmootherState& s, System& sys) {
     const size_t d = static_cast<size_t>(vars[v].dim());
     nnz += d * above + d * (d + 1) / 2;
   }
-  sys.H = own(cholmod_allocate_sparse(static_cast<size_t>(sys.capacity), static_cast<size_t>(sys.capacity), nnz, 1, 1, 1,
-                                      CHOLMOD_REAL, s.workspace.get()),
+  sys.H = own(cholmod_allocate_sparse(static_cast<size_t>(sys.capacity), static_cast<size_t>(sys.capacity), nnz, 1, 1,
+                                      1, CHOLMOD_REAL, s.workspace.get()),
               s.workspace);
   if (sys.H == nullptr) return false;
   int* Hp = static_cast<int*>(sys.H->p);
@@ -77,7 +81,8 @@ void assemble_values(const SmootherState& s, System& sys, size_t end) {
   // Block (a, b), pos a <= pos b, of a factor: J_a' W J_b added at a's rows in b's columns.
   auto offset_in_column = [&](int a, int b) {
     int off = 0;
-    for (int j = sys.first[static_cast<size_t>(b)]; j < sys.first[static_cast<size_t>(b)] + sys.count[static_cast<size_t>(b)]; ++j) {
+    for (int j = sys.first[static_cast<size_t>(b)];
+         j < sys.first[static_cast<size_t>(b)] + sys.count[static_cast<size_t>(b)]; ++j) {
       const int u = sys.before[static_cast<size_t>(j)];
       if (u == a) return off;
       off += vars[static_cast<size_t>(u)].dim();

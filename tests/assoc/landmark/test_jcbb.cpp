@@ -186,7 +186,8 @@ TEST_CASE("sparse and dense Jacobians give the same distances and the same JCBB 
     return c;
   };
   for (int i = 0; i < 3; ++i)
-    for (int j = 0; j < w.landmarks; ++j) CHECK(individual_distance(sparse, i, j) == doctest::Approx(individual_distance(dense, i, j)));
+    for (int j = 0; j < w.landmarks; ++j)
+      CHECK(individual_distance(sparse, i, j) == doctest::Approx(individual_distance(dense, i, j)));
   const Hypothesis h{3, 1, 4};
   CHECK(joint_distance(sparse, h) == doctest::Approx(joint_distance(dense, h)));
   CHECK(joint_compatibility_branch_and_bound(sparse) == joint_compatibility_branch_and_bound(dense));

@@ -56,8 +56,9 @@ struct Run {
   void on_imu(const imu_t& m) {
     const double t = seconds(m.utime);
     if (!filter.initialized()) start(t, m);
-    const BodyImuSample s = imu_to_body(imu_mount, Eigen::Vector3d(m.angular_velocity[0], m.angular_velocity[1], m.angular_velocity[2]),
-                                        Eigen::Vector3d(m.linear_acceleration[0], m.linear_acceleration[1], m.linear_acceleration[2]));
+    const BodyImuSample s =
+        imu_to_body(imu_mount, Eigen::Vector3d(m.angular_velocity[0], m.angular_velocity[1], m.angular_velocity[2]),
+                    Eigen::Vector3d(m.linear_acceleration[0], m.linear_acceleration[1], m.linear_acceleration[2]));
     filter.add_imu(t, s);
     ++imu;
     if (m.has_orientation) {

@@ -9,6 +9,7 @@
 
 namespace sextant::testing {
 
+using config::aggregate_parts;
 using config::field_count;
 using config::fields_of;
 using config::has_aggregate_parts;
@@ -16,7 +17,6 @@ using config::is_std_array;
 using config::is_std_map;
 using config::is_std_optional;
 using config::is_std_vector;
-using config::aggregate_parts;
 
 /// Empty when `a` and `b` are equal field by field; else the path of the first difference.
 template <class T>
@@ -41,18 +41,24 @@ std::string first_difference(const T& a, const T& b, const std::string& path = "
     return a ? first_difference(*a, *b, path) : "";
   } else if constexpr (std::is_aggregate_v<T>) {
     const auto fa = [](const T& x) {
-      if constexpr (has_aggregate_parts<T>) return aggregate_parts<T>::of(x);
-      else return fields_of(x);
+      if constexpr (has_aggregate_parts<T>)
+        return aggregate_parts<T>::of(x);
+      else
+        return fields_of(x);
     }(a);
     const auto fb = [](const T& x) {
-      if constexpr (has_aggregate_parts<T>) return aggregate_parts<T>::of(x);
-      else return fields_of(x);
+      if constexpr (has_aggregate_parts<T>)
+        return aggregate_parts<T>::of(x);
+      else
+        return fields_of(x);
     }(b);
-    static_assert(std::tuple_size_v<std::remove_const_t<decltype(fa)>> == field_count<T>(), "aggregate_parts: a field is not listed");
+    static_assert(std::tuple_size_v<std::remove_const_t<decltype(fa)>> == field_count<T>(),
+                  "aggregate_parts: a field is not listed");
     std::string d;
     [&]<size_t... I>(std::index_sequence<I...>) {
       ((d.empty() ? (void)(d = first_difference(std::get<I>(fa), std::get<I>(fb), at(I))) : (void)0), ...);
-    }(std::make_index_sequence<std::tuple_size_v<decltype(fa)>>{});
+    }
+    (std::make_index_sequence<std::tuple_size_v<decltype(fa)>>{});
     return d;
   } else {
     return a == b ? "" : (path.empty() ? "(value)" : path);

@@ -25,7 +25,8 @@ const auto error_of = sextant::test::config_error_of;
 }  // namespace
 
 TEST_CASE("the shipped configs parse: default enables dead reckoning, mrclam fits the data set") {
-  CHECK(sextant::config::load_daemon_config(std::string(SEXTANT_SOURCE_DIR) + "/config/mrclam.yaml").queue_capacity == 4096);
+  CHECK(sextant::config::load_daemon_config(std::string(SEXTANT_SOURCE_DIR) + "/config/mrclam.yaml").queue_capacity ==
+        4096);
   const auto c = sextant::config::load_daemon_config(std::string(SEXTANT_SOURCE_DIR) + "/config/default.yaml");
   CHECK(c.name == "sextantd");
   CHECK(c.channels.odometry == "ODOMETRY");
@@ -42,7 +43,8 @@ TEST_CASE("an empty file gives every default") {
 }
 
 TEST_CASE("values override defaults and the prefix applies to every channel") {
-  const auto c = parse_daemon_config("daemon:\n  queue_capacity: 7\nchannels:\n  prefix: ROBOT1_\n  odometry: WHEEL\n", "t");
+  const auto c =
+      parse_daemon_config("daemon:\n  queue_capacity: 7\nchannels:\n  prefix: ROBOT1_\n  odometry: WHEEL\n", "t");
   CHECK(c.queue_capacity == 7);
   CHECK(c.channels.full(c.channels.odometry) == "ROBOT1_WHEEL");
 }
@@ -73,8 +75,8 @@ TEST_CASE("a value out of range names its line and the bound") {
 TEST_CASE("enumerations list the allowed values") {
   const std::string e = error_of("engine:\n  primary_estimator: kalman\n");
   CHECK(e.find("test.yaml:2:22:") == 0);
-  CHECK(e.find("'engine.primary_estimator': unknown estimator 'kalman' (auto, dead_reckoning, ekf, pf, graph or inertial)") !=
-        std::string::npos);
+  CHECK(e.find("'engine.primary_estimator': unknown estimator 'kalman' (auto, dead_reckoning, ekf, pf, graph or "
+               "inertial)") != std::string::npos);
 }
 
 TEST_CASE("kinds are parsed once into enums: every spelling maps to its kind, an unknown name names its file:line") {
@@ -94,8 +96,8 @@ TEST_CASE("kinds are parsed once into enums: every spelling maps to its kind, an
   CHECK(std::string(sextant::engine::filter_type_name(FilterType::kPf)) == "pf");
   CHECK(std::string(sextant::engine::association_solver_name(AssociationSolver::kLagrangian)) == "lr");
   using sextant::engine::PrimaryEstimator;
-  for (auto e : {PrimaryEstimator::kAuto, PrimaryEstimator::kDeadReckoning, PrimaryEstimator::kEkf, PrimaryEstimator::kPf,
-                 PrimaryEstimator::kGraph})
+  for (auto e : {PrimaryEstimator::kAuto, PrimaryEstimator::kDeadReckoning, PrimaryEstimator::kEkf,
+                 PrimaryEstimator::kPf, PrimaryEstimator::kGraph})
     CHECK(sextant::engine::primary_estimator_from_name(sextant::engine::primary_estimator_name(e)) == e);
   CHECK(parse_daemon_config("engine:\n  primary_estimator: dead_reckoning\n", "t").engine.primary_estimator ==
         PrimaryEstimator::kDeadReckoning);
@@ -126,7 +128,8 @@ TEST_CASE("kinds are parsed once into enums: every spelling maps to its kind, an
         std::string::npos);
   const std::string r = error_of("engine:\n  graph:\n    loops: {robust: DCS}\n");
   CHECK(r.find("test.yaml:3:21:") == 0);
-  CHECK(r.find("'engine.graph.loops.robust': unknown robust kernel 'DCS' (none, huber, cauchy or dcs)") != std::string::npos);
+  CHECK(r.find("'engine.graph.loops.robust': unknown robust kernel 'DCS' (none, huber, cauchy or dcs)") !=
+        std::string::npos);
   const std::string c = error_of("engine:\n  association:\n    cost: kullback\n");
   CHECK(c.find("test.yaml:3:11:") == 0);
   CHECK(c.find("'engine.association.cost': unknown cost 'kullback' (classic, kl or renyi)") != std::string::npos);
@@ -173,14 +176,16 @@ TEST_CASE("the loops' kernel width: auto by default (a chi-square quantile of th
   const auto shipped = sextant::config::load_daemon_config(std::string(SEXTANT_SOURCE_DIR) + "/config/default.yaml");
   CHECK_FALSE(shipped.engine.graph.kernel_width.has_value());
   // Huber's and Cauchy's delta act on sqrt(chi2): the square root of the same quantile; at 0.99, 6 dof: 16.812.
-  const auto huber = parse_daemon_config("engine:\n  graph:\n    loops: {robust: huber, gate_probability: 0.99}\n", "t").engine.graph;
+  const auto huber =
+      parse_daemon_config("engine:\n  graph:\n    loops: {robust: huber, gate_probability: 0.99}\n", "t").engine.graph;
   CHECK(kernel_width_for(huber, false) == doctest::Approx(std::sqrt(sextant::assoc::chi2_quantile(6, 0.99))));
   CHECK(kernel_width_for(huber, false) == doctest::Approx(std::sqrt(16.812)).epsilon(0.01));
   // A number applies to both kinds of body; "auto" spelled out is the default.
   const auto five = parse_daemon_config("engine:\n  graph:\n    loops: {kernel_width: 5}\n", "t").engine.graph;
   CHECK(kernel_width_for(five, true) == 5.0);
   CHECK(kernel_width_for(five, false) == 5.0);
-  CHECK_FALSE(parse_daemon_config("engine:\n  graph:\n    loops: {kernel_width: auto}\n", "t").engine.graph.kernel_width);
+  CHECK_FALSE(
+      parse_daemon_config("engine:\n  graph:\n    loops: {kernel_width: auto}\n", "t").engine.graph.kernel_width);
   // Anything else names its place.
   for (const char* bad : {"wide", "-1", "0", "1e400", "5m"}) {
     const std::string e = error_of(std::string("engine:\n  graph:\n    loops:\n      kernel_width: ") + bad + "\n");
@@ -203,7 +208,8 @@ sextant::graph::IncrementalOptions planar_smoother_options(const sextant::engine
 }
 
 // The keys of engine.graph.smoother and the IncrementalOptions field each one sets.
-void check_smoother_options(const sextant::graph::IncrementalOptions& got, const sextant::graph::IncrementalOptions& want) {
+void check_smoother_options(const sextant::graph::IncrementalOptions& got,
+                            const sextant::graph::IncrementalOptions& want) {
   CHECK(got.relinearize_translation == want.relinearize_translation);
   CHECK(got.relinearize_rotation == want.relinearize_rotation);
   CHECK(got.relinearization_passes == want.relinearization_passes);
@@ -233,13 +239,15 @@ TEST_CASE("engine.graph.smoother: defaults are IncrementalOptions' own, every ke
   check_smoother_options(planar_smoother_options(shipped.engine.graph), defaults);
 
   // Every key set to a value that differs from its default: each one arrives in the smoother's options.
-  const auto set = parse_daemon_config(
-      "engine:\n  graph:\n    smoother:\n"
-      "      relinearize_translation: 0.25\n      relinearize_rotation: 0.05\n      relinearization_passes: 3\n"
-      "      relinearize_skip: 4\n      wildfire: 0\n      update_fraction: 0.1\n      min_update_factors: 16\n"
-      "      max_update_factors: 512\n      refill_ratio: 2.5\n      nested_dissection_above: 100\n"
-      "      reorder_spread: 3\n      reorder_spread_above: 0\n      reorder_slice_ms: 1.5\n",
-      "t").engine.graph;
+  const auto set =
+      parse_daemon_config(
+          "engine:\n  graph:\n    smoother:\n"
+          "      relinearize_translation: 0.25\n      relinearize_rotation: 0.05\n      relinearization_passes: 3\n"
+          "      relinearize_skip: 4\n      wildfire: 0\n      update_fraction: 0.1\n      min_update_factors: 16\n"
+          "      max_update_factors: 512\n      refill_ratio: 2.5\n      nested_dissection_above: 100\n"
+          "      reorder_spread: 3\n      reorder_spread_above: 0\n      reorder_slice_ms: 1.5\n",
+          "t")
+          .engine.graph;
   sextant::graph::IncrementalOptions want = defaults;
   want.relinearize_translation = 0.25, want.relinearize_rotation = 0.05, want.relinearization_passes = 3;
   want.relinearize_skip = 4, want.wildfire = 0, want.update_fraction = 0.1, want.min_update_factors = 16;
@@ -300,23 +308,24 @@ TEST_CASE("engine.graph.smoother: each bad value stops parsing with its line, co
   // A cap below the floor names the key that was set.
   std::string e = error_of("engine:\n  graph:\n    smoother:\n      max_update_factors: 8\n");
   CHECK(e.find("test.yaml:4:27: 'engine.graph.smoother': max_update_factors (8) must not be smaller than "
-                "min_update_factors (32)") == 0);
+               "min_update_factors (32)") == 0);
   e = error_of("engine:\n  graph:\n    smoother:\n      min_update_factors: 200\n");
   CHECK(e.find("test.yaml:4:27: 'engine.graph.smoother': max_update_factors (128) must not be smaller than "
-                "min_update_factors (200)") == 0);
+               "min_update_factors (200)") == 0);
   // A misspelt key, the smoother section not a mapping, and the thresholds' old place.
   e = error_of("engine:\n  graph:\n    smoother:\n      reorder_spred: 2\n");
   CHECK(e.find("test.yaml:4:7: unknown key 'engine.graph.smoother.reorder_spred'") == 0);
   CHECK(e.find("reorder_spread") != std::string::npos);
-  CHECK(error_of("engine:\n  graph:\n    smoother: 5\n").find("test.yaml:3:15: 'engine.graph.smoother': expected a mapping") == 0);
+  CHECK(error_of("engine:\n  graph:\n    smoother: 5\n")
+            .find("test.yaml:3:15: 'engine.graph.smoother': expected a mapping") == 0);
   e = error_of("engine:\n  graph:\n    relinearize_translation: 0.2\n");
   CHECK(e.find("test.yaml:3:5: 'engine.graph.relinearize_translation' has moved to "
-                "'engine.graph.smoother.relinearize_translation'") == 0);
+               "'engine.graph.smoother.relinearize_translation'") == 0);
 }
 
 TEST_CASE("landmark sightings' kernel width: auto takes the sighting gate's quantile of the sighting's dimension") {
-  using sextant::engine::sighting_kernel_width_for;
   using sextant::assoc::chi2_quantile;
+  using sextant::engine::sighting_kernel_width_for;
   // Planar sightings have 2 residuals (range, bearing), 3-D ones 3; the gate is landmarks.gate_probability (0.999):
   // the tables' 13.816 and 16.266.
   const auto d = parse_daemon_config("", "t").engine.graph;
@@ -326,7 +335,9 @@ TEST_CASE("landmark sightings' kernel width: auto takes the sighting gate's quan
   CHECK(sighting_kernel_width_for(d, false) == doctest::Approx(16.266).epsilon(1e-4));
   // The sightings' own gate probability, not the loops'; Huber and Cauchy take the square root.
   const auto huber = parse_daemon_config(
-      "engine:\n  graph:\n    loops: {robust: huber, gate_probability: 0.9}\n    landmarks: {gate_probability: 0.99}\n", "t")
+                         "engine:\n  graph:\n    loops: {robust: huber, gate_probability: 0.9}\n    landmarks: "
+                         "{gate_probability: 0.99}\n",
+                         "t")
                          .engine.graph;
   CHECK(sighting_kernel_width_for(huber, true) == doctest::Approx(std::sqrt(chi2_quantile(2, 0.99))));
   CHECK(sighting_kernel_width_for(huber, true) == doctest::Approx(std::sqrt(9.2103)).epsilon(1e-4));
@@ -354,8 +365,9 @@ TEST_CASE("load_daemon_config names the file in every error") {
   }
 }
 
-TEST_CASE("channels that cannot work are refused: LCM's 63-character limit with the prefix, shared inputs, outputs "
-          "named like inputs") {
+TEST_CASE(
+    "channels that cannot work are refused: LCM's 63-character limit with the prefix, shared inputs, outputs "
+    "named like inputs") {
   const std::string prefix(70, 'P');
   std::string e = error_of("channels:\n  prefix: " + prefix + "\n");
   CHECK(e.find("test.yaml:2:") == 0);
@@ -371,7 +383,8 @@ TEST_CASE("channels that cannot work are refused: LCM's 63-character limit with 
   e = error_of("channels:\n  fused_pose: ODOMETRY\n");
   CHECK(e.find("test.yaml:2:") == 0);
   CHECK(e.find("is also the input channels.odometry") != std::string::npos);
-  CHECK(error_of("channels:\n  status: TRAJECTORY\n").find("the same channel as channels.trajectory") != std::string::npos);
+  CHECK(error_of("channels:\n  status: TRAJECTORY\n").find("the same channel as channels.trajectory") !=
+        std::string::npos);
 }
 
 TEST_CASE("a config without primary_estimator puts the same estimator on FUSED_POSE as config/default.yaml") {
@@ -394,7 +407,8 @@ TEST_CASE("the guard and bound keys of the daemon section: defaults as documente
   CHECK(d.max_sources == empty.max_sources);
   CHECK(d.source_idle_s == empty.source_idle_s);
   CHECK(d.drain_timeout_s == empty.drain_timeout_s);
-  const auto c = parse_daemon_config("daemon:\n  max_sources: 7\n  drain_timeout_s: 0.5\n  time_resync_messages: 3\n", "t.yaml");
+  const auto c =
+      parse_daemon_config("daemon:\n  max_sources: 7\n  drain_timeout_s: 0.5\n  time_resync_messages: 3\n", "t.yaml");
   CHECK(c.max_sources == 7);
   CHECK(c.drain_timeout_s == 0.5);
   CHECK(c.time_resync_messages == 3);
@@ -410,8 +424,10 @@ TEST_CASE("engine.graph.lifelong: a budget per kind of body, the old shared keys
   CHECK(d.budget(false).max_keyframes == 1000);
   CHECK(d.budget(false).window == 500);
   const auto set = parse_daemon_config(
-      "engine:\n  graph:\n    lifelong:\n      planar: {max_keyframes: 300, window: 100}\n      spatial: {max_keyframes: 40}\n",
-      "t").engine.graph.lifelong;
+                       "engine:\n  graph:\n    lifelong:\n      planar: {max_keyframes: 300, window: 100}\n      "
+                       "spatial: {max_keyframes: 40}\n",
+                       "t")
+                       .engine.graph.lifelong;
   CHECK(set.planar.max_keyframes == 300);
   CHECK(set.planar.window == 100);
   CHECK(set.spatial.max_keyframes == 40);
@@ -425,7 +441,8 @@ TEST_CASE("engine.graph.lifelong: a budget per kind of body, the old shared keys
 }
 
 TEST_CASE("config: daemon.plausibility and source_handover_s are read and checked with file:line") {
-  const auto c = sextant::config::parse_daemon_config("daemon:\n  source_handover_s: 5\n  plausibility:\n    max_speed_planar_mps: 3\n    max_range_m: 80\n", "t.yaml");
+  const auto c = sextant::config::parse_daemon_config(
+      "daemon:\n  source_handover_s: 5\n  plausibility:\n    max_speed_planar_mps: 3\n    max_range_m: 80\n", "t.yaml");
   CHECK(c.source_handover_s == 5);
   CHECK(c.plausibility.max_speed_planar_mps == 3);
   CHECK(c.plausibility.max_range_m == 80);
@@ -434,17 +451,22 @@ TEST_CASE("config: daemon.plausibility and source_handover_s are read and checke
   CHECK(sextant::test::config_error_of("daemon:\n  plausibility:\n    max_rnge_m: 1\n").find("test.yaml:3:") == 0);
 }
 
-TEST_CASE("config: strict reading: duplicate keys, several documents, control characters, bad prefixes, non-regular files") {
+TEST_CASE(
+    "config: strict reading: duplicate keys, several documents, control characters, bad prefixes, non-regular files") {
   using sextant::test::config_error_of;
   CHECK(config_error_of("daemon:\n  name: a\n  name: b\n").find("test.yaml:3:3: key 'name' written twice") == 0);
-  CHECK(config_error_of("daemon:\n  name: a\ndaemon:\n  name: b\n").find("test.yaml:3:1: key 'daemon' written twice") == 0);
-  CHECK(config_error_of("daemon:\n  name: a\n---\ndaemon:\n  name: b\n").find("test.yaml:3: a second YAML document") == 0);
-  CHECK(config_error_of(std::string("daemon:\n  name: \"a\\0b\"\n") + std::string(1, '\0')).find("test.yaml:3:1: control character 0x0") == 0);
+  CHECK(config_error_of("daemon:\n  name: a\ndaemon:\n  name: b\n").find("test.yaml:3:1: key 'daemon' written twice") ==
+        0);
+  CHECK(config_error_of("daemon:\n  name: a\n---\ndaemon:\n  name: b\n").find("test.yaml:3: a second YAML document") ==
+        0);
+  CHECK(config_error_of(std::string("daemon:\n  name: \"a\\0b\"\n") + std::string(1, '\0'))
+            .find("test.yaml:3:1: control character 0x0") == 0);
   CHECK(config_error_of("daemon:\n  name: a\x1b[2Jb\n").find("test.yaml:2:10: control character 0x1b") == 0);
   CHECK(config_error_of("channels:\n  prefix: \"ROBOT 1_\"\n").find("test.yaml:2:11:") == 0);
   CHECK(config_error_of("channels:\n  prefix: \"R\xc3\xa9_\"\n").find("test.yaml:2:11:") == 0);
   CHECK(config_error_of("channels:\n  prefix: \"ROBOT1_\"\n").empty());
-  CHECK(config_error_of(std::string(sextant::config::kMaxConfigBytes + 1, '#')).find("bytes; a config is at most") != std::string::npos);
+  CHECK(config_error_of(std::string(sextant::config::kMaxConfigBytes + 1, '#')).find("bytes; a config is at most") !=
+        std::string::npos);
   const auto load_error = [](const std::string& path) {
     try {
       sextant::config::load_daemon_config(path);
@@ -461,12 +483,16 @@ TEST_CASE("config: strict reading: duplicate keys, several documents, control ch
 }
 
 TEST_CASE("config: a control character written as a YAML escape in daemon.name is refused too") {
-  CHECK(sextant::test::config_error_of("daemon:\n  name: \"a\\0b\"\n").find("test.yaml:2:9: 'daemon.name': must not contain control characters") == 0);
+  CHECK(sextant::test::config_error_of("daemon:\n  name: \"a\\0b\"\n")
+            .find("test.yaml:2:9: 'daemon.name': must not contain control characters") == 0);
 }
 
-TEST_CASE("config: document markers: a leading '---' and a final '...' are one document; content after them is a second") {
+TEST_CASE(
+    "config: document markers: a leading '---' and a final '...' are one document; content after them is a second") {
   using sextant::test::config_error_of;
   CHECK(config_error_of("---\ndaemon:\n  name: a\n...\n").empty());
-  CHECK(config_error_of("daemon:\n  name: a\n...\ndaemon:\n  name: b\n").find("test.yaml:4: a second YAML document") == 0);
-  CHECK(config_error_of(",").find("test.yaml:") == 0);  // malformed: an error, and it returns (yaml-cpp's LoadAll did not)
+  CHECK(config_error_of("daemon:\n  name: a\n...\ndaemon:\n  name: b\n").find("test.yaml:4: a second YAML document") ==
+        0);
+  CHECK(config_error_of(",").find("test.yaml:") ==
+        0);  // malformed: an error, and it returns (yaml-cpp's LoadAll did not)
 }

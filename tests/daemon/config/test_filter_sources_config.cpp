@@ -23,7 +23,8 @@ engine:
       wheel: {body: robot1, predict: true}
       vo: {body: robot1, fuse: [x, yaw], differential: true, gate: 11.34, timeout_s: 0.5}
       gyro: {body: robot1, fuse: [vyaw]}
-)", "t.yaml");
+)",
+                                     "t.yaml");
   const auto& f = c.engine.filter;
   CHECK(f.history_s == doctest::Approx(1.5));
   REQUIRE(f.sources.size() == 3);
@@ -38,14 +39,23 @@ engine:
 }
 
 TEST_CASE("filter sources: errors name the place") {
-  CHECK(error_of("engine:\n  filter:\n    sources:\n      vo: {body: r, fuse: [x, z]}\n").find("test.yaml:4") != std::string::npos);
-  CHECK(error_of("engine:\n  filter:\n    sources:\n      vo: {body: r, fuse: [x, z]}\n").find("unknown component 'z'") != std::string::npos);
+  CHECK(error_of("engine:\n  filter:\n    sources:\n      vo: {body: r, fuse: [x, z]}\n").find("test.yaml:4") !=
+        std::string::npos);
+  CHECK(
+      error_of("engine:\n  filter:\n    sources:\n      vo: {body: r, fuse: [x, z]}\n").find("unknown component 'z'") !=
+      std::string::npos);
   // Two predictors, none, a differential pose with velocities, a masked predictor, unknown key, negative gate.
-  CHECK(error_of("engine:\n  filter:\n    sources:\n      a: {body: r, predict: true}\n      b: {body: r, predict: true}\n").find("exactly one") != std::string::npos);
-  CHECK(error_of("engine:\n  filter:\n    sources:\n      a: {body: r}\n      r: {body: r}\n").find("exactly one") != std::string::npos);
-  CHECK(error_of("engine:\n  filter:\n    sources:\n      a: {body: r, fuse: [x, vx]}\n").find("twice") != std::string::npos);
-  CHECK(error_of("engine:\n  filter:\n    sources:\n      r: {predict: true, fuse: [x, y]}\n").find("predicts") != std::string::npos);
+  CHECK(error_of(
+            "engine:\n  filter:\n    sources:\n      a: {body: r, predict: true}\n      b: {body: r, predict: true}\n")
+            .find("exactly one") != std::string::npos);
+  CHECK(error_of("engine:\n  filter:\n    sources:\n      a: {body: r}\n      r: {body: r}\n").find("exactly one") !=
+        std::string::npos);
+  CHECK(error_of("engine:\n  filter:\n    sources:\n      a: {body: r, fuse: [x, vx]}\n").find("twice") !=
+        std::string::npos);
+  CHECK(error_of("engine:\n  filter:\n    sources:\n      r: {predict: true, fuse: [x, y]}\n").find("predicts") !=
+        std::string::npos);
   CHECK(error_of("engine:\n  filter:\n    sources:\n      a: {body: r, gait: 3}\n").find("gait") != std::string::npos);
-  CHECK(error_of("engine:\n  filter:\n    sources:\n      a: {body: r, gate: -1}\n").find("test.yaml:4") != std::string::npos);
+  CHECK(error_of("engine:\n  filter:\n    sources:\n      a: {body: r, gate: -1}\n").find("test.yaml:4") !=
+        std::string::npos);
   CHECK(!error_of("engine:\n  filter:\n    sources: [a, b]\n").empty());
 }

@@ -16,8 +16,8 @@ namespace sextant::test {
 
 inline std::vector<engine::Event> simulated_events(const tools::SimulationOptions& sim, bool bearings = true) {
   const auto log = (std::filesystem::temp_directory_path() /
-                    ("sextant_events_" + std::to_string(::getpid()) + "_" + tools::scenario_name(sim.scenario) + "_" + sim.source + "_" +
-                     std::to_string(sim.seed) + ".lcm"))
+                    ("sextant_events_" + std::to_string(::getpid()) + "_" + tools::scenario_name(sim.scenario) + "_" +
+                     sim.source + "_" + std::to_string(sim.seed) + ".lcm"))
                        .string();
   {
     runtime::LogWriter w(log);
@@ -28,11 +28,16 @@ inline std::vector<engine::Event> simulated_events(const tools::SimulationOption
   std::vector<engine::Event> events;
   for (const auto& r : records) {
     runtime::InputKind kind;
-    if (r.channel == "ODOMETRY") kind = runtime::InputKind::kOdometry;
-    else if (r.channel == "LANDMARKS") kind = runtime::InputKind::kLandmarks;
-    else if (r.channel == "LOOP_CLOSURES") kind = runtime::InputKind::kLoopClosures;
-    else if (r.channel == "BEARINGS" && bearings) kind = runtime::InputKind::kBearings;
-    else continue;
+    if (r.channel == "ODOMETRY")
+      kind = runtime::InputKind::kOdometry;
+    else if (r.channel == "LANDMARKS")
+      kind = runtime::InputKind::kLandmarks;
+    else if (r.channel == "LOOP_CLOSURES")
+      kind = runtime::InputKind::kLoopClosures;
+    else if (r.channel == "BEARINGS" && bearings)
+      kind = runtime::InputKind::kBearings;
+    else
+      continue;
     auto d = runtime::decode_event(kind, r.data.data(), r.data.size());
     if (auto* e = std::get_if<engine::Event>(&d)) events.push_back(*e);
   }

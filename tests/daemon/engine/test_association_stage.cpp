@@ -50,7 +50,8 @@ TargetScore score(const tools::ReplayResult& r) {
 // A 30 s simulated run (4 sensors, 4 targets, P_D 0.9, 1 false alarm per sensor and scan unless `o` says
 // otherwise) replayed with `config`.
 tools::ReplayResult replay_simulated(const config::DaemonConfig& config, tools::SimulationOptions o = {}) {
-  const auto log = (std::filesystem::temp_directory_path() / ("sextant_assoc_" + std::to_string(::getpid()) + ".lcm")).string();
+  const auto log =
+      (std::filesystem::temp_directory_path() / ("sextant_assoc_" + std::to_string(::getpid()) + ".lcm")).string();
   o.duration_s = 30;
   o.seed = 5;
   {
@@ -86,31 +87,38 @@ TEST_CASE("simulated bearing scans become targets at the true positions") {
 
 TEST_CASE("per-sensor false-alarm densities over a region and the target prior: targets found, no more ghosts") {
   const auto plain = score(replay_simulated(config::DaemonConfig{}));
-  const auto c = config::parse_daemon_config(std::string(kRegion) + "    false_alarms_per_scan: 1\n    target_prior: true\n"
-                                             "    expected_targets: 4\n", "test.yaml");
+  const auto c = config::parse_daemon_config(std::string(kRegion) +
+                                                 "    false_alarms_per_scan: 1\n    target_prior: true\n"
+                                                 "    expected_targets: 4\n",
+                                             "test.yaml");
   REQUIRE(c.engine.association.region_max == std::vector<double>{30, 20, 16});
   REQUIRE(c.engine.association.target_prior);
   const auto s = score(replay_simulated(c));
-  MESSAGE("with region and prior: found " << s.found << " of " << s.truth << "; ghosts " << s.ghosts << " of " << s.estimates
-                                          << " (scalar density, no prior: found " << plain.found << ", ghosts " << plain.ghosts << ")");
+  MESSAGE("with region and prior: found " << s.found << " of " << s.truth << "; ghosts " << s.ghosts << " of "
+                                          << s.estimates << " (scalar density, no prior: found " << plain.found
+                                          << ", ghosts " << plain.ghosts << ")");
   REQUIRE(s.scans >= 50);
   CHECK(s.found >= 0.9 * static_cast<double>(s.truth));
   CHECK(s.ghosts <= plain.ghosts);
 }
 
-TEST_CASE("false alarms simulated in the sensors' fields of view: targets still found, the region's density cuts ghosts") {
+TEST_CASE(
+    "false alarms simulated in the sensors' fields of view: targets still found, the region's density cuts ghosts") {
   // Two false alarms per sensor and scan inside the view of the targets' region (the simulator's clutter region,
   // the box the config names): they compete with the targets' detections, unlike clutter over all azimuths.
   tools::SimulationOptions o;
   o.clutter = 2;
   o.clutter_region_min = {-30, -20, 4}, o.clutter_region_max = {30, 20, 16};
   const auto plain = score(replay_simulated(config::DaemonConfig{}, o));
-  const auto c = config::parse_daemon_config(std::string(kRegion) + "    false_alarms_per_scan: 2\n    target_prior: true\n"
-                                             "    expected_targets: 4\n", "test.yaml");
+  const auto c = config::parse_daemon_config(std::string(kRegion) +
+                                                 "    false_alarms_per_scan: 2\n    target_prior: true\n"
+                                                 "    expected_targets: 4\n",
+                                             "test.yaml");
   const auto s = score(replay_simulated(c, o));
-  MESSAGE("clutter in view, region density and prior: found " << s.found << " of " << s.truth << ", ghosts " << s.ghosts
-          << " of " << s.estimates << " (scalar density, no prior: found " << plain.found << ", ghosts " << plain.ghosts
-          << " of " << plain.estimates << ")");
+  MESSAGE("clutter in view, region density and prior: found "
+          << s.found << " of " << s.truth << ", ghosts " << s.ghosts << " of " << s.estimates
+          << " (scalar density, no prior: found " << plain.found << ", ghosts " << plain.ghosts << " of "
+          << plain.estimates << ")");
   REQUIRE(s.scans >= 50);
   CHECK(s.found >= 0.9 * static_cast<double>(s.truth));
   CHECK(s.ghosts <= 0.15 * static_cast<double>(s.estimates));
@@ -118,19 +126,27 @@ TEST_CASE("false alarms simulated in the sensors' fields of view: targets still 
 }
 
 TEST_CASE("association region, false alarms and target prior: bad values are errors naming file:line") {
-  CHECK(error_of(std::string(kRegion) + "    false_alarms_per_scan: 2\n    target_prior: true\n    expected_targets: 3\n").empty());
+  CHECK(
+      error_of(std::string(kRegion) + "    false_alarms_per_scan: 2\n    target_prior: true\n    expected_targets: 3\n")
+          .empty());
   // region_max without region_min, at region_max's line.
-  CHECK(error_of("engine:\n  association:\n    region_max: [1, 2, 3]\n").find("test.yaml:3:17: 'engine.association.region_min' and") == 0);
+  CHECK(error_of("engine:\n  association:\n    region_max: [1, 2, 3]\n")
+            .find("test.yaml:3:17: 'engine.association.region_min' and") == 0);
   // Not three numbers.
-  CHECK(error_of("engine:\n  association:\n    region_min: [1, 2]\n").find("test.yaml:3:17: 'engine.association.region_min': expected [x, y, z]") == 0);
+  CHECK(error_of("engine:\n  association:\n    region_min: [1, 2]\n")
+            .find("test.yaml:3:17: 'engine.association.region_min': expected [x, y, z]") == 0);
   // An empty box.
   CHECK(error_of("engine:\n  association:\n    region_min: [0, 0, 0]\n    region_max: [1, 0, 1]\n")
-            .find("test.yaml:4:17: 'engine.association.region_max': must be above region_min on every axis (axis 1") == 0);
+            .find("test.yaml:4:17: 'engine.association.region_max': must be above region_min on every axis (axis 1") ==
+        0);
   // False alarms per scan or the prior without a region.
-  CHECK(error_of("engine:\n  association:\n    false_alarms_per_scan: 2\n").find("test.yaml:3:28: 'engine.association.false_alarms_per_scan': needs region_min") == 0);
-  CHECK(error_of("engine:\n  association:\n    target_prior: true\n").find("test.yaml:3:19: 'engine.association.target_prior': needs region_min") == 0);
+  CHECK(error_of("engine:\n  association:\n    false_alarms_per_scan: 2\n")
+            .find("test.yaml:3:28: 'engine.association.false_alarms_per_scan': needs region_min") == 0);
+  CHECK(error_of("engine:\n  association:\n    target_prior: true\n")
+            .find("test.yaml:3:19: 'engine.association.target_prior': needs region_min") == 0);
   // Out of range.
   CHECK(error_of("engine:\n  association:\n    false_alarms_per_scan: -1\n").find("test.yaml:3:28:") == 0);
   CHECK(error_of(std::string(kRegion) + "    expected_targets: 0\n").find("test.yaml:5:23:") == 0);
-  CHECK(error_of("engine:\n  association:\n    target_prior: maybe\n").find("test.yaml:3:19: 'engine.association.target_prior': expected true or false") == 0);
+  CHECK(error_of("engine:\n  association:\n    target_prior: maybe\n")
+            .find("test.yaml:3:19: 'engine.association.target_prior': expected true or false") == 0);
 }

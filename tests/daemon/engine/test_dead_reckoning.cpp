@@ -104,7 +104,8 @@ TEST_CASE("a planar square: four quarter turns return to the start, poses match 
   }
   // The covariance grows (uncertainty never shrinks without measurements) and z, roll, pitch stay exactly zero.
   for (int k = 1; k < 5; ++k) {
-    CHECK(out[k].covariance(0, 0) + out[k].covariance(1, 1) > out[k - 1].covariance(0, 0) + out[k - 1].covariance(1, 1));
+    CHECK(out[k].covariance(0, 0) + out[k].covariance(1, 1) >
+          out[k - 1].covariance(0, 0) + out[k - 1].covariance(1, 1));
     CHECK(out[k].covariance(2, 2) == 0.0);
     CHECK(out[k].covariance(3, 3) == 0.0);
   }

@@ -18,7 +18,8 @@
 using namespace sextant;
 
 TEST_CASE("EKF-SLAM beats dead reckoning on a simulated planar run") {
-  const auto log = (std::filesystem::temp_directory_path() / ("sextant_filter_" + std::to_string(::getpid()) + ".lcm")).string();
+  const auto log =
+      (std::filesystem::temp_directory_path() / ("sextant_filter_" + std::to_string(::getpid()) + ".lcm")).string();
   tools::SimulationOptions o;
   o.duration_s = 60;
   o.seed = 4;
@@ -48,7 +49,8 @@ TEST_CASE("EKF-SLAM beats dead reckoning on a simulated planar run") {
 }
 
 TEST_CASE("landmarks without ids: JCBB association and tentative landmarks recover the map") {
-  const auto log = (std::filesystem::temp_directory_path() / ("sextant_filter_unk_" + std::to_string(::getpid()) + ".lcm")).string();
+  const auto log =
+      (std::filesystem::temp_directory_path() / ("sextant_filter_unk_" + std::to_string(::getpid()) + ".lcm")).string();
   tools::SimulationOptions o;
   o.duration_s = 60;
   o.seed = 6;
@@ -67,13 +69,14 @@ TEST_CASE("landmarks without ids: JCBB association and tentative landmarks recov
   for (const auto& p : r.truth_points) seen_landmarks += p.kind == "landmark";
   MESSAGE("associated " << c["associated"] << ", landmarks created " << c["new_landmarks"] << " of " << seen_landmarks);
   CHECK(c["associated"] > 1000);
-  CHECK(c["new_landmarks"] <= seen_landmarks);       // no duplicates or spurious permanent landmarks
-  CHECK(c["new_landmarks"] >= seen_landmarks / 2);   // most of the landmarks the robot passes are mapped
+  CHECK(c["new_landmarks"] <= seen_landmarks);      // no duplicates or spurious permanent landmarks
+  CHECK(c["new_landmarks"] >= seen_landmarks / 2);  // most of the landmarks the robot passes are mapped
   std::vector<tools::StampedPose> truth, e, d;
   for (const auto& t : r.truth_poses) truth.push_back({t.utime * 1e-6, t.pose});
   for (const auto& p : r.fused_poses.at("ekf")) e.push_back({p.utime * 1e-6, p.pose});
   for (const auto& p : r.fused_poses.at("dead_reckoning")) d.push_back({p.utime * 1e-6, p.pose});
-  CHECK(tools::absolute_trajectory_error(truth, e).error.rmse < 0.5 * tools::absolute_trajectory_error(truth, d).error.rmse);
+  CHECK(tools::absolute_trajectory_error(truth, e).error.rmse <
+        0.5 * tools::absolute_trajectory_error(truth, d).error.rmse);
   std::remove(log.c_str());
 }
 
@@ -81,7 +84,8 @@ namespace {
 
 // The odometry and landmark events of a simulated planar run, in log order.
 std::vector<engine::Event> simulated_events(const tools::SimulationOptions& o) {
-  const auto log = (std::filesystem::temp_directory_path() / ("sextant_filter_ev_" + std::to_string(::getpid()) + ".lcm")).string();
+  const auto log =
+      (std::filesystem::temp_directory_path() / ("sextant_filter_ev_" + std::to_string(::getpid()) + ".lcm")).string();
   {
     runtime::LogWriter w(log);
     tools::simulate(o, w);
@@ -90,7 +94,8 @@ std::vector<engine::Event> simulated_events(const tools::SimulationOptions& o) {
   for (const auto& r : runtime::LogReader::read_all(log)) {
     const bool odo = r.channel == "ODOMETRY", lm = r.channel == "LANDMARKS";
     if (!odo && !lm) continue;
-    auto d = runtime::decode_event(odo ? runtime::InputKind::kOdometry : runtime::InputKind::kLandmarks, r.data.data(), r.data.size());
+    auto d = runtime::decode_event(odo ? runtime::InputKind::kOdometry : runtime::InputKind::kLandmarks, r.data.data(),
+                                   r.data.size());
     if (auto* e = std::get_if<engine::Event>(&d)) out.push_back(*e);
   }
   std::remove(log.c_str());
@@ -114,16 +119,20 @@ TEST_CASE("filter stage: late odometry and sightings inside the window give the 
   cfg.history_s = 0.5;
   engine::FilterStage in_order(cfg), late(cfg);
   std::vector<engine::FusedPose> poses_in_order, poses_late;
-  for (const auto& e : events) in_order.handle(e, [&](engine::Output out) { poses_in_order.push_back(std::get<engine::FusedPose>(out)); });
+  for (const auto& e : events)
+    in_order.handle(e, [&](engine::Output out) { poses_in_order.push_back(std::get<engine::FusedPose>(out)); });
   // Arrival: sightings up to 0.4 s late, odometry up to 0.1 s late (so odometry messages overtake each other too).
   std::mt19937 rng(2);
   std::vector<std::pair<int64_t, size_t>> arrival;
   for (size_t i = 0; i < events.size(); ++i) {
     const bool odo = std::holds_alternative<engine::Odometry>(events[i]);
-    arrival.push_back({engine::event_utime(events[i]) + static_cast<int64_t>(std::uniform_real_distribution<double>(0, odo ? 1e5 : 4e5)(rng)), i});
+    arrival.push_back({engine::event_utime(events[i]) +
+                           static_cast<int64_t>(std::uniform_real_distribution<double>(0, odo ? 1e5 : 4e5)(rng)),
+                       i});
   }
   std::stable_sort(arrival.begin(), arrival.end());
-  for (const auto& [t, i] : arrival) late.handle(events[i], [&](engine::Output out) { poses_late.push_back(std::get<engine::FusedPose>(out)); });
+  for (const auto& [t, i] : arrival)
+    late.handle(events[i], [&](engine::Output out) { poses_late.push_back(std::get<engine::FusedPose>(out)); });
   const auto* a = in_order.ekf(o.source);
   const auto* b = late.ekf(o.source);
   REQUIRE(a != nullptr);
@@ -137,7 +146,10 @@ TEST_CASE("filter stage: late odometry and sightings inside the window give the 
   CHECK(cb.at("too_late") == 0);
   for (const char* k : {"predictions", "updates", "new_landmarks", "gated"}) CHECK(ca.at(k) == cb.at(k));
   // Published stamps strictly increase; late odometry is not published, so fewer poses come out.
-  CHECK(poses_in_order.size() == events.size() - static_cast<size_t>(std::count_if(events.begin(), events.end(), [](const engine::Event& e) { return std::holds_alternative<engine::LandmarkSightings>(e); })));
+  CHECK(poses_in_order.size() ==
+        events.size() - static_cast<size_t>(std::count_if(events.begin(), events.end(), [](const engine::Event& e) {
+          return std::holds_alternative<engine::LandmarkSightings>(e);
+        })));
   CHECK(poses_late.size() < poses_in_order.size());
   for (size_t i = 1; i < poses_late.size(); ++i) CHECK(poses_late[i].utime > poses_late[i - 1].utime);
 }
@@ -154,7 +166,8 @@ TEST_CASE("filter stage: too late, duplicate and backwards stamps are counted an
   const auto count = [&](engine::Output) { ++emitted; };
   const engine::Event* held = nullptr;
   for (const auto& e : events) {
-    if (held == nullptr && std::holds_alternative<engine::LandmarkSightings>(e) && engine::event_utime(e) > o.start_utime + 1'000'000) {
+    if (held == nullptr && std::holds_alternative<engine::LandmarkSightings>(e) &&
+        engine::event_utime(e) > o.start_utime + 1'000'000) {
       held = &e;
       continue;
     }
@@ -164,7 +177,9 @@ TEST_CASE("filter stage: too late, duplicate and backwards stamps are counted an
   REQUIRE(held != nullptr);
   const int before = emitted;
   stage.handle(*held, count);  // about 3 s late, window 0.2 s
-  const auto& last_odo = *std::find_if(events.rbegin(), events.rend(), [](const engine::Event& e) { return std::holds_alternative<engine::Odometry>(e); });
+  const auto& last_odo = *std::find_if(events.rbegin(), events.rend(), [](const engine::Event& e) {
+    return std::holds_alternative<engine::Odometry>(e);
+  });
   stage.handle(last_odo, count);  // the same odometry message again: duplicate stamp
   auto backwards = std::get<engine::Odometry>(last_odo);
   backwards.utime -= 10'000'000;  // far behind: too late
@@ -226,7 +241,8 @@ TEST_CASE("filter stage: sightings after the newest prediction wait for the next
   int64_t last = 0;
   for (const auto& e : events) {
     stage.handle(e, [](engine::Output) {});
-    if (const auto* s = std::get_if<engine::LandmarkSightings>(&e); s != nullptr && !s->observations.empty()) batch = *s;
+    if (const auto* s = std::get_if<engine::LandmarkSightings>(&e); s != nullptr && !s->observations.empty())
+      batch = *s;
     last = std::max(last, engine::event_utime(e));
   }
   REQUIRE(!batch.observations.empty());
@@ -242,7 +258,8 @@ TEST_CASE("filter stage: sightings after the newest prediction wait for the next
 }
 
 TEST_CASE("filter stage: a 3-D body gets the 3-D EKF-SLAM, better than dead reckoning") {
-  const auto log = (std::filesystem::temp_directory_path() / ("sextant_filter_3d_" + std::to_string(::getpid()) + ".lcm")).string();
+  const auto log =
+      (std::filesystem::temp_directory_path() / ("sextant_filter_3d_" + std::to_string(::getpid()) + ".lcm")).string();
   tools::SimulationOptions o;
   o.scenario = tools::Scenario::kSpatial;
   o.duration_s = 60;
@@ -272,7 +289,8 @@ TEST_CASE("filter stage: a 3-D body gets the 3-D EKF-SLAM, better than dead reck
   for (const auto& s : r.stages)
     if (s.name == "filter")
       for (const auto& [k, v] : s.counters) c[k] = v;
-  MESSAGE("updates " << c["updates"] << " gated " << c["gated"] << " new " << c["new_landmarks"] << " rejected " << c["rejected"] << " predictions " << c["predictions"]);
+  MESSAGE("updates " << c["updates"] << " gated " << c["gated"] << " new " << c["new_landmarks"] << " rejected "
+                     << c["rejected"] << " predictions " << c["predictions"]);
   CHECK(c["updates"] > 1000);
   CHECK(c["new_landmarks"] <= o.landmarks);
   CHECK(c["mixed_dimensions"] == 0);
@@ -281,7 +299,8 @@ TEST_CASE("filter stage: a 3-D body gets the 3-D EKF-SLAM, better than dead reck
 }
 
 TEST_CASE("filter stage: two replays of a log give identical EKF poses") {
-  const auto log = (std::filesystem::temp_directory_path() / ("sextant_filter_det_" + std::to_string(::getpid()) + ".lcm")).string();
+  const auto log =
+      (std::filesystem::temp_directory_path() / ("sextant_filter_det_" + std::to_string(::getpid()) + ".lcm")).string();
   tools::SimulationOptions o;
   o.duration_s = 12;
   o.seed = 3;

@@ -282,7 +282,8 @@ TEST_CASE("graph stage: keyframes by motion, proposals, loops from the simulated
   }
   // 120 s of data at 1 Hz, and the final flush (at the last publication's time or later).
   CHECK(publication_times.size() <= 122);
-  for (auto it = publication_times.begin(); std::next(it) != publication_times.end() && std::next(it, 2) != publication_times.end(); ++it)
+  for (auto it = publication_times.begin();
+       std::next(it) != publication_times.end() && std::next(it, 2) != publication_times.end(); ++it)
     CHECK(*std::next(it) - *it >= 1'000'000);
   const double err = keyframe_error(*graph, run);
   MESSAGE("keyframe RMS error " << err << " m, dead reckoning " << dead_reckoning_error << " m");
@@ -341,9 +342,10 @@ TEST_CASE("graph stage: the default kernel width keeps true loops at full weight
     return out;
   };
   const auto by_default = run_with(std::nullopt), phi1 = run_with(1.0);
-  MESSAGE("down-weighted true loops, auto: planar " << by_default.at(true).second << ", 3-D " << by_default.at(false).second
-          << "; phi = 1: planar " << phi1.at(true).second << ", 3-D " << phi1.at(false).second);
-  CHECK(by_default.at(true).first == doctest::Approx(16.266).epsilon(0.02));  // chi2_3(0.999), as the gate computes it
+  MESSAGE("down-weighted true loops, auto: planar " << by_default.at(true).second << ", 3-D "
+                                                    << by_default.at(false).second << "; phi = 1: planar "
+                                                    << phi1.at(true).second << ", 3-D " << phi1.at(false).second);
+  CHECK(by_default.at(true).first == doctest::Approx(16.266).epsilon(0.02));   // chi2_3(0.999), as the gate computes it
   CHECK(by_default.at(false).first == doctest::Approx(22.458).epsilon(0.02));  // chi2_6(0.999)
   CHECK(by_default.at(true).second < 0.02);
   CHECK(by_default.at(false).second < 0.02);
@@ -352,7 +354,8 @@ TEST_CASE("graph stage: the default kernel width keeps true loops at full weight
   CHECK(phi1.at(false).second > 0.8);
 }
 
-TEST_CASE("graph stage: a confident wrong loop is rejected and leaves the map as it was, a time is bridged by odometry") {
+TEST_CASE(
+    "graph stage: a confident wrong loop is rejected and leaves the map as it was, a time is bridged by odometry") {
   const Run run = circle_run(30, 4);
   Engine engine(graph_only_config(false));
   GraphStage* graph = &graph_stage_of(engine);
@@ -369,7 +372,8 @@ TEST_CASE("graph stage: a confident wrong loop is rejected and leaves the map as
   wrong.planar = true;
   wrong.utime_from = before[2].utime;
   wrong.utime_to = before[20].utime;
-  wrong.relative = to_pose(truth.at(wrong.utime_from).inverse() * truth.at(wrong.utime_to) * SE3(SO3(), Eigen::Vector3d(5, 0, 0)));
+  wrong.relative =
+      to_pose(truth.at(wrong.utime_from).inverse() * truth.at(wrong.utime_to) * SE3(SO3(), Eigen::Vector3d(5, 0, 0)));
   wrong.information = Matrix6::Identity() * 1e4;
   engine.handle(wrong, ignore);
   CHECK(counter(*graph, "loops_rejected") == 1);
@@ -408,7 +412,8 @@ TEST_CASE("graph pose stage: odometry composed with the correction") {
   CHECK(out[0].pose.position.isApprox(Eigen::Vector3d(1, 0, 0)));  // before any correction: the odometry frame
   GraphCorrection c;
   c.keyframe_odom = SE3(SO3(), Eigen::Vector3d(1, 0, 0));
-  c.keyframe_map = SE3(SO3(Eigen::Quaterniond(Eigen::AngleAxisd(M_PI / 2, Eigen::Vector3d::UnitZ()))), Eigen::Vector3d(0, 5, 0));
+  c.keyframe_map =
+      SE3(SO3(Eigen::Quaterniond(Eigen::AngleAxisd(M_PI / 2, Eigen::Vector3d::UnitZ()))), Eigen::Vector3d(0, 5, 0));
   c.keyframe_covariance = Matrix6::Identity() * 0.01;
   board->set("r", c);
   o.utime = 20;
@@ -461,7 +466,8 @@ TEST_CASE("graph stage: landmark sightings with ids map the landmarks and hold t
   CHECK(counter(*graph, "landmarks") == 12);
   // Every true sighting passes the gate (0.999 each: at most a handful rejected), none waits or is lost.
   CHECK(counter(*graph, "sightings_accepted") >= static_cast<int64_t>(observations) - 5);
-  CHECK(counter(*graph, "sightings_accepted") + counter(*graph, "sightings_rejected") == static_cast<int64_t>(observations));
+  CHECK(counter(*graph, "sightings_accepted") + counter(*graph, "sightings_rejected") ==
+        static_cast<int64_t>(observations));
   CHECK(counter(*graph, "sightings_unmatched") == 0);
   CHECK(counter(*graph, "updates") >= static_cast<int64_t>(sightings.size()));  // one optimization per sighting message
   CHECK(trajectories > 0);
@@ -539,7 +545,8 @@ TEST_CASE("graph stage: sightings of a mis-identified landmark are rejected and 
   CHECK(counter(graph_stage_of(*open_robust), "sightings_rejected") == 0);
   const double with_kernel = largest_shift(graph_stage_of(*clean_robust), graph_stage_of(*open_robust));
   const double without = largest_shift(graph_stage_of(*clean_plain), graph_stage_of(*open_plain));
-  MESSAGE("map moved by the wrong sightings past an open gate: " << with_kernel << " m with DCS, " << without << " m without");
+  MESSAGE("map moved by the wrong sightings past an open gate: " << with_kernel << " m with DCS, " << without
+                                                                 << " m without");
   CHECK(with_kernel < 0.02);
   CHECK(without > 0.3);
 
@@ -574,13 +581,16 @@ TEST_CASE("graph stage: sightings of a mis-identified landmark are rejected and 
   const auto clean_auto = run_with(sightings, 1000, true, std::nullopt);
   const double with_auto = largest_shift(graph_stage_of(*clean_auto), graph_stage_of(*open_auto));
   // For comparison, sightings at the loops' width (the behaviour before they had their own; no loops in this run).
-  const auto open_loop_width = run_with(with_wrong, 1000, true, phi_loop), clean_loop_width = run_with(sightings, 1000, true, phi_loop);
-  MESSAGE("map moved by the wrong sightings past an open gate: " << with_auto << " m at the sightings' own width, "
+  const auto open_loop_width = run_with(with_wrong, 1000, true, phi_loop),
+             clean_loop_width = run_with(sightings, 1000, true, phi_loop);
+  MESSAGE("map moved by the wrong sightings past an open gate: "
+          << with_auto << " m at the sightings' own width, "
           << largest_shift(graph_stage_of(*clean_loop_width), graph_stage_of(*open_loop_width)) << " m at the loops'");
   CHECK(with_auto < 0.02);
 }
 
-TEST_CASE("graph stage: sightings of an unknown body, before the first keyframe, without an id or malformed are counted") {
+TEST_CASE(
+    "graph stage: sightings of an unknown body, before the first keyframe, without an id or malformed are counted") {
   const Run run = circle_run(10, 5);
   const Emit ignore = [](Output) {};
   Engine engine(graph_only_config(false));
@@ -604,7 +614,8 @@ TEST_CASE("graph stage: sightings of an unknown body, before the first keyframe,
   // At the latest odometry time: used at once.  Without an id: counted, not used.  NaN, a non-positive-definite
   // covariance, a 3-D sighting of a planar body: malformed.
   s.source = "robot";
-  s.observations = {sighting_of(run.truth[19].second, landmarks[0], 100), sighting_of(run.truth[19].second, landmarks[1], -1)};
+  s.observations = {sighting_of(run.truth[19].second, landmarks[0], 100),
+                    sighting_of(run.truth[19].second, landmarks[1], -1)};
   engine.handle(s, ignore);
   CHECK(counter(*graph, "sightings_accepted") == 1);
   CHECK(counter(*graph, "sightings_without_id") == 1);
@@ -669,7 +680,10 @@ TEST_CASE("graph stage: a 3-D body maps 3-D landmarks from range, azimuth and el
   CHECK(ate.error.rmse < 0.25 * ate_dr.error.rmse);
   for (const auto& l : graph->landmarks("robot")) {
     const size_t i = static_cast<size_t>(l.id - 100);
-    const Eigen::Vector3d want(ring_landmarks()[i].x(), ring_landmarks()[i].y(), i % 3 == 0 ? 1.0 : i % 3 == 1 ? -0.5 : 2.0);
+    const Eigen::Vector3d want(ring_landmarks()[i].x(), ring_landmarks()[i].y(),
+                               i % 3 == 0   ? 1.0
+                               : i % 3 == 1 ? -0.5
+                                            : 2.0);
     CHECK((ate.rotation * l.position + ate.translation - want).norm() < 0.3);
   }
 }
@@ -705,7 +719,8 @@ TEST_CASE("graph stage: out-of-order and duplicate odometry are counted and drop
   CHECK(keyframe_times(with_bad) == keyframe_times(clean));
 }
 
-TEST_CASE("graph stage: after a real jump keyframing re-anchors and loops pull the new segment in, a spike is rejected") {
+TEST_CASE(
+    "graph stage: after a real jump keyframing re-anchors and loops pull the new segment in, a spike is rejected") {
   // 60 s on the circle at 10 Hz; the odometry stops at 20 s and resumes at 30 s (the robot went on 10 m meanwhile:
   // a 9.6 m chord, > k2 = 5) with a wrong guess of that motion (0.5 m and 0.1 rad off, as a visual odometry that
   // re-initialized).  The matcher answers loop proposals from the truth.
@@ -742,7 +757,8 @@ TEST_CASE("graph stage: after a real jump keyframing re-anchors and loops pull t
   std::map<int64_t, SE3> truth_at(run.truth.begin(), run.truth.end()), odo;
   for (const auto& o : run.odometry) odo[o.utime] = to_se3(o.pose);
   // The re-anchored keyframe is the tenth message after the gap; keyframing goes on after it.
-  const auto first_after = std::find_if(kfs.begin(), kfs.end(), [&](const Keyframe& k) { return k.utime >= t0 + 30'000'000; });
+  const auto first_after =
+      std::find_if(kfs.begin(), kfs.end(), [&](const Keyframe& k) { return k.utime >= t0 + 30'000'000; });
   REQUIRE(first_after != kfs.end());
   CHECK(first_after->utime == t0 + 30'900'000);
   CHECK(std::distance(first_after, kfs.end()) >= 25);

@@ -21,7 +21,8 @@ using namespace sextant;
 namespace {
 
 std::string temp_path(const std::string& name) {
-  return (std::filesystem::temp_directory_path() / ("sextant_test_" + std::to_string(::getpid()) + "_" + name)).string();
+  return (std::filesystem::temp_directory_path() / ("sextant_test_" + std::to_string(::getpid()) + "_" + name))
+      .string();
 }
 
 int64_t counter(const engine::Counters& c, const std::string& name) {
@@ -84,8 +85,8 @@ TEST_CASE("lifelong: graph size and memory stay flat over a long run, loops stil
   const auto life = tools::replay_log(log, graph_config(true), {}, ro);
   REQUIRE(life.segments.size() == 4);
   for (const auto& seg : life.segments)
-    MESSAGE("t " << seg.start_s << " s: graph keyframes " << counter(seg.graph_counters, "graph_keyframes") << ", factors "
-                 << counter(seg.graph_counters, "graph_factors") << ", RSS " << seg.rss_kb << " KB");
+    MESSAGE("t " << seg.start_s << " s: graph keyframes " << counter(seg.graph_counters, "graph_keyframes")
+                 << ", factors " << counter(seg.graph_counters, "graph_factors") << ", RSS " << seg.rss_kb << " KB");
   const auto& first = life.segments[0].graph_counters;
   const auto& last = life.segments[3].graph_counters;
   CHECK(counter(first, "thinnings") >= 1);
@@ -106,7 +107,8 @@ TEST_CASE("lifelong: graph size and memory stay flat over a long run, loops stil
       if (s.name == "graph") return s.counters;
     return engine::Counters{};
   };
-  const int64_t loops_life = counter(graph_counters(life), "loops_accepted"), loops_full = counter(graph_counters(full), "loops_accepted");
+  const int64_t loops_life = counter(graph_counters(life), "loops_accepted"),
+                loops_full = counter(graph_counters(full), "loops_accepted");
   MESSAGE("loops accepted: lifelong " << loops_life << ", full " << loops_full);
   CHECK(loops_full > 50);
   CHECK(loops_life >= 0.9 * static_cast<double>(loops_full));

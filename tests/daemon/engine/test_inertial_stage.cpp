@@ -45,7 +45,7 @@ TEST_CASE("inertial stage: a level IMU at rest keeps the body at rest, published
   std::vector<FusedPose> out;
   const Emit emit = [&](Output o) { out.push_back(std::get<FusedPose>(o)); };
   for (int k = 0; k <= 1000; ++k) stage.handle(at_rest(kT0 + 5'000 * k), emit);  // 200 Hz for 5 s
-  CHECK(out.size() == 251);  // 50 Hz over 5 s, and the first sample
+  CHECK(out.size() == 251);                                                      // 50 Hz over 5 s, and the first sample
   const FusedPose& last = out.back();
   CHECK(last.estimator == "inertial");
   CHECK(last.pose.position.norm() < 1e-6);

@@ -61,7 +61,8 @@ TEST_CASE("particle filter stage: FastSLAM 2.0 poses at the odometry rate, far b
   const auto again = tools::replay_log(log, cfg);
   REQUIRE(again.fused_poses.at("pf").size() == pf.size());
   bool same = true;
-  for (size_t i = 0; i < pf.size(); ++i) same = same && again.fused_poses.at("pf")[i].pose.position == pf[i].pose.position;
+  for (size_t i = 0; i < pf.size(); ++i)
+    same = same && again.fused_poses.at("pf")[i].pose.position == pf[i].pose.position;
   CHECK(same);
   cfg.engine.filter.pf.seed = 6;
   const auto other = tools::replay_log(log, cfg);
@@ -79,7 +80,8 @@ TEST_CASE("particle filter stage: landmarks without ids are associated per parti
   for (const auto& s : r.stages)
     if (s.name == "particle_filter")
       for (const auto& [k, v] : s.counters) c[k] = v;
-  MESSAGE("associated " << c["associated"] << ", created " << c["new_landmarks"] << ", removed " << c["removed_tentative"]);
+  MESSAGE("associated " << c["associated"] << ", created " << c["new_landmarks"] << ", removed "
+                        << c["removed_tentative"]);
   CHECK(c["associated"] > 500);
   CHECK(ate(r, "pf") < 0.5 * ate(r, "dead_reckoning"));
   std::remove(log.c_str());
@@ -87,7 +89,9 @@ TEST_CASE("particle filter stage: landmarks without ids are associated per parti
 
 TEST_CASE("particle filter config: filter.pf keys are read and checked with file and line") {
   const auto cfg = config::parse_daemon_config(
-      "engine:\n  filter:\n    type: pf\n    pf:\n      particles: 250\n      resample_threshold: 0.3\n      seed: 12\n", "t.yaml");
+      "engine:\n  filter:\n    type: pf\n    pf:\n      particles: 250\n      resample_threshold: 0.3\n      seed: "
+      "12\n",
+      "t.yaml");
   CHECK(cfg.engine.filter.type == engine::FilterType::kPf);
   CHECK(cfg.engine.filter.pf.particles == 250);
   CHECK(cfg.engine.filter.pf.resample_threshold == 0.3);
@@ -101,7 +105,8 @@ TEST_CASE("particle filter config: filter.pf keys are read and checked with file
     return "";
   };
   CHECK(error("engine:\n  filter:\n    type: pf\n    pf:\n      particles: 0\n").find("t.yaml:5") != std::string::npos);
-  CHECK(error("engine:\n  filter:\n    pf:\n      resample_threshold: 2\n").find("resample_threshold") != std::string::npos);
+  CHECK(error("engine:\n  filter:\n    pf:\n      resample_threshold: 2\n").find("resample_threshold") !=
+        std::string::npos);
   CHECK(error("engine:\n  filter:\n    pf:\n      particle: 10\n").find("t.yaml:4") != std::string::npos);
   CHECK(error("engine:\n  filter:\n    type: fastslam\n").find("t.yaml:3") != std::string::npos);
 }

@@ -32,7 +32,8 @@ TEST_CASE("forget: a body leaves the graph, the filters and dead reckoning, the 
   const auto a = run_of("a", 1, 40), b = run_of("b", 2, 60);
   std::vector<Event> both(a);
   both.insert(both.end(), b.begin(), b.end());
-  std::stable_sort(both.begin(), both.end(), [](const Event& x, const Event& y) { return event_utime(x) < event_utime(y); });
+  std::stable_sort(both.begin(), both.end(),
+                   [](const Event& x, const Event& y) { return event_utime(x) < event_utime(y); });
   const int64_t end_of_a = event_utime(a.back());
 
   Engine engine(EngineConfig{});

@@ -34,8 +34,8 @@ struct Flat {
   std::vector<double> numbers;
   std::string names;
   void pose(const Pose& p) {
-    numbers.insert(numbers.end(), {p.position.x(), p.position.y(), p.position.z(), p.orientation.w(),
-                                   p.orientation.x(), p.orientation.y(), p.orientation.z()});
+    numbers.insert(numbers.end(), {p.position.x(), p.position.y(), p.position.z(), p.orientation.w(), p.orientation.x(),
+                                   p.orientation.y(), p.orientation.z()});
   }
   void matrix(const Eigen::MatrixXd& m) { numbers.insert(numbers.end(), m.data(), m.data() + m.size()); }
   void add(const Output& o) {
@@ -90,7 +90,8 @@ Flat feed(Engine& e, const std::vector<Event>& events, size_t from, size_t to) {
 }
 
 // Saves `config`'s engine after `half` of `events`, restores a fresh one and compares what both publish after.
-void round_trip_at(const EngineConfig& config, const std::vector<Event>& events, size_t half, size_t saved_bytes_at_least) {
+void round_trip_at(const EngineConfig& config, const std::vector<Event>& events, size_t half,
+                   size_t saved_bytes_at_least) {
   Engine saved(config);
   for (size_t i = 0; i < half; ++i) saved.handle(events[i], [](Output) {});
   const auto sections = save_engine(saved);
@@ -105,16 +106,18 @@ void round_trip_at(const EngineConfig& config, const std::vector<Event>& events,
   REQUIRE(expected.numbers.size() > 1000);
   // The first difference, if any, with what was published there.
   size_t name_at = 0;
-  while (name_at < std::min(got.names.size(), expected.names.size()) && got.names[name_at] == expected.names[name_at]) ++name_at;
+  while (name_at < std::min(got.names.size(), expected.names.size()) && got.names[name_at] == expected.names[name_at])
+    ++name_at;
   const auto around = [&](const std::string& s) { return s.substr(name_at > 200 ? name_at - 200 : 0, 260); };
-  CHECK_MESSAGE(got.names == expected.names, "first difference at character " << name_at << " of " << expected.names.size()
-                                                                                << "\n  saved:    " << around(expected.names)
-                                                                                << "\n  restored: " << around(got.names));
+  CHECK_MESSAGE(got.names == expected.names, "first difference at character "
+                                                 << name_at << " of " << expected.names.size() << "\n  saved:    "
+                                                 << around(expected.names) << "\n  restored: " << around(got.names));
   size_t differ = 0, first = got.numbers.size();
   for (size_t i = 0; i < std::min(got.numbers.size(), expected.numbers.size()); ++i)
     if (std::memcmp(&got.numbers[i], &expected.numbers[i], sizeof(double)) != 0) ++differ, first = std::min(first, i);
   CHECK(got.numbers.size() == expected.numbers.size());
-  CHECK_MESSAGE(differ == 0, differ << " numbers differ, the first at " << first << " of " << expected.numbers.size());  // bit for bit
+  CHECK_MESSAGE(differ == 0, differ << " numbers differ, the first at " << first << " of "
+                                    << expected.numbers.size());  // bit for bit
 
   Engine fresh(config);
   const Flat cold = feed(fresh, events, half, events.size());
@@ -150,7 +153,8 @@ TEST_CASE("state: a 3-D engine (3-D EKF, 3-D graph) restored half way publishes 
   round_trip(EngineConfig{}, events, 50000);
 }
 
-TEST_CASE("state: the particle filter (FastSLAM, its maps and random generator) restored half way continues identically") {
+TEST_CASE(
+    "state: the particle filter (FastSLAM, its maps and random generator) restored half way continues identically") {
   const auto events = simulated_events("planar", 60, 7);
   EngineConfig c;
   c.filter.type = FilterType::kPf;

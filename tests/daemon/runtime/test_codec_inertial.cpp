@@ -88,7 +88,8 @@ TEST_CASE("bad IMU samples are refused naming the field") {
   CHECK(rejection(decode(runtime::InputKind::kImu, quat)).rfind("quaternion: imu_t.orientation", 0) == 0);
   auto cov = imu();
   cov.angular_velocity_covariance[0] = -1;  // ROS's "absent" marker must become has_* = false, not a covariance
-  CHECK(rejection(decode(runtime::InputKind::kImu, cov)).rfind("covariance: imu_t.angular_velocity_covariance", 0) == 0);
+  CHECK(rejection(decode(runtime::InputKind::kImu, cov)).rfind("covariance: imu_t.angular_velocity_covariance", 0) ==
+        0);
   auto late = imu();
   late.utime = 0;
   CHECK(rejection(decode(runtime::InputKind::kImu, late)).rfind("invalid: imu_t.utime", 0) == 0);

@@ -41,8 +41,9 @@ int64_t counter(const runtime::StageStatus& s, const std::string& name) {
 
 }  // namespace
 
-
-TEST_CASE("a body whose clock jumps back is re-synchronised, forgotten by every stage and the publisher, and published again") {
+TEST_CASE(
+    "a body whose clock jumps back is re-synchronised, forgotten by every stage and the publisher, and published "
+    "again") {
   config::DaemonConfig cfg;
   cfg.time_resync_messages = 3;
   auto engine = std::make_unique<engine::Engine>(cfg.engine, std::make_shared<runtime::SharedGraphCorrections>());
@@ -61,8 +62,9 @@ TEST_CASE("a body whose clock jumps back is re-synchronised, forgotten by every 
   const std::string channel = cfg.channels.full(cfg.channels.odometry);
   driver.start();
 
-  const int64_t now = std::chrono::duration_cast<std::chrono::microseconds>(
-                          std::chrono::system_clock::now().time_since_epoch()).count();
+  const int64_t now =
+      std::chrono::duration_cast<std::chrono::microseconds>(std::chrono::system_clock::now().time_since_epoch())
+          .count();
   const int64_t before_jump = now - 10'000'000, after_jump = now - 3'600'000'000LL;  // a restart an hour back
   int64_t seq = 0;
   auto send = [&](int64_t utime, int i) {
@@ -132,8 +134,9 @@ std::vector<Sent> resync_and_idle_run(const config::DaemonConfig& cfg) {
 
 // Every message of the run through a driver with the given lanes, the log's time as the clock; the published bytes
 // per channel.
-std::map<std::string, std::vector<std::vector<uint8_t>>> drive(const config::DaemonConfig& cfg, runtime::StageLanes lanes,
-                                                               int64_t* forgotten, int64_t* resyncs) {
+std::map<std::string, std::vector<std::vector<uint8_t>>> drive(const config::DaemonConfig& cfg,
+                                                               runtime::StageLanes lanes, int64_t* forgotten,
+                                                               int64_t* resyncs) {
   auto engine = std::make_unique<engine::Engine>(cfg.engine, std::make_shared<runtime::SharedGraphCorrections>());
   std::mutex mutex;
   std::map<std::string, std::vector<std::vector<uint8_t>>> out;
@@ -158,11 +161,13 @@ std::map<std::string, std::vector<std::vector<uint8_t>>> drive(const config::Dae
 
 }  // namespace
 
-TEST_CASE("the daemon's lanes and replay's give the same outputs for the same messages, a resync and an idle expiry included") {
+TEST_CASE(
+    "the daemon's lanes and replay's give the same outputs for the same messages, a resync and an idle expiry "
+    "included") {
   config::DaemonConfig cfg;
   cfg.time_resync_messages = 3;
-  cfg.source_idle_s = 5;                      // b's 8 s of silence expires it (by the log's time)
-  cfg.engine.graph.enabled = false;           // its fused pose follows the graph thread's timing, not the data alone
+  cfg.source_idle_s = 5;             // b's 8 s of silence expires it (by the log's time)
+  cfg.engine.graph.enabled = false;  // its fused pose follows the graph thread's timing, not the data alone
   cfg.engine.association.enabled = false;
   int64_t forgotten_inline = 0, forgotten_threads = 0, resyncs_inline = 0, resyncs_threads = 0;
   const auto inline_out = drive(cfg, runtime::StageLanes::kInline, &forgotten_inline, &resyncs_inline);
@@ -180,7 +185,8 @@ TEST_CASE("the daemon's lanes and replay's give the same outputs for the same me
     const auto& other = thread_out.at(ch);
     CHECK(messages.size() == other.size());
     size_t first_difference = 0;
-    while (first_difference < std::min(messages.size(), other.size()) && messages[first_difference] == other[first_difference])
+    while (first_difference < std::min(messages.size(), other.size()) &&
+           messages[first_difference] == other[first_difference])
       ++first_difference;
     INFO("first difference at message " << first_difference << " of " << messages.size());
     CHECK(first_difference == messages.size());

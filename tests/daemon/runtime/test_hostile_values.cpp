@@ -32,14 +32,16 @@ struct Record {
 };
 
 // A simulated planar run of `source` as the bus would carry it.
-std::vector<Record> simulated_run(const std::string& source, double duration_s, uint64_t seed, bool unknown_ids = false) {
+std::vector<Record> simulated_run(const std::string& source, double duration_s, uint64_t seed,
+                                  bool unknown_ids = false) {
   tools::SimulationOptions sim;
   sim.duration_s = duration_s;
   sim.seed = seed;
   sim.source = source;
   sim.unknown_ids = unknown_ids;
   const auto path = (std::filesystem::temp_directory_path() /
-                     ("sextant_hostile_" + std::to_string(::getpid()) + "_" + source + ".lcm")).string();
+                     ("sextant_hostile_" + std::to_string(::getpid()) + "_" + source + ".lcm"))
+                        .string();
   {
     runtime::LogWriter w(path);
     tools::simulate(sim, w);
@@ -79,7 +81,8 @@ struct Run {
   explicit Run(bool pf = false) {
     if (pf) cfg.engine.filter.type = engine::FilterType::kPf;
     cfg.engine.association.enabled = false;
-    intake = std::make_unique<runtime::Intake>(stats, runtime::Intake::RejectHook{}, runtime::intake_options(cfg, false));
+    intake =
+        std::make_unique<runtime::Intake>(stats, runtime::Intake::RejectHook{}, runtime::intake_options(cfg, false));
     for (const char* c : {"ODOMETRY", "LANDMARKS", "BEARINGS", "LOOP_CLOSURES"}) intake->add_channel(c, kind_of(c));
     engine = std::make_unique<engine::Engine>(cfg.engine);
   }
@@ -201,7 +204,9 @@ TEST_CASE("hostile values: each finding's message is refused at intake by its re
   }
 }
 
-TEST_CASE("hostile values: a consistent reset of a body's odometry is accepted after time_resync_messages and the body restarts") {
+TEST_CASE(
+    "hostile values: a consistent reset of a body's odometry is accepted after time_resync_messages and the body "
+    "restarts") {
   auto run = simulated_run("robot1", 10, 4);
   size_t k = 0;
   for (auto& r : run) {
@@ -221,8 +226,8 @@ namespace {
 
 // Extreme but finite values: what a hostile or broken sender may put in any number.
 double extreme(std::mt19937_64& rng) {
-  static const double values[] = {1e308, -1e308, 1e300, -1e300, 1e30, 1e15, -1e15, 4.9e-324, -4.9e-324, 2.2e-308,
-                                  1e-300, 0.0, -0.0, 1.0, -1.0, 3.14159, 1e6, -1e6, 1e-12};
+  static const double values[] = {1e308,  -1e308, 1e300, -1e300, 1e30, 1e15,    -1e15, 4.9e-324, -4.9e-324, 2.2e-308,
+                                  1e-300, 0.0,    -0.0,  1.0,    -1.0, 3.14159, 1e6,   -1e6,     1e-12};
   return values[std::uniform_int_distribution<size_t>(0, std::size(values) - 1)(rng)];
 }
 
@@ -258,8 +263,11 @@ void fuzz_doubles(sextant::landmarks_t& m, std::mt19937_64& rng) {
 
 }  // namespace
 
-TEST_CASE("value fuzzer: extreme finite values in every odometry and sighting field of one body never harm the published poses or the other body") {
-  const int messages = std::getenv("SEXTANT_VALUE_FUZZ_MESSAGES") ? std::atoi(std::getenv("SEXTANT_VALUE_FUZZ_MESSAGES")) : 400;
+TEST_CASE(
+    "value fuzzer: extreme finite values in every odometry and sighting field of one body never harm the published "
+    "poses or the other body") {
+  const int messages =
+      std::getenv("SEXTANT_VALUE_FUZZ_MESSAGES") ? std::atoi(std::getenv("SEXTANT_VALUE_FUZZ_MESSAGES")) : 400;
   const auto clean = simulated_run("clean", 20, 5);
   const auto victim = simulated_run("victim", 20, 6);
   for (bool pf : {false, true}) {

@@ -69,12 +69,14 @@ TEST_CASE("the reader reads back what liblcm's writer wrote, and so does a file"
   for (int k = 0; k < 20; ++k) {
     CHECK(events[static_cast<size_t>(k)].timestamp == 1000 + k);
     CHECK(events[static_cast<size_t>(k)].channel == "CH" + std::to_string(k % 3));
-    CHECK(events[static_cast<size_t>(k)].data == std::vector<uint8_t>(static_cast<size_t>(k + 1), static_cast<uint8_t>(k)));
+    CHECK(events[static_cast<size_t>(k)].data ==
+          std::vector<uint8_t>(static_cast<size_t>(k + 1), static_cast<uint8_t>(k)));
   }
   CHECK_FALSE(d.damaged());
   CHECK(d.summary().empty());
   const auto path = temp_path("file.lcm");
-  std::ofstream(path, std::ios::binary).write(reinterpret_cast<const char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
+  std::ofstream(path, std::ios::binary)
+      .write(reinterpret_cast<const char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
   runtime::LogDamage fd;
   CHECK(LogReader::read_all(path, &fd).size() == 20);
   CHECK_FALSE(fd.damaged());

@@ -56,14 +56,16 @@ struct Queue {
     return true;
   }
   bool offer(OdometryBatcher& b, const QueuedEvent& e) {
-    return b.offer(e, [&](const QueuedEvent& x) { return push(x); }, [&](const OdometryBatcher::Token& t) { return push(t); });
+    return b.offer(
+        e, [&](const QueuedEvent& x) { return push(x); }, [&](const OdometryBatcher::Token& t) { return push(t); });
   }
   // Pops one slot: what the stage handles for it, in order.
   std::vector<std::string> pop(OdometryBatcher& b) {
     std::vector<std::string> out;
     auto slot = std::move(slots.front());
     slots.pop_front();
-    if (const auto* e = std::get_if<QueuedEvent>(&slot)) out.push_back(name_of(*e));
+    if (const auto* e = std::get_if<QueuedEvent>(&slot))
+      out.push_back(name_of(*e));
     else
       for (const auto& m : b.take(std::get<OdometryBatcher::Token>(slot))) out.push_back(name_of(m));
     return out;
@@ -89,7 +91,8 @@ TEST_CASE("odometry batcher: a body's odometry waits behind one queue slot, its 
   CHECK(b.coalesced() == 4);  // a:3, a:4, b:6, a:9
   CHECK(b.waiting() == 8);
   // Per body the arrival order; a's loop after a:4 and before a:7, b's loop after b:6 and before b:10.
-  CHECK(q.drain(b) == Slots{{"a:o1", "a:o3", "a:o4"}, {"b:o2", "b:o6"}, {"a:l5"}, {"a:o7", "a:o9"}, {"b:l8"}, {"b:o10"}});
+  CHECK(q.drain(b) ==
+        Slots{{"a:o1", "a:o3", "a:o4"}, {"b:o2", "b:o6"}, {"a:l5"}, {"a:o7", "a:o9"}, {"b:l8"}, {"b:o10"}});
   CHECK(b.waiting() == 0);
   CHECK(b.coalesced() == 4);
   CHECK(b.dropped() == 0);
@@ -120,12 +123,12 @@ TEST_CASE("odometry batcher: a token the queue refuses drops its message, an eve
   Queue q;
   q.capacity = 2;
   CHECK(q.offer(b, odometry("a", 1)));
-  CHECK(q.offer(b, loop("a", 2)));    // closes a's batch
+  CHECK(q.offer(b, loop("a", 2)));            // closes a's batch
   CHECK_FALSE(q.offer(b, odometry("a", 3)));  // a new batch: its token is refused, the message dropped
   CHECK(q.refused == 1);
   CHECK(b.waiting() == 1);
   CHECK(q.pop(b) == std::vector<std::string>{"a:o1"});
-  CHECK(q.offer(b, odometry("a", 4)));  // a slot again
+  CHECK(q.offer(b, odometry("a", 4)));    // a slot again
   CHECK_FALSE(q.offer(b, loop("a", 5)));  // refused: as if it had never come
   CHECK(q.refused == 2);
   CHECK(q.offer(b, odometry("a", 6)));  // still joins a:4's batch, needs no slot
@@ -190,11 +193,13 @@ int64_t counter(const runtime::StageStatus& s, const std::string& name) {
 
 }  // namespace
 
-TEST_CASE("odometry batcher behind a stage thread: every message handled once, in its body's order, or counted as dropped") {
+TEST_CASE(
+    "odometry batcher behind a stage thread: every message handled once, in its body's order, or counted as dropped") {
   RecordingStage stage;
   runtime::OdometryBatcherOptions o;
   o.max_batch = 16;
-  runtime::StageRunner runner(stage, 32, [](engine::Output) {}, o);
+  runtime::StageRunner runner(
+      stage, 32, [](engine::Output) {}, o);
   runner.start();
   std::mt19937 rng(3);
   std::map<std::string, std::vector<int64_t>> accepted;
@@ -203,8 +208,10 @@ TEST_CASE("odometry batcher behind a stage thread: every message handled once, i
     const std::string body = "body" + std::to_string(rng() % 3);
     const QueuedEvent e = rng() % 50 == 0 ? loop(body, t) : odometry(body, t);
     ++offered;
-    if (runner.offer(e)) accepted[body].push_back(t);
-    else ++refused;
+    if (runner.offer(e))
+      accepted[body].push_back(t);
+    else
+      ++refused;
     if (t % 100 == 0) std::this_thread::sleep_for(std::chrono::microseconds(300));  // bursts of 100 messages
   }
   runner.drain_and_stop();

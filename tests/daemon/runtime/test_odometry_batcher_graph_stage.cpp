@@ -130,7 +130,7 @@ TEST_CASE("graph stage behind the odometry batcher, lagging: the keyframes and t
   direct.finish(ignore);  // as the runner's drain does
   // The cases the old mirror had to follow happened.
   CHECK(counter(direct, "keyframes_reanchored") == 1);
-  CHECK(counter(direct, "keyframes_rejected") >= 10);  // the spike and the nine before the re-anchoring
+  CHECK(counter(direct, "keyframes_rejected") >= 10);      // the spike and the nine before the re-anchoring
   CHECK(counter(direct, "odometry_edges_rejected") == 0);  // the indefinite increment floored, its edge kept
   CHECK(counter(direct, "loops_accepted") > 10);
   CHECK(counter(direct, "sightings_accepted") > 100);

@@ -9,8 +9,9 @@ using namespace sextant;
 TEST_CASE("the publisher's last FusedPose times are forgotten with their body and bounded") {
   config::Channels channels;
   int64_t sent = 0;
-  runtime::Publisher publisher(channels, "t", "ekf", [&](const std::string&, const std::vector<uint8_t>&, int64_t) { ++sent; },
-                               /*max_tracked=*/4);
+  runtime::Publisher publisher(
+      channels, "t", "ekf", [&](const std::string&, const std::vector<uint8_t>&, int64_t) { ++sent; },
+      /*max_tracked=*/4);
   auto pose = [](const std::string& estimator, const std::string& source, int64_t utime) {
     engine::FusedPose p;
     p.estimator = estimator;

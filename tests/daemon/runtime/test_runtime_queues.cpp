@@ -80,7 +80,8 @@ std::vector<uint8_t> odometry_bytes(int64_t utime, const std::string& source) {
 TEST_CASE("intake rejects duplicate and backwards odometry per source, counts per channel") {
   runtime::ChannelStats stats;
   std::vector<std::string> reasons;
-  runtime::Intake intake(stats, [&](const std::string&, const std::string& r, const std::string&) { reasons.push_back(r); });
+  runtime::Intake intake(stats,
+                         [&](const std::string&, const std::string& r, const std::string&) { reasons.push_back(r); });
   intake.add_channel("ODOMETRY", runtime::InputKind::kOdometry);
   auto a = odometry_bytes(100, "a");
   auto b = odometry_bytes(100, "b");
@@ -88,13 +89,15 @@ TEST_CASE("intake rejects duplicate and backwards odometry per source, counts pe
   auto a_back = odometry_bytes(50, "a");
   auto a_next = odometry_bytes(200, "a");
   CHECK(intake.accept("ODOMETRY", a.data(), a.size(), runtime::Arrival::now()).has_value());
-  CHECK(intake.accept("ODOMETRY", b.data(), b.size(), runtime::Arrival::now()).has_value());  // another source may share the time
+  CHECK(intake.accept("ODOMETRY", b.data(), b.size(), runtime::Arrival::now())
+            .has_value());  // another source may share the time
   CHECK_FALSE(intake.accept("ODOMETRY", a_dup.data(), a_dup.size(), runtime::Arrival::now()).has_value());
   CHECK_FALSE(intake.accept("ODOMETRY", a_back.data(), a_back.size(), runtime::Arrival::now()).has_value());
   CHECK(intake.accept("ODOMETRY", a_next.data(), a_next.size(), runtime::Arrival::now()).has_value());
   const uint8_t junk[] = {0xde, 0xad, 0xbe, 0xef, 0, 0, 0, 0, 1};
   CHECK_FALSE(intake.accept("ODOMETRY", junk, sizeof junk, runtime::Arrival::now()).has_value());
-  CHECK_FALSE(intake.accept("OTHER", a.data(), a.size(), runtime::Arrival::now()).has_value());  // not an input channel: ignored, not counted
+  CHECK_FALSE(intake.accept("OTHER", a.data(), a.size(), runtime::Arrival::now())
+                  .has_value());  // not an input channel: ignored, not counted
   const auto snap = stats.snapshot();
   const auto& c = snap.at("ODOMETRY");
   CHECK(c.received == 6);

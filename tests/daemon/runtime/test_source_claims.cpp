@@ -22,7 +22,9 @@ std::vector<uint8_t> odometry(const std::string& sender, int64_t seq, int64_t ut
 
 }  // namespace
 
-TEST_CASE("source claims: a second sender of an active source is refused and counted; it takes over after the first goes silent") {
+TEST_CASE(
+    "source claims: a second sender of an active source is refused and counted; it takes over after the first goes "
+    "silent") {
   ChannelStats stats;
   Intake intake(stats);
   intake.add_channel("ODOMETRY", InputKind::kOdometry);

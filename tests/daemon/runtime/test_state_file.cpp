@@ -33,7 +33,8 @@ TEST_CASE("state file: CRC-32 is zlib's (IEEE 802.3)") {
 }
 
 TEST_CASE("state file: sections round-trip, every flipped byte and every truncation is refused, naming the file") {
-  const std::vector<StateSection> sections{{"dead_reckoning", std::string("\x01\x02\x03", 3)}, {"graph", std::string(300, 'g')}};
+  const std::vector<StateSection> sections{{"dead_reckoning", std::string("\x01\x02\x03", 3)},
+                                           {"graph", std::string(300, 'g')}};
   const std::string bytes = encode_state(42, sections);
   const auto back = decode_state(bytes, 42, "f");
   REQUIRE(back.size() == 2);

@@ -27,7 +27,8 @@ constexpr int64_t k2100 = 4'102'444'800'000'000;
 // clock at `at` (seconds after an arbitrary origin).
 TimeOrderGuard::LiveClock live_at(double at, int64_t wall = std::numeric_limits<int64_t>::max() / 2) {
   static const auto origin = std::chrono::steady_clock::now();
-  return {wall, origin + std::chrono::duration_cast<std::chrono::steady_clock::duration>(std::chrono::duration<double>(at))};
+  return {wall,
+          origin + std::chrono::duration_cast<std::chrono::steady_clock::duration>(std::chrono::duration<double>(at))};
 }
 
 runtime::IntakeOptions live_intake() {
@@ -43,7 +44,8 @@ std::vector<uint8_t> encode(const Msg& m) {
   return b;
 }
 
-std::vector<uint8_t> odometry(int64_t utime, const std::string& source, int64_t seq = 0, const std::string& sender = "s") {
+std::vector<uint8_t> odometry(int64_t utime, const std::string& source, int64_t seq = 0,
+                              const std::string& sender = "s") {
   engine::Odometry o;
   o.utime = utime;
   o.source = source;
@@ -86,7 +88,8 @@ TEST_CASE("live, a stamp far ahead of its stream's clock is refused, unless real
   TimeOrderGuard g;  // 60 s of slack
   CHECK_FALSE(g.check("a", kT0, true, 0, live_at(0)));
   CHECK(g.check("a", kT0 + 100'000'000, true, 0, live_at(1))->reason == "time_future");  // 100 s ahead after 1 s
-  CHECK(g.check("a", kT0 + 100'000'000, true, 0, live_at(1))->message.find("ahead of the previous") != std::string::npos);
+  CHECK(g.check("a", kT0 + 100'000'000, true, 0, live_at(1))->message.find("ahead of the previous") !=
+        std::string::npos);
   CHECK_FALSE(g.check("a", kT0 + 100'000'000, true, 0, live_at(50)));  // a sender that paused for 50 s
   // Replay (no live clocks): utime order is the feed's, no far-future check.
   TimeOrderGuard r;
@@ -143,9 +146,9 @@ TEST_CASE("a future bearing scan no longer blocks its sensor, landmarks and loop
   TimeOrderGuard g;
   const auto at = live_at(0);
   CHECK_FALSE(g.check("LOOP/r", kT0, false, 1, at));
-  CHECK_FALSE(g.check("LOOP/r", kT0 - 5'000'000, false, 2, at));  // late: fine
-  CHECK(g.check("LOOP/r", kT0, false, 1, at)->reason == "time_order");   // the same loop again
-  CHECK_FALSE(g.check("LOOP/r", kT0, false, 3, at));                      // another loop made at the same time
+  CHECK_FALSE(g.check("LOOP/r", kT0 - 5'000'000, false, 2, at));        // late: fine
+  CHECK(g.check("LOOP/r", kT0, false, 1, at)->reason == "time_order");  // the same loop again
+  CHECK_FALSE(g.check("LOOP/r", kT0, false, 3, at));                    // another loop made at the same time
   CHECK(g.check("LOOP/r", k2100, false, 4, at)->reason == "time_future");
 }
 
@@ -217,7 +220,9 @@ TEST_CASE("live, a full table makes room from the quietest source silent for evi
   CHECK(replay.evicted() == 0);
 }
 
-TEST_CASE("the intake names the bodies whose odometry stream expired (not sensors, not other channels), by the clock it is given") {
+TEST_CASE(
+    "the intake names the bodies whose odometry stream expired (not sensors, not other channels), by the clock it is "
+    "given") {
   runtime::ChannelStats stats;
   runtime::IntakeOptions o;
   o.time.idle_s = 0.05;
@@ -252,7 +257,7 @@ TEST_CASE("the intake counts sequence gaps per channel and sender as lost") {
   send(kT0 + 2, 12, "b");  // 11 lost
   send(kT0 + 4, 0, "a");   // a restarted: nothing lost
   send(kT0 + 5, 1, "a");
-  send(kT0 + 4, 1, "a");   // a repeat (and refused as backwards): nothing lost
+  send(kT0 + 4, 1, "a");  // a repeat (and refused as backwards): nothing lost
   const auto odo = stats.snapshot().at("ODOMETRY");
   CHECK(odo.lost == 4);
   CHECK(odo.lost_by_sender == std::map<std::string, int64_t>{{"a", 3}, {"b", 1}});
@@ -273,7 +278,8 @@ TEST_CASE("loss by sender is bounded: beyond the first 64 senders that lost mess
   CHECK(sum == c.lost);
 }
 
-TEST_CASE("every expired name is told, beyond 4096 at once, and untaken ones are bounded at 2 x max_streams and counted") {
+TEST_CASE(
+    "every expired name is told, beyond 4096 at once, and untaken ones are bounded at 2 x max_streams and counted") {
   TimeGuardOptions o;
   o.max_streams = 5000;
   o.idle_s = 30;
@@ -289,7 +295,8 @@ TEST_CASE("every expired name is told, beyond 4096 at once, and untaken ones are
   TimeOrderGuard h(o);
   for (int round = 0; round < 3; ++round) {
     for (int k = 0; k < 10; ++k)
-      REQUIRE_FALSE(h.check("r" + std::to_string(round) + "b" + std::to_string(k), kT0, true, 0, live_at(100.0 * round)));
+      REQUIRE_FALSE(
+          h.check("r" + std::to_string(round) + "b" + std::to_string(k), kT0, true, 0, live_at(100.0 * round)));
     CHECK_FALSE(h.check("tick" + std::to_string(round), kT0, true, 0, live_at(100.0 * round + 50)));
   }
   CHECK(h.expired_untold() > 0);

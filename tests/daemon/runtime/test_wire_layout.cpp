@@ -118,7 +118,8 @@ sextant::status_t random_status(std::mt19937& rng) {
     sextant::stage_status_t st{};
     st.name = random_string(rng), st.last_failure = random_string(rng);
     st.num_counters = static_cast<int32_t>(rng() % 4);
-    for (int k = 0; k < st.num_counters; ++k) st.counter_names.push_back(random_string(rng)), st.counter_values.push_back(rng());
+    for (int k = 0; k < st.num_counters; ++k)
+      st.counter_names.push_back(random_string(rng)), st.counter_values.push_back(rng());
     m.stages.push_back(st);
   }
   m.num_outputs = static_cast<int32_t>(rng() % 4);
@@ -169,7 +170,8 @@ void check_layout_matches(const Msg& m) {
   const auto& layout = runtime::wire_layout<Msg>();
   CHECK_FALSE(runtime::wire_error(layout, b.data(), b.size()).has_value());
   for (size_t n = 8; n < b.size(); ++n)
-    if (!runtime::wire_error(layout, b.data(), n)) FAIL_CHECK(layout.type << ": a prefix of " << n << " of " << b.size() << " bytes passed");
+    if (!runtime::wire_error(layout, b.data(), n))
+      FAIL_CHECK(layout.type << ": a prefix of " << n << " of " << b.size() << " bytes passed");
 }
 
 std::vector<uint8_t> with_i32_at(std::vector<uint8_t> b, size_t at, int32_t v) {
@@ -243,7 +245,8 @@ TEST_CASE("array counts beyond the bytes or the maximum are refused before anyth
     CHECK(r.message.find("landmarks_t.num_observations: " + std::to_string(n)) != std::string::npos);
   }
   // Within the maximum but more than the bytes hold: 100 observations claimed, none sent.
-  const auto r = rejection(runtime::decode_event(InputKind::kLandmarks, with_i32_at(b, count_at, 100).data(), b.size()));
+  const auto r =
+      rejection(runtime::decode_event(InputKind::kLandmarks, with_i32_at(b, count_at, 100).data(), b.size()));
   CHECK(r.reason == "decode");
   CHECK(r.message.find("landmarks_t.observations: 100 elements") != std::string::npos);
   const auto neg = with_i32_at(b, count_at, -1);
@@ -264,8 +267,9 @@ TEST_CASE("a string without its NUL and an array cut short are refused, naming t
   lm.sender = "abc";
   auto b = encode(lm);
   b[8 + 8 + 4 + 3] = 'x';  // the NUL of "abc"
-  CHECK(rejection(runtime::decode_event(InputKind::kLandmarks, b.data(), b.size())).message.find("does not end in NUL") !=
-        std::string::npos);
+  CHECK(
+      rejection(runtime::decode_event(InputKind::kLandmarks, b.data(), b.size())).message.find("does not end in NUL") !=
+      std::string::npos);
   lm = random_landmarks(rng);
   lm.num_observations = 2;
   lm.observations.resize(2);
@@ -292,10 +296,17 @@ TEST_CASE("decoding mutated messages of every input type never throws") {
     for (int e = 0; e < edits; ++e) {
       const size_t at = 8 + rng() % (b.size() - 8);
       switch (rng() % 4) {
-        case 0: b[at] = static_cast<uint8_t>(rng()); break;
-        case 1: b[at] = (rng() % 2) ? 0xff : 0x00; break;
-        case 2: b.resize(at); break;
-        default: b.insert(b.begin() + static_cast<std::ptrdiff_t>(at), static_cast<uint8_t>(rng()));
+        case 0:
+          b[at] = static_cast<uint8_t>(rng());
+          break;
+        case 1:
+          b[at] = (rng() % 2) ? 0xff : 0x00;
+          break;
+        case 2:
+          b.resize(at);
+          break;
+        default:
+          b.insert(b.begin() + static_cast<std::ptrdiff_t>(at), static_cast<uint8_t>(rng()));
       }
       if (b.size() <= 8) b = seed;
     }

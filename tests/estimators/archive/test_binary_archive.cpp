@@ -41,7 +41,8 @@ TEST_CASE("archive: values round-trip exactly, counts and sizes beyond the bytes
   archive::ArchiveWriter huge;
   huge(uint64_t{1} << 62)(uint32_t{0});
   archive::ArchiveReader hr(huge.data().data(), huge.data().size(), "huge");
-  CHECK_THROWS_WITH_AS(hr.get<std::vector<double>>(), doctest::Contains("huge: at byte 8: a sequence of"), archive::ArchiveError);
+  CHECK_THROWS_WITH_AS(hr.get<std::vector<double>>(), doctest::Contains("huge: at byte 8: a sequence of"),
+                       archive::ArchiveError);
   archive::ArchiveWriter wrong;
   wrong(Eigen::Matrix2d::Identity().eval());
   archive::ArchiveReader wr(wrong.data().data(), wrong.data().size(), "wrong");

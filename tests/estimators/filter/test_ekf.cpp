@@ -60,7 +60,8 @@ TEST_CASE("planar EKF: motion and observation Jacobians against central differen
     for (int c = 0; c < 3; ++c) {
       Eigen::Vector3d e = Eigen::Vector3d::Zero();
       e[c] = h;
-      Eigen::Vector3d diff = PlanarEkf::motion(x + e, d, nullptr, nullptr) - PlanarEkf::motion(x - e, d, nullptr, nullptr);
+      Eigen::Vector3d diff =
+          PlanarEkf::motion(x + e, d, nullptr, nullptr) - PlanarEkf::motion(x - e, d, nullptr, nullptr);
       diff[2] = wrap_angle(diff[2]);
       CHECK((diff / (2 * h) - F.col(c)).norm() < 1e-6);
       // Noise enters on the right of the increment: Delta (+) w.
@@ -76,14 +77,16 @@ TEST_CASE("planar EKF: motion and observation Jacobians against central differen
     for (int c = 0; c < 3; ++c) {
       Eigen::Vector3d e = Eigen::Vector3d::Zero();
       e[c] = h;
-      Eigen::Vector2d diff = PlanarEkf::observation(x + e, l, nullptr, nullptr) - PlanarEkf::observation(x - e, l, nullptr, nullptr);
+      Eigen::Vector2d diff =
+          PlanarEkf::observation(x + e, l, nullptr, nullptr) - PlanarEkf::observation(x - e, l, nullptr, nullptr);
       diff[1] = wrap_angle(diff[1]);
       CHECK((diff / (2 * h) - Hx.col(c)).norm() < 1e-6);
     }
     for (int c = 0; c < 2; ++c) {
       Eigen::Vector2d e = Eigen::Vector2d::Zero();
       e[c] = h;
-      Eigen::Vector2d diff = PlanarEkf::observation(x, l + e, nullptr, nullptr) - PlanarEkf::observation(x, l - e, nullptr, nullptr);
+      Eigen::Vector2d diff =
+          PlanarEkf::observation(x, l + e, nullptr, nullptr) - PlanarEkf::observation(x, l - e, nullptr, nullptr);
       diff[1] = wrap_angle(diff[1]);
       CHECK((diff / (2 * h) - Hl.col(c)).norm() < 1e-6);
     }
@@ -109,7 +112,8 @@ TEST_CASE("planar EKF-SLAM: localization converges, outliers are gated, NaN refu
     ekf.predict(noisy, Q);
     for (size_t i = 0; i < lm.size(); ++i) {
       const Eigen::Vector3d xt(truth.translation().x(), truth.translation().y(), truth.angle());
-      const Eigen::Vector2d z = PlanarEkf::observation(xt, lm[i], nullptr, nullptr) + Eigen::Vector2d(0.1 * n(rng), 0.02 * n(rng));
+      const Eigen::Vector2d z =
+          PlanarEkf::observation(xt, lm[i], nullptr, nullptr) + Eigen::Vector2d(0.1 * n(rng), 0.02 * n(rng));
       const auto r = ekf.observe(static_cast<int64_t>(i), z[0], z[1], R);
       accepted += r.accepted;
     }
@@ -180,6 +184,8 @@ TEST_CASE("state augmentation equals the dense Jacobian transform J blockdiag(P,
   CHECK((got - expected).cwiseAbs().maxCoeff() < 1e-12 * expected.cwiseAbs().maxCoeff());
   CHECK((got - got.transpose()).cwiseAbs().maxCoeff() == 0.0);
   CHECK(Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(got).eigenvalues().minCoeff() > 0);
-  CHECK_THROWS_WITH(augmented_covariance(P, Eigen::MatrixXd::Zero(2, 8), Jz, R), doctest::Contains("augmented_covariance"));
-  CHECK_THROWS_WITH(augmented_covariance(P, Jx, Jz, Eigen::MatrixXd::Zero(3, 3)), doctest::Contains("augmented_covariance"));
+  CHECK_THROWS_WITH(augmented_covariance(P, Eigen::MatrixXd::Zero(2, 8), Jz, R),
+                    doctest::Contains("augmented_covariance"));
+  CHECK_THROWS_WITH(augmented_covariance(P, Jx, Jz, Eigen::MatrixXd::Zero(3, 3)),
+                    doctest::Contains("augmented_covariance"));
 }

@@ -42,7 +42,8 @@ TEST_CASE("kalman_update: an update whose covariance would not be finite is refu
   CHECK(P == P0);
 }
 
-TEST_CASE("planar EKF: a prediction that would overflow is refused, counted, and the filter goes on from where it was") {
+TEST_CASE(
+    "planar EKF: a prediction that would overflow is refused, counted, and the filter goes on from where it was") {
   PlanarEkf ekf;
   ekf.initialize(SE2(1, 2, 0.3), Eigen::Matrix3d::Identity() * 0.01);
   ekf.predict(SE2(1, 0, 0), Eigen::Matrix3d::Identity() * 1e-4);

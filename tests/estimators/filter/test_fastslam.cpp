@@ -194,8 +194,8 @@ namespace {
 /// `range` metres and +-60 degrees.
 struct World {
   std::vector<Eigen::Vector2d> landmarks;
-  std::vector<SE2> truth;                   // pose after each step
-  std::vector<SE2> odometry;                // noisy increments
+  std::vector<SE2> truth;                            // pose after each step
+  std::vector<SE2> odometry;                         // noisy increments
   std::vector<std::vector<RangeBearing>> sightings;  // after each step (possibly empty)
   Eigen::Matrix3d Q;
   Eigen::Matrix2d R;
@@ -225,8 +225,8 @@ World make_world(int steps, uint32_t seed, double range = 4.0, double odometry_n
     std::vector<RangeBearing> s;
     if (k % 2 == 0) {
       for (size_t i = 0; i < w.landmarks.size(); ++i) {
-        const Eigen::Vector2d h = PlanarEkf::observation(Eigen::Vector3d(x.translation().x(), x.translation().y(), x.angle()),
-                                                         w.landmarks[i], nullptr, nullptr);
+        const Eigen::Vector2d h = PlanarEkf::observation(
+            Eigen::Vector3d(x.translation().x(), x.translation().y(), x.angle()), w.landmarks[i], nullptr, nullptr);
         if (h[0] > range || std::abs(h[1]) > M_PI / 3) continue;
         s.push_back({static_cast<int64_t>(i), h[0] + 0.05 * n(rng), wrap_angle(h[1] + 0.02 * n(rng)), w.R});
       }
@@ -245,7 +245,8 @@ struct RunResult {
 RunResult run(const World& w, FastSlamOptions o, bool known_map, bool drop_ids) {
   RunResult r{0, 0, {}, FastSlam(o)};
   if (known_map)
-    for (size_t i = 0; i < w.landmarks.size(); ++i) r.filter.set_known_landmark(static_cast<int64_t>(i), w.landmarks[i]);
+    for (size_t i = 0; i < w.landmarks.size(); ++i)
+      r.filter.set_known_landmark(static_cast<int64_t>(i), w.landmarks[i]);
   r.filter.initialize(SE2(0, -4, 0), Eigen::Matrix3d::Identity() * 1e-6);
   SE2 dr(0, -4, 0);
   double e_pf = 0, e_dr = 0;
@@ -274,7 +275,8 @@ TEST_CASE("fastslam: a simulated run, far below dead reckoning (SLAM with ids, l
   o.particles = 50;
   o.seed = 9;
   const auto slam = run(w, o, false, false);
-  MESSAGE("SLAM: pf " << slam.rmse_pf << " m, dead reckoning " << slam.rmse_dr << " m, resamplings " << slam.filter.resamplings());
+  MESSAGE("SLAM: pf " << slam.rmse_pf << " m, dead reckoning " << slam.rmse_dr << " m, resamplings "
+                      << slam.filter.resamplings());
   CHECK(slam.rmse_pf < 0.3 * slam.rmse_dr);
   CHECK(slam.filter.resamplings() > 0);
   // Landmark estimates near the truth (the map frame is the start pose, which is the true one here).
@@ -294,7 +296,8 @@ TEST_CASE("fastslam: a simulated run, far below dead reckoning (SLAM with ids, l
   // closure then duplicates landmarks instead).
   const World quieter = make_world(500, 2, 4.0, 0.5);
   const auto unk = run(quieter, o, false, true);
-  MESSAGE("unknown ids: pf " << unk.rmse_pf << " m, dead reckoning " << unk.rmse_dr << " m, landmarks " << unk.filter.landmarks().size());
+  MESSAGE("unknown ids: pf " << unk.rmse_pf << " m, dead reckoning " << unk.rmse_dr << " m, landmarks "
+                             << unk.filter.landmarks().size());
   CHECK(unk.rmse_pf < 0.6 * unk.rmse_dr);
   CHECK(unk.filter.landmarks().size() <= quieter.landmarks.size());  // no duplicates among the confirmed ones
   CHECK(unk.filter.landmarks().size() >= 8);
@@ -337,7 +340,8 @@ TEST_CASE("fastslam: resampling shares the maps of duplicated particles, a later
   CHECK(out.updated == 3);
   // Every particle updated its own landmarks: no sharing yet.
   const auto& before = f.particles();
-  for (size_t i = 1; i < before.size(); ++i) CHECK_FALSE(before[i].identified.shares_slot_with(before[0].identified, 0));
+  for (size_t i = 1; i < before.size(); ++i)
+    CHECK_FALSE(before[i].identified.shares_slot_with(before[0].identified, 0));
   const double neff = f.effective_sample_size();
   CHECK(neff < o.particles);
   f.resample();

@@ -43,7 +43,8 @@ State initial_state() {
 
 void apply(State& s, const Input& in) {
   ++s.applied;
-  if (const auto* i = std::get_if<Increment>(&in)) s.ekf.predict(i->delta, i->Q);
+  if (const auto* i = std::get_if<Increment>(&in))
+    s.ekf.predict(i->delta, i->Q);
   else {
     const auto& z = std::get<Sight>(in);
     s.ekf.observe(z.id, z.range, z.bearing, Eigen::Vector2d(0.01, 0.0004).asDiagonal());
@@ -61,13 +62,16 @@ std::vector<Stamped> make_run(int seconds, uint64_t seed) {
   for (int k = 1; k <= 50 * seconds; ++k) {
     const int64_t t = int64_t{20'000} * k;
     truth = truth * step;
-    out.push_back({t, 0, Increment{step * SE2::exp(Eigen::Vector3d(0.002 * n(rng), 0.002 * n(rng), 0.001 * n(rng))),
-                                   Eigen::Vector3d(4e-6, 4e-6, 1e-6).asDiagonal()}});
+    out.push_back({t, 0,
+                   Increment{step * SE2::exp(Eigen::Vector3d(0.002 * n(rng), 0.002 * n(rng), 0.001 * n(rng))),
+                             Eigen::Vector3d(4e-6, 4e-6, 1e-6).asDiagonal()}});
     if (k % 5 == 0) {
       const Eigen::Vector3d xt(truth.translation().x(), truth.translation().y(), truth.angle());
       for (size_t i = 0; i < lm.size(); ++i) {
         const Eigen::Vector2d z = PlanarEkf::observation(xt, lm[i], nullptr, nullptr);
-        out.push_back({t, 1 + static_cast<int>(i), Sight{static_cast<int64_t>(i), z[0] + 0.1 * n(rng), z[1] + 0.02 * n(rng)}});  // distinct ranks: a fixed order at equal stamps
+        out.push_back({t, 1 + static_cast<int>(i),
+                       Sight{static_cast<int64_t>(i), z[0] + 0.1 * n(rng),
+                             z[1] + 0.02 * n(rng)}});  // distinct ranks: a fixed order at equal stamps
       }
     }
   }
@@ -79,13 +83,15 @@ std::vector<Stamped> make_run(int seconds, uint64_t seed) {
 TEST_CASE("late measurements inside the window give exactly the in-order state") {
   const auto run = make_run(10, 3);
   MeasurementHistory<State, Input> in_order(500'000, initial_state());
-  for (const auto& s : run) CHECK(in_order.add(s.utime, s.rank, s.input, apply) == decltype(in_order)::Outcome::applied);
+  for (const auto& s : run)
+    CHECK(in_order.add(s.utime, s.rank, s.input, apply) == decltype(in_order)::Outcome::applied);
 
   // Arrival order: every input delayed by a random lag of up to 0.4 s (window 0.5 s), sightings more than odometry.
   std::mt19937 rng(11);
   std::vector<std::pair<int64_t, size_t>> arrival;
   for (size_t i = 0; i < run.size(); ++i) {
-    const int64_t lag = static_cast<int64_t>(std::uniform_real_distribution<double>(0, run[i].rank >= 1 ? 400'000 : 100'000)(rng));
+    const int64_t lag =
+        static_cast<int64_t>(std::uniform_real_distribution<double>(0, run[i].rank >= 1 ? 400'000 : 100'000)(rng));
     arrival.push_back({run[i].utime + lag, i});
   }
   std::sort(arrival.begin(), arrival.end());
@@ -139,14 +145,17 @@ TEST_CASE("an input older than the window is refused and leaves the state untouc
 
 TEST_CASE("a late input before the first one and a zero window") {
   MeasurementHistory<State, Input> h(0, initial_state());
-  CHECK(h.add(1000, 0, Increment{SE2(0.1, 0, 0), Eigen::Matrix3d::Identity() * 1e-6}, apply) == decltype(h)::Outcome::applied);
-  CHECK(h.add(900, 0, Increment{SE2(0.1, 0, 0), Eigen::Matrix3d::Identity() * 1e-6}, apply) == decltype(h)::Outcome::too_late);
+  CHECK(h.add(1000, 0, Increment{SE2(0.1, 0, 0), Eigen::Matrix3d::Identity() * 1e-6}, apply) ==
+        decltype(h)::Outcome::applied);
+  CHECK(h.add(900, 0, Increment{SE2(0.1, 0, 0), Eigen::Matrix3d::Identity() * 1e-6}, apply) ==
+        decltype(h)::Outcome::too_late);
   // Same stamp as the newest, higher rank: in order.  In g the lower rank comes second and is inserted before
   // (a window of 0 still admits the newest stamp).
   CHECK(h.add(1000, 1, Sight{0, 4.9, 0.0}, apply) == decltype(h)::Outcome::applied);
   MeasurementHistory<State, Input> g(0, initial_state());
   g.add(1000, 1, Sight{0, 4.9, 0.0}, apply);
-  CHECK(g.add(1000, 0, Increment{SE2(0.1, 0, 0), Eigen::Matrix3d::Identity() * 1e-6}, apply) == decltype(g)::Outcome::reapplied);
+  CHECK(g.add(1000, 0, Increment{SE2(0.1, 0, 0), Eigen::Matrix3d::Identity() * 1e-6}, apply) ==
+        decltype(g)::Outcome::reapplied);
   CHECK((g.state().ekf.state() - h.state().ekf.state()).cwiseAbs().maxCoeff() == 0.0);
   using History = MeasurementHistory<State, Input>;
   CHECK_THROWS_AS(History(-1, initial_state()), std::invalid_argument);

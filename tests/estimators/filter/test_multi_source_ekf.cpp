@@ -32,7 +32,8 @@ Eigen::Vector3d residual(const Factor& f, const std::vector<Eigen::Vector3d>& x)
 
 // Marginal covariance of the last pose: information matrix from a prior on x0 and every factor's Jacobian (central
 // differences), inverted.
-Eigen::Matrix3d batch_marginal(const std::vector<Eigen::Vector3d>& x, const Eigen::Matrix3d& P0, const std::vector<Factor>& factors) {
+Eigen::Matrix3d batch_marginal(const std::vector<Eigen::Vector3d>& x, const Eigen::Matrix3d& P0,
+                               const std::vector<Factor>& factors) {
   const auto n = static_cast<Eigen::Index>(3 * x.size());
   Eigen::MatrixXd L = Eigen::MatrixXd::Zero(n, n);
   L.topLeftCorner<3, 3>() = P0.inverse();
@@ -50,7 +51,8 @@ Eigen::Matrix3d batch_marginal(const std::vector<Eigen::Vector3d>& x, const Eige
     Eigen::MatrixXd Jm(use.size(), n), Rm(use.size(), use.size());
     for (size_t a = 0; a < use.size(); ++a) {
       Jm.row(static_cast<Eigen::Index>(a)) = J.row(use[a]);
-      for (size_t b = 0; b < use.size(); ++b) Rm(static_cast<Eigen::Index>(a), static_cast<Eigen::Index>(b)) = f.R(use[a], use[b]);
+      for (size_t b = 0; b < use.size(); ++b)
+        Rm(static_cast<Eigen::Index>(a), static_cast<Eigen::Index>(b)) = f.R(use[a], use[b]);
     }
     L += Jm.transpose() * Rm.inverse() * Jm;
   }
@@ -64,7 +66,8 @@ std::vector<SE2> truth_run() {
   return x;
 }
 
-PlanarOdometry reading(int k, const SE2& p, const Eigen::Matrix3d& pose_cov, const std::optional<Eigen::Matrix3d>& inc) {
+PlanarOdometry reading(int k, const SE2& p, const Eigen::Matrix3d& pose_cov,
+                       const std::optional<Eigen::Matrix3d>& inc) {
   PlanarOdometry m;
   m.utime = 1'000'000 + 100'000 * k;
   m.pose = p;
@@ -96,7 +99,8 @@ TEST_CASE("pose-measurement innovations: Jacobians against central differences")
       const Eigen::Vector3d dx = PlanarEkf::relative_pose_innovation(c, x + e, z, nullptr, nullptr) -
                                  PlanarEkf::relative_pose_innovation(c, x - e, z, nullptr, nullptr);
       const SE2 za = frame.inverse() * pose(x) * SE2(0.1, -0.1, 0.2);
-      const Eigen::Vector3d da = PlanarEkf::pose_innovation(frame, x + e, za, nullptr) - PlanarEkf::pose_innovation(frame, x - e, za, nullptr);
+      const Eigen::Vector3d da =
+          PlanarEkf::pose_innovation(frame, x + e, za, nullptr) - PlanarEkf::pose_innovation(frame, x - e, za, nullptr);
       CHECK((-dc / 2e-6 - Hc.col(k)).norm() < 1e-6);
       CHECK((-dx / 2e-6 - Hx.col(k)).norm() < 1e-6);
       CHECK((-da / 2e-6 - Ha.col(k)).norm() < 1e-6);
@@ -148,7 +152,8 @@ TEST_CASE("two odometry sources: the EKF covariance equals the information-form 
       if (cs.vo.differential && (pose_rows[0] || pose_rows[1] || pose_rows[2]))
         factors.push_back({k - 1, k, X[K - 1].between(X[K]), SE2(), Qv, pose_rows});
       if (!cs.vo.differential) factors.push_back({-1, k, G * X[K], G.inverse(), Rabs, pose_rows});
-      if (vel_rows[0] || vel_rows[2]) factors.push_back({k - 1, k, X[K - 1].between(X[K]), SE2(), Sv * 0.1 * 0.1, vel_rows});
+      if (vel_rows[0] || vel_rows[2])
+        factors.push_back({k - 1, k, X[K - 1].between(X[K]), SE2(), Sv * 0.1 * 0.1, vel_rows});
     }
     const Eigen::Matrix3d batch = batch_marginal(xv, kP0, factors);
     const Eigen::Matrix3d P = ekf.ekf().pose_covariance();
@@ -157,7 +162,8 @@ TEST_CASE("two odometry sources: the EKF covariance equals the information-form 
     CHECK((vec(ekf.ekf().pose()) - xv.back()).norm() < 1e-9);
     // The second source helped: smaller than wheel odometry alone in the fused components.
     MultiSourceEkf alone(PlanarEkfOptions{}, kP0, {{"wheel", wheel}});
-    for (int k = 0; k < static_cast<int>(X.size()); ++k) alone.odometry("wheel", reading(k, X[static_cast<size_t>(k)], Eigen::Matrix3d::Zero(), kQw));
+    for (int k = 0; k < static_cast<int>(X.size()); ++k)
+      alone.odometry("wheel", reading(k, X[static_cast<size_t>(k)], Eigen::Matrix3d::Zero(), kQw));
     CHECK(P.determinant() < alone.ekf().pose_covariance().determinant());
   }
 }
@@ -188,20 +194,24 @@ TEST_CASE("two odometry sources: the gate rejects an outlier, a silent source ti
   // Duplicate stamp.
   CHECK(ekf.odometry("vo", reading(3, X[3], Eigen::Matrix3d::Zero(), Qv)) == OdometryOutcome::duplicate);
   // vo falls silent from k = 3 (t = 1.3 s); the wheel goes on: at k = 6 (0.3 s later) the timeout is reported, once.
-  for (int k = 4; k <= 8; ++k) ekf.odometry("wheel", reading(k, X[static_cast<size_t>(k)], Eigen::Matrix3d::Zero(), kQw));
+  for (int k = 4; k <= 8; ++k)
+    ekf.odometry("wheel", reading(k, X[static_cast<size_t>(k)], Eigen::Matrix3d::Zero(), kQw));
   CHECK(ekf.counters().at("vo").timeouts == 1);
   CHECK(ekf.counters().at("vo").silent);
   // It comes back: the first message re-anchors (the gap is not fused), the next one is fused again.
-  CHECK(ekf.odometry("vo", reading(8, SE2(0.5, 0.5, 0.5) * X[8], Eigen::Matrix3d::Zero(), Qv)) == OdometryOutcome::anchored);
+  CHECK(ekf.odometry("vo", reading(8, SE2(0.5, 0.5, 0.5) * X[8], Eigen::Matrix3d::Zero(), Qv)) ==
+        OdometryOutcome::anchored);
   CHECK_FALSE(ekf.counters().at("vo").silent);
   ekf.odometry("wheel", reading(9, X[9], Eigen::Matrix3d::Zero(), kQw));
-  CHECK(ekf.odometry("vo", reading(9, SE2(0.5, 0.5, 0.5) * X[9], Eigen::Matrix3d::Zero(), Qv)) == OdometryOutcome::fused);
+  CHECK(ekf.odometry("vo", reading(9, SE2(0.5, 0.5, 0.5) * X[9], Eigen::Matrix3d::Zero(), Qv)) ==
+        OdometryOutcome::fused);
   CHECK(ekf.counters().at("vo").timeouts == 1);
   // Non-finite increment covariance: refused, counted.
   ekf.odometry("wheel", reading(10, X[10], Eigen::Matrix3d::Zero(), kQw));
   Eigen::Matrix3d bad = Qv;
   bad(0, 0) = std::nan("");
-  CHECK(ekf.odometry("vo", reading(10, SE2(0.5, 0.5, 0.5) * X[10], Eigen::Matrix3d::Zero(), bad)) == OdometryOutcome::rejected);
+  CHECK(ekf.odometry("vo", reading(10, SE2(0.5, 0.5, 0.5) * X[10], Eigen::Matrix3d::Zero(), bad)) ==
+        OdometryOutcome::rejected);
   CHECK(ekf.odometry("other", reading(10, X[10], Eigen::Matrix3d::Zero(), Qv)) == OdometryOutcome::unknown_source);
 }
 

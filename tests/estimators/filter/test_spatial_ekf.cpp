@@ -31,24 +31,28 @@ TEST_CASE("3-D EKF: motion, observation and initialization Jacobians against cen
     for (int c = 0; c < 6; ++c) {
       SE3::Vector6 e = SE3::Vector6::Zero();
       e[c] = h;
-      const SE3::Vector6 d = ((X * D).inverse() * (X * SE3::exp(e) * D)).log() - ((X * D).inverse() * (X * SE3::exp(-e) * D)).log();
+      const SE3::Vector6 d =
+          ((X * D).inverse() * (X * SE3::exp(e) * D)).log() - ((X * D).inverse() * (X * SE3::exp(-e) * D)).log();
       CHECK((d / (2 * h) - F.col(c)).norm() < 1e-6);
     }
-    const Eigen::Vector3d l = X.translation() + X.rotation().matrix() * Eigen::Vector3d(3 + u(rng), u(rng), 0.5 * u(rng));
+    const Eigen::Vector3d l =
+        X.translation() + X.rotation().matrix() * Eigen::Vector3d(3 + u(rng), u(rng), 0.5 * u(rng));
     Eigen::Matrix<double, 3, 6> Hx;
     Eigen::Matrix3d Hl;
     const Eigen::Vector3d z = SpatialEkf::observation(X, l, &Hx, &Hl);
     for (int c = 0; c < 6; ++c) {
       SE3::Vector6 e = SE3::Vector6::Zero();
       e[c] = h;
-      Eigen::Vector3d d = SpatialEkf::observation(X * SE3::exp(e), l, nullptr, nullptr) - SpatialEkf::observation(X * SE3::exp(-e), l, nullptr, nullptr);
+      Eigen::Vector3d d = SpatialEkf::observation(X * SE3::exp(e), l, nullptr, nullptr) -
+                          SpatialEkf::observation(X * SE3::exp(-e), l, nullptr, nullptr);
       d[1] = std::remainder(d[1], 2 * M_PI);
       CHECK((d / (2 * h) - Hx.col(c)).norm() < 1e-6);
     }
     for (int c = 0; c < 3; ++c) {
       Eigen::Vector3d e = Eigen::Vector3d::Zero();
       e[c] = h;
-      Eigen::Vector3d d = SpatialEkf::observation(X, l + e, nullptr, nullptr) - SpatialEkf::observation(X, l - e, nullptr, nullptr);
+      Eigen::Vector3d d =
+          SpatialEkf::observation(X, l + e, nullptr, nullptr) - SpatialEkf::observation(X, l - e, nullptr, nullptr);
       d[1] = std::remainder(d[1], 2 * M_PI);
       CHECK((d / (2 * h) - Hl.col(c)).norm() < 1e-6);
     }
@@ -59,13 +63,15 @@ TEST_CASE("3-D EKF: motion, observation and initialization Jacobians against cen
     for (int c = 0; c < 6; ++c) {
       SE3::Vector6 e = SE3::Vector6::Zero();
       e[c] = h;
-      const Eigen::Vector3d d = SpatialEkf::inverse_observation(X * SE3::exp(e), z, nullptr, nullptr) - SpatialEkf::inverse_observation(X * SE3::exp(-e), z, nullptr, nullptr);
+      const Eigen::Vector3d d = SpatialEkf::inverse_observation(X * SE3::exp(e), z, nullptr, nullptr) -
+                                SpatialEkf::inverse_observation(X * SE3::exp(-e), z, nullptr, nullptr);
       CHECK((d / (2 * h) - Jx.col(c)).norm() < 1e-6);
     }
     for (int c = 0; c < 3; ++c) {
       Eigen::Vector3d e = Eigen::Vector3d::Zero();
       e[c] = h;
-      const Eigen::Vector3d d = SpatialEkf::inverse_observation(X, z + e, nullptr, nullptr) - SpatialEkf::inverse_observation(X, z - e, nullptr, nullptr);
+      const Eigen::Vector3d d = SpatialEkf::inverse_observation(X, z + e, nullptr, nullptr) -
+                                SpatialEkf::inverse_observation(X, z - e, nullptr, nullptr);
       CHECK((d / (2 * h) - Jz.col(c)).norm() < 1e-6);
     }
   }
@@ -92,7 +98,8 @@ TEST_CASE("3-D EKF-SLAM: converges on a climbing circle, gates an outlier, refus
     for (int i = 0; i < 6; ++i) w[i] = sig[i] * n(rng);
     ekf.predict(step * SE3::exp(w), Q);
     for (size_t i = 0; i < lm.size(); ++i) {
-      const Eigen::Vector3d z = SpatialEkf::observation(truth, lm[i], nullptr, nullptr) + Eigen::Vector3d(0.1 * n(rng), 0.02 * n(rng), 0.02 * n(rng));
+      const Eigen::Vector3d z = SpatialEkf::observation(truth, lm[i], nullptr, nullptr) +
+                                Eigen::Vector3d(0.1 * n(rng), 0.02 * n(rng), 0.02 * n(rng));
       accepted += ekf.observe(static_cast<int64_t>(i), z, R).accepted;
     }
     if (k % 50 == 25) gated += ekf.observe(1, Eigen::Vector3d(30, 1, 0.5), R).reason == UpdateReason::kGate;

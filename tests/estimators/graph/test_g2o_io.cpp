@@ -22,7 +22,8 @@ std::string temp(const std::string& n) {
 TEST_CASE("g2o: an id outside int64's range is an error naming FILE:LINE, not a cast") {
   const auto path = temp("ids.g2o");
   std::ofstream(path) << "VERTEX_SE2 0 0 0 0\nVERTEX_SE2 1e30 0 0 0\n";
-  CHECK_THROWS_WITH(graph::read_g2o(path), doctest::Contains((path + ":2: VERTEX_SE2: id out of range: '1e30'").c_str()));
+  CHECK_THROWS_WITH(graph::read_g2o(path),
+                    doctest::Contains((path + ":2: VERTEX_SE2: id out of range: '1e30'").c_str()));
   std::ofstream(path) << "VERTEX_SE2 nan 0 0 0\n";
   CHECK_THROWS_WITH(graph::read_g2o(path), doctest::Contains((path + ":1: VERTEX_SE2: id out of range").c_str()));
   std::remove(path.c_str());

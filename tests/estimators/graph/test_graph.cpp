@@ -21,7 +21,8 @@ namespace {
 std::string data(const std::string& name) { return std::string(SEXTANT_SHARED_DIR) + "/data/posegraph/" + name; }
 
 std::string temp_file(const std::string& name, const std::string& text = "") {
-  const auto p = (std::filesystem::temp_directory_path() / ("sextant_graph_" + std::to_string(::getpid()) + "_" + name)).string();
+  const auto p =
+      (std::filesystem::temp_directory_path() / ("sextant_graph_" + std::to_string(::getpid()) + "_" + name)).string();
   if (!text.empty()) std::ofstream(p) << text;
   return p;
 }
@@ -82,12 +83,21 @@ TEST_CASE("three poses on a line: the least-squares optimum by hand") {
 }
 
 TEST_CASE("chi2 of the shared data sets at their initial guess equals REFERENCE.md section 8 to 6 digits") {
-  const std::vector<std::pair<std::string, double>> file_chi2 = {
-      {"intel.g2o", 5.517357e2},       {"input_INTEL_g2o.g2o", 5.149721e6}, {"M3500_P_toro.g2o", 2.331853e10},
-      {"M3500.g2o", 2.566668e6},       {"input_M3500b_g2o.g2o", 4.132988e7}, {"city10000.g2o", 6.541627e8},
-      {"CSAIL_P_toro.g2o", 2.218642e6}, {"MIT.g2o", 4.414182e9},            {"FR079_P_toro.g2o", 8.343868e3},
-      {"sphere2500.g2o", 2.547811e6},  {"sphere_bignoise_vertex3.g2o", 1.766312e8}, {"torus3D.g2o", 2.946827e6},
-      {"parking-garage.g2o", 1.672002e4}, {"smallGrid3D.g2o", 1.159580e5}, {"tinyGrid3D.g2o", 2.130644e2}};
+  const std::vector<std::pair<std::string, double>> file_chi2 = {{"intel.g2o", 5.517357e2},
+                                                                 {"input_INTEL_g2o.g2o", 5.149721e6},
+                                                                 {"M3500_P_toro.g2o", 2.331853e10},
+                                                                 {"M3500.g2o", 2.566668e6},
+                                                                 {"input_M3500b_g2o.g2o", 4.132988e7},
+                                                                 {"city10000.g2o", 6.541627e8},
+                                                                 {"CSAIL_P_toro.g2o", 2.218642e6},
+                                                                 {"MIT.g2o", 4.414182e9},
+                                                                 {"FR079_P_toro.g2o", 8.343868e3},
+                                                                 {"sphere2500.g2o", 2.547811e6},
+                                                                 {"sphere_bignoise_vertex3.g2o", 1.766312e8},
+                                                                 {"torus3D.g2o", 2.946827e6},
+                                                                 {"parking-garage.g2o", 1.672002e4},
+                                                                 {"smallGrid3D.g2o", 1.159580e5},
+                                                                 {"tinyGrid3D.g2o", 2.130644e2}};
   for (const auto& [file, expected] : file_chi2) {
     const std::string& name = file;  // CAPTURE's lambda cannot capture a structured binding (clang 14)
     CAPTURE(name);
@@ -160,8 +170,9 @@ TEST_CASE("g2o read -> write -> read is the identity, 2-D with points and 3-D") 
 }
 
 TEST_CASE("a file with no vertices gets its poses from the edges, by odometry") {
-  const auto p = temp_file("novertex.g2o", "EDGE_SE2 0 1 1 0 0 1 0 0 1 0 1\nEDGE_SE2 1 2 1 0 1.5707963267948966 1 0 0 1 0 1\n"
-                                           "EDGE_SE2 2 3 1 0 0 1 0 0 1 0 1\n");
+  const auto p = temp_file("novertex.g2o",
+                           "EDGE_SE2 0 1 1 0 0 1 0 0 1 0 1\nEDGE_SE2 1 2 1 0 1.5707963267948966 1 0 0 1 0 1\n"
+                           "EDGE_SE2 2 3 1 0 0 1 0 0 1 0 1\n");
   const auto g = read_g2o(p);
   CHECK_FALSE(g.had_vertices);
   REQUIRE(g.graph.variables().size() == 4);
@@ -173,12 +184,15 @@ TEST_CASE("a file with no vertices gets its poses from the edges, by odometry") 
 }
 
 TEST_CASE("malformed g2o lines are errors naming the file and line") {
-  CHECK(read_error("VERTEX_SE2 0 0 0 0\nVERTEX_BOGUS 1 2 3\n").find(":2: unknown tag 'VERTEX_BOGUS'") != std::string::npos);
+  CHECK(read_error("VERTEX_SE2 0 0 0 0\nVERTEX_BOGUS 1 2 3\n").find(":2: unknown tag 'VERTEX_BOGUS'") !=
+        std::string::npos);
   CHECK(read_error("VERTEX_SE2 0 0 0\n").find(":1: VERTEX_SE2: expected more values") != std::string::npos);
   CHECK(read_error("VERTEX_SE2 0 0 0 x\n").find(":1: VERTEX_SE2: not a number: 'x'") != std::string::npos);
   CHECK(read_error("VERTEX_SE2 0 0 0 0 9\n").find(":1: VERTEX_SE2: 1 unexpected extra value(s)") != std::string::npos);
-  CHECK(read_error("VERTEX_SE2 0 0 0 0\nVERTEX_SE2 0 1 0 0\n").find(":2: VERTEX_SE2: vertex 0 defined twice") != std::string::npos);
-  CHECK(read_error("VERTEX_SE2 0 0 0 0\n\nEDGE_SE2 0 5 1 0 0 1 0 0 1 0 1\n").find(":3: EDGE_SE2 refers to vertex 5") != std::string::npos);
+  CHECK(read_error("VERTEX_SE2 0 0 0 0\nVERTEX_SE2 0 1 0 0\n").find(":2: VERTEX_SE2: vertex 0 defined twice") !=
+        std::string::npos);
+  CHECK(read_error("VERTEX_SE2 0 0 0 0\n\nEDGE_SE2 0 5 1 0 0 1 0 0 1 0 1\n").find(":3: EDGE_SE2 refers to vertex 5") !=
+        std::string::npos);
   CHECK(read_error("VERTEX_SE2 0 0 0 0\nFIX 3\n").find(":2: FIX of unknown vertex 3") != std::string::npos);
 }
 
@@ -213,12 +227,18 @@ TEST_CASE("factor Jacobians agree with central differences") {
     factors.push_back(std::make_unique<RelativePoseFactor>(2, 3, SE3::exp(xi), Matrix6d::Identity()));
     factors.push_back(std::make_unique<PosePriorFactor>(2, SE3::exp(xi), Matrix6d::Identity()));
     using M = PointObservationFactor::Model;
-    factors.push_back(std::make_unique<PointObservationFactor>(0, 4, M::kPosition, Eigen::Vector2d(1, 2), Eigen::Matrix2d::Identity(), offset));
-    factors.push_back(std::make_unique<PointObservationFactor>(0, 4, M::kRangeBearing, Eigen::Vector2d(1, 0.2), Eigen::Matrix2d::Identity()));
-    factors.push_back(std::make_unique<PointObservationFactor>(0, 4, M::kBearing, Eigen::VectorXd::Constant(1, 0.1), Eigen::MatrixXd::Identity(1, 1)));
-    factors.push_back(std::make_unique<PointObservationFactor>(2, 5, M::kPosition, Eigen::Vector3d(1, 2, 3), Eigen::Matrix3d::Identity(), offset));
-    factors.push_back(std::make_unique<PointObservationFactor>(2, 5, M::kRangeAzimuthElevation, Eigen::Vector3d(1, 0.2, 0.1), Eigen::Matrix3d::Identity()));
-    factors.push_back(std::make_unique<PointObservationFactor>(2, 5, M::kBearing, Eigen::Vector2d(0.2, 0.1), Eigen::Matrix2d::Identity()));
+    factors.push_back(std::make_unique<PointObservationFactor>(0, 4, M::kPosition, Eigen::Vector2d(1, 2),
+                                                               Eigen::Matrix2d::Identity(), offset));
+    factors.push_back(std::make_unique<PointObservationFactor>(0, 4, M::kRangeBearing, Eigen::Vector2d(1, 0.2),
+                                                               Eigen::Matrix2d::Identity()));
+    factors.push_back(std::make_unique<PointObservationFactor>(0, 4, M::kBearing, Eigen::VectorXd::Constant(1, 0.1),
+                                                               Eigen::MatrixXd::Identity(1, 1)));
+    factors.push_back(std::make_unique<PointObservationFactor>(2, 5, M::kPosition, Eigen::Vector3d(1, 2, 3),
+                                                               Eigen::Matrix3d::Identity(), offset));
+    factors.push_back(std::make_unique<PointObservationFactor>(
+        2, 5, M::kRangeAzimuthElevation, Eigen::Vector3d(1, 0.2, 0.1), Eigen::Matrix3d::Identity()));
+    factors.push_back(std::make_unique<PointObservationFactor>(2, 5, M::kBearing, Eigen::Vector2d(0.2, 0.1),
+                                                               Eigen::Matrix2d::Identity()));
     for (const auto& f : factors) {
       CAPTURE(f->type());
       Linearization lin = f->make_linearization(vars);
@@ -276,7 +296,8 @@ TEST_CASE("failure modes come back as a status with a message, never as a crash"
     l.point = {3, 1, 0};
     g.add_variable(l);
     g.add_factor(std::make_unique<PointObservationFactor>(0, 1, PointObservationFactor::Model::kBearing,
-                                                          Eigen::VectorXd::Constant(1, 0.3), Eigen::MatrixXd::Identity(1, 1)));
+                                                          Eigen::VectorXd::Constant(1, 0.3),
+                                                          Eigen::MatrixXd::Identity(1, 1)));
     const auto s = optimize(g, {});
     CHECK_FALSE(s.usable());
     CHECK(s.message.find("variable 5") != std::string::npos);
@@ -302,7 +323,10 @@ TEST_CASE("failure modes come back as a status with a message, never as a crash"
     CHECK(s.message.find("not positive definite") != std::string::npos);
     CHECK(s.message.find("EDGE_SE2 on variable 0 and 1") != std::string::npos);
   }
-  SUBCASE("an empty graph") { FactorGraph g; CHECK_FALSE(optimize(g, {}).usable()); }
+  SUBCASE("an empty graph") {
+    FactorGraph g;
+    CHECK_FALSE(optimize(g, {}).usable());
+  }
 }
 
 TEST_CASE("dynamic covariance scaling keeps a wrong loop closure from bending a square loop") {
@@ -315,7 +339,8 @@ TEST_CASE("dynamic covariance scaling keeps a wrong loop closure from bending a 
       truth.push_back(x);
       x = x * SE2(1, 0, (i % 4 == 3) ? M_PI / 2 : 0);
     }
-    for (int i = 0; i < 16; ++i) g.add_variable(pose2(i, truth[i].translation().x() + 0.05 * i, truth[i].translation().y(), truth[i].angle()));
+    for (int i = 0; i < 16; ++i)
+      g.add_variable(pose2(i, truth[i].translation().x() + 0.05 * i, truth[i].translation().y(), truth[i].angle()));
     const Eigen::Matrix3d I = 100 * Eigen::Matrix3d::Identity();
     for (int i = 0; i + 1 < 16; ++i)
       g.add_factor(std::make_unique<RelativePoseFactor>(i, i + 1, truth[i].inverse() * truth[i + 1], I));
@@ -461,7 +486,8 @@ TEST_CASE("sensor offsets (PARAMS_SE3OFFSET) survive a write and a read") {
   std::ifstream fb(b);
   const std::string tb((std::istreambuf_iterator<char>(fb)), {});
   size_t params = 0;
-  for (size_t at = tb.find("PARAMS_SE3OFFSET"); at != std::string::npos; at = tb.find("PARAMS_SE3OFFSET", at + 1)) ++params;
+  for (size_t at = tb.find("PARAMS_SE3OFFSET"); at != std::string::npos; at = tb.find("PARAMS_SE3OFFSET", at + 1))
+    ++params;
   CHECK(params == 2);
   for (const auto& p : {a, b}) std::remove(p.c_str());
 }
@@ -489,5 +515,6 @@ TEST_CASE("--init auto takes the chordal estimate where it lowers chi2 and keeps
   const double chi2 = h.graph.chi2();
   CHECK_FALSE(initialize_auto(h.graph));
   CHECK(h.graph.chi2() == chi2);
-  for (size_t i = 0; i < before.size(); ++i) CHECK((h.graph.variables()[i].pose2.log() - before[i].pose2.log()).norm() == 0.0);
+  for (size_t i = 0; i < before.size(); ++i)
+    CHECK((h.graph.variables()[i].pose2.log() - before[i].pose2.log()).norm() == 0.0);
 }

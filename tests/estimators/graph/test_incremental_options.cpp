@@ -53,7 +53,8 @@ TEST_CASE("incremental options: defaults are valid, an option out of range is na
   }
   // The edges of the ranges are in.
   IncrementalOptions edges;
-  edges.relinearization_passes = 0, edges.update_fraction = 1.0, edges.min_update_factors = edges.max_update_factors = 1;
+  edges.relinearization_passes = 0, edges.update_fraction = 1.0,
+  edges.min_update_factors = edges.max_update_factors = 1;
   edges.nested_dissection_above = 0, edges.capacity_growth = 0, edges.reorder_spread = 0, edges.reorder_slice_ms = inf;
   edges.wildfire = 0;
   CHECK(invalid_option(edges).empty());

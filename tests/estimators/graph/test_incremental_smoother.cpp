@@ -53,13 +53,16 @@ SyntheticGraph make_graph(bool planar, int laps, int per_lap, uint64_t seed) {
   };
   for (int k = 1; k < laps * per_lap; ++k) {
     g.edges.push_back({k - 1, k, noisy(g.truth[k - 1].inverse() * g.truth[k], 0.05, 0.01)});
-    if (k >= per_lap) g.edges.push_back({k - per_lap, k, noisy(g.truth[k - per_lap].inverse() * g.truth[k], 0.05, 0.01)});
+    if (k >= per_lap)
+      g.edges.push_back({k - per_lap, k, noisy(g.truth[k - per_lap].inverse() * g.truth[k], 0.05, 0.01)});
   }
   return g;
 }
 
 std::unique_ptr<Factor> make_factor(const SyntheticGraph& g, const Edge& e, int vi, int vj) {
-  if (g.planar) return std::make_unique<RelativePoseFactor>(vi, vj, SE2::from_se3(e.z), Eigen::Matrix3d(Eigen::Vector3d(400, 400, 10000).asDiagonal()));
+  if (g.planar)
+    return std::make_unique<RelativePoseFactor>(vi, vj, SE2::from_se3(e.z),
+                                                Eigen::Matrix3d(Eigen::Vector3d(400, 400, 10000).asDiagonal()));
   Vector6d d;
   d << 400, 400, 400, 10000, 10000, 10000;
   return std::make_unique<RelativePoseFactor>(vi, vj, e.z, Matrix6d(d.asDiagonal()));
@@ -69,8 +72,10 @@ Variable pose_variable(bool planar, int64_t id, const SE3& x) {
   Variable v;
   v.id = id;
   v.kind = planar ? VariableKind::kPose2 : VariableKind::kPose3;
-  if (planar) v.pose2 = SE2::from_se3(x);
-  else v.pose3 = x;
+  if (planar)
+    v.pose2 = SE2::from_se3(x);
+  else
+    v.pose3 = x;
   return v;
 }
 
@@ -86,7 +91,8 @@ SE3 initial_pose(const IncrementalSmoother& s, const std::vector<int>& index, co
 // Feeds the edges in `order` (a pose enters when first referenced, initialized by composing the edge with the known
 // end), updating after each edge; every `check_every` updates compares with a batch solve of the same graph from the
 // same start.  Returns the number of comparisons made.
-int run_and_compare(const SyntheticGraph& g, const std::vector<size_t>& order, int check_every, IncrementalOptions opt = {}) {
+int run_and_compare(const SyntheticGraph& g, const std::vector<size_t>& order, int check_every,
+                    IncrementalOptions opt = {}) {
   IncrementalSmoother s(opt);
   FactorGraph start;  // the same variables with the initial values the smoother got, and the same factors
   std::vector<int> index(g.truth.size(), -1);
@@ -112,8 +118,12 @@ int run_and_compare(const SyntheticGraph& g, const std::vector<size_t>& order, i
     for (size_t q = 0; q < start.factors().size(); ++q) {
       const auto* rf = dynamic_cast<const RelativePoseFactor*>(start.factors()[q].get());
       REQUIRE(rf != nullptr);
-      if (g.planar) b2.add_factor(std::make_unique<RelativePoseFactor>(rf->variables()[0], rf->variables()[1], rf->measurement2(), Eigen::Matrix3d(rf->information())));
-      else b2.add_factor(std::make_unique<RelativePoseFactor>(rf->variables()[0], rf->variables()[1], rf->measurement3(), Matrix6d(rf->information())));
+      if (g.planar)
+        b2.add_factor(std::make_unique<RelativePoseFactor>(rf->variables()[0], rf->variables()[1], rf->measurement2(),
+                                                           Eigen::Matrix3d(rf->information())));
+      else
+        b2.add_factor(std::make_unique<RelativePoseFactor>(rf->variables()[0], rf->variables()[1], rf->measurement3(),
+                                                           Matrix6d(rf->information())));
     }
     OptimizerOptions bo;
     bo.relative_tolerance = 1e-10;
@@ -124,7 +134,8 @@ int run_and_compare(const SyntheticGraph& g, const std::vector<size_t>& order, i
     CHECK_MESSAGE(inc <= ref * 1.001 + 1e-3, "update " << updates << ": incremental chi2 " << inc << " batch " << ref);
     double worst = 0;
     for (size_t v = 0; v < b2.variables().size(); ++v)
-      worst = std::max(worst, (s.graph().variables()[v].as_se3().translation() - b2.variables()[v].as_se3().translation()).norm());
+      worst = std::max(
+          worst, (s.graph().variables()[v].as_se3().translation() - b2.variables()[v].as_se3().translation()).norm());
     CHECK_MESSAGE(worst < 0.02, "update " << updates << ": a pose differs from batch by " << worst << " m");
     ++compared;
   }
@@ -157,7 +168,8 @@ TEST_CASE("incremental equals batch for random insertion orders that keep the gr
       while (order.size() < g.edges.size()) {
         std::vector<size_t> candidates;
         for (size_t k = 0; k < g.edges.size(); ++k)
-          if (!used[k] && (have[static_cast<size_t>(g.edges[k].i)] || have[static_cast<size_t>(g.edges[k].j)])) candidates.push_back(k);
+          if (!used[k] && (have[static_cast<size_t>(g.edges[k].i)] || have[static_cast<size_t>(g.edges[k].j)]))
+            candidates.push_back(k);
         const size_t k = candidates[rng() % candidates.size()];
         used[k] = 1;
         have[static_cast<size_t>(g.edges[k].i)] = have[static_cast<size_t>(g.edges[k].j)] = 1;
@@ -234,7 +246,9 @@ TEST_CASE("a long loop closed at once relinearizes, and a rebuild reorders witho
   for (int k = 0; k < 40; ++k) {
     if (k > 0) x = x * g.edges[static_cast<size_t>(k - 1)].z;
     idx.push_back(s.add_variable(pose_variable(true, k, x)));
-    if (k > 0) s.add_factor(make_factor(g, g.edges[static_cast<size_t>(k - 1)], idx[static_cast<size_t>(k - 1)], idx[static_cast<size_t>(k)]));
+    if (k > 0)
+      s.add_factor(make_factor(g, g.edges[static_cast<size_t>(k - 1)], idx[static_cast<size_t>(k - 1)],
+                               idx[static_cast<size_t>(k)]));
     REQUIRE(s.update().ok);
   }
   s.add_factor(make_factor(g, g.edges.back(), idx[0], idx[39]));
@@ -254,7 +268,8 @@ TEST_CASE("bad input: unknown variables, NaN, non-positive-definite information,
   Variable nan = pose_variable(true, 5, SE3());
   nan.pose2 = SE2(std::nan(""), 0, 0);
   CHECK_THROWS_AS(s.add_variable(nan), std::invalid_argument);
-  CHECK_THROWS_AS(s.add_factor(std::make_unique<RelativePoseFactor>(a, 7, SE2(1, 0, 0), Eigen::Matrix3d::Identity())), std::invalid_argument);
+  CHECK_THROWS_AS(s.add_factor(std::make_unique<RelativePoseFactor>(a, 7, SE2(1, 0, 0), Eigen::Matrix3d::Identity())),
+                  std::invalid_argument);
   const int b = s.add_variable(pose_variable(true, 1, SE3()));
   Eigen::Matrix3d bad = Eigen::Matrix3d::Identity();
   bad(2, 2) = -1;
@@ -281,7 +296,8 @@ TEST_CASE("a variable no factor determines waits, a component not tied to the ga
   }();
   // One bearing determines only one direction of a 2-D point: the point waits.
   s.add_factor(std::make_unique<PointObservationFactor>(a, p, PointObservationFactor::Model::kBearing,
-                                                        Eigen::VectorXd::Constant(1, std::atan2(1.0, 3.0)), Eigen::MatrixXd::Identity(1, 1) * 100));
+                                                        Eigen::VectorXd::Constant(1, std::atan2(1.0, 3.0)),
+                                                        Eigen::MatrixXd::Identity(1, 1) * 100));
   auto st = s.update();
   REQUIRE(st.ok);
   CHECK(st.deferred_variables == 1);
@@ -289,7 +305,8 @@ TEST_CASE("a variable no factor determines waits, a component not tied to the ga
   const int b = s.add_variable(pose_variable(true, 1, SE3(SO3(), Eigen::Vector3d(2, 0, 0))));
   s.add_factor(std::make_unique<RelativePoseFactor>(a, b, SE2(2, 0, 0), Eigen::Matrix3d::Identity() * 100));
   s.add_factor(std::make_unique<PointObservationFactor>(b, p, PointObservationFactor::Model::kBearing,
-                                                        Eigen::VectorXd::Constant(1, std::atan2(1.0, 1.0)), Eigen::MatrixXd::Identity(1, 1) * 100));
+                                                        Eigen::VectorXd::Constant(1, std::atan2(1.0, 1.0)),
+                                                        Eigen::MatrixXd::Identity(1, 1) * 100));
   st = s.update();
   REQUIRE(st.ok);
   CHECK(st.deferred_variables == 0);
@@ -325,12 +342,14 @@ WrongLoopEffect wrong_loop_effect(double options_width, std::optional<double> lo
     for (auto* sm : {&s, &clean}) {
       auto& ix = sm == &s ? idx : idx_clean;
       for (const int end : {e.i, e.j})
-        if (ix[static_cast<size_t>(end)] < 0) ix[static_cast<size_t>(end)] = sm->add_variable(pose_variable(true, end, initial_pose(*sm, ix, e, end)));
+        if (ix[static_cast<size_t>(end)] < 0)
+          ix[static_cast<size_t>(end)] = sm->add_variable(pose_variable(true, end, initial_pose(*sm, ix, e, end)));
       sm->add_factor(make_factor(g, e, ix[static_cast<size_t>(e.i)], ix[static_cast<size_t>(e.j)]));
       REQUIRE(sm->update().ok);
     }
   }
-  s.add_factor(make_factor(g, Edge{5, 30, g.truth[5].inverse() * g.truth[30] * SE3(SO3(), Eigen::Vector3d(8, 0, 0))}, idx[5], idx[30]),
+  s.add_factor(make_factor(g, Edge{5, 30, g.truth[5].inverse() * g.truth[30] * SE3(SO3(), Eigen::Vector3d(8, 0, 0))},
+                           idx[5], idx[30]),
                true, loop_width);
   REQUIRE(s.update().ok);
   // Compared at convergence (a rebuild iterates Gauss-Newton to the end), so that what differs is the wrong loop's
@@ -339,8 +358,10 @@ WrongLoopEffect wrong_loop_effect(double options_width, std::optional<double> lo
   REQUIRE(clean.rebuild().ok);
   WrongLoopEffect r;
   for (size_t v = 0; v < g.truth.size(); ++v)
-    r.worst_shift = std::max(r.worst_shift, (s.graph().variables()[static_cast<size_t>(idx[v])].as_se3().translation() -
-                                             clean.graph().variables()[static_cast<size_t>(idx_clean[v])].as_se3().translation()).norm());
+    r.worst_shift =
+        std::max(r.worst_shift, (s.graph().variables()[static_cast<size_t>(idx[v])].as_se3().translation() -
+                                 clean.graph().variables()[static_cast<size_t>(idx_clean[v])].as_se3().translation())
+                                    .norm());
   const size_t loop = s.graph().factors().size() - 1;
   const Factor& f = *s.graph().factors()[loop];
   Eigen::VectorXd e(f.residual_dim());
@@ -350,7 +371,8 @@ WrongLoopEffect wrong_loop_effect(double options_width, std::optional<double> lo
   return r;
 }
 
-TEST_CASE("with DCS a wrong loop closure does not bend the incremental map, a factor's own kernel width applies to it") {
+TEST_CASE(
+    "with DCS a wrong loop closure does not bend the incremental map, a factor's own kernel width applies to it") {
   // DCS weight (Agarwal et al. 2013): min(1, 2 phi / (phi + chi2))^2, computed here from the loop's own residual.
   const auto dcs = [](double phi, double chi2) { return std::pow(std::min(1.0, 2 * phi / (phi + chi2)), 2); };
   const WrongLoopEffect narrow = wrong_loop_effect(1.0, std::nullopt);
@@ -370,8 +392,9 @@ TEST_CASE("with DCS a wrong loop closure does not bend the incremental map, a fa
   const int a = s.add_variable(pose_variable(true, 0, SE3()));
   const int b = s.add_variable(pose_variable(true, 1, SE3()));
   for (const double bad : {0.0, -1.0, std::nan(""), std::numeric_limits<double>::infinity()})
-    CHECK_THROWS_WITH_AS(s.add_factor(std::make_unique<RelativePoseFactor>(a, b, SE2(1, 0, 0), Eigen::Matrix3d::Identity()), true, bad),
-                         doctest::Contains("factor 0: kernel width"), std::invalid_argument);
+    CHECK_THROWS_WITH_AS(
+        s.add_factor(std::make_unique<RelativePoseFactor>(a, b, SE2(1, 0, 0), Eigen::Matrix3d::Identity()), true, bad),
+        doctest::Contains("factor 0: kernel width"), std::invalid_argument);
 }
 
 TEST_CASE("marginal covariance: the block of the inverse of the dense normal equations, for every variable") {
@@ -453,12 +476,15 @@ void converge(IncrementalSmoother& s) {
 
 }  // namespace
 
-TEST_CASE("a CHOLMOD failure injected in the middle of a run is reported, and the next update recovers the same answer") {
+TEST_CASE(
+    "a CHOLMOD failure injected in the middle of a run is reported, and the next update recovers the same answer") {
   for (bool planar : {true, false}) {
     CAPTURE(planar);
     const SyntheticGraph g = make_graph(planar, 3, 24, 7);
     IncrementalSmoother clean;
-    feed_edges(g, clean, [](int64_t k, const IncrementalStatus& st) { REQUIRE_MESSAGE(st.ok, "update " << k << ": " << st.message); });
+    feed_edges(g, clean, [](int64_t k, const IncrementalStatus& st) {
+      REQUIRE_MESSAGE(st.ok, "update " << k << ": " << st.message);
+    });
     const double clean_incremental_chi2 = clean.chi2();
     converge(clean);
     // Update 1 is a rebuild (the numeric factorization fails), 40 and 100 add their edge by rank updates.
@@ -494,7 +520,9 @@ TEST_CASE("a CHOLMOD failure injected in the middle of a run is reported, and th
       CHECK(s.chi2() == doctest::Approx(clean.chi2()).epsilon(1e-12));
       double worst = 0;
       for (size_t v = 0; v < g.truth.size(); ++v)
-        worst = std::max(worst, (s.graph().variables()[v].as_se3().translation() - clean.graph().variables()[v].as_se3().translation()).norm());
+        worst = std::max(worst, (s.graph().variables()[v].as_se3().translation() -
+                                 clean.graph().variables()[v].as_se3().translation())
+                                    .norm());
       CHECK(worst < 1e-8);  // nanometres: the fixed point to rounding
     }
   }
@@ -512,6 +540,7 @@ TEST_CASE("the gauge: the first pose is held fixed unless a variable is fixed or
     CHECK(s.linearization_point()[static_cast<size_t>(a)].fixed == !with_prior);
     CHECK(s.dimension() == (with_prior ? 6 : 3));
     // With the prior the map frame is the prior's: pose 0 at x = 5, pose 1 one metre on.
-    CHECK(s.graph().variables()[static_cast<size_t>(b)].pose2.translation().x() == doctest::Approx(with_prior ? 6.0 : 1.0));
+    CHECK(s.graph().variables()[static_cast<size_t>(b)].pose2.translation().x() ==
+          doctest::Approx(with_prior ? 6.0 : 1.0));
   }
 }

@@ -57,8 +57,12 @@ struct EurocExcerpt {
     for (const auto& r : rows(dir() + "/imu0/data.csv", 7))
       e.imu.push_back({r[0], {r[1], r[2], r[3]}, {r[4], r[5], r[6]}});
     for (const auto& r : rows(dir() + "/gt0/data.csv", 17))
-      e.truth.push_back({r[0], {r[1], r[2], r[3]}, Eigen::Quaterniond(r[4], r[5], r[6], r[7]).normalized(),
-                         {r[8], r[9], r[10]}, {r[11], r[12], r[13]}, {r[14], r[15], r[16]}});
+      e.truth.push_back({r[0],
+                         {r[1], r[2], r[3]},
+                         Eigen::Quaterniond(r[4], r[5], r[6], r[7]).normalized(),
+                         {r[8], r[9], r[10]},
+                         {r[11], r[12], r[13]},
+                         {r[14], r[15], r[16]}});
     REQUIRE(e.imu.size() == 7999);  // 40 s at 200 Hz
     REQUIRE(e.truth.size() == 3340);
     return e;

@@ -66,9 +66,10 @@ TEST_CASE("ESKF: the transition Jacobian F against central differences of the no
     const EskfState y = ErrorStateEkf::step(x, s, dt, g, &F);
     const double h = 1e-6;
     for (int c = 0; c < 15; ++c) {
-      const Vector15 num = (ErrorStateEkf::difference(ErrorStateEkf::step(ErrorStateEkf::inject(x, unit(c, h)), s, dt, g), y) -
-                            ErrorStateEkf::difference(ErrorStateEkf::step(ErrorStateEkf::inject(x, unit(c, -h)), s, dt, g), y)) /
-                           (2 * h);
+      const Vector15 num =
+          (ErrorStateEkf::difference(ErrorStateEkf::step(ErrorStateEkf::inject(x, unit(c, h)), s, dt, g), y) -
+           ErrorStateEkf::difference(ErrorStateEkf::step(ErrorStateEkf::inject(x, unit(c, -h)), s, dt, g), y)) /
+          (2 * h);
       INFO("column ", c);
       CHECK((num - F.col(c)).norm() < 1e-7);
     }
@@ -86,17 +87,21 @@ TEST_CASE("ESKF: measurement Jacobians against central differences, and inject/d
     Matrix3x15 H;
 
     ErrorStateEkf::body_velocity_model(x, gyro, m, &H);
-    CHECK((H - numerical_H(x, [&](const EskfState& s) { return ErrorStateEkf::body_velocity_model(s, gyro, m, nullptr); }))
-              .norm() < 1e-7);
+    CHECK((H - numerical_H(x, [&](const EskfState& s) {
+             return ErrorStateEkf::body_velocity_model(s, gyro, m, nullptr);
+           })).norm() < 1e-7);
     ErrorStateEkf::gnss_position_model(x, lever, &H);
-    CHECK((H - numerical_H(x, [&](const EskfState& s) { return ErrorStateEkf::gnss_position_model(s, lever, nullptr); }))
-              .norm() < 1e-7);
+    CHECK((H - numerical_H(x, [&](const EskfState& s) {
+             return ErrorStateEkf::gnss_position_model(s, lever, nullptr);
+           })).norm() < 1e-7);
     ErrorStateEkf::gnss_velocity_model(x, gyro, lever, &H);
-    CHECK((H - numerical_H(x, [&](const EskfState& s) { return ErrorStateEkf::gnss_velocity_model(s, gyro, lever, nullptr); }))
-              .norm() < 1e-7);
+    CHECK((H - numerical_H(x, [&](const EskfState& s) {
+             return ErrorStateEkf::gnss_velocity_model(s, gyro, lever, nullptr);
+           })).norm() < 1e-7);
     ErrorStateEkf::euler_model(x, &H);
-    CHECK((H - numerical_H(x, [&](const EskfState& s) { return ErrorStateEkf::euler_model(s, nullptr); }, true)).norm() <
-          1e-7);
+    CHECK((H - numerical_H(
+                   x, [&](const EskfState& s) { return ErrorStateEkf::euler_model(s, nullptr); }, true))
+              .norm() < 1e-7);
 
     const Vector15 dx = (Vector15() << random_vector(rng, 1), random_vector(rng, 1), random_vector(rng, 0.5),
                          random_vector(rng, 0.1), random_vector(rng, 0.01))
@@ -236,8 +241,8 @@ TEST_CASE("ESKF: a simulated 3-D run with biased noisy IMU, GNSS, wheel velocity
                              lever);
     }
     if (k % 20 == 10) {  // wheel odometry at 10 Hz, orientation (roll, pitch) at 10 Hz
-      const Eigen::Vector3d v_s = wheel.rotation.transpose() *
-                                  (truth.q.conjugate() * truth.v + s.gyro.cross(wheel.lever_arm));
+      const Eigen::Vector3d v_s =
+          wheel.rotation.transpose() * (truth.q.conjugate() * truth.v + s.gyro.cross(wheel.lever_arm));
       f.update_body_velocity(v_s + noise3(0.03), Eigen::Matrix3d::Identity() * 9e-4, wheel);
       const Eigen::Quaterniond q_meas = truth.q * Eigen::Quaterniond(Eigen::AngleAxisd(0.01, noise3(1).normalized()));
       f.update_orientation(q_meas, Eigen::Matrix3d::Identity() * 1e-4, SensorMounting{}, {true, true, false});
@@ -252,9 +257,8 @@ TEST_CASE("ESKF: a simulated 3-D run with biased noisy IMU, GNSS, wheel velocity
     truth = ErrorStateEkf::step(truth, s, dt, o.gravity);
   }
   const EskfState& x = f.state();
-  MESSAGE("simulated run, 60 s: position error ", (x.p - truth.p).norm(), " m, gyro bias error ",
-          (x.b_g - b_g).norm(), " rad/s, accel bias error ", (x.b_a - b_a).norm(), " m/s^2, mean NEES (15 dof) ",
-          nees_sum / nees_n);
+  MESSAGE("simulated run, 60 s: position error ", (x.p - truth.p).norm(), " m, gyro bias error ", (x.b_g - b_g).norm(),
+          " rad/s, accel bias error ", (x.b_a - b_a).norm(), " m/s^2, mean NEES (15 dof) ", nees_sum / nees_n);
   CHECK((x.p - truth.p).norm() < 0.3);
   CHECK((x.v - truth.v).norm() < 0.05);
   CHECK(Eigen::AngleAxisd(x.q.conjugate() * truth.q).angle() < 0.01);

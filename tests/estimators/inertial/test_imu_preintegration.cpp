@@ -100,9 +100,9 @@ TEST_CASE("preintegration bias Jacobians against central differences of re-integ
     (c < 3 ? plus.gyro : plus.accel)(c % 3) += h;
     (c < 3 ? minus.gyro : minus.accel)(c % 3) -= h;
     const ImuPreintegration p = preintegrate(samples, plus), m = preintegrate(samples, minus);
-    const Eigen::Vector3d dR =
-        (rotation_log(pim.delta_R().transpose() * p.delta_R()) - rotation_log(pim.delta_R().transpose() * m.delta_R())) /
-        (2 * h);
+    const Eigen::Vector3d dR = (rotation_log(pim.delta_R().transpose() * p.delta_R()) -
+                                rotation_log(pim.delta_R().transpose() * m.delta_R())) /
+                               (2 * h);
     const Eigen::Vector3d dv = (p.delta_v() - m.delta_v()) / (2 * h), dp = (p.delta_p() - m.delta_p()) / (2 * h);
     if (c < 3) {
       CHECK((dR - pim.dR_dbg().col(c)).norm() < 1e-6 * (1 + dR.norm()));
@@ -124,8 +124,9 @@ TEST_CASE("preintegration error propagation A, B, C against central differences 
   const double dt = 0.01;
   // One sample from the noisy preintegrated values (dR Exp(e_phi), dv + e_v, dp + e_p) with noisy samples
   // (w + eta_g, a + eta_a); the error after it relative to the noise-free step.
-  auto step = [&](const Eigen::Matrix3d& R, const Eigen::Vector3d& v, const Eigen::Vector3d& p, const Eigen::Vector3d& ws,
-                  const Eigen::Vector3d& as, Eigen::Matrix3d& R2, Eigen::Vector3d& v2, Eigen::Vector3d& p2) {
+  auto step = [&](const Eigen::Matrix3d& R, const Eigen::Vector3d& v, const Eigen::Vector3d& p,
+                  const Eigen::Vector3d& ws, const Eigen::Vector3d& as, Eigen::Matrix3d& R2, Eigen::Vector3d& v2,
+                  Eigen::Vector3d& p2) {
     p2 = p + v * dt + 0.5 * R * as * dt * dt;
     v2 = v + R * as * dt;
     R2 = R * rodrigues(ws * dt);
@@ -202,7 +203,8 @@ TEST_CASE("first-order bias correction against re-integration, and the covarianc
   }
   // Off-diagonal structure (the v-p and phi-v couplings) in the correlation matrices.
   const Eigen::VectorXd sd_p = clean.covariance().diagonal().cwiseSqrt(), sd_e = empirical.diagonal().cwiseSqrt();
-  const Eigen::MatrixXd corr_p = sd_p.cwiseInverse().asDiagonal() * clean.covariance() * sd_p.cwiseInverse().asDiagonal();
+  const Eigen::MatrixXd corr_p =
+      sd_p.cwiseInverse().asDiagonal() * clean.covariance() * sd_p.cwiseInverse().asDiagonal();
   const Eigen::MatrixXd corr_e = sd_e.cwiseInverse().asDiagonal() * empirical * sd_e.cwiseInverse().asDiagonal();
   CHECK((corr_p - corr_e).cwiseAbs().maxCoeff() < 0.08);
 }
@@ -222,8 +224,9 @@ TEST_CASE("EuRoC V1_02: preintegrated dR, dv, dp with the true biases against Vi
     std::vector<double> rot_deg, vel, pos, rot_deg_unbiased, vel_unbiased;
     for (size_t i = 0; i < data.truth.size(); i += static_cast<size_t>(window * 40)) {
       const auto& ti = data.truth[i];
-      const auto j_it = std::lower_bound(data.truth.begin() + static_cast<long>(i), data.truth.end(), ti.t + window - 1e-6,
-                                         [](const EurocExcerpt::Truth& a, double t) { return a.t < t; });
+      const auto j_it =
+          std::lower_bound(data.truth.begin() + static_cast<long>(i), data.truth.end(), ti.t + window - 1e-6,
+                           [](const EurocExcerpt::Truth& a, double t) { return a.t < t; });
       if (j_it == data.truth.end() || j_it->t > data.imu.back().t) break;
       const auto& tj = *j_it;
       ImuBias b;

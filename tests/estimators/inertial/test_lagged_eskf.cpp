@@ -29,10 +29,15 @@ std::vector<Input> inputs() {
   for (int k = 0; k < 30 * 200; ++k) {
     const double t = k * 0.005;
     BodyImuSample s;
-    s.gyro = Eigen::Vector3d(0.02 * std::sin(t), 0.01, 0.2 * std::cos(0.1 * t)) + 0.002 * Eigen::Vector3d(n(rng), n(rng), n(rng));
+    s.gyro = Eigen::Vector3d(0.02 * std::sin(t), 0.01, 0.2 * std::cos(0.1 * t)) +
+             0.002 * Eigen::Vector3d(n(rng), n(rng), n(rng));
     s.accel = Eigen::Vector3d(0.3 * std::cos(0.5 * t), 0.1, 9.80665) + 0.02 * Eigen::Vector3d(n(rng), n(rng), n(rng));
     out.push_back({t, true, s, {}});
-    if (k % 40 == 13) out.push_back({t + 0.0023, false, {}, Eigen::Vector3d(0.5 * t, 0.1 * t, 0) + 0.3 * Eigen::Vector3d(n(rng), n(rng), n(rng))});
+    if (k % 40 == 13)
+      out.push_back({t + 0.0023,
+                     false,
+                     {},
+                     Eigen::Vector3d(0.5 * t, 0.1 * t, 0) + 0.3 * Eigen::Vector3d(n(rng), n(rng), n(rng))});
   }
   return out;
 }
@@ -93,7 +98,8 @@ TEST_CASE("lagged ESKF: fixes 150 ms late give the in-order estimate exactly") {
   CHECK(max_history <= 0.5 * 200 + 4);  // bounded by the history length
 }
 
-TEST_CASE("lagged ESKF: a measurement older than the history is refused; a fix ahead of the IMU is re-applied after it") {
+TEST_CASE(
+    "lagged ESKF: a measurement older than the history is refused; a fix ahead of the IMU is re-applied after it") {
   LaggedEskf lag(EskfOptions{}, 0.2);
   lag.initialize(0, EskfState{}, initial_covariance());
   BodyImuSample rest;

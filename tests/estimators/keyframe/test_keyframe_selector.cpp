@@ -160,7 +160,8 @@ namespace {
 bool refers_to(const KeyframeSelector& s, const std::optional<SE3>& pose) {
   const auto& r = s.reference();
   if (!r || !pose) return !r && !pose;
-  return r->translation() == pose->translation() && r->rotation().quaternion().coeffs() == pose->rotation().quaternion().coeffs();
+  return r->translation() == pose->translation() &&
+         r->rotation().quaternion().coeffs() == pose->rotation().quaternion().coeffs();
 }
 }  // namespace
 

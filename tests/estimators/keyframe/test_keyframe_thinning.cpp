@@ -51,7 +51,8 @@ TEST_CASE("keyframe thinning: heading sectors and height separate places, bad op
   KeyframeThinningOptions o;
   o.window = 1;
   // Same cell, opposite headings: two places.  Same cell and heading: one.
-  std::vector<ThinningCandidate> k = {at(0, 0, 0, 0), at(1, 5.2, 5.2, 0.1), at(2, 5.4, 5.3, 0.1 + M_PI), at(3, 5.5, 5.5, 0.12), at(4, 50, 50, 0)};
+  std::vector<ThinningCandidate> k = {at(0, 0, 0, 0), at(1, 5.2, 5.2, 0.1), at(2, 5.4, 5.3, 0.1 + M_PI),
+                                      at(3, 5.5, 5.5, 0.12), at(4, 50, 50, 0)};
   auto keep = keyframes_to_keep(k, true, o);
   CHECK(keep == std::vector<char>{1, 1, 1, 0, 1});
   // 3-D: the same x, y at another height is another place; planar bodies ignore z.

@@ -33,7 +33,8 @@ std::set<int64_t> reference_random_set(uint64_t seed, int64_t k, int n1, int n2)
     // Accept x when its whole block of n values [x - x mod n, x - x mod n + n - 1] fits below 2^64.
     const auto n = static_cast<uint64_t>(j + 1);
     uint64_t x;
-    do x = rng(); while (x - x % n > UINT64_MAX - (n - 1));
+    do x = rng();
+    while (x - x % n > UINT64_MAX - (n - 1));
     const auto t = static_cast<int64_t>(x % n);
     S.insert(S.count(t) ? j : t);
   }
@@ -58,8 +59,10 @@ TEST_CASE("loop proposals: local then random sets equal an independent reimpleme
         std::set<int64_t> random;
         for (const auto& x : props) {
           CHECK(x.from == k);
-          if (x.random) random.insert(x.to);
-          else local.push_back(x.to);
+          if (x.random)
+            random.insert(x.to);
+          else
+            local.push_back(x.to);
         }
         std::vector<int64_t> expected_local;
         for (int64_t i = 1; i <= std::min<int64_t>(n1, k); ++i) expected_local.push_back(k - i);
@@ -92,8 +95,10 @@ TEST_CASE("loop proposals: no duplicates, never itself, never a future keyframe,
       CHECK(x.to >= 0);
       CHECK(x.to < k);
       CHECK(seen.insert(x.to).second);
-      if (x.random) CHECK(x.to < k - 4);  // random ones are not in the local set
-      else CHECK(x.to >= k - 4);
+      if (x.random)
+        CHECK(x.to < k - 4);  // random ones are not in the local set
+      else
+        CHECK(x.to >= k - 4);
     }
     CHECK(static_cast<int64_t>(props.size()) == std::min<int64_t>(k, 12));
   }

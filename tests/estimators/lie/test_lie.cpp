@@ -115,7 +115,8 @@ void check_group(uint32_t seed) {
       for (int i = 0; i < T<G>::kDof; ++i) {
         typename T<G>::Tangent e = T<G>::Tangent::Zero();
         e[i] = h;
-        Jnum.col(i) = (T<G>::log(x.inverse() * T<G>::exp(tau + e)) - T<G>::log(x.inverse() * T<G>::exp(tau - e))) / (2 * h);
+        Jnum.col(i) =
+            (T<G>::log(x.inverse() * T<G>::exp(tau + e)) - T<G>::log(x.inverse() * T<G>::exp(tau - e))) / (2 * h);
       }
       if (T<G>::angle(tau) < M_PI - 1e-4) CHECK((Jr - Jnum).norm() < 1e-6 * std::max(1.0, Jr.norm()));
 
@@ -140,13 +141,16 @@ void check_operation_jacobians(uint32_t seed) {
     G b = T<G>::exp(random_tangent<G>(rng, scale));
     typename T<G>::Jac Ja, Jb, Ji;
     a.compose(b, &Ja, &Jb);
-    CHECK((Ja - numerical_jacobian<G, G>(a, [&](const G& x) { return x * b; })).norm() < 1e-6 * std::max(1.0, Ja.norm()));
+    CHECK((Ja - numerical_jacobian<G, G>(a, [&](const G& x) { return x * b; })).norm() <
+          1e-6 * std::max(1.0, Ja.norm()));
     CHECK((Jb - numerical_jacobian<G, G>(b, [&](const G& x) { return a * x; })).norm() < 1e-6);
     a.between(b, &Ja, &Jb);
-    CHECK((Ja - numerical_jacobian<G, G>(a, [&](const G& x) { return x.inverse() * b; })).norm() < 1e-6 * std::max(1.0, Ja.norm()));
+    CHECK((Ja - numerical_jacobian<G, G>(a, [&](const G& x) { return x.inverse() * b; })).norm() <
+          1e-6 * std::max(1.0, Ja.norm()));
     CHECK((Jb - numerical_jacobian<G, G>(b, [&](const G& x) { return a.inverse() * x; })).norm() < 1e-6);
     a.inverse(&Ji);
-    CHECK((Ji - numerical_jacobian<G, G>(a, [](const G& x) { return x.inverse(); })).norm() < 1e-6 * std::max(1.0, Ji.norm()));
+    CHECK((Ji - numerical_jacobian<G, G>(a, [](const G& x) { return x.inverse(); })).norm() <
+          1e-6 * std::max(1.0, Ji.norm()));
   }
 }
 

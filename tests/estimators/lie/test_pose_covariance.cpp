@@ -93,20 +93,23 @@ TEST_CASE("regularized_increment_covariance: eigenvalues on the used axes floore
   const Matrix6d spatial = regularized_increment_covariance(after, std::nullopt, false, SE3(), before, mv);
   d << 1, mv, mv, mv, mv, 2;
   CHECK(max_abs(spatial - Matrix6d(d.asDiagonal())) < 1e-14);
-  CHECK(Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(planar_block(planar)).eigenvalues().minCoeff() == doctest::Approx(mv));
+  CHECK(Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(planar_block(planar)).eigenvalues().minCoeff() ==
+        doctest::Approx(mv));
 
   // Stated and well above the floor: kept as stated (to rounding); the entries off the used axes untouched.
   Matrix6d stated = Matrix6d::Zero();
   stated(0, 0) = 0.01, stated(0, 1) = stated(1, 0) = 0.002, stated(1, 1) = 0.02, stated(5, 5) = 0.003;
   stated(2, 2) = 0.5;  // z: not a planar body's axis
   CHECK(max_abs(regularized_increment_covariance(Matrix6d::Identity(), stated, true, pose(1, 2, 0, 0, 0, 1),
-                                                 Matrix6d::Zero(), mv) - stated) < 1e-15);
+                                                 Matrix6d::Zero(), mv) -
+                stated) < 1e-15);
   // Stated with a direction below the floor (yaw 1e-9): that direction raised to min_variance, the others kept.
   Matrix6d thin = stated;
   thin(5, 5) = 1e-9;
   Matrix6d expected = thin;
   expected(5, 5) = mv;
-  CHECK(max_abs(regularized_increment_covariance(Matrix6d::Zero(), thin, true, SE3(), Matrix6d::Zero(), mv) - expected) < 1e-15);
+  CHECK(max_abs(regularized_increment_covariance(Matrix6d::Zero(), thin, true, SE3(), Matrix6d::Zero(), mv) -
+                expected) < 1e-15);
 }
 
 TEST_CASE("nearest_psd: eigenvalues floored at zero, eigenvectors kept (Higham 1988)") {

@@ -37,14 +37,16 @@ KeyframeTrack straight_track() {
   for (int64_t t = 0; t <= 400; t += 100) {
     const SE3 pose = planar_pose(static_cast<double>(t) / 200.0, 0, 0);
     track.advance(t, pose, Matrix6d::Zero(), 100);
-    if (t % 200 == 0) track.add_keyframe(keyframe_at(track, t, pose, diagonal(0.01 * static_cast<double>(t), 0.02, 0.03)));
+    if (t % 200 == 0)
+      track.add_keyframe(keyframe_at(track, t, pose, diagonal(0.01 * static_cast<double>(t), 0.02, 0.03)));
   }
   return track;
 }
 
 }  // namespace
 
-TEST_CASE("keyframe track: a time resolves to its keyframe exactly, between keyframes through the odometry, not outside") {
+TEST_CASE(
+    "keyframe track: a time resolves to its keyframe exactly, between keyframes through the odometry, not outside") {
   const KeyframeTrack track = straight_track();
   REQUIRE(track.keyframes().size() == 3);
   CHECK(track.keyframes()[1].id == 1);
@@ -78,7 +80,8 @@ TEST_CASE("keyframe track: a time resolves to its keyframe exactly, between keyf
   CHECK_FALSE(track.resolve(-1, -500, tolerance));
 }
 
-TEST_CASE("keyframe track: a thinned keyframe's time lands on the keyframe before it with the composed edge's covariance") {
+TEST_CASE(
+    "keyframe track: a thinned keyframe's time lands on the keyframe before it with the composed edge's covariance") {
   KeyframeTrack track = straight_track();
   // Thin keyframe 1: keyframe 2's edge now spans 0 -> 2 with a covariance of its own.
   std::vector<TrackKeyframe> kept = {track.keyframes()[0], track.keyframes()[2]};
@@ -158,6 +161,6 @@ TEST_CASE("keyframe track: the odometry history is bounded (the older half goes)
   CHECK(track.odometry().size() <= 4);
   CHECK(track.odometry().back().first == 9);
   track.add_keyframe(keyframe_at(track, 9, planar_pose(9, 0, 0), Matrix6d::Zero()));
-  CHECK(track.resolve(-1, 8, 5));                 // still recorded
-  CHECK_FALSE(track.resolve(-1, 2, 10));          // forgotten
+  CHECK(track.resolve(-1, 8, 5));         // still recorded
+  CHECK_FALSE(track.resolve(-1, 2, 10));  // forgotten
 }

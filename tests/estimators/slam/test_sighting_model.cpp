@@ -43,7 +43,8 @@ TEST_CASE("sighting model: the first sighting places the landmark by hand, and t
   CHECK(R.rows() == 2);
   // The landmark where the sighting puts it: the sensor's pose K D S, then range along the azimuth.
   const SE2 sensor = K * D * S;
-  const Eigen::Vector2d expected = sensor.translation() + 4.0 * Eigen::Vector2d(std::cos(sensor.angle() + 0.6), std::sin(sensor.angle() + 0.6));
+  const Eigen::Vector2d expected =
+      sensor.translation() + 4.0 * Eigen::Vector2d(std::cos(sensor.angle() + 0.6), std::sin(sensor.angle() + 0.6));
   const Eigen::Vector3d placed = model.landmark_from(s);
   CHECK(placed.x() == doctest::Approx(expected.x()).epsilon(1e-12));
   CHECK(placed.y() == doctest::Approx(expected.y()).epsilon(1e-12));
@@ -78,7 +79,8 @@ TEST_CASE("sighting model: the first sighting places the landmark by hand, and t
   P_p << 0.2, 0.05, 0.05, 0.1;
   const double k = 3.0;
   const Eigen::Matrix2d Rm = R;
-  const Eigen::Matrix2d Sfull = Rm + k * k * JD * sigma_d * JD.transpose() + JK * P_K * JK.transpose() + Jp * P_p * Jp.transpose();
+  const Eigen::Matrix2d Sfull =
+      Rm + k * k * JD * sigma_d * JD.transpose() + JK * P_K * JK.transpose() + Jp * P_p * Jp.transpose();
   const Eigen::Vector2d e(h(0) - 4.0, h(1) - 0.6);
   const double d2 = e.dot(Sfull.ldlt().solve(e));
   CHECK(model.mahalanobis(ev, R, k, P_p, P_K) == doctest::Approx(d2).epsilon(1e-6));

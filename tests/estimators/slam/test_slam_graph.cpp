@@ -179,7 +179,7 @@ TEST_CASE("slam graph: a state saved and restored continues bit for bit, and sav
   for (int i = 0; i < 8; ++i) a.add_odometry("robot", odometry(i), out);
   a.add_sightings("robot", sighting_of(3, 1, 2.0, 1.0), out);
   a.add_loop("robot", loop(1, 7, 0.01, 0.0), out);
-  a.add_loop("robot", loop(2, 9, 0.0, 0.0), out);            // waits for the odometry
+  a.add_loop("robot", loop(2, 9, 0.0, 0.0), out);               // waits for the odometry
   a.add_sightings("robot", sighting_of(9, 2, 3.0, -1.0), out);  // waits too
 
   archive::ArchiveWriter w;
