@@ -2,6 +2,7 @@
 //                 | tum GT.txt -o OUT.lcm [--seed N ...] | euroc DIR -o OUT.lcm [--gt-out GT.txt]
 //                 | rosbag FILE.bag -o OUT.lcm [--topic TOPIC=CHANNEL]... [--frame FRAME=BODY]... [--yaw-free TOPIC]...
 #include "cli/command.hpp"
+#include "cli/convert_command.hpp"
 #include "convert/euroc_converter.hpp"
 #include "convert/g2o_converter.hpp"
 #include "convert/mrclam_converter.hpp"
@@ -17,16 +18,6 @@
 namespace {
 
 using namespace sextant::tools;
-
-template <class F>
-void guarded(const char* what, F&& f) {
-  try {
-    f();
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "sextant convert %s: %s\n", what, e.what());
-    throw CLI::RuntimeError(2);
-  }
-}
 
 // "KEY=VALUE" arguments (--topic, --frame) as a map; std::invalid_argument naming the option for a malformed one.
 std::map<std::string, std::string> key_values(const std::vector<std::string>& args, const char* option) {
@@ -60,7 +51,7 @@ void add_euroc(CLI::App* cmd) {
   eu->add_option("--source", opt->source, "body name (imu_t.source)");
   eu->add_option("--channel", opt->imu_channel, "IMU channel");
   eu->callback([=] {
-    guarded("euroc", [&] {
+    sextant::cli::convert_guarded("euroc", [&] {
       const auto r = convert_euroc(*dir, *out, *gt, *opt);
       std::printf("%s: %lld imu samples, %lld truth\n", out->c_str(), (long long)r.imu, (long long)r.truth);
     });
@@ -81,7 +72,7 @@ void add_rosbag(CLI::App* cmd) {
   rb->add_option("--frame", *frames, "FRAME=BODY: a ROS frame_id's body name (default: the frame_id itself)");
   rb->add_option("--yaw-free", *yaw_free, "an IMU topic whose orientation has no meaningful yaw");
   rb->callback([=] {
-    guarded("rosbag", [&] {
+    sextant::cli::convert_guarded("rosbag", [&] {
       RosbagConversionOptions o;
       o.channels = key_values(*topics, "--topic");
       o.bodies = key_values(*frames, "--frame");
@@ -95,8 +86,7 @@ void add_rosbag(CLI::App* cmd) {
 
 sextant::cli::RegisterCommand reg{
     "convert", [](CLI::App& app) {
-      auto* cmd = app.add_subcommand("convert", "convert real data sets into LCM logs");
-      cmd->require_subcommand(1);
+      auto* cmd = sextant::cli::convert_command(app);
 
       auto* g2o = cmd->add_subcommand("g2o", "a g2o pose graph -> odometry and loop closures");
       auto g_in = std::make_shared<std::string>(), g_out = std::make_shared<std::string>(),
@@ -107,7 +97,7 @@ sextant::cli::RegisterCommand reg{
       g2o->add_option("--gt-out", *g_gt, "write the file's vertex estimates as a TUM trajectory");
       g2o->add_option("--period", g_opt->period_us, "microseconds between vertices")->check(CLI::PositiveNumber);
       g2o->callback([=] {
-        guarded("g2o", [&] {
+        sextant::cli::convert_guarded("g2o", [&] {
           const auto r = convert_g2o(*g_in, *g_out, *g_gt, *g_opt);
           std::printf("%s: %lld odometry, %lld loop closures (%lld edges of other kinds skipped)\n", g_out->c_str(),
                       (long long)r.odometry, (long long)r.loop_closures, (long long)r.skipped_edges);
@@ -133,7 +123,7 @@ sextant::cli::RegisterCommand reg{
           ->check(CLI::PositiveNumber);
       mr->add_option("--bearing-sigma", m_opt->bearing_sigma, "bearing noise, rad")->check(CLI::PositiveNumber);
       mr->callback([=] {
-        guarded("mrclam", [&] {
+        sextant::cli::convert_guarded("mrclam", [&] {
           const auto r = convert_mrclam(*m_dir, *m_robot, *m_out, *m_gt, *m_opt);
           std::printf(
               "%s: %lld odometry, %lld landmark messages (%lld sightings; %lld robot sightings and %lld unknown "
@@ -157,7 +147,7 @@ sextant::cli::RegisterCommand reg{
       tum->add_option("--drift-yaw", t_opt->yaw_drift, "heading bias, rad per m travelled");
       tum->add_option("--drift-scale", t_opt->scale_drift, "translation scale error");
       tum->callback([=] {
-        guarded("tum", [&] {
+        sextant::cli::convert_guarded("tum", [&] {
           const auto r = convert_tum(*t_in, *t_out, *t_opt);
           if (!t_gt->empty()) sextant::tools::write_tum(*t_gt, sextant::tools::read_tum(*t_in));
           std::printf("%s: %lld odometry messages with ground truth\n", t_out->c_str(), (long long)r.odometry);

@@ -2,6 +2,7 @@
 // bridge's topics and schemas: viewer/topics.hpp) and back.  Registered under the name "convert mcap" so that it
 // sorts after "convert" (main.cpp adds commands by name) and adds its formats to that subcommand.
 #include "cli/command.hpp"
+#include "cli/convert_command.hpp"
 #include "viewer/lcm_mcap.hpp"
 
 #include <chrono>
@@ -11,26 +12,9 @@ namespace {
 
 using namespace sextant::viewer;
 
-CLI::App* convert_command(CLI::App& app) {
-  for (auto* c : app.get_subcommands([](CLI::App* s) { return s->get_name() == "convert"; })) return c;
-  auto* c = app.add_subcommand("convert", "convert data sets and logs");
-  c->require_subcommand(1);
-  return c;
-}
-
-template <class F>
-void guarded(const char* what, F&& f) {
-  try {
-    f();
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "sextant convert %s: %s\n", what, e.what());
-    throw CLI::RuntimeError(2);
-  }
-}
-
 sextant::cli::RegisterCommand reg{
     "convert mcap", [](CLI::App& app) {
-      auto* convert = convert_command(app);
+      auto* convert = sextant::cli::convert_command(app);
 
       auto* mcap = convert->add_subcommand("mcap",
                                            "an LCM log -> an MCAP file for Foxglove (every sextant channel as JSON "
@@ -43,7 +27,7 @@ sextant::cli::RegisterCommand reg{
           ->check(CLI::Range(size_t{4096}, size_t{1} << 30));
       mcap->add_option("--zstd-level", m_opt->zstd_level, "zstd compression level")->check(CLI::Range(1, 19));
       mcap->callback([=] {
-        guarded("mcap", [&] {
+        sextant::cli::convert_guarded("mcap", [&] {
           const auto t0 = std::chrono::steady_clock::now();
           const auto r = convert_lcm_to_mcap(*m_in, *m_out, *m_opt);
           const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -64,7 +48,7 @@ sextant::cli::RegisterCommand reg{
       lcm->add_option("mcap", *l_in, "MCAP file")->required()->check(CLI::ExistingFile);
       lcm->add_option("-o,--output", *l_out, "output LCM log")->required();
       lcm->callback([=] {
-        guarded("lcm", [&] {
+        sextant::cli::convert_guarded("lcm", [&] {
           const auto r = convert_mcap_to_lcm(*l_in, *l_out);
           std::printf("%s: %lld LCM events (%lld view messages skipped)\n", l_out->c_str(), (long long)r.events,
                       (long long)r.views_skipped);
