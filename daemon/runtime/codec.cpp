@@ -1,5 +1,6 @@
 #include "daemon/runtime/codec.hpp"
 
+#include "daemon/runtime/codec_fields.hpp"
 #include "daemon/runtime/wire_layout.hpp"
 #include "estimators/lie/planar_axes.hpp"
 #include "estimators/spd_matrix.hpp"
@@ -11,6 +12,9 @@
 #include <sstream>
 
 namespace sextant::runtime {
+
+using namespace codec_fields;
+
 namespace {
 
 // Validation failures carry the field name up to the caller; thrown only inside this file.
@@ -85,33 +89,6 @@ const std::vector<int> kPlanar3{0, 1};
 
 void check_name(const std::string& s, const std::string& field) {
   if (s.size() > 256) fail("invalid", field + ": longer than 256 characters");
-}
-
-template <int N>
-void copy_row_major(const Eigen::Matrix<double, N, N>& m, double* out) {
-  Eigen::Map<Eigen::Matrix<double, N, N, Eigen::RowMajor>> dst(out);
-  dst = m;
-}
-
-void copy_pose(const engine::Pose& p, double pos[3], double quat[4]) {
-  for (int i = 0; i < 3; ++i) pos[i] = p.position[i];
-  const Eigen::Quaterniond q = p.orientation.normalized();
-  quat[0] = q.w();
-  quat[1] = q.x();
-  quat[2] = q.y();
-  quat[3] = q.z();
-}
-
-engine::Pose read_pose(const double pos[3], const double quat[4]) {
-  engine::Pose p;
-  p.position = Eigen::Vector3d(pos[0], pos[1], pos[2]);
-  p.orientation = Eigen::Quaterniond(quat[0], quat[1], quat[2], quat[3]);
-  return p;
-}
-
-template <int N>
-Eigen::Matrix<double, N, N> read_matrix(const double* v) {
-  return Eigen::Map<const Eigen::Matrix<double, N, N, Eigen::RowMajor>>(v);
 }
 
 template <class Msg>
@@ -254,12 +231,11 @@ Eigen::Matrix3d check_stated_covariance(const double* v, const std::string& fiel
   check_finite(v, 9, field);
   const Eigen::Matrix3d m = read_matrix<3>(v);
   if (m.isZero(0)) return m;
-  const double scale = std::max(1.0, m.cwiseAbs().maxCoeff());
-  if ((m - m.transpose()).cwiseAbs().maxCoeff() > 1e-9 * scale) fail("covariance", field + ": not symmetric");
-  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(m, Eigen::EigenvaluesOnly);
-  if (eig.eigenvalues().minCoeff() < -1e-12 * scale) {
+  if (!is_symmetric(m)) fail("covariance", field + ": not symmetric");
+  const double smallest = smallest_eigenvalue(m), scale = std::max(1.0, m.cwiseAbs().maxCoeff());
+  if (smallest < -1e-12 * scale) {
     std::ostringstream s;
-    s << field << ": not positive semi-definite (smallest eigenvalue " << eig.eigenvalues().minCoeff() << ")";
+    s << field << ": not positive semi-definite (smallest eigenvalue " << smallest << ")";
     fail("covariance", s.str());
   }
   return m;
@@ -361,20 +337,6 @@ Decoded to_event(const sextant::loop_closure_t& m) {
     return engine::Event{std::move(e)};
   });
 }
-
-namespace {
-
-// Every message starts the same way (lcmtypes/sextant/*.lcm): its time, the sender's name and the sender's sequence number.
-template <class Message>
-Message message_header(int64_t utime, const std::string& sender, int64_t seq) {
-  Message m{};
-  m.utime = utime;
-  m.sender = sender;
-  m.seq = seq;
-  return m;
-}
-
-}  // namespace
 
 sextant::odometry_t to_message(const engine::Odometry& e, const std::string& sender, int64_t seq) {
   auto m = message_header<sextant::odometry_t>(e.utime, sender, seq);
@@ -478,141 +440,6 @@ sextant::gnss_t to_message(const engine::GnssFix& e, const std::string& sender, 
   if (e.velocity) std::copy(e.velocity->data(), e.velocity->data() + 3, m.velocity);
   copy_row_major<3>(e.velocity_covariance, m.velocity_covariance);
   return m;
-}
-
-sextant::fused_pose_t to_message(const engine::FusedPose& o, const std::string& sender, int64_t seq) {
-  auto m = message_header<sextant::fused_pose_t>(o.utime, sender, seq);
-  m.source = o.source;
-  m.estimator = o.estimator;
-  m.planar = o.planar;
-  copy_pose(o.pose, m.position, m.orientation);
-  copy_row_major<6>(o.covariance, m.covariance);
-  return m;
-}
-
-sextant::trajectory_t to_message(const engine::Trajectory& o, const std::string& sender, int64_t seq) {
-  auto m = message_header<sextant::trajectory_t>(o.utime, sender, seq);
-  m.source = o.source;
-  m.estimator = o.estimator;
-  m.chi2 = o.chi2;
-  m.iterations = o.iterations;
-  m.solve_ms = o.solve_ms;
-  m.kind =
-      o.kind == engine::Trajectory::Kind::kSnapshot ? sextant::trajectory_t::SNAPSHOT : sextant::trajectory_t::UPDATE;
-  m.snapshot_id = o.snapshot_id;
-  m.chunk = o.chunk;
-  m.num_chunks = o.num_chunks;
-  m.range_first = o.range_first;
-  m.range_last = o.range_last;
-  m.total_keyframes = o.total_keyframes;
-  m.num_removed = static_cast<int32_t>(o.removed_ids.size());
-  m.removed_ids = o.removed_ids;
-  m.num_keyframes = static_cast<int32_t>(o.keyframes.size());
-  for (const auto& k : o.keyframes) {
-    sextant::keyframe_t x{};
-    x.id = k.id;
-    x.utime = k.utime;
-    copy_pose(k.pose, x.position, x.orientation);
-    m.keyframes.push_back(x);
-  }
-  return m;
-}
-
-sextant::match_request_t to_message(const engine::MatchRequest& o, const std::string& sender, int64_t seq) {
-  auto m = message_header<sextant::match_request_t>(o.utime, sender, seq);
-  m.source = o.source;
-  m.request_id = o.request_id;
-  m.kind = o.kind;
-  m.keyframe_a = o.a.id;
-  m.utime_a = o.a.utime;
-  copy_pose(o.a.pose, m.position_a, m.orientation_a);
-  m.keyframe_b = o.b.id;
-  m.utime_b = o.b.utime;
-  copy_pose(o.b.pose, m.position_b, m.orientation_b);
-  return m;
-}
-
-sextant::targets_t to_message(const engine::Targets& o, const std::string& sender, int64_t seq) {
-  auto m = message_header<sextant::targets_t>(o.utime, sender, seq);
-  m.scan_id = o.scan_id;
-  m.cost_kind = o.cost_kind;
-  m.total_cost = o.total_cost;
-  m.duality_gap = o.duality_gap;
-  m.num_sensors = static_cast<int32_t>(o.sensor_ids.size());
-  m.sensor_ids = o.sensor_ids;
-  m.num_targets = static_cast<int32_t>(o.targets.size());
-  for (const auto& t : o.targets) {
-    sextant::target_t x{};
-    for (int i = 0; i < 3; ++i) x.position[i] = t.position[i];
-    copy_row_major<3>(t.covariance, x.covariance);
-    x.num_sensors = static_cast<int32_t>(t.detection_indices.size());
-    x.detection_indices = t.detection_indices;
-    x.cost = t.cost;
-    m.targets.push_back(x);
-  }
-  return m;
-}
-
-engine::FusedPose to_output(const sextant::fused_pose_t& m) {
-  engine::FusedPose o;
-  o.utime = m.utime;
-  o.source = m.source;
-  o.estimator = m.estimator;
-  o.planar = m.planar;
-  o.pose = read_pose(m.position, m.orientation);
-  o.covariance = read_matrix<6>(m.covariance);
-  return o;
-}
-
-engine::Trajectory to_output(const sextant::trajectory_t& m) {
-  engine::Trajectory o;
-  o.utime = m.utime;
-  o.source = m.source;
-  o.estimator = m.estimator;
-  o.chi2 = m.chi2;
-  o.iterations = m.iterations;
-  o.solve_ms = m.solve_ms;
-  o.kind = m.kind == sextant::trajectory_t::SNAPSHOT ? engine::Trajectory::Kind::kSnapshot
-                                                     : engine::Trajectory::Kind::kUpdate;
-  o.snapshot_id = m.snapshot_id;
-  o.chunk = m.chunk;
-  o.num_chunks = m.num_chunks;
-  o.range_first = m.range_first;
-  o.range_last = m.range_last;
-  o.total_keyframes = m.total_keyframes;
-  o.removed_ids = m.removed_ids;
-  for (const auto& k : m.keyframes) o.keyframes.push_back({k.id, k.utime, read_pose(k.position, k.orientation)});
-  return o;
-}
-
-engine::MatchRequest to_output(const sextant::match_request_t& m) {
-  engine::MatchRequest o;
-  o.utime = m.utime;
-  o.source = m.source;
-  o.request_id = m.request_id;
-  o.kind = m.kind;
-  o.a = {m.keyframe_a, m.utime_a, read_pose(m.position_a, m.orientation_a)};
-  o.b = {m.keyframe_b, m.utime_b, read_pose(m.position_b, m.orientation_b)};
-  return o;
-}
-
-engine::Targets to_output(const sextant::targets_t& m) {
-  engine::Targets o;
-  o.utime = m.utime;
-  o.scan_id = m.scan_id;
-  o.cost_kind = m.cost_kind;
-  o.total_cost = m.total_cost;
-  o.duality_gap = m.duality_gap;
-  o.sensor_ids = m.sensor_ids;
-  for (const auto& t : m.targets) {
-    engine::Target x;
-    x.position = Eigen::Vector3d(t.position[0], t.position[1], t.position[2]);
-    x.covariance = read_matrix<3>(t.covariance);
-    x.detection_indices = t.detection_indices;
-    x.cost = t.cost;
-    o.targets.push_back(x);
-  }
-  return o;
 }
 
 }  // namespace sextant::runtime
