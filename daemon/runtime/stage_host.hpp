@@ -38,9 +38,6 @@ class StageHost {
 
   engine::Stage& stage() { return stage_; }
   const engine::Stage& stage() const { return stage_; }
-  const engine::Emit& emit() const { return emit_; }
-  int64_t failures() const { return failures_.load(); }
-  int64_t recoveries() const { return recoveries_.load(); }
   std::string last_failure() const;
 
  private:
