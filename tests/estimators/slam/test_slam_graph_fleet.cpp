@@ -163,7 +163,7 @@ TEST_CASE("fleet: disabled, the robots stay apart whatever they share") {
   CHECK(slam.counters().fleet_sightings == 0);
 }
 
-TEST_CASE("fleet: an inter-robot loop joins with agreeing sightings; a fleet state saved and restored continues bit for bit") {
+TEST_CASE("fleet: an inter-robot loop joins with agreeing sightings, a fleet state saved and restored continues bit for bit") {
   const Robot a{"a", {0, 0}, 3, 0, 0.3}, b{"b", {0.5, 0.5}, 2.5, 2.0, -0.25};
   SlamGraph slam(fleet_options());
   auto world_b = random_landmarks(1, 25);
