@@ -96,6 +96,38 @@ ErrorStatistics statistics_of(std::vector<double> e) {
   return s;
 }
 
+namespace {
+
+// Umeyama in D dimensions (the first D rows of the points).
+template <int D>
+RigidAlignment align_in(const Eigen::Matrix3Xd& model, const Eigen::Matrix3Xd& data, bool estimate_scale) {
+  using Vector = Eigen::Matrix<double, D, 1>;
+  using Matrix = Eigen::Matrix<double, D, D>;
+  const Eigen::Matrix<double, D, Eigen::Dynamic> m = model.topRows<D>(), d = data.topRows<D>();
+  const Vector mu_m = m.rowwise().mean(), mu_d = d.rowwise().mean();
+  const Eigen::Matrix<double, D, Eigen::Dynamic> mc = m.colwise() - mu_m, dc = d.colwise() - mu_d;
+  // W' = sum data_c model_c' (evaluate_ate.py's align(); Umeyama 1991 with the 1/n dropped).
+  const Matrix Wt = dc * mc.transpose();
+  Eigen::JacobiSVD<Matrix> svd(Wt, Eigen::ComputeFullU | Eigen::ComputeFullV);
+  Matrix S = Matrix::Identity();
+  if (svd.matrixU().determinant() * svd.matrixV().determinant() < 0) S(D - 1, D - 1) = -1;
+  RigidAlignment r;
+  const Matrix R = svd.matrixU() * S * svd.matrixV().transpose();
+  r.rotation.topLeftCorner<D, D>() = R;
+  if (estimate_scale) r.scale = (svd.singularValues().asDiagonal() * S).trace() / mc.squaredNorm();
+  r.translation.head<D>() = mu_d - r.scale * R * mu_m;
+  return r;
+}
+
+}  // namespace
+
+RigidAlignment align_points(const Eigen::Matrix3Xd& model, const Eigen::Matrix3Xd& data, bool estimate_scale,
+                            bool planar) {
+  if (model.cols() != data.cols() || model.cols() < 2)
+    throw std::invalid_argument("alignment: at least 2 corresponding points are needed");
+  return planar ? align_in<2>(model, data, estimate_scale) : align_in<3>(model, data, estimate_scale);
+}
+
 AteResult absolute_trajectory_error(const std::vector<StampedPose>& gt, const std::vector<StampedPose>& est,
                                     bool estimate_scale, double max_difference) {
   const auto matches = associate(gt, est, max_difference);
@@ -109,20 +141,11 @@ AteResult absolute_trajectory_error(const std::vector<StampedPose>& gt, const st
     data.col(static_cast<Eigen::Index>(k)) = gt[matches[k].first].pose.position;
     model.col(static_cast<Eigen::Index>(k)) = est[matches[k].second].pose.position;
   }
-  const Eigen::Vector3d mu_m = model.rowwise().mean(), mu_d = data.rowwise().mean();
-  const Eigen::Matrix3Xd mc = model.colwise() - mu_m, dc = data.colwise() - mu_d;
-  // W' = sum data_c model_c' (evaluate_ate.py's align(); Umeyama 1991 with the 1/n dropped).
-  const Eigen::Matrix3d Wt = dc * mc.transpose();
-  Eigen::JacobiSVD<Eigen::Matrix3d> svd(Wt, Eigen::ComputeFullU | Eigen::ComputeFullV);
-  Eigen::Matrix3d S = Eigen::Matrix3d::Identity();
-  if (svd.matrixU().determinant() * svd.matrixV().determinant() < 0) S(2, 2) = -1;
+  const RigidAlignment a = align_points(model, data, estimate_scale);
   AteResult r;
-  r.rotation = svd.matrixU() * S * svd.matrixV().transpose();
-  if (estimate_scale) {
-    const double var_model = mc.squaredNorm();
-    r.scale = (svd.singularValues().asDiagonal() * S).trace() / var_model;
-  }
-  r.translation = mu_d - r.scale * r.rotation * mu_m;
+  r.rotation = a.rotation;
+  r.translation = a.translation;
+  r.scale = a.scale;
   std::vector<double> errors(n);
   for (size_t k = 0; k < n; ++k)
     errors[k] = (r.scale * r.rotation * model.col(static_cast<Eigen::Index>(k)) + r.translation -

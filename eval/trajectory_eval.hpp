@@ -28,6 +28,21 @@ struct ErrorStatistics {
 /// Statistics as numpy computes them (population std, median of an even count = mean of the middle two).
 ErrorStatistics statistics_of(std::vector<double> errors);
 
+/// x -> scale * rotation * x + translation.
+struct RigidAlignment {
+  Eigen::Matrix3d rotation = Eigen::Matrix3d::Identity();
+  Eigen::Vector3d translation = Eigen::Vector3d::Zero();
+  double scale = 1.0;
+  Eigen::Vector3d operator()(const Eigen::Vector3d& x) const { return scale * rotation * x + translation; }
+};
+
+/// The alignment minimizing sum_k |scale R model_k + t - data_k|^2 over corresponding columns (Umeyama 1991, as
+/// evaluate_ate.py computes it; scale fixed at 1 unless `estimate_scale`).  `planar`: an SE(2) (Sim(2)) alignment,
+/// from the x and y rows only: a rotation about z and a translation in x, y.  Needs at least 2 columns; with fewer
+/// than 3 non-collinear points the rotation is not determined (the SVD picks one).
+RigidAlignment align_points(const Eigen::Matrix3Xd& model, const Eigen::Matrix3Xd& data, bool estimate_scale = false,
+                            bool planar = false);
+
 struct AteResult {
   ErrorStatistics error;  // metres
   Eigen::Matrix3d rotation = Eigen::Matrix3d::Identity();
