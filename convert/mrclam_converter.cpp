@@ -292,14 +292,6 @@ MrclamConversion write_log(std::vector<MrclamConverter>& robots, const std::stri
   return total;
 }
 
-void write_landmark_file(const std::string& path, const std::vector<std::tuple<int, double, double>>& landmarks) {
-  std::FILE* f = std::fopen(path.c_str(), "w");
-  if (f == nullptr) throw std::runtime_error("cannot write " + path);
-  std::fprintf(f, "# id x y (metres, Vicon world frame)\n");
-  for (const auto& [id, x, y] : landmarks) std::fprintf(f, "%d %.6f %.6f\n", id, x, y);
-  if (std::fclose(f) != 0) throw std::runtime_error("cannot write " + path);
-}
-
 }  // namespace
 
 MrclamConversion convert_mrclam(const std::string& dir, int robot, const std::string& out_lcm,
@@ -328,7 +320,9 @@ MrclamConversion convert_mrclam_fleet(const std::string& dir, const std::vector<
   if (gt_prefix.empty()) return c;
   for (size_t i = 0; i < robots.size(); ++i)
     write_tum(gt_prefix + "robot" + std::to_string(robot_numbers[i]) + ".txt", robots[i].ground_truth());
-  write_landmark_file(gt_prefix + "landmarks.txt", robots.front().landmark_truth());
+  LandmarkPositions landmarks;
+  for (const auto& [id, x, y] : robots.front().landmark_truth()) landmarks[id] = Eigen::Vector3d(x, y, 0);
+  write_landmarks(gt_prefix + "landmarks.txt", landmarks);
   return c;
 }
 

@@ -15,9 +15,6 @@
 
 namespace sextant::tools {
 
-/// Landmark positions by id, metres.
-using LandmarkPositions = std::map<int64_t, Eigen::Vector3d>;
-
 struct FleetEvaluationOptions {
   bool planar = true;            // SE(2) alignment (rotation about z, translation in x, y)
   double max_difference = 0.02;  // association window, seconds
