@@ -1,4 +1,4 @@
-// sextant eval fleet --out-log OUT.lcm (--gt-prefix PREFIX | --gt-log IN.lcm) [--estimator graph] [--spatial]
+// sextant eval fleet --out-log OUT.lcm [--out-log ...] (--gt-prefix PREFIX | --gt-log IN.lcm) [--estimator graph] [--spatial]
 //                    [--max-difference S] [--json]
 //
 // A fleet's final map from a replay's output log against the ground truth under one alignment (eval/fleet_eval.hpp):
@@ -34,7 +34,8 @@ namespace {
 using namespace sextant::tools;
 
 struct Options {
-  std::string out_log, gt_prefix, gt_log, estimator = "graph";
+  std::vector<std::string> out_logs;
+  std::string gt_prefix, gt_log, estimator = "graph";
   bool spatial = false, json = false;
   double max_difference = 0.02;
 };
@@ -121,7 +122,13 @@ void run(const Options& o) {
   FleetOutput out;
   FleetTruth truth;
   try {
-    out = read_fleet_output(o.out_log, o.estimator);
+    for (const auto& path : o.out_logs) {  // several logs: their bodies together (a body in two: the last log's)
+      FleetOutput one = read_fleet_output(path, o.estimator);
+      for (auto& [body, poses] : one.keyframes) out.keyframes[body] = std::move(poses);
+      for (auto& [body, frame] : one.frames) out.frames[body] = frame;
+      for (auto& [body, poses] : one.fused) out.fused[body] = std::move(poses);
+      for (auto& [frame, map] : one.maps) out.maps[frame] = std::move(map);
+    }
     if (!o.gt_log.empty()) {
       truth = read_truth_log(o.gt_log);
     } else {
@@ -158,7 +165,9 @@ sextant::cli::RegisterCommand reg{
           "a fleet's final keyframes and landmarks (a replay's --out-log) against the ground truth under "
           "one alignment for the whole fleet, and each robot's online fused-pose ATE");
       auto o = std::make_shared<Options>();
-      cmd->add_option("--out-log", o->out_log, "the replay's output log (TRAJECTORY, LANDMARK_MAP, FUSED_POSE*)")
+      cmd->add_option("--out-log", o->out_logs,
+                      "the replay's output log (TRAJECTORY, LANDMARK_MAP, FUSED_POSE*); several: their bodies together "
+                      "(e.g. single-robot replays under one alignment)")
           ->required()
           ->check(CLI::ExistingFile);
       auto* prefix = cmd->add_option("--gt-prefix", o->gt_prefix,
