@@ -1,0 +1,78 @@
+#include "eval/fleet_log.hpp"
+
+#include "daemon/engine/trajectory_rebuild.hpp"
+#include "daemon/runtime/codec.hpp"
+#include "daemon/runtime/lcm_log.hpp"
+
+#include <sextant/fused_pose_t.hpp>
+#include <sextant/trajectory_t.hpp>
+#include <sextant/truth_t.hpp>
+
+#include <algorithm>
+#include <filesystem>
+#include <stdexcept>
+
+namespace sextant::tools {
+namespace {
+
+template <class Message>
+Message decoded(const runtime::LogRecord& r) {
+  Message m;
+  if (m.decode(r.data.data(), 0, static_cast<int>(r.data.size())) < 0)
+    throw std::runtime_error("a " + r.channel + " message at " + std::to_string(r.timestamp) + " does not decode");
+  return m;
+}
+
+engine::Pose pose_of(const double position[3], const double orientation[4]) {
+  engine::Pose p;
+  p.position = {position[0], position[1], position[2]};
+  p.orientation = Eigen::Quaterniond(orientation[0], orientation[1], orientation[2], orientation[3]).normalized();
+  return p;
+}
+
+}  // namespace
+
+FleetOutput read_fleet_output(const std::string& out_log, const std::string& estimator) {
+  FleetOutput out;
+  std::map<std::string, engine::TrajectoryRebuild> rebuilds;
+  for (const auto& r : runtime::LogReader::read_all(out_log)) {
+    if (r.channel == "TRAJECTORY") {
+      const auto m = decoded<sextant::trajectory_t>(r);
+      rebuilds[m.source].add(runtime::to_output(m));
+    } else if (r.channel.rfind("FUSED_POSE", 0) == 0) {  // FUSED_POSE (the primary) or FUSED_POSE_<ESTIMATOR>
+      const auto m = decoded<sextant::fused_pose_t>(r);
+      if (m.estimator == estimator) out.fused[m.source].push_back({m.utime * 1e-6, pose_of(m.position, m.orientation)});
+    }
+  }
+  for (const auto& [body, rebuild] : rebuilds) {
+    auto& poses = out.keyframes[body];
+    for (const auto& [id, k] : rebuild.keyframes()) poses.push_back({k.utime * 1e-6, k.pose});
+    std::sort(poses.begin(), poses.end(), [](const StampedPose& a, const StampedPose& b) { return a.t < b.t; });
+  }
+  return out;
+}
+
+FleetTruth read_truth_log(const std::string& log) {
+  FleetTruth t;
+  for (const auto& r : runtime::LogReader::read_all(log)) {
+    if (r.channel != "GROUND_TRUTH") continue;
+    const auto m = decoded<sextant::truth_t>(r);
+    if (m.kind == "robot")
+      t.robots[m.source].push_back({m.utime * 1e-6, pose_of(m.position, m.orientation)});
+    else if (m.kind == "landmark")
+      t.landmarks[m.id] = Eigen::Vector3d(m.position[0], m.position[1], m.position[2]);
+  }
+  for (auto& [body, poses] : t.robots)
+    std::stable_sort(poses.begin(), poses.end(), [](const StampedPose& a, const StampedPose& b) { return a.t < b.t; });
+  return t;
+}
+
+FleetTruth read_truth_files(const std::string& prefix, const std::vector<std::string>& bodies) {
+  FleetTruth t;
+  for (const auto& body : bodies)
+    if (std::filesystem::exists(prefix + body + ".txt")) t.robots[body] = read_tum(prefix + body + ".txt");
+  if (std::filesystem::exists(prefix + "landmarks.txt")) t.landmarks = read_landmarks(prefix + "landmarks.txt");
+  return t;
+}
+
+}  // namespace sextant::tools
