@@ -1,4 +1,5 @@
-"""The table of bench/foxglove.sh: bench/foxglove_summary.py OUT RUN (RUN: the MCAP run's path prefix)."""
+"""The table of bench/foxglove.sh: bench/foxglove_summary.py OUT [RUN] (RUN: the MCAP run's path prefix; without it,
+the bridge cases only).  A bridge case that was not run has no row."""
 import json
 import os
 import re
@@ -44,7 +45,7 @@ def mcap_row(log, label):
 
 
 def main():
-    out, run = sys.argv[1], sys.argv[2]
+    out, run = sys.argv[1], (sys.argv[2] if len(sys.argv) > 2 else None)
     print("Bridge: 10 bodies x 100 Hz FUSED_POSE + TRAJECTORY (1 Hz per body) + SEXTANT_STATUS (1 Hz), 30 s played by "
           "`sextant replay --realtime` on a namespace bus; viewers: tests/viewer/bridge_client.mjs --bench "
           "(@foxglove/ws-protocol).  Latency: viewer receive time - bridge receive time, every FUSED_POSE of every viewer. "
@@ -52,9 +53,12 @@ def main():
     print("| case | viewers | added latency p50 (ms) | p99 (ms) | bridge CPU (% of a core) | FUSED_POSE received per viewer | "
           "dropped per client (bridge) | largest client queue |")
     print("|---|---|---|---|---|---|---|---|")
-    print(bridge_row(out, "one_viewer", "one viewer"))
-    print(bridge_row(out, "ten_viewers", "ten viewers"))
-    print(bridge_row(out, "stalled_viewer", "one viewer + one stalled"))
+    for name, label in [("one_viewer", "one viewer"), ("ten_viewers", "ten viewers"),
+                        ("stalled_viewer", "one viewer + one stalled")]:
+        if os.path.exists(os.path.join(out, name, "cpu.txt")):
+            print(bridge_row(out, name, label))
+    if run is None:
+        return
     print("\nMCAP: `sextant convert mcap` (zstd level 3, 1 MiB chunks) of a 60-minute planar run, checked by "
           "tests/viewer/check_mcap.mjs (@mcap/core indexed + stream readers, CRCs, statistics, every message against the log).\n")
     print("| log | LCM events | LCM MB | MCAP MB | chunks | seconds | MB/s of LCM log | reference reader |")
