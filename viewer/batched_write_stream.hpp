@@ -24,16 +24,20 @@ namespace sextant::viewer {
 /// holding `prefix` then `payload`, as binary or text.
 inline void append_websocket_frame(std::string& out, bool binary, std::string_view prefix, std::string_view payload) {
   const uint64_t n = prefix.size() + payload.size();
-  out.push_back(static_cast<char>(0x80 | (binary ? 0x2 : 0x1)));  // FIN, opcode
+  char header[10] = {static_cast<char>(0x80 | (binary ? 0x2 : 0x1))};  // FIN, opcode
+  size_t size = 2;
   if (n < 126) {
-    out.push_back(static_cast<char>(n));
+    header[1] = static_cast<char>(n);
   } else if (n < 65536) {
-    out.push_back(126);
-    for (int i = 1; i >= 0; --i) out.push_back(static_cast<char>(n >> (8 * i)));
+    header[1] = 126;
+    for (int i = 0; i < 2; ++i) header[2 + i] = static_cast<char>(n >> (8 * (1 - i)));  // big-endian
+    size = 4;
   } else {
-    out.push_back(127);
-    for (int i = 7; i >= 0; --i) out.push_back(static_cast<char>(n >> (8 * i)));
+    header[1] = 127;
+    for (int i = 0; i < 8; ++i) header[2 + i] = static_cast<char>(n >> (8 * (7 - i)));
+    size = 10;
   }
+  out.append(header, size);
   out.append(prefix);
   out.append(payload);
 }

@@ -106,6 +106,7 @@ struct FoxgloveBridge::Impl {
   void accept();
   void map_loop();
   void map_one(const Received& r, std::vector<Outgoing>& out);
+  void take_mapped(uint64_t time_ns, std::vector<Outgoing>& out);
   void add_session(const std::shared_ptr<Session>& s);
   void remove_session(const Session* s);
   uint32_t channel_for(const ViewerMessage& m);
@@ -399,6 +400,7 @@ uint32_t FoxgloveBridge::Impl::channel_for(const ViewerMessage& m) {
 FoxgloveBridge::FoxgloveBridge(FoxgloveBridgeOptions options, TopicMapperOptions mapping)
     : impl_(std::make_shared<Impl>()) {
   impl_->options = std::move(options);
+  mapping.batch_frame_transforms = true;  // one /tf message per batch mapped together
   impl_->mapper = TopicMapper(mapping);
   const std::string where = impl_->options.bind_address + ":" + std::to_string(impl_->options.port);
   try {
@@ -470,6 +472,9 @@ void FoxgloveBridge::Impl::map_loop() {
         ++totals.mapping_failures;
       }
     }
+    scratch.clear();
+    mapper.flush(scratch);  // the batch's frame transforms, in one message
+    take_mapped(batch.back().time_ns, out);
     batch.clear();
     std::vector<std::shared_ptr<Session>> targets;
     {
@@ -480,7 +485,7 @@ void FoxgloveBridge::Impl::map_loop() {
   }
 }
 
-// One LCM message through the viewer mapping: its viewer messages appended to `out`, their channels advertised.
+// One LCM message through the viewer mapping: its viewer messages appended to `out`.
 void FoxgloveBridge::Impl::map_one(const Received& r, std::vector<Outgoing>& out) {
   scratch.clear();
   mapper.map(r.channel, r.data.data(), r.data.size(), scratch);
@@ -489,8 +494,13 @@ void FoxgloveBridge::Impl::map_one(const Received& r, std::vector<Outgoing>& out
     ++totals.lcm_messages;
     totals.without_json = mapper.counts().raw;
   }
+  take_mapped(r.time_ns, out);
+}
+
+// The viewer messages in `scratch`, received at `time_ns`, appended to `out`; their channels advertised.
+void FoxgloveBridge::Impl::take_mapped(uint64_t time_ns, std::vector<Outgoing>& out) {
   for (auto& m : scratch)
-    if (m.schema) out.push_back({channel_for(m), r.time_ns, std::make_shared<const std::string>(std::move(m.data))});
+    if (m.schema) out.push_back({channel_for(m), time_ns, std::make_shared<const std::string>(std::move(m.data))});
 }
 
 FoxgloveBridgeStats FoxgloveBridge::stats() const {
