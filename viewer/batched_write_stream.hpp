@@ -127,9 +127,4 @@ void async_teardown(boost::beast::role_type role, BatchedWriteStream& stream, Te
   });
 }
 
-inline void teardown(boost::beast::role_type role, BatchedWriteStream& stream, boost::beast::error_code& ec) {
-  using boost::beast::websocket::teardown;
-  teardown(role, stream.next_layer(), ec);
-}
-
 }  // namespace sextant::viewer
