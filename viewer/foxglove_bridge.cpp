@@ -120,6 +120,9 @@ class Session : public std::enable_shared_from_this<Session> {
     beast::error_code ec;
     const auto ep = beast::get_lowest_layer(ws_).socket().remote_endpoint(ec);
     address_ = ec ? "?" : ep.address().to_string() + ":" + std::to_string(ep.port());
+    // The writer batches; Nagle's algorithm would only hold a batch back until the previous one is acknowledged
+    // (with the viewer's delayed acknowledgement, tens of milliseconds).
+    beast::get_lowest_layer(ws_).socket().set_option(tcp::no_delay(true), ec);
   }
 
   void run() {
