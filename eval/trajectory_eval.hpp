@@ -3,11 +3,12 @@
 // evaluate_rpe.py), so sextant's numbers are the numbers everyone cites.
 //  - Association: every (gt, est) stamp pair closer than max_difference, sorted by |difference| (then by the gt
 //    and est stamps), taken greedily one-to-one.
-//  - ATE: rigid alignment of the matched positions (Kabsch/Umeyama without scale; with scale = Sim(3), Umeyama
-//    1991), then the statistics of |R s p + t - q|.
+//  - ATE: rigid alignment of the matched positions (align_points, estimators/lie/rigid_alignment.hpp: Kabsch/Umeyama
+//    without scale; with scale = Sim(3), Umeyama 1991), then the statistics of |R s p + t - q|.
 //  - RPE: pairs (i, j) of estimated poses with j the pose closest to stamp_i + delta (seconds) or i + delta (frames),
 //    dropping pairs whose j is the last pose; ground truth by nearest stamp within 2 x the median gt interval;
 //    E = (P_j^-1 P_i)^-1 (Q_j^-1 Q_i); translational error |t_E|, rotational error acos((tr R_E - 1) / 2).
+#include "estimators/lie/rigid_alignment.hpp"
 #include "eval/trajectory_io.hpp"
 
 #include <utility>
@@ -27,21 +28,6 @@ struct ErrorStatistics {
 
 /// Statistics as numpy computes them (population std, median of an even count = mean of the middle two).
 ErrorStatistics statistics_of(std::vector<double> errors);
-
-/// x -> scale * rotation * x + translation.
-struct RigidAlignment {
-  Eigen::Matrix3d rotation = Eigen::Matrix3d::Identity();
-  Eigen::Vector3d translation = Eigen::Vector3d::Zero();
-  double scale = 1.0;
-  Eigen::Vector3d operator()(const Eigen::Vector3d& x) const { return scale * rotation * x + translation; }
-};
-
-/// The alignment minimizing sum_k |scale R model_k + t - data_k|^2 over corresponding columns (Umeyama 1991, as
-/// evaluate_ate.py computes it; scale fixed at 1 unless `estimate_scale`).  `planar`: an SE(2) (Sim(2)) alignment,
-/// from the x and y rows only: a rotation about z and a translation in x, y.  Needs at least 2 columns; with fewer
-/// than 3 non-collinear points the rotation is not determined (the SVD picks one).
-RigidAlignment align_points(const Eigen::Matrix3Xd& model, const Eigen::Matrix3Xd& data, bool estimate_scale = false,
-                            bool planar = false);
 
 struct AteResult {
   ErrorStatistics error;  // metres

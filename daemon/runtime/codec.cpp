@@ -396,6 +396,7 @@ sextant::bearing_scan_t to_message(const engine::BearingScan& e, const std::stri
 sextant::loop_closure_t to_message(const engine::LoopClosure& e, const std::string& sender, int64_t seq) {
   auto m = message_header<sextant::loop_closure_t>(e.utime, sender, seq);
   m.source = e.source;
+  m.source_to = e.source_to;
   m.planar = e.planar;
   m.utime_from = e.utime_from;
   m.utime_to = e.utime_to;
