@@ -60,7 +60,9 @@ FleetOutput read_fleet_output(const std::string& out_log, const std::string& est
       add_map_chunk(decoded<sextant::landmark_map_t>(r), pending, out.maps);
     } else if (r.channel.rfind("FUSED_POSE", 0) == 0) {  // FUSED_POSE (the primary) or FUSED_POSE_<ESTIMATOR>
       const auto m = decoded<sextant::fused_pose_t>(r);
-      if (m.estimator == estimator) out.fused[m.source].push_back({m.utime * 1e-6, pose_of(m.position, m.orientation)});
+      if (m.estimator != estimator) continue;
+      out.fused[m.source].push_back({m.utime * 1e-6, pose_of(m.position, m.orientation)});
+      out.fused_frames[m.source].push_back(m.frame.empty() ? m.source : m.frame);
     }
   }
   for (const auto& [body, rebuild] : rebuilds) {

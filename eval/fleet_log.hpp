@@ -17,10 +17,11 @@ namespace sextant::tools {
 using BodyTrajectories = std::map<std::string, std::vector<StampedPose>>;
 
 struct FleetOutput {
-  BodyTrajectories keyframes;                     // final keyframes per body, in time order
-  std::map<std::string, std::string> frames;      // per body: the map frame of its last TRAJECTORY (empty: unnamed)
-  BodyTrajectories fused;                         // FUSED_POSE of the chosen estimator per body, as published
-  std::map<std::string, LandmarkPositions> maps;  // the last LANDMARK_MAP per map frame
+  BodyTrajectories keyframes;                 // final keyframes per body, in time order
+  std::map<std::string, std::string> frames;  // per body: the map frame of its last TRAJECTORY (empty: unnamed)
+  BodyTrajectories fused;                     // FUSED_POSE of the chosen estimator per body, as published
+  std::map<std::string, std::vector<std::string>> fused_frames;  // per body and fused pose: its map frame
+  std::map<std::string, LandmarkPositions> maps;                 // the last LANDMARK_MAP per map frame
 };
 
 /// Reads an output log; FUSED_POSE messages of estimators other than `estimator` are skipped.  Throws
