@@ -145,13 +145,7 @@ void run(const Options& o) {
   FleetOutput out;
   FleetTruth truth;
   try {
-    for (const auto& path : o.out_logs) {  // several logs: their bodies together (a body in two: the last log's)
-      FleetOutput one = read_fleet_output(path, o.estimator);
-      for (auto& [body, poses] : one.keyframes) out.keyframes[body] = std::move(poses);
-      for (auto& [body, frame] : one.frames) out.frames[body] = frame;
-      for (auto& [body, poses] : one.fused) out.fused[body] = std::move(poses);
-      for (auto& [frame, map] : one.maps) out.maps[frame] = std::move(map);
-    }
+    for (const auto& path : o.out_logs) merge_into(out, read_fleet_output(path, o.estimator));
     if (!o.gt_log.empty()) {
       truth = read_truth_log(o.gt_log);
     } else {

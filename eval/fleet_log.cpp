@@ -73,6 +73,14 @@ FleetOutput read_fleet_output(const std::string& out_log, const std::string& est
   return out;
 }
 
+void merge_into(FleetOutput& into, FleetOutput&& from) {
+  for (auto& [body, poses] : from.keyframes) into.keyframes[body] = std::move(poses);
+  for (auto& [body, frame] : from.frames) into.frames[body] = std::move(frame);
+  for (auto& [body, poses] : from.fused) into.fused[body] = std::move(poses);
+  for (auto& [body, frames] : from.fused_frames) into.fused_frames[body] = std::move(frames);
+  for (auto& [frame, map] : from.maps) into.maps[frame] = std::move(map);
+}
+
 FleetTruth read_truth_log(const std::string& log) {
   FleetTruth t;
   for (const auto& r : runtime::LogReader::read_all(log)) {

@@ -28,6 +28,10 @@ struct FleetOutput {
 /// std::runtime_error when the log cannot be read or a message does not decode.
 FleetOutput read_fleet_output(const std::string& out_log, const std::string& estimator);
 
+/// Adds `from`'s bodies and map frames to `into` (a body or frame in both: `from`'s), e.g. single-robot replays
+/// evaluated together.
+void merge_into(FleetOutput& into, FleetOutput&& from);
+
 struct FleetTruth {
   BodyTrajectories robots;  // per body, sorted by time
   LandmarkPositions landmarks;
