@@ -29,6 +29,11 @@ trap 'rm -rf "$work"' EXIT
 
 ate() { "$sextant" eval --gt "$1" --est "$2" --json | python3 -c 'import json,sys; print("%.3f" % json.load(sys.stdin)["ate_rmse"])'; }
 
+list=$(echo $robots | tr ' ' ',')
+"$sextant" convert mrclam "$data" --robots "$list" -o "$work/fleet.lcm" --gt-out "$work/fleet_gt_" > "$out/fleet_convert.txt"
+# The landmarks' surveyed positions, for the single-robot maps too.
+cp "$work/fleet_gt_landmarks.txt" "$work/single_gt_landmarks.txt"
+
 # (a) and (c): one robot at a time.
 single_logs=()
 for r in $robots; do
@@ -42,8 +47,6 @@ done
 "$sextant" eval fleet "${single_logs[@]}" --gt-prefix "$work/single_gt_" --json > "$out/single_fleet_eval.json"
 
 # (b) the fleet in one log and one replay.
-list=$(echo $robots | tr ' ' ',')
-"$sextant" convert mrclam "$data" --robots "$list" -o "$work/fleet.lcm" --gt-out "$work/fleet_gt_" > "$out/fleet_convert.txt"
 start=$(date +%s.%N)
 fleet_status=0
 "$sextant" replay "$work/fleet.lcm" --config "$root/config/mrclam_fleet.yaml" --out-log "$work/fleet_out.lcm" --json \
@@ -77,7 +80,8 @@ for body, (graph, ekf) in single.items():
           f"{num(b.get('online_joined_ate_rmse'))} | "
           f"{num(b.get('fleet_ate_rmse'))} | {num(b.get('own_ate_rmse'))} | {b.get('frame', 'n/a') or '(own)'} | {ekf} |")
 print()
-print(f"Landmarks under the one alignment: (a) {sf.get('landmarks_matched', 0)} matched, RMSE "
+print(f"Landmarks under the one alignment: (a) {sf.get('landmarks_matched', 0)} of map frame "
+      f"'{sf.get('landmark_frame', '')}' matched (each single-robot replay has its own map), RMSE "
       f"{num(sf.get('landmark_rmse'))} m; (b) {fl.get('landmarks_matched', 0)} matched, RMSE {num(fl.get('landmark_rmse'))} m "
       f"(map frame '{fl.get('landmark_frame', '')}', {fl.get('frames', 0)} map frame(s) among the robots).")
 print(f"\nFleet replay: {seconds} s wall" + (f"; it failed: {err}" if err and not fl else "") + ".")
