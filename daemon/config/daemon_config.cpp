@@ -262,6 +262,13 @@ DaemonConfig parse_daemon_config(const std::string& yaml_text, const std::string
     s << file << ":" << e.mark.line + 1 << ":" << e.mark.column + 1 << ": YAML syntax error: " << e.msg;
     throw ConfigError(s.str());
   }
+  if (root.IsDefined() && !root.IsNull() && !root.IsMap()) {  // a scalar or a list: no section can be read from it
+    std::ostringstream s;
+    s << file << ":" << root.Mark().line + 1 << ":" << root.Mark().column + 1
+      << ": expected a map of sections (daemon, channels, engine), got "
+      << (root.IsScalar() ? "'" + root.Scalar() + "'" : std::string("a list"));
+    throw ConfigError(s.str());
+  }
   int64_t budget = kMaxConfigNodes;
   refuse_duplicate_keys(root, file, budget);
   DaemonConfig c;

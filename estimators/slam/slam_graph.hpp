@@ -85,6 +85,12 @@ class SlamListener {
   /// A loop candidate for the new keyframe `a` (newest first) against the earlier keyframe `b`.
   virtual void loop_proposed(const std::string& body, int64_t utime, const KeyframeEstimate& a,
                              const KeyframeEstimate& b, bool random) = 0;
+  /// An inter-robot candidate: the new keyframe `a` of `body` against keyframe `b` of `other`, a body of the same map
+  /// frame whose estimate came within FleetOptions::proposal_radius.
+  virtual void fleet_loop_proposed(const std::string& body, int64_t utime, const KeyframeEstimate& a,
+                                   const std::string& other, const KeyframeEstimate& b) {
+    (void)body, (void)utime, (void)a, (void)other, (void)b;
+  }
 };
 
 class SlamGraph {
@@ -216,6 +222,8 @@ class SlamGraph {
   /// keyframe is measured from that one and its edge, which spans the dropped pose, accumulates from there.
   void drop_keyframe(Body& b);
   void propose_loops(const std::string& name, const Body& b, int64_t utime, SlamListener& listener);
+  /// For the newest keyframe of `name`: each other body of its frame's nearest keyframe within proposal_radius.
+  void propose_fleet_loops(const std::string& name, const Body& b, int64_t utime, SlamListener& listener);
   /// One smoother update of b's smoother, counted.
   graph::IncrementalStatus solve(Body& b);
   /// One smoother update for `b`, counted and reported when it succeeds.

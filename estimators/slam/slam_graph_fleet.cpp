@@ -29,6 +29,24 @@ std::map<std::string, std::vector<std::string>> SlamGraph::frames() const {
   return out;
 }
 
+void SlamGraph::propose_fleet_loops(const std::string& name, const Body& b, int64_t utime, SlamListener& listener) {
+  if (!(options_.fleet.proposal_radius > 0)) return;
+  const TrackKeyframe& k = b.track.newest();
+  const SE3 here = estimate(b, k.variable);
+  for (const auto& [other, o] : bodies_) {
+    if (other == name || o.frame != b.frame) continue;
+    const TrackKeyframe* nearest = nullptr;
+    double best = options_.fleet.proposal_radius;
+    for (const TrackKeyframe& c : o.track.keyframes()) {
+      const double d = (estimate(o, c.variable).translation() - here.translation()).norm();
+      if (d <= best) best = d, nearest = &c;
+    }
+    if (nearest != nullptr)
+      listener.fleet_loop_proposed(name, utime, KeyframeEstimate{k.id, k.utime, here}, other,
+                                   KeyframeEstimate{nearest->id, nearest->utime, estimate(o, nearest->variable)});
+  }
+}
+
 std::optional<TrackPoint> SlamGraph::anchor_near(const Body& b, int64_t utime) const {
   if (b.track.empty()) return std::nullopt;
   if (utime <= b.track.last_utime()) return b.track.anchor_at(utime);
