@@ -160,7 +160,7 @@ TEST_CASE("fleet simulation: inter-robot loops are T_from^-1 T_to of the truths,
   }
 }
 
-TEST_CASE("fleet simulation: deterministic by seed; no wrong loops unless asked; one robot is not a fleet") {
+TEST_CASE("fleet simulation: deterministic by seed, no wrong loops unless asked, and one robot is not a fleet") {
   auto o = fleet_options(tools::Scenario::kPlanar);
   o.duration_s = 60;
   const auto a = temp("a.lcm"), b = temp("b.lcm");
