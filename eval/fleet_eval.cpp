@@ -27,7 +27,7 @@ Correspondences matched_keyframes(const std::vector<StampedPose>& est, const std
 
 ErrorStatistics errors_under(const RigidAlignment& a, const Correspondences& c) {
   std::vector<double> e(c.model.size());
-  for (size_t k = 0; k < e.size(); ++k) e[k] = (a.rotation * c.model[k] + a.translation - c.data[k]).norm();
+  for (size_t k = 0; k < e.size(); ++k) e[k] = (a(c.model[k]) - c.data[k]).norm();
   return statistics_of(std::move(e));
 }
 
@@ -59,11 +59,11 @@ FleetEvaluation evaluate_fleet(const std::map<std::string, std::vector<StampedPo
     throw std::invalid_argument("fleet evaluation: only " + std::to_string(all.model.size()) +
                                 " keyframe(s) and landmark(s) have ground truth; at least 2 are needed");
   FleetEvaluation r;
-  r.alignment = align_points(all.matrix(all.model), all.matrix(all.data), o.planar);
+  r.alignment = align_points(all.matrix(all.model), all.matrix(all.data), false, o.planar);
   for (const auto& [body, c] : per_robot) {
     FleetRobotError& e = r.robots[body];
     e.fleet = errors_under(r.alignment, c);
-    e.own = errors_under(align_points(c.matrix(c.model), c.matrix(c.data), o.planar), c);
+    e.own = errors_under(align_points(c.matrix(c.model), c.matrix(c.data), false, o.planar), c);
     e.matched = c.model.size();
     e.keyframes = keyframes.at(body).size();
   }

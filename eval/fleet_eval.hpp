@@ -1,8 +1,7 @@
 #pragma once
 // A fleet's map against the ground truth under one alignment: every robot's final keyframes (associated with its
 // ground truth by time, associate() of trajectory_eval.hpp) and the landmarks (by id) are aligned together by one
-// rigid transform (align_points of estimators/lie/rigid_alignment.hpp: SE(2) for a planar fleet, SE(3) otherwise;
-// no scale), so the figures say whether the
+// rigid transform (align_points: SE(2) for a planar fleet, SE(3) otherwise; no scale), so the figures say whether the
 // robots and the landmarks are in one consistent frame, not only whether each trajectory has the right shape:
 //  - per robot, the ATE of its keyframes under the fleet's alignment (fleet-frame ATE), and under its own alignment
 //    (the usual ATE, for comparison: a robot whose frame is off by a rigid transform has a large fleet-frame ATE and
@@ -28,7 +27,7 @@ struct FleetRobotError {
 };
 
 struct FleetEvaluation {
-  RigidAlignment alignment;  // estimate -> ground truth: x -> rotation x + translation
+  RigidAlignment alignment;  // estimate -> ground truth
   std::map<std::string, FleetRobotError> robots;
   ErrorStatistics landmarks;  // |A l - l_true| over the landmarks with a true position; metres
   size_t landmarks_estimated = 0;

@@ -1,7 +1,5 @@
 #include "eval/trajectory_eval.hpp"
 
-#include <Eigen/SVD>
-
 #include <algorithm>
 #include <cmath>
 #include <numeric>
@@ -109,7 +107,7 @@ AteResult absolute_trajectory_error(const std::vector<StampedPose>& gt, const st
     data.col(static_cast<Eigen::Index>(k)) = gt[matches[k].first].pose.position;
     model.col(static_cast<Eigen::Index>(k)) = est[matches[k].second].pose.position;
   }
-  const RigidAlignment a = align_points(model, data, false, estimate_scale);
+  const RigidAlignment a = align_points(model, data, estimate_scale);
   AteResult r;
   r.rotation = a.rotation;
   r.translation = a.translation;

@@ -193,7 +193,7 @@ void SlamGraph::add_body_loop(const std::string& name, Body& b, const LoopInput&
     return;
   }
   const KeyframeLoop kl = loop_on_keyframes(b.planar, l.relative, l.information, *end_from, *end_to);
-  BodyLoop bl{name, l.body_to, b.track.keyframes()[end_from->keyframe].id, o.track.keyframes()[end_to->keyframe].id,
+  BodyLoop bl{name, l.body_to,     b.track.keyframes()[end_from->keyframe].id, o.track.keyframes()[end_to->keyframe].id,
               kl.z, kl.information};
   if (o.frame == b.frame) {
     if (add_loop_factor(bl)) update_frame(b.frame, listener);

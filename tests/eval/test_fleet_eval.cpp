@@ -65,8 +65,7 @@ TEST_CASE("fleet evaluation: a rigid transform of the whole fleet's truth has ze
   CHECK(e.landmarks.rmse < 1e-9);
   // The alignment is the inverse of the transform applied.
   CHECK(std::atan2(e.alignment.rotation(1, 0), e.alignment.rotation(0, 0)) == doctest::Approx(-0.7));
-  CHECK((e.alignment.rotation * moved(Eigen::Vector3d(1, 2, 0), 0.7, -4, 2.5) + e.alignment.translation)
-            .isApprox(Eigen::Vector3d(1, 2, 0), 1e-9));
+  CHECK(e.alignment(moved(Eigen::Vector3d(1, 2, 0), 0.7, -4, 2.5)).isApprox(Eigen::Vector3d(1, 2, 0), 1e-9));
 }
 
 TEST_CASE("fleet evaluation: a robot in a shifted frame shows its shift under the fleet's alignment only") {
@@ -86,4 +85,19 @@ TEST_CASE("fleet evaluation: a robot in a shifted frame shows its shift under th
   est["robot9"] = est["robot1"];
   CHECK(evaluate_fleet(est, lm_truth, truth, lm_truth).robots.count("robot9") == 0);
   CHECK_THROWS_AS(evaluate_fleet({}, {}, truth, lm_truth), std::invalid_argument);
+}
+
+TEST_CASE("align_points: planar alignment is SE(2), from x and y only") {
+  Eigen::Matrix3Xd model(3, 4), data(3, 4);
+  model << 0, 1, 0, 2, 0, 0, 1, 3, 5, -2, 0, 1;  // z of the model ignored
+  for (int k = 0; k < 4; ++k) {
+    data.col(k) = moved(Eigen::Vector3d(model(0, k), model(1, k), 0), -1.2, 0.5, 0.25);
+  }
+  const auto a = align_points(model, data, false, true);
+  CHECK(a.rotation(2, 2) == 1.0);
+  CHECK(a.translation.z() == 0.0);
+  CHECK(std::atan2(a.rotation(1, 0), a.rotation(0, 0)) == doctest::Approx(-1.2));
+  CHECK(a.translation.x() == doctest::Approx(0.5));
+  CHECK(a.translation.y() == doctest::Approx(0.25));
+  CHECK_THROWS_AS(align_points(model.leftCols(1), data.leftCols(1)), std::invalid_argument);
 }

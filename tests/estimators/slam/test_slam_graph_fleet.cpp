@@ -27,7 +27,8 @@ struct Robot {
   double radius = 3, phase = 0, turn = 0.3;
   SE2 truth(double t) const {
     const double a = phase + turn * t;
-    return SE2(centre.x() + radius * std::cos(a), centre.y() + radius * std::sin(a), a + (turn > 0 ? M_PI / 2 : -M_PI / 2));
+    return SE2(centre.x() + radius * std::cos(a), centre.y() + radius * std::sin(a),
+               a + (turn > 0 ? M_PI / 2 : -M_PI / 2));
   }
   /// The odometry pose: the truth in the robot's own frame (identity at t = 0).
   SE3 odometry(double t) const { return (truth(0).inverse() * truth(t)).to_se3(); }
@@ -163,7 +164,9 @@ TEST_CASE("fleet: disabled, the robots stay apart whatever they share") {
   CHECK(slam.counters().fleet_sightings == 0);
 }
 
-TEST_CASE("fleet: an inter-robot loop joins with agreeing sightings, a fleet state saved and restored continues bit for bit") {
+TEST_CASE(
+    "fleet: an inter-robot loop joins with agreeing sightings, a fleet state saved and restored continues bit for "
+    "bit") {
   const Robot a{"a", {0, 0}, 3, 0, 0.3}, b{"b", {0.5, 0.5}, 2.5, 2.0, -0.25};
   SlamGraph slam(fleet_options());
   auto world_b = random_landmarks(1, 25);
