@@ -29,6 +29,11 @@ trap 'rm -rf "$work"' EXIT
 
 ate() { "$sextant" eval --gt "$1" --est "$2" --json | python3 -c 'import json,sys; print("%.3f" % json.load(sys.stdin)["ate_rmse"])'; }
 
+list=$(echo $robots | tr ' ' ',')
+"$sextant" convert mrclam "$data" --robots "$list" -o "$work/fleet.lcm" --gt-out "$work/fleet_gt_" > "$out/fleet_convert.txt"
+# The landmarks' surveyed positions, for the single-robot maps too.
+cp "$work/fleet_gt_landmarks.txt" "$work/single_gt_landmarks.txt"
+
 # (a) and (c): one robot at a time.
 single_logs=()
 for r in $robots; do
@@ -42,8 +47,6 @@ done
 "$sextant" eval fleet "${single_logs[@]}" --gt-prefix "$work/single_gt_" --json > "$out/single_fleet_eval.json"
 
 # (b) the fleet in one log and one replay.
-list=$(echo $robots | tr ' ' ',')
-"$sextant" convert mrclam "$data" --robots "$list" -o "$work/fleet.lcm" --gt-out "$work/fleet_gt_" > "$out/fleet_convert.txt"
 start=$(date +%s.%N)
 fleet_status=0
 "$sextant" replay "$work/fleet.lcm" --config "$root/config/mrclam_fleet.yaml" --out-log "$work/fleet_out.lcm" --json \
@@ -65,18 +68,20 @@ err, seconds, robots = open(sys.argv[4]).read().strip(), sys.argv[5], sys.argv[6
 num = lambda x: "n/a" if x is None else "%.3f" % x
 print(f"# Fleet benchmark: MRCLAM Dataset 7, robots {robots}\n")
 print("| robot | (a) single-robot graph, online ATE [m] | (a) single-robot graphs, fleet-frame ATE [m] | "
-      "(b) fleet graph, online ATE [m] | (b) / (a) online | (b) fleet-frame ATE [m] | (b) own-alignment ATE [m] | "
-      "(b) map frame | (c) EKF localization, surveyed map [m] |")
-print("|---|---|---|---|---|---|---|---|---|")
+      "(b) fleet graph, online ATE [m] | (b) / (a) online | (b) online, since joined [m] | (b) fleet-frame ATE [m] | "
+      "(b) own-alignment ATE [m] | (b) map frame | (c) EKF localization, surveyed map [m] |")
+print("|---|---|---|---|---|---|---|---|---|---|")
 for body, (graph, ekf) in single.items():
     a = sf.get("robots", {}).get(body, {})
     b = fl.get("robots", {}).get(body, {})
     online = b.get("online_ate_rmse")
     ratio = "n/a" if online is None else "%.2f" % (online / float(graph))
     print(f"| {body} | {graph} | {num(a.get('fleet_ate_rmse'))} | {num(online)} | {ratio} | "
+          f"{num(b.get('online_joined_ate_rmse'))} | "
           f"{num(b.get('fleet_ate_rmse'))} | {num(b.get('own_ate_rmse'))} | {b.get('frame', 'n/a') or '(own)'} | {ekf} |")
 print()
-print(f"Landmarks under the one alignment: (a) {sf.get('landmarks_matched', 0)} matched, RMSE "
+print(f"Landmarks under the one alignment: (a) {sf.get('landmarks_matched', 0)} of map frame "
+      f"'{sf.get('landmark_frame', '')}' matched (each single-robot replay has its own map), RMSE "
       f"{num(sf.get('landmark_rmse'))} m; (b) {fl.get('landmarks_matched', 0)} matched, RMSE {num(fl.get('landmark_rmse'))} m "
       f"(map frame '{fl.get('landmark_frame', '')}', {fl.get('frames', 0)} map frame(s) among the robots).")
 print(f"\nFleet replay: {seconds} s wall" + (f"; it failed: {err}" if err and not fl else "") + ".")
@@ -88,7 +93,8 @@ single-robot graphs under one alignment; the fleet: `sextant convert mrclam DIR 
 `sextant replay fleet.lcm --config config/mrclam_fleet.yaml --out-log fleet_out.lcm`,
 `sextant eval fleet --out-log fleet_out.lcm --gt-prefix fleet_gt_ --estimator graph --json`.
 ATE: RMSE of positions, associated by time within 0.02 s; online = FUSED_POSE as published, aligned per robot (SE(3)
-Umeyama, `sextant eval`); fleet-frame = final keyframes (TRAJECTORY rebuilt) of all robots and the landmarks under one
+Umeyama, `sextant eval`), all of them and those published in the map frame the robot ended in ("since joined");
+fleet-frame = final keyframes (TRAJECTORY rebuilt) of all robots and the landmarks under one
 SE(2) alignment; own-alignment = the same keyframes, SE(2) alignment per robot.""")
 EOP
 cat "$out/fleet.md"

@@ -15,8 +15,9 @@
 //   landmarks_estimated, landmarks_matched, landmark_rmse, landmark_max   (metres; rmse null without a match)
 //   fleet_ate_rmse_max   the largest fleet_ate_rmse over the robots
 //   robots               {BODY: {frame, keyframes, matched, fleet_ate_rmse, fleet_ate_max, own_ate_rmse,
-//                                online_poses, online_matched, online_ate_rmse}}  (metres; online_ate_rmse null when
-//                                the body has fewer than 2 fused poses with ground truth)
+//                                online_poses, online_matched, online_ate_rmse, online_joined_poses,
+//                                online_joined_ate_rmse}}  (metres; online_joined_*: over the fused poses published
+//                                in the map frame the body ended in; an ATE is null with fewer than 2 poses matched)
 // Registered as "eval fleet": the registry adds commands in name order, so `eval` exists when this one is added.
 #include "cli/command.hpp"
 #include "eval/fleet_eval.hpp"
@@ -43,7 +44,22 @@ struct Options {
 struct OnlineError {
   size_t poses = 0, matched = 0;
   double rmse = std::numeric_limits<double>::quiet_NaN();
+  // The same over the fused poses published in the map frame the body ended in (after it joined the fleet's).
+  size_t joined_poses = 0;
+  double joined_rmse = std::numeric_limits<double>::quiet_NaN();
 };
+
+// ATE RMSE of `poses` against `gt` (sextant eval's alignment), NaN when fewer than 2 match.
+double ate_rmse(const std::vector<StampedPose>& gt, const std::vector<StampedPose>& poses, double window,
+                size_t* matched = nullptr) {
+  try {
+    const AteResult ate = absolute_trajectory_error(gt, poses, false, window);
+    if (matched) *matched = ate.matched;
+    return ate.error.rmse;
+  } catch (const std::invalid_argument&) {
+    return std::numeric_limits<double>::quiet_NaN();
+  }
+}
 
 // The map frame most bodies are in (the first by name among equals); empty when no body names one.
 std::string majority_frame(const std::map<std::string, std::string>& frames) {
@@ -63,10 +79,15 @@ std::map<std::string, OnlineError> online_errors(const FleetOutput& out, const F
     o.poses = poses.size();
     const auto gt = truth.robots.find(body);
     if (gt == truth.robots.end()) continue;
-    try {
-      const AteResult ate = absolute_trajectory_error(gt->second, poses, false, window);
-      o.matched = ate.matched, o.rmse = ate.error.rmse;
-    } catch (const std::invalid_argument&) {}
+    o.rmse = ate_rmse(gt->second, poses, window, &o.matched);
+    const auto final_frame = out.frames.find(body);
+    if (final_frame == out.frames.end()) continue;
+    std::vector<StampedPose> joined;
+    const auto& frames = out.fused_frames.at(body);
+    for (size_t k = 0; k < poses.size(); ++k)
+      if (frames[k] == final_frame->second) joined.push_back(poses[k]);
+    o.joined_poses = joined.size();
+    o.joined_rmse = ate_rmse(gt->second, joined, window);
   }
   return e;
 }
@@ -98,21 +119,23 @@ void print_json(const Options& o, const FleetOutput& out, const FleetEvaluation&
     j.key(body).begin_object().field("frame", f == out.frames.end() ? "" : f->second);
     j.field("keyframes", r.keyframes).field("matched", r.matched).field("fleet_ate_rmse", r.fleet.rmse);
     j.field("fleet_ate_max", r.fleet.max).field("own_ate_rmse", r.own.rmse).field("online_poses", oe.poses);
-    j.field("online_matched", oe.matched).field("online_ate_rmse", oe.rmse).end_object();
+    j.field("online_matched", oe.matched).field("online_ate_rmse", oe.rmse);
+    j.field("online_joined_poses", oe.joined_poses).field("online_joined_ate_rmse", oe.joined_rmse).end_object();
   }
   j.end_object().end_object();
   std::puts(j.str().c_str());
 }
 
 void print_text(const FleetOutput& out, const FleetEvaluation& e, const std::map<std::string, OnlineError>& online) {
-  std::printf("%-10s %-10s %9s %8s %15s %13s %16s\n", "body", "frame", "keyframes", "matched", "fleet ATE [m]",
-              "own ATE [m]", "online ATE [m]");
+  std::printf("%-10s %-10s %9s %8s %15s %13s %16s %16s\n", "body", "frame", "keyframes", "matched", "fleet ATE [m]",
+              "own ATE [m]", "online ATE [m]", "since joined [m]");
   for (const auto& [body, r] : e.robots) {
     const auto f = out.frames.find(body);
     const auto on = online.find(body);
-    std::printf("%-10s %-10s %9zu %8zu %15.4f %13.4f %16.4f\n", body.c_str(),
+    const OnlineError oe = on == online.end() ? OnlineError{} : on->second;
+    std::printf("%-10s %-10s %9zu %8zu %15.4f %13.4f %16.4f %16.4f\n", body.c_str(),
                 f == out.frames.end() ? "" : f->second.c_str(), r.keyframes, r.matched, r.fleet.rmse, r.own.rmse,
-                on == online.end() ? std::nan("") : on->second.rmse);
+                oe.rmse, oe.joined_rmse);
   }
   std::printf("landmarks: %zu of %zu with ground truth, RMSE %.4f m, max %.4f m (fleet alignment)\n", e.landmarks.count,
               e.landmarks_estimated, e.landmarks.rmse, e.landmarks.max);
@@ -122,13 +145,7 @@ void run(const Options& o) {
   FleetOutput out;
   FleetTruth truth;
   try {
-    for (const auto& path : o.out_logs) {  // several logs: their bodies together (a body in two: the last log's)
-      FleetOutput one = read_fleet_output(path, o.estimator);
-      for (auto& [body, poses] : one.keyframes) out.keyframes[body] = std::move(poses);
-      for (auto& [body, frame] : one.frames) out.frames[body] = frame;
-      for (auto& [body, poses] : one.fused) out.fused[body] = std::move(poses);
-      for (auto& [frame, map] : one.maps) out.maps[frame] = std::move(map);
-    }
+    for (const auto& path : o.out_logs) merge_into(out, read_fleet_output(path, o.estimator));
     if (!o.gt_log.empty()) {
       truth = read_truth_log(o.gt_log);
     } else {

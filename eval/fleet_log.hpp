@@ -17,15 +17,20 @@ namespace sextant::tools {
 using BodyTrajectories = std::map<std::string, std::vector<StampedPose>>;
 
 struct FleetOutput {
-  BodyTrajectories keyframes;                     // final keyframes per body, in time order
-  std::map<std::string, std::string> frames;      // per body: the map frame of its last TRAJECTORY (empty: unnamed)
-  BodyTrajectories fused;                         // FUSED_POSE of the chosen estimator per body, as published
-  std::map<std::string, LandmarkPositions> maps;  // the last LANDMARK_MAP per map frame
+  BodyTrajectories keyframes;                 // final keyframes per body, in time order
+  std::map<std::string, std::string> frames;  // per body: the map frame of its last TRAJECTORY (empty: unnamed)
+  BodyTrajectories fused;                     // FUSED_POSE of the chosen estimator per body, as published
+  std::map<std::string, std::vector<std::string>> fused_frames;  // per body and fused pose: its map frame
+  std::map<std::string, LandmarkPositions> maps;                 // the last LANDMARK_MAP per map frame
 };
 
 /// Reads an output log; FUSED_POSE messages of estimators other than `estimator` are skipped.  Throws
 /// std::runtime_error when the log cannot be read or a message does not decode.
 FleetOutput read_fleet_output(const std::string& out_log, const std::string& estimator);
+
+/// Adds `from`'s bodies and map frames to `into` (a body or frame in both: `from`'s), e.g. single-robot replays
+/// evaluated together.
+void merge_into(FleetOutput& into, FleetOutput&& from);
 
 struct FleetTruth {
   BodyTrajectories robots;  // per body, sorted by time

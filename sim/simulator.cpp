@@ -395,7 +395,7 @@ class Simulation {
     engine::LoopClosure lc;
     lc.utime = t;
     lc.source = from;
-    (void)to;  // TEMP
+    lc.source_to = to == from ? "" : to;
     lc.planar = planar_;
     lc.utime_from = utime_from;
     lc.utime_to = t;

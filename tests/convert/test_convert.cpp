@@ -257,7 +257,7 @@ TEST_CASE("MRCLAM fleet: robots merged in time order, each odometry from the ide
     std::remove((prefix + f).c_str());
 }
 
-TEST_CASE("MRCLAM fleet: sightings of robots outside the log are counted, not kept; robot lists") {
+TEST_CASE("MRCLAM fleet: sightings of robots outside the log are counted, not kept, and robot lists parse") {
   const std::string dir = std::string(SEXTANT_SHARED_DIR) + "/data/landmarks/MRCLAM_Dataset7";
   const auto log = temp("mrclam_fleet23.lcm");
   const auto r = tools::convert_mrclam_fleet(dir, {2, 3}, log, "");

@@ -97,3 +97,44 @@ TEST_CASE("fleet log: ground truth files PREFIX BODY.txt and PREFIX landmarks.tx
   CHECK_THROWS_WITH(tools::read_landmarks(prefix + "landmarks.txt"), doctest::Contains("landmarks.txt:2"));
   for (const char* n : {"robot1.txt", "landmarks.txt"}) std::remove((prefix + n).c_str());
 }
+
+TEST_CASE("fleet log: the last complete LANDMARK_MAP per frame, the frames bodies end in, logs merged") {
+  const auto log = temp("maps.lcm");
+  auto map = [](const std::string& frame, int chunk, int chunks, int total, std::vector<int64_t> ids) {
+    engine::LandmarkMap m;
+    m.frame = frame, m.chunk = chunk, m.num_chunks = chunks, m.total_landmarks = total;
+    for (int64_t id : ids) m.landmarks.push_back({id, Eigen::Vector3d(static_cast<double>(id), 0, 0), 1});
+    return m;
+  };
+  {
+    runtime::LogWriter w(log);
+    int64_t seq = 0;
+    auto a = trajectory("a", {{0, 1'000'000, at(0, 0)}});
+    auto b = trajectory("b", {{0, 1'000'000, at(0, 0)}});
+    b.frame = "b";
+    w.write(1, "TRAJECTORY", runtime::to_message(a, "sextantd", seq++));
+    w.write(1, "TRAJECTORY", runtime::to_message(b, "sextantd", seq++));
+    w.write(1, "LANDMARK_MAP", runtime::to_message(map("b", 0, 1, 1, {9}), "sextantd", seq++));
+    w.write(2, "LANDMARK_MAP", runtime::to_message(map("a", 0, 2, 3, {1, 2}), "sextantd", seq++));
+    w.write(2, "LANDMARK_MAP", runtime::to_message(map("a", 1, 2, 3, {3}), "sextantd", seq++));
+    // A later publication of a's map replaces the earlier one; its first chunk alone is not complete yet.
+    w.write(3, "LANDMARK_MAP", runtime::to_message(map("a", 0, 2, 2, {4}), "sextantd", seq++));
+    // b joined a: b's frame is published once more, empty, and b's trajectory now names a.
+    w.write(3, "LANDMARK_MAP", runtime::to_message(map("b", 0, 1, 0, {}), "sextantd", seq++));
+    b.frame = "a";
+    w.write(3, "TRAJECTORY", runtime::to_message(b, "sextantd", seq++));
+  }
+  auto out = tools::read_fleet_output(log, "graph");
+  CHECK(out.frames.at("a") == "a");  // an unnamed frame is the body's own
+  CHECK(out.frames.at("b") == "a");
+  REQUIRE(out.maps.size() == 1);
+  CHECK(out.maps.at("a").size() == 3);
+  CHECK(out.maps.at("a").at(3).x() == 3);
+  tools::FleetOutput other;
+  other.keyframes["c"] = {{1.0, at(1, 1)}};
+  other.maps["c"] = {{5, Eigen::Vector3d(5, 5, 0)}};
+  tools::merge_into(out, std::move(other));
+  CHECK(out.keyframes.size() == 3);
+  CHECK(out.maps.size() == 2);
+  std::remove(log.c_str());
+}
