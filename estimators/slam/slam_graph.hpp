@@ -267,7 +267,7 @@ class SlamGraph {
   std::optional<TrackPoint> anchor_near(const Body& b, int64_t utime) const;
   /// The placement evidence between frames `a` and `b` (T_ab) and which pending item each came from.
   struct Evidence;
-  Evidence evidence_between(const std::string& a, const std::string& b) const;
+  Evidence evidence_between(const std::string& a, const std::string& b);
   /// Tries to place frame `b` in `a` (or the reverse) and joins them when the rule holds; true when joined.
   bool try_join(const std::string& a, const std::string& b, SlamListener& listener);
   void join(const std::string& keep, const std::string& gone, const SE3& keep_from_gone);

@@ -6,7 +6,10 @@
 #include "estimators/slam/sighting_model.hpp"
 #include "estimators/slam/slam_graph.hpp"
 
+#include <Eigen/Eigenvalues>
+
 #include <algorithm>
+#include <cmath>
 #include <set>
 
 namespace sextant::slam {
@@ -208,16 +211,23 @@ void SlamGraph::add_body_loop(const std::string& name, Body& b, const LoopInput&
   try_join(b.frame, o.frame, listener);
 }
 
-SlamGraph::Evidence SlamGraph::evidence_between(const std::string& a, const std::string& b) const {
+SlamGraph::Evidence SlamGraph::evidence_between(const std::string& a, const std::string& b) {
   Evidence ev;
   const Body& ra = bodies_.at(a);
   const Body& rb = bodies_.at(b);
   const auto point = [&](const Landmark& l, const Body& r) {
     return r.smoother->graph().variables()[static_cast<size_t>(l.variable)].point;
   };
+  // A landmark is evidence once both maps know where it is to within half the inlier distance (its marginal's
+  // largest standard deviation): a landmark placed by a sighting or two is off by more than the agreement tested.
+  const double max_variance = std::pow(options_.fleet.placement.inlier_distance / 2, 2);
+  const auto known = [&](const Body& r, const Landmark& l) {
+    const Eigen::MatrixXd m = gate_marginal(r, l.variable);
+    return m.size() > 0 && Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(m).eigenvalues().maxCoeff() <= max_variance;
+  };
   for (const auto& [id, la] : ra.landmarks) {
     const auto lb = rb.landmarks.find(id);
-    if (lb == rb.landmarks.end()) continue;
+    if (lb == rb.landmarks.end() || !known(ra, la) || !known(rb, lb->second)) continue;
     ev.items.push_back({PlacementEvidence::Kind::kLandmark, point(la, ra), point(lb->second, rb), SE3()});
     ev.origin.emplace_back(false, -1);
   }
