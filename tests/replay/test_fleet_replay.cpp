@@ -51,8 +51,8 @@ double worst_keyframe_error(const FleetRun& run) {
   for (const auto& t : run.replay.trajectories) rebuilt[t.source].add(t);
   const auto truth_at = [&](const std::string& body, int64_t utime) {
     const auto& samples = run.truth.fleet_truth.at(body);
-    const auto it = std::lower_bound(samples.begin(), samples.end(), utime,
-                                     [](const auto& s, int64_t t) { return s.first < t; });
+    const auto it =
+        std::lower_bound(samples.begin(), samples.end(), utime, [](const auto& s, int64_t t) { return s.first < t; });
     return SE3(it->second.orientation, it->second.position);
   };
   const SE3 origin = truth_at("robot1", run.truth.fleet_truth.at("robot1").front().first);
