@@ -24,7 +24,7 @@ bool close(const SE3& x, const SE3& y, const PlacementOptions& o) {
 
 bool explains(const PlacementEvidence& e, const SE3& t, bool planar, const PlacementOptions& o) {
   if (e.kind == Kind::kLoop) return close(t, e.a_from_b, o);
-  return planar_distance(t * e.in_b, e.in_a, planar) <= o.inlier_distance;
+  return planar_distance(t * e.in_b, e.in_a, planar) <= std::max(o.inlier_distance, e.tolerance);
 }
 
 /// The correspondences (b -> a) that stand for the evidence in a least-squares fit: a point itself, a loop its

@@ -12,7 +12,8 @@
 // one that no later measurement can unfold.  So the placement is found by consensus, as RANSAC does:
 //  1. hypotheses: every loop's placement, and every pair (planar; every triple in 3-D) of point correspondences
 //     whose points are at least `min_pair_distance` apart and whose mutual distances agree in both frames;
-//  2. each hypothesis's support: the measurements it explains, a point within `inlier_distance` of its counterpart,
+//  2. each hypothesis's support: the measurements it explains, a point within `inlier_distance` (or its own
+//     tolerance, when larger) of its counterpart,
 //     a loop within `inlier_distance` and `inlier_angle` of the hypothesis;
 //  3. the best (most support; ties: the first) is refined by least squares over its inliers (a loop counts as the
 //     correspondences of its frame's origin and unit axes; rigid_alignment.hpp).
@@ -37,6 +38,10 @@ struct PlacementEvidence {
   Kind kind = Kind::kLandmark;
   Eigen::Vector3d in_a = Eigen::Vector3d::Zero(), in_b = Eigen::Vector3d::Zero();  // points (metres)
   SE3 a_from_b;                                                                    // kLoop: T_AB it implies
+  /// Points: the distance within which this measurement agrees (m); 0: inlier_distance.  A sighting far away is
+  /// uncertain by more than a near one (its bearing's error times its range): its own 3-sigma, never less than
+  /// inlier_distance.
+  double tolerance = 0;
 };
 
 struct PlacementOptions {

@@ -88,6 +88,7 @@ bool SlamGraph::add_body_sighting(const std::string& name, Body& b, const Sighti
   if (pending_.sightings.size() >= static_cast<size_t>(std::max(options_.fleet.max_pending, 1))) {
     pending_.sightings.erase(pending_.sightings.begin());
     ++counters_.fleet_pending_dropped;
+    --counters_.fleet_pending;
   }
   pending_.sightings.push_back(std::move(bs));
   ++counters_.fleet_pending;
@@ -205,6 +206,7 @@ void SlamGraph::add_body_loop(const std::string& name, Body& b, const LoopInput&
   if (pending_.loops.size() >= static_cast<size_t>(std::max(options_.fleet.max_pending, 1))) {
     pending_.loops.erase(pending_.loops.begin());
     ++counters_.fleet_pending_dropped;
+    --counters_.fleet_pending;
   }
   pending_.loops.push_back(std::move(bl));
   ++counters_.fleet_pending;
@@ -243,9 +245,14 @@ SlamGraph::Evidence SlamGraph::evidence_between(const std::string& a, const std:
     const SightingModel model(observer.planar, estimate(observer, observer.track.keyframes()[*ka].variable),
                               {*ka, s.observer_motion, s.observer_covariance}, s.sensor_in_body);
     const Eigen::Vector3d seen = model.landmark_from(s.sighting);  // in the observer's frame
+    // The seen point's uncertainty: range variance plus the angles' times the range squared (3 sigma).
+    const Eigen::Matrix3d& c = s.sighting.covariance;
+    const double angles = c(1, 1) + (observer.planar ? 0.0 : c(2, 2));
+    const double tolerance = 3 * std::sqrt(std::max(0.0, c(0, 0) + s.sighting.range * s.sighting.range * angles));
     const Eigen::Vector3d own =
         (estimate(observed, observed.track.keyframes()[*ko].variable) * s.observed_motion).translation();
-    ev.items.push_back({PlacementEvidence::Kind::kBodySighting, forward ? seen : own, forward ? own : seen, SE3()});
+    ev.items.push_back(
+        {PlacementEvidence::Kind::kBodySighting, forward ? seen : own, forward ? own : seen, SE3(), tolerance});
     ev.origin.emplace_back(true, static_cast<int>(k));
   }
   for (size_t k = 0; k < pending_.loops.size(); ++k) {
