@@ -20,7 +20,7 @@
 // frame_id otherwise) to the body name in `source`; an unmapped frame is its own body name.  imu_t.frame and
 // gnss_t.frame keep the ROS frame_id (the mounting is looked up by it).
 // A message with a non-finite value where one is required (a stamp, a fix's coordinates, a pose) is counted and
-// dropped.
+// dropped (so is a pose whose covariance, rotated into the body frame, overflows).
 #include <cstdint>
 #include <functional>
 #include <map>
@@ -46,7 +46,7 @@ struct RosbagConversion {
 using RosbagSink = std::function<void(int64_t utime, const std::string& channel, const std::vector<uint8_t>& bytes)>;
 
 /// Reads the bag and hands each converted message to `sink`, in the bag's order.  Throws std::runtime_error naming
-/// the bag when it cannot be read (with ROS's own message).
+/// the bag when it cannot be read or a message record is shorter than its type (with ROS's own message).
 RosbagConversion read_rosbag(const std::string& bag, const RosbagConversionOptions& options, const RosbagSink& sink);
 
 /// read_rosbag into an LCM log (each event stamped with the message's utime); also throws when `out_lcm` cannot be
