@@ -69,15 +69,20 @@ std::string RosMessageConverter::body(const std::string& frame) const {
   return it == options_.bodies.end() ? frame : it->second;
 }
 
+// False when a name (a frame_id) holds a NUL byte: LCM's encoder ends a string at its first NUL, so the message
+// would be shorter than its stated size and every reader would refuse it.
 template <class Msg>
-void RosMessageConverter::write(const std::string& channel, Msg& m) {
+bool RosMessageConverter::write(const std::string& channel, Msg& m) {
   m.sender = kSender;
-  m.seq = seq_[channel]++;
+  m.seq = seq_[channel];
   std::vector<uint8_t> bytes(static_cast<size_t>(m.getEncodedSize()));
-  if (m.encode(bytes.data(), 0, static_cast<int>(bytes.size())) < 0)
-    throw std::runtime_error("cannot encode a message for channel " + channel);
+  const int n = m.encode(bytes.data(), 0, static_cast<int>(bytes.size()));
+  if (n < 0) throw std::runtime_error("cannot encode a message for channel " + channel);
+  if (static_cast<size_t>(n) != bytes.size()) return false;
+  ++seq_[channel];
   sink_(m.utime, channel, bytes);
   ++result_.written[channel];
+  return true;
 }
 
 void RosMessageConverter::convert(const std::string& topic, const sensor_msgs::Imu& msg) {
@@ -116,8 +121,7 @@ bool RosMessageConverter::write_imu(const std::string& topic, const sensor_msgs:
       (!m.has_linear_acceleration || (finite(m.linear_acceleration) && finite(m.linear_acceleration_covariance))) &&
       (!m.has_orientation || (finite(m.orientation) && finite(m.orientation_covariance)));
   if (!ok) return false;
-  write(channel(topic, "IMU"), m);
-  return true;
+  return write(channel(topic, "IMU"), m);
 }
 
 bool RosMessageConverter::write_odometry(const std::string& topic, const nav_msgs::Odometry& r) {
@@ -132,8 +136,7 @@ bool RosMessageConverter::write_odometry(const std::string& topic, const nav_msg
   copy(m.twist_covariance, r.twist.covariance);
   m.has_twist = finite(m.linear_velocity) && finite(m.angular_velocity) && finite(m.twist_covariance);
   if (!m.has_twist) return false;
-  write(channel(topic, "ODOMETRY"), m);
-  return true;
+  return write(channel(topic, "ODOMETRY"), m);
 }
 
 bool RosMessageConverter::write_pose(const std::string& topic, const geometry_msgs::PoseWithCovarianceStamped& r) {
@@ -142,8 +145,7 @@ bool RosMessageConverter::write_pose(const std::string& topic, const geometry_ms
   m.utime = utime(r.header.stamp);
   m.source = body(r.header.frame_id);
   if (!set_pose(m, r.pose)) return false;
-  write(channel(topic, "ODOMETRY"), m);
-  return true;
+  return write(channel(topic, "ODOMETRY"), m);
 }
 
 bool RosMessageConverter::write_fix(const std::string& topic, const sensor_msgs::NavSatFix& r) {
@@ -160,8 +162,7 @@ bool RosMessageConverter::write_fix(const std::string& topic, const sensor_msgs:
     m.latitude = r.latitude, m.longitude = r.longitude, m.altitude = r.altitude;
     copy(m.position_covariance, r.position_covariance);
   }
-  write(channel(topic, "GNSS"), m);
-  return true;
+  return write(channel(topic, "GNSS"), m);
 }
 
 }  // namespace sextant::tools

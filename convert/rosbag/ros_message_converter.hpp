@@ -22,7 +22,8 @@ class RosMessageConverter {
       : options_(options), sink_(sink), result_(result) {}
 
   /// `msg`, received on `topic`, onto the topic's channel (from `options.channels`, else IMU, ODOMETRY or GNSS by
-  /// type); a message with a non-finite value where one is required is counted in `dropped` instead.
+  /// type); a message with a non-finite value where one is required, or a frame_id with a NUL byte, is counted in
+  /// `dropped` instead.
   void convert(const std::string& topic, const sensor_msgs::Imu& msg);
   void convert(const std::string& topic, const nav_msgs::Odometry& msg);
   void convert(const std::string& topic, const sensor_msgs::NavSatFix& msg);
@@ -32,7 +33,7 @@ class RosMessageConverter {
   std::string channel(const std::string& topic, const char* fallback) const;
   std::string body(const std::string& frame) const;
   template <class Msg>
-  void write(const std::string& channel, Msg& m);
+  bool write(const std::string& channel, Msg& m);
   bool write_imu(const std::string& topic, const sensor_msgs::Imu& r);
   bool write_odometry(const std::string& topic, const nav_msgs::Odometry& r);
   bool write_fix(const std::string& topic, const sensor_msgs::NavSatFix& r);

@@ -20,7 +20,8 @@
 // frame_id otherwise) to the body name in `source`; an unmapped frame is its own body name.  imu_t.frame and
 // gnss_t.frame keep the ROS frame_id (the mounting is looked up by it).
 // A message with a non-finite value where one is required (a stamp, a fix's coordinates, a pose) is counted and
-// dropped (so is a pose whose covariance, rotated into the body frame, overflows).
+// dropped (so is a pose whose covariance, rotated into the body frame, overflows, and a frame_id with a NUL byte,
+// which an LCM string cannot hold).
 #include <cstdint>
 #include <functional>
 #include <map>
