@@ -55,6 +55,9 @@ bool sound(const gnss_t& m) {
 // Deserializes `bytes` as Ros (as rosbag's instantiate does) and converts it; checks what is written as Sextant.
 template <class Ros, class Sextant>
 void run(std::vector<uint8_t> bytes, const tools::RosbagConversionOptions& options) {
+  // Every type is longer than nothing; and ROS's stream would do arithmetic on the null data() of an empty vector,
+  // which the bag reader never hands it.
+  if (bytes.empty()) return;
   Ros msg;
   try {
     ros::serialization::IStream s(bytes.data(), static_cast<uint32_t>(bytes.size()));
