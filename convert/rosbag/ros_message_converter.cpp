@@ -98,6 +98,7 @@ void RosMessageConverter::convert(const std::string& topic, const geometry_msgs:
   if (!write_pose(topic, msg)) ++result_.dropped[topic];
 }
 
+// A group ROS marks as not provided is written as zeros (an identity orientation), whatever its fields hold.
 bool RosMessageConverter::write_imu(const std::string& topic, const sensor_msgs::Imu& r) {
   sextant::imu_t m{};
   m.utime = utime(r.header.stamp);
@@ -108,20 +109,25 @@ bool RosMessageConverter::write_imu(const std::string& topic, const sensor_msgs:
   const auto& q = r.orientation;
   m.has_orientation = r.orientation_covariance[0] != -1 && (q.w != 0 || q.x != 0 || q.y != 0 || q.z != 0);
   m.orientation_has_yaw = options_.yaw_free_topics.count(topic) == 0;
-  m.angular_velocity[0] = r.angular_velocity.x, m.angular_velocity[1] = r.angular_velocity.y,
-  m.angular_velocity[2] = r.angular_velocity.z;
-  m.linear_acceleration[0] = r.linear_acceleration.x, m.linear_acceleration[1] = r.linear_acceleration.y,
-  m.linear_acceleration[2] = r.linear_acceleration.z;
-  m.orientation[0] = q.w, m.orientation[1] = q.x, m.orientation[2] = q.y, m.orientation[3] = q.z;
-  if (m.has_angular_velocity) copy(m.angular_velocity_covariance, r.angular_velocity_covariance);
-  if (m.has_linear_acceleration) copy(m.linear_acceleration_covariance, r.linear_acceleration_covariance);
-  if (m.has_orientation) copy(m.orientation_covariance, r.orientation_covariance);
-  const bool ok =
-      (!m.has_angular_velocity || (finite(m.angular_velocity) && finite(m.angular_velocity_covariance))) &&
-      (!m.has_linear_acceleration || (finite(m.linear_acceleration) && finite(m.linear_acceleration_covariance))) &&
-      (!m.has_orientation || (finite(m.orientation) && finite(m.orientation_covariance)));
-  if (!ok) return false;
-  return write(channel(topic, "IMU"), m);
+  m.orientation[0] = 1;
+  if (m.has_angular_velocity) {
+    const auto& w = r.angular_velocity;
+    m.angular_velocity[0] = w.x, m.angular_velocity[1] = w.y, m.angular_velocity[2] = w.z;
+    copy(m.angular_velocity_covariance, r.angular_velocity_covariance);
+  }
+  if (m.has_linear_acceleration) {
+    const auto& a = r.linear_acceleration;
+    m.linear_acceleration[0] = a.x, m.linear_acceleration[1] = a.y, m.linear_acceleration[2] = a.z;
+    copy(m.linear_acceleration_covariance, r.linear_acceleration_covariance);
+  }
+  if (m.has_orientation) {
+    m.orientation[0] = q.w, m.orientation[1] = q.x, m.orientation[2] = q.y, m.orientation[3] = q.z;
+    copy(m.orientation_covariance, r.orientation_covariance);
+  }
+  const bool ok = finite(m.angular_velocity) && finite(m.angular_velocity_covariance) &&
+                  finite(m.linear_acceleration) && finite(m.linear_acceleration_covariance) && finite(m.orientation) &&
+                  finite(m.orientation_covariance);
+  return ok && write(channel(topic, "IMU"), m);
 }
 
 bool RosMessageConverter::write_odometry(const std::string& topic, const nav_msgs::Odometry& r) {

@@ -5,8 +5,8 @@
 // Messages (by type; other types are counted and skipped):
 //  - sensor_msgs/Imu -> imu_t: angular velocity, linear acceleration (gravity included, as ROS's Imu carries it),
 //    orientation, with their covariances; a group whose covariance[0] is -1 (ROS's "not provided") has has_* false,
-//    and so has an orientation whose quaternion is all zeros.  orientation_has_yaw unless the topic is listed in
-//    `yaw_free_topics`.
+//    and so has an orientation whose quaternion is all zeros; such a group is written as zeros (the orientation as
+//    the identity), whatever its fields held.  orientation_has_yaw unless the topic is listed in `yaw_free_topics`.
 //  - nav_msgs/Odometry -> odometry_t: pose (position, orientation) and twist (linear, angular, in child_frame_id) with
 //    their covariances.  ROS's pose covariance is about the axes of header.frame_id; sextant's is the right
 //    perturbation in the body frame, so it is rotated: Sigma = diag(R^T, R^T) Sigma_ros diag(R, R).  The twist's
