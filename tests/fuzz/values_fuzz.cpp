@@ -1,6 +1,6 @@
 // Fuzz harness: the value fuzzer (test_hostile_values.cpp) guided by coverage.  A clean simulated body and a victim
 // body go through the intake and every stage of the default engine; the input's bytes say which of the victim's
-// messages are mutated and how (which fields of its odometry, sightings or loop closures take which extreme but
+// messages are mutated and how (which fields of its odometry or sightings take which extreme but
 // finite values, which flags flip, which stamps jump; hostile_engine.hpp).  The first byte picks the EKF or the
 // particle filter.  Contract checked: every published pose is finite with a positive semi-definite covariance, and
 // the clean body's poses are those of a run without the victim.  Work per input is bounded by libFuzzer's -timeout.
@@ -14,7 +14,7 @@ using namespace sextant::hostile;
 
 namespace {
 
-constexpr double kSeconds = 8;    // of each simulated run: a few keyframes and loop closures per body
+constexpr double kSeconds = 8;    // of each simulated run: a few keyframes per body
 constexpr int kMaxMutated = 120;  // victim messages mutated at most (of about 500)
 
 // The input's bytes as choices: a number in [0, n) from one byte (four when n > 256); 0 once they are used up.
