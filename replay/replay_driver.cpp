@@ -142,6 +142,9 @@ void ReplayCollector::output(const engine::Output& o) {
           ++result_.target_messages;
           result_.targets.push_back(x);
           if (!keep_all_ && result_.targets.size() > kNewestTargetsKept) result_.targets.erase(result_.targets.begin());
+        } else if constexpr (std::is_same_v<T, engine::LandmarkMap>) {
+          ++result_.landmark_map_messages;
+          if (keep_all_) result_.landmark_maps.push_back(x);
         } else {
           ++result_.match_request_messages;
           if (keep_all_) result_.match_requests.push_back(x);

@@ -95,6 +95,7 @@ struct ReplayResult {
   std::vector<engine::Trajectory> trajectories;
   std::vector<engine::Targets> targets;
   std::vector<engine::MatchRequest> match_requests;
+  std::vector<engine::LandmarkMap> landmark_maps;
   std::vector<TruthPose> truth_poses;
   std::vector<TruthPoint> truth_points;
   std::vector<StageReport> stages;
@@ -102,7 +103,7 @@ struct ReplayResult {
   // Totals (what the series above hold may be a sample or nothing: ReplayOptions::max_kept).
   std::map<std::string, int64_t> fused_pose_counts;           // by estimator
   std::map<std::string, engine::FusedPose> last_fused_poses;  // by estimator
-  int64_t trajectory_messages = 0, target_messages = 0, match_request_messages = 0;
+  int64_t trajectory_messages = 0, target_messages = 0, match_request_messages = 0, landmark_map_messages = 0;
   std::vector<SegmentReport> segments;  // ReplayOptions::segment_seconds
 };
 

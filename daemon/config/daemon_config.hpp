@@ -21,6 +21,7 @@ struct Channels {
   std::string trajectory = "TRAJECTORY";
   std::string targets = "TARGETS";
   std::string match_requests = "MATCH_REQUESTS";
+  std::string landmark_map = "LANDMARK_MAP";
   std::string status = "SEXTANT_STATUS";
 
   std::string full(const std::string& name) const { return prefix + name; }

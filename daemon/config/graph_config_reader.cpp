@@ -63,6 +63,48 @@ void read_landmarks(Section& s, engine::GraphConfig& c) {
   l.reject_unknown_keys();
 }
 
+// A body name as the messages' `source` carries it: not empty, at most 256 characters (codec.cpp's rule).
+Check<std::string> body_name() {
+  return [](const std::string& v) -> std::optional<std::string> {
+    if (v.empty() || v.size() > 256) return "a body name of 1 to 256 characters";
+    return std::nullopt;
+  };
+}
+
+// fleet: {enabled, markers: {ID: BODY}, placement: {...}, observed_time_tolerance_s, max_pending, join_every_keyframes}
+void read_fleet(Section& s, engine::GraphConfig& c) {
+  Section f = s.child("fleet");
+  slam::FleetOptions& o = c.fleet;
+  f.get("enabled", o.enabled);
+  f.get("observed_time_tolerance_s", o.observed_time_tolerance_s, in_range(0.0, 10.0));
+  f.get("max_pending", o.max_pending, int_in_range(1, 1 << 16));
+  f.get("join_every_keyframes", o.join_every_keyframes, int_in_range(1, 1 << 20));
+  Section markers = f.child("markers");
+  if (markers.node().IsDefined() && !markers.node().IsNull()) {
+    if (!markers.node().IsMap()) throw markers.error("'" + markers.path() + "': expected a map of landmark id -> body");
+    for (const auto& kv : markers.node()) {
+      int64_t id = -1;
+      if (!YAML::convert<int64_t>::decode(kv.first, id) || id < 0)
+        throw markers.error_at(kv.first, "'" + markers.path() + "': a marker id must be a non-negative integer, not '" +
+                                             kv.first.Scalar() + "'");
+      std::string body;
+      markers.get(kv.first.Scalar(), body, body_name());
+      o.markers[id] = body;
+    }
+  }
+  Section p = f.child("placement");
+  p.get("min_support", o.placement.min_support, int_in_range(2, 1000));
+  p.get("min_inlier_ratio", o.placement.min_inlier_ratio, in_range(0.0, 1.0));
+  p.get("inlier_distance", o.placement.inlier_distance, positive());
+  p.get("inlier_angle", o.placement.inlier_angle, in_range(1e-6, 3.14159));
+  p.get("min_spread", o.placement.min_spread, non_negative());
+  p.get("min_pair_distance", o.placement.min_pair_distance, positive());
+  p.get("rival_ratio", o.placement.rival_ratio, in_range(0.0, 1.0));
+  p.get("max_evidence", o.placement.max_evidence, int_in_range(2, 256));
+  p.reject_unknown_keys();
+  f.reject_unknown_keys();
+}
+
 void read_smoother(Section& s, engine::GraphConfig& c) {
   // The incremental smoother's options (estimators/graph/incremental_options.hpp says what each does); an absent
   // key keeps IncrementalOptions' default.
@@ -164,6 +206,7 @@ void read_stage_config(Section& s, engine::GraphConfig& c) {
   read_keyframes(s, c);
   read_loops(s, c);
   read_landmarks(s, c);
+  read_fleet(s, c);
   read_smoother(s, c);
   reject_moved_smoother_keys(s);
   read_odometry(s, c);

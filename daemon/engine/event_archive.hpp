@@ -74,7 +74,7 @@ inline void load(archive::ArchiveReader& r, BearingScan& s) { fields(r, s); }
 
 template <class Archive, class X>
 std::enable_if_t<std::is_same_v<std::remove_const_t<X>, GraphCorrection>> fields(Archive& a, X& c) {
-  a(c.keyframe_utime)(c.keyframe_odom)(c.keyframe_map)(c.keyframe_covariance)(c.keyframe_odom_covariance);
+  a(c.keyframe_utime)(c.keyframe_odom)(c.keyframe_map)(c.keyframe_covariance)(c.keyframe_odom_covariance)(c.frame);
 }
 inline void save(archive::ArchiveWriter& w, const GraphCorrection& c) { fields(w, c); }
 inline void load(archive::ArchiveReader& r, GraphCorrection& c) { fields(r, c); }

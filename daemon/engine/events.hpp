@@ -73,7 +73,8 @@ struct BearingScan {
 /// Relative pose between two times of one body (loop_closure_t).
 struct LoopClosure {
   int64_t utime = 0;
-  std::string source;
+  std::string source;     // the body of the "from" pose
+  std::string source_to;  // the body of the "to" pose (another body of the fleet); empty: source
   bool planar = false;
   int64_t utime_from = 0, utime_to = 0;
   int64_t keyframe_from = -1, keyframe_to = -1;

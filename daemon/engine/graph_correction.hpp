@@ -21,6 +21,7 @@ struct GraphCorrection {
   SE3 keyframe_map;                                    // its optimized pose in the map frame
   Matrix6 keyframe_covariance = Matrix6::Zero();       // marginal covariance of keyframe_map (right perturbation)
   Matrix6 keyframe_odom_covariance = Matrix6::Zero();  // the odometry message's pose covariance at the keyframe
+  std::string frame;  // the map frame of keyframe_map (its root body: the body itself, or the fleet's frame)
 };
 
 /// Each body's latest correction: the graph stage writes, the graph pose stage reads.

@@ -20,6 +20,7 @@ void GraphPoseStage::handle(const Event& e, const Emit& emit) {
     // The odometry's own uncertainty growth since the keyframe, PSD without a floor (pose_covariance.hpp says why).
     const Matrix6 growth = nearest_psd(pose_covariance_growth(o.covariance, delta, c->keyframe_odom_covariance));
     out.pose = to_pose(c->keyframe_map * delta);
+    out.frame = c->frame;
     record_correction_age(o.utime - c->keyframe_utime);
     out.covariance = compose_covariance(c->keyframe_covariance, delta, growth);
   } else {

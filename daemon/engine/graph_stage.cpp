@@ -12,7 +12,7 @@ slam::OdometryInput to_input(const Odometry& o) {
 }
 
 slam::LoopInput to_input(const LoopClosure& l) {
-  return {l.utime_from, l.utime_to, l.keyframe_from, l.keyframe_to, to_se3(l.relative), l.information};
+  return {l.utime_from, l.utime_to, l.keyframe_from, l.keyframe_to, to_se3(l.relative), l.information, l.source_to};
 }
 
 slam::SightingsInput to_input(const LandmarkSightings& s) {
@@ -36,6 +36,7 @@ class GraphStage::Outputs final : public slam::SlamListener {
     Feed& f = stage_.feed_of(body);
     f.newest_utime = utime;
     if (f.feed.due(utime)) stage_.publish_trajectory(body, f, utime, status.solves, false, emit_);
+    stage_.publish_map(stage_.slam_.frame_of(body), utime, false, emit_);
     const slam::SlamGraph::NewestKeyframe newest = stage_.slam_.newest_keyframe(body);
     GraphCorrection c;
     c.keyframe_utime = newest.keyframe->utime;
@@ -43,6 +44,7 @@ class GraphStage::Outputs final : public slam::SlamListener {
     c.keyframe_map = newest.estimate;
     c.keyframe_covariance = newest.covariance;
     c.keyframe_odom_covariance = newest.keyframe->odom_covariance;
+    c.frame = stage_.slam_.frame_of(body);
     // A solve gone wrong never reaches FUSED_POSE: the previous correction stays.
     Eigen::Matrix<double, 7, 1> pose;
     pose << c.keyframe_map.translation(), c.keyframe_map.rotation().quaternion().coeffs();
@@ -60,6 +62,7 @@ class GraphStage::Outputs final : public slam::SlamListener {
     r.source = body;
     r.request_id = stage_.next_request_id_++;
     r.kind = random ? "random" : "local";
+    r.source_b = body;
     r.a = to_keyframe(a);
     r.b = to_keyframe(b);
     ++stage_.counters_.match_requests;
@@ -94,6 +97,7 @@ void GraphStage::publish_trajectory(const std::string& source, Feed& f, int64_t 
                                     const Emit& emit) {
   Trajectory header;
   header.source = source;
+  header.frame = slam_.frame_of(source);
   header.chi2 = slam_.chi2(source);
   header.iterations = solves;
   header.solve_ms = slam_.counters().last_update_ms;
@@ -105,12 +109,49 @@ void GraphStage::publish_trajectory(const std::string& source, Feed& f, int64_t 
   }
 }
 
+void GraphStage::publish_map(const std::string& frame, int64_t utime, bool flush, const Emit& emit) {
+  const auto frames = slam_.frames();
+  const auto period = static_cast<int64_t>(config_.trajectory.rate_hz > 0 ? 1e6 / config_.trajectory.rate_hz : 0);
+  auto [at, first] = maps_published_.try_emplace(frame, utime);
+  if (!flush && !first && utime - at->second < period) return;
+  at->second = utime;
+  const auto send = [&](LandmarkMap m) {
+    ++counters_.landmark_map_messages;
+    emit(std::move(m));
+  };
+  for (auto gone = maps_published_.begin(); gone != maps_published_.end();) {  // joined another frame since
+    if (frames.contains(gone->first)) {
+      ++gone;
+      continue;
+    }
+    send(LandmarkMap{utime, gone->first, {}, 0, 1, 0, {}});
+    gone = maps_published_.erase(gone);
+  }
+  const std::vector<GraphLandmark> landmarks = slam_.landmarks(frame);
+  if (landmarks.empty() || !frames.contains(frame)) return;
+  LandmarkMap m{utime, frame, frames.at(frame), 0, 0, static_cast<int>(landmarks.size()), {}};
+  m.num_chunks = static_cast<int>((landmarks.size() + kMaxLandmarksPerMessage - 1) / kMaxLandmarksPerMessage);
+  for (size_t k = 0; k < landmarks.size(); ++k) {
+    m.landmarks.push_back({landmarks[k].id, landmarks[k].position, static_cast<int32_t>(landmarks[k].sightings)});
+    if (m.landmarks.size() == kMaxLandmarksPerMessage || k + 1 == landmarks.size()) {
+      send(m);
+      m.landmarks.clear();
+      ++m.chunk;
+    }
+  }
+}
+
 void GraphStage::finish(const Emit& emit) {
   for (const std::string& source : slam_.bodies()) {
     const slam::KeyframeTrack* track = slam_.track(source);
     if (track->empty()) continue;
     Feed& f = feed_of(source);
     publish_trajectory(source, f, f.newest_utime, 0, true, emit);
+  }
+  for (const auto& [frame, bodies] : slam_.frames()) {
+    int64_t newest = 0;
+    for (const std::string& b : bodies) newest = std::max(newest, feed_of(b).newest_utime);
+    publish_map(frame, newest, true, emit);
   }
 }
 
@@ -163,7 +204,17 @@ Counters GraphStage::counters() const {
           {"graph_landmarks", graph_landmarks()},
           {"graph_factors", graph_factors()},
           {"trajectory_keyframe_bytes", counters_.trajectory_keyframe_bytes},
-          {"corrections_refused", counters_.corrections_refused}};
+          {"corrections_refused", counters_.corrections_refused},
+          {"fleet_frames", static_cast<int64_t>(slam_.frames().size())},
+          {"fleet_joins", s.fleet_joins},
+          {"fleet_sightings", s.fleet_sightings},
+          {"fleet_loops", s.fleet_loops},
+          {"fleet_pending", s.fleet_pending},
+          {"fleet_outliers", s.fleet_outliers},
+          {"fleet_pending_dropped", s.fleet_pending_dropped},
+          {"fleet_sightings_unplaced", s.fleet_sightings_unplaced},
+          {"fleet_self_sightings", s.fleet_self_sightings},
+          {"landmark_map_messages", counters_.landmark_map_messages}};
 }
 
 void GraphStage::save(archive::ArchiveWriter& w) {

@@ -5,7 +5,8 @@
 //  - turns Odometry, LoopClosure and LandmarkSightings into the layer's inputs (a body is an odometry source);
 //  - turns what the layer reports into outputs: MATCH_REQUESTS for its loop proposals (request ids numbered here),
 //    after every update the map -> odometry correction for GraphPoseStage (graph_correction.hpp) and TRAJECTORY at
-//    its own rate (trajectory_feed.hpp: new and moved keyframes, a rolling snapshot, bounded messages);
+//    its own rate (trajectory_feed.hpp: new and moved keyframes, a rolling snapshot, bounded messages), and each map
+//    frame's landmarks on LANDMARK_MAP at the same rate (landmark_map_t.lcm; chunks of kMaxLandmarksPerMessage);
 //  - handles one event at a time and knows no threads: in the daemon a body's odometry may reach it in batches
 //    (daemon/runtime/odometry_batcher.hpp), handed to `handle` one message at a time as replay does;
 //  - counts what it does itself (GraphStageCounters) beside the layer's counters (slam_counters.hpp).
@@ -29,6 +30,7 @@ struct GraphStageCounters {
   int64_t trajectory_messages = 0;        // TRAJECTORY messages published
   int64_t trajectory_keyframe_bytes = 0;  // their keyframes (72 bytes each) and removed ids (8 bytes each)
   int64_t corrections_refused = 0;        // solves whose newest keyframe was not finite or not PSD: not published
+  int64_t landmark_map_messages = 0;      // LANDMARK_MAP messages published
 };
 
 class GraphStage final : public Stage {
@@ -74,11 +76,16 @@ class GraphStage final : public Stage {
   /// TRAJECTORY messages of a body when its feed is due (or `flush`): chi2 and the keyframe list are computed only then.
   void publish_trajectory(const std::string& source, Feed& f, int64_t utime, int solves, bool flush, const Emit& emit);
   Feed& feed_of(const std::string& source);
+  /// LANDMARK_MAP of `frame` when due (the trajectory's rate) or `flush`; a frame that joined another since its last
+  /// publication is published once empty.
+  void publish_map(const std::string& frame, int64_t utime, bool flush, const Emit& emit);
+  static constexpr size_t kMaxLandmarksPerMessage = 1024;  // 36 bytes each: under one 64 KB datagram
 
   GraphConfig config_;
   std::shared_ptr<GraphCorrectionBoard> corrections_;
   slam::SlamGraph slam_;
   std::map<std::string, Feed> feeds_;
+  std::map<std::string, int64_t> maps_published_;  // frame -> utime of its last LANDMARK_MAP
   int64_t next_request_id_ = 0;
   GraphStageCounters counters_;
 };

@@ -8,7 +8,8 @@ namespace sextant::engine {
 struct FusedPose {
   int64_t utime = 0;
   std::string source;
-  std::string estimator;  // "dead_reckoning", "ekf", "pf", "graph"
+  std::string estimator;  // "dead_reckoning", "ekf", "pf", "inertial", "graph"
+  std::string frame;      // the map frame, named by its root body (fused_pose_t.frame); empty: the body itself
   bool planar = false;
   Pose pose;
   Matrix6 covariance = Matrix6::Zero();
@@ -27,6 +28,7 @@ struct Trajectory {
   int64_t utime = 0;
   std::string source;
   std::string estimator = "graph";
+  std::string frame;  // the map frame of the keyframes (trajectory_t.frame); empty: the body itself
   double chi2 = 0;
   int iterations = 0;
   double solve_ms = 0;
@@ -42,9 +44,10 @@ struct Trajectory {
 /// Ask a front end to match keyframe a (new) against keyframe b (match_request_t).
 struct MatchRequest {
   int64_t utime = 0;
-  std::string source;
+  std::string source;    // the body of keyframe a
+  std::string source_b;  // the body of keyframe b; empty: source
   int64_t request_id = 0;
-  std::string kind;  // "local" or "random"
+  std::string kind;  // "local", "random" or "fleet"
   Keyframe a, b;
 };
 
@@ -66,6 +69,21 @@ struct Targets {
   std::vector<Target> targets;
 };
 
-using Output = std::variant<FusedPose, Trajectory, MatchRequest, Targets>;
+/// The graph's landmarks in one map frame (landmark_map_t: one chunk of a publication).
+struct LandmarkMap {
+  struct Landmark {
+    int64_t id = 0;
+    Eigen::Vector3d position = Eigen::Vector3d::Zero();  // metres, map frame
+    int32_t sightings = 0;
+  };
+  int64_t utime = 0;
+  std::string frame;  // the map frame (its root body)
+  std::vector<std::string> bodies;
+  int chunk = 0, num_chunks = 1;
+  int total_landmarks = 0;
+  std::vector<Landmark> landmarks;
+};
+
+using Output = std::variant<FusedPose, Trajectory, MatchRequest, Targets, LandmarkMap>;
 
 }  // namespace sextant::engine

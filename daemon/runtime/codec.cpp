@@ -318,12 +318,14 @@ Decoded to_event(const sextant::gnss_t& m) {
 Decoded to_event(const sextant::loop_closure_t& m) {
   return guarded([&]() -> Decoded {
     check_name(m.source, "loop_closure_t.source");
+    if (!m.source_to.empty()) check_name(m.source_to, "loop_closure_t.source_to");
     if (m.utime <= 0) fail("invalid", "loop_closure_t.utime: not positive (" + std::to_string(m.utime) + ")");
     if (m.utime_from <= 0 || m.utime_to <= 0) fail("invalid", "loop_closure_t.utime_from/utime_to: not positive");
     if (m.utime_from == m.utime_to) fail("invalid", "loop_closure_t.utime_to: equal to utime_from");
     engine::LoopClosure e;
     e.utime = m.utime;
     e.source = m.source;
+    if (m.source_to != m.source) e.source_to = m.source_to;
     e.planar = m.planar;
     e.utime_from = m.utime_from;
     e.utime_to = m.utime_to;

@@ -13,6 +13,7 @@
 #include <sextant/loop_closure_t.hpp>
 #include <sextant/match_request_t.hpp>
 #include <sextant/odometry_t.hpp>
+#include <sextant/landmark_map_t.hpp>
 #include <sextant/targets_t.hpp>
 #include <sextant/trajectory_t.hpp>
 
@@ -74,11 +75,13 @@ sextant::fused_pose_t to_message(const engine::FusedPose& o, const std::string& 
 sextant::trajectory_t to_message(const engine::Trajectory& o, const std::string& sender, int64_t seq);
 sextant::match_request_t to_message(const engine::MatchRequest& o, const std::string& sender, int64_t seq);
 sextant::targets_t to_message(const engine::Targets& o, const std::string& sender, int64_t seq);
+sextant::landmark_map_t to_message(const engine::LandmarkMap& o, const std::string& sender, int64_t seq);
 
 /// Message -> output (for replay reports, tests and `sextant listen`); no validation beyond decoding.
 engine::FusedPose to_output(const sextant::fused_pose_t& m);
 engine::Trajectory to_output(const sextant::trajectory_t& m);
 engine::MatchRequest to_output(const sextant::match_request_t& m);
 engine::Targets to_output(const sextant::targets_t& m);
+engine::LandmarkMap to_output(const sextant::landmark_map_t& m);
 
 }  // namespace sextant::runtime

@@ -11,6 +11,7 @@ sextant::fused_pose_t to_message(const engine::FusedPose& o, const std::string& 
   auto m = message_header<sextant::fused_pose_t>(o.utime, sender, seq);
   m.source = o.source;
   m.estimator = o.estimator;
+  m.frame = o.frame.empty() ? o.source : o.frame;
   m.planar = o.planar;
   copy_pose(o.pose, m.position, m.orientation);
   copy_row_major<6>(o.covariance, m.covariance);
@@ -21,6 +22,7 @@ sextant::trajectory_t to_message(const engine::Trajectory& o, const std::string&
   auto m = message_header<sextant::trajectory_t>(o.utime, sender, seq);
   m.source = o.source;
   m.estimator = o.estimator;
+  m.frame = o.frame.empty() ? o.source : o.frame;
   m.chi2 = o.chi2;
   m.iterations = o.iterations;
   m.solve_ms = o.solve_ms;
@@ -48,6 +50,7 @@ sextant::trajectory_t to_message(const engine::Trajectory& o, const std::string&
 sextant::match_request_t to_message(const engine::MatchRequest& o, const std::string& sender, int64_t seq) {
   auto m = message_header<sextant::match_request_t>(o.utime, sender, seq);
   m.source = o.source;
+  m.source_b = o.source_b.empty() ? o.source : o.source_b;
   m.request_id = o.request_id;
   m.kind = o.kind;
   m.keyframe_a = o.a.id;
@@ -80,11 +83,31 @@ sextant::targets_t to_message(const engine::Targets& o, const std::string& sende
   return m;
 }
 
+sextant::landmark_map_t to_message(const engine::LandmarkMap& o, const std::string& sender, int64_t seq) {
+  auto m = message_header<sextant::landmark_map_t>(o.utime, sender, seq);
+  m.frame = o.frame;
+  m.num_bodies = static_cast<int32_t>(o.bodies.size());
+  m.bodies = o.bodies;
+  m.chunk = o.chunk;
+  m.num_chunks = o.num_chunks;
+  m.total_landmarks = o.total_landmarks;
+  m.num_landmarks = static_cast<int32_t>(o.landmarks.size());
+  for (const auto& l : o.landmarks) {
+    sextant::map_landmark_t x{};
+    x.id = l.id;
+    for (int i = 0; i < 3; ++i) x.position[i] = l.position[i];
+    x.sightings = l.sightings;
+    m.landmarks.push_back(x);
+  }
+  return m;
+}
+
 engine::FusedPose to_output(const sextant::fused_pose_t& m) {
   engine::FusedPose o;
   o.utime = m.utime;
   o.source = m.source;
   o.estimator = m.estimator;
+  o.frame = m.frame;
   o.planar = m.planar;
   o.pose = read_pose(m.position, m.orientation);
   o.covariance = read_matrix<6>(m.covariance);
@@ -96,6 +119,7 @@ engine::Trajectory to_output(const sextant::trajectory_t& m) {
   o.utime = m.utime;
   o.source = m.source;
   o.estimator = m.estimator;
+  o.frame = m.frame;
   o.chi2 = m.chi2;
   o.iterations = m.iterations;
   o.solve_ms = m.solve_ms;
@@ -116,10 +140,24 @@ engine::MatchRequest to_output(const sextant::match_request_t& m) {
   engine::MatchRequest o;
   o.utime = m.utime;
   o.source = m.source;
+  o.source_b = m.source_b;
   o.request_id = m.request_id;
   o.kind = m.kind;
   o.a = {m.keyframe_a, m.utime_a, read_pose(m.position_a, m.orientation_a)};
   o.b = {m.keyframe_b, m.utime_b, read_pose(m.position_b, m.orientation_b)};
+  return o;
+}
+
+engine::LandmarkMap to_output(const sextant::landmark_map_t& m) {
+  engine::LandmarkMap o;
+  o.utime = m.utime;
+  o.frame = m.frame;
+  o.bodies = m.bodies;
+  o.chunk = m.chunk;
+  o.num_chunks = m.num_chunks;
+  o.total_landmarks = m.total_landmarks;
+  for (const auto& l : m.landmarks)
+    o.landmarks.push_back({l.id, Eigen::Vector3d(l.position[0], l.position[1], l.position[2]), l.sightings});
   return o;
 }
 

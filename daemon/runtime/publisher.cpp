@@ -67,6 +67,8 @@ bool Publisher::publish(const engine::Output& output) {
           send(channels_.full(channels_.match_requests), to_message(o, sender_, 0));
         } else if constexpr (std::is_same_v<T, engine::Targets>) {
           send(channels_.full(channels_.targets), to_message(o, sender_, 0));
+        } else if constexpr (std::is_same_v<T, engine::LandmarkMap>) {
+          send(channels_.full(channels_.landmark_map), to_message(o, sender_, 0));
         }
         return true;
       },

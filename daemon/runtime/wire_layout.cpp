@@ -189,9 +189,9 @@ template <>
 const WireLayout& wire_layout<sextant::loop_closure_t>() {
   static const WireLayout l{
       "loop_closure_t",
-      {i64("utime"), str("sender"), i64("seq"), str("source"), boolean("planar"), i64("utime_from"), i64("utime_to"),
-       i64("keyframe_from"), i64("keyframe_to"), i64("request_id"), doubles("position", 3), doubles("orientation", 4),
-       doubles("information", 36), str("matcher"), doubles("score", 1)}};
+      {i64("utime"), str("sender"), i64("seq"), str("source"), str("source_to"), boolean("planar"), i64("utime_from"),
+       i64("utime_to"), i64("keyframe_from"), i64("keyframe_to"), i64("request_id"), doubles("position", 3),
+       doubles("orientation", 4), doubles("information", 36), str("matcher"), doubles("score", 1)}};
   return l;
 }
 
@@ -205,10 +205,11 @@ const WireLayout& wire_layout<sextant::truth_t>() {
 
 template <>
 const WireLayout& wire_layout<sextant::match_request_t>() {
-  static const WireLayout l{"match_request_t",
-                            {i64("utime"), str("sender"), i64("seq"), str("source"), i64("request_id"), str("kind"),
-                             i64("keyframe_a"), i64("utime_a"), doubles("position_a", 3), doubles("orientation_a", 4),
-                             i64("keyframe_b"), i64("utime_b"), doubles("position_b", 3), doubles("orientation_b", 4)}};
+  static const WireLayout l{
+      "match_request_t",
+      {i64("utime"), str("sender"), i64("seq"), str("source"), str("source_b"), i64("request_id"), str("kind"),
+       i64("keyframe_a"), i64("utime_a"), doubles("position_a", 3), doubles("orientation_a", 4), i64("keyframe_b"),
+       i64("utime_b"), doubles("position_b", 3), doubles("orientation_b", 4)}};
   return l;
 }
 
@@ -216,7 +217,7 @@ template <>
 const WireLayout& wire_layout<sextant::fused_pose_t>() {
   static const WireLayout l{
       "fused_pose_t",
-      {i64("utime"), str("sender"), i64("seq"), str("source"), str("estimator"), boolean("planar"),
+      {i64("utime"), str("sender"), i64("seq"), str("source"), str("estimator"), str("frame"), boolean("planar"),
        doubles("position", 3), doubles("orientation", 4), doubles("covariance", 36)}};
   return l;
 }
@@ -248,12 +249,37 @@ template <>
 const WireLayout& wire_layout<sextant::trajectory_t>() {
   static const WireLayout keyframe{"keyframe_t",
                                    {i64("id"), i64("utime"), doubles("position", 3), doubles("orientation", 4)}};
-  static const WireLayout l{
-      "trajectory_t",
-      {i64("utime"), str("sender"), i64("seq"), str("source"), str("estimator"), doubles("chi2", 1), i32("iterations"),
-       doubles("solve_ms", 1), fixed("kind", 1), i64("snapshot_id"), i32("chunk"), i32("num_chunks"),
-       i64("range_first"), i64("range_last"), i32("total_keyframes"), count("num_keyframes", kMaxItems),
-       array("keyframes", keyframe), count("num_removed", kMaxItems), array("removed_ids", kInt64Element)}};
+  static const WireLayout l{"trajectory_t",
+                            {i64("utime"),
+                             str("sender"),
+                             i64("seq"),
+                             str("source"),
+                             str("estimator"),
+                             str("frame"),
+                             doubles("chi2", 1),
+                             i32("iterations"),
+                             doubles("solve_ms", 1),
+                             fixed("kind", 1),
+                             i64("snapshot_id"),
+                             i32("chunk"),
+                             i32("num_chunks"),
+                             i64("range_first"),
+                             i64("range_last"),
+                             i32("total_keyframes"),
+                             count("num_keyframes", kMaxItems),
+                             array("keyframes", keyframe),
+                             count("num_removed", kMaxItems),
+                             array("removed_ids", kInt64Element)}};
+  return l;
+}
+
+template <>
+const WireLayout& wire_layout<sextant::landmark_map_t>() {
+  static const WireLayout landmark{"map_landmark_t", {i64("id"), doubles("position", 3), i32("sightings")}};
+  static const WireLayout l{"landmark_map_t",
+                            {i64("utime"), str("sender"), i64("seq"), str("frame"), count("num_bodies", kMaxListed),
+                             array("bodies", kStringElement), i32("chunk"), i32("num_chunks"), i32("total_landmarks"),
+                             count("num_landmarks", kMaxItems), array("landmarks", landmark)}};
   return l;
 }
 

@@ -19,6 +19,7 @@
 #include <sextant/match_request_t.hpp>
 #include <sextant/odometry_t.hpp>
 #include <sextant/status_t.hpp>
+#include <sextant/landmark_map_t.hpp>
 #include <sextant/targets_t.hpp>
 #include <sextant/trajectory_t.hpp>
 #include <sextant/truth_t.hpp>
@@ -95,6 +96,8 @@ template <>
 const WireLayout& wire_layout<sextant::trajectory_t>();
 template <>
 const WireLayout& wire_layout<sextant::targets_t>();
+template <>
+const WireLayout& wire_layout<sextant::landmark_map_t>();
 
 /// Whether `wire_layout<Msg>()` exists (safe_decode needs it).
 template <class Msg>
@@ -123,6 +126,8 @@ template <>
 inline constexpr bool kHasWireLayout<sextant::trajectory_t> = true;
 template <>
 inline constexpr bool kHasWireLayout<sextant::targets_t> = true;
+template <>
+inline constexpr bool kHasWireLayout<sextant::landmark_map_t> = true;
 
 /// Decodes untrusted bytes as `Msg`: the fingerprint, then the layout walk (for the types that have one), then
 /// lcm-gen's decode with anything it throws caught.  nullopt on success, else what is wrong ("fingerprint", "decode" or "too_large").

@@ -208,4 +208,49 @@ void PointObservationFactor::evaluate(const std::vector<Variable>& vars, Eigen::
   }
 }
 
+PoseObservationFactor::PoseObservationFactor(int observer, int observed, PointObservationFactor::Model model,
+                                             Eigen::VectorXd z, Eigen::MatrixXd information, SE3 sensor_offset,
+                                             Eigen::Vector3d marker)
+    : Factor({observer, observed}, information),
+      point_(0, 1, model, std::move(z), std::move(information), std::move(sensor_offset)),
+      marker_(std::move(marker)) {
+  if (!marker_.allFinite()) throw std::invalid_argument("PoseObservationFactor: a non-finite marker position");
+}
+
+std::vector<Variable> PoseObservationFactor::observer_and_point(const std::vector<Variable>& vars) const {
+  const Variable& x = vars[static_cast<size_t>(variables()[0])];
+  const Variable& y = vars[static_cast<size_t>(variables()[1])];
+  Variable p;
+  p.kind = y.kind == VariableKind::kPose2 ? VariableKind::kPoint2 : VariableKind::kPoint3;
+  if (y.kind == VariableKind::kPose2)
+    p.point << y.pose2.act(marker_.head<2>()), 0;
+  else
+    p.point = y.pose3 * marker_;
+  return {x, p};
+}
+
+void PoseObservationFactor::error(const std::vector<Variable>& vars, Eigen::VectorXd& e) const {
+  point_.error(observer_and_point(vars), e);
+}
+
+void PoseObservationFactor::linearize(const std::vector<Variable>& vars, Linearization& out) const {
+  const std::vector<Variable> local = observer_and_point(vars);
+  Linearization point = point_.make_linearization(local);
+  point_.linearize(local, point);
+  const Variable& y = vars[static_cast<size_t>(variables()[1])];
+  Eigen::MatrixXd dp_dy;
+  if (y.kind == VariableKind::kPose2) {
+    const Eigen::Matrix2d r = y.pose2.rotation().matrix();
+    dp_dy.resize(2, 3);
+    dp_dy << r, r * Eigen::Vector2d(-marker_.y(), marker_.x());
+  } else {
+    const Eigen::Matrix3d r = y.pose3.rotation().matrix();
+    dp_dy.resize(3, 6);
+    dp_dy << r, -r * SO3::hat(marker_);
+  }
+  out.error = point.error;
+  out.jacobians[0] = point.jacobians[0];
+  out.jacobians[1] = point.jacobians[1] * dp_dy;
+}
+
 }  // namespace sextant::graph

@@ -122,4 +122,28 @@ class PointObservationFactor final : public Factor {
   SE3 offset_;
 };
 
+/// A pose observing a point fixed on another pose: one robot's sighting of another robot's marker.  The observed
+/// point is p = Y m (Y the observed pose, m the marker's position in Y's frame, metres) and the residual that of
+/// PointObservationFactor on (X, p); the Jacobian with respect to Y's right perturbation is J_p dp/dY with
+/// dp/dY = R_Y [I  -[m]x] (3-D) or R_Y [I  (-m_y, m_x)'] (planar).
+class PoseObservationFactor final : public Factor {
+ public:
+  std::unique_ptr<Factor> clone() const override { return std::make_unique<PoseObservationFactor>(*this); }
+  PoseObservationFactor(int observer, int observed, PointObservationFactor::Model model, Eigen::VectorXd z,
+                        Eigen::MatrixXd information, SE3 sensor_offset, Eigen::Vector3d marker);
+  std::string type() const override { return "POSE_OBSERVATION"; }
+  void error(const std::vector<Variable>& vars, Eigen::VectorXd& e) const override;
+  void linearize(const std::vector<Variable>& vars, Linearization& out) const override;
+  PointObservationFactor::Model model() const { return point_.model(); }
+  const Eigen::VectorXd& measurement() const { return point_.measurement(); }
+  const SE3& sensor_offset() const { return point_.sensor_offset(); }
+  const Eigen::Vector3d& marker() const { return marker_; }
+
+ private:
+  /// The observer and the observed point as the variables of point_ (indices 0 and 1).
+  std::vector<Variable> observer_and_point(const std::vector<Variable>& vars) const;
+  PointObservationFactor point_;  // on variables {0, 1} of observer_and_point
+  Eigen::Vector3d marker_;
+};
+
 }  // namespace sextant::graph

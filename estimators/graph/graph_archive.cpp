@@ -7,7 +7,7 @@
 namespace sextant::graph {
 namespace {
 
-enum class FactorTag : uint8_t { kRelativePose2 = 1, kRelativePose3 = 2, kPointObservation = 3 };
+enum class FactorTag : uint8_t { kRelativePose2 = 1, kRelativePose3 = 2, kPointObservation = 3, kPoseObservation = 4 };
 
 }  // namespace
 
@@ -55,6 +55,9 @@ void save_factor(archive::ArchiveWriter& w, const Factor& f) {
       w(p->measurement3());
   } else if (const auto* o = dynamic_cast<const PointObservationFactor*>(&f)) {
     w(FactorTag::kPointObservation)(f.variables())(f.information())(o->model())(o->measurement())(o->sensor_offset());
+  } else if (const auto* o = dynamic_cast<const PoseObservationFactor*>(&f)) {
+    w(FactorTag::kPoseObservation)(f.variables())(f.information())(o->model())(o->measurement())(o->sensor_offset());
+    w(o->marker());
   } else {
     throw std::invalid_argument("a factor of type " + f.type() + " cannot be saved");
   }
@@ -64,9 +67,9 @@ std::unique_ptr<Factor> load_factor(archive::ArchiveReader& r) {
   const auto tag = r.get<FactorTag>();
   const auto vars = r.get<std::vector<int>>();
   const auto information = r.get<Eigen::MatrixXd>();
-  const size_t arity =
-      tag == FactorTag::kRelativePose2 || tag == FactorTag::kRelativePose3 || tag == FactorTag::kPointObservation ? 2
-                                                                                                                  : 0;
+  const bool known = tag == FactorTag::kRelativePose2 || tag == FactorTag::kRelativePose3 ||
+                     tag == FactorTag::kPointObservation || tag == FactorTag::kPoseObservation;
+  const size_t arity = known ? 2 : 0;
   if (arity == 0) r.fail("a factor of unknown type " + std::to_string(static_cast<int>(tag)));
   if (vars.size() != arity) r.fail("a factor with " + std::to_string(vars.size()) + " variables");
   switch (tag) {
@@ -81,7 +84,8 @@ std::unique_ptr<Factor> load_factor(archive::ArchiveReader& r) {
       const SE3 z = r.get<SE3>();
       return std::make_unique<RelativePoseFactor>(vars[0], vars[1], z, Matrix6d(information));
     }
-    case FactorTag::kPointObservation: {
+    case FactorTag::kPointObservation:
+    case FactorTag::kPoseObservation: {
       const auto model = r.get<PointObservationFactor::Model>();
       if (static_cast<int>(model) < 0 ||
           static_cast<int>(model) > static_cast<int>(PointObservationFactor::Model::kBearing))
@@ -90,7 +94,11 @@ std::unique_ptr<Factor> load_factor(archive::ArchiveReader& r) {
       const SE3 offset = r.get<SE3>();
       if (information.rows() != z.size() || information.cols() != z.size())
         r.fail("a point observation whose information does not match its measurement");
-      return std::make_unique<PointObservationFactor>(vars[0], vars[1], model, z, information, offset);
+      if (tag == FactorTag::kPointObservation)
+        return std::make_unique<PointObservationFactor>(vars[0], vars[1], model, z, information, offset);
+      const auto marker = r.get<Eigen::Vector3d>();
+      if (!marker.allFinite()) r.fail("a pose observation with a non-finite marker");
+      return std::make_unique<PoseObservationFactor>(vars[0], vars[1], model, z, information, offset, marker);
     }
   }
   r.fail("a factor of unknown type");

@@ -87,6 +87,13 @@ std::optional<TrackPoint> KeyframeTrack::resolve(int64_t keyframe_id, int64_t ut
   return TrackPoint{k, keyframes_[k].odom.between(*at_time), keyframes_[k + 1].edge_covariance};
 }
 
+std::optional<size_t> KeyframeTrack::position_of(int64_t id) const {
+  const auto it = std::lower_bound(keyframes_.begin(), keyframes_.end(), id,
+                                   [](const TrackKeyframe& k, int64_t x) { return k.id < x; });
+  if (it == keyframes_.end() || it->id != id) return std::nullopt;
+  return static_cast<size_t>(it - keyframes_.begin());
+}
+
 std::optional<size_t> KeyframeTrack::keyframe_at_or_before(int64_t utime) const {
   const auto after = by_utime_.upper_bound(utime);
   if (after == by_utime_.begin()) return std::nullopt;

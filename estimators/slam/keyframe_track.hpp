@@ -91,6 +91,8 @@ class KeyframeTrack {
   /// cannot be tied (no odometry pose recorded at it, outside the graph's keyframes, or after the newest keyframe and
   /// farther than the tolerance).
   std::optional<TrackPoint> resolve(int64_t keyframe_id, int64_t utime, int64_t tolerance_us) const;
+  /// The position in keyframes() of the keyframe with this id (nullopt: not in the graph).
+  std::optional<size_t> position_of(int64_t id) const;
   /// The keyframe position of the newest keyframe at or before `utime` (nullopt: none).
   std::optional<size_t> keyframe_at_or_before(int64_t utime) const;
   /// A sighting's anchor at `utime` (see above): requires a keyframe at or before it and utime <= last_utime();

@@ -29,6 +29,12 @@ struct SlamCounters {
   int64_t sightings_malformed = 0;  // a bad value, a planar flag unlike the body's, or refused by the smoother
   int64_t sightings_dropped = 0;    // waiting for the odometry beyond LandmarkOptions::max_waiting
   int64_t thinnings = 0, thinning_failures = 0;
+  // Fleet: frames joined; robot sightings and inter-robot loops added as factors, kept as evidence, left out as
+  // outliers of a placement or dropped beyond FleetOptions::max_pending; robot sightings that could not be placed
+  // (the seen body unknown, of another kind, without keyframes or its odometry too far behind) or of the observer
+  // itself.
+  int64_t fleet_joins = 0, fleet_sightings = 0, fleet_loops = 0, fleet_pending = 0, fleet_outliers = 0;
+  int64_t fleet_pending_dropped = 0, fleet_sightings_unplaced = 0, fleet_self_sightings = 0;
   int64_t keyframes_thinned = 0, loops_thinned = 0, sightings_thinned = 0, landmarks_thinned = 0;
   // Wall clock (not saved): the last update, the last and the longest thinning, the last thinning's solve.
   double last_update_ms = 0;
@@ -42,7 +48,9 @@ struct SlamCounters {
         c.loops_unmatched)(c.loops_unknown_source)(c.loops_on_thinned)(c.landmarks)(c.sightings_accepted)(
         c.sightings_rejected)(c.sightings_without_id)(c.sightings_unknown_source)(c.sightings_before_keyframe)(
         c.sightings_unmatched)(c.sightings_malformed)(c.sightings_dropped)(c.thinnings)(c.thinning_failures)(
-        c.keyframes_thinned)(c.loops_thinned)(c.sightings_thinned)(c.landmarks_thinned);
+        c.keyframes_thinned)(c.loops_thinned)(c.sightings_thinned)(c.landmarks_thinned)(c.fleet_joins)(
+        c.fleet_sightings)(c.fleet_loops)(c.fleet_pending)(c.fleet_outliers)(c.fleet_pending_dropped)(
+        c.fleet_sightings_unplaced)(c.fleet_self_sightings);
   }
 };
 

@@ -63,6 +63,7 @@ SlamGraph::Body& SlamGraph::body_for(const std::string& name, bool planar) {
   KeyframeSelectorOptions ko = options_.keyframes;
   ko.planar = planar;
   Body body;
+  body.frame = name;  // a map frame of its own until it joins another (slam_graph_fleet.cpp)
   body.planar = planar;
   body.selector = KeyframeSelector(ko);
   body.smoother = &smoother_for(planar);
@@ -207,6 +208,10 @@ void SlamGraph::add_loop(const std::string& name, const LoopInput& l, SlamListen
     return;
   }
   Body& b = it->second;
+  if (!l.body_to.empty() && l.body_to != name) {
+    add_body_loop(name, b, l, listener);
+    return;
+  }
   const auto tolerance = static_cast<int64_t>(options_.loop_time_tolerance_s * 1e6);
   const auto end_from = b.track.resolve(l.keyframe_from, l.utime_from, tolerance);
   const auto end_to = b.track.resolve(l.keyframe_to, l.utime_to, tolerance);
@@ -247,18 +252,20 @@ void SlamGraph::add_loop(const std::string& name, const LoopInput& l, SlamListen
   update(name, b, b.track.newest().utime, listener);
 }
 
-void SlamGraph::update(const std::string& name, Body& b, int64_t utime, SlamListener& listener) {
+graph::IncrementalStatus SlamGraph::solve(Body& b) {
   const auto t0 = std::chrono::steady_clock::now();
   const graph::IncrementalStatus st = b.smoother->update();
   counters_.last_update_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
   ++counters_.updates;
   counters_.rebuilds += st.rebuilt ? 1 : 0;
   counters_.relinearized_factors += st.relinearized_factors;
-  if (!st.ok) {
-    ++counters_.optimizer_failures;
-    return;
-  }
-  listener.updated(name, utime, st);
+  if (!st.ok) ++counters_.optimizer_failures;
+  return st;
+}
+
+void SlamGraph::update(const std::string& name, Body& b, int64_t utime, SlamListener& listener) {
+  const graph::IncrementalStatus st = solve(b);
+  if (st.ok) listener.updated(name, utime, st);
 }
 
 void SlamGraph::rebuild() {
@@ -291,7 +298,7 @@ std::vector<SlamLandmark> SlamGraph::landmarks(const std::string& name) const {
   std::vector<SlamLandmark> out;
   auto it = bodies_.find(name);
   if (it == bodies_.end()) return out;
-  for (const auto& [id, l] : it->second.landmarks)
+  for (const auto& [id, l] : root_of(it->second).landmarks)
     out.push_back(
         SlamLandmark{id, it->second.smoother->graph().variables()[static_cast<size_t>(l.variable)].point, l.sightings});
   return out;

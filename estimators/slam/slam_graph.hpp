@@ -28,9 +28,21 @@
 //    exact (the covariance since the keyframe plus the interpolated part of the increment);
 //  - lifelong mode (slam_graph_thinning.cpp): over a kind of body's keyframe budget the graph is thinned to the places
 //    it needs.
-// One smoother per kind of body (planar, 3-D), created with the first such body: the bodies' graphs share no
-// variable, and the robust kernel's width depends on the loops' dimension.  Every smoother update is reported to the
-// listener, in order, while its estimates are current.
+// One smoother per kind of body (planar, 3-D), created with the first such body (the robust kernel's width depends
+// on the loops' dimension).  Every smoother update is reported to the listener, in order, while its estimates are
+// current.
+//
+// Fleet (slam_graph_fleet.cpp; FleetOptions): the bodies of one kind are one fleet.  Each body starts in a map
+// frame of its own (named by the body; its first keyframe fixed).  Landmarks belong to a frame: bodies in one frame
+// share them by id.  What connects two frames -- landmark ids both maps hold, a body's sighting of another body's
+// marker (FleetOptions::markers), a loop closure between two bodies -- is evidence of their placement; when
+// frame_placement.hpp's consensus rule places one frame in the other, they join: the frame whose root body's name
+// comes later moves into the other (its variables transformed by the placement, its root's first keyframe freed,
+// landmarks of the same id merged into one variable), and the evidence that agreed with the placement enters as
+// factors (robot sightings: graph::PoseObservationFactor between the two bodies' keyframes; loops:
+// RelativePoseFactor; both with the robust kernel); what disagreed is dropped and counted.  Within one frame, robot
+// sightings and inter-robot loops become factors at once.  A frame is named by its root body (the smallest name);
+// when the root is forgotten the next body names it and holds the gauge (its coordinates stay).
 #include "estimators/archive/binary_archive.hpp"
 #include "estimators/graph/incremental_smoother.hpp"
 #include "estimators/keyframe/keyframe_selector.hpp"
@@ -103,8 +115,13 @@ class SlamGraph {
   const graph::IncrementalSmoother* smoother(bool planar) const { return smoothers_[planar ? 1 : 0].get(); }
   /// The keyframes of a body (estimates), oldest first; empty for an unknown body.
   std::vector<KeyframeEstimate> keyframes(const std::string& body) const;
-  /// The landmarks of a body (estimates), by id.
+  /// The landmarks of a body's frame (estimates), by id.
   std::vector<SlamLandmark> landmarks(const std::string& body) const;
+  /// The map frame a body's estimates are in: the name of its frame's root body (the body itself until it joins
+  /// another's); empty for an unknown body.
+  std::string frame_of(const std::string& body) const;
+  /// The frames and their bodies (by frame name).
+  std::map<std::string, std::vector<std::string>> frames() const;
   /// The newest keyframe of a body with its estimate and marginal covariance (6x6; a planar body's at x, y, yaw;
   /// zero when not determined).  The body must have a keyframe.
   struct NewestKeyframe {
@@ -129,6 +146,8 @@ class SlamGraph {
   void load(archive::ArchiveReader& r);
 
  private:
+  /// The fleet's part of load(): frames checked against the bodies, the pending links (slam_graph_state.cpp).
+  void load_fleet(archive::ArchiveReader& r);
   /// What a factor of a smoother is, kept beside it (one tag per factor, in the smoother's order) so that lifelong
   /// thinning and forgetting can rebuild the graph: odometry edges are recomposed, loops and sightings carried over.
   enum class FactorRole { kOdometry, kLoop, kSighting };
@@ -142,13 +161,47 @@ class SlamGraph {
     int64_t sightings = 0;
   };
   struct Body {
+    std::string frame;  // the root body of its map frame (slam_graph_fleet.cpp); landmarks live in the root's Body
     bool planar = false;
     graph::IncrementalSmoother* smoother = nullptr;  // smoothers_[planar]
     KeyframeSelector selector;
     KeyframeTrack track;
     std::vector<LoopInput> early_loops;           // about times the odometry has not reached yet (bounded)
     std::vector<SightingsInput> early_sightings;  // ahead of the odometry, in time order (bounded)
-    std::map<int64_t, Landmark> landmarks;        // by landmark id
+    std::map<int64_t, Landmark> landmarks;        // by landmark id; a frame's map, kept by its root body only
+  };
+  /// A body's sighting of another body's marker, anchored on a keyframe of each (by keyframe id: thinning renumbers
+  /// positions) with the odometry motion from it to the sighting's time and that motion's covariance.
+  struct BodySighting {
+    std::string observer, observed;
+    int64_t utime = 0;
+    SE3 sensor_in_body;
+    LandmarkSighting sighting;
+    int64_t observer_keyframe = 0, observed_keyframe = 0;
+    SE3 observer_motion, observed_motion;
+    Matrix6d observer_covariance = Matrix6d::Zero(), observed_covariance = Matrix6d::Zero();
+    template <class Archive, class Self>
+    static void fields(Archive& a, Self& s) {
+      a(s.observer)(s.observed)(s.utime)(s.sensor_in_body)(s.sighting)(s.observer_keyframe)(s.observed_keyframe)(
+          s.observer_motion)(s.observed_motion)(s.observer_covariance)(s.observed_covariance);
+    }
+  };
+  /// A loop between keyframes of two bodies (loop_gate.hpp's KeyframeLoop, by keyframe id).
+  struct BodyLoop {
+    std::string from, to;
+    int64_t from_keyframe = 0, to_keyframe = 0;
+    SE3 z;
+    Matrix6d information = Matrix6d::Zero();
+    template <class Archive, class Self>
+    static void fields(Archive& a, Self& l) {
+      a(l.from)(l.to)(l.from_keyframe)(l.to_keyframe)(l.z)(l.information);
+    }
+  };
+  /// Robot sightings and loops between two frames not joined yet, kept as evidence of their placement (oldest first,
+  /// at most FleetOptions::max_pending of each).
+  struct Pending {
+    std::vector<BodySighting> sightings;
+    std::vector<BodyLoop> loops;
   };
 
   Body& body_for(const std::string& name, bool planar);
@@ -163,6 +216,8 @@ class SlamGraph {
   /// keyframe is measured from that one and its edge, which spans the dropped pose, accumulates from there.
   void drop_keyframe(Body& b);
   void propose_loops(const std::string& name, const Body& b, int64_t utime, SlamListener& listener);
+  /// One smoother update of b's smoother, counted.
+  graph::IncrementalStatus solve(Body& b);
   /// One smoother update for `b`, counted and reported when it succeeds.
   void update(const std::string& name, Body& b, int64_t utime, SlamListener& listener);
   /// The sightings of one message at `anchor` (slam_graph_sightings.cpp).
@@ -170,6 +225,52 @@ class SlamGraph {
                               SlamListener& listener);
   /// Marginal covariances for the sighting gate, reused for kGateMarginalUpdates updates.
   Eigen::MatrixXd gate_marginal(const Body& b, int variable);
+  /// A new smoother of `kind` from `vars` (the old graph's variables, possibly moved): variable v is dropped when
+  /// merge_into[v] == kDropVariable, merged into variable merge_into[v] when >= 0, else kept; factors on a dropped
+  /// variable leave, the others follow their variables, in their old order (slam_graph_state.cpp).
+  static constexpr int kDropVariable = -2;
+  struct Rebuilt {
+    std::unique_ptr<graph::IncrementalSmoother> smoother;
+    std::vector<FactorTag> tags;
+    std::vector<int> remap;  // old variable -> new (-1: dropped)
+  };
+  Rebuilt rebuilt(int kind, const std::vector<graph::Variable>& vars, const std::vector<int>& merge_into) const;
+  /// Puts a rebuilt smoother in place: every body of the kind on its new variables.
+  void commit_rebuilt(int kind, Rebuilt r);
+  /// Before a frame's root is forgotten: the next body of the frame (by name) becomes its root, with its landmarks
+  /// and the gauge; returns that body's name (empty when the root was alone).
+  std::string hand_over_frame(const std::string& root);
+  /// Marks for dropping (and removes from their maps) the landmarks no factor would be left on once the variables
+  /// marked kDropVariable go: a landmark only a forgotten body saw.
+  void drop_unseen_landmarks(int kind, std::vector<int>& merge_into);
+
+  // Fleet (slam_graph_fleet.cpp).
+  Body& root_of(const Body& b) { return bodies_.at(b.frame); }
+  const Body& root_of(const Body& b) const { return bodies_.at(b.frame); }
+  /// A marker's sighting: a factor when both bodies share a frame (true), else evidence kept for the placement.
+  bool add_body_sighting(const std::string& name, Body& b, const SightingsInput& s, const TrackPoint& anchor,
+                         const LandmarkSighting& ob, const std::string& observed);
+  /// A loop of `name` whose "to" end is another body's.
+  void add_body_loop(const std::string& name, Body& b, const LoopInput& l, SlamListener& listener);
+  bool add_sighting_factor(const BodySighting& s);
+  bool add_loop_factor(const BodyLoop& l);
+  /// A time of a body as a keyframe anchor: anchor_at, or its latest odometry when the time is ahead of it by at
+  /// most observed_time_tolerance_s.
+  std::optional<TrackPoint> anchor_near(const Body& b, int64_t utime) const;
+  /// The placement evidence between frames `a` and `b` (T_ab) and which pending item each came from.
+  struct Evidence;
+  Evidence evidence_between(const std::string& a, const std::string& b) const;
+  /// Tries to place frame `b` in `a` (or the reverse) and joins them when the rule holds; true when joined.
+  bool try_join(const std::string& a, const std::string& b, SlamListener& listener);
+  void join(const std::string& keep, const std::string& gone, const SE3& keep_from_gone);
+  /// Moves the frame `gone`'s variables into `keep` and rebuilds the smoother (landmarks of one id merged).
+  void merge_frame_variables(const std::string& keep, const std::string& gone, const SE3& keep_from_gone);
+  /// After a join or a new link: a smoother update reported for every body of the frame.
+  void update_frame(const std::string& frame, SlamListener& listener);
+  /// The frame roots other than `frame` that share evidence with it (pending links or landmark ids).
+  std::vector<std::string> linked_frames(const std::string& frame) const;
+  void try_joins(const std::string& frame, SlamListener& listener);
+
   /// Lifelong thinning (slam_graph_thinning.cpp): over the kind's budget, rebuild the smoother of that kind with the
   /// keyframes keyframes_to_keep() keeps (estimators/keyframe/keyframe_thinning.hpp): odometry composed across the
   /// thinned ones, loops and sightings of thinned keyframes dropped, landmarks left without sightings dropped.
@@ -191,6 +292,8 @@ class SlamGraph {
       gate_marginals_[2];  // per variable: (updates when computed, marginal)
   int64_t keyframes_since_thinning_[2] = {0, 0};
   std::map<std::string, Body> bodies_;
+  Pending pending_;
+  std::map<std::pair<std::string, std::string>, int64_t> join_attempts_;  // frame pair -> keyframes at the last try
   int64_t next_variable_id_ = 0;
   double loop_gate_[2] = {0, 0}, sighting_gate_[2] = {0, 0};  // chi-square thresholds, [0] 3-D, [1] planar
   double sighting_width_[2] = {0, 0};                         // sighting_kernel_width_for

@@ -65,6 +65,8 @@ void SlamGraph::add_anchored_sightings(const std::string& name, Body& b, const S
   const TrackKeyframe& kf = b.track.keyframes()[anchor.keyframe];
   const SightingModel model(b.planar, estimate(b, kf.variable), anchor, s.sensor_in_body);
   const int kind = b.planar ? 1 : 0;
+  auto& landmarks = root_of(b).landmarks;  // the map of the body's frame
+  const size_t pending_before = pending_.sightings.size();
   bool added = false;
   Eigen::VectorXd z;
   Eigen::MatrixXd R;
@@ -73,12 +75,17 @@ void SlamGraph::add_anchored_sightings(const std::string& name, Body& b, const S
       ++counters_.sightings_without_id;
       continue;
     }
+    if (const auto marker = options_.fleet.markers.find(ob.id);
+        options_.fleet.enabled && marker != options_.fleet.markers.end()) {
+      added = add_body_sighting(name, b, s, anchor, ob, marker->second) || added;
+      continue;
+    }
     if (!model.measurement(ob, z, R)) {
       ++counters_.sightings_malformed;
       continue;
     }
-    auto lm = b.landmarks.find(ob.id);
-    const bool known = lm != b.landmarks.end();
+    auto lm = landmarks.find(ob.id);
+    const bool known = lm != landmarks.end();
     const Eigen::Vector3d position =
         known ? b.smoother->graph().variables()[static_cast<size_t>(lm->second.variable)].point
               : model.landmark_from(ob);
@@ -101,7 +108,7 @@ void SlamGraph::add_anchored_sightings(const std::string& name, Body& b, const S
         v.kind = b.planar ? graph::VariableKind::kPoint2 : graph::VariableKind::kPoint3;
         v.point = position;
         v.id = next_variable_id_++;
-        lm = b.landmarks.emplace(ob.id, Landmark{b.smoother->add_variable(v), 0}).first;
+        lm = landmarks.emplace(ob.id, Landmark{b.smoother->add_variable(v), 0}).first;
         ++counters_.landmarks;
       }
       add_factor(b,
@@ -116,7 +123,9 @@ void SlamGraph::add_anchored_sightings(const std::string& name, Body& b, const S
     ++counters_.sightings_accepted;
     added = true;
   }
-  if (added) update(name, b, b.track.newest().utime, listener);
+  if (added) update_frame(b.frame, listener);
+  // Shared landmarks and robot sightings are what place this body's frame among the others'.
+  if (options_.fleet.enabled && (added || pending_.sightings.size() != pending_before)) try_joins(b.frame, listener);
 }
 
 }  // namespace sextant::slam

@@ -26,10 +26,14 @@ void SlamGraph::save(archive::ArchiveWriter& w) {
   }
   w(static_cast<uint64_t>(bodies_.size()));
   for (const auto& [name, b] : bodies_) {
-    w(name)(b.planar)(b.selector)(b.track)(b.early_loops)(b.early_sightings);
+    w(name)(b.planar)(b.frame)(b.selector)(b.track)(b.early_loops)(b.early_sightings);
     w(static_cast<uint64_t>(b.landmarks.size()));
     for (const auto& [id, l] : b.landmarks) w(id)(l.variable)(l.sightings);
   }
+  w(static_cast<uint64_t>(pending_.sightings.size()));
+  for (const BodySighting& s : pending_.sightings) BodySighting::fields(w, s);
+  w(static_cast<uint64_t>(pending_.loops.size()));
+  for (const BodyLoop& l : pending_.loops) BodyLoop::fields(w, l);
   // The canonical form both this layer and a restored one continue from (slam_graph.hpp, save).
   for (int kind = 0; kind < 2; ++kind) {
     if (smoothers_[kind]) counters_.rebuilds += smoothers_[kind]->rebuild().ok ? 1 : 0;
@@ -65,7 +69,7 @@ void SlamGraph::load(archive::ArchiveReader& r) {
   for (uint64_t i = 0; i < bodies; ++i) {
     const auto name = r.get<std::string>();
     Body b;
-    r(b.planar);
+    r(b.planar)(b.frame);
     KeyframeSelectorOptions ko = options_.keyframes;
     ko.planar = b.planar;
     b.selector = KeyframeSelector(ko);
@@ -89,6 +93,100 @@ void SlamGraph::load(archive::ArchiveReader& r) {
     counters_.loops_waiting += static_cast<int64_t>(b.early_loops.size());
     if (!bodies_.emplace(name, std::move(b)).second) r.fail("body '" + name + "' twice");
   }
+  load_fleet(r);
+}
+
+void SlamGraph::load_fleet(archive::ArchiveReader& r) {
+  for (const auto& [name, b] : bodies_) {
+    const auto root = bodies_.find(b.frame);
+    if (root == bodies_.end() || root->second.frame != b.frame || root->second.planar != b.planar)
+      r.fail("body '" + name + "': its frame '" + b.frame + "' is not the root of a frame of its kind");
+    if (b.frame != name && !b.landmarks.empty()) r.fail("body '" + name + "': landmarks outside its frame's root");
+  }
+  const auto known = [&](const std::string& body) {
+    if (!bodies_.contains(body)) r.fail("a fleet link to an unknown body '" + body + "'");
+  };
+  for (uint64_t n = r.count(1, "the pending robot sightings"), k = 0; k < n; ++k) {
+    BodySighting s;
+    BodySighting::fields(r, s);
+    known(s.observer), known(s.observed);
+    pending_.sightings.push_back(std::move(s));
+  }
+  for (uint64_t n = r.count(1, "the pending inter-robot loops"), k = 0; k < n; ++k) {
+    BodyLoop l;
+    BodyLoop::fields(r, l);
+    known(l.from), known(l.to);
+    pending_.loops.push_back(std::move(l));
+  }
+}
+
+SlamGraph::Rebuilt SlamGraph::rebuilt(int kind, const std::vector<graph::Variable>& vars,
+                                      const std::vector<int>& merge_into) const {
+  const graph::IncrementalSmoother& old = *smoothers_[kind];
+  const auto& factors = old.graph().factors();
+  Rebuilt r{std::make_unique<graph::IncrementalSmoother>(old.options()), {}, std::vector<int>(vars.size(), -1)};
+  for (size_t v = 0; v < vars.size(); ++v)
+    if (merge_into[v] == -1) r.remap[v] = r.smoother->add_variable(vars[v]);
+  for (size_t v = 0; v < vars.size(); ++v)
+    if (merge_into[v] >= 0) r.remap[v] = r.remap[static_cast<size_t>(merge_into[v])];
+  for (size_t f = 0; f < factors.size(); ++f) {
+    std::vector<int> vs;
+    for (int v : factors[f]->variables()) vs.push_back(r.remap[static_cast<size_t>(v)]);
+    if (std::find(vs.begin(), vs.end(), -1) != vs.end()) continue;
+    const FactorTag& t = factor_tags_[kind][f];
+    r.smoother->add_factor(factors[f]->rebind(vs), t.robust, t.kernel_width);
+    r.tags.push_back(t);
+  }
+  return r;
+}
+
+void SlamGraph::commit_rebuilt(int kind, Rebuilt r) {
+  for (auto& [name, b] : bodies_) {
+    if ((b.planar ? 1 : 0) != kind) continue;
+    b.track.remap_variables(r.remap);
+    for (auto& [id, l] : b.landmarks) l.variable = r.remap[static_cast<size_t>(l.variable)];
+    b.smoother = r.smoother.get();
+  }
+  smoothers_[kind] = std::move(r.smoother);
+  factor_tags_[kind] = std::move(r.tags);
+  gate_marginals_[kind].clear();  // the variables' indices changed
+}
+
+void SlamGraph::drop_unseen_landmarks(int kind, std::vector<int>& merge_into) {
+  std::vector<int> seen(merge_into.size(), 0);
+  for (const auto& f : smoothers_[kind]->graph().factors()) {
+    bool stays = true;
+    for (int v : f->variables()) stays = stays && merge_into[static_cast<size_t>(v)] != kDropVariable;
+    if (stays)
+      for (int v : f->variables()) ++seen[static_cast<size_t>(v)];
+  }
+  for (auto& [name, b] : bodies_) {
+    if ((b.planar ? 1 : 0) != kind) continue;
+    for (auto it = b.landmarks.begin(); it != b.landmarks.end();) {
+      const auto v = static_cast<size_t>(it->second.variable);
+      if (merge_into[v] == kDropVariable || seen[v] > 0) {
+        ++it;
+        continue;
+      }
+      merge_into[v] = kDropVariable;
+      it = b.landmarks.erase(it);
+    }
+  }
+}
+
+std::string SlamGraph::hand_over_frame(const std::string& root) {
+  Body& old = bodies_.at(root);
+  if (old.frame != root) return {};
+  std::string next;
+  for (auto& [name, b] : bodies_)
+    if (name != root && b.frame == root) {
+      if (next.empty()) next = name;
+      b.frame = next;
+    }
+  if (next.empty()) return next;  // alone: its landmarks leave with it
+  bodies_.at(next).landmarks = std::move(old.landmarks);
+  old.landmarks.clear();
+  return next;
 }
 
 void SlamGraph::forget(const std::string& name) {
@@ -96,45 +194,40 @@ void SlamGraph::forget(const std::string& name) {
   if (it == bodies_.end()) return;
   const bool planar = it->second.planar;
   const int kind = planar ? 1 : 0;
-  const graph::IncrementalSmoother& old = *smoothers_[kind];
-  const auto& vars = old.graph().variables();
-  const auto& factors = old.graph().factors();
-  std::vector<char> drop(vars.size(), 0);
-  for (const auto& k : it->second.track.keyframes()) drop[static_cast<size_t>(k.variable)] = 1;
-  for (const auto& [id, l] : it->second.landmarks) drop[static_cast<size_t>(l.variable)] = 1;
-  // Bodies share no variable: the other bodies' variables and factors make the new smoother, in their old order.
-  auto fresh = std::make_unique<graph::IncrementalSmoother>(old.options());
-  std::vector<FactorTag> fresh_tags;
-  std::vector<int> remap(vars.size(), -1);
-  for (size_t v = 0; v < vars.size(); ++v)
-    if (!drop[v]) remap[v] = fresh->add_variable(vars[v]);
-  for (size_t f = 0; f < factors.size(); ++f) {
-    std::vector<int> vs;
-    for (int v : factors[f]->variables()) vs.push_back(remap[static_cast<size_t>(v)]);
-    if (std::find(vs.begin(), vs.end(), -1) != vs.end()) continue;
-    const FactorTag& t = factor_tags_[kind][f];
-    fresh->add_factor(factors[f]->rebind(vs), t.robust, t.kernel_width);
-    fresh_tags.push_back(t);
-  }
+  const std::string next_root = hand_over_frame(name);
+  std::vector<graph::Variable> vars = smoothers_[kind]->graph().variables();
+  std::vector<int> merge_into(vars.size(), -1);
+  for (const auto& k : it->second.track.keyframes()) merge_into[static_cast<size_t>(k.variable)] = kDropVariable;
+  for (const auto& [id, l] : it->second.landmarks) merge_into[static_cast<size_t>(l.variable)] = kDropVariable;
+  if (!next_root.empty() && !bodies_.at(next_root).track.empty())  // the frame's gauge moves to its new root
+    vars[static_cast<size_t>(bodies_.at(next_root).track.keyframes().front().variable)].fixed = true;
+  drop_unseen_landmarks(kind, merge_into);
+  Rebuilt fresh = rebuilt(kind, vars, merge_into);
+  const auto involves = [&](const auto& x) {
+    if constexpr (std::is_same_v<std::decay_t<decltype(x)>, BodySighting>)
+      return x.observer == name || x.observed == name;
+    else
+      return x.from == name || x.to == name;
+  };
+  const auto purge = [&](auto& list) {
+    const auto before = list.size();
+    list.erase(std::remove_if(list.begin(), list.end(), involves), list.end());
+    counters_.fleet_pending -= static_cast<int64_t>(before - list.size());
+  };
+  purge(pending_.sightings);
+  purge(pending_.loops);
   counters_.loops_waiting -= static_cast<int64_t>(it->second.early_loops.size());
   bodies_.erase(it);
-  bool others = false;
-  for (auto& [other, b] : bodies_) {
-    if (b.planar != planar) continue;
-    others = true;
-    b.track.remap_variables(remap);
-    for (auto& [id, l] : b.landmarks) l.variable = remap[static_cast<size_t>(l.variable)];
-    b.smoother = fresh.get();
-  }
-  gate_marginals_[kind].clear();
+  const bool others =
+      std::any_of(bodies_.begin(), bodies_.end(), [&](const auto& x) { return x.second.planar == planar; });
   if (!others) {
     smoothers_[kind].reset();
     factor_tags_[kind].clear();
+    gate_marginals_[kind].clear();
     return;
   }
-  if (!fresh->update().ok) ++counters_.optimizer_failures;
-  smoothers_[kind] = std::move(fresh);
-  factor_tags_[kind] = std::move(fresh_tags);
+  if (!fresh.smoother->update().ok) ++counters_.optimizer_failures;
+  commit_rebuilt(kind, std::move(fresh));
 }
 
 }  // namespace sextant::slam

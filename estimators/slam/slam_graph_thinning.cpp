@@ -89,6 +89,10 @@ void SlamGraph::thin(bool planar) {
 bool SlamGraph::choose_kept_keyframes(ThinningPlan& p) {
   p.keep_var.assign(p.vars.size(), 1);
   bool any = false;
+  // The window is the kind's, shared by its bodies: a fleet of N keeps each body's window/N newest keyframes whole,
+  // so that the graph returns under its budget whatever the fleet's size.
+  const int bodies = static_cast<int>(
+      std::count_if(bodies_.begin(), bodies_.end(), [&](const auto& x) { return x.second.planar == p.planar; }));
   for (auto& [name, b] : bodies_) {
     if (b.planar != p.planar || b.track.empty()) continue;
     std::vector<ThinningCandidate> candidates;
@@ -96,7 +100,7 @@ bool SlamGraph::choose_kept_keyframes(ThinningPlan& p) {
     for (const auto& k : b.track.keyframes())
       candidates.push_back({k.id, p.vars[static_cast<size_t>(k.variable)].as_se3()});
     KeyframeThinningOptions thinning = options_.lifelong.thinning;
-    thinning.window = options_.lifelong.budget(p.planar).window;
+    thinning.window = std::max(1, options_.lifelong.budget(p.planar).window / std::max(bodies, 1));
     auto keep = keyframes_to_keep(candidates, p.planar, thinning);
     for (size_t i = 0; i < keep.size(); ++i)
       if (!keep[i]) p.keep_var[static_cast<size_t>(b.track.keyframes()[i].variable)] = 0, any = true;

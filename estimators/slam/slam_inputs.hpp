@@ -11,6 +11,7 @@
 
 #include <cstdint>
 #include <optional>
+#include <string>
 #include <vector>
 
 namespace sextant::slam {
@@ -33,10 +34,11 @@ struct LoopInput {
   int64_t keyframe_from = -1, keyframe_to = -1;
   SE3 relative;
   Matrix6d information = Matrix6d::Identity();
+  std::string body_to;  // the body of the "to" end when it is another body of the fleet (empty: the same body)
 
   template <class Archive, class Self>
   static void fields(Archive& a, Self& l) {
-    a(l.utime_from)(l.utime_to)(l.keyframe_from)(l.keyframe_to)(l.relative)(l.information);
+    a(l.utime_from)(l.utime_to)(l.keyframe_from)(l.keyframe_to)(l.relative)(l.information)(l.body_to);
   }
   void save(archive::ArchiveWriter& w) const { fields(w, *this); }
   void load(archive::ArchiveReader& r) { fields(r, *this); }

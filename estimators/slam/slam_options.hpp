@@ -6,7 +6,9 @@
 #include "estimators/keyframe/keyframe_selector.hpp"
 #include "estimators/keyframe/keyframe_thinning.hpp"
 #include "estimators/keyframe/loop_proposals.hpp"
+#include "estimators/slam/frame_placement.hpp"
 
+#include <map>
 #include <optional>
 #include <string>
 
@@ -33,13 +35,26 @@ struct LandmarkOptions {
 struct LifelongOptions {
   struct Budget {
     int max_keyframes = 2000;
-    int window = 1000;  // the newest keyframes that stay whole
+    int window = 1000;  // the newest keyframes that stay whole (shared by the bodies of the kind)
   };
   bool enabled = true;
   Budget planar{2000, 1000};
   Budget spatial{1000, 500};
   KeyframeThinningOptions thinning;  // cell_size and heading_sector; its window is the budget's of the kind
   const Budget& budget(bool planar_kind) const { return planar_kind ? planar : spatial; }
+};
+
+/// A fleet (slam_graph.hpp, "Fleet"): every body of the layer belongs to one fleet; each starts in a map frame of its
+/// own and joins another body's frame when frame_placement.hpp's rule places it there.
+struct FleetOptions {
+  bool enabled = true;                     // false: every body is estimated alone, as separate robots
+  std::map<int64_t, std::string> markers;  // landmark id -> the body whose origin a sighting of that id sees
+  PlacementOptions placement;              // the joining rule
+  /// A sighting of a body at a time its odometry has not reached yet is taken at its latest pose when at most this
+  /// much older (robots' odometry streams interleave; 65 Hz MRCLAM odometry is at most 15 ms behind).
+  double observed_time_tolerance_s = 0.25;
+  int max_pending = 256;  // robot sightings and loops between frames not yet joined, kept as evidence (oldest go)
+  int join_every_keyframes = 5;  // placement tried at most this often per pair of frames without new evidence
 };
 
 struct SlamOptions {
@@ -73,6 +88,7 @@ struct SlamOptions {
   graph::IncrementalOptions smoother;
   LifelongOptions lifelong;
   LandmarkOptions landmarks;
+  FleetOptions fleet;
 };
 
 /// The robust kernel's width for the loops of one kind of body (planar: x, y, yaw residuals, d = 3; spatial: d = 6).

@@ -239,6 +239,12 @@ TEST_CASE("factor Jacobians agree with central differences") {
         2, 5, M::kRangeAzimuthElevation, Eigen::Vector3d(1, 0.2, 0.1), Eigen::Matrix3d::Identity()));
     factors.push_back(std::make_unique<PointObservationFactor>(2, 5, M::kBearing, Eigen::Vector2d(0.2, 0.1),
                                                                Eigen::Matrix2d::Identity()));
+    factors.push_back(std::make_unique<PoseObservationFactor>(0, 1, M::kRangeBearing, Eigen::Vector2d(1, 0.2),
+                                                              Eigen::Matrix2d::Identity(), offset,
+                                                              Eigen::Vector3d(0.3, -0.2, 0)));
+    factors.push_back(std::make_unique<PoseObservationFactor>(2, 3, M::kRangeAzimuthElevation,
+                                                              Eigen::Vector3d(1, 0.2, 0.1), Eigen::Matrix3d::Identity(),
+                                                              offset, Eigen::Vector3d(0.3, -0.2, 0.1)));
     for (const auto& f : factors) {
       CAPTURE(f->type());
       Linearization lin = f->make_linearization(vars);

@@ -1,0 +1,359 @@
+// The SLAM layer's fleet (slam_graph.hpp, "Fleet"): robot sightings and inter-robot loops, evidence between map
+// frames, the joining of two frames, and the frames' names.
+#include "estimators/lie/planar_axes.hpp"
+#include "estimators/slam/loop_gate.hpp"
+#include "estimators/slam/pose_factors.hpp"
+#include "estimators/slam/sighting_model.hpp"
+#include "estimators/slam/slam_graph.hpp"
+
+#include <algorithm>
+#include <set>
+
+namespace sextant::slam {
+
+/// The placement evidence between two frames and where each item came from: -1 a landmark both maps hold, else an
+/// index into pending_.sightings (from_sighting) or pending_.loops.
+struct SlamGraph::Evidence {
+  std::vector<PlacementEvidence> items;
+  std::vector<std::pair<bool, int>> origin;  // (from a pending sighting, index); index -1: a landmark
+};
+
+std::string SlamGraph::frame_of(const std::string& name) const {
+  auto it = bodies_.find(name);
+  return it == bodies_.end() ? std::string() : it->second.frame;
+}
+
+std::map<std::string, std::vector<std::string>> SlamGraph::frames() const {
+  std::map<std::string, std::vector<std::string>> out;
+  for (const auto& [name, b] : bodies_) out[b.frame].push_back(name);
+  return out;
+}
+
+std::optional<TrackPoint> SlamGraph::anchor_near(const Body& b, int64_t utime) const {
+  if (b.track.empty()) return std::nullopt;
+  if (utime <= b.track.last_utime()) return b.track.anchor_at(utime);
+  if (static_cast<double>(utime - b.track.last_utime()) > options_.fleet.observed_time_tolerance_s * 1e6)
+    return std::nullopt;
+  return TrackPoint{b.track.keyframes().size() - 1, b.track.newest().odom.between(b.track.last_odom()),
+                    b.track.since_keyframe()};
+}
+
+bool SlamGraph::add_body_sighting(const std::string& name, Body& b, const SightingsInput& s, const TrackPoint& anchor,
+                                  const LandmarkSighting& ob, const std::string& observed) {
+  if (observed == name) {
+    ++counters_.fleet_self_sightings;
+    return false;
+  }
+  auto it = bodies_.find(observed);
+  const std::optional<TrackPoint> at =
+      it == bodies_.end() || it->second.planar != b.planar ? std::nullopt : anchor_near(it->second, s.utime);
+  if (!at) {
+    ++counters_.fleet_sightings_unplaced;
+    return false;
+  }
+  const Body& o = it->second;
+  BodySighting bs{name,
+                  observed,
+                  s.utime,
+                  s.sensor_in_body,
+                  ob,
+                  b.track.keyframes()[anchor.keyframe].id,
+                  o.track.keyframes()[at->keyframe].id,
+                  anchor.motion,
+                  at->motion,
+                  anchor.covariance,
+                  at->covariance};
+  if (o.frame == b.frame) return add_sighting_factor(bs);
+  if (pending_.sightings.size() >= static_cast<size_t>(std::max(options_.fleet.max_pending, 1))) {
+    pending_.sightings.erase(pending_.sightings.begin());
+    ++counters_.fleet_pending_dropped;
+  }
+  pending_.sightings.push_back(std::move(bs));
+  ++counters_.fleet_pending;
+  return false;
+}
+
+bool SlamGraph::add_sighting_factor(const BodySighting& s) {
+  const auto a = bodies_.find(s.observer), o = bodies_.find(s.observed);
+  if (a == bodies_.end() || o == bodies_.end()) return false;
+  const auto ka = a->second.track.position_of(s.observer_keyframe);
+  const auto ko = o->second.track.position_of(s.observed_keyframe);
+  if (!ka || !ko) {
+    ++counters_.fleet_sightings_unplaced;  // an anchor thinned away while the sighting waited
+    return false;
+  }
+  Body& observer = a->second;
+  const bool planar = observer.planar;
+  const TrackKeyframe& kfa = observer.track.keyframes()[*ka];
+  const TrackKeyframe& kfo = o->second.track.keyframes()[*ko];
+  const SightingModel model(planar, estimate(observer, kfa.variable), {*ka, s.observer_motion, s.observer_covariance},
+                            s.sensor_in_body);
+  Eigen::VectorXd z;
+  Eigen::MatrixXd R;
+  if (!model.measurement(s.sighting, z, R)) {
+    ++counters_.sightings_malformed;
+    return false;
+  }
+  const SE3 seen = estimate(o->second, kfo.variable) * s.observed_motion;
+  const SightingModel::Evaluation ev = model.evaluate(z, seen.translation());
+  // The seen body's odometry from its keyframe to the sighting is uncertain too: its translation moves the seen
+  // point by R_seen dt, so R gains J_p R_seen Sigma_t R_seen' J_p' (the rotation part does not move the origin).
+  const int n = planar ? 2 : 3;
+  const Eigen::MatrixXd j = ev.d_landmark * seen.rotation().matrix().topLeftCorner(n, n);
+  const Eigen::MatrixXd r_seen = R + j * s.observed_covariance.topLeftCorner(n, n) * j.transpose();
+  try {
+    add_factor(observer,
+               std::make_unique<graph::PoseObservationFactor>(kfa.variable, kfo.variable, model.model(), z,
+                                                              model.information(ev, r_seen), model.sensor_in_keyframe(),
+                                                              s.observed_motion.translation()),
+               FactorRole::kLoop, true, sighting_width_[planar ? 1 : 0]);
+  } catch (const std::invalid_argument&) {
+    ++counters_.sightings_malformed;
+    return false;
+  }
+  ++counters_.fleet_sightings;
+  return true;
+}
+
+bool SlamGraph::add_loop_factor(const BodyLoop& l) {
+  const auto a = bodies_.find(l.from), b = bodies_.find(l.to);
+  if (a == bodies_.end() || b == bodies_.end()) return false;
+  const auto ka = a->second.track.position_of(l.from_keyframe);
+  const auto kb = b->second.track.position_of(l.to_keyframe);
+  if (!ka || !kb) {
+    ++counters_.loops_unmatched;
+    return false;
+  }
+  Body& from = a->second;
+  const int va = from.track.keyframes()[*ka].variable, vb = b->second.track.keyframes()[*kb].variable;
+  // The gate against the estimate: the relative pose's covariance from the two keyframes' marginals (their
+  // correlation ignored), P = Ad(D^-1) P_a Ad(D^-1)' + P_b with D = X_a^-1 X_b.
+  const SE3 predicted = estimate(from, va).between(estimate(b->second, vb));
+  const auto marginal = [&](int v) {
+    const Eigen::MatrixXd m = gate_marginal(from, v);
+    return m.size() == 0 ? Matrix6d::Zero().eval() : from.planar ? embed_planar(m) : Matrix6d(m);
+  };
+  const Matrix6d ad = predicted.inverse().adjoint();
+  const Matrix6d path = ad * marginal(va) * ad.transpose() + marginal(vb);
+  const KeyframeLoop loop{l.z, l.information, false};
+  if (!(loop_mahalanobis(from.planar, loop, predicted, path, 1.0) <= loop_gate_[from.planar ? 1 : 0])) {
+    ++counters_.loops_rejected;
+    return false;
+  }
+  try {
+    add_factor(from, loop_factor(from.planar, va, vb, l.z, l.information), FactorRole::kLoop, true, std::nullopt);
+  } catch (const std::invalid_argument&) {
+    ++counters_.loops_rejected;
+    return false;
+  }
+  ++counters_.fleet_loops;
+  ++counters_.loops_accepted;
+  return true;
+}
+
+void SlamGraph::add_body_loop(const std::string& name, Body& b, const LoopInput& l, SlamListener& listener) {
+  auto it = bodies_.find(l.body_to);
+  if (it == bodies_.end() || it->second.planar != b.planar || !options_.fleet.enabled) {
+    ++counters_.loops_unknown_source;
+    return;
+  }
+  Body& o = it->second;
+  const auto tolerance = static_cast<int64_t>(options_.loop_time_tolerance_s * 1e6);
+  const auto end_from = b.track.resolve(l.keyframe_from, l.utime_from, tolerance);
+  const auto end_to = o.track.resolve(l.keyframe_to, l.utime_to, tolerance);
+  if (!end_from || !end_to) {
+    if (l.utime_from > b.track.last_utime() || l.utime_to > o.track.last_utime()) {
+      if (b.early_loops.size() < static_cast<size_t>(std::max(options_.max_waiting_loops, 0))) {
+        b.early_loops.push_back(l);  // retried with the body's next odometry
+        ++counters_.loops_waiting;
+      } else {
+        ++counters_.loops_waiting_dropped;
+      }
+    } else {
+      ++counters_.loops_unmatched;
+    }
+    return;
+  }
+  const KeyframeLoop kl = loop_on_keyframes(b.planar, l.relative, l.information, *end_from, *end_to);
+  BodyLoop bl{name, l.body_to, b.track.keyframes()[end_from->keyframe].id, o.track.keyframes()[end_to->keyframe].id,
+              kl.z, kl.information};
+  if (o.frame == b.frame) {
+    if (add_loop_factor(bl)) update_frame(b.frame, listener);
+    return;
+  }
+  if (pending_.loops.size() >= static_cast<size_t>(std::max(options_.fleet.max_pending, 1))) {
+    pending_.loops.erase(pending_.loops.begin());
+    ++counters_.fleet_pending_dropped;
+  }
+  pending_.loops.push_back(std::move(bl));
+  ++counters_.fleet_pending;
+  try_join(b.frame, o.frame, listener);
+}
+
+SlamGraph::Evidence SlamGraph::evidence_between(const std::string& a, const std::string& b) const {
+  Evidence ev;
+  const Body& ra = bodies_.at(a);
+  const Body& rb = bodies_.at(b);
+  const auto point = [&](const Landmark& l, const Body& r) {
+    return r.smoother->graph().variables()[static_cast<size_t>(l.variable)].point;
+  };
+  for (const auto& [id, la] : ra.landmarks) {
+    const auto lb = rb.landmarks.find(id);
+    if (lb == rb.landmarks.end()) continue;
+    ev.items.push_back({PlacementEvidence::Kind::kLandmark, point(la, ra), point(lb->second, rb), SE3()});
+    ev.origin.emplace_back(false, -1);
+  }
+  for (size_t k = 0; k < pending_.sightings.size(); ++k) {
+    const BodySighting& s = pending_.sightings[k];
+    const Body& observer = bodies_.at(s.observer);
+    const Body& observed = bodies_.at(s.observed);
+    const bool forward = observer.frame == a && observed.frame == b;
+    if (!forward && !(observer.frame == b && observed.frame == a)) continue;
+    const auto ka = observer.track.position_of(s.observer_keyframe);
+    const auto ko = observed.track.position_of(s.observed_keyframe);
+    if (!ka || !ko) continue;
+    const SightingModel model(observer.planar, estimate(observer, observer.track.keyframes()[*ka].variable),
+                              {*ka, s.observer_motion, s.observer_covariance}, s.sensor_in_body);
+    const Eigen::Vector3d seen = model.landmark_from(s.sighting);  // in the observer's frame
+    const Eigen::Vector3d own =
+        (estimate(observed, observed.track.keyframes()[*ko].variable) * s.observed_motion).translation();
+    ev.items.push_back({PlacementEvidence::Kind::kBodySighting, forward ? seen : own, forward ? own : seen, SE3()});
+    ev.origin.emplace_back(true, static_cast<int>(k));
+  }
+  for (size_t k = 0; k < pending_.loops.size(); ++k) {
+    const BodyLoop& l = pending_.loops[k];
+    const Body& from = bodies_.at(l.from);
+    const Body& to = bodies_.at(l.to);
+    const bool forward = from.frame == a && to.frame == b;
+    if (!forward && !(from.frame == b && to.frame == a)) continue;
+    const auto kf = from.track.position_of(l.from_keyframe);
+    const auto kt = to.track.position_of(l.to_keyframe);
+    if (!kf || !kt) continue;
+    // T_from_to = X_from z X_to^-1 (each X in its own frame).
+    const SE3 t = estimate(from, from.track.keyframes()[*kf].variable) * l.z *
+                  estimate(to, to.track.keyframes()[*kt].variable).inverse();
+    ev.items.push_back({PlacementEvidence::Kind::kLoop, {}, {}, forward ? t : t.inverse()});
+    ev.origin.emplace_back(false, static_cast<int>(k));
+  }
+  return ev;
+}
+
+std::vector<std::string> SlamGraph::linked_frames(const std::string& frame) const {
+  std::set<std::string> out;
+  const auto link = [&](const std::string& x, const std::string& y) {
+    if (x == frame && y != frame) out.insert(y);
+    if (y == frame && x != frame) out.insert(x);
+  };
+  for (const BodySighting& s : pending_.sightings) link(bodies_.at(s.observer).frame, bodies_.at(s.observed).frame);
+  for (const BodyLoop& l : pending_.loops) link(bodies_.at(l.from).frame, bodies_.at(l.to).frame);
+  const Body& root = bodies_.at(frame);
+  for (const auto& [name, b] : bodies_) {
+    if (b.frame != name || name == frame || b.planar != root.planar || out.contains(name)) continue;
+    for (const auto& [id, l] : b.landmarks)
+      if (root.landmarks.contains(id)) {
+        out.insert(name);
+        break;
+      }
+  }
+  return {out.begin(), out.end()};
+}
+
+void SlamGraph::try_joins(const std::string& frame, SlamListener& listener) {
+  if (!options_.fleet.enabled) return;
+  std::string current = frame;
+  for (const std::string& other : linked_frames(frame)) {
+    if (!bodies_.contains(other) || bodies_.at(other).frame != other) continue;  // joined meanwhile
+    auto& last = join_attempts_[std::minmax(current, other)];
+    if (last != 0 && counters_.keyframes - last < options_.fleet.join_every_keyframes) continue;
+    last = std::max<int64_t>(counters_.keyframes, 1);
+    if (try_join(current, other, listener)) current = std::min(current, other);
+  }
+}
+
+bool SlamGraph::try_join(const std::string& a, const std::string& b, SlamListener& listener) {
+  if (!options_.fleet.enabled || a == b) return false;
+  const Evidence ev = evidence_between(a, b);
+  if (ev.items.size() < static_cast<size_t>(options_.fleet.placement.min_support)) return false;
+  const Placement p = place_frames(ev.items, bodies_.at(a).planar, options_.fleet.placement);
+  if (!p.placed) return false;
+  // The links between the two frames leave the pending lists: those that agree with the placement become factors
+  // once the frames are one, the others are outliers.
+  std::vector<char> inlier(ev.items.size(), 0);
+  for (size_t i : p.inliers) inlier[i] = 1;
+  std::vector<BodySighting> sightings;
+  std::vector<BodyLoop> loops;
+  std::set<int> taken_sightings, taken_loops;
+  for (size_t i = 0; i < ev.items.size(); ++i) {
+    const auto [is_sighting, k] = ev.origin[i];
+    if (k < 0) continue;
+    (is_sighting ? taken_sightings : taken_loops).insert(k);
+    if (!inlier[i]) {
+      ++counters_.fleet_outliers;
+      continue;
+    }
+    if (is_sighting)
+      sightings.push_back(pending_.sightings[static_cast<size_t>(k)]);
+    else
+      loops.push_back(pending_.loops[static_cast<size_t>(k)]);
+  }
+  const auto erase_taken = [](auto& list, const std::set<int>& taken) {
+    for (auto it = taken.rbegin(); it != taken.rend(); ++it) list.erase(list.begin() + *it);
+  };
+  erase_taken(pending_.sightings, taken_sightings);
+  erase_taken(pending_.loops, taken_loops);
+  counters_.fleet_pending -= static_cast<int64_t>(taken_sightings.size() + taken_loops.size());
+  const std::string keep = std::min(a, b), gone = std::max(a, b);
+  merge_frame_variables(keep, gone, keep == a ? p.a_from_b : p.a_from_b.inverse());
+  ++counters_.fleet_joins;
+  for (const BodySighting& s : sightings) add_sighting_factor(s);
+  for (const BodyLoop& l : loops) add_loop_factor(l);
+  update_frame(keep, listener);
+  return true;
+}
+
+void SlamGraph::update_frame(const std::string& frame, SlamListener& listener) {
+  const graph::IncrementalStatus st = solve(bodies_.at(frame));
+  if (!st.ok) return;
+  for (const auto& [name, b] : bodies_)
+    if (b.frame == frame && !b.track.empty()) listener.updated(name, b.track.newest().utime, st);
+}
+
+void SlamGraph::merge_frame_variables(const std::string& keep, const std::string& gone, const SE3& keep_from_gone) {
+  Body& rk = bodies_.at(keep);
+  Body& rg = bodies_.at(gone);
+  const int kind = rk.planar ? 1 : 0;
+  std::vector<graph::Variable> vars = rk.smoother->graph().variables();
+  const auto move = [&](graph::Variable& v) {
+    if (v.kind == graph::VariableKind::kPose2)
+      v.pose2 = SE2::from_se3(keep_from_gone * v.pose2.to_se3());
+    else if (v.kind == graph::VariableKind::kPose3)
+      v.pose3 = keep_from_gone * v.pose3;
+    else
+      v.point = keep_from_gone * v.point;
+    if (v.kind == graph::VariableKind::kPoint2) v.point.z() = 0;
+  };
+  for (auto& [name, b] : bodies_) {
+    if (b.frame != gone) continue;
+    for (const TrackKeyframe& k : b.track.keyframes()) {
+      graph::Variable& v = vars[static_cast<size_t>(k.variable)];
+      move(v);
+      v.fixed = false;  // the gone frame's gauge: its root's first keyframe
+    }
+    b.frame = keep;
+  }
+  std::vector<int> merge_into(vars.size(), -1);
+  for (auto& [id, l] : rg.landmarks) {
+    move(vars[static_cast<size_t>(l.variable)]);
+    auto k = rk.landmarks.find(id);
+    if (k == rk.landmarks.end()) {
+      rk.landmarks.emplace(id, l);
+    } else {
+      merge_into[static_cast<size_t>(l.variable)] = k->second.variable;
+      k->second.sightings += l.sightings;
+    }
+  }
+  rg.landmarks.clear();
+  commit_rebuilt(kind, rebuilt(kind, vars, merge_into));
+}
+
+}  // namespace sextant::slam
