@@ -10,7 +10,8 @@
 #    queue.
 # 2. MCAP: a 60-minute planar run (seed 1) replayed with config/default.yaml (lifelong); `convert mcap` of its output
 #    log (what the daemon published) and of its input log: MB/s, sizes, then the reference reader
-#    (tests/viewer/check_mcap.mjs) on both, compared with the logs.  MINUTES=N for a shorter run.
+#    (tests/viewer/check_mcap.mjs) on both, compared with the logs.  MINUTES=N for a shorter run, MINUTES=0 for none.
+# CASES="ten_viewers ..." runs only those bridge cases (before/after comparisons: interleave runs of two builds).
 # Writes OUT/foxglove.md (the table) and the raw figures beside it.
 set -euo pipefail
 build=${1:?usage: bench/foxglove.sh BUILD OUT}
@@ -58,9 +59,16 @@ bridge_case() {
 
 require_netns
 [ -f "$out/load.lcm" ] || python3 "$root/bench/foxglove_load.py" "$out/load.lcm" --seconds "$seconds"
-bridge_case one_viewer 1 0
-bridge_case ten_viewers 10 0
-bridge_case stalled_viewer 1 1
+declare -A case_args=([one_viewer]="1 0" [ten_viewers]="10 0" [stalled_viewer]="1 1")
+for c in ${CASES:-one_viewer ten_viewers stalled_viewer}; do
+  # shellcheck disable=SC2086  # "VIEWERS STALLED"
+  bridge_case "$c" ${case_args[$c]:?unknown case $c}
+done
+
+if [ "$minutes" = 0 ]; then
+  python3 "$root/bench/foxglove_summary.py" "$out" > "$out/foxglove.md"
+  cat "$out/foxglove.md"; exit 0
+fi
 
 # MCAP of the 60-minute lifelong run.
 run="$out/planar_${minutes}min"

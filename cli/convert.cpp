@@ -1,4 +1,5 @@
 // sextant convert g2o FILE -o OUT.lcm [--gt-out GT.txt] | mrclam DIR --robot N -o OUT.lcm [--gt-out GT.txt]
+//                 | mrclam DIR --robots 1-5 -o OUT.lcm [--gt-out PREFIX]
 //                 | tum GT.txt -o OUT.lcm [--seed N ...] | euroc DIR -o OUT.lcm [--gt-out GT.txt]
 //                 | rosbag FILE.bag -o OUT.lcm [--topic TOPIC=CHANNEL]... [--frame FRAME=BODY]... [--yaw-free TOPIC]...
 #include "cli/command.hpp"
@@ -35,6 +36,48 @@ std::string counts(const std::map<std::string, int64_t>& m) {
   std::string s;
   for (const auto& [k, v] : m) s += (s.empty() ? "" : ", ") + k + " " + std::to_string(v);
   return s.empty() ? "none" : s;
+}
+
+void add_mrclam(CLI::App* cmd) {
+  auto* mr = cmd->add_subcommand("mrclam",
+                                 "a UTIAS MRCLAM data set folder -> one robot's (--robot) or a fleet's (--robots) "
+                                 "odometry, landmark (and robot) sightings and truth");
+  auto dir = std::make_shared<std::string>(), out = std::make_shared<std::string>(),
+       gt = std::make_shared<std::string>(), robots = std::make_shared<std::string>();
+  auto robot = std::make_shared<int>(1);
+  mr->add_option("dir", *dir, "folder with Barcodes.dat, Landmark_Groundtruth.dat, RobotN_*.dat")
+      ->required()
+      ->check(CLI::ExistingDirectory);
+  auto* one = mr->add_option("--robot", *robot, "one robot, 1 to 5, its odometry starting on its ground truth")
+                  ->check(CLI::Range(1, 5));
+  auto* fleet = mr->add_option("--robots", *robots,
+                               "a fleet in one log, e.g. 1-5 or 1,3: each robot's odometry in its own frame, robot "
+                               "sightings kept with the seen robot's number as id");
+  one->excludes(fleet);
+  mr->add_option("-o,--output", *out, "output LCM log")->required();
+  mr->add_option("--gt-out", *gt,
+                 "--robot: the robot's ground truth as a TUM file; --robots: a prefix P, written P robotN.txt (TUM) "
+                 "per robot and P landmarks.txt (id x y)");
+  auto o = std::make_shared<MrclamOptions>();
+  mr->add_option("--command-delay", o->command_delay_s,
+                 "seconds between a velocity command's stamp and the motion it causes")
+      ->check(CLI::Range(-1.0, 1.0));
+  mr->add_option("--range-sigma-per-metre", o->range_sigma_per_metre, "range noise, m per m of range")
+      ->check(CLI::PositiveNumber);
+  mr->add_option("--bearing-sigma", o->bearing_sigma, "bearing noise, rad")->check(CLI::PositiveNumber);
+  mr->callback([=] {
+    sextant::cli::convert_guarded("mrclam", [&] {
+      if (one->count() == 0 && fleet->count() == 0) throw std::invalid_argument("give --robot N or --robots LIST");
+      const auto r = fleet->count() ? convert_mrclam_fleet(*dir, parse_mrclam_robots(*robots), *out, *gt, *o)
+                                    : convert_mrclam(*dir, *robot, *out, *gt, *o);
+      std::printf(
+          "%s: %lld odometry, %lld landmark messages (%lld landmark sightings, %lld of %lld robot sightings; %lld "
+          "unknown barcodes left out), %lld truth\n",
+          out->c_str(), (long long)r.odometry, (long long)r.landmark_messages, (long long)r.landmark_observations,
+          (long long)r.robot_sightings_kept, (long long)r.robot_sightings, (long long)r.unknown_barcodes,
+          (long long)r.truth);
+    });
+  });
 }
 
 void add_euroc(CLI::App* cmd) {
@@ -104,34 +147,7 @@ sextant::cli::RegisterCommand reg{
         });
       });
 
-      auto* mr = cmd->add_subcommand(
-          "mrclam", "a UTIAS MRCLAM data set folder -> one robot's odometry, landmark sightings and truth");
-      auto m_dir = std::make_shared<std::string>(), m_out = std::make_shared<std::string>(),
-           m_gt = std::make_shared<std::string>();
-      auto m_robot = std::make_shared<int>(1);
-      mr->add_option("dir", *m_dir, "folder with Barcodes.dat, Landmark_Groundtruth.dat, RobotN_*.dat")
-          ->required()
-          ->check(CLI::ExistingDirectory);
-      mr->add_option("--robot", *m_robot, "robot number, 1 to 5")->required()->check(CLI::Range(1, 5));
-      mr->add_option("-o,--output", *m_out, "output LCM log")->required();
-      mr->add_option("--gt-out", *m_gt, "the robot's ground truth as a TUM trajectory");
-      auto m_opt = std::make_shared<MrclamOptions>();
-      mr->add_option("--command-delay", m_opt->command_delay_s,
-                     "seconds between a velocity command's stamp and the motion it causes")
-          ->check(CLI::Range(-1.0, 1.0));
-      mr->add_option("--range-sigma-per-metre", m_opt->range_sigma_per_metre, "range noise, m per m of range")
-          ->check(CLI::PositiveNumber);
-      mr->add_option("--bearing-sigma", m_opt->bearing_sigma, "bearing noise, rad")->check(CLI::PositiveNumber);
-      mr->callback([=] {
-        sextant::cli::convert_guarded("mrclam", [&] {
-          const auto r = convert_mrclam(*m_dir, *m_robot, *m_out, *m_gt, *m_opt);
-          std::printf(
-              "%s: %lld odometry, %lld landmark messages (%lld sightings; %lld robot sightings and %lld unknown "
-              "barcodes left out), %lld truth\n",
-              m_out->c_str(), (long long)r.odometry, (long long)r.landmark_messages, (long long)r.landmark_observations,
-              (long long)r.robot_sightings, (long long)r.unknown_barcodes, (long long)r.truth);
-        });
-      });
+      add_mrclam(cmd);
 
       auto* tum = cmd->add_subcommand("tum", "TUM ground truth -> noisy, drifting odometry (plus the ground truth)");
       auto t_in = std::make_shared<std::string>(), t_out = std::make_shared<std::string>(),

@@ -1,5 +1,6 @@
 // sextant eval --gt GT.txt --est EST.txt [--format tum|kitti] [--gt-times F] [--est-times F] [--scale] [--delta D]
 //              [--delta-unit s|f] [--max-difference S] [--json]
+// sextant eval fleet ... (cli/eval_fleet.cpp)
 #include "cli/command.hpp"
 #include "cli/trajectory_evaluation.hpp"
 
@@ -23,8 +24,9 @@ sextant::cli::RegisterCommand reg{
                              "ATE and RPE of a trajectory against ground truth (TUM benchmark tools' semantics), "
                              "and the KITTI odometry error when the ground truth is at least 100 m long");
       auto o = std::make_shared<Options>();
-      cmd->add_option("--gt", o->gt, "ground truth")->required()->check(CLI::ExistingFile);
-      cmd->add_option("--est", o->est, "estimate")->required()->check(CLI::ExistingFile);
+      // Required unless a subcommand (`eval fleet`) runs instead: checked in the callback.
+      cmd->add_option("--gt", o->gt, "ground truth")->check(CLI::ExistingFile);
+      cmd->add_option("--est", o->est, "estimate")->check(CLI::ExistingFile);
       cmd->add_option("--format", o->format, "tum (stamped poses) or kitti (3x4 [R|t] per line, frame i with frame i)")
           ->check(CLI::IsMember({"tum", "kitti"}));
       cmd->add_option("--gt-times", o->gt_times, "kitti: the ground truth's times.txt (default: frame numbers)")
@@ -36,7 +38,12 @@ sextant::cli::RegisterCommand reg{
       cmd->add_option("--delta-unit", o->delta_unit, "s (seconds) or f (frames)")->check(CLI::IsMember({"s", "f"}));
       cmd->add_option("--max-difference", o->max_difference, "association window, seconds")->check(CLI::PositiveNumber);
       cmd->add_flag("--json", o->json, "print JSON");
-      cmd->callback([o] {
+      cmd->callback([o, cmd] {
+        if (!cmd->get_subcommands().empty()) return;
+        if (o->gt.empty() || o->est.empty()) {
+          std::fprintf(stderr, "sextant eval: --gt and --est are required\n");
+          throw CLI::RuntimeError(2);
+        }
         std::vector<StampedPose> gt, est;
         try {
           if (o->format == "kitti") {

@@ -1,18 +1,24 @@
 #pragma once
-// The UTIAS MRCLAM data set (Leung et al., IJRR 2011, and the data set's own format description) as an LCM log
-// for one robot:
+// The UTIAS MRCLAM data set (Leung et al., IJRR 2011, and the data set's own format description) as an LCM log,
+// for one robot (convert_mrclam) or for several in one log (convert_mrclam_fleet: the robots' messages merged in time
+// order).  Per robot, source "robotN":
 //  - ODOMETRY: the velocity commands (v, omega) of each row integrated exactly over the time to the next row,
 //    shifted later by the robots' command delay (MrclamOptions::command_delay_s),
-//    Delta = Exp_SE(2)([v dt, 0, omega dt]), starting from the ground-truth pose at the first odometry stamp (so the
-//    odometry frame is the Vicon world frame); rows sharing a stamp are merged.  Increment covariance from a
-//    distance-proportional model (see MrclamOptions).
+//    Delta = Exp_SE(2)([v dt, 0, omega dt]); rows sharing a stamp are merged.  Increment covariance from a
+//    distance-proportional model (see MrclamOptions).  One robot: the odometry starts at the ground-truth pose at
+//    its first stamp (the odometry frame is the Vicon world frame).  A fleet: each robot's odometry starts at the
+//    identity, the origin of its own frame, as a real robot's does (placing the robots is the estimator's job).
 //  - LANDMARKS: the camera's range/bearing readings of one image (rows sharing a stamp) with the barcode mapped
-//    to its subject id through Barcodes.dat; sightings of other robots (subjects 1-5) and unknown barcodes are not
-//    landmarks and are counted, not written.
-//  - GROUND_TRUTH: the robot's Vicon poses (truth_t "robot") and the landmark map (truth_t "landmark", id =
-//    subject id), plus an optional TUM file of the robot's ground truth.
+//    to its subject id through Barcodes.dat.  Unknown barcodes are counted, not written.  Sightings of other robots
+//    (subjects 1-5): one robot: counted, not written; a fleet: written as observations with id = the seen robot's
+//    subject number when that robot is in the log (the fleet config's markers {N: robotN}), else counted only.
+//  - GROUND_TRUTH: the robots' Vicon poses (truth_t "robot", source robotN) and the landmark map (truth_t "landmark",
+//    id = subject id), plus optional text files of the ground truth (see the functions).
+// Senders: one robot's messages are sent by "sextant-convert"; in a fleet log robot N's by "sextant-convert-robotN",
+// so that every sender's sequence numbers per channel stay gapless in the merged log.
 #include <cstdint>
 #include <string>
+#include <vector>
 
 namespace sextant::tools {
 
@@ -40,14 +46,28 @@ struct MrclamOptions {
   double bearing_sigma = 0.037;         // rad
 };
 
+/// Counts over all robots converted.  landmark_observations: sightings of the 15 landmarks; robot_sightings: every
+/// sighting of a robot, of which robot_sightings_kept were written as observations (a fleet log only).
 struct MrclamConversion {
-  int64_t odometry = 0, landmark_messages = 0, landmark_observations = 0, robot_sightings = 0, unknown_barcodes = 0,
-          truth = 0;
+  int64_t odometry = 0, landmark_messages = 0, landmark_observations = 0, robot_sightings = 0, robot_sightings_kept = 0,
+          unknown_barcodes = 0, truth = 0;
 };
 
 /// `dir` holds Barcodes.dat, Landmark_Groundtruth.dat and RobotN_{Odometry,Measurement,Groundtruth}.dat.
 /// Throws std::runtime_error naming the file and line of a malformed row.
+/// One robot's log; `gt_tum` (when not empty): its ground truth as a TUM file.
 MrclamConversion convert_mrclam(const std::string& dir, int robot, const std::string& out_lcm,
                                 const std::string& gt_tum, const MrclamOptions& options = {});
+
+/// Robots `robots` (each 1 to 5, no repeats) in one log, each in its own odometry frame.  With `gt_prefix` not empty:
+/// each robot's ground truth as a TUM file GT_PREFIX + "robotN.txt", and the landmarks' as GT_PREFIX + "landmarks.txt"
+/// (one "id x y" line per landmark, metres, Vicon world frame).
+MrclamConversion convert_mrclam_fleet(const std::string& dir, const std::vector<int>& robots,
+                                      const std::string& out_lcm, const std::string& gt_prefix,
+                                      const MrclamOptions& options = {});
+
+/// A robot list as written on the command line: "1-5", "1,3,5", "2-3,5".  Throws std::invalid_argument for anything
+/// else, for robots outside 1-5 and for repeats.
+std::vector<int> parse_mrclam_robots(const std::string& list);
 
 }  // namespace sextant::tools

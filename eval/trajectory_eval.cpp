@@ -1,7 +1,5 @@
 #include "eval/trajectory_eval.hpp"
 
-#include <Eigen/SVD>
-
 #include <algorithm>
 #include <cmath>
 #include <numeric>
@@ -109,20 +107,11 @@ AteResult absolute_trajectory_error(const std::vector<StampedPose>& gt, const st
     data.col(static_cast<Eigen::Index>(k)) = gt[matches[k].first].pose.position;
     model.col(static_cast<Eigen::Index>(k)) = est[matches[k].second].pose.position;
   }
-  const Eigen::Vector3d mu_m = model.rowwise().mean(), mu_d = data.rowwise().mean();
-  const Eigen::Matrix3Xd mc = model.colwise() - mu_m, dc = data.colwise() - mu_d;
-  // W' = sum data_c model_c' (evaluate_ate.py's align(); Umeyama 1991 with the 1/n dropped).
-  const Eigen::Matrix3d Wt = dc * mc.transpose();
-  Eigen::JacobiSVD<Eigen::Matrix3d> svd(Wt, Eigen::ComputeFullU | Eigen::ComputeFullV);
-  Eigen::Matrix3d S = Eigen::Matrix3d::Identity();
-  if (svd.matrixU().determinant() * svd.matrixV().determinant() < 0) S(2, 2) = -1;
+  const RigidAlignment a = align_points(model, data, estimate_scale);
   AteResult r;
-  r.rotation = svd.matrixU() * S * svd.matrixV().transpose();
-  if (estimate_scale) {
-    const double var_model = mc.squaredNorm();
-    r.scale = (svd.singularValues().asDiagonal() * S).trace() / var_model;
-  }
-  r.translation = mu_d - r.scale * r.rotation * mu_m;
+  r.rotation = a.rotation;
+  r.translation = a.translation;
+  r.scale = a.scale;
   std::vector<double> errors(n);
   for (size_t k = 0; k < n; ++k)
     errors[k] = (r.scale * r.rotation * model.col(static_cast<Eigen::Index>(k)) + r.translation -

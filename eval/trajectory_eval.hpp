@@ -8,6 +8,7 @@
 //  - RPE: pairs (i, j) of estimated poses with j the pose closest to stamp_i + delta (seconds) or i + delta (frames),
 //    dropping pairs whose j is the last pose; ground truth by nearest stamp within 2 x the median gt interval;
 //    E = (P_j^-1 P_i)^-1 (Q_j^-1 Q_i); translational error |t_E|, rotational error acos((tr R_E - 1) / 2).
+#include "estimators/lie/rigid_alignment.hpp"
 #include "eval/trajectory_io.hpp"
 
 #include <utility>
@@ -27,6 +28,10 @@ struct ErrorStatistics {
 
 /// Statistics as numpy computes them (population std, median of an even count = mean of the middle two).
 ErrorStatistics statistics_of(std::vector<double> errors);
+
+// The alignment (Umeyama; SE(2) when planar) lives in estimators/lie/rigid_alignment.hpp.
+using sextant::align_points;
+using sextant::RigidAlignment;
 
 struct AteResult {
   ErrorStatistics error;  // metres

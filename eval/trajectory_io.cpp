@@ -35,6 +35,36 @@ std::vector<double> finite_numbers(const std::string& line, const std::string& p
 bool blank(const std::string& line) { return line.find_first_not_of(" \t\r") == std::string::npos; }
 }  // namespace
 
+void write_landmarks(const std::string& path, const LandmarkPositions& landmarks, bool planar) {
+  std::FILE* f = std::fopen(path.c_str(), "w");
+  if (f == nullptr) throw std::runtime_error("cannot write " + path + ": " + std::strerror(errno));
+  std::fprintf(f, planar ? "# id x y (metres)\n" : "# id x y z (metres)\n");
+  for (const auto& [id, p] : landmarks)
+    if (planar)
+      std::fprintf(f, "%lld %.6f %.6f\n", static_cast<long long>(id), p.x(), p.y());
+    else
+      std::fprintf(f, "%lld %.6f %.6f %.6f\n", static_cast<long long>(id), p.x(), p.y(), p.z());
+  if (std::fclose(f) != 0) throw std::runtime_error("cannot write " + path);
+}
+
+LandmarkPositions read_landmarks(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw std::runtime_error("cannot read " + path + ": " + std::strerror(errno));
+  LandmarkPositions out;
+  std::string line;
+  for (int number = 1; std::getline(in, line); ++number) {
+    const size_t first = line.find_first_not_of(" \t\r");
+    if (first == std::string::npos || line[first] == '#') continue;
+    const std::vector<double> v = finite_numbers(line, path, number);
+    const std::string where = path + ":" + std::to_string(number);
+    if (v.size() != 3 && v.size() != 4) throw std::runtime_error(where + ": expected id x y [z]");
+    if (v[0] != std::floor(v[0]) || std::abs(v[0]) > 9e15) throw std::runtime_error(where + ": id is not an integer");
+    if (!out.emplace(static_cast<int64_t>(v[0]), Eigen::Vector3d(v[1], v[2], v.size() == 4 ? v[3] : 0.0)).second)
+      throw std::runtime_error(where + ": landmark " + std::to_string(static_cast<int64_t>(v[0])) + " repeated");
+  }
+  return out;
+}
+
 std::vector<StampedPose> read_tum(const std::string& path) {
   std::ifstream in(path);
   if (!in) throw std::runtime_error("cannot read " + path + ": " + std::strerror(errno));

@@ -43,6 +43,17 @@ void write_kitti(const std::string& path, const std::vector<StampedPose>& poses)
 /// EDGE_SE3:QUAT with identity information, so g2o_viewer shows the path.
 void write_g2o_trajectory(const std::string& path, const std::vector<StampedPose>& poses);
 
+/// Landmark positions by id, metres.
+using LandmarkPositions = std::map<int64_t, Eigen::Vector3d>;
+
+/// Writes landmark positions, one "id x y" line each ("id x y z" unless `planar`), after a '#' comment line; 6
+/// decimals.  Throws std::runtime_error naming the path when it cannot be written.
+void write_landmarks(const std::string& path, const LandmarkPositions& landmarks, bool planar = true);
+
+/// Reads a landmark file: "id x y" or "id x y z" per line (z = 0 when absent); '#' lines and empty lines skipped.
+/// Throws std::runtime_error naming the file and line of a malformed row (an id that is not an integer, a repeated id).
+LandmarkPositions read_landmarks(const std::string& path);
+
 enum class TrajectoryFormat { kTum, kKitti, kG2o };
 
 /// Writes a trajectory file pose by pose, as the poses come (a replay streams its estimate to disk instead of holding

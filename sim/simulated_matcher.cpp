@@ -32,22 +32,30 @@ SimulatedMatcher::SimulatedMatcher(std::map<std::string, MatcherTruth> truth, co
 }
 
 std::optional<SE3> SimulatedMatcher::true_relative(const std::string& source, int64_t utime_b, int64_t utime_a) const {
-  const auto it = truth_.find(source);
-  if (it == truth_.end()) return std::nullopt;
-  const auto Tb = it->second.trajectory.at(utime_b), Ta = it->second.trajectory.at(utime_a);
+  return true_relative(source, utime_b, source, utime_a);
+}
+
+std::optional<SE3> SimulatedMatcher::true_relative(const std::string& body_b, int64_t utime_b,
+                                                   const std::string& body_a, int64_t utime_a) const {
+  const auto b = truth_.find(body_b), a = truth_.find(body_a);
+  if (b == truth_.end() || a == truth_.end()) return std::nullopt;
+  const auto Tb = b->second.trajectory.at(utime_b), Ta = a->second.trajectory.at(utime_a);
   if (!Tb || !Ta) return std::nullopt;
-  if (it->second.planar) return SE2::from_se3(*Tb).between(SE2::from_se3(*Ta)).to_se3();
+  if (a->second.planar) return SE2::from_se3(*Tb).between(SE2::from_se3(*Ta)).to_se3();
   return Tb->between(*Ta);
 }
 
 std::optional<engine::LoopClosure> SimulatedMatcher::answer(const engine::MatchRequest& r) {
   ++counts_.requests;
-  const auto it = truth_.find(r.source);
-  if (it == truth_.end() || r.a.utime <= 0 || r.b.utime <= 0 || r.a.utime == r.b.utime) {
+  // Keyframe b may be another body's (an inter-robot request): the answer is a loop from b's body to a's.
+  const std::string& body_b = r.source_b.empty() ? r.source : r.source_b;
+  const auto it = truth_.find(body_b);
+  if (it == truth_.end() || !truth_.contains(r.source) || r.a.utime <= 0 || r.b.utime <= 0 ||
+      (r.a.utime == r.b.utime && body_b == r.source)) {
     ++counts_.invalid;
     return std::nullopt;
   }
-  const std::optional<SE3> truth = true_relative(r.source, r.b.utime, r.a.utime);
+  const std::optional<SE3> truth = true_relative(body_b, r.b.utime, r.source, r.a.utime);
   if (!truth) {
     ++counts_.out_of_span;
     return std::nullopt;
@@ -72,7 +80,7 @@ std::optional<engine::LoopClosure> SimulatedMatcher::answer(const engine::MatchR
     const auto span = static_cast<uint64_t>(track.last_utime() - track.first_utime()) + 1;
     for (int attempt = 0; attempt < 16 && !found; ++attempt) {
       const int64_t tw = track.first_utime() + static_cast<int64_t>(random::uniform_index(rng_, span));
-      const auto wrong = true_relative(r.source, tw, r.a.utime);  // T_w^-1 T_a: a matched against place w
+      const auto wrong = true_relative(body_b, tw, r.source, r.a.utime);  // T_w^-1 T_a: a matched against place w
       if (wrong && far_enough(*wrong)) relative = *wrong, found = true;
     }
     if (!found) {
@@ -103,7 +111,8 @@ std::optional<engine::LoopClosure> SimulatedMatcher::answer(const engine::MatchR
     for (int i = 0; i < 6; ++i) lc.information(i, i) = 1 / std::pow(i < 3 ? o.sigma_t : o.sigma_r, 2);
   }
   lc.utime = r.utime > 0 ? r.utime : r.a.utime;
-  lc.source = r.source;
+  lc.source = body_b;
+  if (body_b != r.source) lc.source_to = r.source;
   lc.planar = planar;
   lc.utime_from = r.b.utime;
   lc.utime_to = r.a.utime;

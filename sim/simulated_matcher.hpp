@@ -3,7 +3,8 @@
 // loop proposals) from ground truth, as a camera front end with a known error model would.  No LCM here: the CLI
 // (cli/matcher.cpp) decodes requests and publishes the answers.
 //
-// For a request to match keyframe a (the new one, at utime_a) against keyframe b (earlier, at utime_b):
+// For a request to match keyframe a (the new one, at utime_a) against keyframe b (earlier, at utime_b; of body
+// source_b when the request is an inter-robot one, and then the answer is a loop from source_b to source):
 //  - a request of a body with no truth, or invalid (utime_a or utime_b <= 0, or utime_a == utime_b: the codec
 //    refuses such a loop closure) is counted in `invalid` and not answered; a request with utime_a or utime_b outside the truth's
 //    time span is counted in `out_of_span` and not answered (no draw is made for either);
@@ -73,6 +74,9 @@ class SimulatedMatcher {
   /// The noise-free relative pose T_b^-1 T_a between two times of `source` (planar parts when planar), nullopt
   /// when the body is unknown or a time is outside its truth's span.
   std::optional<SE3> true_relative(const std::string& source, int64_t utime_b, int64_t utime_a) const;
+  /// The same between two bodies' times (in the truth's common world frame): T_b^-1 T_a.
+  std::optional<SE3> true_relative(const std::string& body_b, int64_t utime_b, const std::string& body_a,
+                                   int64_t utime_a) const;
 
   const MatcherCounts& counts() const { return counts_; }
   const SimulatedMatcherOptions& options() const { return options_; }

@@ -68,6 +68,23 @@ Eigen::Isometry3d perturbation(const Vector6& xi) { return SE3::exp(xi).isometry
 
 SE3 to_se3(const Eigen::Isometry3d& x) { return SE3(Eigen::Quaterniond(x.linear()), x.translation()); }
 
+struct HistoryEntry {
+  int64_t utime;
+  Eigen::Isometry3d pose;
+};
+
+// One robot of the run: its name, its course and its odometry.
+struct Robot {
+  std::string source;
+  int64_t marker = 0;          // a fleet's: the id of its sightings by the others (and of its truth_t)
+  double course_rotation = 0;  // its course, rotated about the origin, rad
+  bool started = false;
+  Eigen::Isometry3d odom = Eigen::Isometry3d::Identity(), last_truth = Eigen::Isometry3d::Identity();
+  Matrix6 cov = Matrix6::Zero();  // the odometry's pose covariance
+  std::vector<HistoryEntry> history;
+  int64_t last_loop = 0, last_loop_check = 0, last_inter_loop = 0, last_inter_check = 0;
+};
+
 class Simulation {
  public:
   Simulation(const SimulationOptions& o, runtime::LogWriter& out) : o_(o), out_(out), rng_(o.seed) {
@@ -84,11 +101,25 @@ class Simulation {
         throw std::invalid_argument("clutter region: min must be below max on every axis (axis " + std::to_string(i) +
                                     ")");
     if (o.imu_rate_hz < 0 || o.gnss_rate_hz < 0) throw std::invalid_argument("IMU and GNSS rates must not be negative");
+    if (o.robots < 1 || o.robots > 1000) throw std::invalid_argument("robots: 1 to 1000");
+    if (!(o.wrong_loops >= 0 && o.wrong_loops <= 1)) throw std::invalid_argument("wrong loops: a share, 0 to 1");
+    if (o.landmarks >= fleet_marker(0)) throw std::invalid_argument("landmark ids must stay below the markers");
     planar_ = o.scenario == Scenario::kPlanar;
+    fleet_ = o.robots > 1;
+    if (fleet_ && (o.imu_rate_hz > 0 || o.gnss_rate_hz > 0))
+      throw std::invalid_argument("IMU and GNSS are simulated for one robot only");
+    for (int i = 0; i < o.robots; ++i) {
+      Robot r;
+      r.source = fleet_ ? "robot" + std::to_string(i + 1) : o.source;
+      r.marker = fleet_ ? fleet_marker(i + 1) : 0;
+      r.course_rotation = kPi * i / o.robots;
+      robots_.push_back(std::move(r));
+      if (fleet_) summary_.markers[robots_.back().marker] = robots_.back().source;
+    }
     if (o.imu_rate_hz > 0 || o.gnss_rate_hz > 0) {
       imu_ = o.imu, gnss_ = o.gnss;
       imu_.rate_hz = o.imu_rate_hz, gnss_.rate_hz = o.gnss_rate_hz;
-      inertial_.emplace([this](double t) { return truth_at(t); }, imu_, gnss_, o.seed ^ 0x1e27ULL);
+      inertial_.emplace([this](double t) { return truth_at(robots_.front(), t); }, imu_, gnss_, o.seed ^ 0x1e27ULL);
     }
   }
 
@@ -106,11 +137,13 @@ class Simulation {
       const int64_t t = std::min({next_odo, next_lm, next_scan, next_imu, next_gnss});
       if (t > end) break;
       if (t == next_odo) {
-        odometry_step(t);
+        for (auto& r : robots_) odometry_step(r, t);
+        if (fleet_)
+          for (auto& r : robots_) consider_inter_robot_loop(r, t);
         next_odo += period(o_.odometry_rate_hz);
       }
       if (t == next_lm) {
-        landmark_step(t);
+        for (const auto& r : robots_) landmark_step(r, t);
         next_lm += period(o_.landmark_rate_hz);
       }
       if (t == next_scan) {
@@ -133,10 +166,17 @@ class Simulation {
   double gauss(double sigma) { return std::normal_distribution<double>(0.0, sigma)(rng_); }
   double uniform(double a, double b) { return std::uniform_real_distribution<double>(a, b)(rng_); }
 
-  // True robot pose at time t.
-  Eigen::Isometry3d truth(int64_t utime) const { return truth_at(static_cast<double>(utime - o_.start_utime) * 1e-6); }
-  // ... at t seconds after the start.
-  Eigen::Isometry3d truth_at(double t) const {
+  // True pose of robot r at time t.
+  Eigen::Isometry3d truth(const Robot& r, int64_t utime) const {
+    return truth_at(r, static_cast<double>(utime - o_.start_utime) * 1e-6);
+  }
+  // ... at t seconds after the start: on the course, rotated by the robot's course rotation about the origin.
+  Eigen::Isometry3d truth_at(const Robot& r, double t) const {
+    const Eigen::Isometry3d x = course_pose(t);
+    if (r.course_rotation == 0) return x;
+    return Eigen::Isometry3d(Eigen::AngleAxisd(r.course_rotation, Eigen::Vector3d::UnitZ())) * x;
+  }
+  Eigen::Isometry3d course_pose(double t) const {
     const double s = o_.speed * t;
     double x, y, yaw;
     course_.at(s, x, y, yaw);
@@ -161,8 +201,12 @@ class Simulation {
   }
 
   void place_world() {
-    for (int i = 0; i < o_.landmarks; ++i)
-      landmarks_.push_back({uniform(-28, 28), uniform(-16, 16), planar_ ? 0.0 : uniform(0, 4)});
+    // The rotated courses of a fleet reach 18 m from the origin in every direction.
+    const double x_max = fleet_ ? 24 : 28, y_max = fleet_ ? 24 : 16;
+    for (int i = 0; i < o_.landmarks; ++i) {
+      landmarks_.push_back({uniform(-x_max, x_max), uniform(-y_max, y_max), planar_ ? 0.0 : uniform(0, 4)});
+      summary_.landmarks[i] = landmarks_.back();
+    }
     // Passive sensors around the area, at different heights (elevation geometry needs them).
     const double ring = 40;
     for (int i = 0; i < o_.sensors; ++i) {
@@ -179,13 +223,13 @@ class Simulation {
   }
 
   void write_truth(int64_t utime, const std::string& kind, int64_t id, const Eigen::Vector3d& p,
-                   const Eigen::Quaterniond& q = Eigen::Quaterniond::Identity()) {
+                   const Eigen::Quaterniond& q = Eigen::Quaterniond::Identity(), const std::string& source = "") {
     sextant::truth_t m{};
     m.utime = utime;
     m.sender = kSender;
     m.seq = seq_["GROUND_TRUTH"]++;
     m.kind = kind;
-    m.source = kind == "robot" ? o_.source : "";
+    m.source = source;
     m.id = id;
     for (int i = 0; i < 3; ++i) m.position[i] = p[i];
     m.orientation[0] = q.w(), m.orientation[1] = q.x(), m.orientation[2] = q.y(), m.orientation[3] = q.z();
@@ -214,24 +258,26 @@ class Simulation {
       write_truth(utime, "landmark", static_cast<int64_t>(i), landmarks_[i]);
   }
 
-  void odometry_step(int64_t t) {
-    const Eigen::Isometry3d T = truth(t);
-    write_truth(t, "robot", 0, T.translation(), Eigen::Quaterniond(T.linear()));
-    summary_.robot_truth.push_back({t, to_pose(T)});
+  void odometry_step(Robot& r, int64_t t) {
+    const Eigen::Isometry3d T = truth(r, t);
+    write_truth(t, "robot", r.marker, T.translation(), Eigen::Quaterniond(T.linear()), r.source);
+    if (&r == &robots_.front()) summary_.robot_truth.push_back({t, to_pose(T)});
+    if (fleet_) summary_.fleet_truth[r.source].push_back({t, to_pose(T)});
 
     engine::Odometry odo;
     odo.utime = t;
-    odo.source = o_.source;
+    odo.source = r.source;
     odo.planar = planar_;
-    if (!started_) {
-      started_ = true;
-      odom_ = T;  // the odometry frame coincides with the world at the start
-      cov_ = Matrix6::Zero();
-      for (int i : active()) cov_(i, i) = 1e-6;
+    if (!r.started) {
+      r.started = true;
+      // One robot: the odometry frame coincides with the world at the start; a fleet's robots start in their own.
+      r.odom = fleet_ ? Eigen::Isometry3d::Identity() : T;
+      r.cov = Matrix6::Zero();
+      for (int i : active()) r.cov(i, i) = 1e-6;
       odo.increment_covariance = Matrix6::Zero();
       for (int i : active()) (*odo.increment_covariance)(i, i) = 1e-6;
     } else {
-      const Eigen::Isometry3d delta_true = last_truth_.inverse() * T;
+      const Eigen::Isometry3d delta_true = r.last_truth.inverse() * T;
       const double dist = delta_true.translation().norm();
       Matrix6 q = Matrix6::Zero();
       Vector6 eta = Vector6::Zero();
@@ -242,43 +288,57 @@ class Simulation {
         eta[i] = gauss(sigma);
       }
       const Eigen::Isometry3d delta = delta_true * perturbation(eta);
-      cov_ = engine::DeadReckoningStage::propagate(cov_, to_se3(delta), q);
-      odom_ = odom_ * delta;
+      r.cov = engine::DeadReckoningStage::propagate(r.cov, to_se3(delta), q);
+      r.odom = r.odom * delta;
       odo.increment_covariance = q;
-      consider_loop(t, T);
+      consider_loop(r, t, T);
     }
-    odo.pose = to_pose(odom_);
-    odo.covariance = cov_;
+    odo.pose = to_pose(r.odom);
+    odo.covariance = r.cov;
     out_.write(t, "ODOMETRY", runtime::to_message(odo, kSender, seq_["ODOMETRY"]++));
     ++summary_.odometry;
-    last_truth_ = T;
-    history_.push_back({t, T});
+    r.last_truth = T;
+    r.history.push_back({t, T});
+    if (fleet_) visits_[cell_of(T.translation())][&r - robots_.data()] = {t, T};
   }
 
   std::span<const int> active() const { return pose_axes(planar_); }
 
-  void landmark_step(int64_t t) {
-    const Eigen::Isometry3d T = truth(t);
+  // A noisy range/azimuth(/elevation) sighting of world point `w` from pose T, or nothing outside range and view.
+  std::optional<engine::LandmarkObservation> sighting(const Eigen::Isometry3d& T, const Eigen::Vector3d& w,
+                                                      int64_t id) {
+    const Eigen::Vector3d p = T.inverse() * w;
+    const double range = planar_ ? std::hypot(p.x(), p.y()) : p.norm();
+    const double az = std::atan2(p.y(), p.x());
+    if (range > o_.landmark_max_range || range < 0.5 || std::abs(az) > o_.landmark_fov / 2) return std::nullopt;
+    engine::LandmarkObservation ob;
+    ob.id = o_.unknown_ids ? -1 : id;
+    ob.range = range + gauss(o_.range_sigma);
+    ob.azimuth = az + gauss(o_.bearing_sigma);
+    ob.elevation = planar_ ? 0.0 : std::atan2(p.z(), std::hypot(p.x(), p.y())) + gauss(o_.bearing_sigma);
+    ob.covariance = Eigen::Vector3d(o_.range_sigma * o_.range_sigma, o_.bearing_sigma * o_.bearing_sigma,
+                                    planar_ ? 0.0 : o_.bearing_sigma * o_.bearing_sigma)
+                        .asDiagonal();
+    return ob;
+  }
+
+  // The landmarks, and in a fleet the other robots' origins (by their markers), that robot r sees at t.
+  void landmark_step(const Robot& r, int64_t t) {
+    const Eigen::Isometry3d T = truth(r, t);
     engine::LandmarkSightings s;
     s.utime = t;
-    s.source = o_.source;
+    s.source = r.source;
     s.planar = planar_;
-    for (size_t i = 0; i < landmarks_.size(); ++i) {
-      const Eigen::Vector3d p = T.inverse() * landmarks_[i];
-      const double range = planar_ ? std::hypot(p.x(), p.y()) : p.norm();
-      const double az = std::atan2(p.y(), p.x());
-      if (range > o_.landmark_max_range || range < 0.5 || std::abs(az) > o_.landmark_fov / 2) continue;
-      engine::LandmarkObservation ob;
-      ob.id = o_.unknown_ids ? -1 : static_cast<int64_t>(i);
-      ob.range = range + gauss(o_.range_sigma);
-      ob.azimuth = az + gauss(o_.bearing_sigma);
-      ob.elevation = planar_ ? 0.0 : std::atan2(p.z(), std::hypot(p.x(), p.y())) + gauss(o_.bearing_sigma);
-      ob.covariance = Eigen::Vector3d(o_.range_sigma * o_.range_sigma, o_.bearing_sigma * o_.bearing_sigma,
-                                      planar_ ? 0.0 : o_.bearing_sigma * o_.bearing_sigma)
-                          .asDiagonal();
-      s.observations.push_back(ob);
-    }
+    for (size_t i = 0; i < landmarks_.size(); ++i)
+      if (auto ob = sighting(T, landmarks_[i], static_cast<int64_t>(i))) s.observations.push_back(*ob);
     summary_.landmark_observations += static_cast<int64_t>(s.observations.size());
+    for (const auto& other : robots_) {
+      if (&other == &r) continue;
+      if (auto ob = sighting(T, truth(other, t).translation(), other.marker)) {
+        s.observations.push_back(*ob);
+        ++summary_.robot_sightings;
+      }
+    }
     ++summary_.landmark_messages;
     out_.write(t, "LANDMARKS", runtime::to_message(s, kSender, seq_["LANDMARKS"]++));
   }
@@ -318,49 +378,96 @@ class Simulation {
     ++scan_id_;
   }
 
-  void consider_loop(int64_t t, const Eigen::Isometry3d& T) {
-    if (t - last_loop_ < static_cast<int64_t>(o_.loop_min_interval_s * 1e6)) return;
-    if (t - last_loop_check_ < 200'000) return;  // look for revisits at 5 Hz: the history scan is linear
-    last_loop_check_ = t;
-    const int64_t oldest_allowed = t - static_cast<int64_t>(o_.loop_min_age_s * 1e6);
-    const HistoryEntry* best = nullptr;
-    double best_d = o_.loop_distance;
-    for (const auto& h : history_) {
-      if (h.utime > oldest_allowed) break;
-      const double d = (h.pose.translation() - T.translation()).norm();
-      if (d < best_d) best_d = d, best = &h;
-    }
-    if (best == nullptr) return;
+  // The loop's noise: a right perturbation with the loops' sigmas, and the matching information.
+  std::pair<Eigen::Isometry3d, Matrix6> loop_noise() {
     Vector6 eta = Vector6::Zero();
-    engine::Matrix6 info = engine::Matrix6::Zero();
+    Matrix6 info = Matrix6::Zero();
     for (int i : active()) {
       const double sigma = i < 3 ? o_.loop_trans_sigma : o_.loop_rot_sigma;
       eta[i] = gauss(sigma);
       info(i, i) = 1.0 / (sigma * sigma);
     }
+    return {perturbation(eta), info};
+  }
+
+  void write_loop(int64_t t, const std::string& from, const std::string& to, int64_t utime_from,
+                  const Eigen::Isometry3d& relative, const Matrix6& info) {
     engine::LoopClosure lc;
     lc.utime = t;
-    lc.source = o_.source;
+    lc.source = from;
+    lc.source_to = to == from ? "" : to;
     lc.planar = planar_;
-    lc.utime_from = best->utime;
+    lc.utime_from = utime_from;
     lc.utime_to = t;
-    lc.relative = to_pose(best->pose.inverse() * T * perturbation(eta));
+    lc.relative = to_pose(relative);
     lc.information = info;
     lc.matcher = "sextant-sim";
     lc.score = 1.0;
     out_.write(t, "LOOP_CLOSURES", runtime::to_message(lc, kSender, seq_["LOOP_CLOSURES"]++));
     ++summary_.loop_closures;
-    last_loop_ = t;
+  }
+
+  void consider_loop(Robot& r, int64_t t, const Eigen::Isometry3d& T) {
+    if (t - r.last_loop < static_cast<int64_t>(o_.loop_min_interval_s * 1e6)) return;
+    if (t - r.last_loop_check < 200'000) return;  // look for revisits at 5 Hz: the history scan is linear
+    r.last_loop_check = t;
+    const int64_t oldest_allowed = t - static_cast<int64_t>(o_.loop_min_age_s * 1e6);
+    const HistoryEntry* best = nullptr;
+    double best_d = o_.loop_distance;
+    for (const auto& h : r.history) {
+      if (h.utime > oldest_allowed) break;
+      const double d = (h.pose.translation() - T.translation()).norm();
+      if (d < best_d) best_d = d, best = &h;
+    }
+    if (best == nullptr) return;
+    const auto [noise, info] = loop_noise();
+    write_loop(t, r.source, r.source, best->utime, best->pose.inverse() * T * noise, info);
+    r.last_loop = t;
+  }
+
+  // The grid cell (loop_distance wide, in x and y) of a position.
+  std::pair<int64_t, int64_t> cell_of(const Eigen::Vector3d& p) const {
+    const double w = std::max(o_.loop_distance, 1e-3);
+    return {static_cast<int64_t>(std::floor(p.x() / w)), static_cast<int64_t>(std::floor(p.y() / w))};
+  }
+
+  // A fleet's inter-robot loop: robot r now against the nearest latest visit of another robot nearby (a share of
+  // them made wrong on purpose).
+  void consider_inter_robot_loop(Robot& r, int64_t t) {
+    if (!(o_.loop_distance > 0) || t - r.last_inter_loop < static_cast<int64_t>(o_.loop_min_interval_s * 1e6)) return;
+    if (t - r.last_inter_check < 200'000) return;
+    r.last_inter_check = t;
+    const Eigen::Isometry3d T = r.last_truth;
+    const auto [cx, cy] = cell_of(T.translation());
+    const HistoryEntry* best = nullptr;
+    size_t best_robot = 0;
+    double best_d = o_.loop_distance;
+    for (int64_t dx = -1; dx <= 1; ++dx)
+      for (int64_t dy = -1; dy <= 1; ++dy) {
+        const auto it = visits_.find({cx + dx, cy + dy});
+        if (it == visits_.end()) continue;
+        for (const auto& [robot, h] : it->second) {
+          const double d = (h.pose.translation() - T.translation()).norm();
+          if (&robots_[robot] != &r && d < best_d) best_d = d, best = &h, best_robot = robot;
+        }
+      }
+    if (best == nullptr) return;
+    auto [noise, info] = loop_noise();
+    if (uniform(0, 1) < o_.wrong_loops) {
+      const double a = uniform(-kPi, kPi), distance = uniform(3, 10);
+      noise = noise * make_iso({distance * std::cos(a), distance * std::sin(a), 0},
+                               Eigen::Quaterniond(Eigen::AngleAxisd(uniform(-kPi, kPi), Eigen::Vector3d::UnitZ())));
+      ++summary_.wrong_loops;
+    }
+    write_loop(t, robots_[best_robot].source, r.source, best->utime, best->pose.inverse() * T * noise, info);
+    ++summary_.inter_robot_loops;
+    r.last_inter_loop = t;
   }
 
   static constexpr const char* kSender = "sextant-sim";
   struct Target {
     Eigen::Vector3d centre;
     double radius, omega, phase;
-  };
-  struct HistoryEntry {
-    int64_t utime;
-    Eigen::Isometry3d pose;
   };
 
   const SimulationOptions& o_;
@@ -375,11 +482,10 @@ class Simulation {
   std::vector<Target> targets_;
   std::vector<assoc::FieldOfView> clutter_view_;  // per sensor, with a clutter region
   std::map<std::string, int64_t> seq_;
-  bool started_ = false;
-  Eigen::Isometry3d odom_ = Eigen::Isometry3d::Identity(), last_truth_ = Eigen::Isometry3d::Identity();
-  Matrix6 cov_ = Matrix6::Zero();
-  std::vector<HistoryEntry> history_;
-  int64_t last_loop_ = 0, last_loop_check_ = 0;
+  bool fleet_ = false;
+  std::vector<Robot> robots_;
+  // A fleet's latest visit of each robot to each grid cell, by robot index: where inter-robot loops are looked for.
+  std::map<std::pair<int64_t, int64_t>, std::map<size_t, HistoryEntry>> visits_;
   int64_t scan_id_ = 0;
   SimulationSummary summary_;
 };

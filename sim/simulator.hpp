@@ -19,12 +19,28 @@
 //    around `gnss.datum`), from the same true trajectory (sim/inertial_sensor_sim.hpp), with their own random
 //    stream so that the other streams do not change when they are switched on.
 //  - GROUND_TRUTH (truth_t): robot poses at the odometry rate, target positions per scan, landmarks once.
+// A fleet (`robots` > 1): robots robot1..robotN (sources), robot i (0-based) driving the course rotated by i pi / N
+// about the origin (the courses cross), all at t = 0 at their courses' start, in one world of shared landmarks (drawn
+// over [-24, 24] m in x and y instead); the odometry and landmark sightings as above, each robot's odometry starting at
+// the identity (its own frame; the robots' relative placement is unknown to the estimator), and:
+//  - robot sightings: in each robot's LANDMARKS message, the range/azimuth(/elevation) of every other robot's origin
+//    within range and field of view, with the landmarks' noise, id = that robot's marker 1000000 + N for robotN (no
+//    landmark id reaches it; the markers are also the `id` of the robots' truth_t, and `sextant simulate
+//    --config-out` writes them as the config's engine.graph.fleet.markers);
+//  - inter-robot loop closures: when a robot comes within `loop_distance` of the latest pose another robot had in
+//    that part of the world (a grid of loop_distance cells, the 3 x 3 around it), at most one per
+//    `loop_min_interval_s` per robot: source = the other robot ("from", its pose then), source_to = the robot
+//    ("to", now), relative = T_from^-1 T_to with the loops' noise.  A share `wrong_loops` of them is wrong: the
+//    relative pose composed with a random offset of 3-10 m and any heading (drawn independently per loop).
+// IMU and GNSS are simulated for one robot only.
 // Deterministic for a seed: the same options give a byte-identical log.
 #include "daemon/engine/events.hpp"
 #include "daemon/runtime/lcm_log.hpp"
+#include "eval/trajectory_io.hpp"
 #include "sim/inertial_sensor_sim.hpp"
 
 #include <cstdint>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -42,7 +58,9 @@ struct SimulationOptions {
   uint64_t seed = 1;
   double duration_s = 60;
   int64_t start_utime = 1'700'000'000'000'000;  // 2023-11-14, an arbitrary fixed epoch
-  std::string source = "robot1";
+  std::string source = "robot1";                // one robot's name (a fleet's are robot1..robotN)
+  int robots = 1;                               // more than 1: a fleet (above)
+  double wrong_loops = 0;                       // fleet: share of the inter-robot loop closures that are wrong, 0..1
 
   // Robot and odometry.
   double speed = 2.0;  // m/s along the course
@@ -85,10 +103,18 @@ struct SimulationOptions {
   SimulatedGnssOptions gnss;
 };
 
+/// The marker id of robot N (1-based) of a fleet: its sightings by the other robots carry this id.
+constexpr int64_t fleet_marker(int robot) { return 1'000'000 + robot; }
+
 struct SimulationSummary {
   int64_t odometry = 0, landmark_messages = 0, landmark_observations = 0, bearing_scans = 0, detections = 0,
           false_alarms = 0, loop_closures = 0, truth = 0, imu = 0, gnss = 0, gnss_outliers = 0;
-  std::vector<std::pair<int64_t, engine::Pose>> robot_truth;  // (utime, pose), at the odometry rate
+  int64_t robot_sightings = 0, inter_robot_loops = 0, wrong_loops = 0;  // a fleet's (landmark_observations
+                                                                        // counts the landmarks' only)
+  std::vector<std::pair<int64_t, engine::Pose>> robot_truth;  // (utime, pose), at the odometry rate (the first robot)
+  std::map<std::string, std::vector<std::pair<int64_t, engine::Pose>>> fleet_truth;  // every robot's, by source
+  std::map<int64_t, std::string> markers;                                            // a fleet's marker ids -> sources
+  LandmarkPositions landmarks;  // the landmarks' true positions, by id
 };
 
 /// Writes the run into `out`; throws std::invalid_argument for bad options.

@@ -1,6 +1,7 @@
 #include "viewer/foxglove_bridge.hpp"
 
 #include "daemon/runtime/version.hpp"
+#include "viewer/batched_write_stream.hpp"
 
 #include <boost/asio/dispatch.hpp>
 #include <boost/asio/ip/tcp.hpp>
@@ -30,14 +31,25 @@ using tcp = net::ip::tcp;
 
 constexpr const char* kSubprotocol = "foxglove.websocket.v1";
 constexpr uint8_t kMessageData = 0x01;  // server binary opcode
+// A client's queued messages go out in writes of about this size: enough to make the system calls few, small
+// enough that the batch being written adds little to the queue's bound.
+constexpr size_t kBatchBytes = 256u << 10;
 
 /// One WebSocket message queued for a client: a text control message, or a binary message-data frame whose
 /// payload is shared by every client it goes to.
 struct Frame {
   bool binary = false;
-  std::array<uint8_t, 13> header{};  // opcode, subscription id (u32 LE), timestamp (u64 LE)
+  std::array<char, 13> header{};  // opcode, subscription id (u32 LE), timestamp (u64 LE)
   std::shared_ptr<const std::string> payload;
   size_t size() const { return (binary ? header.size() : 0) + payload->size(); }
+  std::string_view prefix() const { return {header.data(), binary ? header.size() : 0}; }
+};
+
+/// A viewer message mapped from the bus, for every client that subscribes to its channel.
+struct Outgoing {
+  uint32_t channel;
+  uint64_t timestamp;  // when the bridge received its LCM message
+  std::shared_ptr<const std::string> payload;
 };
 
 Frame control(const Json& j) { return Frame{false, {}, std::make_shared<const std::string>(j.dump())}; }
@@ -67,7 +79,8 @@ struct FoxgloveBridge::Impl {
   std::vector<ViewerMessage> scratch;
 
   // The LCM thread only copies each message into this bounded queue, so that it drains the socket at once however
-  // long the mapping takes (a burst of datagrams would otherwise overflow the kernel's receive buffer).
+  // long the mapping takes (a burst of datagrams would otherwise overflow the kernel's receive buffer).  The mapping
+  // thread takes what is there at once and hands each client the batch's messages together.
   struct Received {
     uint64_t time_ns;
     std::string channel;
@@ -92,7 +105,8 @@ struct FoxgloveBridge::Impl {
 
   void accept();
   void map_loop();
-  void map_one(const Received& r);
+  void map_one(const Received& r, std::vector<Outgoing>& out);
+  void take_mapped(uint64_t time_ns, std::vector<Outgoing>& out);
   void add_session(const std::shared_ptr<Session>& s);
   void remove_session(const Session* s);
   uint32_t channel_for(const ViewerMessage& m);
@@ -104,8 +118,11 @@ class Session : public std::enable_shared_from_this<Session> {
  public:
   Session(tcp::socket socket, FoxgloveBridge::Impl& bridge) : ws_(std::move(socket)), bridge_(bridge) {
     beast::error_code ec;
-    const auto ep = ws_.next_layer().socket().remote_endpoint(ec);
+    const auto ep = beast::get_lowest_layer(ws_).socket().remote_endpoint(ec);
     address_ = ec ? "?" : ep.address().to_string() + ":" + std::to_string(ep.port());
+    // The writer batches; Nagle's algorithm would only hold a batch back until the previous one is acknowledged
+    // (with the viewer's delayed acknowledgement, tens of milliseconds).
+    beast::get_lowest_layer(ws_).socket().set_option(tcp::no_delay(true), ec);
   }
 
   void run() {
@@ -115,16 +132,20 @@ class Session : public std::enable_shared_from_this<Session> {
   /// Queues a control message (never dropped).
   void send(const Json& j) { enqueue(control(j), false); }
 
-  /// Queues `payload` for this client when it subscribes to `channel`.
-  void offer(uint32_t channel, uint64_t timestamp, const std::shared_ptr<const std::string>& payload) {
+  /// Queues the messages of `batch` whose channels this client subscribes to.
+  void offer(const std::vector<Outgoing>& batch) {
     std::lock_guard lock(mutex_);
-    const auto sub = by_channel_.find(channel);
-    if (sub == by_channel_.end() || closed_) return;
-    Frame f{true, {}, payload};
-    f.header[0] = kMessageData;
-    for (int i = 0; i < 4; ++i) f.header[1 + i] = static_cast<uint8_t>(sub->second >> (8 * i));
-    for (int i = 0; i < 8; ++i) f.header[5 + i] = static_cast<uint8_t>(timestamp >> (8 * i));
-    push(std::move(f), true);
+    if (closed_) return;
+    for (const auto& o : batch) {
+      const auto sub = by_channel_.find(o.channel);
+      if (sub == by_channel_.end()) continue;
+      Frame f{true, {}, o.payload};
+      f.header[0] = static_cast<char>(kMessageData);
+      for (int i = 0; i < 4; ++i) f.header[1 + i] = static_cast<char>(sub->second >> (8 * i));
+      for (int i = 0; i < 8; ++i) f.header[5 + i] = static_cast<char>(o.timestamp >> (8 * i));
+      append(std::move(f), true);
+    }
+    wake();
   }
 
   FoxgloveClientStats stats() const {
@@ -143,8 +164,14 @@ class Session : public std::enable_shared_from_this<Session> {
     if (!closed_) push(std::move(f), droppable);
   }
 
-  // With mutex_ held: append, dropping the oldest droppable messages while over the bounds, and wake the writer.
+  // With mutex_ held: append and wake the writer.
   void push(Frame f, bool droppable) {
+    append(std::move(f), droppable);
+    wake();
+  }
+
+  // With mutex_ held: append, dropping the oldest droppable messages while over the bounds.
+  void append(Frame f, bool droppable) {
     queued_bytes_ += f.size();
     queue_.push_back({std::move(f), droppable});
     while (queue_.size() > bridge_.options.max_queued_messages || queued_bytes_ > bridge_.options.max_queued_bytes) {
@@ -155,7 +182,11 @@ class Session : public std::enable_shared_from_this<Session> {
       ++dropped_;
     }
     queued_max_ = std::max(queued_max_, queue_.size());
-    if (!writing_ && accepted_) {
+  }
+
+  // With mutex_ held: start the writer unless it is running (it takes whatever is queued when it runs).
+  void wake() {
+    if (!writing_ && accepted_ && !queue_.empty()) {
       writing_ = true;
       net::post(ws_.get_executor(), [self = shared_from_this()] { self->write_next(); });
     }
@@ -273,29 +304,31 @@ class Session : public std::enable_shared_from_this<Session> {
     subscriptions_.erase(it);
   }
 
-  // ---- the writer: one frame at a time, on the I/O thread ----
+  // ---- the writer, on the I/O thread: what is queued (up to kBatchBytes) framed into one write; the next batch
+  // once it is written, so that a client that does not read holds one batch here and the rest in its queue ----
   void write_next() {
-    Frame f;
+    batch_.clear();
     {
       std::lock_guard lock(mutex_);
       if (queue_.empty() || closed_) {
         writing_ = false;
         return;
       }
-      f = std::move(queue_.front().frame);
-      queued_bytes_ -= f.size();
-      queue_.pop_front();
+      for (size_t bytes = 0; !queue_.empty() && bytes < kBatchBytes; queue_.pop_front()) {
+        bytes += queue_.front().frame.size();
+        queued_bytes_ -= queue_.front().frame.size();
+        batch_.push_back(std::move(queue_.front().frame));
+      }
     }
-    writing_frame_ = std::move(f);
-    ws_.binary(writing_frame_.binary);
-    const std::array<net::const_buffer, 2> buffers{
-        net::buffer(writing_frame_.header.data(), writing_frame_.binary ? writing_frame_.header.size() : 0),
-        net::buffer(*writing_frame_.payload)};
-    ws_.async_write(buffers, [self = shared_from_this()](beast::error_code ec, size_t) {
+    auto& stream = ws_.next_layer();
+    for (const auto& f : batch_) append_websocket_frame(stream.pending(), f.binary, f.prefix(), *f.payload);
+    const auto n = static_cast<int64_t>(batch_.size());
+    batch_.clear();  // the payloads are copied: release them now
+    stream.flush([self = shared_from_this(), n](beast::error_code ec) {
       if (ec) return self->close();
       {
         std::lock_guard lock(self->mutex_);
-        ++self->sent_;
+        self->sent_ += n;
       }
       self->write_next();
     });
@@ -313,12 +346,12 @@ class Session : public std::enable_shared_from_this<Session> {
     bridge_.remove_session(this);
   }
 
-  websocket::stream<beast::tcp_stream> ws_;
+  websocket::stream<BatchedWriteStream> ws_;
   FoxgloveBridge::Impl& bridge_;
   std::string address_;
   beast::flat_buffer buffer_;
   http::request<http::string_body> request_;
-  Frame writing_frame_;  // the frame being written (its buffers must live until the write completes)
+  std::vector<Frame> batch_;  // the writer's, reused
 
   mutable std::mutex mutex_;  // guards what follows
   std::deque<Queued> queue_;
@@ -370,6 +403,7 @@ uint32_t FoxgloveBridge::Impl::channel_for(const ViewerMessage& m) {
 FoxgloveBridge::FoxgloveBridge(FoxgloveBridgeOptions options, TopicMapperOptions mapping)
     : impl_(std::make_shared<Impl>()) {
   impl_->options = std::move(options);
+  mapping.batch_frame_transforms = true;  // one /tf message per batch mapped together
   impl_->mapper = TopicMapper(mapping);
   const std::string where = impl_->options.bind_address + ":" + std::to_string(impl_->options.port);
   try {
@@ -422,42 +456,54 @@ void FoxgloveBridge::on_lcm(const std::string& channel, const uint8_t* data, siz
 }
 
 void FoxgloveBridge::Impl::map_loop() {
+  std::deque<Received> batch;
+  std::vector<Outgoing> out;
   while (true) {
-    Received r;
     {
       std::unique_lock lock(input_mutex);
       input_ready.wait(lock, [this] { return stopping || !input.empty(); });
       if (input.empty()) return;  // stopping, and everything received was mapped
-      r = std::move(input.front());
-      input.pop_front();
-      input_bytes -= r.data.size();
+      batch.swap(input);
+      input_bytes = 0;
     }
-    try {
-      map_one(r);
-    } catch (const std::exception&) {  // nothing leaves this thread; the message is lost and counted
+    out.clear();
+    for (const auto& r : batch) {
+      try {
+        map_one(r, out);
+      } catch (const std::exception&) {  // nothing leaves this thread; the message is lost and counted
+        std::lock_guard lock(mutex);
+        ++totals.mapping_failures;
+      }
+    }
+    scratch.clear();
+    mapper.flush(scratch);  // the batch's frame transforms, in one message
+    take_mapped(batch.back().time_ns, out);
+    batch.clear();
+    std::vector<std::shared_ptr<Session>> targets;
+    {
       std::lock_guard lock(mutex);
-      ++totals.mapping_failures;
+      targets = sessions;
     }
+    for (const auto& s : targets) s->offer(out);
   }
 }
 
-// One LCM message through the viewer mapping, each result to every client that subscribes to its channel.
-void FoxgloveBridge::Impl::map_one(const Received& r) {
+// One LCM message through the viewer mapping: its viewer messages appended to `out`.
+void FoxgloveBridge::Impl::map_one(const Received& r, std::vector<Outgoing>& out) {
   scratch.clear();
   mapper.map(r.channel, r.data.data(), r.data.size(), scratch);
-  std::vector<std::shared_ptr<Session>> targets;
   {
     std::lock_guard lock(mutex);
     ++totals.lcm_messages;
     totals.without_json = mapper.counts().raw;
-    targets = sessions;
   }
-  for (auto& m : scratch) {
-    if (!m.schema) continue;
-    const uint32_t id = channel_for(m);
-    const auto payload = std::make_shared<const std::string>(std::move(m.data));
-    for (const auto& s : targets) s->offer(id, r.time_ns, payload);
-  }
+  take_mapped(r.time_ns, out);
+}
+
+// The viewer messages in `scratch`, received at `time_ns`, appended to `out`; their channels advertised.
+void FoxgloveBridge::Impl::take_mapped(uint64_t time_ns, std::vector<Outgoing>& out) {
+  for (auto& m : scratch)
+    if (m.schema) out.push_back({channel_for(m), time_ns, std::make_shared<const std::string>(std::move(m.data))});
 }
 
 FoxgloveBridgeStats FoxgloveBridge::stats() const {

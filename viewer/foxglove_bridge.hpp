@@ -6,8 +6,9 @@
 // bridge received them (ns since the Unix epoch).
 //
 // Slow viewers never slow the bus side: on_lcm() only queues a copy of the message (bounded); a mapping thread maps
-// it once and hands each subscribed client a shared payload under that client's lock; one I/O thread writes to the
-// sockets.  Each client's queue is bounded (messages
+// what has arrived, serializing each viewer message once, and hands each subscribed client the batch's shared
+// payloads under that client's lock, once per batch; one I/O thread writes to the sockets, each client's queued
+// messages framed together into one write (batched_write_stream.hpp).  Each client's queue is bounded (messages
 // and bytes); when it is full the oldest message is dropped and counted (advertisements are never dropped).  The
 // server listens on 127.0.0.1 by default and offers no capability by which a client changes anything (no parameters,
 // services or client publishing): a client can only subscribe and unsubscribe.

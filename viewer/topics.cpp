@@ -103,6 +103,7 @@ struct TopicMapper::Views {
   };
   std::map<std::string, BodyPose> bodies;  // by source: its best estimator's latest pose
   std::map<std::pair<std::string, std::string>, engine::TrajectoryRebuild> trajectories;  // by (sender, source)
+  Json pending_transforms = Json::array();  // batch_frame_transforms: gathered for the next flush
 
   void out(std::vector<ViewerMessage>& o, std::string topic, const char* schema, const Json& j) {
     o.push_back({std::move(topic), topic_schema(schema), "json", "", j.dump()});
@@ -120,13 +121,20 @@ struct TopicMapper::Views {
                   {"translation", vec3(p)},
                   {"rotation", quat(q)}};
     };
-    Json transforms = Json::array({transform(m.source + "/" + m.estimator)});
+    Json& transforms = pending_transforms;
+    transforms.push_back(transform(m.source + "/" + m.estimator));
     auto& body = bodies[m.source];
     if (estimator_rank(m.estimator) >= body.rank) {
       body = {estimator_rank(m.estimator), p, q};
       transforms.push_back(transform(m.source));
     }
-    out(o, "/tf", "foxglove.FrameTransforms", Json{{"transforms", transforms}});
+    if (!options.batch_frame_transforms) flush(o);
+  }
+
+  void flush(std::vector<ViewerMessage>& o) {
+    if (pending_transforms.empty()) return;
+    out(o, "/tf", "foxglove.FrameTransforms", Json{{"transforms", std::move(pending_transforms)}});
+    pending_transforms = Json::array();
   }
 
   /// A body's trajectory is drawn in segments of kSegment keyframe ids (entity "<source>/trajectory/<k>", each
@@ -268,6 +276,7 @@ TopicMapper::TopicMapper(TopicMapperOptions options) : options_(options), views_
   views_->options = options;
 }
 TopicMapper::~TopicMapper() = default;
+void TopicMapper::flush(std::vector<ViewerMessage>& out) { views_->flush(out); }
 TopicMapper::TopicMapper(TopicMapper&&) noexcept = default;
 TopicMapper& TopicMapper::operator=(TopicMapper&&) noexcept = default;
 

@@ -8,7 +8,8 @@
 //   fused_pose_t                /sextant/<source>/<estimator>/pose  foxglove.PoseInFrame (frame "map")
 //                               /tf                                 foxglove.FrameTransforms: map -> <source>/<estimator>,
 //                                                                   and map -> <source> from its best estimator so far
-//                                                                   (graph, then ekf, pf, dead_reckoning)
+//                                                                   (graph, then ekf, pf, dead_reckoning); one message per
+//                                                                   pose, or per batch (batch_frame_transforms)
 //   trajectory_t                /sextant/trajectories               foxglove.SceneUpdate: each body's optimized trajectory
 //                                                                   rebuilt as trajectory_t.lcm says, a line strip + label
 //   targets_t                   /sextant/targets                    foxglove.SceneUpdate: 95 % covariance ellipsoids + labels
@@ -56,6 +57,10 @@ struct TopicMapperOptions {
   /// UTF-8) is kept raw.  MCAP files turn it on so that `convert lcm` is exact.
   bool check_round_trip = false;
   double bearing_ray_length_m = 60;  // how far a bearing ray is drawn from its sensor
+  /// Gather the frame transforms of successive fused poses, all of them in order, into one /tf message that
+  /// flush() appends, instead of one message per pose: the bridge flushes after each batch of messages it maps
+  /// together, so that a viewer receives fewer, larger /tf messages and nothing later.
+  bool batch_frame_transforms = false;
 };
 
 struct TopicMapperCounts {
@@ -75,6 +80,8 @@ class TopicMapper {
 
   /// Appends to `out` what the LCM message `data` on `channel` becomes.
   void map(const std::string& channel, const uint8_t* data, size_t size, std::vector<ViewerMessage>& out);
+  /// Appends the /tf message of the transforms gathered since the last call (batch_frame_transforms), if any.
+  void flush(std::vector<ViewerMessage>& out);
   const TopicMapperCounts& counts() const { return counts_; }
 
  private:

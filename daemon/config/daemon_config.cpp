@@ -219,6 +219,22 @@ void refuse_second_document(const std::string& text, const std::string& file) {
   }
 }
 
+// Text that yaml-cpp reads as no document at all (a lone ',', say) although it holds more than comments and markers:
+// an error at its first such line, not an empty configuration.
+void refuse_content_without_document(const std::string& text, const std::string& file) {
+  int line = 0;
+  std::istringstream in(text);
+  for (std::string l; std::getline(in, l);) {
+    ++line;
+    const auto first = l.find_first_not_of(" \t\r");
+    if (first == std::string::npos || l[first] == '#' || l.rfind("---", 0) == 0 || l.rfind("...", 0) == 0) continue;
+    std::ostringstream s;
+    s << file << ":" << line << ":" << first + 1 << ": no YAML document could be read from '" << l.substr(first, 40)
+      << "' (expected a map of sections: daemon, channels, engine)";
+    throw ConfigError(s.str());
+  }
+}
+
 // A key written twice in one mapping (yaml-cpp keeps the first and ignores the rest): an error at the second.
 // Aliases make a node reachable many times (a "billion laughs" document): past `budget` visits the walk stops with
 // an error instead of taking exponential time.
@@ -260,6 +276,14 @@ DaemonConfig parse_daemon_config(const std::string& yaml_text, const std::string
   } catch (const YAML::Exception& e) {
     std::ostringstream s;
     s << file << ":" << e.mark.line + 1 << ":" << e.mark.column + 1 << ": YAML syntax error: " << e.msg;
+    throw ConfigError(s.str());
+  }
+  if (root.IsNull()) refuse_content_without_document(yaml_text, file);
+  if (root.IsDefined() && !root.IsNull() && !root.IsMap()) {  // a scalar or a list: no section can be read from it
+    std::ostringstream s;
+    s << file << ":" << root.Mark().line + 1 << ":" << root.Mark().column + 1
+      << ": expected a map of sections (daemon, channels, engine), got "
+      << (root.IsScalar() ? "'" + root.Scalar() + "'" : std::string("a list"));
     throw ConfigError(s.str());
   }
   int64_t budget = kMaxConfigNodes;

@@ -79,6 +79,7 @@ void read_fleet(Section& s, engine::GraphConfig& c) {
   f.get("observed_time_tolerance_s", o.observed_time_tolerance_s, in_range(0.0, 10.0));
   f.get("max_pending", o.max_pending, int_in_range(1, 1 << 16));
   f.get("join_every_keyframes", o.join_every_keyframes, int_in_range(1, 1 << 20));
+  f.get("proposal_radius", o.proposal_radius, non_negative());
   Section markers = f.child("markers");
   if (markers.node().IsDefined() && !markers.node().IsNull()) {
     if (!markers.node().IsMap()) throw markers.error("'" + markers.path() + "': expected a map of landmark id -> body");

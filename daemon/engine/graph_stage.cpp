@@ -69,6 +69,20 @@ class GraphStage::Outputs final : public slam::SlamListener {
     emit_(r);
   }
 
+  void fleet_loop_proposed(const std::string& body, int64_t utime, const slam::KeyframeEstimate& a,
+                           const std::string& other, const slam::KeyframeEstimate& b) override {
+    MatchRequest r;
+    r.utime = utime;
+    r.source = body;
+    r.source_b = other;
+    r.request_id = stage_.next_request_id_++;
+    r.kind = "fleet";
+    r.a = to_keyframe(a);
+    r.b = to_keyframe(b);
+    ++stage_.counters_.match_requests;
+    emit_(r);
+  }
+
  private:
   GraphStage& stage_;
   const Emit& emit_;

@@ -321,7 +321,8 @@ Decoded to_event(const sextant::loop_closure_t& m) {
     if (!m.source_to.empty()) check_name(m.source_to, "loop_closure_t.source_to");
     if (m.utime <= 0) fail("invalid", "loop_closure_t.utime: not positive (" + std::to_string(m.utime) + ")");
     if (m.utime_from <= 0 || m.utime_to <= 0) fail("invalid", "loop_closure_t.utime_from/utime_to: not positive");
-    if (m.utime_from == m.utime_to) fail("invalid", "loop_closure_t.utime_to: equal to utime_from");
+    if (m.utime_from == m.utime_to && (m.source_to.empty() || m.source_to == m.source))
+      fail("invalid", "loop_closure_t.utime_to: equal to utime_from (one body)");
     engine::LoopClosure e;
     e.utime = m.utime;
     e.source = m.source;
@@ -396,6 +397,7 @@ sextant::bearing_scan_t to_message(const engine::BearingScan& e, const std::stri
 sextant::loop_closure_t to_message(const engine::LoopClosure& e, const std::string& sender, int64_t seq) {
   auto m = message_header<sextant::loop_closure_t>(e.utime, sender, seq);
   m.source = e.source;
+  m.source_to = e.source_to;
   m.planar = e.planar;
   m.utime_from = e.utime_from;
   m.utime_to = e.utime_to;

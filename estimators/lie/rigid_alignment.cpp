@@ -2,47 +2,41 @@
 
 #include <Eigen/SVD>
 
-#include <cmath>
 #include <stdexcept>
 
 namespace sextant {
+namespace {
+
+// Umeyama in D dimensions (the first D rows of the points).
+template <int D>
+RigidAlignment align_in(const Eigen::Matrix3Xd& model, const Eigen::Matrix3Xd& data, bool estimate_scale) {
+  using Vector = Eigen::Matrix<double, D, 1>;
+  using Matrix = Eigen::Matrix<double, D, D>;
+  const Eigen::Matrix<double, D, Eigen::Dynamic> m = model.topRows<D>(), d = data.topRows<D>();
+  const Vector mu_m = m.rowwise().mean(), mu_d = d.rowwise().mean();
+  const Eigen::Matrix<double, D, Eigen::Dynamic> mc = m.colwise() - mu_m, dc = d.colwise() - mu_d;
+  // W' = sum data_c model_c' (evaluate_ate.py's align(); Umeyama 1991 with the 1/n dropped).
+  const Matrix Wt = dc * mc.transpose();
+  Eigen::JacobiSVD<Matrix> svd(Wt, Eigen::ComputeFullU | Eigen::ComputeFullV);
+  Matrix S = Matrix::Identity();
+  if (svd.matrixU().determinant() * svd.matrixV().determinant() < 0) S(D - 1, D - 1) = -1;
+  RigidAlignment r;
+  const Matrix R = svd.matrixU() * S * svd.matrixV().transpose();
+  r.rotation.topLeftCorner<D, D>() = R;
+  if (estimate_scale) r.scale = (svd.singularValues().asDiagonal() * S).trace() / mc.squaredNorm();
+  r.translation.head<D>() = mu_d - r.scale * R * mu_m;
+  return r;
+}
+
+}  // namespace
 
 SE3 RigidAlignment::motion() const { return SE3(SO3(Eigen::Quaterniond(rotation)), translation); }
 
-RigidAlignment align_points(const Eigen::Matrix3Xd& a, const Eigen::Matrix3Xd& b, bool planar, bool estimate_scale,
-                            const Eigen::VectorXd& weights) {
-  const Eigen::Index n = a.cols();
-  if (n == 0 || b.cols() != n || (weights.size() != 0 && weights.size() != n))
-    throw std::invalid_argument("align_points: two point sets of the same non-zero size (and as many weights)");
-  const Eigen::VectorXd w = weights.size() == 0 ? Eigen::VectorXd::Ones(n) : weights;
-  const double total = w.sum();
-  const Eigen::Vector3d mu_a = a * w / total, mu_b = b * w / total;
-  Eigen::Matrix3Xd ac = a.colwise() - mu_a, bc = b.colwise() - mu_b;
-  RigidAlignment r;
-  if (planar) {
-    ac.row(2).setZero();
-    bc.row(2).setZero();
-    double cross = 0, dot = 0;
-    for (Eigen::Index k = 0; k < n; ++k) {
-      cross += w[k] * (ac(0, k) * bc(1, k) - ac(1, k) * bc(0, k));
-      dot += w[k] * (ac(0, k) * bc(0, k) + ac(1, k) * bc(1, k));
-    }
-    r.rotation = Eigen::AngleAxisd(std::atan2(cross, dot), Eigen::Vector3d::UnitZ()).toRotationMatrix();
-    r.translation = mu_b - r.rotation * mu_a;
-    r.translation.z() = 0;
-    return r;
-  }
-  const Eigen::Matrix3d cov = bc * w.asDiagonal() * ac.transpose();
-  Eigen::JacobiSVD<Eigen::Matrix3d> svd(cov, Eigen::ComputeFullU | Eigen::ComputeFullV);
-  Eigen::Matrix3d S = Eigen::Matrix3d::Identity();
-  if (svd.matrixU().determinant() * svd.matrixV().determinant() < 0) S(2, 2) = -1;
-  r.rotation = svd.matrixU() * S * svd.matrixV().transpose();
-  if (estimate_scale) {
-    const double var_a = (ac * w.cwiseSqrt().asDiagonal()).squaredNorm();
-    if (var_a > 0) r.scale = (svd.singularValues().asDiagonal() * S).trace() / var_a;
-  }
-  r.translation = mu_b - r.scale * r.rotation * mu_a;
-  return r;
+RigidAlignment align_points(const Eigen::Matrix3Xd& model, const Eigen::Matrix3Xd& data, bool estimate_scale,
+                            bool planar) {
+  if (model.cols() != data.cols() || model.cols() < 2)
+    throw std::invalid_argument("alignment: at least 2 corresponding points are needed");
+  return planar ? align_in<2>(model, data, estimate_scale) : align_in<3>(model, data, estimate_scale);
 }
 
 }  // namespace sextant

@@ -1,27 +1,30 @@
 #pragma once
-// The rigid motion that best maps one set of points onto another, in the least-squares sense:
-//     min over R, t (and s) of  sum_k w_k | s R a_k + t - b_k |^2,
-// Umeyama, "Least-squares estimation of transformation parameters between two point patterns", PAMI 1991 (the
-// weighted form; with s fixed at 1 it is Kabsch's).  For planar points (z ignored) the rotation is about z alone:
-// theta = atan2(sum w (a_c x b_c), sum w (a_c . b_c)) over the centred points.
+// The similarity (or rigid motion) that best maps one set of points onto another in the least-squares sense:
+//     min over s, R, t of  sum_k | s R model_k + t - data_k |^2,
+// Umeyama, "Least-squares estimation of transformation parameters between two point patterns", PAMI 1991 (as the
+// TUM benchmark's evaluate_ate.py computes it; s fixed at 1 unless asked: Kabsch).  A planar alignment uses the x
+// and y rows only: a rotation about z and a translation in x, y.  One home for both users: the fleet's frame
+// placement (estimators/slam/frame_placement.hpp) and the trajectory evaluation (eval/).
 #include "estimators/lie/se3.hpp"
 
 #include <Eigen/Core>
 
 namespace sextant {
 
+/// x -> scale * rotation * x + translation.
 struct RigidAlignment {
   Eigen::Matrix3d rotation = Eigen::Matrix3d::Identity();
   Eigen::Vector3d translation = Eigen::Vector3d::Zero();
   double scale = 1.0;
-  /// b ~ s R a + t as an SE(3) (the scale left out).
+  Eigen::Vector3d operator()(const Eigen::Vector3d& x) const { return scale * rotation * x + translation; }
+  /// The rigid part as an SE(3) (the scale left out).
   SE3 motion() const;
 };
 
-/// The alignment mapping the columns of `a` onto those of `b` (same count, at least 1; weights all 1 when empty).
-/// `planar`: a rotation about z and a translation in x, y only.  `estimate_scale`: Sim(3) (3-D only).
-/// Throws std::invalid_argument for mismatched sizes or no point.
-RigidAlignment align_points(const Eigen::Matrix3Xd& a, const Eigen::Matrix3Xd& b, bool planar,
-                            bool estimate_scale = false, const Eigen::VectorXd& weights = {});
+/// The alignment of the columns of `model` onto those of `data` (see above).  Needs at least 2 corresponding
+/// columns (throws std::invalid_argument otherwise); with fewer than 3 non-collinear points a 3-D rotation is not
+/// determined (the SVD picks one).
+RigidAlignment align_points(const Eigen::Matrix3Xd& model, const Eigen::Matrix3Xd& data, bool estimate_scale = false,
+                            bool planar = false);
 
 }  // namespace sextant

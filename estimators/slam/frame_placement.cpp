@@ -46,8 +46,9 @@ SE3 fit(const std::vector<const PlacementEvidence*>& es, bool planar) {
   std::vector<Eigen::Vector3d> b, a;
   for (const PlacementEvidence* e : es) add_correspondences(*e, planar, b, a);
   Eigen::Matrix3Xd mb(3, static_cast<Eigen::Index>(b.size())), ma(3, static_cast<Eigen::Index>(a.size()));
-  for (size_t k = 0; k < b.size(); ++k) mb.col(static_cast<Eigen::Index>(k)) = b[k], ma.col(static_cast<Eigen::Index>(k)) = a[k];
-  return align_points(mb, ma, planar).motion();
+  for (size_t k = 0; k < b.size(); ++k)
+    mb.col(static_cast<Eigen::Index>(k)) = b[k], ma.col(static_cast<Eigen::Index>(k)) = a[k];
+  return align_points(mb, ma, false, planar).motion();
 }
 
 /// Point subsets that can form a hypothesis: their points far enough apart and their mutual distances the same in

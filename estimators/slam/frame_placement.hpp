@@ -36,7 +36,7 @@ struct PlacementEvidence {
   enum class Kind { kLandmark, kBodySighting, kLoop };
   Kind kind = Kind::kLandmark;
   Eigen::Vector3d in_a = Eigen::Vector3d::Zero(), in_b = Eigen::Vector3d::Zero();  // points (metres)
-  SE3 a_from_b;                                                                     // kLoop: T_AB it implies
+  SE3 a_from_b;                                                                    // kLoop: T_AB it implies
 };
 
 struct PlacementOptions {
@@ -52,7 +52,7 @@ struct PlacementOptions {
 
 struct Placement {
   bool placed = false;
-  SE3 a_from_b;                // T_AB, refined on the inliers
+  SE3 a_from_b;                 // T_AB, refined on the inliers
   std::vector<size_t> inliers;  // indices into the evidence
   int support = 0, rival_support = 0;
   double spread = 0;

@@ -180,6 +180,7 @@ void SlamGraph::on_keyframe_candidate(const std::string& name, Body& b, const Od
   if (reanchored) ++counters_.keyframes_reanchored;
   update(name, b, o.utime, listener);
   if (options_.propose_loops) propose_loops(name, b, o.utime, listener);
+  if (options_.propose_loops && options_.fleet.enabled) propose_fleet_loops(name, b, o.utime, listener);
   maybe_thin(b.planar);
 }
 

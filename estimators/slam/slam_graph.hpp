@@ -85,6 +85,12 @@ class SlamListener {
   /// A loop candidate for the new keyframe `a` (newest first) against the earlier keyframe `b`.
   virtual void loop_proposed(const std::string& body, int64_t utime, const KeyframeEstimate& a,
                              const KeyframeEstimate& b, bool random) = 0;
+  /// An inter-robot candidate: the new keyframe `a` of `body` against keyframe `b` of `other`, a body of the same map
+  /// frame whose estimate came within FleetOptions::proposal_radius.
+  virtual void fleet_loop_proposed(const std::string& body, int64_t utime, const KeyframeEstimate& a,
+                                   const std::string& other, const KeyframeEstimate& b) {
+    (void)body, (void)utime, (void)a, (void)other, (void)b;
+  }
 };
 
 class SlamGraph {
@@ -216,6 +222,8 @@ class SlamGraph {
   /// keyframe is measured from that one and its edge, which spans the dropped pose, accumulates from there.
   void drop_keyframe(Body& b);
   void propose_loops(const std::string& name, const Body& b, int64_t utime, SlamListener& listener);
+  /// For the newest keyframe of `name`: each other body of its frame's nearest keyframe within proposal_radius.
+  void propose_fleet_loops(const std::string& name, const Body& b, int64_t utime, SlamListener& listener);
   /// One smoother update of b's smoother, counted.
   graph::IncrementalStatus solve(Body& b);
   /// One smoother update for `b`, counted and reported when it succeeds.
@@ -259,7 +267,7 @@ class SlamGraph {
   std::optional<TrackPoint> anchor_near(const Body& b, int64_t utime) const;
   /// The placement evidence between frames `a` and `b` (T_ab) and which pending item each came from.
   struct Evidence;
-  Evidence evidence_between(const std::string& a, const std::string& b) const;
+  Evidence evidence_between(const std::string& a, const std::string& b);
   /// Tries to place frame `b` in `a` (or the reverse) and joins them when the rule holds; true when joined.
   bool try_join(const std::string& a, const std::string& b, SlamListener& listener);
   void join(const std::string& keep, const std::string& gone, const SE3& keep_from_gone);

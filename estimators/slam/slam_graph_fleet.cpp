@@ -6,7 +6,10 @@
 #include "estimators/slam/sighting_model.hpp"
 #include "estimators/slam/slam_graph.hpp"
 
+#include <Eigen/Eigenvalues>
+
 #include <algorithm>
+#include <cmath>
 #include <set>
 
 namespace sextant::slam {
@@ -27,6 +30,24 @@ std::map<std::string, std::vector<std::string>> SlamGraph::frames() const {
   std::map<std::string, std::vector<std::string>> out;
   for (const auto& [name, b] : bodies_) out[b.frame].push_back(name);
   return out;
+}
+
+void SlamGraph::propose_fleet_loops(const std::string& name, const Body& b, int64_t utime, SlamListener& listener) {
+  if (!(options_.fleet.proposal_radius > 0)) return;
+  const TrackKeyframe& k = b.track.newest();
+  const SE3 here = estimate(b, k.variable);
+  for (const auto& [other, o] : bodies_) {
+    if (other == name || o.frame != b.frame) continue;
+    const TrackKeyframe* nearest = nullptr;
+    double best = options_.fleet.proposal_radius;
+    for (const TrackKeyframe& c : o.track.keyframes()) {
+      const double d = (estimate(o, c.variable).translation() - here.translation()).norm();
+      if (d <= best) best = d, nearest = &c;
+    }
+    if (nearest != nullptr)
+      listener.fleet_loop_proposed(name, utime, KeyframeEstimate{k.id, k.utime, here}, other,
+                                   KeyframeEstimate{nearest->id, nearest->utime, estimate(o, nearest->variable)});
+  }
 }
 
 std::optional<TrackPoint> SlamGraph::anchor_near(const Body& b, int64_t utime) const {
@@ -175,7 +196,7 @@ void SlamGraph::add_body_loop(const std::string& name, Body& b, const LoopInput&
     return;
   }
   const KeyframeLoop kl = loop_on_keyframes(b.planar, l.relative, l.information, *end_from, *end_to);
-  BodyLoop bl{name, l.body_to, b.track.keyframes()[end_from->keyframe].id, o.track.keyframes()[end_to->keyframe].id,
+  BodyLoop bl{name, l.body_to,     b.track.keyframes()[end_from->keyframe].id, o.track.keyframes()[end_to->keyframe].id,
               kl.z, kl.information};
   if (o.frame == b.frame) {
     if (add_loop_factor(bl)) update_frame(b.frame, listener);
@@ -190,16 +211,23 @@ void SlamGraph::add_body_loop(const std::string& name, Body& b, const LoopInput&
   try_join(b.frame, o.frame, listener);
 }
 
-SlamGraph::Evidence SlamGraph::evidence_between(const std::string& a, const std::string& b) const {
+SlamGraph::Evidence SlamGraph::evidence_between(const std::string& a, const std::string& b) {
   Evidence ev;
   const Body& ra = bodies_.at(a);
   const Body& rb = bodies_.at(b);
   const auto point = [&](const Landmark& l, const Body& r) {
     return r.smoother->graph().variables()[static_cast<size_t>(l.variable)].point;
   };
+  // A landmark is evidence once both maps know where it is to within half the inlier distance (its marginal's
+  // largest standard deviation): a landmark placed by a sighting or two is off by more than the agreement tested.
+  const double max_variance = std::pow(options_.fleet.placement.inlier_distance / 2, 2);
+  const auto known = [&](const Body& r, const Landmark& l) {
+    const Eigen::MatrixXd m = gate_marginal(r, l.variable);
+    return m.size() > 0 && Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(m).eigenvalues().maxCoeff() <= max_variance;
+  };
   for (const auto& [id, la] : ra.landmarks) {
     const auto lb = rb.landmarks.find(id);
-    if (lb == rb.landmarks.end()) continue;
+    if (lb == rb.landmarks.end() || !known(ra, la) || !known(rb, lb->second)) continue;
     ev.items.push_back({PlacementEvidence::Kind::kLandmark, point(la, ra), point(lb->second, rb), SE3()});
     ev.origin.emplace_back(false, -1);
   }

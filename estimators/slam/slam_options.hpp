@@ -55,6 +55,9 @@ struct FleetOptions {
   double observed_time_tolerance_s = 0.25;
   int max_pending = 256;  // robot sightings and loops between frames not yet joined, kept as evidence (oldest go)
   int join_every_keyframes = 5;  // placement tried at most this often per pair of frames without new evidence
+  /// Inter-robot loop candidates (SlamListener::fleet_loop_proposed, with propose_loops): for each new keyframe, the
+  /// nearest keyframe of every other body of its frame within this many metres (0: none).
+  double proposal_radius = 2.0;
 };
 
 struct SlamOptions {

@@ -16,6 +16,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <optional>
 
 using namespace sextant;
@@ -206,4 +207,70 @@ TEST_CASE(
   bad.command_delay_s = std::nan("");
   CHECK_THROWS_WITH(tools::convert_mrclam(dir, 4, log0, "", bad), doctest::Contains("delay"));
   for (const auto& f : {log0, log1, gt}) std::remove(f.c_str());
+}
+
+TEST_CASE("MRCLAM fleet: robots merged in time order, each odometry from the identity, robot sightings kept by id") {
+  const std::string dir = std::string(SEXTANT_SHARED_DIR) + "/data/landmarks/MRCLAM_Dataset7";
+  const auto log = temp("mrclam_fleet.lcm"), prefix = temp("mrclam_fleet_gt_");
+  const auto r = tools::convert_mrclam_fleet(dir, {1, 2, 3, 4, 5}, log, prefix);
+  // Robot sightings per robot in the raw files: 650, 700, 965, 555, 1336 (barcodes 5, 14, 41, 32, 23).
+  CHECK(r.robot_sightings == 4206);
+  CHECK(r.robot_sightings_kept == 4206);
+  const auto odo = events_of<engine::Odometry>(log, runtime::InputKind::kOdometry, "ODOMETRY");
+  const auto sightings = events_of<engine::LandmarkSightings>(log, runtime::InputKind::kLandmarks, "LANDMARKS");
+  CHECK(static_cast<int64_t>(odo.size()) == r.odometry);
+  std::map<std::string, engine::Odometry> first;
+  for (const auto& o : odo) first.try_emplace(o.source, o);
+  REQUIRE(first.size() == 5);
+  for (const auto& [source, o] : first) {
+    CAPTURE(source);
+    CHECK(o.pose.position.norm() == 0.0);
+    CHECK(o.pose.orientation.angularDistance(Eigen::Quaterniond::Identity()) == 0.0);
+  }
+  // Robot2_Measurement.dat: "1248446191.119  32  1.247  -0.068", barcode 32 = subject 4.
+  int64_t robots_seen = 0, landmarks_seen = 0;
+  bool found = false;
+  for (const auto& s : sightings)
+    for (const auto& ob : s.observations) {
+      (ob.id <= 5 ? robots_seen : landmarks_seen) += 1;
+      if (s.source == "robot2" && s.utime == 1248446191119000 && ob.id == 4)
+        found = ob.range == doctest::Approx(1.247) && ob.azimuth == doctest::Approx(-0.068);
+    }
+  CHECK(found);
+  CHECK(robots_seen == 4206);
+  CHECK(landmarks_seen == r.landmark_observations);
+  // Time order across robots.
+  int64_t last = 0;
+  bool ordered = true;
+  for (const auto& rec : runtime::LogReader::read_all(log))
+    ordered = ordered && rec.timestamp >= last, last = rec.timestamp;
+  CHECK(ordered);
+  // Ground truth files: one TUM per robot (robot 3's as long as the single-robot conversion's) and the landmarks.
+  CHECK(tools::read_tum(prefix + "robot3.txt").size() == 53545);
+  std::ifstream lm(prefix + "landmarks.txt");
+  std::string line;
+  int rows = 0;
+  while (std::getline(lm, line)) rows += !line.empty() && line[0] != '#';
+  CHECK(rows == 15);
+  std::remove(log.c_str());
+  for (const char* f : {"robot1.txt", "robot2.txt", "robot3.txt", "robot4.txt", "robot5.txt", "landmarks.txt"})
+    std::remove((prefix + f).c_str());
+}
+
+TEST_CASE("MRCLAM fleet: sightings of robots outside the log are counted, not kept, and robot lists parse") {
+  const std::string dir = std::string(SEXTANT_SHARED_DIR) + "/data/landmarks/MRCLAM_Dataset7";
+  const auto log = temp("mrclam_fleet23.lcm");
+  const auto r = tools::convert_mrclam_fleet(dir, {2, 3}, log, "");
+  CHECK(r.robot_sightings == 700 + 965);
+  CHECK(r.robot_sightings_kept > 0);
+  CHECK(r.robot_sightings_kept < r.robot_sightings);
+  for (const auto& s : events_of<engine::LandmarkSightings>(log, runtime::InputKind::kLandmarks, "LANDMARKS"))
+    for (const auto& ob : s.observations) CHECK((ob.id == 2 || ob.id == 3 || ob.id >= 6));
+  std::remove(log.c_str());
+  CHECK(tools::parse_mrclam_robots("1-5") == std::vector<int>{1, 2, 3, 4, 5});
+  CHECK(tools::parse_mrclam_robots("1,3,5") == std::vector<int>{1, 3, 5});
+  CHECK(tools::parse_mrclam_robots("2-3,5") == std::vector<int>{2, 3, 5});
+  for (const char* bad : {"", "0-2", "1-6", "3-1", "1,1", "a", "1-", "1-2x"})
+    CHECK_THROWS_AS(tools::parse_mrclam_robots(bad), std::invalid_argument);
+  CHECK_THROWS_WITH(tools::convert_mrclam_fleet(dir, {1, 1}, log, ""), doctest::Contains("twice"));
 }

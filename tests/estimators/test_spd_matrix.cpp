@@ -35,7 +35,7 @@ TEST_CASE("symmetrized: (m + m') / 2 exactly, also when assigned back to m") {
   CHECK(symmetrized(a + Eigen::Matrix3d::Identity()) == Eigen::Matrix3d(expected + Eigen::Matrix3d::Identity()));
 }
 
-TEST_CASE("check_positive_definite: finite, symmetric, smallest eigenvalue above zero; the problem says which") {
+TEST_CASE("check_positive_definite: finite, symmetric, smallest eigenvalue above zero, the problem says which") {
   using P = DefinitenessCheck::Problem;
   const Eigen::Matrix3d pd = with_eigenvalues({0.1, 0.5, 2.0});
   const DefinitenessCheck good = check_positive_definite(pd);

@@ -378,3 +378,27 @@ TEST_CASE("matcher truth from logs: simulate's planar and spatial runs, a truth-
   std::filesystem::remove(empty);
   CHECK_THROWS(tools::read_matcher_truth(temp("does_not_exist.lcm")));
 }
+
+TEST_CASE("simulated matcher: an inter-robot request is answered as a loop from b's body to a's, from both truths") {
+  SimulatedMatcherOptions o;
+  o.sigma_t = 1e-6;
+  o.sigma_r = 1e-7;
+  std::map<std::string, MatcherTruth> truths;
+  truths["robot1"] = helix_truth();
+  std::vector<std::pair<int64_t, SE3>> other;  // robot2: the helix shifted by 3 m in y and turned by 1 rad
+  const SE3 shift(SO3::exp(Eigen::Vector3d(0, 0, 1)), Eigen::Vector3d(0, 3, 0));
+  for (int i = 0; i <= 600; ++i) other.push_back({at_s(i * 0.1), shift * helix(i * 0.1)});
+  truths["robot2"] = {InterpolatedTrajectory(std::move(other)), false};
+  SimulatedMatcher m(std::move(truths), o);
+  auto r = request(20, 20);  // the same time for two bodies is a valid inter-robot request
+  r.source_b = "robot2";
+  const auto lc = m.answer(r);
+  REQUIRE(lc);
+  CHECK(lc->source == "robot2");
+  CHECK(lc->source_to == "robot1");
+  const SE3 expected = (shift * helix(20)).between(helix(20));
+  CHECK((to_se3(lc->relative).translation() - expected.translation()).norm() < 1e-5);
+  r.source_b = "robot9";  // no truth of b's body
+  CHECK_FALSE(m.answer(r));
+  CHECK(m.counts().invalid == 1);
+}

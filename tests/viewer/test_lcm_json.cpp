@@ -68,7 +68,7 @@ TEST_CASE("fused_pose_t: JSON field by field, and back to the same bytes") {
   CHECK(type->encode(Json::parse(j->dump())) == bytes);
 }
 
-TEST_CASE("status_t: nested arrays with their counts; non-finite doubles survive as strings") {
+TEST_CASE("status_t: nested arrays with their counts, non-finite doubles survive as strings") {
   sextant::status_t s{};
   s.sender = "d";
   s.version = "v";

@@ -177,3 +177,25 @@ TEST_CASE("bytes without a JSON form: kept raw for files, dropped by the bridge,
   CHECK(out.empty());
   CHECK(bridge.counts().raw == 1);
 }
+
+TEST_CASE("batched frame transforms: every pose's transforms, in order, in one /tf message at flush") {
+  TopicMapperOptions options;
+  options.batch_frame_transforms = true;
+  TopicMapper mapper(options);
+  auto first = map(mapper, "FUSED_POSE", pose("ekf", 1));
+  auto second = map(mapper, "FUSED_POSE", pose("dead_reckoning", 2));
+  CHECK(std::none_of(first.begin(), first.end(), [](const ViewerMessage& m) { return m.topic == "/tf"; }));
+  CHECK(std::none_of(second.begin(), second.end(), [](const ViewerMessage& m) { return m.topic == "/tf"; }));
+  std::vector<ViewerMessage> flushed;
+  mapper.flush(flushed);
+  REQUIRE(flushed.size() == 1);
+  const Json tf = Json::parse(on(flushed, "/tf").data);
+  REQUIRE(tf["transforms"].size() == 3);
+  CHECK(tf["transforms"][0]["child_frame_id"] == "robot1/ekf");
+  CHECK(tf["transforms"][1]["child_frame_id"] == "robot1");
+  CHECK(tf["transforms"][2]["child_frame_id"] == "robot1/dead_reckoning");
+  CHECK(tf["transforms"][2]["translation"]["x"] == 2.0);
+  flushed.clear();
+  mapper.flush(flushed);
+  CHECK(flushed.empty());  // nothing gathered since
+}

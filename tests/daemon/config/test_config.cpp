@@ -488,7 +488,7 @@ TEST_CASE("config: a control character written as a YAML escape in daemon.name i
 }
 
 TEST_CASE(
-    "config: document markers: a leading '---' and a final '...' are one document; content after them is a second") {
+    "config: document markers: a leading '---' and a final '...' are one document, content after them is a second") {
   using sextant::test::config_error_of;
   CHECK(config_error_of("---\ndaemon:\n  name: a\n...\n").empty());
   CHECK(config_error_of("daemon:\n  name: a\n...\ndaemon:\n  name: b\n").find("test.yaml:4: a second YAML document") ==

@@ -65,7 +65,7 @@ TEST_CASE("inertial stage: a sample from a frame without a mounting is refused a
   CHECK(counter(stage, "started") == 0);
 }
 
-TEST_CASE("inertial stage: GNSS fixes at the datum hold the body; a fix 200 m off is gated, not fused") {
+TEST_CASE("inertial stage: GNSS fixes at the datum hold the body, a fix 200 m off is gated, not fused") {
   InertialStage stage(config());
   std::vector<FusedPose> out;
   const Emit emit = [&](Output o) { out.push_back(std::get<FusedPose>(o)); };

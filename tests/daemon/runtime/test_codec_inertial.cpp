@@ -99,7 +99,7 @@ TEST_CASE("bad IMU samples are refused naming the field") {
   CHECK(rejection(decode(runtime::InputKind::kImu, absent)) == "accepted");
 }
 
-TEST_CASE("a GNSS fix decodes; no fix, an unknown status and impossible coordinates are refused") {
+TEST_CASE("a GNSS fix decodes, no fix, an unknown status and impossible coordinates are refused") {
   const auto d = decode(runtime::InputKind::kGnss, gnss());
   REQUIRE(std::holds_alternative<engine::Event>(d));
   const auto& e = std::get<engine::GnssFix>(std::get<engine::Event>(d));

@@ -23,7 +23,7 @@ std::vector<uint8_t> odometry(const std::string& sender, int64_t seq, int64_t ut
 }  // namespace
 
 TEST_CASE(
-    "source claims: a second sender of an active source is refused and counted; it takes over after the first goes "
+    "source claims: a second sender of an active source is refused and counted, it takes over after the first goes "
     "silent") {
   ChannelStats stats;
   Intake intake(stats);
@@ -48,7 +48,7 @@ TEST_CASE(
   CHECK_FALSE(intake.accept("ODOMETRY", a.data(), a.size(), Arrival::now()));
 }
 
-TEST_CASE("source claims: the table is bounded; the claim silent longest gives its place") {
+TEST_CASE("source claims: the table is bounded, the claim silent longest gives its place") {
   SourceClaims claims(2.0, 2);
   CHECK(claims.claim("x", "s1", 10));
   CHECK(claims.claim("y", "s2", 20));

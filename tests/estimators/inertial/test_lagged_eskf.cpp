@@ -99,7 +99,7 @@ TEST_CASE("lagged ESKF: fixes 150 ms late give the in-order estimate exactly") {
 }
 
 TEST_CASE(
-    "lagged ESKF: a measurement older than the history is refused; a fix ahead of the IMU is re-applied after it") {
+    "lagged ESKF: a measurement older than the history is refused, a fix ahead of the IMU is re-applied after it") {
   LaggedEskf lag(EskfOptions{}, 0.2);
   lag.initialize(0, EskfState{}, initial_covariance());
   BodyImuSample rest;

@@ -65,8 +65,8 @@ TEST_CASE("frame placement: consensus over landmarks, robot sightings and loops,
   SUBCASE("two placements with equal support (a symmetric, ambiguous scene): not decided") {
     // Frame B's points seen at the truth, and as many at another placement: no majority.
     const SE3 other = planar_pose(-6, 2, -1.0);
-    std::vector<PlacementEvidence> e{point(truth, {0, 0, 0}, rng), point(truth, {3, 0, 0}, rng),
-                                     point(truth, {1, 3, 0}, rng), point(other, {10, 10, 0}, rng),
+    std::vector<PlacementEvidence> e{point(truth, {0, 0, 0}, rng),   point(truth, {3, 0, 0}, rng),
+                                     point(truth, {1, 3, 0}, rng),   point(other, {10, 10, 0}, rng),
                                      point(other, {13, 10, 0}, rng), point(other, {11, 13, 0}, rng)};
     const Placement p = place_frames(e, true, o);
     CHECK_FALSE(p.placed);
@@ -95,8 +95,8 @@ TEST_CASE("frame placement: consensus over landmarks, robot sightings and loops,
     xi << 1, 2, -0.5, 0.1, -0.2, 0.9;
     const SE3 t = SE3::exp(xi);
     std::vector<PlacementEvidence> e;
-    for (const Eigen::Vector3d& q : {Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(2, 0, 0.5), Eigen::Vector3d(0, 2, 1),
-                                     Eigen::Vector3d(1, 1, -1)}) {
+    for (const Eigen::Vector3d& q :
+         {Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(2, 0, 0.5), Eigen::Vector3d(0, 2, 1), Eigen::Vector3d(1, 1, -1)}) {
       PlacementEvidence x;
       x.in_b = q;
       x.in_a = t * q;

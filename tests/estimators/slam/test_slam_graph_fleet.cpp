@@ -27,7 +27,8 @@ struct Robot {
   double radius = 3, phase = 0, turn = 0.3;
   SE2 truth(double t) const {
     const double a = phase + turn * t;
-    return SE2(centre.x() + radius * std::cos(a), centre.y() + radius * std::sin(a), a + (turn > 0 ? M_PI / 2 : -M_PI / 2));
+    return SE2(centre.x() + radius * std::cos(a), centre.y() + radius * std::sin(a),
+               a + (turn > 0 ? M_PI / 2 : -M_PI / 2));
   }
   /// The odometry pose: the truth in the robot's own frame (identity at t = 0).
   SE3 odometry(double t) const { return (truth(0).inverse() * truth(t)).to_se3(); }
@@ -163,7 +164,9 @@ TEST_CASE("fleet: disabled, the robots stay apart whatever they share") {
   CHECK(slam.counters().fleet_sightings == 0);
 }
 
-TEST_CASE("fleet: an inter-robot loop joins with agreeing sightings; a fleet state saved and restored continues bit for bit") {
+TEST_CASE(
+    "fleet: an inter-robot loop joins with agreeing sightings, a fleet state saved and restored continues bit for "
+    "bit") {
   const Robot a{"a", {0, 0}, 3, 0, 0.3}, b{"b", {0.5, 0.5}, 2.5, 2.0, -0.25};
   SlamGraph slam(fleet_options());
   auto world_b = random_landmarks(1, 25);
@@ -194,4 +197,33 @@ TEST_CASE("fleet: an inter-robot loop joins with agreeing sightings; a fleet sta
   const auto ka = slam.keyframes("b"), kb = restored.keyframes("b");
   REQUIRE(ka.size() == kb.size());
   for (size_t k = 0; k < ka.size(); ++k) CHECK(ka[k].pose.translation() == kb[k].pose.translation());
+}
+
+TEST_CASE("fleet: once two robots share a frame, their new keyframes are proposed against each other's nearest") {
+  struct Proposals final : SlamListener {
+    int fleet = 0;
+    double farthest = 0;
+    void updated(const std::string&, int64_t, const graph::IncrementalStatus&) override {}
+    void loop_proposed(const std::string&, int64_t, const KeyframeEstimate&, const KeyframeEstimate&, bool) override {}
+    void fleet_loop_proposed(const std::string& body, int64_t, const KeyframeEstimate& a, const std::string& other,
+                             const KeyframeEstimate& b) override {
+      CHECK(body != other);
+      farthest = std::max(farthest, (a.pose.translation() - b.pose.translation()).norm());
+      ++fleet;
+    }
+  };
+  const Robot a{"a", {0, 0}, 3, 0, 0.3}, b{"b", {0.5, 0.5}, 2.5, 2.0, -0.25};
+  SlamOptions o = fleet_options();
+  o.propose_loops = true;
+  SlamGraph slam(o);
+  const auto world = random_landmarks(1, 25);
+  drive(slam, a, b, world, world, 10);
+  REQUIRE(slam.frame_of("b") == "a");
+  Proposals out;
+  for (int i = 101; i < 160; ++i) {
+    slam.add_odometry("a", odometry_at(a, 0.1 * i), out);
+    slam.add_odometry("b", odometry_at(b, 0.1 * i), out);
+  }
+  CHECK(out.fleet > 10);
+  CHECK(out.farthest <= o.fleet.proposal_radius);
 }
