@@ -55,7 +55,7 @@ TEST_CASE("EuRoC: a ground-truth quaternion of 1e300s or denormals is a rotation
   std::filesystem::remove_all(dir);
 }
 
-TEST_CASE("EuRoC: stamps at int64's ends convert with a finite rate; one beyond them is named by line") {
+TEST_CASE("EuRoC: stamps at int64's ends convert with a finite rate, and one beyond them is named by line") {
   const auto dir = folder("s", "-9223372036854775808", "9223372036854775807", "1,0,0,0");
   const auto log = dir + "/out.lcm";
   CHECK(tools::convert_euroc(dir, log).imu == 2);
