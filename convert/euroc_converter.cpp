@@ -7,6 +7,7 @@
 #include <sextant/truth_t.hpp>
 
 #include <cctype>
+#include <cerrno>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
@@ -22,6 +23,7 @@ namespace fs = std::filesystem;
 struct Row {
   int64_t ns = 0;
   std::vector<double> values;
+  std::string where;  // "FILE:LINE: "
 };
 
 // The rows of an ASL CSV file with `columns` numbers after the timestamp, strictly increasing in time.
@@ -35,10 +37,13 @@ std::vector<Row> read_asl_csv(const fs::path& path, size_t columns) {
     if (line.empty() || line[0] == '#') continue;
     const std::string where = path.string() + ":" + std::to_string(n) + ": ";
     Row r;
+    r.where = where;
     const char* p = line.c_str();
     char* end = nullptr;
+    errno = 0;
     r.ns = std::strtoll(p, &end, 10);
     if (end == p) throw std::runtime_error(where + "no timestamp");
+    if (errno == ERANGE) throw std::runtime_error(where + "timestamp out of range");
     for (p = end; *p == ',' || *p == ' '; p = end) {
       ++p;
       const double v = std::strtod(p, &end);
@@ -95,7 +100,13 @@ sextant::truth_t truth_message(const Row& r, int64_t seq, const std::string& sou
   m.seq = seq;
   m.kind = "robot";
   m.source = source;
-  const Eigen::Quaterniond q = Eigen::Quaterniond(r.values[3], r.values[4], r.values[5], r.values[6]).normalized();
+  // Normalized after scaling by its largest component, so that a quaternion of 1e300s or of denormals, which
+  // overflows or underflows the plain norm, is still the rotation it spells.
+  const Eigen::Vector4d wxyz(r.values[3], r.values[4], r.values[5], r.values[6]);
+  const double scale = wxyz.cwiseAbs().maxCoeff();
+  if (!(scale > 0)) throw std::runtime_error(r.where + "the orientation quaternion is zero");
+  const Eigen::Vector4d u = (wxyz / scale).normalized();
+  const Eigen::Quaterniond q(u[0], u[1], u[2], u[3]);
   for (int i = 0; i < 3; ++i) m.position[i] = r.values[static_cast<size_t>(i)];
   m.orientation[0] = q.w(), m.orientation[1] = q.x(), m.orientation[2] = q.y(), m.orientation[3] = q.z();
   return m;
@@ -111,8 +122,10 @@ EurocConversion convert_euroc(const std::string& dir, const std::string& out_lcm
   if (imu.size() < 2) throw std::runtime_error(imu_path.string() + ": fewer than two samples");
   const fs::path gt_path = find_first(dir, {"state_groundtruth_estimate0/data.csv", "gt0/data.csv"});
   const std::vector<Row> gt = gt_path.empty() ? std::vector<Row>{} : read_asl_csv(gt_path, 16);
-  const double rate_hz =
-      static_cast<double>(imu.size() - 1) / (static_cast<double>(imu.back().ns - imu.front().ns) * 1e-9);
+  // The stamps increase, so their difference fits in 64 unsigned bits (in int64_t it may overflow).
+  const double span_s =
+      static_cast<double>(static_cast<uint64_t>(imu.back().ns) - static_cast<uint64_t>(imu.front().ns)) * 1e-9;
+  const double rate_hz = static_cast<double>(imu.size() - 1) / span_s;
 
   // Both streams in time order (a merge of two sorted lists; IMU first at equal stamps).
   runtime::LogWriter out(out_lcm);

@@ -27,7 +27,8 @@ struct EurocConversion {
 };
 
 /// Throws std::runtime_error naming the file and line of a malformed row (wrong column count, a number that does
-/// not parse or is not finite, a timestamp not after the previous one), or a folder without imu0/data.csv.
+/// not parse or is not finite, a timestamp out of int64's range or not after the previous one, a ground-truth
+/// quaternion of zeros), or a folder without imu0/data.csv.
 EurocConversion convert_euroc(const std::string& dir, const std::string& out_lcm, const std::string& gt_tum = "",
                               const EurocConversionOptions& options = {});
 

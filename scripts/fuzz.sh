@@ -3,7 +3,8 @@
 # starting from the seed corpus and the past crash inputs in tests/fuzz/.  New corpus entries stay in
 # BUILD/fuzz-corpus/<name>/; a crash leaves its input in BUILD/fuzz-crashes/<name>/ (copy it into
 # tests/fuzz/crashes/<name>/ with the fix, so that `make test` replays it for ever) and makes this script fail.
-# Prints one line per harness: executions, executions per second, corpus size.  FUZZ_ONLY="codec lcm_log" runs
+# Prints one line per harness: executions, executions per second, coverage (libFuzzer's cov: edges and ft: features
+# at the end), corpus size.  FUZZ_ONLY="codec lcm_log" runs
 # those harnesses only; FUZZ_RUNS=N stops each after N executions (then FUZZ_SECONDS is only an upper bound).
 # Allocation stacks are not recorded (malloc_context_size=0): recording them took a third of the parsers' time; a
 # crash input reproduces its report with full stacks when its harness is run on it alone.
@@ -26,13 +27,14 @@ for bin in "$build"/bin/fuzz_*; do
     -artifact_prefix="$crashes/" "$corpus" "${seeds[@]}" > "$log" 2>&1 || rc=$?
   runs=$(grep -o 'stat::number_of_executed_units: *[0-9]*' "$log" | grep -o '[0-9]*$' || echo "?")
   rate=$(grep -o 'exec/s: *[0-9]*' "$log" | tail -1 | grep -o '[0-9]*$' || echo "?")
+  cov=$(grep -o 'cov: [0-9]* ft: [0-9]*' "$log" | tail -1 || echo "cov: ?")
   if [ "$rc" -ne 0 ]; then
     failed=1
     echo "fuzz $name: FAILED after $runs executions (log: $log, inputs: $crashes)"
     grep -m3 -E 'ERROR|SUMMARY|runtime error' "$log" || true
   else
     took=$(grep -o 'Done [0-9]* runs in [0-9]* second' "$log" | grep -o '[0-9]* second' | grep -o '[0-9]*' || echo "$seconds")
-    echo "fuzz $name: $runs executions in ${took} s ($rate exec/s), corpus $(ls "$corpus" | wc -l) files, no failure"
+    echo "fuzz $name: $runs executions in ${took} s ($rate exec/s), $cov, corpus $(ls "$corpus" | wc -l) files, no failure"
   fi
 done
 exit $failed

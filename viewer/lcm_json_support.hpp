@@ -49,6 +49,8 @@ inline void read_boolean(const Json& j, int8_t& v, const Where& at) {
 inline void read_value(const Json& j, std::string& v, const Where& at) {
   if (!j.is_string()) json_error(at, "expected a string");
   v = j.get<std::string>();
+  // LCM's encoder ends a string at its first NUL: the message would be shorter than its stated size.
+  if (v.find('\0') != std::string::npos) json_error(at, "holds a NUL character (\\u0000)");
 }
 template <class T>
 void read_value(const Json& j, T& v, const Where& at) {

@@ -5,6 +5,8 @@
 
 #include <algorithm>
 #include <array>
+#include <memory>
+#include <new>
 #include <stdexcept>
 
 namespace sextant::viewer {
@@ -398,6 +400,8 @@ std::vector<RawRecord> split_records(const std::string& bytes, uint64_t base, co
   return out;
 }
 
+// A chunk's records from its bytes.  The output grows as zstd produces it, up to one byte past what the chunk's
+// header claims: a small chunk that claims gigabytes costs what it really holds, not what it claims.
 std::string decompress(const std::string& compression, const std::string& data, uint64_t size,
                        const std::string& where) {
   if (compression.empty()) return data;
@@ -405,12 +409,28 @@ std::string decompress(const std::string& compression, const std::string& data, 
     throw std::runtime_error(where + ": chunk compression '" + compression + "' is not supported (zstd or none)");
   if (size > (uint64_t{1} << 34))
     throw std::runtime_error(where + ": chunk claims " + std::to_string(size) + " bytes uncompressed");
-  std::string out(size, '\0');
-  const size_t n = ZSTD_decompress(out.data(), out.size(), data.data(), data.size());
-  if (ZSTD_isError(n)) throw std::runtime_error(where + ": zstd: " + ZSTD_getErrorName(n));
-  if (n != size)
-    throw std::runtime_error(where + ": chunk decompressed to " + std::to_string(n) + " bytes, its header says " +
-                             std::to_string(size));
+  const std::unique_ptr<ZSTD_DCtx, size_t (*)(ZSTD_DCtx*)> ctx(ZSTD_createDCtx(), ZSTD_freeDCtx);
+  if (!ctx) throw std::bad_alloc();
+  std::string out(std::min<uint64_t>(size + 1, uint64_t{1} << 20), '\0');
+  ZSTD_inBuffer in{data.data(), data.size(), 0};
+  size_t produced = 0;
+  for (size_t left = 1; left != 0 || in.pos < in.size;) {  // left: 0 once a frame is done (more may follow)
+    if (produced == out.size()) {
+      if (out.size() > size) break;  // more than claimed
+      out.resize(std::min<uint64_t>(size + 1, 2 * out.size()));
+    }
+    ZSTD_outBuffer o{out.data(), out.size(), produced};
+    const size_t before = in.pos;
+    left = ZSTD_decompressStream(ctx.get(), &o, &in);
+    if (ZSTD_isError(left)) throw std::runtime_error(where + ": zstd: " + ZSTD_getErrorName(left));
+    if (left != 0 && in.pos == in.size && in.pos == before && o.pos == produced)
+      throw std::runtime_error(where + ": zstd: the compressed data ends inside a frame");
+    produced = o.pos;
+  }
+  if (produced != size)
+    throw std::runtime_error(where + ": chunk decompressed to " + (produced > size ? "more than " : "") +
+                             std::to_string(produced) + " bytes, its header says " + std::to_string(size));
+  out.resize(produced);
   return out;
 }
 

@@ -5,8 +5,8 @@
 // Messages (by type; other types are counted and skipped):
 //  - sensor_msgs/Imu -> imu_t: angular velocity, linear acceleration (gravity included, as ROS's Imu carries it),
 //    orientation, with their covariances; a group whose covariance[0] is -1 (ROS's "not provided") has has_* false,
-//    and so has an orientation whose quaternion is all zeros.  orientation_has_yaw unless the topic is listed in
-//    `yaw_free_topics`.
+//    and so has an orientation whose quaternion is all zeros; such a group is written as zeros (the orientation as
+//    the identity), whatever its fields held.  orientation_has_yaw unless the topic is listed in `yaw_free_topics`.
 //  - nav_msgs/Odometry -> odometry_t: pose (position, orientation) and twist (linear, angular, in child_frame_id) with
 //    their covariances.  ROS's pose covariance is about the axes of header.frame_id; sextant's is the right
 //    perturbation in the body frame, so it is rotated: Sigma = diag(R^T, R^T) Sigma_ros diag(R, R).  The twist's
@@ -20,7 +20,8 @@
 // frame_id otherwise) to the body name in `source`; an unmapped frame is its own body name.  imu_t.frame and
 // gnss_t.frame keep the ROS frame_id (the mounting is looked up by it).
 // A message with a non-finite value where one is required (a stamp, a fix's coordinates, a pose) is counted and
-// dropped.
+// dropped (so is a pose whose covariance, rotated into the body frame, overflows, and a frame_id with a NUL byte,
+// which an LCM string cannot hold).
 #include <cstdint>
 #include <functional>
 #include <map>
@@ -46,7 +47,7 @@ struct RosbagConversion {
 using RosbagSink = std::function<void(int64_t utime, const std::string& channel, const std::vector<uint8_t>& bytes)>;
 
 /// Reads the bag and hands each converted message to `sink`, in the bag's order.  Throws std::runtime_error naming
-/// the bag when it cannot be read (with ROS's own message).
+/// the bag when it cannot be read or a message record is shorter than its type (with ROS's own message).
 RosbagConversion read_rosbag(const std::string& bag, const RosbagConversionOptions& options, const RosbagSink& sink);
 
 /// read_rosbag into an LCM log (each event stamped with the message's utime); also throws when `out_lcm` cannot be

@@ -1,166 +1,21 @@
 // Compiled as C++17: ROS 1's generated message headers use std::allocator<void>::rebind, gone in C++20.
+#include "convert/rosbag/ros_message_converter.hpp"
 #include "convert/rosbag/rosbag_converter.hpp"
 
-#include <Eigen/Geometry>
-#include <geometry_msgs/PoseWithCovarianceStamped.h>
-#include <nav_msgs/Odometry.h>
 #include <rosbag/bag.h>
 #include <rosbag/view.h>
-#include <sensor_msgs/Imu.h>
-#include <sensor_msgs/NavSatFix.h>
-#include <sextant/gnss_t.hpp>
-#include <sextant/imu_t.hpp>
-#include <sextant/odometry_t.hpp>
 
-#include <algorithm>
-#include <cmath>
-#include <iterator>
 #include <stdexcept>
 
 namespace sextant::tools {
 namespace {
 
-constexpr const char* kSender = "sextant-convert";
-
-struct Context {
-  const RosbagConversionOptions& options;
-  const RosbagSink& sink;
-  RosbagConversion& result;
-  std::map<std::string, int64_t> seq;  // per channel
-
-  std::string body(const std::string& frame) const {
-    const auto it = options.bodies.find(frame);
-    return it == options.bodies.end() ? frame : it->second;
-  }
-  template <class Msg>
-  void write(const std::string& channel, Msg& m) {
-    m.sender = kSender;
-    m.seq = seq[channel]++;
-    std::vector<uint8_t> bytes(static_cast<size_t>(m.getEncodedSize()));
-    if (m.encode(bytes.data(), 0, static_cast<int>(bytes.size())) < 0)
-      throw std::runtime_error("cannot encode a message for channel " + channel);
-    sink(m.utime, channel, bytes);
-    ++result.written[channel];
-  }
-};
-
-int64_t utime(const ros::Time& t) { return static_cast<int64_t>(t.sec) * 1000000 + t.nsec / 1000; }
-
-template <class A>
-bool finite(const A& a) {
-  return std::all_of(std::begin(a), std::end(a), [](double x) { return std::isfinite(x); });
-}
-
-template <size_t N, class A>
-void copy(double (&dst)[N], const A& src) {
-  std::copy(src.begin(), src.begin() + N, dst);
-}
-
-// ROS's pose covariance (about the parent frame's axes) -> sextant's right perturbation in the body frame.
-void body_frame_pose_covariance(const Eigen::Quaterniond& q, const boost::array<double, 36>& ros, double (&out)[36]) {
-  Eigen::Matrix<double, 6, 6> S = Eigen::Map<const Eigen::Matrix<double, 6, 6, Eigen::RowMajor>>(ros.data());
-  Eigen::Matrix<double, 6, 6> Rt = Eigen::Matrix<double, 6, 6>::Zero();
-  Rt.topLeftCorner<3, 3>() = Rt.bottomRightCorner<3, 3>() = q.toRotationMatrix().transpose();
-  Eigen::Map<Eigen::Matrix<double, 6, 6, Eigen::RowMajor>> body(out);
-  body = Rt * S * Rt.transpose();
-}
-
-void set_pose(sextant::odometry_t& m, const geometry_msgs::PoseWithCovariance& p) {
-  const Eigen::Quaterniond q =
-      Eigen::Quaterniond(p.pose.orientation.w, p.pose.orientation.x, p.pose.orientation.y, p.pose.orientation.z)
-          .normalized();
-  m.position[0] = p.pose.position.x, m.position[1] = p.pose.position.y, m.position[2] = p.pose.position.z;
-  m.orientation[0] = q.w(), m.orientation[1] = q.x(), m.orientation[2] = q.y(), m.orientation[3] = q.z();
-  body_frame_pose_covariance(q, p.covariance, m.covariance);
-}
-
-bool pose_finite(const geometry_msgs::PoseWithCovariance& p) {
-  const auto& o = p.pose.orientation;
-  const double n = o.w * o.w + o.x * o.x + o.y * o.y + o.z * o.z;
-  return std::isfinite(p.pose.position.x + p.pose.position.y + p.pose.position.z) && std::isfinite(n) && n > 1e-12 &&
-         finite(p.covariance);
-}
-
-bool convert(Context& c, const std::string& channel, const std::string& topic, const sensor_msgs::Imu& r) {
-  sextant::imu_t m{};
-  m.utime = utime(r.header.stamp);
-  m.source = c.body(r.header.frame_id);
-  m.frame = r.header.frame_id;
-  m.has_angular_velocity = r.angular_velocity_covariance[0] != -1;
-  m.has_linear_acceleration = r.linear_acceleration_covariance[0] != -1;
-  const auto& q = r.orientation;
-  m.has_orientation = r.orientation_covariance[0] != -1 && (q.w != 0 || q.x != 0 || q.y != 0 || q.z != 0);
-  m.orientation_has_yaw = c.options.yaw_free_topics.count(topic) == 0;
-  m.angular_velocity[0] = r.angular_velocity.x, m.angular_velocity[1] = r.angular_velocity.y,
-  m.angular_velocity[2] = r.angular_velocity.z;
-  m.linear_acceleration[0] = r.linear_acceleration.x, m.linear_acceleration[1] = r.linear_acceleration.y,
-  m.linear_acceleration[2] = r.linear_acceleration.z;
-  m.orientation[0] = q.w, m.orientation[1] = q.x, m.orientation[2] = q.y, m.orientation[3] = q.z;
-  if (m.has_angular_velocity) copy(m.angular_velocity_covariance, r.angular_velocity_covariance);
-  if (m.has_linear_acceleration) copy(m.linear_acceleration_covariance, r.linear_acceleration_covariance);
-  if (m.has_orientation) copy(m.orientation_covariance, r.orientation_covariance);
-  const bool ok =
-      (!m.has_angular_velocity || (finite(m.angular_velocity) && finite(m.angular_velocity_covariance))) &&
-      (!m.has_linear_acceleration || (finite(m.linear_acceleration) && finite(m.linear_acceleration_covariance))) &&
-      (!m.has_orientation || (finite(m.orientation) && finite(m.orientation_covariance)));
-  if (!ok) return false;
-  c.write(channel, m);
-  return true;
-}
-
-bool convert(Context& c, const std::string& channel, const std::string&, const nav_msgs::Odometry& r) {
-  if (!pose_finite(r.pose)) return false;
-  sextant::odometry_t m{};
-  m.utime = utime(r.header.stamp);
-  m.source = c.body(r.child_frame_id.empty() ? r.header.frame_id : r.child_frame_id);
-  set_pose(m, r.pose);
-  const auto& t = r.twist.twist;
-  m.linear_velocity[0] = t.linear.x, m.linear_velocity[1] = t.linear.y, m.linear_velocity[2] = t.linear.z;
-  m.angular_velocity[0] = t.angular.x, m.angular_velocity[1] = t.angular.y, m.angular_velocity[2] = t.angular.z;
-  copy(m.twist_covariance, r.twist.covariance);
-  m.has_twist = finite(m.linear_velocity) && finite(m.angular_velocity) && finite(m.twist_covariance);
-  if (!m.has_twist) return false;
-  c.write(channel, m);
-  return true;
-}
-
-bool convert(Context& c, const std::string& channel, const std::string&,
-             const geometry_msgs::PoseWithCovarianceStamped& r) {
-  if (!pose_finite(r.pose)) return false;
-  sextant::odometry_t m{};
-  m.utime = utime(r.header.stamp);
-  m.source = c.body(r.header.frame_id);
-  set_pose(m, r.pose);
-  c.write(channel, m);
-  return true;
-}
-
-bool convert(Context& c, const std::string& channel, const std::string&, const sensor_msgs::NavSatFix& r) {
-  sextant::gnss_t m{};
-  m.utime = utime(r.header.stamp);
-  m.source = c.body(r.header.frame_id);
-  m.frame = r.header.frame_id;
-  m.status = r.status.status;
-  m.covariance_type = static_cast<int8_t>(r.position_covariance_type);
-  if (m.status >= sextant::gnss_t::STATUS_FIX) {
-    if (!std::isfinite(r.latitude) || !std::isfinite(r.longitude) || !std::isfinite(r.altitude) ||
-        !finite(r.position_covariance))
-      return false;
-    m.latitude = r.latitude, m.longitude = r.longitude, m.altitude = r.altitude;
-    copy(m.position_covariance, r.position_covariance);
-  }
-  c.write(channel, m);
-  return true;
-}
-
-// The message of type Ros in `mi`, converted onto the topic's channel (`fallback` unless mapped).
+// The message of type Ros in `mi` through `convert`; false when it is of another type.
 template <class Ros>
-bool try_convert(Context& c, const rosbag::MessageInstance& mi, const char* fallback) {
+bool try_convert(RosMessageConverter& convert, const rosbag::MessageInstance& mi) {
   const auto msg = mi.instantiate<Ros>();
   if (!msg) return false;
-  const auto it = c.options.channels.find(mi.getTopic());
-  if (!convert(c, it == c.options.channels.end() ? fallback : it->second, mi.getTopic(), *msg))
-    ++c.result.dropped[mi.getTopic()];
+  convert.convert(mi.getTopic(), *msg);
   return true;
 }
 
@@ -175,20 +30,20 @@ RosbagConversion read_rosbag(const std::string& bag_path, const RosbagConversion
     throw std::runtime_error(bag_path + ": " + e.what());
   }
   RosbagConversion result;
-  Context c{options, sink, result, {}};
+  RosMessageConverter convert(options, sink, result);
   try {
     for (const rosbag::MessageInstance& mi : rosbag::View(bag)) {
       if (!options.channels.empty() && options.channels.count(mi.getTopic()) == 0) {
         ++result.skipped[mi.getTopic()];
         continue;
       }
-      const bool taken = try_convert<sensor_msgs::Imu>(c, mi, "IMU") ||
-                         try_convert<nav_msgs::Odometry>(c, mi, "ODOMETRY") ||
-                         try_convert<sensor_msgs::NavSatFix>(c, mi, "GNSS") ||
-                         try_convert<geometry_msgs::PoseWithCovarianceStamped>(c, mi, "ODOMETRY");
+      const bool taken = try_convert<sensor_msgs::Imu>(convert, mi) || try_convert<nav_msgs::Odometry>(convert, mi) ||
+                         try_convert<sensor_msgs::NavSatFix>(convert, mi) ||
+                         try_convert<geometry_msgs::PoseWithCovarianceStamped>(convert, mi);
       if (!taken) ++result.skipped[mi.getTopic()];
     }
-  } catch (const rosbag::BagException& e) {
+  } catch (const ros::Exception& e) {
+    // The bag's own errors (BagException) and a message record shorter than its type (StreamOverrunException).
     throw std::runtime_error(bag_path + ": " + e.what());
   }
   return result;

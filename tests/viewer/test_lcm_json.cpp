@@ -111,6 +111,10 @@ TEST_CASE("JSON that is not a message is refused with the field path") {
     j["num_channels"] = int64_t{1} << 40;
     CHECK_THROWS_WITH(type->encode(j), "status_t.num_channels: integer out of range");
   }
+  SUBCASE("a string with a NUL character, which an LCM string cannot hold") {
+    j["sender"] = std::string("sextant\0d", 9);
+    CHECK_THROWS_WITH(type->encode(j), "status_t.sender: holds a NUL character (\\u0000)");
+  }
   SUBCASE("a string for a number") {
     j["uptime_s"] = "fast";
     CHECK_THROWS_WITH(type->encode(j), "status_t.uptime_s: expected a number");
