@@ -53,7 +53,7 @@ for (const [channel, got] of gotBy) {
     fail(`${channel}: ${missed.length} of ${want.length - start} bus messages after the first received one never reached the viewer (first: ${id(missed[0])})`);
   udpLost += missed.length;
 }
-if (notRecorded > 10) fail(`${notRecorded} messages the viewer got are missing from the recording`);
+if (notRecorded > Math.max(10, compared / 100)) fail(`${notRecorded} messages the viewer got are missing from the recording (lcm-logger lost them)`);
 
 // Poses: every FUSED_POSE as-is message received after its PoseInFrame topic's first one has its PoseInFrame,
 // equal to it.
