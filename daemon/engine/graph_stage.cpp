@@ -124,11 +124,11 @@ void GraphStage::publish_trajectory(const std::string& source, Feed& f, int64_t 
 }
 
 void GraphStage::publish_map(const std::string& frame, int64_t utime, bool flush, const Emit& emit) {
-  const auto frames = slam_.frames();
   const auto period = static_cast<int64_t>(config_.trajectory.rate_hz > 0 ? 1e6 / config_.trajectory.rate_hz : 0);
   auto [at, first] = maps_published_.try_emplace(frame, utime);
   if (!flush && !first && utime - at->second < period) return;
   at->second = utime;
+  const auto frames = slam_.frames();  // only when due: this runs after every graph update
   const auto send = [&](LandmarkMap m) {
     ++counters_.landmark_map_messages;
     emit(std::move(m));
