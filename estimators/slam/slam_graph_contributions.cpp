@@ -114,8 +114,7 @@ bool SlamGraph::add_loop_on_keyframes(Body& b, const LoopContribution& l) {
   return true;
 }
 
-bool SlamGraph::complete_body_sighting(const std::string& observer, const BodySightingHalf& h,
-                                       SlamListener& listener) {
+bool SlamGraph::complete_body_sighting(const std::string& observer, const BodySightingHalf& h, SlamListener& listener) {
   auto it = bodies_.find(h.observed);
   if (it != bodies_.end() && it->second.remote) return false;  // its owner anchors the observed end
   const std::optional<TrackPoint> at = it == bodies_.end() || it->second.planar != bodies_.at(observer).planar
@@ -125,8 +124,8 @@ bool SlamGraph::complete_body_sighting(const std::string& observer, const BodySi
     ++counters_.fleet_sightings_unplaced;
     return false;
   }
-  const GraphContribution whole{
-      h.observed, BodySighting{observer, h.utime, h.sensor_in_body, h.sighting, h.observer, anchor_of(it->second, *at)}};
+  const GraphContribution whole{h.observed, BodySighting{observer, h.utime, h.sensor_in_body, h.sighting, h.observer,
+                                                         anchor_of(it->second, *at)}};
   listener.contributed(whole);
   return add_whole(whole);
 }
