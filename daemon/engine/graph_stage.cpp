@@ -35,8 +35,12 @@ class GraphStage::Outputs final : public slam::SlamListener {
   void updated(const std::string& body, int64_t utime, const graph::IncrementalStatus& status) override {
     Feed& f = stage_.feed_of(body);
     f.newest_utime = utime;
-    if (f.feed.due(utime)) stage_.publish_trajectory(body, f, utime, status.solves, false, emit_);
+    // A remote body (its graph built from another daemon's contributions) is published by the daemon that has its
+    // sensors: its trajectory and fused pose there, in the same frame.
+    const bool remote = stage_.slam_.remote(body);
+    if (!remote && f.feed.due(utime)) stage_.publish_trajectory(body, f, utime, status.solves, false, emit_);
     stage_.publish_map(stage_.slam_.frame_of(body), utime, false, emit_);
+    if (remote) return;
     const slam::SlamGraph::NewestKeyframe newest = stage_.slam_.newest_keyframe(body);
     GraphCorrection c;
     c.keyframe_utime = newest.keyframe->utime;
@@ -158,7 +162,7 @@ void GraphStage::publish_map(const std::string& frame, int64_t utime, bool flush
 void GraphStage::finish(const Emit& emit) {
   for (const std::string& source : slam_.bodies()) {
     const slam::KeyframeTrack* track = slam_.track(source);
-    if (track->empty()) continue;
+    if (track->empty() || slam_.remote(source)) continue;
     Feed& f = feed_of(source);
     publish_trajectory(source, f, f.newest_utime, 0, true, emit);
   }
@@ -228,6 +232,11 @@ Counters GraphStage::counters() const {
           {"fleet_pending_dropped", s.fleet_pending_dropped},
           {"fleet_sightings_unplaced", s.fleet_sightings_unplaced},
           {"fleet_self_sightings", s.fleet_self_sightings},
+          {"fleet_contributions_applied", s.fleet_contributions_applied},
+          {"fleet_contributions_refused", s.fleet_contributions_refused},
+          {"fleet_contributions_waiting", s.fleet_contributions_waiting},
+          {"fleet_contributions_dropped", s.fleet_contributions_dropped},
+          {"fleet_remote_inputs", s.fleet_remote_inputs},
           {"landmark_map_messages", counters_.landmark_map_messages}};
 }
 
