@@ -35,12 +35,11 @@ class GraphStage::Outputs final : public slam::SlamListener {
   void updated(const std::string& body, int64_t utime, const graph::IncrementalStatus& status) override {
     Feed& f = stage_.feed_of(body);
     f.newest_utime = utime;
-    // A remote body (its graph built from another daemon's contributions) is published by the daemon that has its
-    // sensors: its trajectory and fused pose there, in the same frame.
-    const bool remote = stage_.slam_.remote(body);
-    if (!remote && f.feed.due(utime)) stage_.publish_trajectory(body, f, utime, status.solves, false, emit_);
+    if (f.feed.due(utime)) stage_.publish_trajectory(body, f, utime, status.solves, false, emit_);
     stage_.publish_map(stage_.slam_.frame_of(body), utime, false, emit_);
-    if (remote) return;
+    // A remote body (its graph built from another daemon's contributions) has its trajectory here, this daemon's
+    // view of it; its fused pose comes from the daemon that has its odometry.
+    if (stage_.slam_.remote(body)) return;
     const slam::SlamGraph::NewestKeyframe newest = stage_.slam_.newest_keyframe(body);
     GraphCorrection c;
     c.keyframe_utime = newest.keyframe->utime;
@@ -162,7 +161,7 @@ void GraphStage::publish_map(const std::string& frame, int64_t utime, bool flush
 void GraphStage::finish(const Emit& emit) {
   for (const std::string& source : slam_.bodies()) {
     const slam::KeyframeTrack* track = slam_.track(source);
-    if (track->empty() || slam_.remote(source)) continue;
+    if (track->empty()) continue;
     Feed& f = feed_of(source);
     publish_trajectory(source, f, f.newest_utime, 0, true, emit);
   }
