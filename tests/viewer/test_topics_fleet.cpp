@@ -29,8 +29,10 @@ struct Scene {
   std::map<std::string, Json> entities;
   void apply(const Json& update) {
     for (const auto& d : update["deletions"]) {
-      if (d["type"] == 1) entities.clear();
-      else entities.erase(d["id"].get<std::string>());
+      if (d["type"] == 1)
+        entities.clear();
+      else
+        entities.erase(d["id"].get<std::string>());
     }
     for (const auto& e : update["entities"]) entities[e["id"].get<std::string>()] = e;
   }
@@ -190,7 +192,7 @@ TEST_CASE("a fleet's outputs: each body under its map frame, every frame connect
     CHECK(frame == "robot1");
     CHECK(v.parent.at(body) == "robot1/map");
     CHECK(v.parent.at(body + "/ekf") == body + "/map");  // the filters stay in the body's own frame
-    CHECK(v.path(body + "/ekf").size() == 3);             // robotN/ekf -> robotN/map -> map
+    CHECK(v.path(body + "/ekf").size() == 3);            // robotN/ekf -> robotN/map -> map
     for (const auto& [id, e] : v.scenes.at("/sextant/trajectories").entities)
       if (id.rfind(body + "/", 0) == 0) CHECK(e["frame_id"] == "robot1/map");
   }
