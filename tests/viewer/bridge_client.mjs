@@ -27,6 +27,12 @@ const idleSeconds = rest.includes("--idle") ? Number(rest[rest.indexOf("--idle")
 const stall = rest.includes("--stall");
 const bench = rest.includes("--bench");
 
+// Foxglove's and Lichtblick's JSON Schema parser (parseJsonSchema in their mcap-support) reads the properties of
+// every "type": "object" in a channel's schema and fails on the channel when one has none: the paths of such objects.
+const objectsWithoutProperties = (schema, path = "") =>
+  schema === null || typeof schema !== "object" ? []
+    : [...(schema.type === "object" && !schema.properties ? [path || "/"] : []),
+      ...Object.entries(schema).flatMap(([k, v]) => objectsWithoutProperties(v, `${path}/${k}`))];
 const ajv = new Ajv({ strict: false });
 const channels = new Map(); // channel id -> {topic, schemaName, checks}
 const subscriptions = new Map(); // subscription id -> channel id
@@ -61,6 +67,7 @@ client.on("advertise", (list) => {
     if (ch.encoding !== "json" || ch.schemaEncoding !== "jsonschema") fail(`${ch.topic}: encoding ${ch.encoding}/${ch.schemaEncoding}`);
     const own = JSON.parse(ch.schema);
     const checks = [compile(own)];
+    for (const path of objectsWithoutProperties(own)) fail(`${ch.schemaName}: the object at ${path} has no properties (the viewers cannot parse it)`);
     if (ch.schemaName.startsWith("foxglove.")) {
       const reference = foxgloveSchemas[ch.schemaName.slice("foxglove.".length)];
       if (!reference) fail(`${ch.schemaName}: not a Foxglove schema`);

@@ -70,12 +70,19 @@ if (!stream.done()) fail("stream reader: file not read to its end");
 if (streamed !== messages.length) fail(`stream reader: ${streamed} messages, indexed reader ${messages.length}`);
 
 // 3. Schemas: every JSON message valid against its channel's schema and the Foxglove one it names.
+// Foxglove's and Lichtblick's JSON Schema parser (parseJsonSchema in their mcap-support) reads the properties of
+// every "type": "object" in a channel's schema and fails on the channel when one has none: the paths of such objects.
+const objectsWithoutProperties = (schema, path = "") =>
+  schema === null || typeof schema !== "object" ? []
+    : [...(schema.type === "object" && !schema.properties ? [path || "/"] : []),
+      ...Object.entries(schema).flatMap(([k, v]) => objectsWithoutProperties(v, `${path}/${k}`))];
 const ajv = new Ajv({ strict: false, allErrors: false });
 const validators = new Map();
 for (const [id, schema] of reader.schemasById) {
   if (schema.encoding !== "jsonschema") { fail(`schema ${schema.name}: encoding ${schema.encoding}`); continue; }
   const own = JSON.parse(new TextDecoder().decode(schema.data));
   const checks = [ajv.compile(own)];
+  for (const path of objectsWithoutProperties(own)) fail(`${schema.name}: the object at ${path} has no properties (the viewers cannot parse it)`);
   if (schema.name.startsWith("foxglove.")) {
     const reference = foxgloveSchemas[schema.name.slice("foxglove.".length)];
     if (!reference) fail(`${schema.name}: not in @foxglove/schemas`);
