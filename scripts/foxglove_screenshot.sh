@@ -8,6 +8,8 @@
 # extension API's types only, no app; studio-base ships the whole app prebuilt, so nothing is built here.)
 #
 # Usage: scripts/foxglove_screenshot.sh [BUILD] [OUT.png]      (BUILD: build; OUT: docs/img/foxglove.png)
+# A file instead: node scripts/foxglove_screenshot/shot.mjs FILE.mcap OUT.png --time RFC3339 (Foxglove's remote-file
+# source over a local HTTP server, seeked to that time).
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
 here="$root/scripts/foxglove_screenshot"

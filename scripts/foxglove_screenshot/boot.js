@@ -42,7 +42,7 @@ void initI18n().then(() =>
     React.createElement(App, {
       deepLinks: [window.location.href],
       appConfiguration,
-      dataSources: [new FoxgloveWebSocketDataSourceFactory(), new McapLocalDataSourceFactory()],
+      dataSources: [new FoxgloveWebSocketDataSourceFactory(), new RemoteDataSourceFactory()],
       layoutStorage,
       extensionLoaders: [],
       enableGlobalCss: true,
