@@ -20,6 +20,7 @@
 using namespace sextant;
 using sextant::viewer::Json;
 using sextant::viewer::TopicMapper;
+using sextant::viewer::TopicMapperOptions;
 using sextant::viewer::ViewerMessage;
 
 namespace {
@@ -95,6 +96,12 @@ FleetOutputs replay_fleet() {
   return run;
 }
 
+/// One replay for every test case of this file.
+const FleetOutputs& fleet_run() {
+  static const FleetOutputs run = replay_fleet();
+  return run;
+}
+
 template <class Msg>
 Msg decode(const tools::PublishedMessage& p) {
   Msg m;
@@ -137,7 +144,7 @@ void check_landmark_map(const Viewer& v, const std::vector<sextant::landmark_map
 }  // namespace
 
 TEST_CASE("a fleet's outputs: each body under its map frame, every frame connected to map, the landmark maps") {
-  const FleetOutputs run = replay_fleet();
+  const FleetOutputs& run = fleet_run();
   TopicMapper mapper;
   Viewer v;
   int64_t poses = 0, maps = 0, joined_maps = 0;
@@ -207,6 +214,41 @@ TEST_CASE("a fleet's outputs: each body under its map frame, every frame connect
         "robot1/map = map (robot1, robot2, robot3)\n"
         "robot2/map unplaced: drawn at map's origin (robot2)\n"
         "robot3/map unplaced: drawn at map's origin (robot3)");
+}
+
+TEST_CASE("a fleet through the bridge's batched frame transforms: after each batch every frame drawn in reaches map") {
+  TopicMapperOptions options;
+  options.batch_frame_transforms = true;
+  TopicMapper mapper(options);
+  Viewer v;
+  size_t batches = 0, placements = 0;  // placements: map -> <frame>/map
+  const auto& published = fleet_run().published;
+  for (size_t i = 0; i < published.size(); ++i) {
+    std::vector<ViewerMessage> out;
+    mapper.map(published[i].channel, published[i].bytes.data(), published[i].bytes.size(), out);
+    if (i % 64 == 63 || i + 1 == published.size()) {  // the bridge flushes after each batch it maps together
+      mapper.flush(out);
+      ++batches;
+    }
+    for (const auto& m : out) {
+      v.receive(m);
+      if (m.topic != "/tf") continue;
+      const Json tf = Json::parse(m.data);
+      for (const auto& t : tf["transforms"]) placements += t["parent_frame_id"] == "map";
+    }
+    if (i % 64 != 63) continue;
+    for (const auto& f : v.drawn_in) {
+      CAPTURE(f);
+      CHECK_FALSE(v.path(f).empty());
+    }
+    v.drawn_in.clear();
+  }
+  CHECK(batches == (published.size() + 63) / 64);
+  CHECK(v.path("robot2") == std::vector<std::string>{"robot2", "robot1/map", "map"});
+  CHECK(v.path("robot3/dead_reckoning") == std::vector<std::string>{"robot3/dead_reckoning", "robot3/map", "map"});
+  // Each map frame placed once per batch, not once per pose: three frames at most, in every batch (each has poses).
+  CHECK(placements >= batches);
+  CHECK(placements <= 3 * batches);
 }
 
 namespace {
