@@ -96,7 +96,7 @@ void outbox_counter_fields(A& a, C& c) {
 template <class A, class C>
 void inbox_counter_fields(A& a, C& c) {
   a(c.messages)(c.delivered)(c.duplicates)(c.out_of_window)(c.own)(c.not_member)(c.local_body)(c.claimed)(
-      c.too_many_streams)(c.lost)(c.repair_requests)(c.repair_asked)(c.heartbeats);
+      c.too_many_streams)(c.lost)(c.repair_requests)(c.repair_asked)(c.heartbeats)(c.owner_rewound);
 }
 
 int64_t micros(double seconds) { return static_cast<int64_t>(seconds * 1e6); }
@@ -128,7 +128,8 @@ std::vector<What> split_for_wire(const What& what) {
     part.sightings.planar = s->sightings.planar;
     part.sightings.sensor_in_body = s->sightings.sensor_in_body;
     const auto from = all.begin() + static_cast<std::ptrdiff_t>(i);
-    part.sightings.sightings.assign(from, from + static_cast<std::ptrdiff_t>(std::min(kMaxSightingsPerItem, all.size() - i)));
+    part.sightings.sightings.assign(from,
+                                    from + static_cast<std::ptrdiff_t>(std::min(kMaxSightingsPerItem, all.size() - i)));
     parts.push_back(std::move(part));
   }
   return parts;  // none for a contribution without sightings: it adds nothing to a graph
@@ -159,7 +160,9 @@ void Numbered::load(archive::ArchiveReader& r) {
 // ---- Outbox ----------------------------------------------------------------------------------------------------
 
 Outbox::Outbox(std::string self, FleetExchangeOptions options)
-    : self_(std::move(self)), options_(std::move(options)), members_(options_.members.begin(), options_.members.end()) {}
+    : self_(std::move(self)),
+      options_(std::move(options)),
+      members_(options_.members.begin(), options_.members.end()) {}
 
 void Outbox::add(const slam::GraphContribution& c) {
   Stream& s = streams_[c.body];
@@ -184,8 +187,7 @@ void Outbox::evict(Stream& s) {
 }
 
 std::vector<FleetContributions> Outbox::pack(const std::string& body, std::deque<Numbered>::const_iterator begin,
-                                             std::deque<Numbered>::const_iterator end, bool repair,
-                                             int64_t now) const {
+                                             std::deque<Numbered>::const_iterator end, bool repair, int64_t now) const {
   std::vector<FleetContributions> out;
   const size_t overhead = message_overhead_bytes(self_, body);
   const size_t budget = static_cast<size_t>(std::max(options_.max_message_bytes, 1));
@@ -206,7 +208,8 @@ std::vector<FleetContributions> Outbox::take_messages(int64_t now_utime) {
   std::vector<FleetContributions> out;
   for (auto& [body, s] : streams_) {
     if (s.pending == 0) continue;
-    auto msgs = pack(body, s.retained.end() - static_cast<std::ptrdiff_t>(s.pending), s.retained.end(), false, now_utime);
+    auto msgs =
+        pack(body, s.retained.end() - static_cast<std::ptrdiff_t>(s.pending), s.retained.end(), false, now_utime);
     counters_.messages += static_cast<int64_t>(msgs.size());
     std::move(msgs.begin(), msgs.end(), std::back_inserter(out));
     s.pending = 0;
@@ -325,7 +328,9 @@ void Outbox::load(archive::ArchiveReader& r) {
 // ---- Inbox -----------------------------------------------------------------------------------------------------
 
 Inbox::Inbox(std::string self, FleetExchangeOptions options)
-    : self_(std::move(self)), options_(std::move(options)), members_(options_.members.begin(), options_.members.end()) {}
+    : self_(std::move(self)),
+      options_(std::move(options)),
+      members_(options_.members.begin(), options_.members.end()) {}
 
 bool Inbox::own(const std::string& body) {
   if (local_.contains(body)) return true;
@@ -421,6 +426,7 @@ std::vector<slam::GraphContribution> Inbox::receive(const FleetContributions& m,
   Stream* s = stream_for(m.sender, m.body);
   if (s == nullptr) return {};
   ++counters_.messages;
+  if (!m.repair) s->sent_utime = std::max(s->sent_utime, m.utime);
   const auto n = static_cast<int64_t>(m.contributions.size());
   if (m.first < 1 || m.first > kMaxSeq - n) {
     counters_.out_of_window += n;
@@ -448,6 +454,11 @@ std::vector<slam::GraphContribution> Inbox::receive(const FleetControl& m, int64
     if (range.last < 1 || range.last > kMaxSeq || range.first < 0 || range.first > range.last) continue;
     Stream* s = stream_for(m.sender, range.body);
     if (s == nullptr) continue;
+    if (m.utime > s->sent_utime) {
+      if (range.last < std::max(s->beat_last, s->next - 1)) ++counters_.owner_rewound;
+      s->sent_utime = m.utime;
+    }
+    s->beat_last = range.last;
     s->known_last = std::max(s->known_last, range.last);
     s->owner_first = range.first;
     deliver(range.body, *s, now_utime, out);
@@ -479,9 +490,9 @@ std::vector<FleetControl> Inbox::repair_requests(int64_t now_utime) {
   std::map<std::string, FleetControl> by_owner;
   for (auto& [body, s] : streams_) {
     if (s.ask_at == 0 || now_utime < s.ask_at) continue;
-    FleetControl& request = by_owner.try_emplace(s.owner, FleetControl{now_utime, self_, FleetControl::Kind::kRepair,
-                                                                         s.owner, {}})
-                                .first->second;
+    FleetControl& request =
+        by_owner.try_emplace(s.owner, FleetControl{now_utime, self_, FleetControl::Kind::kRepair, s.owner, {}})
+            .first->second;
     for (FleetRange& r : holes(body, s)) {
       if (request.streams.size() >= kMaxRangesPerMessage) break;  // the rest at this stream's next turn
       counters_.repair_asked += r.last - r.first + 1;

@@ -15,6 +15,14 @@
 // repair_backoff_s, again after twice as long while nothing arrives (up to repair_backoff_max_s), from the start
 // when the stream moves.
 //
+// The limit of a restart: an owner restarted from its state directory continues from what it saved (the state is
+// written every daemon.state_period_s).  What it sent after that save and before it stopped was applied by the others
+// and is not in its own graph; its next contributions take those numbers again and the others drop them as already
+// delivered.  A receiver sees this (a heartbeat whose stream ends before what it delivered) and counts it
+// (`owner_rewound`); the maps of that body then differ until the state directory is saved at shutdown (SIGTERM saves
+// it, README "State directory"): a daemon that is killed, not stopped, loses up to state_period_s of its own
+// contributions from the fleet's agreement.
+//
 // The limit of `retain`: the owner keeps the last `retain` contributions of each body (and at most retain_mb of them)
 // to resend.  A receiver that misses older ones (cut off for longer, or a daemon that joins after the fleet made more
 // than `retain` contributions of a body) counts them as lost (`lost`), and the stream resumes from the oldest one the
@@ -31,6 +39,7 @@
 // repair_bytes_per_s per requester (a token bucket of one second's worth).  The values themselves are validated by
 // the codec (daemon/runtime/codec.hpp) before they get here.
 #include "daemon/engine/fleet_events.hpp"
+#include "daemon/engine/fleet_exchange_options.hpp"
 #include "estimators/archive/binary_archive.hpp"
 
 #include <cstdint>
@@ -42,23 +51,6 @@
 #include <vector>
 
 namespace sextant::engine {
-
-/// engine.graph.fleet.exchange (config/default.yaml documents each key).
-struct FleetExchangeOptions {
-  bool enabled = false;
-  std::vector<std::string> members;  // the fleet's daemon names (daemon.name of each), this daemon's included
-  int retain = 20000;                // contributions kept per local body for repair
-  int retain_mb = 64;                // ... and at most this many MB of them (wire size)
-  double heartbeat_period_s = 1.0;
-  double repair_backoff_s = 0.2;      // a gap is asked for this long after it is seen, then again after twice as long
-  double repair_backoff_max_s = 5.0;  // ... up to this
-  int max_streams_per_sender = 64;    // bodies one member may contribute
-  int reorder_window = 4096;          // contributions of a stream held ahead of the next one expected
-  int reorder_mb = 16;                // ... and at most this many MB of them per stream
-  int max_repair_range = 1024;        // contributions asked for in one request per stream
-  double repair_bytes_per_s = 1.0e6;  // resent per requester at most
-  int max_message_bytes = 60000;      // a FLEET message's encoded size at most (under one 64 KB datagram)
-};
 
 namespace fleet {
 
@@ -90,14 +82,14 @@ struct Numbered {
 };
 
 struct OutboxCounters {
-  int64_t contributions = 0;     // numbered (after splitting)
-  int64_t messages = 0;          // FLEET messages made, first sendings
-  int64_t evicted = 0;           // contributions no longer retained (retain, retain_mb)
-  int64_t repair_requests = 0;   // REPAIR requests addressed to this daemon by a member
-  int64_t repair_refused = 0;    // ... by a non-member, or for a body this daemon does not own
-  int64_t repaired = 0;          // contributions resent
-  int64_t repair_messages = 0;   // FLEET messages of resent contributions
-  int64_t repair_limited = 0;    // contributions asked for and not resent for the requester's rate
+  int64_t contributions = 0;        // numbered (after splitting)
+  int64_t messages = 0;             // FLEET messages made, first sendings
+  int64_t evicted = 0;              // contributions no longer retained (retain, retain_mb)
+  int64_t repair_requests = 0;      // REPAIR requests addressed to this daemon by a member
+  int64_t repair_refused = 0;       // ... by a non-member, or for a body this daemon does not own
+  int64_t repaired = 0;             // contributions resent
+  int64_t repair_messages = 0;      // FLEET messages of resent contributions
+  int64_t repair_limited = 0;       // contributions asked for and not resent for the requester's rate
   int64_t repair_not_retained = 0;  // contributions asked for that are no longer retained
 };
 
@@ -162,19 +154,22 @@ class Outbox {
 };
 
 struct InboxCounters {
-  int64_t messages = 0;           // FLEET messages from members, taken in
-  int64_t delivered = 0;          // contributions handed to the graph, in their stream's order
-  int64_t duplicates = 0;         // contributions already delivered or already held
-  int64_t out_of_window = 0;      // contributions beyond the reorder window (dropped; a repair fetches them later)
-  int64_t own = 0;                // messages of this daemon, brought back by multicast (ignored)
-  int64_t not_member = 0;         // messages of a sender not in `members` (refused)
-  int64_t local_body = 0;         // messages about a body this daemon owns (refused)
-  int64_t claimed = 0;            // messages about a body another member owns (refused)
-  int64_t too_many_streams = 0;   // messages that would open a stream beyond max_streams_per_sender (refused)
-  int64_t lost = 0;               // contributions the owner no longer retained when asked for (skipped)
-  int64_t repair_requests = 0;    // REPAIR requests made
-  int64_t repair_asked = 0;       // contributions asked for in them
-  int64_t heartbeats = 0;         // heartbeats of members taken in
+  int64_t messages = 0;          // FLEET messages from members, taken in
+  int64_t delivered = 0;         // contributions handed to the graph, in their stream's order
+  int64_t duplicates = 0;        // contributions already delivered or already held
+  int64_t out_of_window = 0;     // contributions beyond the reorder window (dropped; a repair fetches them later)
+  int64_t own = 0;               // messages of this daemon, brought back by multicast (ignored)
+  int64_t not_member = 0;        // messages of a sender not in `members` (refused)
+  int64_t local_body = 0;        // messages about a body this daemon owns (refused)
+  int64_t claimed = 0;           // messages about a body another member owns (refused)
+  int64_t too_many_streams = 0;  // messages that would open a stream beyond max_streams_per_sender (refused)
+  int64_t lost = 0;              // contributions the owner no longer retained when asked for (skipped)
+  int64_t repair_requests = 0;   // REPAIR requests made
+  int64_t repair_asked = 0;      // contributions asked for in them
+  int64_t heartbeats = 0;        // heartbeats of members taken in
+  int64_t owner_rewound = 0;     // heartbeats, newer than every message heard of their stream, that end the stream
+                                 // before what was heard (the owner restarted from a state older than what it had
+                                 // sent: its next numbers repeat ones already applied here)
 };
 
 /// The receiving side: per (owner, body) stream, the contributions in order.
@@ -216,8 +211,10 @@ class Inbox {
     int64_t owner_first = 0;  // the oldest the owner retains (its last heartbeat)
     std::map<int64_t, What> held;
     size_t held_bytes = 0;
-    int64_t ask_at = 0;   // when the gap may be asked for (0: no gap seen)
+    int64_t ask_at = 0;  // when the gap may be asked for (0: no gap seen)
     double backoff_s = 0;
+    int64_t sent_utime = 0;  // the owner's clock: its newest message (data or heartbeat) heard, for owner_rewound
+    int64_t beat_last = 0;   // ... and the stream's last number it stated then
     void save(archive::ArchiveWriter& w) const;
     void load(archive::ArchiveReader& r);
   };
@@ -245,6 +242,7 @@ class Inbox {
 struct FleetExchange {
   FleetExchange(const std::string& self, const FleetExchangeOptions& options)
       : outbox(self, options), inbox(self, options) {}
+  explicit FleetExchange(const FleetExchangeOptions& options) : FleetExchange(options.self, options) {}
   /// A contribution made from a local body's inputs: its body is local from now on, and it is numbered and queued.
   /// False (nothing sent) when another member already contributes that body (Inbox::own: the same robot fed to two
   /// daemons; counted as claimed).

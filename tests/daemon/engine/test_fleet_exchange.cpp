@@ -113,7 +113,9 @@ struct Pair {
 
 }  // namespace
 
-TEST_CASE("fleet exchange: numbering from 1 per body, a big sightings message split with its anchor, messages under the size") {
+TEST_CASE(
+    "fleet exchange: numbering from 1 per body, a big sightings message split with its anchor, messages under the "
+    "size") {
   Outbox out("a", options());
   out.add(keyframe("r1", 0));
   out.add(sightings("r1", 0, 600));
@@ -377,4 +379,20 @@ TEST_CASE("fleet exchange: the retained log is bounded by count and by size") {
   const int64_t kept = out.next_seq("r1") - out.first_retained("r1");
   CHECK(kept * static_cast<int64_t>(item_bytes(sightings("r1", 0, 256).what)) <= (1 << 20));
   CHECK(out.counters().evicted == 1100 - kept);
+}
+
+TEST_CASE("fleet exchange: an owner restarted from an older state than it sent is seen by the others") {
+  Pair p;
+  for (int i = 0; i < 10; ++i) p.step(1);
+  archive::ArchiveWriter w;
+  p.a.save(w);
+  for (int i = 0; i < 10; ++i) p.step(1);  // sent, applied by b, and not in a's saved state
+  CHECK(p.b.inbox.counters().owner_rewound == 0);
+  FleetExchange restarted("a", options());
+  archive::ArchiveReader r(w.data().data(), w.data().size(), "state");
+  restarted.load(r);
+  p.a = std::move(restarted);
+  p.now += 1000000;
+  for (const auto& h : p.a.outbox.heartbeat(p.now)) (void)p.b.inbox.receive(h, p.now);
+  CHECK(p.b.inbox.counters().owner_rewound == 1);
 }
