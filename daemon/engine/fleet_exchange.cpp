@@ -569,6 +569,36 @@ void Inbox::load(archive::ArchiveReader& r) {
   }
 }
 
+std::vector<std::pair<std::string, int64_t>> FleetExchange::counters() const {
+  const OutboxCounters& o = outbox.counters();
+  const InboxCounters& i = inbox.counters();
+  return {{"fleet_out_contributions", o.contributions},
+          {"fleet_out_messages", o.messages},
+          {"fleet_out_evicted", o.evicted},
+          {"fleet_out_repair_requests", o.repair_requests},
+          {"fleet_out_repair_refused", o.repair_refused},
+          {"fleet_out_repaired", o.repaired},
+          {"fleet_out_repair_messages", o.repair_messages},
+          {"fleet_out_repair_limited", o.repair_limited},
+          {"fleet_out_repair_not_retained", o.repair_not_retained},
+          {"fleet_in_messages", i.messages},
+          {"fleet_in_delivered", i.delivered},
+          {"fleet_in_duplicates", i.duplicates},
+          {"fleet_in_out_of_window", i.out_of_window},
+          {"fleet_in_own", i.own},
+          {"fleet_in_not_member", i.not_member},
+          {"fleet_in_local_body", i.local_body},
+          {"fleet_in_claimed", i.claimed},
+          {"fleet_in_too_many_streams", i.too_many_streams},
+          {"fleet_in_lost", i.lost},
+          {"fleet_in_repair_requests", i.repair_requests},
+          {"fleet_in_repair_asked", i.repair_asked},
+          {"fleet_in_heartbeats", i.heartbeats},
+          {"fleet_in_owner_rewound", i.owner_rewound},
+          {"fleet_in_streams", static_cast<int64_t>(inbox.streams())},
+          {"fleet_in_held", static_cast<int64_t>(inbox.held())}};
+}
+
 FleetExchange::Due FleetExchange::due(int64_t now_utime) {
   Due d;
   d.contributions = outbox.take_messages(now_utime);

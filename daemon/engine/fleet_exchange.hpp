@@ -48,6 +48,7 @@
 #include <optional>
 #include <set>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace sextant::engine {
@@ -251,6 +252,19 @@ struct FleetExchange {
     outbox.add(c);
     return true;
   }
+  /// A fleet event heard on the bus: the contributions now next in their streams, to apply in this order
+  /// (SlamGraph::apply), and for a repair request addressed to this daemon the messages that answer it, to send.
+  struct Received {
+    std::vector<slam::GraphContribution> apply;
+    std::vector<FleetContributions> answers;
+  };
+  Received received(const FleetContributions& m, int64_t now_utime) { return {inbox.receive(m, now_utime), {}}; }
+  Received received(const FleetControl& m, int64_t now_utime) {
+    if (m.kind == FleetControl::Kind::kRepair) return {{}, outbox.answer(m, now_utime)};
+    return {inbox.receive(m, now_utime), {}};
+  }
+  /// The counters of both sides and the sizes now, named for the status channel (fleet_out_*, fleet_in_*).
+  std::vector<std::pair<std::string, int64_t>> counters() const;
   /// What is due now: the FLEET messages queued, the heartbeat and the repair requests.
   struct Due {
     std::vector<FleetContributions> contributions;

@@ -396,3 +396,28 @@ TEST_CASE("fleet exchange: an owner restarted from an older state than it sent i
   for (const auto& h : p.a.outbox.heartbeat(p.now)) (void)p.b.inbox.receive(h, p.now);
   CHECK(p.b.inbox.counters().owner_rewound == 1);
 }
+
+TEST_CASE("fleet exchange: one call per fleet event gives what to apply and what to send, and names every counter") {
+  FleetExchange a("a", options()), c("c", options());
+  CHECK(a.contributed(keyframe("r1", 0)));
+  CHECK(a.contributed(keyframe("r1", 1)));
+  const auto due = a.due(1000000);
+  REQUIRE(due.contributions.size() == 1);
+  REQUIRE(due.control.size() == 1);  // the first heartbeat
+  const auto got = c.received(due.contributions[0], 1000000);
+  CHECK(got.apply.size() == 2);
+  CHECK(got.answers.empty());
+  CHECK_FALSE(c.contributed(keyframe("r1", 5)));  // a's body: c's contribution of it is not sent
+  CHECK(c.outbox.next_seq("r1") == 1);
+  const FleetControl ask{2, "c", FleetControl::Kind::kRepair, "a", {FleetRange{"r1", 1, 2}}};
+  const auto answer = a.received(ask, 2000000);
+  CHECK(answer.apply.empty());
+  REQUIRE(answer.answers.size() == 1);
+  CHECK(answer.answers[0].repair);
+  const auto counters = c.counters();
+  CHECK(counters.size() == 25);
+  CHECK(std::find(counters.begin(), counters.end(), std::pair<std::string, int64_t>{"fleet_in_delivered", 2}) !=
+        counters.end());
+  CHECK(std::find(counters.begin(), counters.end(), std::pair<std::string, int64_t>{"fleet_in_claimed", 1}) !=
+        counters.end());
+}
