@@ -37,6 +37,9 @@ class GraphStage::Outputs final : public slam::SlamListener {
     f.newest_utime = utime;
     if (f.feed.due(utime)) stage_.publish_trajectory(body, f, utime, status.solves, false, emit_);
     stage_.publish_map(stage_.slam_.frame_of(body), utime, false, emit_);
+    // A remote body (its graph built from another daemon's contributions) has its trajectory here, this daemon's
+    // view of it; its fused pose comes from the daemon that has its odometry.
+    if (stage_.slam_.remote(body)) return;
     const slam::SlamGraph::NewestKeyframe newest = stage_.slam_.newest_keyframe(body);
     GraphCorrection c;
     c.keyframe_utime = newest.keyframe->utime;
@@ -232,6 +235,11 @@ Counters GraphStage::counters() const {
           {"fleet_pending_dropped", s.fleet_pending_dropped},
           {"fleet_sightings_unplaced", s.fleet_sightings_unplaced},
           {"fleet_self_sightings", s.fleet_self_sightings},
+          {"fleet_contributions_applied", s.fleet_contributions_applied},
+          {"fleet_contributions_refused", s.fleet_contributions_refused},
+          {"fleet_contributions_waiting", s.fleet_contributions_waiting},
+          {"fleet_contributions_dropped", s.fleet_contributions_dropped},
+          {"fleet_remote_inputs", s.fleet_remote_inputs},
           {"landmark_map_messages", counters_.landmark_map_messages},
           {"fleet_messages_received", counters_.fleet_messages_received},
           {"fleet_control_received", counters_.fleet_control_received}};

@@ -46,6 +46,12 @@ struct KeyframeContribution {
   Matrix6d odom_covariance = Matrix6d::Zero();
   SE3 edge;
   Matrix6d edge_covariance = Matrix6d::Zero();
+  template <class Archive, class Self>
+  static void fields(Archive& a, Self& x) {
+    a(x.id)(x.utime)(x.planar)(x.first)(x.reanchored)(x.odom)(x.odom_covariance)(x.edge)(x.edge_covariance);
+  }
+  void save(archive::ArchiveWriter& w) const { fields(w, *this); }
+  void load(archive::ArchiveReader& r) { fields(r, *this); }
 };
 
 /// A time of the body anchored on one of its keyframes: the keyframe's id, the odometry motion D from it to the time
@@ -54,6 +60,12 @@ struct KeyframeAnchor {
   int64_t keyframe = 0;
   SE3 motion;
   Matrix6d covariance = Matrix6d::Zero();
+  template <class Archive, class Self>
+  static void fields(Archive& a, Self& x) {
+    a(x.keyframe)(x.motion)(x.covariance);
+  }
+  void save(archive::ArchiveWriter& w) const { fields(w, *this); }
+  void load(archive::ArchiveReader& r) { fields(r, *this); }
 };
 
 /// Identified landmark sightings of one message (SightingsInput without the unidentified ones), anchored.  Sightings
@@ -61,6 +73,12 @@ struct KeyframeAnchor {
 struct SightingsContribution {
   KeyframeAnchor anchor;
   SightingsInput sightings;
+  template <class Archive, class Self>
+  static void fields(Archive& a, Self& x) {
+    a(x.anchor)(x.sightings);
+  }
+  void save(archive::ArchiveWriter& w) const { fields(w, *this); }
+  void load(archive::ArchiveReader& r) { fields(r, *this); }
 };
 
 /// The observer's end of a sighting of another body: the observer's anchor, the sighting and the observed body.
@@ -70,6 +88,12 @@ struct BodySightingHalf {
   SE3 sensor_in_body;
   LandmarkSighting sighting;
   KeyframeAnchor observer;
+  template <class Archive, class Self>
+  static void fields(Archive& a, Self& x) {
+    a(x.observed)(x.utime)(x.sensor_in_body)(x.sighting)(x.observer);
+  }
+  void save(archive::ArchiveWriter& w) const { fields(w, *this); }
+  void load(archive::ArchiveReader& r) { fields(r, *this); }
 };
 
 /// A sighting of one body by another with both ends anchored, contributed by the observed body's owner.
@@ -79,6 +103,12 @@ struct BodySighting {
   SE3 sensor_in_body;
   LandmarkSighting sighting;
   KeyframeAnchor observer_anchor, observed_anchor;
+  template <class Archive, class Self>
+  static void fields(Archive& a, Self& x) {
+    a(x.observer)(x.utime)(x.sensor_in_body)(x.sighting)(x.observer_anchor)(x.observed_anchor);
+  }
+  void save(archive::ArchiveWriter& w) const { fields(w, *this); }
+  void load(archive::ArchiveReader& r) { fields(r, *this); }
 };
 
 /// A loop closure within the body, between two of its keyframes (loop_gate.hpp's KeyframeLoop by keyframe id).
@@ -87,12 +117,24 @@ struct LoopContribution {
   SE3 z;
   Matrix6d information = Matrix6d::Zero();
   bool widened = false;
+  template <class Archive, class Self>
+  static void fields(Archive& a, Self& x) {
+    a(x.from_keyframe)(x.to_keyframe)(x.z)(x.information)(x.widened);
+  }
+  void save(archive::ArchiveWriter& w) const { fields(w, *this); }
+  void load(archive::ArchiveReader& r) { fields(r, *this); }
 };
 
 /// The "from" end of a loop to another body (LoopInput::body_to), anchored by the from body's owner.
 struct BodyLoopHalf {
   LoopInput loop;
   KeyframeAnchor from;
+  template <class Archive, class Self>
+  static void fields(Archive& a, Self& x) {
+    a(x.loop)(x.from);
+  }
+  void save(archive::ArchiveWriter& w) const { fields(w, *this); }
+  void load(archive::ArchiveReader& r) { fields(r, *this); }
 };
 
 /// A loop between keyframes of two bodies, contributed by the "to" body's owner.
@@ -101,6 +143,12 @@ struct BodyLoop {
   int64_t from_keyframe = 0, to_keyframe = 0;
   SE3 z;
   Matrix6d information = Matrix6d::Zero();
+  template <class Archive, class Self>
+  static void fields(Archive& a, Self& x) {
+    a(x.from)(x.from_keyframe)(x.to_keyframe)(x.z)(x.information);
+  }
+  void save(archive::ArchiveWriter& w) const { fields(w, *this); }
+  void load(archive::ArchiveReader& r) { fields(r, *this); }
 };
 
 /// One contribution of `body` (the stream it belongs to).
@@ -109,6 +157,11 @@ struct GraphContribution {
                             LoopContribution, BodyLoopHalf, BodyLoop>;
   std::string body;
   What what;
+
+  /// In the binary archive: the body, the alternative's index, its fields (archive::ArchiveError when loading an
+  /// index that names no alternative).
+  void save(archive::ArchiveWriter& w) const { w(body)(what); }
+  void load(archive::ArchiveReader& r) { r(body)(what); }
 };
 
 }  // namespace sextant::slam
