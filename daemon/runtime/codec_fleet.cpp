@@ -87,7 +87,8 @@ slam::LandmarkSighting check_sighting(const sextant::landmark_observation_t& o, 
   if (!(o.range > 0)) fail("invalid", field + ".range: not positive");
   s.range = o.range, s.azimuth = o.azimuth, s.elevation = o.elevation;
   s.covariance = check_psd<3>(o.covariance, field + ".covariance");
-  if (!(s.covariance(0, 0) > 0 && s.covariance(1, 1) > 0)) fail("covariance", field + ".covariance: range or azimuth variance not positive");
+  if (!(s.covariance(0, 0) > 0 && s.covariance(1, 1) > 0))
+    fail("covariance", field + ".covariance: range or azimuth variance not positive");
   return s;
 }
 
@@ -122,10 +123,11 @@ void check_counts(const sextant::fleet_item_t& it, const std::string& field) {
   const Counts c = counts_of(it, field);
   if ((it.flags & ~c.flags) != 0) fail("invalid", field + ".flags: " + std::to_string(it.flags) + " not of its kind");
   if (it.num_poses != c.poses || static_cast<int>(it.poses.size()) != c.poses)
-    fail("invalid", field + ".num_poses: " + std::to_string(it.num_poses) + ", its kind has " + std::to_string(c.poses));
+    fail("invalid",
+         field + ".num_poses: " + std::to_string(it.num_poses) + ", its kind has " + std::to_string(c.poses));
   if (it.num_anchors != c.anchors || static_cast<int>(it.anchors.size()) != c.anchors)
-    fail("invalid", field + ".num_anchors: " + std::to_string(it.num_anchors) + ", its kind has " +
-                        std::to_string(c.anchors));
+    fail("invalid",
+         field + ".num_anchors: " + std::to_string(it.num_anchors) + ", its kind has " + std::to_string(c.anchors));
   if (it.num_sightings < c.min_sightings || it.num_sightings > c.max_sightings ||
       static_cast<int>(it.sightings.size()) != it.num_sightings)
     fail("invalid", field + ".num_sightings: " + std::to_string(it.num_sightings) + " outside [" +
@@ -186,14 +188,16 @@ engine::fleet::What sightings_of(const sextant::fleet_item_t& it, Parts& p) {
     s.sightings.sightings = std::move(p.sightings);
     return s;
   }
-  if (it.kind == I::BODY_SIGHTING_HALF) return slam::BodySightingHalf{it.other, it.utime, p.poses[0], p.sightings[0], p.anchors[0]};
+  if (it.kind == I::BODY_SIGHTING_HALF)
+    return slam::BodySightingHalf{it.other, it.utime, p.poses[0], p.sightings[0], p.anchors[0]};
   return slam::BodySighting{it.other, it.utime, p.poses[0], p.sightings[0], p.anchors[0], p.anchors[1]};
 }
 
 engine::fleet::What loop_of(const sextant::fleet_item_t& it, Parts& p) {
   using I = sextant::fleet_item_t;
   if (it.kind == I::LOOP)
-    return slam::LoopContribution{it.keyframe_a, it.keyframe_b, p.poses[0], p.matrices[0], (it.flags & I::WIDENED) != 0};
+    return slam::LoopContribution{it.keyframe_a, it.keyframe_b, p.poses[0], p.matrices[0],
+                                  (it.flags & I::WIDENED) != 0};
   if (it.kind == I::BODY_LOOP) return slam::BodyLoop{it.other, it.keyframe_a, it.keyframe_b, p.poses[0], p.matrices[0]};
   slam::BodyLoopHalf h;
   h.loop.utime_from = it.utime;
@@ -284,7 +288,8 @@ Decoded to_event(const sextant::fleet_control_t& m) {
       check_fleet_name(r.body, f + ".body");
       const int64_t lo = m.kind == C::HEARTBEAT ? 0 : 1;
       if (r.first < lo || r.last < r.first || r.last > kMaxSeq)
-        fail("invalid", f + ": range [" + std::to_string(r.first) + ", " + std::to_string(r.last) + "] not of its kind");
+        fail("invalid",
+             f + ": range [" + std::to_string(r.first) + ", " + std::to_string(r.last) + "] not of its kind");
       e.streams.push_back(engine::FleetRange{r.body, r.first, r.last});
     }
     return engine::Event{std::move(e)};
@@ -395,7 +400,7 @@ sextant::fleet_contribution_t to_message(const engine::FleetContributions& o, co
 sextant::fleet_control_t to_message(const engine::FleetControl& o, const std::string& sender, int64_t seq) {
   auto m = message_header<sextant::fleet_control_t>(o.utime, sender, seq);
   m.kind = o.kind == engine::FleetControl::Kind::kHeartbeat ? sextant::fleet_control_t::HEARTBEAT
-                                                             : sextant::fleet_control_t::REPAIR;
+                                                            : sextant::fleet_control_t::REPAIR;
   m.daemon = o.daemon;
   m.num_streams = static_cast<int32_t>(o.streams.size());
   for (const auto& r : o.streams) {

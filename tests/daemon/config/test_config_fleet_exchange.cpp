@@ -66,7 +66,8 @@ TEST_CASE("config: fleet exchange off by default, on with its members and every 
 
 TEST_CASE("config: a wrong fleet exchange is refused at its file:line") {
   // daemon.name must be a member (the line of `members`).
-  CHECK(config_error_of(exchange("        enabled: true\n        members: [beta, gamma]\n")).starts_with("test.yaml:8:"));
+  CHECK(
+      config_error_of(exchange("        enabled: true\n        members: [beta, gamma]\n")).starts_with("test.yaml:8:"));
   CHECK(config_error_of(exchange("        enabled: true\n        members: [beta, gamma]\n"))
             .find("daemon.name 'alpha' is not among the members") != std::string::npos);
   CHECK(config_error_of(exchange("        enabled: true\n")).starts_with("test.yaml:7:"));  // no members
@@ -74,8 +75,8 @@ TEST_CASE("config: a wrong fleet exchange is refused at its file:line") {
   CHECK(config_error_of(exchange("        members: [\"\"]\n")).starts_with("test.yaml:7:"));
   CHECK(config_error_of(exchange("        retain: 0\n")).starts_with("test.yaml:7:"));
   CHECK(config_error_of(exchange("        max_message_bytes: 70000\n")).starts_with("test.yaml:7:"));
-  CHECK(config_error_of(exchange("        repair_backoff_s: 2\n        repair_backoff_max_s: 1\n")).find("repair_backoff_max_s") !=
-        std::string::npos);
+  CHECK(config_error_of(exchange("        repair_backoff_s: 2\n        repair_backoff_max_s: 1\n"))
+            .find("repair_backoff_max_s") != std::string::npos);
   CHECK(config_error_of(exchange("        retian: 5\n")).starts_with("test.yaml:7:"));  // unknown key
   CHECK(config_error_of("daemon:\n  name: alpha\nengine:\n  graph:\n    fleet:\n      enabled: false\n      exchange:\n"
                         "        enabled: true\n        members: [alpha]\n")

@@ -136,34 +136,41 @@ TEST_CASE("fleet codec: each bad value is refused naming its field") {
   const double nan = std::numeric_limits<double>::quiet_NaN();
   CHECK(refused([&](auto& m) { m.contributions[2].anchors[0].covariance[7] = nan; }) ==
         "non_finite: fleet_contribution_t.contributions[2].anchors[0].covariance[7]: not finite (nan)");
-  CHECK(refused([](auto& m) { m.contributions[1].poses[1].matrix[0] = -1; })
-            .starts_with("covariance: fleet_contribution_t.contributions[1].poses[1].matrix: not positive semi-definite"));
+  CHECK(
+      refused([](auto& m) {
+        m.contributions[1].poses[1].matrix[0] = -1;
+      }).starts_with("covariance: fleet_contribution_t.contributions[1].poses[1].matrix: not positive semi-definite"));
   CHECK(refused([](auto& m) { m.contributions[1].poses[1].matrix[1] = 0.5; }) ==
         "covariance: fleet_contribution_t.contributions[1].poses[1].matrix: not symmetric");
-  CHECK(refused([](auto& m) { m.contributions[0].poses[0].orientation[0] = 2; })
-            .starts_with("quaternion: fleet_contribution_t.contributions[0].poses[0].orientation"));
+  CHECK(refused([](auto& m) {
+          m.contributions[0].poses[0].orientation[0] = 2;
+        }).starts_with("quaternion: fleet_contribution_t.contributions[0].poses[0].orientation"));
   CHECK(refused([](auto& m) { m.contributions[3].kind = 9; }) ==
         "invalid: fleet_contribution_t.contributions[3].kind: unknown (9)");
-  CHECK(refused([](auto& m) { m.contributions[5].flags = sextant::fleet_item_t::FIRST; })
-            .starts_with("invalid: fleet_contribution_t.contributions[5].flags"));
+  CHECK(refused([](auto& m) {
+          m.contributions[5].flags = sextant::fleet_item_t::FIRST;
+        }).starts_with("invalid: fleet_contribution_t.contributions[5].flags"));
   CHECK(refused([](auto& m) {
           m.contributions[4].anchors.pop_back();
           m.contributions[4].num_anchors = 1;
         }).starts_with("invalid: fleet_contribution_t.contributions[4].num_anchors: 1, its kind has 2"));
   CHECK(refused([](auto& m) { m.contributions[2].sightings[3].range = -1; }) ==
         "invalid: fleet_contribution_t.contributions[2].sightings[3].range: not positive");
-  CHECK(refused([](auto& m) { m.contributions[2].sightings[0].id = -1; })
-            .starts_with("invalid: fleet_contribution_t.contributions[2].sightings[0].id"));
+  CHECK(refused([](auto& m) {
+          m.contributions[2].sightings[0].id = -1;
+        }).starts_with("invalid: fleet_contribution_t.contributions[2].sightings[0].id"));
   CHECK(refused([](auto& m) { m.contributions[3].other = std::string("rob\x01t"); }) ==
         "invalid: fleet_contribution_t.contributions[3].other: a control character");
-  CHECK(refused([](auto& m) { m.contributions[0].other = "robot9"; })
-            .starts_with("invalid: fleet_contribution_t.contributions[0].other"));
+  CHECK(refused([](auto& m) {
+          m.contributions[0].other = "robot9";
+        }).starts_with("invalid: fleet_contribution_t.contributions[0].other"));
   CHECK(refused([](auto& m) { m.body = std::string(300, 'b'); }) ==
         "invalid: fleet_contribution_t.body: longer than 256 characters");
   CHECK(refused([](auto& m) { m.sender = ""; }) == "invalid: fleet_contribution_t.sender: empty");
   CHECK(refused([](auto& m) { m.first = 0; }).starts_with("invalid: fleet_contribution_t.first"));
-  CHECK(refused([](auto& m) { m.first = std::numeric_limits<int64_t>::max(); })
-            .starts_with("invalid: fleet_contribution_t.first"));
+  CHECK(refused([](auto& m) {
+          m.first = std::numeric_limits<int64_t>::max();
+        }).starts_with("invalid: fleet_contribution_t.first"));
   CHECK(refused([](auto& m) {
           m.contributions.clear();
           m.num_contributions = 0;
@@ -201,10 +208,12 @@ TEST_CASE("fleet codec: bytes that do not fit are refused before anything is all
   const auto r = rejection(runtime::decode_event(InputKind::kFleet, big.data(), big.size()));
   CHECK(r.starts_with("too_large: fleet_contribution_t.num_contributions"));
   const std::vector<uint8_t> junk(300, 0xAB);
-  CHECK(rejection(runtime::decode_event(InputKind::kFleetControl, junk.data(), junk.size())).starts_with("fingerprint"));
+  CHECK(
+      rejection(runtime::decode_event(InputKind::kFleetControl, junk.data(), junk.size())).starts_with("fingerprint"));
 }
 
-TEST_CASE("fleet codec: the intake takes FLEET and FLEET_CONTROL without the sensors' clock checks, counting refusals") {
+TEST_CASE(
+    "fleet codec: the intake takes FLEET and FLEET_CONTROL without the sensors' clock checks, counting refusals") {
   runtime::ChannelStats stats;
   runtime::Intake intake(stats);
   intake.add_channel("FLEET", InputKind::kFleet);
