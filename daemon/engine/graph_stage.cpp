@@ -119,7 +119,7 @@ void GraphStage::publish_trajectory(const std::string& source, Feed& f, int64_t 
   Trajectory header;
   header.source = source;
   header.frame = slam_.frame_of(source);
-  header.chi2 = slam_.chi2(source);
+  header.chi2 = chi2_of(source, utime, flush);
   header.iterations = solves;
   header.solve_ms = slam_.counters().last_update_ms;
   for (auto& t : f.feed.publish(utime, keyframes(source), header, flush)) {
@@ -128,6 +128,18 @@ void GraphStage::publish_trajectory(const std::string& source, Feed& f, int64_t 
     ++counters_.trajectory_messages;
     emit(std::move(t));
   }
+}
+
+double GraphStage::chi2_of(const std::string& source, int64_t utime, bool flush) {
+  // Evaluating chi2 touches every factor a solve moved: once per trajectory period for all the bodies of a smoother,
+  // not once per body (a fleet of N bodies would pay it N times per period).
+  const auto period = static_cast<int64_t>(config_.trajectory.rate_hz > 0 ? 1e6 / config_.trajectory.rate_hz : 0);
+  auto& [at, value] = chi2_[slam_.planar(source) ? 1 : 0];
+  if (flush || !at || utime - *at >= period || utime < *at) {
+    at = utime;
+    value = slam_.chi2(source);
+  }
+  return value;
 }
 
 void GraphStage::publish_map(const std::string& frame, int64_t utime, bool flush, const Emit& emit) {
@@ -247,7 +259,7 @@ Counters GraphStage::counters() const {
 
 void GraphStage::save(archive::ArchiveWriter& w) {
   w(next_request_id_)(counters_.match_requests)(counters_.trajectory_messages)(counters_.trajectory_keyframe_bytes)(
-      counters_.corrections_refused);
+      counters_.corrections_refused)(chi2_[0])(chi2_[1]);
   slam_.save(w);
   for (const std::string& source : slam_.bodies()) {
     const Feed& f = feed_of(source);
@@ -258,7 +270,7 @@ void GraphStage::save(archive::ArchiveWriter& w) {
 void GraphStage::load(archive::ArchiveReader& r) {
   if (!feeds_.empty()) throw std::logic_error("GraphStage::load into a used stage");
   r(next_request_id_)(counters_.match_requests)(counters_.trajectory_messages)(counters_.trajectory_keyframe_bytes)(
-      counters_.corrections_refused);
+      counters_.corrections_refused)(chi2_[0])(chi2_[1]);
   slam_.load(r);
   for (const std::string& source : slam_.bodies()) {
     Feed& f = feed_of(source);

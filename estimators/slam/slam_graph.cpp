@@ -289,6 +289,11 @@ SlamGraph::NewestKeyframe SlamGraph::newest_keyframe(const std::string& name) co
   return out;
 }
 
+bool SlamGraph::planar(const std::string& name) const {
+  auto it = bodies_.find(name);
+  return it != bodies_.end() && it->second.planar;
+}
+
 double SlamGraph::chi2(const std::string& name) const { return bodies_.at(name).smoother->chi2(); }
 
 int64_t SlamGraph::graph_keyframes() const {

@@ -149,6 +149,8 @@ class SlamGraph {
     Matrix6d covariance = Matrix6d::Zero();
   };
   NewestKeyframe newest_keyframe(const std::string& body) const;
+  /// Whether a body is planar (its smoother is the planar one); false for an unknown body.
+  bool planar(const std::string& body) const;
   /// chi2 of the smoother a body's graph is in.
   double chi2(const std::string& body) const;
   /// The size of the graphs now (every body): keyframes and landmarks in them, factors in the smoothers.
