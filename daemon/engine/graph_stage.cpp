@@ -105,6 +105,10 @@ void GraphStage::handle(const Event& e, const Emit& emit) {
     slam_.add_loop(l->source, to_input(*l), out);
   else if (const auto* s = std::get_if<LandmarkSightings>(&e))
     slam_.add_sightings(s->source, to_input(*s), out);
+  else if (std::holds_alternative<FleetContributions>(e))
+    ++counters_.fleet_messages_received;
+  else if (std::holds_alternative<FleetControl>(e))
+    ++counters_.fleet_control_received;
 }
 
 void GraphStage::publish_trajectory(const std::string& source, Feed& f, int64_t utime, int solves, bool flush,
@@ -245,7 +249,9 @@ Counters GraphStage::counters() const {
           {"fleet_contributions_waiting", s.fleet_contributions_waiting},
           {"fleet_contributions_dropped", s.fleet_contributions_dropped},
           {"fleet_remote_inputs", s.fleet_remote_inputs},
-          {"landmark_map_messages", counters_.landmark_map_messages}};
+          {"landmark_map_messages", counters_.landmark_map_messages},
+          {"fleet_messages_received", counters_.fleet_messages_received},
+          {"fleet_control_received", counters_.fleet_control_received}};
 }
 
 void GraphStage::save(archive::ArchiveWriter& w) {
