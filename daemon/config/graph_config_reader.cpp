@@ -116,13 +116,12 @@ void read_exchange(Section& f, engine::GraphConfig& c) {
   x.reject_unknown_keys();
 }
 
-// fleet: {enabled, markers: {ID: BODY}, placement: {...}, observed_time_tolerance_s, max_pending, join_every_keyframes,
+// fleet: {enabled, markers: {ID: BODY}, placement: {...}, max_pending, join_every_keyframes,
 // exchange: {...}}
 void read_fleet(Section& s, engine::GraphConfig& c) {
   Section f = s.child("fleet");
   slam::FleetOptions& o = c.fleet;
   f.get("enabled", o.enabled);
-  f.get("observed_time_tolerance_s", o.observed_time_tolerance_s, in_range(0.0, 10.0));
   f.get("max_pending", o.max_pending, int_in_range(1, 1 << 16));
   f.get("join_every_keyframes", o.join_every_keyframes, int_in_range(1, 1 << 20));
   f.get("proposal_radius", o.proposal_radius, non_negative());

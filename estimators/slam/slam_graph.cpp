@@ -12,6 +12,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <set>
 
 namespace sextant::slam {
 namespace {
@@ -132,6 +133,8 @@ void SlamGraph::add_odometry(const std::string& name, const OdometryInput& o, Sl
     counters_.loops_waiting -= static_cast<int64_t>(due.size());
     for (const auto& l : due) add_loop(name, l, listener);
   }
+  // Other bodies' sightings of this one that its odometry had not reached.
+  if (!b.early_seen.empty()) complete_seen(name, b, listener);
   // Other bodies' loops to a time of this one that its odometry had not reached.
   if (!b.early_halves.empty()) {
     std::vector<std::pair<std::string, BodyLoopHalf>> waiting = std::move(b.early_halves);
@@ -139,6 +142,22 @@ void SlamGraph::add_odometry(const std::string& name, const OdometryInput& o, Sl
     counters_.loops_waiting -= static_cast<int64_t>(waiting.size());
     for (const auto& [from, h] : waiting) complete_body_loop(from, h, listener);
   }
+}
+
+void SlamGraph::complete_seen(const std::string& name, Body& b, SlamListener& listener) {
+  std::vector<std::pair<std::string, BodySightingHalf>> due, later;
+  for (auto& x : b.early_seen) (x.second.utime <= b.track.last_utime() ? due : later).push_back(std::move(x));
+  b.early_seen = std::move(later);
+  std::set<std::string> frames;
+  const size_t pending_before = pending_.sightings.size();
+  for (const auto& [observer, h] : due) {
+    if (!bodies_.contains(observer)) continue;  // forgotten meanwhile
+    if (complete_body_sighting(observer, h, listener)) frames.insert(b.frame);
+  }
+  for (const std::string& f : frames) update_frame(f, listener);
+  if (options_.fleet.enabled && (!frames.empty() || pending_.sightings.size() != pending_before))
+    try_joins(b.frame, listener);
+  (void)name;
 }
 
 void SlamGraph::on_keyframe_candidate(const std::string& name, Body& b, const OdometryInput& o,

@@ -191,8 +191,10 @@ class SlamGraph {
     std::vector<LoopInput> early_loops;           // about times the odometry has not reached yet (bounded)
     std::vector<SightingsInput> early_sightings;  // ahead of the odometry, in time order (bounded)
     std::map<int64_t, Landmark> landmarks;        // by landmark id; a frame's map, kept by its root body only
-    std::vector<std::pair<std::string, BodyLoopHalf>> early_halves;  // other bodies' loops (from, half) to a time
-                                                                     // this one's odometry has not reached
+    std::vector<std::pair<std::string, BodyLoopHalf>> early_halves;    // other bodies' loops (from, half) to a time
+                                                                       // this one's odometry has not reached
+    std::vector<std::pair<std::string, BodySightingHalf>> early_seen;  // sightings of this body (observer, half)
+                                                                       // ahead of its odometry
   };
   /// A body's sighting of another body's marker, anchored on a keyframe of each (by keyframe id: thinning renumbers
   /// positions) with the odometry motion from it to the sighting's time and that motion's covariance.
@@ -235,6 +237,8 @@ class SlamGraph {
                   std::optional<double> width);
   SE3 estimate(const Body& b, int variable) const;
   void on_keyframe_candidate(const std::string& name, Body& b, const OdometryInput& o, SlamListener& listener);
+  /// The sightings of body `name` that waited for its odometry (early_seen) and are now behind it: anchored.
+  void complete_seen(const std::string& name, Body& b, SlamListener& listener);
 
   // The back end (slam_graph_contributions.cpp): what one contribution adds, the same for a local body's (made by the
   // front end just before) and a remote one's.  Each returns whether a factor entered; the caller solves.
@@ -306,9 +310,6 @@ class SlamGraph {
   void add_body_loop(const std::string& name, Body& b, const LoopInput& l, SlamListener& listener);
   bool add_sighting_factor(const SightingLink& s);
   bool add_loop_factor(const LoopLink& l);
-  /// A time of a body as a keyframe anchor: anchor_at, or its latest odometry when the time is ahead of it by at
-  /// most observed_time_tolerance_s.
-  std::optional<TrackPoint> anchor_near(const Body& b, int64_t utime) const;
   /// The placement evidence between frames `a` and `b` (T_ab) and which pending item each came from.
   struct Evidence;
   Evidence evidence_between(const std::string& a, const std::string& b);

@@ -117,9 +117,20 @@ bool SlamGraph::add_loop_on_keyframes(Body& b, const LoopContribution& l) {
 bool SlamGraph::complete_body_sighting(const std::string& observer, const BodySightingHalf& h, SlamListener& listener) {
   auto it = bodies_.find(h.observed);
   if (it != bodies_.end() && it->second.remote) return false;  // its owner anchors the observed end
+  if (it != bodies_.end() && !it->second.track.empty() && h.utime > it->second.track.last_utime()) {
+    // Ahead of the seen body's odometry (its stream is behind the observer's, or another daemon's half came early):
+    // anchored exactly once the odometry passes the time (add_odometry), within a bound.
+    Body& o = it->second;
+    if (o.early_seen.size() >= static_cast<size_t>(std::max(options_.fleet.max_pending, 1))) {
+      o.early_seen.erase(o.early_seen.begin());
+      ++counters_.fleet_sightings_unplaced;
+    }
+    o.early_seen.emplace_back(observer, h);
+    return false;
+  }
   const std::optional<TrackPoint> at = it == bodies_.end() || it->second.planar != bodies_.at(observer).planar
                                            ? std::nullopt
-                                           : anchor_near(it->second, h.utime);
+                                           : it->second.track.anchor_at(h.utime);
   if (!at) {
     ++counters_.fleet_sightings_unplaced;
     return false;

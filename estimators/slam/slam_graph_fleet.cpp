@@ -50,15 +50,6 @@ void SlamGraph::propose_fleet_loops(const std::string& name, const Body& b, int6
   }
 }
 
-std::optional<TrackPoint> SlamGraph::anchor_near(const Body& b, int64_t utime) const {
-  if (b.track.empty()) return std::nullopt;
-  if (utime <= b.track.last_utime()) return b.track.anchor_at(utime);
-  if (static_cast<double>(utime - b.track.last_utime()) > options_.fleet.observed_time_tolerance_s * 1e6)
-    return std::nullopt;
-  return TrackPoint{b.track.keyframes().size() - 1, b.track.newest().odom.between(b.track.last_odom()),
-                    b.track.since_keyframe()};
-}
-
 bool SlamGraph::add_sighting_factor(const SightingLink& s) {
   const auto a = bodies_.find(s.observer), o = bodies_.find(s.observed);
   if (a == bodies_.end() || o == bodies_.end()) return false;

@@ -26,7 +26,8 @@ void SlamGraph::save(archive::ArchiveWriter& w) {
   }
   w(static_cast<uint64_t>(bodies_.size()));
   for (const auto& [name, b] : bodies_) {
-    w(name)(b.planar)(b.frame)(b.selector)(b.track)(b.early_loops)(b.early_sightings)(b.remote)(b.early_halves);
+    w(name)(b.planar)(b.frame)(b.selector)(b.track)(b.early_loops)(b.early_sightings)(b.remote)(b.early_halves)(
+        b.early_seen);
     w(static_cast<uint64_t>(b.landmarks.size()));
     for (const auto& [id, l] : b.landmarks) w(id)(l.variable)(l.sightings);
   }
@@ -74,7 +75,7 @@ void SlamGraph::load(archive::ArchiveReader& r) {
     KeyframeSelectorOptions ko = options_.keyframes;
     ko.planar = b.planar;
     b.selector = KeyframeSelector(ko);
-    r(b.selector)(b.track)(b.early_loops)(b.early_sightings)(b.remote)(b.early_halves);
+    r(b.selector)(b.track)(b.early_loops)(b.early_sightings)(b.remote)(b.early_halves)(b.early_seen);
     b.smoother = &smoother_for(b.planar);
     const int variables = static_cast<int>(b.smoother->graph().variables().size());
     const auto check_variable = [&](int v, bool pose) {
@@ -223,6 +224,7 @@ void SlamGraph::forget(const std::string& name) {
   purge(pending_.loops);
   counters_.loops_waiting -= static_cast<int64_t>(it->second.early_loops.size() + it->second.early_halves.size());
   for (auto& [other, b] : bodies_) {  // other bodies' loops from this one, waiting for their odometry
+    std::erase_if(b.early_seen, [&](const auto& h) { return h.first == name; });
     const auto before = b.early_halves.size();
     std::erase_if(b.early_halves, [&](const auto& h) { return h.first == name; });
     counters_.loops_waiting -= static_cast<int64_t>(before - b.early_halves.size());

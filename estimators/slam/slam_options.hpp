@@ -50,9 +50,8 @@ struct FleetOptions {
   bool enabled = true;                     // false: every body is estimated alone, as separate robots
   std::map<int64_t, std::string> markers;  // landmark id -> the body whose origin a sighting of that id sees
   PlacementOptions placement;              // the joining rule
-  /// A sighting of a body at a time its odometry has not reached yet is taken at its latest pose when at most this
-  /// much older (robots' odometry streams interleave; 65 Hz MRCLAM odometry is at most 15 ms behind).
-  double observed_time_tolerance_s = 0.25;
+  // A sighting of a body at a time its odometry has not reached yet waits for it (at most max_pending per body) and
+  // is anchored exactly, interpolated between the odometry poses around it.
   int max_pending = 256;  // robot sightings and loops between frames not yet joined, kept as evidence (oldest go)
   int join_every_keyframes = 5;  // placement tried at most this often per pair of frames without new evidence
   /// Inter-robot loop candidates (SlamListener::fleet_loop_proposed, with propose_loops): for each new keyframe, the

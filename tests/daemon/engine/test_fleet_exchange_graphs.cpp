@@ -137,8 +137,10 @@ TEST_CASE(
   const auto round = [&](int cut) {
     for (size_t k = 0; k < daemons.size(); ++k) {
       auto due = daemons[k]->exchange.due(now);
-      for (const auto& m : due.contributions) wires[k].fleet.push_back(Daemon::bytes(runtime::to_message(m, daemons[k]->name, 0)));
-      for (const auto& m : due.control) wires[k].control.push_back(Daemon::bytes(runtime::to_message(m, daemons[k]->name, 0)));
+      for (const auto& m : due.contributions)
+        wires[k].fleet.push_back(Daemon::bytes(runtime::to_message(m, daemons[k]->name, 0)));
+      for (const auto& m : due.control)
+        wires[k].control.push_back(Daemon::bytes(runtime::to_message(m, daemons[k]->name, 0)));
     }
     carry(daemons, wires, rng, 0.3, cut, now);
   };

@@ -1,0 +1,84 @@
+#!/usr/bin/env bash
+# Not in `make test` yet: the daemons do not all reach the same frame joins (a run at 1d47e48: two of three daemons
+# held every robot within 0.2 cm of the single daemon, the third kept two robots in a frame of their own).  Run as
+#   SEXTANT_BIN=build/bin SEXTANT_LCMTYPES_PY=build/lcmtypes/python bench/fleet_hosts.sh
+# A fleet of daemons across hosts: three test hosts (network namespaces on one bridge), one robot each; each host's
+# sextantd is fed only its own robot's sensors (a simulated planar fleet split per robot, channels prefixed
+# ROBOTn_) and exchanges graph contributions with the others over LCM (FLEET, FLEET_CONTROL).  Every host drops 10 %
+# of the datagrams it receives, and host 3's link is cut for 8 s in the middle of the run.  After the run, every
+# daemon's view of every robot (its TRAJECTORY) must be the single daemon's (`sextant replay` of the whole fleet)
+# within 1 cm RMS with no keyframe missing, all in one map frame.
+set -euo pipefail
+source "$(dirname "$0")/../tests/e2e/netns.bash"
+require_netns
+if ! command -v nft > /dev/null || ! unshare --net --mount true 2> /dev/null; then
+  echo "SKIP: needs nftables and mount namespaces" >&2
+  exit 77
+fi
+work=$(mktemp -d)
+trap '[ -n "${KEEP:-}" ] || rm -rf "$work"' EXIT
+e2e=$(cd "$(dirname "$0")/../tests/e2e" && pwd)
+
+"$SEXTANT_BIN/sextant" simulate planar --robots 3 --duration 60 --seed 4 --loop-distance 0 -o "$work/sim.lcm" \
+  --config-out "$work/fleet.yaml" > /dev/null
+markers=$(grep markers "$work/fleet.yaml" | sed 's/^ *//')
+python3 "$e2e/split_fleet_log.py" "$work/sim.lcm" "$work" robot1=ROBOT1_ robot2=ROBOT2_ robot3=ROBOT3_
+
+config() {  # config NAME PREFIX EXCHANGE
+  cat <<EOC
+daemon:
+  name: $1
+  status_period_s: 0.5
+channels:
+  prefix: "$2"
+engine:
+  primary_estimator: graph
+  graph:
+    fleet:
+      enabled: true
+      $markers
+      exchange:
+        enabled: $3
+        members: [host1, host2, host3]
+EOC
+}
+config single "" false > "$work/single.yaml"
+for n in 1 2 3; do config "host$n" "ROBOT${n}_" true > "$work/host$n.yaml"; done
+"$SEXTANT_BIN/sextant" replay "$work/sim.lcm" --config "$work/single.yaml" --out-log "$work/single_out.lcm" \
+  > /dev/null
+
+cat > "$work/lab.sh" <<EOS
+set -euo pipefail
+source "$e2e/fleet_lab.bash"
+trap 'kill \$(jobs -p) 2> /dev/null || true' EXIT
+lab_init
+for n in 1 2 3; do lab_host \$n; lab_loss \$n 10; done
+pids=()
+for n in 1 2 3; do
+  in_host \$n lcm-logger -f "$work/bus\$n.lcm" --channel="ROBOT\${n}_.*" > /dev/null 2>&1 &
+  loggers[\$n]=\$!
+  in_host \$n "$SEXTANT_BIN/sextantd" --config "$work/host\$n.yaml" > "$work/daemon\$n.log" 2>&1 &
+  daemons[\$n]=\$!
+done
+for n in 1 2 3; do
+  until grep -q "running on" "$work/daemon\$n.log" 2> /dev/null; do
+    kill -0 \${daemons[\$n]} || { cat "$work/daemon\$n.log"; exit 1; }
+    sleep 0.1
+  done
+done
+sleep 0.3
+for n in 1 2 3; do in_host \$n lcm-logplayer -s 4 "$work/robot\$n.lcm" > /dev/null & players[\$n]=\$!; done
+sleep 4; lab_cut 3; sleep 8; lab_heal 3
+for n in 1 2 3; do wait \${players[\$n]}; done
+sleep 6  # repairs after the heal and the last heartbeats
+rc=0
+for n in 1 2 3; do kill -TERM \${daemons[\$n]}; done
+for n in 1 2 3; do wait \${daemons[\$n]} || { echo "sextantd on host \$n failed"; cat "$work/daemon\$n.log"; rc=1; }; done
+sleep 0.3
+for n in 1 2 3; do kill -INT \${loggers[\$n]}; wait \${loggers[\$n]} || true; done
+exit \$rc
+EOS
+unshare --net --mount bash "$work/lab.sh"
+python3 "$e2e/check_fleet_hosts.py" "$work/single_out.lcm" 0.01 host1="$work/bus1.lcm" host2="$work/bus2.lcm" \
+  host3="$work/bus3.lcm"
+echo "fleet_hosts: ok"
