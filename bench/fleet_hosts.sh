@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Not in `make test` yet: the daemons do not all reach the same frame joins (a run at 1d47e48: two of three daemons
+# Not in `make test` yet: the daemons do not all reach the same frame joins (a run at 231ec19: two of three daemons
 # held every robot within 0.2 cm of the single daemon, the third kept two robots in a frame of their own).  Run as
 #   SEXTANT_BIN=build/bin SEXTANT_LCMTYPES_PY=build/lcmtypes/python bench/fleet_hosts.sh
 # A fleet of daemons across hosts: three test hosts (network namespaces on one bridge), one robot each; each host's
