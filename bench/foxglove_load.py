@@ -1,5 +1,5 @@
 """Writes the bridge benchmark's load as an LCM log (bench/foxglove.sh): BODIES bodies each publishing fused poses
-at RATE Hz (FUSED_POSE, estimator "ekf", moving on circles), each body's TRAJECTORY at 1 Hz (an UPDATE carrying the
+at RATE Hz (FUSED_POSE, estimator "ekf", moving on circles, each in its own map frame), each body's TRAJECTORY at 1 Hz (an UPDATE carrying the
 new keyframe, a full SNAPSHOT every 10 s) and SEXTANT_STATUS at 1 Hz, for SECONDS seconds; `sextant replay --realtime`
 plays it at the pace of its utimes.
 
@@ -27,6 +27,7 @@ def pose(body, t):
 def fused(body, i, utime, t):
     m = fused_pose_t()
     m.utime, m.sender, m.seq, m.source, m.estimator, m.planar = utime, "bench", i, f"robot{body}", "ekf", True
+    m.frame = f"robot{body}"  # each body in its own map frame, as sextantd's filters publish it
     m.position, m.orientation = pose(body, t)
     m.covariance = [0.01 if k % 7 == 0 else 0.0 for k in range(36)]
     return m
@@ -35,6 +36,7 @@ def fused(body, i, utime, t):
 def trajectory(body, seq, utime, keyframes, snapshot):
     m = trajectory_t()
     m.utime, m.sender, m.seq, m.source, m.estimator = utime, "bench", seq, f"robot{body}", "graph"
+    m.frame = f"robot{body}"  # not joined: ten map frames
     m.kind = trajectory_t.SNAPSHOT if snapshot else trajectory_t.UPDATE
     m.num_chunks, m.range_first, m.range_last = 1, 0, len(keyframes) - 1
     m.total_keyframes = len(keyframes)

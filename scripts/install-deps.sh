@@ -9,6 +9,7 @@ packages=(
   libeigen3-dev libsuitesparse-dev libgeographiclib-dev
   libspdlog-dev libyaml-cpp-dev libcli11-dev doctest-dev libbenchmark-dev
   iproute2 util-linux procps python3
+  nftables   # the fleet's multi-host test drops a share of datagrams at each test host (no netem in this kernel)
   pybind11-dev python3-dev python3-pytest   # the sextant Python module and its tests
   chromium   # the report test renders the HTML report in headless Chromium
   libzstd-dev zlib1g-dev libboost-dev nlohmann-json3-dev   # viewer/: MCAP chunks and CRCs, the Foxglove bridge, JSON

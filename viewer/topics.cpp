@@ -8,9 +8,13 @@
 #include <Eigen/Eigenvalues>
 #include <Eigen/Geometry>
 
+#include <algorithm>
 #include <cmath>
 #include <exception>
+#include <limits>
+#include <optional>
 #include <set>
+#include <stdexcept>
 
 namespace sextant::viewer {
 namespace {
@@ -30,16 +34,27 @@ Json color(double r, double g, double b, double a = 1) { return Json{{"r", r}, {
 Eigen::Vector3d vec(const double* p) { return {p[0], p[1], p[2]}; }
 Eigen::Quaterniond quat_wxyz(const double* q) { return Eigen::Quaterniond(q[0], q[1], q[2], q[3]).normalized(); }
 
-/// A SceneEntity in the map frame with every primitive list present (the schema requires them all) and empty.
-Json entity(int64_t utime, const std::string& id) {
+/// The viewer frame of a map frame that an output names (fused_pose_t.frame, trajectory_t.frame, landmark_map_t.frame):
+/// "<name>/map", or the root "map" itself for an empty name (logs from before fleets).  Not "<name>": that is the
+/// body's own frame, and a fleet frame is named by a body.
+std::string map_frame_id(const std::string& frame) { return frame.empty() ? "map" : frame + "/map"; }
+
+/// A SceneEntity in `frame_id` with every primitive list present (the schema requires them all) and empty.
+Json entity(int64_t utime, const std::string& id, const std::string& frame_id = "map") {
   Json e{
-      {"timestamp", stamp(utime)}, {"frame_id", "map"},        {"id", id}, {"lifetime", Json{{"sec", 0}, {"nsec", 0}}},
+      {"timestamp", stamp(utime)}, {"frame_id", frame_id},     {"id", id}, {"lifetime", Json{{"sec", 0}, {"nsec", 0}}},
       {"frame_locked", false},     {"metadata", Json::array()}};
   for (const char* k : {"arrows", "cubes", "spheres", "cylinders", "lines", "triangles", "texts", "models"})
     e[k] = Json::array();
   return e;
 }
-Json scene_update(Json entities) { return Json{{"deletions", Json::array()}, {"entities", std::move(entities)}}; }
+Json scene_update(Json entities, Json deletions = Json::array()) {
+  return Json{{"deletions", std::move(deletions)}, {"entities", std::move(entities)}};
+}
+Json deletion(int64_t utime, const std::string& id) {
+  constexpr int kMatchingId = 0;
+  return Json{{"timestamp", stamp(utime)}, {"type", kMatchingId}, {"id", id}};
+}
 Json text(const Eigen::Vector3d& at, const std::string& s, const Json& c) {
   return Json{{"pose", pose(at)},        {"billboard", true}, {"font_size", 14.0},
               {"scale_invariant", true}, {"color", c},        {"text", s}};
@@ -93,6 +108,50 @@ const TopicSchema* topic_schema(const std::string& name) {
   return it == schemas.end() ? nullptr : &it->second;
 }
 
+namespace {
+
+/// Which outputs are in which map frame now, for the frame list on /sextant/frames.  A user is one output stream of a
+/// body: one of its estimators' poses, its trajectory, its place in a landmark map.
+class FrameUsers {
+ public:
+  using User = std::pair<std::string, std::string>;  // (body, what)
+  /// Records that `user` is in `frame` now (an empty frame is "map" itself, not listed); true when that changed the
+  /// frames or who is in them.
+  bool use(const User& user, const std::string& frame) {
+    auto [it, fresh] = frame_of_.try_emplace(user, frame);
+    if (!fresh) {
+      if (it->second == frame) return false;
+      leave(user, it->second);
+      it->second = frame;
+    }
+    if (!frame.empty()) users_[frame].insert(user);
+    return true;
+  }
+  /// Each map frame in use (by name) with its users.
+  const std::map<std::string, std::set<User>>& frames() const { return users_; }
+
+ private:
+  void leave(const User& user, const std::string& frame) {
+    const auto f = users_.find(frame);
+    if (f == users_.end()) return;
+    f->second.erase(user);
+    if (f->second.empty()) users_.erase(f);
+  }
+  std::map<User, std::string> frame_of_;
+  std::map<std::string, std::set<User>> users_;
+};
+
+/// The chunks of one landmark map publication (landmark_map_t.lcm: chunks 0 .. num_chunks - 1 of one utime).
+struct MapAssembly {
+  int64_t utime = std::numeric_limits<int64_t>::min();
+  int32_t num_chunks = 0;
+  bool complete = false;
+  std::set<int32_t> chunks;
+  std::vector<sextant::map_landmark_t> landmarks;
+};
+
+}  // namespace
+
 /// The Foxglove views and the state they need.
 struct TopicMapper::Views {
   TopicMapperOptions options;
@@ -100,34 +159,84 @@ struct TopicMapper::Views {
     int rank = 0;
     Eigen::Vector3d position = Eigen::Vector3d::Zero();
     Eigen::Quaterniond orientation = Eigen::Quaterniond::Identity();
+    std::string frame;  // the map frame of the pose
+  };
+  struct TrajectoryView {
+    engine::TrajectoryRebuild rebuild;
+    std::string frame;  // of the latest message: the frame its keyframes are in
   };
   std::map<std::string, BodyPose> bodies;  // by source: its best estimator's latest pose
-  std::map<std::pair<std::string, std::string>, engine::TrajectoryRebuild> trajectories;  // by (sender, source)
-  Json pending_transforms = Json::array();  // batch_frame_transforms: gathered for the next flush
+  std::map<std::pair<std::string, std::string>, TrajectoryView> trajectories;  // by (sender, source)
+  std::map<std::pair<std::string, std::string>, MapAssembly> map_assemblies;   // by (sender, frame)
+  std::map<std::string, int64_t> map_groups;  // by map frame: the landmark entities drawn for it
+  FrameUsers frame_users;
+  int64_t frames_utime = std::numeric_limits<int64_t>::min();  // when /sextant/frames went out last
+  Json pending_transforms = Json::array();                     // batch_frame_transforms: gathered for the next flush
+  std::set<std::string> placed;  // map frames whose transform from "map" is in pending_transforms
 
   void out(std::vector<ViewerMessage>& o, std::string topic, const char* schema, const Json& j) {
     o.push_back({std::move(topic), topic_schema(schema), "json", "", j.dump()});
   }
 
+  static Json transform(int64_t utime, const std::string& parent, const std::string& child, const Eigen::Vector3d& p,
+                        const Eigen::Quaterniond& q) {
+    return Json{{"timestamp", stamp(utime)},
+                {"parent_frame_id", parent},
+                {"child_frame_id", child},
+                {"translation", vec3(p)},
+                {"rotation", quat(q)}};
+  }
+
+  /// map -> <frame>/map, identity, once in each /tf message whose transforms or scene hang from that map frame: every
+  /// map frame has a path to the display frame "map" (see the header: how fleet frames appear).
+  void place(const std::string& frame, int64_t utime) {
+    if (frame.empty() || !placed.insert(frame).second) return;
+    pending_transforms.push_back(
+        transform(utime, "map", map_frame_id(frame), Eigen::Vector3d::Zero(), Eigen::Quaterniond::Identity()));
+  }
+
+  /// `user` is in `frame` now: /sextant/frames goes out when the frames or their users changed, and at least once
+  /// per second of data time while there are any (a viewer that connects later gets it too).
+  void use_frame(const FrameUsers::User& user, const std::string& frame, int64_t utime, std::vector<ViewerMessage>& o) {
+    const bool changed = frame_users.use(user, frame);
+    if (frame_users.frames().empty()) return;
+    constexpr int64_t kPeriod = 1'000'000;
+    if (changed || utime >= frames_utime + kPeriod || utime < frames_utime - kPeriod) frame_list(utime, o);
+  }
+
+  /// One text in "map" listing the map frames: the first by name is the fleet's frame (a join moves the frame of the
+  /// later name into the earlier one), the others are unplaced, drawn at map's origin.
+  void frame_list(int64_t utime, std::vector<ViewerMessage>& o) {
+    const auto& frames = frame_users.frames();
+    std::string lines;
+    for (const auto& [frame, users] : frames) {
+      std::set<std::string> names;
+      for (const auto& u : users) names.insert(u.first);
+      std::string bodies;
+      for (const auto& b : names) bodies += (bodies.empty() ? "" : ", ") + b;
+      lines += (lines.empty() ? "" : "\n") + map_frame_id(frame) +
+               (frame == frames.begin()->first ? " = map" : " unplaced: drawn at map's origin") + " (" + bodies + ")";
+    }
+    Json e = entity(utime, "frames");
+    e["texts"].push_back(text(Eigen::Vector3d::Zero(), lines, color(1, 1, 1)));
+    out(o, "/sextant/frames", "foxglove.SceneUpdate", scene_update(Json::array({e})));
+    frames_utime = utime;
+  }
+
   void fused_pose(const sextant::fused_pose_t& m, std::vector<ViewerMessage>& o) {
     const Eigen::Vector3d p = vec(m.position);
     const Eigen::Quaterniond q = quat_wxyz(m.orientation);
+    const std::string frame = map_frame_id(m.frame);
     out(o, "/sextant/" + m.source + "/" + m.estimator + "/pose", "foxglove.PoseInFrame",
-        Json{{"timestamp", stamp(m.utime)}, {"frame_id", "map"}, {"pose", pose(p, q)}});
-    auto transform = [&](const std::string& child) {
-      return Json{{"timestamp", stamp(m.utime)},
-                  {"parent_frame_id", "map"},
-                  {"child_frame_id", child},
-                  {"translation", vec3(p)},
-                  {"rotation", quat(q)}};
-    };
-    Json& transforms = pending_transforms;
-    transforms.push_back(transform(m.source + "/" + m.estimator));
+        Json{{"timestamp", stamp(m.utime)}, {"frame_id", frame}, {"pose", pose(p, q)}});
+    place(m.frame, m.utime);
+    pending_transforms.push_back(transform(m.utime, frame, m.source + "/" + m.estimator, p, q));
     auto& body = bodies[m.source];
     if (estimator_rank(m.estimator) >= body.rank) {
-      body = {estimator_rank(m.estimator), p, q};
-      transforms.push_back(transform(m.source));
+      body = {estimator_rank(m.estimator), p, q, m.frame};
+      pending_transforms.push_back(transform(m.utime, frame, m.source, p, q));
     }
+    use_frame({m.source, m.estimator}, m.frame, m.utime, o);
     if (!options.batch_frame_transforms) flush(o);
   }
 
@@ -135,6 +244,7 @@ struct TopicMapper::Views {
     if (pending_transforms.empty()) return;
     out(o, "/tf", "foxglove.FrameTransforms", Json{{"transforms", std::move(pending_transforms)}});
     pending_transforms = Json::array();
+    placed.clear();
   }
 
   /// A body's trajectory is drawn in segments of kSegment keyframe ids (entity "<source>/trajectory/<k>", each
@@ -143,44 +253,108 @@ struct TopicMapper::Views {
   /// changes cost, not the whole trajectory.
   static constexpr int64_t kSegment = 256;
 
-  Json trajectory_segment(const engine::TrajectoryRebuild& rebuild, const std::string& source, int64_t segment,
-                          int64_t utime) {
-    const auto& kfs = rebuild.keyframes();
+  Json trajectory_segment(const TrajectoryView& view, const std::string& source, int64_t segment, int64_t utime) {
+    const auto& kfs = view.rebuild.keyframes();
     Json points = Json::array();
     auto it = kfs.lower_bound(segment * kSegment);
     if (it != kfs.begin()) points.push_back(vec3(std::prev(it)->second.pose.position));
     for (; it != kfs.end() && it->first < (segment + 1) * kSegment; ++it)
       points.push_back(vec3(it->second.pose.position));
-    Json e = entity(utime, source + "/trajectory/" + std::to_string(segment));
+    Json e = entity(utime, source + "/trajectory/" + std::to_string(segment), map_frame_id(view.frame));
     if (points.size() >= 2) e["lines"].push_back(line(kLineStrip, points, 0.05, color(0.1, 0.6, 1.0)));
     return e;
   }
 
-  void trajectory(const sextant::trajectory_t& m, std::vector<ViewerMessage>& o) {
-    auto& rebuild = trajectories[{m.sender, m.source}];
-    const auto t = runtime::to_output(m);
-    std::set<int64_t> touched;  // segments whose strip changed (a change at a segment's end moves the next one's start)
+  /// The segments a message changes: those of the keyframes it carries, removes or (a snapshot) may erase, each
+  /// with the next one (whose strip starts at its end); all of them when the trajectory moved to another map frame
+  /// (trajectory_t.frame: every keyframe is in the message's frame now).
+  std::set<int64_t> touched_segments(const TrajectoryView& view, const engine::Trajectory& t,
+                                     const std::string& frame) {
+    std::set<int64_t> touched;
     auto touch = [&](int64_t id) {
       touched.insert(id / kSegment);
       touched.insert(id / kSegment + 1);
     };
+    const auto& held = view.rebuild.keyframes();
+    if (frame != view.frame && !held.empty())
+      for (int64_t s = held.begin()->first / kSegment; s <= held.rbegin()->first / kSegment + 1; ++s) touched.insert(s);
     if (t.kind == engine::Trajectory::Kind::kSnapshot)  // the keyframes it may erase (its range can be open-ended)
-      for (auto it = rebuild.keyframes().lower_bound(t.range_first);
-           it != rebuild.keyframes().end() && it->first <= t.range_last; ++it)
+      for (auto it = held.lower_bound(t.range_first); it != held.end() && it->first <= t.range_last; ++it)
         touch(it->first);
-    rebuild.add(t);
     for (const auto& k : t.keyframes) touch(k.id);
     for (int64_t id : t.removed_ids) touch(id);
+    return touched;
+  }
+
+  void trajectory(const sextant::trajectory_t& m, std::vector<ViewerMessage>& o) {
+    auto& view = trajectories[{m.sender, m.source}];
+    const auto t = runtime::to_output(m);
+    const std::set<int64_t> touched = touched_segments(view, t, m.frame);
+    view.rebuild.add(t);
+    view.frame = m.frame;
     Json entities = Json::array();
-    for (int64_t s : touched) entities.push_back(trajectory_segment(rebuild, m.source, s, m.utime));
-    if (!rebuild.keyframes().empty()) {
-      Json label = entity(m.utime, m.source + "/trajectory/label");
-      label["texts"].push_back(text(rebuild.keyframes().rbegin()->second.pose.position,
-                                    m.source + " (" + std::to_string(rebuild.keyframes().size()) + " keyframes)",
-                                    color(1, 1, 1)));
+    for (int64_t s : touched) entities.push_back(trajectory_segment(view, m.source, s, m.utime));
+    const auto& kfs = view.rebuild.keyframes();
+    if (!kfs.empty()) {
+      Json label = entity(m.utime, m.source + "/trajectory/label", map_frame_id(m.frame));
+      label["texts"].push_back(text(kfs.rbegin()->second.pose.position,
+                                    m.source + " (" + std::to_string(kfs.size()) + " keyframes)", color(1, 1, 1)));
       entities.push_back(label);
     }
     out(o, "/sextant/trajectories", "foxglove.SceneUpdate", scene_update(entities));
+    use_frame({m.source, "trajectory " + m.sender}, m.frame, m.utime, o);
+    place(m.frame, m.utime);
+    if (!options.batch_frame_transforms) flush(o);
+  }
+
+  /// Adds one chunk of a landmark map; the whole map, by id, once its publication's chunks are all there.
+  std::optional<std::vector<sextant::map_landmark_t>> assemble(const sextant::landmark_map_t& m) {
+    if (m.num_chunks < 1 || m.chunk < 0 || m.chunk >= m.num_chunks)
+      throw std::runtime_error("landmark_map_t: chunk " + std::to_string(m.chunk) + " of " +
+                               std::to_string(m.num_chunks));
+    MapAssembly& a = map_assemblies[{m.sender, m.frame}];
+    if (m.utime < a.utime || (m.utime == a.utime && a.complete)) return std::nullopt;  // older, or a repeat
+    if (m.utime > a.utime || m.num_chunks != a.num_chunks) a = MapAssembly{m.utime, m.num_chunks, false, {}, {}};
+    if (!a.chunks.insert(m.chunk).second) return std::nullopt;
+    a.landmarks.insert(a.landmarks.end(), m.landmarks.begin(), m.landmarks.end());
+    if (static_cast<int32_t>(a.chunks.size()) < a.num_chunks) return std::nullopt;
+    a.complete = true;
+    std::vector<sextant::map_landmark_t> whole = std::move(a.landmarks);
+    a.landmarks = {};
+    std::sort(whole.begin(), whole.end(), [](const auto& x, const auto& y) { return x.id < y.id; });
+    return whole;
+  }
+
+  /// A map frame's landmarks as spheres and labels (their ids), in entities of kMapGroup landmarks by id
+  /// ("landmark_map/<frame>/<k>"), replacing the frame's previous map whole: what it had beyond deleted.  A map of no
+  /// landmarks (its frame joined another) deletes them all.
+  static constexpr size_t kMapGroup = 1024;
+
+  void landmark_map(const sextant::landmark_map_t& m, std::vector<ViewerMessage>& o) {
+    const auto landmarks = assemble(m);
+    if (!landmarks) return;
+    const std::string frame = map_frame_id(m.frame), prefix = "landmark_map/" + m.frame + "/";
+    Json entities = Json::array(), deletions = Json::array();
+    const int64_t groups = static_cast<int64_t>((landmarks->size() + kMapGroup - 1) / kMapGroup);
+    for (int64_t g = 0; g < groups; ++g) {
+      Json e = entity(m.utime, prefix + std::to_string(g), frame);
+      const size_t end = std::min(landmarks->size(), static_cast<size_t>(g + 1) * kMapGroup);
+      for (size_t i = static_cast<size_t>(g) * kMapGroup; i < end; ++i) {
+        const auto& l = (*landmarks)[i];
+        e["spheres"].push_back(sphere(vec(l.position), Eigen::Vector3d::Constant(0.5), color(1.0, 0.55, 0.0, 0.9)));
+        e["texts"].push_back(text(vec(l.position), std::to_string(l.id), color(1.0, 0.7, 0.3)));
+      }
+      entities.push_back(std::move(e));
+    }
+    int64_t& drawn = map_groups[m.frame];
+    for (int64_t g = groups; g < drawn; ++g) deletions.push_back(deletion(m.utime, prefix + std::to_string(g)));
+    drawn = groups;
+    if (!entities.empty() || !deletions.empty())
+      out(o, "/sextant/landmark_map", "foxglove.SceneUpdate", scene_update(entities, deletions));
+    for (const auto& body : m.bodies) use_frame({body, "landmark map " + m.sender}, m.frame, m.utime, o);
+    if (groups == 0) return;
+    place(m.frame, m.utime);
+    if (!options.batch_frame_transforms) flush(o);
   }
 
   void targets(const sextant::targets_t& m, std::vector<ViewerMessage>& o) {
@@ -215,10 +389,11 @@ struct TopicMapper::Views {
   void landmarks(const sextant::landmarks_t& m, std::vector<ViewerMessage>& o) {
     const auto body = bodies.find(m.source);
     if (body == bodies.end()) return;  // no pose of the body yet: nowhere to place its sightings
+    // In the map frame of the body's pose.
     const Eigen::Isometry3d map_body = Eigen::Translation3d(body->second.position) * body->second.orientation;
     const Eigen::Isometry3d map_sensor =
         map_body * (Eigen::Translation3d(vec(m.sensor_position)) * quat_wxyz(m.sensor_orientation));
-    Json e = entity(m.utime, m.source + "/sightings");
+    Json e = entity(m.utime, m.source + "/sightings", map_frame_id(body->second.frame));
     Json rays = Json::array();
     for (const auto& s : m.observations) {
       const double el = m.planar ? 0.0 : s.elevation;
@@ -265,6 +440,9 @@ struct TopicMapper::Views {
     } else if (type.name == "sextant.landmarks_t") {
       sextant::landmarks_t m;
       if (decode(data, size, m)) landmarks(m, o);
+    } else if (type.name == "sextant.landmark_map_t") {
+      sextant::landmark_map_t m;
+      if (decode(data, size, m)) landmark_map(m, o);
     } else if (type.name == "sextant.truth_t") {
       sextant::truth_t m;
       if (decode(data, size, m)) truth(m, o);

@@ -5,20 +5,39 @@
 //
 //   LCM message (any channel)   topic                               schema
 //   every sextant type          the LCM channel, as-is              sextant.<type> (generated from its .lcm file)
-//   fused_pose_t                /sextant/<source>/<estimator>/pose  foxglove.PoseInFrame (frame "map")
-//                               /tf                                 foxglove.FrameTransforms: map -> <source>/<estimator>,
-//                                                                   and map -> <source> from its best estimator so far
-//                                                                   (graph, then ekf, pf, dead_reckoning); one message per
-//                                                                   pose, or per batch (batch_frame_transforms)
+//   fused_pose_t                /sextant/<source>/<estimator>/pose  foxglove.PoseInFrame in the pose's map frame (below)
+//                               /tf                                 foxglove.FrameTransforms: <map frame> -> <source>/
+//                                                                   <estimator>, and <map frame> -> <source> from its
+//                                                                   best estimator so far (graph, then ekf, pf,
+//                                                                   dead_reckoning); one message per pose, or per batch
+//                                                                   (batch_frame_transforms)
 //   trajectory_t                /sextant/trajectories               foxglove.SceneUpdate: each body's optimized trajectory
 //                                                                   rebuilt as trajectory_t.lcm says, a line strip + label
+//   landmark_map_t              /sextant/landmark_map               foxglove.SceneUpdate: each map frame's landmarks,
+//                                                                   a sphere + its id per landmark, drawn once all the
+//                                                                   chunks of a publication are there, replacing the
+//                                                                   frame's previous map (none once the frame joined
+//                                                                   another)
+//   (the above)                 /sextant/frames                     foxglove.SceneUpdate: a text at map's origin listing
+//                                                                   the map frames, their bodies, which are unplaced
 //   targets_t                   /sextant/targets                    foxglove.SceneUpdate: 95 % covariance ellipsoids + labels
 //   bearing_scan_t              /sextant/bearings                   foxglove.SceneUpdate: the sensor (cube) and a ray per detection
 //   landmarks_t                 /sextant/landmarks                  foxglove.SceneUpdate: each sighting placed from the body's
-//                                                                   current pose (rays and points)
+//                                                                   current pose, in its frame (rays and points)
 //   truth_t                     /sextant/truth (landmark, target)   foxglove.SceneUpdate: spheres
 //                               /sextant/<source>/truth/pose        foxglove.PoseInFrame (robot)
 //   SEXTANT_STATUS (status_t) is its as-is topic: counters and latencies plot as /SEXTANT_STATUS.stages[:]{name=="graph"}...
+// Map frames (fleets): each estimate is drawn in the map frame its message names (fused_pose_t.frame,
+// trajectory_t.frame, landmark_map_t.frame): the frame named by a body, as the viewer frame "<name>/map" ("<name>"
+// is the body's own frame); an empty name (logs from before fleets) is "map" itself.  "map" is the root and the
+// display frame, and every map frame hangs from it by an identity transform, sent in each /tf message that has
+// transforms from that frame or comes with a scene drawn in it, so that every frame has a path to the display frame
+// whenever a viewer connects.  The map frame first by name is the fleet's (a join moves the frame of the later name
+// into the earlier one, never the other way): "map" is that frame.  The others are frames not placed in it (a body not
+// joined yet, or the filters, which stay in their body's own frame): the outputs carry no transform between them, so
+// they are drawn at map's origin, and /sextant/frames says they are unplaced.  truth_t stays in "map": it is in
+// the simulator's world frame, which is the robot's frame in a one-robot simulation (its odometry starts at its true
+// pose) but not in a fleet's (each odometry starts at its own origin).
 // A message whose bytes are not a sextant type (unknown fingerprint, malformed) has no JSON form: MCAP files keep it
 // as raw LCM bytes on the topic "lcm_raw/<channel>" (message encoding "lcm", no schema) so that converting back
 // loses nothing; the bridge counts and drops it.

@@ -44,6 +44,9 @@ class GraphStage::Outputs final : public slam::SlamListener {
     f.newest_utime = utime;
     if (f.feed.due(utime)) stage_.publish_trajectory(body, f, utime, status.solves, false, emit_);
     stage_.publish_map(stage_.slam_.frame_of(body), utime, false, emit_);
+    // A remote body (its graph built from another daemon's contributions) has its trajectory here, this daemon's
+    // view of it; its fused pose comes from the daemon that has its odometry.
+    if (stage_.slam_.remote(body)) return;
     const slam::SlamGraph::NewestKeyframe newest = stage_.slam_.newest_keyframe(body);
     GraphCorrection c;
     c.keyframe_utime = newest.keyframe->utime;
@@ -119,7 +122,7 @@ void GraphStage::publish_trajectory(const std::string& source, Feed& f, int64_t 
   Trajectory header;
   header.source = source;
   header.frame = slam_.frame_of(source);
-  header.chi2 = slam_.chi2(source);
+  header.chi2 = chi2_of(source, utime, flush);
   header.iterations = solves;
   header.solve_ms = slam_.counters().last_update_ms;
   for (auto& t : f.feed.publish(utime, keyframes(source), header, flush)) {
@@ -128,6 +131,18 @@ void GraphStage::publish_trajectory(const std::string& source, Feed& f, int64_t 
     ++counters_.trajectory_messages;
     emit(std::move(t));
   }
+}
+
+double GraphStage::chi2_of(const std::string& source, int64_t utime, bool flush) {
+  // Evaluating chi2 touches every factor a solve moved: once per trajectory period for all the bodies of a smoother,
+  // not once per body (a fleet of N bodies would pay it N times per period).
+  const auto period = static_cast<int64_t>(config_.trajectory.rate_hz > 0 ? 1e6 / config_.trajectory.rate_hz : 0);
+  auto& [at, value] = chi2_[slam_.planar(source) ? 1 : 0];
+  if (flush || !at || utime - *at >= period || utime < *at) {
+    at = utime;
+    value = slam_.chi2(source);
+  }
+  return value;
 }
 
 void GraphStage::publish_map(const std::string& frame, int64_t utime, bool flush, const Emit& emit) {
@@ -242,13 +257,18 @@ Counters GraphStage::counters() const {
           {"fleet_pending_dropped", s.fleet_pending_dropped},
           {"fleet_sightings_unplaced", s.fleet_sightings_unplaced},
           {"fleet_self_sightings", s.fleet_self_sightings},
+          {"fleet_contributions_applied", s.fleet_contributions_applied},
+          {"fleet_contributions_refused", s.fleet_contributions_refused},
+          {"fleet_contributions_waiting", s.fleet_contributions_waiting},
+          {"fleet_contributions_dropped", s.fleet_contributions_dropped},
+          {"fleet_remote_inputs", s.fleet_remote_inputs},
           {"landmark_map_messages", counters_.landmark_map_messages},
           {"solves_interrupted", solves_interrupted()}};
 }
 
 void GraphStage::save(archive::ArchiveWriter& w) {
   w(next_request_id_)(counters_.match_requests)(counters_.trajectory_messages)(counters_.trajectory_keyframe_bytes)(
-      counters_.corrections_refused);
+      counters_.corrections_refused)(chi2_[0])(chi2_[1]);
   slam_.save(w);
   for (const std::string& source : slam_.bodies()) {
     const Feed& f = feed_of(source);
@@ -259,7 +279,7 @@ void GraphStage::save(archive::ArchiveWriter& w) {
 void GraphStage::load(archive::ArchiveReader& r) {
   if (!feeds_.empty()) throw std::logic_error("GraphStage::load into a used stage");
   r(next_request_id_)(counters_.match_requests)(counters_.trajectory_messages)(counters_.trajectory_keyframe_bytes)(
-      counters_.corrections_refused);
+      counters_.corrections_refused)(chi2_[0])(chi2_[1]);
   slam_.load(r);
   for (const std::string& source : slam_.bodies()) {
     Feed& f = feed_of(source);

@@ -19,6 +19,8 @@
 #include <atomic>
 #include <map>
 #include <memory>
+#include <optional>
+#include <utility>
 
 namespace sextant::engine {
 
@@ -83,6 +85,8 @@ class GraphStage final : public Stage {
   /// TRAJECTORY messages of a body when its feed is due (or `flush`): chi2 and the keyframe list are computed only then.
   void publish_trajectory(const std::string& source, Feed& f, int64_t utime, int solves, bool flush, const Emit& emit);
   Feed& feed_of(const std::string& source);
+  /// chi2 of the smoother `source` is in, evaluated at most once per trajectory period of data time (or `flush`).
+  double chi2_of(const std::string& source, int64_t utime, bool flush);
   /// LANDMARK_MAP of `frame` when due (the trajectory's rate) or `flush`; a frame that joined another since its last
   /// publication is published once empty.
   void publish_map(const std::string& frame, int64_t utime, bool flush, const Emit& emit);
@@ -93,7 +97,8 @@ class GraphStage final : public Stage {
   std::atomic<bool> interrupt_{false};  // read by the smoothers (their options' interrupt): before slam_
   slam::SlamGraph slam_;
   std::map<std::string, Feed> feeds_;
-  std::map<std::string, int64_t> maps_published_;  // frame -> utime of its last LANDMARK_MAP
+  std::map<std::string, int64_t> maps_published_;      // frame -> utime of its last LANDMARK_MAP
+  std::pair<std::optional<int64_t>, double> chi2_[2];  // [0] 3-D, [1] planar: when chi2 was last evaluated, its value
   int64_t next_request_id_ = 0;
   GraphStageCounters counters_;
 };

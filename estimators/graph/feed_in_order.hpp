@@ -6,7 +6,8 @@
 // variable enters with the first factor that references it, initialized by composing that relative-pose measurement
 // with the end already estimated (the previous pose's current estimate and the odometry, as GTSAM's
 // timeIncremental does), else with the file's value.  This is how `sextant optimize --incremental` and the
-// incremental benchmarks measure per-step latency (the protocol of ../shared/peers/RESULTS.md for iSAM2).
+// incremental benchmarks measure per-step latency, the same feed as the iSAM2 peer's driver uses (one pose per
+// update, its time being the update plus the new pose's estimate).
 #include "estimators/graph/incremental_smoother.hpp"
 
 #include <string>

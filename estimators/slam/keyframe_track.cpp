@@ -21,7 +21,8 @@ void KeyframeTrack::advance(int64_t utime, const SE3& pose, const Matrix6d& pose
 }
 
 int64_t KeyframeTrack::add_keyframe(TrackKeyframe keyframe) {
-  keyframe.id = next_keyframe_id_++;
+  keyframe.id = std::max(keyframe.id, next_keyframe_id_);
+  next_keyframe_id_ = keyframe.id + 1;
   since_keyframe_.setZero();
   by_utime_[keyframe.utime] = keyframes_.size();
   keyframes_.push_back(std::move(keyframe));

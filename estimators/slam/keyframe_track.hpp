@@ -78,8 +78,11 @@ class KeyframeTrack {
   /// poses: when it is full the older half goes).
   void advance(int64_t utime, const SE3& pose, const Matrix6d& pose_covariance, size_t history);
 
-  /// Appends a keyframe (its id is the next one) and restarts since_keyframe(); returns its id.
+  /// Appends a keyframe and restarts since_keyframe(); returns its id: the keyframe's own when it is not below
+  /// next_id() (a remote body's keyframes keep their owner's ids), else the next one.
   int64_t add_keyframe(TrackKeyframe keyframe);
+  /// The id the next keyframe gets.
+  int64_t next_id() const { return next_keyframe_id_; }
   /// Replaces the keyframes of the graph after thinning (oldest first, variables renumbered) and appends the records
   /// of the thinned ones (time order; the oldest records beyond kMaxThinnedRecords go).
   void replace_keyframes(std::vector<TrackKeyframe> keyframes, const std::vector<ThinnedKeyframe>& thinned);

@@ -35,6 +35,12 @@ struct SlamCounters {
   // itself.
   int64_t fleet_joins = 0, fleet_sightings = 0, fleet_loops = 0, fleet_pending = 0, fleet_outliers = 0;
   int64_t fleet_pending_dropped = 0, fleet_sightings_unplaced = 0, fleet_self_sightings = 0;
+  // Contributions of remote bodies (SlamGraph::apply): applied; refused (about a local body, a keyframe that does not
+  // follow the body's newest, an anchor on a keyframe not in the graph, a value the smoother refuses); waiting for
+  // another body's keyframe, and dropped from that wait beyond FleetOptions::max_pending.
+  int64_t fleet_contributions_applied = 0, fleet_contributions_refused = 0, fleet_contributions_waiting = 0;
+  int64_t fleet_contributions_dropped = 0;
+  int64_t fleet_remote_inputs = 0;  // inputs about a remote body, refused (its owner's daemon has its sensors)
   int64_t keyframes_thinned = 0, loops_thinned = 0, sightings_thinned = 0, landmarks_thinned = 0;
   // Wall clock (not saved): the last update, the last and the longest thinning, the last thinning's solve.
   double last_update_ms = 0;
@@ -50,7 +56,9 @@ struct SlamCounters {
         c.sightings_unmatched)(c.sightings_malformed)(c.sightings_dropped)(c.thinnings)(c.thinning_failures)(
         c.keyframes_thinned)(c.loops_thinned)(c.sightings_thinned)(c.landmarks_thinned)(c.fleet_joins)(
         c.fleet_sightings)(c.fleet_loops)(c.fleet_pending)(c.fleet_outliers)(c.fleet_pending_dropped)(
-        c.fleet_sightings_unplaced)(c.fleet_self_sightings);
+        c.fleet_sightings_unplaced)(c.fleet_self_sightings)(c.fleet_contributions_applied)(
+        c.fleet_contributions_refused)(c.fleet_contributions_waiting)(c.fleet_contributions_dropped)(
+        c.fleet_remote_inputs);
   }
 };
 

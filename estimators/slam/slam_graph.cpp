@@ -83,6 +83,10 @@ void SlamGraph::add_factor(Body& b, std::unique_ptr<graph::Factor> factor, Facto
 void SlamGraph::add_odometry(const std::string& name, const OdometryInput& o, SlamListener& listener) {
   const auto it = bodies_.find(name);
   const bool known = it != bodies_.end();
+  if (known && it->second.remote) {
+    ++counters_.fleet_remote_inputs;  // a body has one owner: its graph is built from another's contributions
+    return;
+  }
   Body& b = known ? it->second : body_for(name, o.planar);
   if (known && o.utime <= b.track.last_utime()) {
     ++counters_.odometry_out_of_order;
@@ -120,68 +124,44 @@ void SlamGraph::add_odometry(const std::string& name, const OdometryInput& o, Sl
   // Loops that arrived before the odometry of their times: try them now that the odometry has reached them.
   if (!b.early_loops.empty()) {
     std::vector<LoopInput> due, later;
-    for (auto& l : b.early_loops)
-      (std::max(l.utime_from, l.utime_to) <= b.track.last_utime() ? due : later).push_back(std::move(l));
+    for (auto& l : b.early_loops) {
+      const int64_t own = l.body_to.empty() || l.body_to == name ? std::max(l.utime_from, l.utime_to) : l.utime_from;
+      (own <= b.track.last_utime() ? due : later).push_back(std::move(l));
+    }
     b.early_loops = std::move(later);
     counters_.loops_waiting -= static_cast<int64_t>(due.size());
     for (const auto& l : due) add_loop(name, l, listener);
+  }
+  // Other bodies' loops to a time of this one that its odometry had not reached.
+  if (!b.early_halves.empty()) {
+    std::vector<std::pair<std::string, BodyLoopHalf>> waiting = std::move(b.early_halves);
+    b.early_halves.clear();
+    counters_.loops_waiting -= static_cast<int64_t>(waiting.size());
+    for (const auto& [from, h] : waiting) complete_body_loop(from, h, listener);
   }
 }
 
 void SlamGraph::on_keyframe_candidate(const std::string& name, Body& b, const OdometryInput& o,
                                       SlamListener& listener) {
-  const SE3& odom = o.pose;
-  const KeyframeDecision d = b.selector.decide(odom);
+  const KeyframeDecision d = b.selector.decide(o.pose);
   if (d == KeyframeDecision::kImplausible) ++counters_.keyframes_rejected;
   if (d != KeyframeDecision::kKeyframe && d != KeyframeDecision::kReanchored) return;
-  const bool reanchored = d == KeyframeDecision::kReanchored && !b.track.empty();
-
-  TrackKeyframe node;
-  node.utime = o.utime;
-  node.odom = odom;
-  node.odom_covariance = o.covariance;
-  std::unique_ptr<graph::Factor> edge_factor;
-  if (!b.track.empty()) {
-    node.edge = b.track.newest().odom.between(odom);
-    node.edge_covariance = b.track.since_keyframe();
-    if (reanchored) node.edge_covariance += jump_covariance(node.edge, b.planar);
-    // A covariance that cannot be inverted drops the keyframe (the selector goes back to the last keyframe in the
-    // graph) and keeps accumulating towards the next one, whose edge spans the dropped pose.
-    edge_factor = odometry_factor(b.planar, b.track.newest().variable, -1, node.edge, node.edge_covariance);
-    if (!edge_factor) {
-      drop_keyframe(b);
-      return;
-    }
+  KeyframeContribution k;
+  k.id = b.track.next_id();
+  k.utime = o.utime;
+  k.planar = b.planar;
+  k.first = b.track.empty();
+  k.reanchored = d == KeyframeDecision::kReanchored && !k.first;
+  k.odom = o.pose;
+  k.odom_covariance = o.covariance;
+  if (!k.first) {
+    k.edge = b.track.newest().odom.between(o.pose);
+    k.edge_covariance = b.track.since_keyframe();
+    if (k.reanchored) k.edge_covariance += jump_covariance(k.edge, b.planar);
   }
-  graph::Variable v;
-  v.id = next_variable_id_++;
-  v.kind = b.planar ? graph::VariableKind::kPose2 : graph::VariableKind::kPose3;
-  SE3 initial = odom;
-  if (b.track.empty()) {
-    v.fixed = true;  // the body's map frame: its odometry frame at the first keyframe
-  } else {
-    initial = estimate(b, b.track.newest().variable) * node.edge;
-  }
-  if (b.planar)
-    v.pose2 = SE2::from_se3(initial);
-  else
-    v.pose3 = initial;
-  try {
-    node.variable = b.smoother->add_variable(v);
-    if (edge_factor)
-      add_factor(b, edge_factor->rebind({b.track.newest().variable, node.variable}), FactorRole::kOdometry, false,
-                 std::nullopt);
-  } catch (const std::invalid_argument&) {
-    drop_keyframe(b);  // a non-finite pose or information: never reaches the smoother's system
-    return;
-  }
-  b.track.add_keyframe(std::move(node));
-  ++counters_.keyframes;
-  if (reanchored) ++counters_.keyframes_reanchored;
-  update(name, b, o.utime, listener);
-  if (options_.propose_loops) propose_loops(name, b, o.utime, listener);
-  if (options_.propose_loops && options_.fleet.enabled) propose_fleet_loops(name, b, o.utime, listener);
-  maybe_thin(b.planar);
+  // A keyframe that cannot enter (a covariance that cannot be inverted, a value the smoother refuses) is dropped: the
+  // selector goes back to the last keyframe in the graph and the next edge, which spans it, accumulates from there.
+  if (!add_keyframe_to_graph(name, b, k, listener)) drop_keyframe(b);
 }
 
 void SlamGraph::propose_loops(const std::string& name, const Body& b, int64_t utime, SlamListener& listener) {
@@ -202,8 +182,22 @@ void SlamGraph::drop_keyframe(Body& b) {
   b.selector.reset_reference(b.track.empty() ? std::nullopt : std::optional<SE3>(b.track.newest().odom));
 }
 
+void SlamGraph::wait_for_odometry(Body& b, const LoopInput& l) {
+  // Retried when the odometry gets there, within a bound per body (a far-future loop would otherwise wait forever).
+  if (b.early_loops.size() < static_cast<size_t>(std::max(options_.max_waiting_loops, 0))) {
+    b.early_loops.push_back(l);
+    ++counters_.loops_waiting;
+  } else {
+    ++counters_.loops_waiting_dropped;
+  }
+}
+
 void SlamGraph::add_loop(const std::string& name, const LoopInput& l, SlamListener& listener) {
   auto it = bodies_.find(name);
+  if (it != bodies_.end() && it->second.remote) {
+    ++counters_.fleet_remote_inputs;
+    return;
+  }
   if (it == bodies_.end()) {
     ++counters_.loops_unknown_source;
     return;
@@ -217,14 +211,7 @@ void SlamGraph::add_loop(const std::string& name, const LoopInput& l, SlamListen
   const auto end_from = b.track.resolve(l.keyframe_from, l.utime_from, tolerance);
   const auto end_to = b.track.resolve(l.keyframe_to, l.utime_to, tolerance);
   if ((!end_from || !end_to) && std::max(l.utime_from, l.utime_to) > b.track.last_utime()) {
-    // Ahead of the odometry: retried when it gets there, within a bound per body (a far-future loop would otherwise
-    // wait forever).
-    if (b.early_loops.size() < static_cast<size_t>(std::max(options_.max_waiting_loops, 0))) {
-      b.early_loops.push_back(l);
-      ++counters_.loops_waiting;
-    } else {
-      ++counters_.loops_waiting_dropped;
-    }
+    wait_for_odometry(b, l);
     return;
   }
   if (!end_from || !end_to || end_from->keyframe == end_to->keyframe) {
@@ -233,23 +220,10 @@ void SlamGraph::add_loop(const std::string& name, const LoopInput& l, SlamListen
   }
   const KeyframeLoop loop = loop_on_keyframes(b.planar, l.relative, l.information, *end_from, *end_to);
   if (loop.widened) ++counters_.loops_on_thinned;
-  const TrackKeyframe& from = b.track.keyframes()[end_from->keyframe];
-  const TrackKeyframe& to = b.track.keyframes()[end_to->keyframe];
-  const Matrix6d path = b.track.odometry_path(end_from->keyframe, end_to->keyframe).second;
-  const SE3 predicted = estimate(b, from.variable).between(estimate(b, to.variable));
-  const double d2 = loop_mahalanobis(b.planar, loop, predicted, path, options_.loop_gate_odometry_scale);
-  if (!(d2 <= loop_gate_[b.planar ? 1 : 0])) {
-    ++counters_.loops_rejected;
-    return;
-  }
-  try {
-    add_factor(b, loop_factor(b.planar, from.variable, to.variable, loop.z, loop.information), FactorRole::kLoop, true,
-               std::nullopt);
-  } catch (const std::invalid_argument&) {
-    ++counters_.loops_rejected;  // an information the caller let through but the smoother cannot use
-    return;
-  }
-  ++counters_.loops_accepted;
+  const LoopContribution c{b.track.keyframes()[end_from->keyframe].id, b.track.keyframes()[end_to->keyframe].id, loop.z,
+                           loop.information, loop.widened};
+  if (!add_loop_on_keyframes(b, c)) return;
+  listener.contributed({name, c});
   update(name, b, b.track.newest().utime, listener);
 }
 
@@ -313,6 +287,11 @@ SlamGraph::NewestKeyframe SlamGraph::newest_keyframe(const std::string& name) co
   const Eigen::MatrixXd marginal = b.smoother->marginal_covariance(out.keyframe->variable);
   if (marginal.size() > 0) out.covariance = b.planar ? embed_planar(marginal) : Matrix6d(marginal);
   return out;
+}
+
+bool SlamGraph::planar(const std::string& name) const {
+  auto it = bodies_.find(name);
+  return it != bodies_.end() && it->second.planar;
 }
 
 double SlamGraph::chi2(const std::string& name) const { return bodies_.at(name).smoother->chi2(); }

@@ -47,6 +47,7 @@
 #include "estimators/graph/incremental_smoother.hpp"
 #include "estimators/keyframe/keyframe_selector.hpp"
 #include "estimators/keyframe/loop_proposals.hpp"
+#include "estimators/slam/graph_contribution.hpp"
 #include "estimators/slam/keyframe_track.hpp"
 #include "estimators/slam/slam_counters.hpp"
 #include "estimators/slam/slam_inputs.hpp"
@@ -91,6 +92,9 @@ class SlamListener {
                                    const std::string& other, const KeyframeEstimate& b) {
     (void)body, (void)utime, (void)a, (void)other, (void)b;
   }
+  /// What a local body's inputs added to the graph, in the order it was added (graph_contribution.hpp): another
+  /// SlamGraph that applies these builds the same graph.
+  virtual void contributed(const GraphContribution& contribution) { (void)contribution; }
 };
 
 class SlamGraph {
@@ -105,6 +109,15 @@ class SlamGraph {
   void add_loop(const std::string& body, const LoopInput& loop, SlamListener& listener);
   /// Landmark sightings of `body` (see above); nothing when landmarks are disabled.
   void add_sightings(const std::string& body, const SightingsInput& sightings, SlamListener& listener);
+  /// A contribution of a body whose inputs reach another graph (graph_contribution.hpp), in its stream's order: the
+  /// back end builds from it what the owner's graph built.  A contribution about a body this graph has inputs of is
+  /// refused (a body has one owner); a keyframe that does not follow the body's newest one, a sighting or loop on a
+  /// keyframe that is not in the graph, values the smoother refuses: counted (SlamCounters::fleet_contributions_*),
+  /// nothing else changes.  A whole robot sighting or inter-robot loop whose other body's keyframe has not arrived
+  /// waits (at most FleetOptions::max_pending) and is applied when it does.  True when applied.
+  bool apply(const GraphContribution& contribution, SlamListener& listener);
+  /// Whether a body's graph is built from contributions (another graph owns its inputs).
+  bool remote(const std::string& body) const;
   /// Drops the body with its map: its keyframes, landmarks and their factors leave the smoother of its kind (rebuilt
   /// from the other bodies' variables and factors), its waiting loops and sightings go.
   void forget(const std::string& body);
@@ -136,6 +149,8 @@ class SlamGraph {
     Matrix6d covariance = Matrix6d::Zero();
   };
   NewestKeyframe newest_keyframe(const std::string& body) const;
+  /// Whether a body is planar (its smoother is the planar one); false for an unknown body.
+  bool planar(const std::string& body) const;
   /// chi2 of the smoother a body's graph is in.
   double chi2(const std::string& body) const;
   /// The size of the graphs now (every body): keyframes and landmarks in them, factors in the smoothers.
@@ -167,7 +182,8 @@ class SlamGraph {
     int64_t sightings = 0;
   };
   struct Body {
-    std::string frame;  // the root body of its map frame (slam_graph_fleet.cpp); landmarks live in the root's Body
+    bool remote = false;  // built from contributions (apply), not from inputs
+    std::string frame;    // the root body of its map frame (slam_graph_fleet.cpp); landmarks live in the root's Body
     bool planar = false;
     graph::IncrementalSmoother* smoother = nullptr;  // smoothers_[planar]
     KeyframeSelector selector;
@@ -175,10 +191,12 @@ class SlamGraph {
     std::vector<LoopInput> early_loops;           // about times the odometry has not reached yet (bounded)
     std::vector<SightingsInput> early_sightings;  // ahead of the odometry, in time order (bounded)
     std::map<int64_t, Landmark> landmarks;        // by landmark id; a frame's map, kept by its root body only
+    std::vector<std::pair<std::string, BodyLoopHalf>> early_halves;  // other bodies' loops (from, half) to a time
+                                                                     // this one's odometry has not reached
   };
   /// A body's sighting of another body's marker, anchored on a keyframe of each (by keyframe id: thinning renumbers
   /// positions) with the odometry motion from it to the sighting's time and that motion's covariance.
-  struct BodySighting {
+  struct SightingLink {
     std::string observer, observed;
     int64_t utime = 0;
     SE3 sensor_in_body;
@@ -193,7 +211,7 @@ class SlamGraph {
     }
   };
   /// A loop between keyframes of two bodies (loop_gate.hpp's KeyframeLoop, by keyframe id).
-  struct BodyLoop {
+  struct LoopLink {
     std::string from, to;
     int64_t from_keyframe = 0, to_keyframe = 0;
     SE3 z;
@@ -206,8 +224,8 @@ class SlamGraph {
   /// Robot sightings and loops between two frames not joined yet, kept as evidence of their placement (oldest first,
   /// at most FleetOptions::max_pending of each).
   struct Pending {
-    std::vector<BodySighting> sightings;
-    std::vector<BodyLoop> loops;
+    std::vector<SightingLink> sightings;
+    std::vector<LoopLink> loops;
   };
 
   Body& body_for(const std::string& name, bool planar);
@@ -217,6 +235,35 @@ class SlamGraph {
                   std::optional<double> width);
   SE3 estimate(const Body& b, int variable) const;
   void on_keyframe_candidate(const std::string& name, Body& b, const OdometryInput& o, SlamListener& listener);
+
+  // The back end (slam_graph_contributions.cpp): what one contribution adds, the same for a local body's (made by the
+  // front end just before) and a remote one's.  Each returns whether a factor entered; the caller solves.
+  /// A keyframe and its odometry edge; for a local body, what follows a new keyframe (update, proposals, thinning).
+  bool add_keyframe_to_graph(const std::string& name, Body& b, const KeyframeContribution& k, SlamListener& listener);
+  /// The landmark sightings of one message at `anchor` (slam_graph_sightings.cpp), markers left out; gated against
+  /// the estimate and the accepted ones appended to `accepted` when it is given (the owner), taken as they are when
+  /// not (a remote body's, gated by its owner).
+  bool add_landmark_sightings(Body& b, const SightingsInput& s, const TrackPoint& anchor, SightingsInput* accepted);
+  /// The observed body's end of a robot sighting when that body is local: anchored, contributed and added.
+  bool complete_body_sighting(const std::string& observer, const BodySightingHalf& h, SlamListener& listener);
+  /// A same-body loop on keyframes, gated when the body is local (its owner's gate otherwise).
+  bool add_loop_on_keyframes(Body& b, const LoopContribution& l);
+  /// The "to" body's end of an inter-robot loop when that body is local (it may wait for its odometry).
+  bool complete_body_loop(const std::string& from, const BodyLoopHalf& h, SlamListener& listener);
+  /// A whole robot sighting or inter-robot loop (c.body the observed / "to" body): a factor when both bodies share a
+  /// frame, else evidence for their placement; it waits when a keyframe it names has not arrived.
+  bool add_whole(const GraphContribution& c);
+  /// Before the first keyframe of a loop's time: the loop waits for the odometry (bounded per body).
+  void wait_for_odometry(Body& b, const LoopInput& l);
+  /// A whole robot sighting or loop whose other body's keyframe is not in the graph yet waits (bounded); retried
+  /// after every keyframe.
+  bool keyframes_present(const GraphContribution& c) const;
+  void wait_for_keyframes(const GraphContribution& c);
+  void retry_waiting(SlamListener& listener);
+  /// One contribution through the back end, for a remote body (apply) or a completed whole: the update after it.
+  bool apply_contribution(const GraphContribution& c, SlamListener& listener);
+  std::optional<TrackPoint> point_of(const Body& b, const KeyframeAnchor& a) const;
+  KeyframeAnchor anchor_of(const Body& b, const TrackPoint& p) const;
   /// A keyframe candidate that cannot enter the graph (its odometry edge's covariance cannot be inverted, or the
   /// smoother refuses it): counted; the selector goes back to the body's last keyframe in the graph, so the next
   /// keyframe is measured from that one and its edge, which spans the dropped pose, accumulates from there.
@@ -228,7 +275,7 @@ class SlamGraph {
   graph::IncrementalStatus solve(Body& b);
   /// One smoother update for `b`, counted and reported when it succeeds.
   void update(const std::string& name, Body& b, int64_t utime, SlamListener& listener);
-  /// The sightings of one message at `anchor` (slam_graph_sightings.cpp).
+  /// The sightings of one message at `anchor` (slam_graph_sightings.cpp): landmarks and markers, contributed.
   void add_anchored_sightings(const std::string& name, Body& b, const SightingsInput& s, const TrackPoint& anchor,
                               SlamListener& listener);
   /// Marginal covariances for the sighting gate, reused for kGateMarginalUpdates updates.
@@ -255,13 +302,10 @@ class SlamGraph {
   // Fleet (slam_graph_fleet.cpp).
   Body& root_of(const Body& b) { return bodies_.at(b.frame); }
   const Body& root_of(const Body& b) const { return bodies_.at(b.frame); }
-  /// A marker's sighting: a factor when both bodies share a frame (true), else evidence kept for the placement.
-  bool add_body_sighting(const std::string& name, Body& b, const SightingsInput& s, const TrackPoint& anchor,
-                         const LandmarkSighting& ob, const std::string& observed);
   /// A loop of `name` whose "to" end is another body's.
   void add_body_loop(const std::string& name, Body& b, const LoopInput& l, SlamListener& listener);
-  bool add_sighting_factor(const BodySighting& s);
-  bool add_loop_factor(const BodyLoop& l);
+  bool add_sighting_factor(const SightingLink& s);
+  bool add_loop_factor(const LoopLink& l);
   /// A time of a body as a keyframe anchor: anchor_at, or its latest odometry when the time is ahead of it by at
   /// most observed_time_tolerance_s.
   std::optional<TrackPoint> anchor_near(const Body& b, int64_t utime) const;
@@ -301,6 +345,7 @@ class SlamGraph {
   int64_t keyframes_since_thinning_[2] = {0, 0};
   std::map<std::string, Body> bodies_;
   Pending pending_;
+  std::vector<GraphContribution> waiting_wholes_;  // robot sightings and loops waiting for a keyframe (oldest first)
   std::map<std::pair<std::string, std::string>, int64_t> join_attempts_;  // frame pair -> keyframes at the last try
   int64_t next_variable_id_ = 0;
   double loop_gate_[2] = {0, 0}, sighting_gate_[2] = {0, 0};  // chi-square thresholds, [0] 3-D, [1] planar

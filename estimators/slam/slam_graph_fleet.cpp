@@ -59,43 +59,7 @@ std::optional<TrackPoint> SlamGraph::anchor_near(const Body& b, int64_t utime) c
                     b.track.since_keyframe()};
 }
 
-bool SlamGraph::add_body_sighting(const std::string& name, Body& b, const SightingsInput& s, const TrackPoint& anchor,
-                                  const LandmarkSighting& ob, const std::string& observed) {
-  if (observed == name) {
-    ++counters_.fleet_self_sightings;
-    return false;
-  }
-  auto it = bodies_.find(observed);
-  const std::optional<TrackPoint> at =
-      it == bodies_.end() || it->second.planar != b.planar ? std::nullopt : anchor_near(it->second, s.utime);
-  if (!at) {
-    ++counters_.fleet_sightings_unplaced;
-    return false;
-  }
-  const Body& o = it->second;
-  BodySighting bs{name,
-                  observed,
-                  s.utime,
-                  s.sensor_in_body,
-                  ob,
-                  b.track.keyframes()[anchor.keyframe].id,
-                  o.track.keyframes()[at->keyframe].id,
-                  anchor.motion,
-                  at->motion,
-                  anchor.covariance,
-                  at->covariance};
-  if (o.frame == b.frame) return add_sighting_factor(bs);
-  if (pending_.sightings.size() >= static_cast<size_t>(std::max(options_.fleet.max_pending, 1))) {
-    pending_.sightings.erase(pending_.sightings.begin());
-    ++counters_.fleet_pending_dropped;
-    --counters_.fleet_pending;
-  }
-  pending_.sightings.push_back(std::move(bs));
-  ++counters_.fleet_pending;
-  return false;
-}
-
-bool SlamGraph::add_sighting_factor(const BodySighting& s) {
+bool SlamGraph::add_sighting_factor(const SightingLink& s) {
   const auto a = bodies_.find(s.observer), o = bodies_.find(s.observed);
   if (a == bodies_.end() || o == bodies_.end()) return false;
   const auto ka = a->second.track.position_of(s.observer_keyframe);
@@ -137,7 +101,7 @@ bool SlamGraph::add_sighting_factor(const BodySighting& s) {
   return true;
 }
 
-bool SlamGraph::add_loop_factor(const BodyLoop& l) {
+bool SlamGraph::add_loop_factor(const LoopLink& l) {
   const auto a = bodies_.find(l.from), b = bodies_.find(l.to);
   if (a == bodies_.end() || b == bodies_.end()) return false;
   const auto ka = a->second.track.position_of(l.from_keyframe);
@@ -175,42 +139,27 @@ bool SlamGraph::add_loop_factor(const BodyLoop& l) {
 
 void SlamGraph::add_body_loop(const std::string& name, Body& b, const LoopInput& l, SlamListener& listener) {
   auto it = bodies_.find(l.body_to);
-  if (it == bodies_.end() || it->second.planar != b.planar || !options_.fleet.enabled) {
+  if (!options_.fleet.enabled || (it != bodies_.end() && it->second.planar != b.planar)) {
     ++counters_.loops_unknown_source;
     return;
   }
-  Body& o = it->second;
   const auto tolerance = static_cast<int64_t>(options_.loop_time_tolerance_s * 1e6);
   const auto end_from = b.track.resolve(l.keyframe_from, l.utime_from, tolerance);
-  const auto end_to = o.track.resolve(l.keyframe_to, l.utime_to, tolerance);
-  if (!end_from || !end_to) {
-    if (l.utime_from > b.track.last_utime() || l.utime_to > o.track.last_utime()) {
-      if (b.early_loops.size() < static_cast<size_t>(std::max(options_.max_waiting_loops, 0))) {
-        b.early_loops.push_back(l);  // retried with the body's next odometry
-        ++counters_.loops_waiting;
-      } else {
-        ++counters_.loops_waiting_dropped;
-      }
-    } else {
+  if (!end_from) {
+    if (l.utime_from > b.track.last_utime())
+      wait_for_odometry(b, l);
+    else
       ++counters_.loops_unmatched;
-    }
     return;
   }
-  const KeyframeLoop kl = loop_on_keyframes(b.planar, l.relative, l.information, *end_from, *end_to);
-  BodyLoop bl{name, l.body_to,     b.track.keyframes()[end_from->keyframe].id, o.track.keyframes()[end_to->keyframe].id,
-              kl.z, kl.information};
-  if (o.frame == b.frame) {
-    if (add_loop_factor(bl)) update_frame(b.frame, listener);
+  // This end is the owner's to anchor; the other body's owner anchors the other end (graph_contribution.hpp).
+  const BodyLoopHalf half{l, anchor_of(b, *end_from)};
+  listener.contributed({name, half});
+  if (it == bodies_.end()) {
+    ++counters_.loops_unknown_source;
     return;
   }
-  if (pending_.loops.size() >= static_cast<size_t>(std::max(options_.fleet.max_pending, 1))) {
-    pending_.loops.erase(pending_.loops.begin());
-    ++counters_.fleet_pending_dropped;
-    --counters_.fleet_pending;
-  }
-  pending_.loops.push_back(std::move(bl));
-  ++counters_.fleet_pending;
-  try_join(b.frame, o.frame, listener);
+  complete_body_loop(name, half, listener);
 }
 
 SlamGraph::Evidence SlamGraph::evidence_between(const std::string& a, const std::string& b) {
@@ -234,7 +183,7 @@ SlamGraph::Evidence SlamGraph::evidence_between(const std::string& a, const std:
     ev.origin.emplace_back(false, -1);
   }
   for (size_t k = 0; k < pending_.sightings.size(); ++k) {
-    const BodySighting& s = pending_.sightings[k];
+    const SightingLink& s = pending_.sightings[k];
     const Body& observer = bodies_.at(s.observer);
     const Body& observed = bodies_.at(s.observed);
     const bool forward = observer.frame == a && observed.frame == b;
@@ -256,7 +205,7 @@ SlamGraph::Evidence SlamGraph::evidence_between(const std::string& a, const std:
     ev.origin.emplace_back(true, static_cast<int>(k));
   }
   for (size_t k = 0; k < pending_.loops.size(); ++k) {
-    const BodyLoop& l = pending_.loops[k];
+    const LoopLink& l = pending_.loops[k];
     const Body& from = bodies_.at(l.from);
     const Body& to = bodies_.at(l.to);
     const bool forward = from.frame == a && to.frame == b;
@@ -279,8 +228,8 @@ std::vector<std::string> SlamGraph::linked_frames(const std::string& frame) cons
     if (x == frame && y != frame) out.insert(y);
     if (y == frame && x != frame) out.insert(x);
   };
-  for (const BodySighting& s : pending_.sightings) link(bodies_.at(s.observer).frame, bodies_.at(s.observed).frame);
-  for (const BodyLoop& l : pending_.loops) link(bodies_.at(l.from).frame, bodies_.at(l.to).frame);
+  for (const SightingLink& s : pending_.sightings) link(bodies_.at(s.observer).frame, bodies_.at(s.observed).frame);
+  for (const LoopLink& l : pending_.loops) link(bodies_.at(l.from).frame, bodies_.at(l.to).frame);
   const Body& root = bodies_.at(frame);
   for (const auto& [name, b] : bodies_) {
     if (b.frame != name || name == frame || b.planar != root.planar || out.contains(name)) continue;
@@ -315,8 +264,8 @@ bool SlamGraph::try_join(const std::string& a, const std::string& b, SlamListene
   // once the frames are one, the others are outliers.
   std::vector<char> inlier(ev.items.size(), 0);
   for (size_t i : p.inliers) inlier[i] = 1;
-  std::vector<BodySighting> sightings;
-  std::vector<BodyLoop> loops;
+  std::vector<SightingLink> sightings;
+  std::vector<LoopLink> loops;
   std::set<int> taken_sightings, taken_loops;
   for (size_t i = 0; i < ev.items.size(); ++i) {
     const auto [is_sighting, k] = ev.origin[i];
@@ -340,8 +289,8 @@ bool SlamGraph::try_join(const std::string& a, const std::string& b, SlamListene
   const std::string keep = std::min(a, b), gone = std::max(a, b);
   merge_frame_variables(keep, gone, keep == a ? p.a_from_b : p.a_from_b.inverse());
   ++counters_.fleet_joins;
-  for (const BodySighting& s : sightings) add_sighting_factor(s);
-  for (const BodyLoop& l : loops) add_loop_factor(l);
+  for (const SightingLink& s : sightings) add_sighting_factor(s);
+  for (const LoopLink& l : loops) add_loop_factor(l);
   update_frame(keep, listener);
   return true;
 }

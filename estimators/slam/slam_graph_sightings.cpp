@@ -29,6 +29,10 @@ void SlamGraph::add_sightings(const std::string& name, const SightingsInput& s, 
     counters_.sightings_unknown_source += n;
     return;
   }
+  if (it->second.remote) {
+    ++counters_.fleet_remote_inputs;
+    return;
+  }
   Body& b = it->second;
   if (s.planar != b.planar) {
     counters_.sightings_malformed += n;  // a planar body's sightings must be planar, and a 3-D body's 3-D
@@ -62,11 +66,32 @@ void SlamGraph::add_sightings(const std::string& name, const SightingsInput& s, 
 
 void SlamGraph::add_anchored_sightings(const std::string& name, Body& b, const SightingsInput& s,
                                        const TrackPoint& anchor, SlamListener& listener) {
+  const size_t pending_before = pending_.sightings.size();
+  SightingsInput accepted{s.utime, s.planar, s.sensor_in_body, {}};
+  bool added = add_landmark_sightings(b, s, anchor, &accepted);
+  if (!accepted.sightings.empty()) listener.contributed({name, SightingsContribution{anchor_of(b, anchor), accepted}});
+  for (const LandmarkSighting& ob : s.sightings) {
+    const auto marker = options_.fleet.markers.find(ob.id);
+    if (ob.id < 0 || !options_.fleet.enabled || marker == options_.fleet.markers.end()) continue;
+    if (marker->second == name) {
+      ++counters_.fleet_self_sightings;
+      continue;
+    }
+    const BodySightingHalf half{marker->second, s.utime, s.sensor_in_body, ob, anchor_of(b, anchor)};
+    listener.contributed({name, half});
+    added = complete_body_sighting(name, half, listener) || added;
+  }
+  if (added) update_frame(b.frame, listener);
+  // Shared landmarks and robot sightings are what place this body's frame among the others'.
+  if (options_.fleet.enabled && (added || pending_.sightings.size() != pending_before)) try_joins(b.frame, listener);
+}
+
+bool SlamGraph::add_landmark_sightings(Body& b, const SightingsInput& s, const TrackPoint& anchor,
+                                       SightingsInput* accepted) {
   const TrackKeyframe& kf = b.track.keyframes()[anchor.keyframe];
   const SightingModel model(b.planar, estimate(b, kf.variable), anchor, s.sensor_in_body);
   const int kind = b.planar ? 1 : 0;
   auto& landmarks = root_of(b).landmarks;  // the map of the body's frame
-  const size_t pending_before = pending_.sightings.size();
   bool added = false;
   Eigen::VectorXd z;
   Eigen::MatrixXd R;
@@ -75,11 +100,7 @@ void SlamGraph::add_anchored_sightings(const std::string& name, Body& b, const S
       ++counters_.sightings_without_id;
       continue;
     }
-    if (const auto marker = options_.fleet.markers.find(ob.id);
-        options_.fleet.enabled && marker != options_.fleet.markers.end()) {
-      added = add_body_sighting(name, b, s, anchor, ob, marker->second) || added;
-      continue;
-    }
+    if (options_.fleet.enabled && options_.fleet.markers.contains(ob.id)) continue;  // a body: add_anchored_sightings
     if (!model.measurement(ob, z, R)) {
       ++counters_.sightings_malformed;
       continue;
@@ -90,7 +111,8 @@ void SlamGraph::add_anchored_sightings(const std::string& name, Body& b, const S
         known ? b.smoother->graph().variables()[static_cast<size_t>(lm->second.variable)].point
               : model.landmark_from(ob);
     const SightingModel::Evaluation ev = model.evaluate(z, position);
-    if (known) {
+    // The owner gates against its estimate; a remote body's sightings (accepted == nullptr) passed its owner's gate.
+    if (known && accepted != nullptr) {
       const Eigen::MatrixXd p_landmark = gate_marginal(b, lm->second.variable);
       if (p_landmark.size() > 0) {  // determined: gate against the estimate
         const double d2 =
@@ -121,11 +143,10 @@ void SlamGraph::add_anchored_sightings(const std::string& name, Body& b, const S
     }
     ++lm->second.sightings;
     ++counters_.sightings_accepted;
+    if (accepted != nullptr) accepted->sightings.push_back(ob);
     added = true;
   }
-  if (added) update_frame(b.frame, listener);
-  // Shared landmarks and robot sightings are what place this body's frame among the others'.
-  if (options_.fleet.enabled && (added || pending_.sightings.size() != pending_before)) try_joins(b.frame, listener);
+  return added;
 }
 
 }  // namespace sextant::slam

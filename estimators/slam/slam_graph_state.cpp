@@ -26,14 +26,15 @@ void SlamGraph::save(archive::ArchiveWriter& w) {
   }
   w(static_cast<uint64_t>(bodies_.size()));
   for (const auto& [name, b] : bodies_) {
-    w(name)(b.planar)(b.frame)(b.selector)(b.track)(b.early_loops)(b.early_sightings);
+    w(name)(b.planar)(b.frame)(b.selector)(b.track)(b.early_loops)(b.early_sightings)(b.remote)(b.early_halves);
     w(static_cast<uint64_t>(b.landmarks.size()));
     for (const auto& [id, l] : b.landmarks) w(id)(l.variable)(l.sightings);
   }
   w(static_cast<uint64_t>(pending_.sightings.size()));
-  for (const BodySighting& s : pending_.sightings) BodySighting::fields(w, s);
+  for (const SightingLink& s : pending_.sightings) SightingLink::fields(w, s);
   w(static_cast<uint64_t>(pending_.loops.size()));
-  for (const BodyLoop& l : pending_.loops) BodyLoop::fields(w, l);
+  for (const LoopLink& l : pending_.loops) LoopLink::fields(w, l);
+  w(waiting_wholes_);
   // The canonical form both this layer and a restored one continue from (slam_graph.hpp, save).
   for (int kind = 0; kind < 2; ++kind) {
     if (smoothers_[kind]) counters_.rebuilds += smoothers_[kind]->rebuild().ok ? 1 : 0;
@@ -73,7 +74,7 @@ void SlamGraph::load(archive::ArchiveReader& r) {
     KeyframeSelectorOptions ko = options_.keyframes;
     ko.planar = b.planar;
     b.selector = KeyframeSelector(ko);
-    r(b.selector)(b.track)(b.early_loops)(b.early_sightings);
+    r(b.selector)(b.track)(b.early_loops)(b.early_sightings)(b.remote)(b.early_halves);
     b.smoother = &smoother_for(b.planar);
     const int variables = static_cast<int>(b.smoother->graph().variables().size());
     const auto check_variable = [&](int v, bool pose) {
@@ -90,7 +91,7 @@ void SlamGraph::load(archive::ArchiveReader& r) {
       check_variable(l.variable, false);
       b.landmarks[id] = l;
     }
-    counters_.loops_waiting += static_cast<int64_t>(b.early_loops.size());
+    counters_.loops_waiting += static_cast<int64_t>(b.early_loops.size() + b.early_halves.size());
     if (!bodies_.emplace(name, std::move(b)).second) r.fail("body '" + name + "' twice");
   }
   load_fleet(r);
@@ -107,17 +108,21 @@ void SlamGraph::load_fleet(archive::ArchiveReader& r) {
     if (!bodies_.contains(body)) r.fail("a fleet link to an unknown body '" + body + "'");
   };
   for (uint64_t n = r.count(1, "the pending robot sightings"), k = 0; k < n; ++k) {
-    BodySighting s;
-    BodySighting::fields(r, s);
+    SightingLink s;
+    SightingLink::fields(r, s);
     known(s.observer), known(s.observed);
     pending_.sightings.push_back(std::move(s));
   }
   for (uint64_t n = r.count(1, "the pending inter-robot loops"), k = 0; k < n; ++k) {
-    BodyLoop l;
-    BodyLoop::fields(r, l);
+    LoopLink l;
+    LoopLink::fields(r, l);
     known(l.from), known(l.to);
     pending_.loops.push_back(std::move(l));
   }
+  r(waiting_wholes_);
+  for (const GraphContribution& c : waiting_wholes_)
+    if (!std::holds_alternative<BodySighting>(c.what) && !std::holds_alternative<BodyLoop>(c.what))
+      r.fail("a waiting contribution of body '" + c.body + "' that is not a robot sighting or an inter-robot loop");
 }
 
 SlamGraph::Rebuilt SlamGraph::rebuilt(int kind, const std::vector<graph::Variable>& vars,
@@ -204,7 +209,7 @@ void SlamGraph::forget(const std::string& name) {
   drop_unseen_landmarks(kind, merge_into);
   Rebuilt fresh = rebuilt(kind, vars, merge_into);
   const auto involves = [&](const auto& x) {
-    if constexpr (std::is_same_v<std::decay_t<decltype(x)>, BodySighting>)
+    if constexpr (std::is_same_v<std::decay_t<decltype(x)>, SightingLink>)
       return x.observer == name || x.observed == name;
     else
       return x.from == name || x.to == name;
@@ -216,7 +221,19 @@ void SlamGraph::forget(const std::string& name) {
   };
   purge(pending_.sightings);
   purge(pending_.loops);
-  counters_.loops_waiting -= static_cast<int64_t>(it->second.early_loops.size());
+  counters_.loops_waiting -= static_cast<int64_t>(it->second.early_loops.size() + it->second.early_halves.size());
+  for (auto& [other, b] : bodies_) {  // other bodies' loops from this one, waiting for their odometry
+    const auto before = b.early_halves.size();
+    std::erase_if(b.early_halves, [&](const auto& h) { return h.first == name; });
+    counters_.loops_waiting -= static_cast<int64_t>(before - b.early_halves.size());
+  }
+  const auto waiting_before = waiting_wholes_.size();
+  std::erase_if(waiting_wholes_, [&](const GraphContribution& c) {
+    const auto* s = std::get_if<BodySighting>(&c.what);
+    const auto* l = std::get_if<BodyLoop>(&c.what);
+    return c.body == name || (s && s->observer == name) || (l && l->from == name);
+  });
+  counters_.fleet_contributions_waiting -= static_cast<int64_t>(waiting_before - waiting_wholes_.size());
   bodies_.erase(it);
   const bool others =
       std::any_of(bodies_.begin(), bodies_.end(), [&](const auto& x) { return x.second.planar == planar; });

@@ -6,7 +6,8 @@
 // Usage: node bridge_client.mjs ws://HOST:PORT OUT.json [--idle SECONDS] [--stall | --bench]
 // Prints "connected" once the server's info arrived; exits when no message arrived for --idle seconds (default 3)
 // after the first one, or on SIGTERM, writing OUT.json: {channels, counts, failures, received: [{topic, schema,
-// receiveTime, message}] for the as-is sextant channels and the PoseInFrame topics, latencies_ms}.
+// receiveTime, message}] for the as-is sextant channels and the PoseInFrame topics, latencies_ms, parents (each /tf
+// frame's latest parent), drawnIn (the frames of the poses and scene entities received)}.
 // --stall: subscribe to everything but never read from the socket (a stalled viewer for the bridge's queue bound).
 // --bench: no validation and no recording, only counts and latencies (bench/foxglove.sh).
 // latencies_ms: for each fused_pose_t message, this client's receive time minus the bridge's receive time (the
@@ -26,6 +27,12 @@ const idleSeconds = rest.includes("--idle") ? Number(rest[rest.indexOf("--idle")
 const stall = rest.includes("--stall");
 const bench = rest.includes("--bench");
 
+// Foxglove's and Lichtblick's JSON Schema parser (parseJsonSchema in their mcap-support) reads the properties of
+// every "type": "object" in a channel's schema and fails on the channel when one has none: the paths of such objects.
+const objectsWithoutProperties = (schema, path = "") =>
+  schema === null || typeof schema !== "object" ? []
+    : [...(schema.type === "object" && !schema.properties ? [path || "/"] : []),
+      ...Object.entries(schema).flatMap(([k, v]) => objectsWithoutProperties(v, `${path}/${k}`))];
 const ajv = new Ajv({ strict: false });
 const channels = new Map(); // channel id -> {topic, schemaName, checks}
 const subscriptions = new Map(); // subscription id -> channel id
@@ -33,6 +40,8 @@ const counts = {};
 const failures = [];
 const received = [];
 const latencies = [];
+const parents = {};
+const drawnIn = new Set();
 let last = 0, first = 0;
 const textDecoder = new TextDecoder();
 
@@ -58,6 +67,7 @@ client.on("advertise", (list) => {
     if (ch.encoding !== "json" || ch.schemaEncoding !== "jsonschema") fail(`${ch.topic}: encoding ${ch.encoding}/${ch.schemaEncoding}`);
     const own = JSON.parse(ch.schema);
     const checks = [compile(own)];
+    for (const path of objectsWithoutProperties(own)) fail(`${ch.schemaName}: the object at ${path} has no properties (the viewers cannot parse it)`);
     if (ch.schemaName.startsWith("foxglove.")) {
       const reference = foxgloveSchemas[ch.schemaName.slice("foxglove.".length)];
       if (!reference) fail(`${ch.schemaName}: not a Foxglove schema`);
@@ -80,13 +90,16 @@ client.on("message", ({ subscriptionId, timestamp, data }) => {
   if (bench) { counts[ch.topic] = (counts[ch.topic] ?? 0) + 1; return; }
   for (const check of ch.checks) if (!check(message)) { fail(`${ch.topic}: ${ajv.errorsText(check.errors)}`); break; }
   counts[ch.topic] = (counts[ch.topic] ?? 0) + 1;
+  if (ch.schemaName === "foxglove.FrameTransforms") for (const t of message.transforms) parents[t.child_frame_id] = t.parent_frame_id;
+  if (ch.schemaName === "foxglove.PoseInFrame") drawnIn.add(message.frame_id);
+  if (ch.schemaName === "foxglove.SceneUpdate") for (const e of message.entities) drawnIn.add(e.frame_id);
   if (ch.schemaName.startsWith("sextant.") || ch.schemaName === "foxglove.PoseInFrame")
     received.push({ topic: ch.topic, schema: ch.schemaName, receiveTime: Number(timestamp), message });
 });
 
 function finish() {
   writeFileSync(outPath, JSON.stringify({ channels: [...channels.values()].map(({ topic, schemaName }) => ({ topic, schemaName })),
-    counts, failures, received, latencies_ms: latencies }));
+    counts, failures, received, latencies_ms: latencies, parents, drawnIn: [...drawnIn] }));
   client.close();
   process.exit(0);
 }

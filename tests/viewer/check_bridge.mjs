@@ -6,7 +6,8 @@
 // - each sextant channel's as-is messages equal the bus messages of that channel, in order, from the client's first
 //   one on: every message after the subscription took effect arrived (nothing dropped for a viewer that keeps up);
 // - each FUSED_POSE message on the bus has its PoseInFrame on /sextant/<source>/<estimator>/pose with the same
-//   time, position and orientation.
+//   time, position and orientation;
+// - every frame a pose or a scene entity was drawn in has a path to the display frame "map" through /tf.
 import { readFileSync } from "node:fs";
 
 const [clientPath, busPath] = process.argv.slice(2);
@@ -16,7 +17,8 @@ const failures = [...client.failures];
 const fail = (what) => failures.push(what);
 
 // Topics a user sees without configuring anything.
-for (const topic of ["FUSED_POSE", "/tf", "/sextant/trajectories", "/sextant/targets", "/sextant/bearings", "SEXTANT_STATUS"])
+for (const topic of ["FUSED_POSE", "/tf", "/sextant/trajectories", "/sextant/targets", "/sextant/bearings", "SEXTANT_STATUS",
+  "LANDMARK_MAP", "/sextant/landmark_map", "/sextant/frames"])
   if (!client.counts[topic]) fail(`nothing received on ${topic}`);
 
 // As-is channels, message by message (sender and seq identify one): every message the viewer received equals the
@@ -81,7 +83,16 @@ for (const m of gotBy.get("FUSED_POSE") ?? []) {
 }
 if (posesChecked === 0) fail("no pose checked");
 
+// Frames: each one drawn in reaches "map" through the parents /tf gave, with no cycle.
+const rooted = (frame) => {
+  for (let f = frame, steps = 0; f !== "map"; f = client.parents[f], ++steps)
+    if (f === undefined || steps > Object.keys(client.parents).length) return false;
+  return true;
+};
+if (!client.drawnIn.length) fail("no pose or scene entity received");
+for (const f of client.drawnIn) if (!rooted(f)) fail(`frame ${f} has no path to map through /tf`);
+
 console.log(`check_bridge: ${client.channels.length} channels, ${compared} as-is messages equal to the bus's ` +
-  `(${notRecorded} not in the recording, ${udpLost} on the bus not received by the bridge), ${posesChecked} poses checked`);
+  `(${notRecorded} not in the recording, ${udpLost} on the bus not received by the bridge), ${posesChecked} poses checked, frames ${client.drawnIn.join(" ")} all reach map`);
 if (failures.length) { for (const f of failures.slice(0, 20)) console.error(`FAIL: ${f}`); process.exit(1); }
 console.log("check_bridge: ok");

@@ -10,7 +10,11 @@
 //   of the same name in @foxglove/schemas (sextant's own schema, written for the fields it sends, names the same
 //   type: its title must be that name);
 // - channel by channel (the "lcm_channel" metadata), the messages equal the log's: same timestamps, same decoded
-//   values (raw LCM bytes for what has no JSON form).
+//   values (raw LCM bytes for what has no JSON form);
+// - every frame a pose or a scene entity is drawn in has a path to the display frame "map" through the /tf transforms
+//   read so far, by the end of the messages of its log time (the views of one LCM message share its log time), with
+//   no cycle;
+// - --require-topics T1,T2,...: each of these topics has messages.
 import { McapIndexedReader, McapStreamReader } from "@mcap/core";
 import { crc32 } from "@foxglove/crc";
 import foxgloveSchemas from "@foxglove/schemas/jsonschema.js";
@@ -20,7 +24,8 @@ import { createReadStream, readFileSync } from "node:fs";
 import { createInterface } from "node:readline";
 import { isDeepStrictEqual } from "node:util";
 
-const [mcapPath, jsonlPath] = process.argv.slice(2);
+const [mcapPath, jsonlPath, ...options] = process.argv.slice(2);
+const required = options.includes("--require-topics") ? options[options.indexOf("--require-topics") + 1].split(",") : [];
 const failures = [];
 const fail = (what) => {
   if (failures.length < 20) console.error(`FAIL: ${what}`);
@@ -65,12 +70,19 @@ if (!stream.done()) fail("stream reader: file not read to its end");
 if (streamed !== messages.length) fail(`stream reader: ${streamed} messages, indexed reader ${messages.length}`);
 
 // 3. Schemas: every JSON message valid against its channel's schema and the Foxglove one it names.
+// Foxglove's and Lichtblick's JSON Schema parser (parseJsonSchema in their mcap-support) reads the properties of
+// every "type": "object" in a channel's schema and fails on the channel when one has none: the paths of such objects.
+const objectsWithoutProperties = (schema, path = "") =>
+  schema === null || typeof schema !== "object" ? []
+    : [...(schema.type === "object" && !schema.properties ? [path || "/"] : []),
+      ...Object.entries(schema).flatMap(([k, v]) => objectsWithoutProperties(v, `${path}/${k}`))];
 const ajv = new Ajv({ strict: false, allErrors: false });
 const validators = new Map();
 for (const [id, schema] of reader.schemasById) {
   if (schema.encoding !== "jsonschema") { fail(`schema ${schema.name}: encoding ${schema.encoding}`); continue; }
   const own = JSON.parse(new TextDecoder().decode(schema.data));
   const checks = [ajv.compile(own)];
+  for (const path of objectsWithoutProperties(own)) fail(`${schema.name}: the object at ${path} has no properties (the viewers cannot parse it)`);
   if (schema.name.startsWith("foxglove.")) {
     const reference = foxgloveSchemas[schema.name.slice("foxglove.".length)];
     if (!reference) fail(`${schema.name}: not in @foxglove/schemas`);
@@ -81,6 +93,24 @@ for (const [id, schema] of reader.schemasById) {
   }
   validators.set(id, checks);
 }
+// The frame tree: each frame's latest parent, and the frames drawn in since the last change of log time.
+const parent = new Map();
+const drawnIn = new Set();
+let treeTime = -1n, framesChecked = 0;
+const rooted = (frame) => {
+  for (let f = frame, steps = 0; f !== "map"; f = parent.get(f), ++steps) if (f === undefined || steps > parent.size) return false;
+  return true;
+};
+const checkFrames = () => {
+  for (const f of drawnIn) if (!rooted(f)) { fail(`frame ${f} has no path to map at ${treeTime}`); break; }
+  framesChecked += drawnIn.size;
+  drawnIn.clear();
+};
+const frames = (schemaName, value) => {
+  if (schemaName === "foxglove.FrameTransforms") for (const t of value.transforms) parent.set(t.child_frame_id, t.parent_frame_id);
+  else if (schemaName === "foxglove.PoseInFrame") drawnIn.add(value.frame_id);
+  else if (schemaName === "foxglove.SceneUpdate") for (const e of value.entities) drawnIn.add(e.frame_id);
+};
 const key = (e) => `${e.timestamp.toString().padStart(20, "0")} ${JSON.stringify(e.message ?? e.raw)}`;
 const textDecoder = new TextDecoder();
 const byLcmChannel = new Map();
@@ -94,6 +124,8 @@ for (const m of messages) {
       if (!v(value)) { fail(`${ch.topic}: ${ajv.errorsText(v.errors)}`); break; }
     validated.set(ch.topic, (validated.get(ch.topic) ?? 0) + 1);
     entry.message = value;
+    if (m.logTime !== treeTime) { checkFrames(); treeTime = m.logTime; }
+    frames(reader.schemasById.get(ch.schemaId)?.name, value);
   } else if (ch.messageEncoding === "lcm") {
     entry.raw = Buffer.from(m.data).toString("hex");
   } else fail(`${ch.topic}: message encoding ${ch.messageEncoding}`);
@@ -103,6 +135,10 @@ for (const m of messages) {
     byLcmChannel.get(lcm).push(entry);
   }
 }
+
+checkFrames();
+if (framesChecked === 0) fail("no pose or scene entity to check the frames of");
+for (const t of required) if (!validated.get(t)) fail(`no message on ${t}`);
 
 // 4. Channel by channel, the LCM log's messages (read line by line: a long run's log is larger than a string can be).
 const expected = new Map();

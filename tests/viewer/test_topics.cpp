@@ -11,6 +11,7 @@
 #include <cmath>
 #include <limits>
 #include <map>
+#include <utility>
 
 using namespace sextant::viewer;
 
@@ -198,4 +199,26 @@ TEST_CASE("batched frame transforms: every pose's transforms, in order, in one /
   flushed.clear();
   mapper.flush(flushed);
   CHECK(flushed.empty());  // nothing gathered since
+}
+
+TEST_CASE("a pose in a fleet frame: PoseInFrame in <frame>/map, which hangs from map once per /tf message") {
+  TopicMapperOptions options;
+  options.batch_frame_transforms = true;
+  TopicMapper mapper(options);
+  auto ekf = pose("ekf", 1), dead_reckoning = pose("dead_reckoning", 2);
+  ekf.frame = dead_reckoning.frame = "robot1";
+  const auto out = map(mapper, "FUSED_POSE", ekf);
+  CHECK(Json::parse(on(out, "/sextant/robot1/ekf/pose").data)["frame_id"] == "robot1/map");
+  map(mapper, "FUSED_POSE", dead_reckoning);
+  std::vector<ViewerMessage> flushed;
+  mapper.flush(flushed);
+  const Json tf = Json::parse(on(flushed, "/tf").data);
+  std::vector<std::pair<std::string, std::string>> edges;
+  for (const auto& t : tf["transforms"]) edges.emplace_back(t["parent_frame_id"], t["child_frame_id"]);
+  CHECK(edges == std::vector<std::pair<std::string, std::string>>{{"map", "robot1/map"},
+                                                                  {"robot1/map", "robot1/ekf"},
+                                                                  {"robot1/map", "robot1"},
+                                                                  {"robot1/map", "robot1/dead_reckoning"}});
+  CHECK(tf["transforms"][0]["translation"] == Json{{"x", 0.0}, {"y", 0.0}, {"z", 0.0}});
+  CHECK(tf["transforms"][0]["rotation"]["w"] == 1.0);
 }

@@ -1,0 +1,268 @@
+// The SLAM layer's back end (slam_graph.hpp, graph_contribution.hpp): what one contribution adds to the graph, for a
+// local body's (made by the front end just before) and a remote one's (apply), and the wait of a whole robot sighting
+// or inter-robot loop for a keyframe of the other body.
+#include "estimators/slam/loop_gate.hpp"
+#include "estimators/slam/pose_factors.hpp"
+#include "estimators/slam/slam_graph.hpp"
+
+#include <algorithm>
+
+namespace sextant::slam {
+namespace {
+
+/// Appends to a bounded list of placement evidence, the oldest item going when it is full (counted).
+template <class T>
+void push_bounded(std::vector<T>& list, T item, int max_pending, SlamCounters& counters) {
+  if (list.size() >= static_cast<size_t>(std::max(max_pending, 1))) {
+    list.erase(list.begin());
+    ++counters.fleet_pending_dropped;
+    --counters.fleet_pending;
+  }
+  list.push_back(std::move(item));
+  ++counters.fleet_pending;
+}
+
+}  // namespace
+
+bool SlamGraph::remote(const std::string& name) const {
+  auto it = bodies_.find(name);
+  return it != bodies_.end() && it->second.remote;
+}
+
+std::optional<TrackPoint> SlamGraph::point_of(const Body& b, const KeyframeAnchor& a) const {
+  const auto at = b.track.position_of(a.keyframe);
+  if (!at) return std::nullopt;
+  return TrackPoint{*at, a.motion, a.covariance};
+}
+
+KeyframeAnchor SlamGraph::anchor_of(const Body& b, const TrackPoint& p) const {
+  return KeyframeAnchor{b.track.keyframes()[p.keyframe].id, p.motion, p.covariance};
+}
+
+bool SlamGraph::add_keyframe_to_graph(const std::string& name, Body& b, const KeyframeContribution& k,
+                                      SlamListener& listener) {
+  // A remote body's stream that starts after its first keyframe (its owner no longer had the beginning) starts a
+  // frame of its own at the first keyframe that arrives, as a new body does.
+  const bool starts = b.track.empty();
+  if (!starts && b.remote && b.track.newest().id != k.id - 1) return false;  // not the keyframe after the newest
+  TrackKeyframe node;
+  node.id = k.id;
+  node.utime = k.utime;
+  node.odom = k.odom;
+  node.odom_covariance = k.odom_covariance;
+  std::unique_ptr<graph::Factor> edge_factor;
+  if (!starts) {
+    node.edge = k.edge;
+    node.edge_covariance = k.edge_covariance;
+    edge_factor = odometry_factor(b.planar, b.track.newest().variable, -1, node.edge, node.edge_covariance);
+    if (!edge_factor) return false;
+  }
+  graph::Variable v;
+  v.id = next_variable_id_++;
+  v.kind = b.planar ? graph::VariableKind::kPose2 : graph::VariableKind::kPose3;
+  v.fixed = starts;  // the body's map frame: its odometry frame at the first keyframe
+  const SE3 initial = starts ? k.odom : estimate(b, b.track.newest().variable) * node.edge;
+  if (b.planar)
+    v.pose2 = SE2::from_se3(initial);
+  else
+    v.pose3 = initial;
+  try {
+    node.variable = b.smoother->add_variable(v);
+    if (edge_factor)
+      add_factor(b, edge_factor->rebind({b.track.newest().variable, node.variable}), FactorRole::kOdometry, false,
+                 std::nullopt);
+  } catch (const std::invalid_argument&) {
+    return false;  // a non-finite pose or information: never reaches the smoother's system
+  }
+  if (b.remote) b.track.advance(k.utime, k.odom, k.odom_covariance, static_cast<size_t>(options_.odometry_history));
+  b.track.add_keyframe(std::move(node));
+  ++counters_.keyframes;
+  if (k.reanchored) ++counters_.keyframes_reanchored;
+  if (!b.remote) listener.contributed({name, k});
+  update(name, b, k.utime, listener);
+  if (!b.remote && options_.propose_loops) propose_loops(name, b, k.utime, listener);
+  if (!b.remote && options_.propose_loops && options_.fleet.enabled) propose_fleet_loops(name, b, k.utime, listener);
+  maybe_thin(b.planar);
+  retry_waiting(listener);
+  return true;
+}
+
+bool SlamGraph::add_loop_on_keyframes(Body& b, const LoopContribution& l) {
+  const auto from = b.track.position_of(l.from_keyframe), to = b.track.position_of(l.to_keyframe);
+  if (!from || !to || *from == *to) {
+    ++counters_.loops_unmatched;
+    return false;
+  }
+  const int vf = b.track.keyframes()[*from].variable, vt = b.track.keyframes()[*to].variable;
+  if (!b.remote) {  // a remote body's loops passed its owner's gate
+    const Matrix6d path = b.track.odometry_path(*from, *to).second;
+    const SE3 predicted = estimate(b, vf).between(estimate(b, vt));
+    const KeyframeLoop loop{l.z, l.information, l.widened};
+    if (!(loop_mahalanobis(b.planar, loop, predicted, path, options_.loop_gate_odometry_scale) <=
+          loop_gate_[b.planar ? 1 : 0])) {
+      ++counters_.loops_rejected;
+      return false;
+    }
+  }
+  try {
+    add_factor(b, loop_factor(b.planar, vf, vt, l.z, l.information), FactorRole::kLoop, true, std::nullopt);
+  } catch (const std::invalid_argument&) {
+    ++counters_.loops_rejected;  // an information the caller let through but the smoother cannot use
+    return false;
+  }
+  ++counters_.loops_accepted;
+  return true;
+}
+
+bool SlamGraph::complete_body_sighting(const std::string& observer, const BodySightingHalf& h, SlamListener& listener) {
+  auto it = bodies_.find(h.observed);
+  if (it != bodies_.end() && it->second.remote) return false;  // its owner anchors the observed end
+  const std::optional<TrackPoint> at = it == bodies_.end() || it->second.planar != bodies_.at(observer).planar
+                                           ? std::nullopt
+                                           : anchor_near(it->second, h.utime);
+  if (!at) {
+    ++counters_.fleet_sightings_unplaced;
+    return false;
+  }
+  const GraphContribution whole{h.observed, BodySighting{observer, h.utime, h.sensor_in_body, h.sighting, h.observer,
+                                                         anchor_of(it->second, *at)}};
+  listener.contributed(whole);
+  return add_whole(whole);
+}
+
+bool SlamGraph::complete_body_loop(const std::string& from, const BodyLoopHalf& h, SlamListener& listener) {
+  auto it = bodies_.find(h.loop.body_to);
+  if (it == bodies_.end() || it->second.remote) return false;  // unknown here, or its owner anchors the "to" end
+  Body& o = it->second;
+  const auto tolerance = static_cast<int64_t>(options_.loop_time_tolerance_s * 1e6);
+  const auto end_to = o.track.resolve(h.loop.keyframe_to, h.loop.utime_to, tolerance);
+  if (!end_to) {
+    if (h.loop.utime_to <= o.track.last_utime()) {
+      ++counters_.loops_unmatched;
+    } else if (o.early_halves.size() < static_cast<size_t>(std::max(options_.max_waiting_loops, 0))) {
+      o.early_halves.emplace_back(from, h);  // completed with this body's next odometry
+      ++counters_.loops_waiting;
+    } else {
+      ++counters_.loops_waiting_dropped;
+    }
+    return false;
+  }
+  const KeyframeLoop kl =
+      loop_on_keyframes(o.planar, h.loop.relative, h.loop.information, {0, h.from.motion, h.from.covariance}, *end_to);
+  const GraphContribution whole{
+      h.loop.body_to, BodyLoop{from, h.from.keyframe, o.track.keyframes()[end_to->keyframe].id, kl.z, kl.information}};
+  listener.contributed(whole);
+  const size_t pending_before = pending_.loops.size();
+  const bool added = add_whole(whole);
+  if (added) update_frame(o.frame, listener);
+  if (pending_.loops.size() != pending_before) try_join(bodies_.at(from).frame, o.frame, listener);
+  return added;
+}
+
+bool SlamGraph::keyframes_present(const GraphContribution& c) const {
+  // A keyframe id at or past a body's next id has not arrived (an older one that is not in the graph was thinned:
+  // waiting would not bring it back).
+  const auto arrived = [&](const std::string& body, int64_t id) {
+    auto it = bodies_.find(body);
+    return it != bodies_.end() && !it->second.track.empty() && id < it->second.track.next_id();
+  };
+  if (const auto* s = std::get_if<BodySighting>(&c.what))
+    return arrived(s->observer, s->observer_anchor.keyframe) && arrived(c.body, s->observed_anchor.keyframe);
+  if (const auto* l = std::get_if<BodyLoop>(&c.what))
+    return arrived(l->from, l->from_keyframe) && arrived(c.body, l->to_keyframe);
+  return true;
+}
+
+void SlamGraph::wait_for_keyframes(const GraphContribution& c) {
+  if (waiting_wholes_.size() >= static_cast<size_t>(std::max(options_.fleet.max_pending, 1))) {
+    waiting_wholes_.erase(waiting_wholes_.begin());
+    ++counters_.fleet_contributions_dropped;
+    --counters_.fleet_contributions_waiting;
+  }
+  waiting_wholes_.push_back(c);
+  ++counters_.fleet_contributions_waiting;
+}
+
+void SlamGraph::retry_waiting(SlamListener& listener) {
+  if (waiting_wholes_.empty()) return;
+  std::vector<GraphContribution> due;
+  for (auto it = waiting_wholes_.begin(); it != waiting_wholes_.end();) {
+    if (keyframes_present(*it)) {
+      due.push_back(std::move(*it));
+      it = waiting_wholes_.erase(it);
+      --counters_.fleet_contributions_waiting;
+    } else {
+      ++it;
+    }
+  }
+  for (const GraphContribution& c : due) apply_contribution(c, listener);
+}
+
+bool SlamGraph::add_whole(const GraphContribution& c) {
+  if (!keyframes_present(c)) {
+    wait_for_keyframes(c);
+    return false;
+  }
+  const std::string& frame = bodies_.at(c.body).frame;
+  if (const auto* s = std::get_if<BodySighting>(&c.what)) {
+    SightingLink link{s->observer,
+                      c.body,
+                      s->utime,
+                      s->sensor_in_body,
+                      s->sighting,
+                      s->observer_anchor.keyframe,
+                      s->observed_anchor.keyframe,
+                      s->observer_anchor.motion,
+                      s->observed_anchor.motion,
+                      s->observer_anchor.covariance,
+                      s->observed_anchor.covariance};
+    if (bodies_.at(s->observer).frame == frame) return add_sighting_factor(link);
+    push_bounded(pending_.sightings, std::move(link), options_.fleet.max_pending, counters_);
+    return false;
+  }
+  const auto& l = std::get<BodyLoop>(c.what);
+  LoopLink link{l.from, c.body, l.from_keyframe, l.to_keyframe, l.z, l.information};
+  if (bodies_.at(l.from).frame == frame) return add_loop_factor(link);
+  push_bounded(pending_.loops, std::move(link), options_.fleet.max_pending, counters_);
+  return false;
+}
+
+bool SlamGraph::apply(const GraphContribution& c, SlamListener& listener) {
+  auto it = bodies_.find(c.body);
+  const auto* k = std::get_if<KeyframeContribution>(&c.what);
+  // A body has one owner: a contribution about a local body is refused; a remote body starts with a keyframe.
+  const bool acceptable =
+      it != bodies_.end() ? it->second.remote && (k == nullptr || k->planar == it->second.planar) : k != nullptr;
+  if (acceptable && it == bodies_.end()) body_for(c.body, k->planar).remote = true;
+  const bool applied = acceptable && apply_contribution(c, listener);
+  ++(applied ? counters_.fleet_contributions_applied : counters_.fleet_contributions_refused);
+  return applied;
+}
+
+bool SlamGraph::apply_contribution(const GraphContribution& c, SlamListener& listener) {
+  Body& b = bodies_.at(c.body);
+  const size_t sightings_before = pending_.sightings.size(), loops_before = pending_.loops.size();
+  bool added = false;
+  if (const auto* k = std::get_if<KeyframeContribution>(&c.what)) return add_keyframe_to_graph(c.body, b, *k, listener);
+  if (const auto* s = std::get_if<SightingsContribution>(&c.what)) {
+    const auto anchor = point_of(b, s->anchor);
+    if (!anchor) return false;
+    added = add_landmark_sightings(b, s->sightings, *anchor, nullptr);
+  } else if (const auto* l = std::get_if<LoopContribution>(&c.what)) {
+    if (!add_loop_on_keyframes(b, *l)) return false;
+    added = true;
+  } else if (const auto* h = std::get_if<BodySightingHalf>(&c.what)) {
+    added = complete_body_sighting(c.body, *h, listener);
+  } else if (const auto* hl = std::get_if<BodyLoopHalf>(&c.what)) {
+    complete_body_loop(c.body, *hl, listener);  // updates and joins itself
+    return true;
+  } else {
+    added = add_whole(c);
+  }
+  if (added) update_frame(b.frame, listener);
+  const bool new_evidence = pending_.sightings.size() != sightings_before || pending_.loops.size() != loops_before;
+  if (options_.fleet.enabled && (added || new_evidence)) try_joins(b.frame, listener);
+  return true;
+}
+
+}  // namespace sextant::slam
