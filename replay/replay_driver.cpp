@@ -145,6 +145,8 @@ void ReplayCollector::output(const engine::Output& o) {
         } else if constexpr (std::is_same_v<T, engine::LandmarkMap>) {
           ++result_.landmark_map_messages;
           if (keep_all_) result_.landmark_maps.push_back(x);
+        } else if constexpr (std::is_same_v<T, engine::FleetContributions> || std::is_same_v<T, engine::FleetControl>) {
+          ++result_.fleet_messages;
         } else {
           ++result_.match_request_messages;
           if (keep_all_) result_.match_requests.push_back(x);

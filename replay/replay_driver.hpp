@@ -104,6 +104,7 @@ struct ReplayResult {
   std::map<std::string, int64_t> fused_pose_counts;           // by estimator
   std::map<std::string, engine::FusedPose> last_fused_poses;  // by estimator
   int64_t trajectory_messages = 0, target_messages = 0, match_request_messages = 0, landmark_map_messages = 0;
+  int64_t fleet_messages = 0;           // FLEET and FLEET_CONTROL (engine.graph.fleet.exchange)
   std::vector<SegmentReport> segments;  // ReplayOptions::segment_seconds
 };
 

@@ -4,6 +4,7 @@
 
 #include "daemon/config/stage_config_readers.hpp"
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <set>
@@ -25,6 +26,30 @@ Check<std::string> channel_name() {
 // Channels that cannot work: a name (with the prefix) longer than LCM allows is neither sent nor received; two
 // inputs on one channel feed one kind's decoder with the other's messages; an output named like an input comes
 // back to the daemon as input.  Each is an error at the key that makes it so.
+// The fleet's channels go without the prefix (every daemon of the fleet shares them): each fits LCM's length and is
+// none of the daemon's other channels (with its prefix), nor the other fleet channel.
+void check_fleet_channels(Section& s, const Channels& c, const std::vector<std::pair<std::string, std::string>>& inputs,
+                          const std::vector<std::pair<std::string, std::string>>& outputs) {
+  constexpr size_t kLcmMaxChannel = 63;
+  const auto at = [&](const std::string& key) {
+    const YAML::Node n = s.node().IsMap() ? s.node()[key] : YAML::Node();
+    return n.IsDefined() ? n : s.node();
+  };
+  for (const auto& [key, name] : {std::pair{"fleet", c.fleet}, std::pair{"fleet_control", c.fleet_control}}) {
+    if (name.size() > kLcmMaxChannel)
+      throw s.error_at(at(key), "'" + s.path() + "." + key + "': channel '" + name + "' is longer than LCM's " +
+                                    std::to_string(kLcmMaxChannel) + " characters");
+    for (const auto* list : {&inputs, &outputs})
+      for (const auto& [other, other_name] : *list)
+        if (c.full(other_name) == name)
+          throw s.error_at(at(key), "'" + s.path() + "." + key + "': the same channel as " + s.path() + "." + other +
+                                        " ('" + name + "')");
+  }
+  if (c.fleet == c.fleet_control)
+    throw s.error_at(at("fleet_control"), "'" + s.path() + ".fleet_control': the same channel as " + s.path() +
+                                              ".fleet ('" + c.fleet + "')");
+}
+
 void check_channels(Section& s, const Channels& c) {
   constexpr size_t kLcmMaxChannel = 63;  // LCM_MAX_CHANNEL_NAME_LENGTH
   const auto at = [&](const std::string& key) {
@@ -65,6 +90,7 @@ void check_channels(Section& s, const Channels& c) {
         throw s.error_at(at(outputs[i].first), "'" + s.path() + "." + outputs[i].first + "': the same channel as " +
                                                    s.path() + "." + outputs[j].first + " ('" +
                                                    c.full(outputs[i].second) + "')");
+  check_fleet_channels(s, c, inputs, outputs);
 }
 
 void read_channels(Section s, Channels& c) {
@@ -82,7 +108,9 @@ void read_channels(Section s, Channels& c) {
                             {"targets", &c.targets},
                             {"match_requests", &c.match_requests},
                             {"landmark_map", &c.landmark_map},
-                            {"status", &c.status}})
+                            {"status", &c.status},
+                            {"fleet", &c.fleet},
+                            {"fleet_control", &c.fleet_control}})
     s.get(key, *field, channel_name());
   s.reject_unknown_keys();
   check_channels(s, c);
@@ -135,6 +163,20 @@ static void read_plausibility(Section p, Plausibility& c) {
   p.reject_unknown_keys();
 }
 
+// engine.graph.fleet.exchange, when enabled, is this daemon's: daemon.name must be one of its members, and is its name
+// there (FleetExchangeOptions::self).
+static void check_fleet_member(const YAML::Node& root, const std::string& file, DaemonConfig& c) {
+  engine::FleetExchangeOptions& x = c.engine.graph.fleet_exchange;
+  if (!x.enabled) return;
+  if (std::find(x.members.begin(), x.members.end(), c.name) == x.members.end()) {
+    Section s(root["engine"]["graph"]["fleet"]["exchange"], "engine.graph.fleet.exchange", file);
+    const YAML::Node members = s.node()["members"];
+    throw s.error_at(members.IsDefined() ? members : s.node(),
+                     "'engine.graph.fleet.exchange.members': daemon.name '" + c.name + "' is not among the members");
+  }
+  x.self = c.name;
+}
+
 static void read_daemon_config(const YAML::Node& root, const std::string& file, DaemonConfig& c) {
   Section top(root, "", file);
   {
@@ -170,6 +212,7 @@ static void read_daemon_config(const YAML::Node& root, const std::string& file, 
     read_engine_config(e, c.engine);
   }
   top.reject_unknown_keys();
+  check_fleet_member(root, file, c);
   c.engine_fingerprint = engine_fingerprint(c.engine);
 }
 

@@ -23,6 +23,9 @@ struct Channels {
   std::string match_requests = "MATCH_REQUESTS";
   std::string landmark_map = "LANDMARK_MAP";
   std::string status = "SEXTANT_STATUS";
+  // The fleet's channels (engine.graph.fleet.exchange): shared by every daemon of the fleet, so without the prefix.
+  std::string fleet = "FLEET";
+  std::string fleet_control = "FLEET_CONTROL";
 
   std::string full(const std::string& name) const { return prefix + name; }
 };

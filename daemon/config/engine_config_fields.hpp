@@ -10,6 +10,6 @@ template <>
 struct sextant::config::aggregate_parts<sextant::engine::GraphConfig> {
   static auto of(const engine::GraphConfig& c) {
     return std::tie(static_cast<const slam::SlamOptions&>(c), c.enabled, c.coalesce_odometry, c.odometry_batch_max,
-                    c.odometry_waiting_max, c.odometry_waiting_total_max, c.trajectory);
+                    c.odometry_waiting_max, c.odometry_waiting_total_max, c.trajectory, c.fleet_exchange);
   }
 };

@@ -71,7 +71,53 @@ Check<std::string> body_name() {
   };
 }
 
-// fleet: {enabled, markers: {ID: BODY}, placement: {...}, observed_time_tolerance_s, max_pending, join_every_keyframes}
+// A daemon's name as daemon.name takes it: 1 to 64 characters, no control characters.
+std::optional<std::string> daemon_name_error(const std::string& v) {
+  if (v.empty() || v.size() > 64) return "a daemon name of 1 to 64 characters, got '" + v + "'";
+  for (unsigned char ch : v)
+    if (ch < 0x20 || ch == 0x7f) return "a daemon name without control characters";
+  return std::nullopt;
+}
+
+// fleet.exchange: several daemons, one per robot, exchanging graph contributions (daemon/engine/fleet_exchange.hpp).
+// Whether daemon.name is among the members is checked where both are known (daemon_config.cpp).
+void read_exchange(Section& f, engine::GraphConfig& c) {
+  Section x = f.child("exchange");
+  engine::FleetExchangeOptions& o = c.fleet_exchange;
+  x.get("enabled", o.enabled);
+  x.get("members", o.members,
+        Check<std::vector<std::string>>([](const std::vector<std::string>& v) -> std::optional<std::string> {
+          if (v.size() > 256) return "at most 256 members";
+          for (size_t i = 0; i < v.size(); ++i) {
+            if (auto why = daemon_name_error(v[i])) return why;
+            for (size_t j = 0; j < i; ++j)
+              if (v[i] == v[j]) return "'" + v[i] + "' is listed twice";
+          }
+          return std::nullopt;
+        }));
+  x.get("retain", o.retain, int_in_range(1, 1 << 24));
+  x.get("retain_mb", o.retain_mb, int_in_range(1, 1 << 16));
+  x.get("heartbeat_period_s", o.heartbeat_period_s, in_range(0.01, 3600));
+  x.get("repair_backoff_s", o.repair_backoff_s, in_range(0.001, 3600));
+  x.get("repair_backoff_max_s", o.repair_backoff_max_s, in_range(0.001, 3600));
+  x.get("max_streams_per_sender", o.max_streams_per_sender, int_in_range(1, 1 << 16));
+  x.get("reorder_window", o.reorder_window, int_in_range(1, 1 << 20));
+  x.get("reorder_mb", o.reorder_mb, int_in_range(1, 1 << 16));
+  x.get("max_repair_range", o.max_repair_range, int_in_range(1, 1 << 20));
+  x.get("repair_bytes_per_s", o.repair_bytes_per_s, in_range(1000, 1e9));
+  // The largest item (256 sightings, two names of 256 characters) and its message's fields must fit.
+  x.get("max_message_bytes", o.max_message_bytes, int_in_range(32768, 65000));
+  if (o.repair_backoff_max_s < o.repair_backoff_s)
+    throw x.error("'" + x.path() + "': repair_backoff_max_s must not be smaller than repair_backoff_s");
+  if (o.enabled && o.members.empty())
+    throw x.error("'" + x.path() + "': enabled without members (the fleet's daemon names)");
+  if (o.enabled && !c.fleet.enabled)
+    throw x.error("'" + x.path() + "': enabled while '" + f.path() + ".enabled' is false");
+  x.reject_unknown_keys();
+}
+
+// fleet: {enabled, markers: {ID: BODY}, placement: {...}, observed_time_tolerance_s, max_pending, join_every_keyframes,
+// exchange: {...}}
 void read_fleet(Section& s, engine::GraphConfig& c) {
   Section f = s.child("fleet");
   slam::FleetOptions& o = c.fleet;
@@ -103,6 +149,7 @@ void read_fleet(Section& s, engine::GraphConfig& c) {
   p.get("rival_ratio", o.placement.rival_ratio, in_range(0.0, 1.0));
   p.get("max_evidence", o.placement.max_evidence, int_in_range(2, 256));
   p.reject_unknown_keys();
+  read_exchange(f, c);
   f.reject_unknown_keys();
 }
 

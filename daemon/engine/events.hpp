@@ -5,6 +5,8 @@
 // Conventions (as in lcmtypes/sextant/*.lcm): times are utime, int64 microseconds; poses are a position in metres and a unit
 // quaternion (Eigen stores it as x,y,z,w but its constructor takes w,x,y,z); tangent vectors and covariances are
 // ordered translation first, then rotation, with the perturbation on the right (T = T_hat * exp(xi)).
+#include "daemon/engine/fleet_events.hpp"
+
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 
@@ -112,19 +114,26 @@ struct GnssFix {
   Eigen::Matrix3d velocity_covariance = Eigen::Matrix3d::Zero();
 };
 
-using Event = std::variant<Odometry, LandmarkSightings, BearingScan, LoopClosure, ImuSample, GnssFix>;
+/// FleetContributions and FleetControl (fleet_events.hpp): what the other daemons of a fleet send on FLEET and
+/// FLEET_CONTROL, for the graph stage.
+using Event = std::variant<Odometry, LandmarkSightings, BearingScan, LoopClosure, ImuSample, GnssFix,
+                           FleetContributions, FleetControl>;
 
 /// The utime every event carries.
 inline int64_t event_utime(const Event& e) {
   return std::visit([](const auto& x) { return x.utime; }, e);
 }
 
-/// Whom an event is about: the source (body) of odometry, sightings and loop closures; "sensor N" for a bearing scan.
+/// Whom an event is about: the source (body) of odometry, sightings and loop closures; "sensor N" for a bearing scan;
+/// the sending daemon of a fleet message.
 inline std::string event_source(const Event& e) {
   return std::visit(
       [](const auto& x) -> std::string {
-        if constexpr (std::is_same_v<std::decay_t<decltype(x)>, BearingScan>)
+        using T = std::decay_t<decltype(x)>;
+        if constexpr (std::is_same_v<T, BearingScan>)
           return "sensor " + std::to_string(x.sensor_id);
+        else if constexpr (std::is_same_v<T, FleetContributions> || std::is_same_v<T, FleetControl>)
+          return x.sender;
         else
           return x.source;
       },

@@ -67,33 +67,30 @@ class GraphStage::Outputs final : public slam::SlamListener {
 
   void loop_proposed(const std::string& body, int64_t utime, const slam::KeyframeEstimate& a,
                      const slam::KeyframeEstimate& b, bool random) override {
-    MatchRequest r;
-    r.utime = utime;
-    r.source = body;
-    r.request_id = stage_.next_request_id_++;
-    r.kind = random ? "random" : "local";
-    r.source_b = body;
-    r.a = to_keyframe(a);
-    r.b = to_keyframe(b);
-    ++stage_.counters_.match_requests;
-    emit_(r);
+    request(body, utime, random ? "random" : "local", a, body, b);
   }
 
   void fleet_loop_proposed(const std::string& body, int64_t utime, const slam::KeyframeEstimate& a,
                            const std::string& other, const slam::KeyframeEstimate& b) override {
+    request(body, utime, "fleet", a, other, b);
+  }
+
+ private:
+  /// A MATCH_REQUESTS message: keyframe `a` of `body` against keyframe `b` of `body_b`, numbered here.
+  void request(const std::string& body, int64_t utime, const char* kind, const slam::KeyframeEstimate& a,
+               const std::string& body_b, const slam::KeyframeEstimate& b) {
     MatchRequest r;
     r.utime = utime;
     r.source = body;
-    r.source_b = other;
     r.request_id = stage_.next_request_id_++;
-    r.kind = "fleet";
+    r.kind = kind;
+    r.source_b = body_b;
     r.a = to_keyframe(a);
     r.b = to_keyframe(b);
     ++stage_.counters_.match_requests;
     emit_(r);
   }
 
- private:
   GraphStage& stage_;
   const Emit& emit_;
 };
@@ -115,6 +112,10 @@ void GraphStage::handle(const Event& e, const Emit& emit) {
     slam_.add_loop(l->source, to_input(*l), out);
   else if (const auto* s = std::get_if<LandmarkSightings>(&e))
     slam_.add_sightings(s->source, to_input(*s), out);
+  else if (std::holds_alternative<FleetContributions>(e))
+    ++counters_.fleet_messages_received;
+  else if (std::holds_alternative<FleetControl>(e))
+    ++counters_.fleet_control_received;
 }
 
 void GraphStage::publish_trajectory(const std::string& source, Feed& f, int64_t utime, int solves, bool flush,
@@ -263,6 +264,8 @@ Counters GraphStage::counters() const {
           {"fleet_contributions_dropped", s.fleet_contributions_dropped},
           {"fleet_remote_inputs", s.fleet_remote_inputs},
           {"landmark_map_messages", counters_.landmark_map_messages},
+          {"fleet_messages_received", counters_.fleet_messages_received},
+          {"fleet_control_received", counters_.fleet_control_received},
           {"solves_interrupted", solves_interrupted()}};
 }
 

@@ -34,6 +34,8 @@ struct GraphStageCounters {
   int64_t trajectory_keyframe_bytes = 0;  // their keyframes (72 bytes each) and removed ids (8 bytes each)
   int64_t corrections_refused = 0;        // solves whose newest keyframe was not finite or not PSD: not published
   int64_t landmark_map_messages = 0;      // LANDMARK_MAP messages published
+  int64_t fleet_messages_received = 0;    // FLEET messages of other members (engine.graph.fleet.exchange), not yet
+  int64_t fleet_control_received = 0;     // applied: the graph's side of the exchange (SlamGraph::apply) is to come
 };
 
 class GraphStage final : public Stage {
@@ -42,7 +44,9 @@ class GraphStage final : public Stage {
   StageKind kind() const override { return StageKind::kGraph; }
   bool accepts(const Event& e) const override {
     return std::holds_alternative<Odometry>(e) || std::holds_alternative<LoopClosure>(e) ||
-           (config_.landmarks.enabled && std::holds_alternative<LandmarkSightings>(e));
+           (config_.landmarks.enabled && std::holds_alternative<LandmarkSightings>(e)) ||
+           (config_.fleet_exchange.enabled &&
+            (std::holds_alternative<FleetContributions>(e) || std::holds_alternative<FleetControl>(e)));
   }
   void handle(const Event& e, const Emit& emit) override;
   /// The last TRAJECTORY publication of every body: every keyframe that moved at all since it was published.

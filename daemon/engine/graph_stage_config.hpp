@@ -1,4 +1,5 @@
 #pragma once
+#include "daemon/engine/fleet_exchange_options.hpp"
 #include "daemon/engine/trajectory_feed.hpp"
 #include "estimators/slam/slam_options.hpp"
 
@@ -21,6 +22,8 @@ struct GraphConfig : slam::SlamOptions {
   int odometry_waiting_max = 16384;        // messages of one body waiting in batches (about 1.1 kB each)
   int odometry_waiting_total_max = 65536;  // messages of all bodies waiting in batches
   TrajectoryFeedOptions trajectory;        // what TRAJECTORY carries and how often (trajectory_feed.hpp)
+  /// engine.graph.fleet.exchange: one daemon per robot, exchanging graph contributions on FLEET (fleet_exchange.hpp).
+  FleetExchangeOptions fleet_exchange;
 };
 
 }  // namespace sextant::engine

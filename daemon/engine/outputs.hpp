@@ -84,6 +84,9 @@ struct LandmarkMap {
   std::vector<Landmark> landmarks;
 };
 
-using Output = std::variant<FusedPose, Trajectory, MatchRequest, Targets, LandmarkMap>;
+/// FleetContributions and FleetControl (fleet_events.hpp): the graph stage's contributions, heartbeats, repair
+/// requests and answers for the other daemons of a fleet (FLEET, FLEET_CONTROL); the publisher stamps the sender.
+using Output =
+    std::variant<FusedPose, Trajectory, MatchRequest, Targets, LandmarkMap, FleetContributions, FleetControl>;
 
 }  // namespace sextant::engine

@@ -130,6 +130,10 @@ Decoded decode_event(InputKind kind, const void* data, size_t size, MessageOrigi
         return decode_as<sextant::imu_t>(data, size, origin);
       case InputKind::kGnss:
         return decode_as<sextant::gnss_t>(data, size, origin);
+      case InputKind::kFleet:
+        return decode_as<sextant::fleet_contribution_t>(data, size, origin);
+      case InputKind::kFleetControl:
+        return decode_as<sextant::fleet_control_t>(data, size, origin);
     }
   } catch (const std::exception& e) {
     return Rejection{"decode", std::string("cannot decode: ") + e.what()};

@@ -6,6 +6,8 @@
 #include "daemon/engine/outputs.hpp"
 
 #include <sextant/bearing_scan_t.hpp>
+#include <sextant/fleet_contribution_t.hpp>
+#include <sextant/fleet_control_t.hpp>
 #include <sextant/fused_pose_t.hpp>
 #include <sextant/gnss_t.hpp>
 #include <sextant/imu_t.hpp>
@@ -35,8 +37,8 @@ struct Rejection {
 inline constexpr int kMaxObservationsPerMessage = 4096;
 inline constexpr int kMaxDetectionsPerScan = 4096;
 
-/// The kinds of input channel the daemon subscribes to.
-enum class InputKind { kOdometry, kLandmarks, kBearings, kLoopClosures, kImu, kGnss };
+/// The kinds of input channel the daemon subscribes to (kFleet, kFleetControl: engine.graph.fleet.exchange).
+enum class InputKind { kOdometry, kLandmarks, kBearings, kLoopClosures, kImu, kGnss, kFleet, kFleetControl };
 
 using Decoded = std::variant<engine::Event, Rejection>;
 
@@ -63,7 +65,15 @@ Decoded to_event(const sextant::imu_t& msg);
 /// 100 km of the ellipsoid, covariances symmetric positive semi-definite.  A message without a fix (STATUS_NO_FIX) is
 /// refused with reason "no_fix": it carries nothing to fuse.
 Decoded to_event(const sextant::gnss_t& msg);
-
+/// A run of a fleet member's contribution stream (codec_fleet.cpp): sender and body names of 1 to 256 characters
+/// without control characters, first in [1, 2^62], 1 to 1024 contributions, each with exactly the poses, anchors and
+/// sightings its kind carries (fleet_item_t.lcm) and only its kind's flags; every number finite, quaternions of unit
+/// norm, covariances and information matrices symmetric positive semi-definite, a sighting's range positive with its
+/// range and azimuth variances, ids of keyframes and landmarks not negative.
+Decoded to_event(const sextant::fleet_contribution_t& msg);
+/// A heartbeat or a repair request: the kind known, `daemon` set exactly on a request, at most 1024 ranges, each
+/// with a valid body name and 0 <= first <= last <= 2^62 (a request's first >= 1).
+Decoded to_event(const sextant::fleet_control_t& msg);
 /// Conversions event/output -> message, stamped with the sender's name and sequence number.
 sextant::odometry_t to_message(const engine::Odometry& e, const std::string& sender, int64_t seq);
 sextant::landmarks_t to_message(const engine::LandmarkSightings& e, const std::string& sender, int64_t seq);
@@ -76,6 +86,10 @@ sextant::trajectory_t to_message(const engine::Trajectory& o, const std::string&
 sextant::match_request_t to_message(const engine::MatchRequest& o, const std::string& sender, int64_t seq);
 sextant::targets_t to_message(const engine::Targets& o, const std::string& sender, int64_t seq);
 sextant::landmark_map_t to_message(const engine::LandmarkMap& o, const std::string& sender, int64_t seq);
+sextant::fleet_contribution_t to_message(const engine::FleetContributions& o, const std::string& sender, int64_t seq);
+sextant::fleet_control_t to_message(const engine::FleetControl& o, const std::string& sender, int64_t seq);
+/// One contribution as fleet_item_t (fleet_exchange.hpp's item_bytes is its encoded size).
+sextant::fleet_item_t to_item(const slam::GraphContribution::What& what);
 
 /// Message -> output (for replay reports, tests and `sextant listen`); no validation beyond decoding.
 engine::FusedPose to_output(const sextant::fused_pose_t& m);

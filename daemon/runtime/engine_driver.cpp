@@ -37,6 +37,11 @@ EngineDriver::EngineDriver(const config::DaemonConfig& config, engine::Engine& e
   intake_.add_channel(ch.full(ch.loop_closures), InputKind::kLoopClosures);
   intake_.add_channel(ch.full(ch.imu), InputKind::kImu);
   intake_.add_channel(ch.full(ch.gnss), InputKind::kGnss);
+  // The fleet's channels are shared by its daemons: no prefix (daemon_config.hpp).
+  if (config.engine.graph.enabled && config.engine.graph.fleet_exchange.enabled) {
+    intake_.add_channel(ch.fleet, InputKind::kFleet);
+    intake_.add_channel(ch.fleet_control, InputKind::kFleetControl);
+  }
   make_lanes(config);
 }
 

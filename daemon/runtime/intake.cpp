@@ -23,6 +23,8 @@ StreamKey stream_of(const std::string& channel, const engine::Event& e) {
           return {channel + "/" + x.source, false, 0};
         else if constexpr (std::is_same_v<T, engine::ImuSample> || std::is_same_v<T, engine::GnssFix>)
           return {channel + "/" + x.source + "/" + x.frame, true, 0};  // one clock per sensor of a body
+        else if constexpr (std::is_same_v<T, engine::FleetContributions> || std::is_same_v<T, engine::FleetControl>)
+          return {channel + "/" + x.sender, false, 0};  // not time-checked: the exchange orders them (accept_unguarded)
         else
           return {channel + "/" + x.source, false,
                   static_cast<uint64_t>(x.utime_from) * 0x9e3779b97f4a7c15ULL ^ static_cast<uint64_t>(x.utime_to)};
@@ -99,6 +101,12 @@ std::optional<engine::Event> Intake::accept_unguarded(const std::string& channel
     return std::nullopt;
   }
   engine::Event event = std::get<engine::Event>(std::move(d));
+  // A fleet member's message is not a sensor's: no clock, body or physics to check here; the graph stage's exchange
+  // (daemon/engine/fleet_exchange.hpp) orders it by its stream's numbers and decides whom to hear.
+  if (kind == InputKind::kFleet || kind == InputKind::kFleetControl) {
+    stats_.decoded(channel);
+    return event;
+  }
   const StreamKey key = stream_of(channel, event);
   if (!claims_.claim(key.stream, origin.sender, engine::event_utime(event))) {
     reject(

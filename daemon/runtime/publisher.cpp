@@ -71,6 +71,10 @@ bool Publisher::publish(const engine::Output& output) {
           send(channels_.full(channels_.targets), to_message(o, sender_, 0));
         } else if constexpr (std::is_same_v<T, engine::LandmarkMap>) {
           send(channels_.full(channels_.landmark_map), to_message(o, sender_, 0));
+        } else if constexpr (std::is_same_v<T, engine::FleetContributions>) {
+          send(channels_.fleet, to_message(o, sender_, 0));  // the fleet's channels: no prefix
+        } else if constexpr (std::is_same_v<T, engine::FleetControl>) {
+          send(channels_.fleet_control, to_message(o, sender_, 0));
         }
         return true;
       },

@@ -296,4 +296,36 @@ const WireLayout& wire_layout<sextant::targets_t>() {
   return l;
 }
 
+// The fleet's messages (lcmtypes/sextant/fleet_*.lcm).  The counts' maxima are the codec's own bounds, so that a count
+// beyond them is refused before anything is allocated.
+template <>
+const WireLayout& wire_layout<sextant::fleet_contribution_t>() {
+  static const WireLayout pose{"fleet_pose_t",
+                               {doubles("position", 3), doubles("orientation", 4), doubles("matrix", 36)}};
+  static const WireLayout anchor{
+      "fleet_anchor_t",
+      {i64("keyframe"), doubles("position", 3), doubles("orientation", 4), doubles("covariance", 36)}};
+  static const WireLayout observation{
+      "landmark_observation_t",
+      {i64("id"), doubles("range", 1), doubles("azimuth", 1), doubles("elevation", 1), doubles("covariance", 9)}};
+  static const WireLayout item{
+      "fleet_item_t",
+      {i8("kind"), i8("flags"), i64("utime"), i64("utime_to"), boolean("planar"), str("other"), i64("keyframe_a"),
+       i64("keyframe_b"), count("num_poses", 2), array("poses", pose), count("num_anchors", 2),
+       array("anchors", anchor), count("num_sightings", 256), array("sightings", observation)}};
+  static const WireLayout l{"fleet_contribution_t",
+                            {i64("utime"), str("sender"), i64("seq"), str("body"), boolean("repair"), i64("first"),
+                             count("num_contributions", 1024), array("contributions", item)}};
+  return l;
+}
+
+template <>
+const WireLayout& wire_layout<sextant::fleet_control_t>() {
+  static const WireLayout range{"fleet_range_t", {str("body"), i64("first"), i64("last")}};
+  static const WireLayout l{"fleet_control_t",
+                            {i64("utime"), str("sender"), i64("seq"), i8("kind"), str("daemon"),
+                             count("num_streams", 1024), array("streams", range)}};
+  return l;
+}
+
 }  // namespace sextant::runtime

@@ -11,6 +11,8 @@
 // The layouts mirror lcmtypes/sextant/*.lcm; tests/daemon/runtime/test_wire_layout.cpp checks each against lcm-gen's
 // encoder (the encoded size of random messages, and every truncation refused).
 #include <sextant/bearing_scan_t.hpp>
+#include <sextant/fleet_contribution_t.hpp>
+#include <sextant/fleet_control_t.hpp>
 #include <sextant/fused_pose_t.hpp>
 #include <sextant/gnss_t.hpp>
 #include <sextant/imu_t.hpp>
@@ -98,6 +100,10 @@ template <>
 const WireLayout& wire_layout<sextant::targets_t>();
 template <>
 const WireLayout& wire_layout<sextant::landmark_map_t>();
+template <>
+const WireLayout& wire_layout<sextant::fleet_contribution_t>();
+template <>
+const WireLayout& wire_layout<sextant::fleet_control_t>();
 
 /// Whether `wire_layout<Msg>()` exists (safe_decode needs it).
 template <class Msg>
@@ -128,6 +134,10 @@ template <>
 inline constexpr bool kHasWireLayout<sextant::targets_t> = true;
 template <>
 inline constexpr bool kHasWireLayout<sextant::landmark_map_t> = true;
+template <>
+inline constexpr bool kHasWireLayout<sextant::fleet_contribution_t> = true;
+template <>
+inline constexpr bool kHasWireLayout<sextant::fleet_control_t> = true;
 
 /// Decodes untrusted bytes as `Msg`: the fingerprint, then the layout walk (for the types that have one), then
 /// lcm-gen's decode with anything it throws caught.  nullopt on success, else what is wrong ("fingerprint", "decode" or "too_large").

@@ -1,4 +1,4 @@
-// Fuzz harness: the message codec, every type that arrives from outside (the daemon's four inputs; ground truth,
+// Fuzz harness: the message codec, every type that arrives from outside (the daemon's inputs, the fleet's two; ground truth,
 // match requests, fused poses, status, trajectories and targets, which the tools decode).  The first byte picks the
 // type; with its high bit set the harness writes the type's fingerprint in front of the rest, so that the fuzzer reaches the
 // layout walk and the validation behind the fingerprint check (random bytes almost never carry a fingerprint).
@@ -60,6 +60,15 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   const bool fp = (data[0] & 0x80) != 0;
   const uint8_t which = data[0] & 0x7f;
   ++data, --size;
+  // The fleet's two messages have picks of their own (12, 13), so the older picks keep their types.
+  if (which == 12) {
+    decode_input<sextant::fleet_contribution_t>(runtime::InputKind::kFleet, fp, data, size);
+    return 0;
+  }
+  if (which == 13) {
+    decode_input<sextant::fleet_control_t>(runtime::InputKind::kFleetControl, fp, data, size);
+    return 0;
+  }
   switch (which % 12) {
     case 0:
       decode_input<sextant::odometry_t>(runtime::InputKind::kOdometry, fp, data, size);

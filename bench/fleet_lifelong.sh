@@ -1,0 +1,48 @@
+#!/usr/bin/env bash
+# A simulated fleet in lifelong mode against run length: `sextant simulate planar --robots N` for MINUTES, with no
+# wrong inter-robot loops and with 10 % wrong ones, replayed with config/default.yaml (lifelong on) plus the fleet's
+# markers, per 5-minute segment the real-time factor, the graph stage's p99/max time per event and the RSS; then every
+# robot's fleet-frame ATE (`sextant eval fleet`).
+#   bench/fleet_lifelong.sh BUILD OUT [MINUTES] [ROBOTS]       (defaults: 60 minutes, 8 robots)
+# -> OUT/fleet_lifelong.md (the table), OUT/*.json (replay --json), OUT/eval_*.txt.  A benchmark, not a test: the
+# 60-minute run of 8 robots takes tens of minutes.
+set -euo pipefail
+build=${1:?usage: bench/fleet_lifelong.sh BUILD OUT [MINUTES] [ROBOTS]}
+out=${2:?usage: bench/fleet_lifelong.sh BUILD OUT [MINUTES] [ROBOTS]}
+minutes=${3:-60}
+robots=${4:-8}
+root=$(cd "$(dirname "$0")/.." && pwd)
+mkdir -p "$out"
+out=$(cd "$out" && pwd)
+sextant="$(cd "$build/bin" && pwd)/sextant"
+for wrong in 0 0.1; do
+  run="$out/fleet${robots}_${minutes}min_wrong${wrong}"
+  "$sextant" simulate planar --robots "$robots" --duration $((minutes * 60)) --seed 1 --wrong-loops "$wrong" \
+    -o "$run.lcm" --config-out "$run.markers.yaml" > /dev/null
+  markers=$(grep markers "$run.markers.yaml" | sed 's/^ *//')
+  sed "s/^      markers: {}  .*/      $markers/" "$root/config/default.yaml" > "$run.yaml"
+  /usr/bin/time -f "%M" -o "$run.maxrss" "$sextant" replay "$run.lcm" --config "$run.yaml" --estimator graph --json \
+    --segment-seconds 300 --out-log "$run.out.lcm" > "$run.json"
+  "$sextant" eval fleet --out-log "$run.out.lcm" --gt-prefix "${run}_gt_" --estimator graph > "$run.eval.txt"
+  rm -f "$run.lcm" "$run.out.lcm"
+done
+python3 - "$out" "$robots" "$minutes" > "$out/fleet_lifelong.md" <<'EOP'
+import glob, json, os, sys
+out, robots, minutes = sys.argv[1:4]
+print(f"# Fleet in lifelong mode: {robots} simulated planar robots, {minutes} minutes\n")
+print("| wrong loops | real-time factor | segment | segment real-time factor | graph p99 (ms) | graph max (ms) | RSS (MB) |")
+print("|---|---|---|---|---|---|---|")
+for wrong in ("0", "0.1"):
+    run = f"{out}/fleet{robots}_{minutes}min_wrong{wrong}"
+    d = json.load(open(run + ".json"))
+    for s in d["segments"]:
+        g = s["stages"]["graph"]
+        print(f"| {wrong} | {d['realtime_factor']:.2f} | {s['start_s'] // 60}-{(s['start_s'] + s['data_s']) // 60} min | "
+              f"{s['realtime_factor']:.2f} | {g['p99_ms']:.1f} | {g['max_ms']:.0f} | {s['rss_kb'] // 1024} |")
+for wrong in ("0", "0.1"):
+    run = f"{out}/fleet{robots}_{minutes}min_wrong{wrong}"
+    print(f"\nFleet-frame ATE, wrong loops {wrong} (`sextant eval fleet`):\n\n```")
+    print(open(run + ".eval.txt").read().rstrip())
+    print("```")
+EOP
+cat "$out/fleet_lifelong.md"

@@ -1,0 +1,292 @@
+#pragma once
+// The exchange between the graphs of a fleet's daemons (docs/graph.md "A fleet of daemons"): each daemon is fed only
+// its own robots' sensors, makes graph contributions from them (estimators/slam/graph_contribution.hpp) and sends
+// them on FLEET; every daemon applies the others' in each stream's order, so all hold the same fleet map.  This is
+// the pure part: numbering, batching, loss repair, membership and ordering, with no I/O, no threads and no clock
+// (every call that needs the time takes it, microseconds).  The graph stage owns one FleetExchange and saves it with
+// its own state, so a restarted daemon asks only for what it missed.  Why in the engine: the exchange's state must
+// be saved at the same moment as the graph it describes (what was applied, what was sent), which is the stage's.
+//
+// Streams.  A body is owned by the daemon that first contributes it; its contributions are numbered 1, 2, ... in the
+// order its owner made them (the Outbox).  A receiver (the Inbox) applies stream (owner, body) in order: it holds
+// back contributions that arrive early (at most reorder_window of them, reorder_bytes of wire size, per stream),
+// drops what it already has, and finds gaps from a later contribution or from the owner's heartbeat (which names the
+// stream's last number, so a lost tail is found too).  A gap is asked for (a REPAIR request to the owner) after
+// repair_backoff_s, again after twice as long while nothing arrives (up to repair_backoff_max_s), from the start
+// when the stream moves.
+//
+// The limit of a restart: an owner restarted from its state directory continues from what it saved (the state is
+// written every daemon.state_period_s).  What it sent after that save and before it stopped was applied by the others
+// and is not in its own graph; its next contributions take those numbers again and the others drop them as already
+// delivered.  A receiver sees this (a heartbeat whose stream ends before what it delivered) and counts it
+// (`owner_rewound`); the maps of that body then differ until the state directory is saved at shutdown (SIGTERM saves
+// it, README "State directory"): a daemon that is killed, not stopped, loses up to state_period_s of its own
+// contributions from the fleet's agreement.
+//
+// The limit of `retain`: the owner keeps the last `retain` contributions of each body (and at most retain_mb of them)
+// to resend.  A receiver that misses older ones (cut off for longer, or a daemon that joins after the fleet made more
+// than `retain` contributions of a body) counts them as lost (`lost`), and the stream resumes from the oldest one the
+// owner still has: its map then lacks what was lost, and the later contributions that need a lost keyframe wait and
+// are dropped by the graph as it drops any it cannot place.  Memory of the owner: a keyframe contribution takes
+// about 740 bytes on the wire and in memory, a sighting 104 more; with 20000 retained keyframes and a few sightings
+// each, about 20 MB per body, bounded by retain_mb in any case.
+//
+// Membership and hostile senders: only the configured members are heard (a sender not in `members` is refused,
+// counted; this daemon's own messages, which multicast brings back, are ignored, counted); a body this daemon owns is
+// never taken from a sender; a body owned by a member is not taken by another (counted, like
+// daemon/runtime/source_claims.hpp); at most max_streams_per_sender streams per member; a number beyond the reorder
+// window is dropped (counted; a repair fetches it when it is due); a repair request is answered with at most
+// repair_bytes_per_s per requester (a token bucket of one second's worth).  The values themselves are validated by
+// the codec (daemon/runtime/codec.hpp) before they get here.
+#include "daemon/engine/fleet_events.hpp"
+#include "daemon/engine/fleet_exchange_options.hpp"
+#include "estimators/archive/binary_archive.hpp"
+
+#include <cstdint>
+#include <deque>
+#include <map>
+#include <optional>
+#include <set>
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace sextant::engine {
+
+namespace fleet {
+
+using What = slam::GraphContribution::What;
+
+/// The identified sightings of one contribution at most (fleet_item_t.num_sightings): a message's sightings beyond are
+/// split into contributions of their own with the same anchor.
+inline constexpr size_t kMaxSightingsPerItem = 256;
+/// The contributions of one FLEET message, and the ranges of one FLEET_CONTROL message, at most.
+inline constexpr size_t kMaxItemsPerMessage = 1024;
+inline constexpr size_t kMaxRangesPerMessage = 1024;
+/// A body or daemon name's length at most (as the other inputs' names).
+inline constexpr size_t kMaxNameLength = 256;
+
+/// The encoded size of one contribution as fleet_item_t (bytes), and of a FLEET message's fields around its
+/// contributions (the fingerprint included); the codec's tests check both against lcm-gen's encoder.
+size_t item_bytes(const What& what);
+size_t message_overhead_bytes(const std::string& sender, const std::string& body);
+/// `what` as it goes on the wire: a SightingsContribution of more than kMaxSightingsPerItem sightings becomes several,
+/// in order, each with the same anchor; anything else is itself.
+std::vector<What> split_for_wire(const What& what);
+
+/// One contribution with its number in its stream.
+struct Numbered {
+  int64_t seq = 0;
+  What what;
+  void save(archive::ArchiveWriter& w) const;
+  void load(archive::ArchiveReader& r);
+};
+
+struct OutboxCounters {
+  int64_t contributions = 0;        // numbered (after splitting)
+  int64_t messages = 0;             // FLEET messages made, first sendings
+  int64_t evicted = 0;              // contributions no longer retained (retain, retain_mb)
+  int64_t repair_requests = 0;      // REPAIR requests addressed to this daemon by a member
+  int64_t repair_refused = 0;       // ... by a non-member, or for a body this daemon does not own
+  int64_t repaired = 0;             // contributions resent
+  int64_t repair_messages = 0;      // FLEET messages of resent contributions
+  int64_t repair_limited = 0;       // contributions asked for and not resent for the requester's rate
+  int64_t repair_not_retained = 0;  // contributions asked for that are no longer retained
+};
+
+/// The sending side: numbers the contributions of the local bodies, keeps the last ones for repair, makes the FLEET
+/// messages, the heartbeats, and the answers to repair requests.
+class Outbox {
+ public:
+  Outbox(std::string self, FleetExchangeOptions options);
+
+  /// Numbers a contribution of a local body (split as split_for_wire), keeps it and queues it for sending.
+  void add(const slam::GraphContribution& c);
+  /// Whether `body` is a local body (it contributed here).
+  bool owns(const std::string& body) const { return streams_.contains(body); }
+  /// The FLEET messages of what was added since the last call: per body, runs of consecutive contributions, each
+  /// message at most max_message_bytes and kMaxItemsPerMessage contributions.
+  std::vector<FleetContributions> take_messages(int64_t now_utime);
+  /// The heartbeat when one is due (heartbeat_period_s since the last; the first at once): per local body the range
+  /// retained and sent, kMaxRangesPerMessage bodies per message.  Nothing when not due or without a local body yet.
+  std::vector<FleetControl> heartbeat(int64_t now_utime);
+  /// The answer to a REPAIR request: the retained contributions asked for, as far as the requester's rate allows.
+  /// A request addressed to another daemon is not for this one (nothing, not counted).
+  std::vector<FleetContributions> answer(const FleetControl& request, int64_t now_utime);
+  /// The numbers of `body`'s stream: the next to be given and the oldest retained (0: none).
+  int64_t next_seq(const std::string& body) const;
+  int64_t first_retained(const std::string& body) const;
+  const OutboxCounters& counters() const { return counters_; }
+
+  /// The numbering and the retained log of every local body, and the counters (not the rate buckets: a restarted
+  /// daemon starts with full ones).  What was queued and not yet taken is saved as queued.
+  void save(archive::ArchiveWriter& w) const;
+  void load(archive::ArchiveReader& r);
+
+ private:
+  struct Stream {
+    int64_t next_seq = 1;
+    std::deque<Numbered> retained;
+    size_t retained_bytes = 0;
+    size_t pending = 0;  // the newest `pending` of `retained` are not sent yet
+    void save(archive::ArchiveWriter& w) const;
+    void load(archive::ArchiveReader& r);
+  };
+  struct Bucket {
+    double tokens = 0;
+    int64_t utime = 0;
+  };
+  /// Packs `items` of `body` (consecutive numbers) into messages.
+  std::vector<FleetContributions> pack(const std::string& body, std::deque<Numbered>::const_iterator begin,
+                                       std::deque<Numbered>::const_iterator end, bool repair, int64_t now) const;
+  /// The bytes `requester` may be sent now (its bucket refilled to `now`).
+  Bucket& bucket(const std::string& requester, int64_t now);
+  void evict(Stream& s);
+  /// One range of a repair request answered into `out`, within the requester's bucket.
+  void answer_range(const FleetRange& range, Bucket& b, int64_t now, std::vector<FleetContributions>& out);
+
+  std::string self_;
+  FleetExchangeOptions options_;
+  std::set<std::string> members_;
+  std::map<std::string, Stream> streams_;
+  std::map<std::string, Bucket> buckets_;  // per requester: members only
+  std::optional<int64_t> last_heartbeat_;
+  OutboxCounters counters_;
+};
+
+struct InboxCounters {
+  int64_t messages = 0;          // FLEET messages from members, taken in
+  int64_t delivered = 0;         // contributions handed to the graph, in their stream's order
+  int64_t duplicates = 0;        // contributions already delivered or already held
+  int64_t out_of_window = 0;     // contributions beyond the reorder window (dropped; a repair fetches them later)
+  int64_t own = 0;               // messages of this daemon, brought back by multicast (ignored)
+  int64_t not_member = 0;        // messages of a sender not in `members` (refused)
+  int64_t local_body = 0;        // messages about a body this daemon owns (refused)
+  int64_t claimed = 0;           // messages about a body another member owns (refused)
+  int64_t too_many_streams = 0;  // messages that would open a stream beyond max_streams_per_sender (refused)
+  int64_t lost = 0;              // contributions the owner no longer retained when asked for (skipped)
+  int64_t repair_requests = 0;   // REPAIR requests made
+  int64_t repair_asked = 0;      // contributions asked for in them
+  int64_t heartbeats = 0;        // heartbeats of members taken in
+  int64_t owner_rewound = 0;     // heartbeats, newer than every message heard of their stream, that end the stream
+                                 // before what was heard (the owner restarted from a state older than what it had
+                                 // sent: its next numbers repeat ones already applied here)
+};
+
+/// The receiving side: per (owner, body) stream, the contributions in order.
+class Inbox {
+ public:
+  Inbox(std::string self, FleetExchangeOptions options);
+
+  /// `body` is this daemon's own (its sensors arrive here): no sender is heard about it from now on.  False when a
+  /// member already contributed it (counted as claimed; the stream stays theirs).
+  bool own(const std::string& body);
+  /// A FLEET message: the contributions that are now next in their stream, in order (each with its body).
+  std::vector<slam::GraphContribution> receive(const FleetContributions& m, int64_t now_utime);
+  /// A heartbeat: learns each stream's last number (a lost tail becomes a gap) and the oldest the owner retains (what
+  /// is older and missing is lost: the stream resumes, delivering what it held).  A REPAIR request is not for the
+  /// Inbox (Outbox::answer): nothing.
+  std::vector<slam::GraphContribution> receive(const FleetControl& m, int64_t now_utime);
+  /// The REPAIR requests due now: one per owner with a gap whose back-off has passed, each range at most
+  /// max_repair_range contributions (the first holes of the stream, at most kMaxRangesPerMessage ranges).
+  std::vector<FleetControl> repair_requests(int64_t now_utime);
+
+  /// The next number expected of `body`'s stream (1 for a stream not heard of) and its owner (empty: none).
+  int64_t next_expected(const std::string& body) const;
+  std::string owner(const std::string& body) const;
+  /// Streams now, and contributions held ahead of their turn (all streams).
+  size_t streams() const { return streams_.size(); }
+  size_t held() const;
+  const InboxCounters& counters() const { return counters_; }
+
+  /// Every stream's owner, next number, known last and owner's first, the contributions held, the local bodies and
+  /// the counters (not the repair timers: a restarted daemon asks for its gaps after repair_backoff_s).
+  void save(archive::ArchiveWriter& w) const;
+  void load(archive::ArchiveReader& r);
+
+ private:
+  struct Stream {
+    std::string owner;
+    int64_t next = 1;         // the next number to deliver
+    int64_t known_last = 0;   // the highest number known to exist (held contributions, heartbeats)
+    int64_t owner_first = 0;  // the oldest the owner retains (its last heartbeat)
+    std::map<int64_t, What> held;
+    size_t held_bytes = 0;
+    int64_t ask_at = 0;  // when the gap may be asked for (0: no gap seen)
+    double backoff_s = 0;
+    int64_t sent_utime = 0;  // the owner's clock: its newest message (data or heartbeat) heard, for owner_rewound
+    int64_t beat_last = 0;   // ... and the stream's last number it stated then
+    void save(archive::ArchiveWriter& w) const;
+    void load(archive::ArchiveReader& r);
+  };
+  /// Whether `sender` may speak for `body` (counting why not); the stream when it may, opened if new.
+  Stream* stream_for(const std::string& sender, const std::string& body);
+  /// Delivers what is next in `s` into `out`, skipping (as lost) what is below the owner's first retained number.
+  void deliver(const std::string& body, Stream& s, int64_t now, std::vector<slam::GraphContribution>& out);
+  /// Keeps one contribution arriving at `seq` (held, duplicate or beyond the window).
+  void hold(Stream& s, int64_t seq, What what);
+  /// Schedules or clears `s`'s repair after the stream moved or learned of a gap.
+  void schedule(Stream& s, int64_t now, bool moved);
+  /// The holes of `s` to ask for, at most max_repair_range contributions.
+  std::vector<FleetRange> holes(const std::string& body, const Stream& s) const;
+
+  std::string self_;
+  FleetExchangeOptions options_;
+  std::set<std::string> members_;
+  std::set<std::string> local_;
+  std::map<std::string, Stream> streams_;  // by body: a body has one owner
+  std::map<std::string, int> streams_of_;  // streams per owner
+  InboxCounters counters_;
+};
+
+/// Both sides of one daemon, the unit the graph stage holds and saves.
+struct FleetExchange {
+  FleetExchange(const std::string& self, const FleetExchangeOptions& options)
+      : outbox(self, options), inbox(self, options) {}
+  explicit FleetExchange(const FleetExchangeOptions& options) : FleetExchange(options.self, options) {}
+  /// A contribution made from a local body's inputs: its body is local from now on, and it is numbered and queued.
+  /// False (nothing sent) when another member already contributes that body (Inbox::own: the same robot fed to two
+  /// daemons; counted as claimed).
+  bool contributed(const slam::GraphContribution& c) {
+    if (!inbox.own(c.body)) return false;
+    outbox.add(c);
+    return true;
+  }
+  /// A fleet event heard on the bus: the contributions now next in their streams, to apply in this order
+  /// (SlamGraph::apply), and for a repair request addressed to this daemon the messages that answer it, to send.
+  struct Received {
+    std::vector<slam::GraphContribution> apply;
+    std::vector<FleetContributions> answers;
+  };
+  Received received(const FleetContributions& m, int64_t now_utime) { return {inbox.receive(m, now_utime), {}}; }
+  Received received(const FleetControl& m, int64_t now_utime) {
+    if (m.kind == FleetControl::Kind::kRepair) return {{}, outbox.answer(m, now_utime)};
+    return {inbox.receive(m, now_utime), {}};
+  }
+  /// The counters of both sides and the sizes now, named for the status channel (fleet_out_*, fleet_in_*).
+  std::vector<std::pair<std::string, int64_t>> counters() const;
+  /// What is due now: the FLEET messages queued, the heartbeat and the repair requests.
+  struct Due {
+    std::vector<FleetContributions> contributions;
+    std::vector<FleetControl> control;
+  };
+  Due due(int64_t now_utime);
+  void save(archive::ArchiveWriter& w) const {
+    outbox.save(w);
+    inbox.save(w);
+  }
+  void load(archive::ArchiveReader& r) {
+    outbox.load(r);
+    inbox.load(r);
+  }
+
+  Outbox outbox;
+  Inbox inbox;
+};
+
+/// The contributions' own archive (every field, exactly), for the retained and held logs.
+void save_what(archive::ArchiveWriter& w, const What& what);
+void load_what(archive::ArchiveReader& r, What& what);
+
+}  // namespace fleet
+}  // namespace sextant::engine

@@ -1,0 +1,423 @@
+// The fleet exchange between daemons (daemon/engine/fleet_exchange.hpp): numbering, batching under the datagram size,
+// loss repair over a lossy, reordering, duplicating bus, a long cut, a restart from saved state, and senders that are
+// not to be believed.  Each run asserts that a receiver delivers exactly the owner's stream, in order, where the
+// scheme promises it, and bounded memory and counts otherwise.
+#include "daemon/engine/fleet_exchange.hpp"
+
+#include <doctest/doctest.h>
+
+#include <algorithm>
+#include <random>
+#include <string>
+#include <vector>
+
+using namespace sextant;
+using namespace sextant::engine;
+using namespace sextant::engine::fleet;
+
+namespace {
+
+FleetExchangeOptions options(std::vector<std::string> members = {"a", "b", "c"}) {
+  FleetExchangeOptions o;
+  o.enabled = true;
+  o.members = std::move(members);
+  return o;
+}
+
+slam::GraphContribution keyframe(const std::string& body, int64_t id) {
+  slam::KeyframeContribution k;
+  k.id = id;
+  k.utime = 1000000 * id;
+  k.first = id == 0;
+  k.odom_covariance = Matrix6d::Identity() * 0.01;
+  k.edge_covariance = Matrix6d::Identity() * 0.001;
+  return {body, k};
+}
+
+slam::GraphContribution sightings(const std::string& body, int64_t keyframe_id, size_t n) {
+  slam::SightingsContribution s;
+  s.anchor.keyframe = keyframe_id;
+  s.sightings.utime = 1000000 * keyframe_id + 10;
+  for (size_t i = 0; i < n; ++i) {
+    slam::LandmarkSighting l;
+    l.id = static_cast<int64_t>(i);
+    l.range = 1.0 + static_cast<double>(i);
+    l.covariance = Eigen::Matrix3d::Identity() * 0.01;
+    s.sightings.sightings.push_back(l);
+  }
+  return {body, s};
+}
+
+// What identifies a test contribution: its kind, keyframe id and time, and its sightings' first id and count.
+std::string key(const What& w) {
+  if (const auto* k = std::get_if<slam::KeyframeContribution>(&w)) return "k" + std::to_string(k->id);
+  if (const auto* s = std::get_if<slam::SightingsContribution>(&w))
+    return "s" + std::to_string(s->anchor.keyframe) + "/" + std::to_string(s->sightings.sightings.front().id) + "+" +
+           std::to_string(s->sightings.sightings.size());
+  return "?";
+}
+
+// A bus between daemons: each message is lost with probability `loss`, delivered twice with `duplicate`, and what
+// is delivered in one step arrives in a random order.  `cut` drops everything.
+struct Bus {
+  std::mt19937 rng;
+  double loss = 0, duplicate = 0;
+  bool cut = false;
+  template <class M>
+  std::vector<M> carry(std::vector<M> in) {
+    std::vector<M> out;
+    std::uniform_real_distribution<double> u(0, 1);
+    for (auto& m : in) {
+      if (cut || u(rng) < loss) continue;
+      if (u(rng) < duplicate) out.push_back(m);
+      out.push_back(std::move(m));
+    }
+    std::shuffle(out.begin(), out.end(), rng);
+    return out;
+  }
+};
+
+// Daemon a owns body r1 and contributes; daemon b receives.  One step is 0.1 s.
+struct Pair {
+  FleetExchange a{"a", options()}, b{"b", options()};
+  Bus bus{std::mt19937(7)};
+  std::vector<std::string> sent, delivered;
+  int64_t now = 1000000;
+  int64_t next_id = 0;
+
+  void contribute(int keyframes) {
+    for (int i = 0; i < keyframes; ++i) {
+      const int64_t id = next_id++;
+      for (auto c : {keyframe("r1", id), sightings("r1", id, 3)}) {
+        sent.push_back(key(c.what));
+        a.contributed(c);
+      }
+    }
+  }
+  void step(int keyframes = 0) {
+    now += 100000;
+    contribute(keyframes);
+    auto due = a.due(now);
+    for (auto& m : bus.carry(due.contributions)) take(b.inbox.receive(m, now));
+    for (auto& h : bus.carry(due.control)) take(b.inbox.receive(h, now));
+    for (auto& request : bus.carry(b.due(now).control))
+      for (auto& answer : bus.carry(a.outbox.answer(request, now))) take(b.inbox.receive(answer, now));
+  }
+  void take(const std::vector<slam::GraphContribution>& got) {
+    for (const auto& c : got) {
+      CHECK(c.body == "r1");
+      delivered.push_back(key(c.what));
+    }
+  }
+};
+
+}  // namespace
+
+TEST_CASE(
+    "fleet exchange: numbering from 1 per body, a big sightings message split with its anchor, messages under the "
+    "size") {
+  Outbox out("a", options());
+  out.add(keyframe("r1", 0));
+  out.add(sightings("r1", 0, 600));
+  out.add(keyframe("r2", 0));
+  CHECK(out.next_seq("r1") == 5);  // the keyframe, then 256 + 256 + 88 sightings
+  CHECK(out.next_seq("r2") == 2);
+  const auto msgs = out.take_messages(5);
+  REQUIRE(msgs.size() >= 2);
+  std::vector<int64_t> firsts;
+  for (const auto& m : msgs) {
+    size_t bytes = message_overhead_bytes(m.sender, m.body);
+    for (const auto& w : m.contributions) bytes += item_bytes(w);
+    CHECK(bytes <= 60000);
+    CHECK(m.sender == "a");
+    if (m.body == "r1") firsts.push_back(m.first);
+  }
+  CHECK(firsts.front() == 1);
+  std::vector<size_t> parts;
+  for (const auto& m : msgs)
+    for (const auto& w : m.contributions)
+      if (const auto* s = std::get_if<slam::SightingsContribution>(&w)) {
+        CHECK(s->anchor.keyframe == 0);
+        parts.push_back(s->sightings.sightings.size());
+      }
+  CHECK(parts == std::vector<size_t>{256, 256, 88});
+  CHECK(out.take_messages(6).empty());  // each sent once
+  CHECK(split_for_wire(sightings("r1", 0, 0).what).empty());
+}
+
+TEST_CASE("fleet exchange: the stream arrives whole and in order through loss, reordering and duplication") {
+  for (const double loss : {0.1, 0.3, 0.5}) {
+    CAPTURE(loss);
+    Pair p;
+    p.bus.loss = loss;
+    p.bus.duplicate = 0.2;
+    for (int i = 0; i < 300; ++i) p.step(i % 3 == 0 ? 2 : 0);
+    for (int i = 0; i < 600 && p.delivered.size() < p.sent.size(); ++i) p.step();
+    CHECK(p.delivered == p.sent);
+    CHECK(p.b.inbox.held() == 0);
+    CHECK(p.b.inbox.counters().lost == 0);
+    CHECK(p.b.inbox.counters().repair_requests > 0);
+  }
+}
+
+TEST_CASE("fleet exchange: a lost tail is found from the heartbeat, and asked for with a back-off") {
+  Pair p;
+  p.contribute(1);
+  (void)p.a.due(p.now);  // sent, and lost on the way
+  p.now += 100000;
+  for (auto& h : p.a.outbox.heartbeat(p.now + 5000000)) CHECK(p.b.inbox.receive(h, p.now).empty());
+  CHECK(p.b.inbox.repair_requests(p.now).empty());  // not before the back-off
+  std::vector<int64_t> asked;
+  for (int64_t t = p.now; t < p.now + 4000000; t += 10000)
+    if (auto r = p.b.inbox.repair_requests(t); !r.empty()) {
+      CHECK(r.size() == 1);
+      CHECK(r[0].daemon == "a");
+      CHECK(r[0].streams[0].first == 1);
+      CHECK(r[0].streams[0].last == 2);
+      asked.push_back(t);
+    }
+  REQUIRE(asked.size() >= 3);
+  CHECK(asked[2] - asked[1] > asked[1] - asked[0]);  // backing off
+  const auto answer = p.a.outbox.answer(p.b.inbox.repair_requests(p.now + 10000000)[0], p.now);
+  REQUIRE(answer.size() == 1);
+  CHECK(answer[0].repair);
+  CHECK(p.b.inbox.receive(answer[0], p.now).size() == 2);
+  CHECK(p.b.inbox.repair_requests(p.now + 20000000).empty());
+}
+
+TEST_CASE("fleet exchange: after a long cut the stream resumes from repairs, at the requester's rate") {
+  Pair p;
+  p.bus.loss = 0.1;
+  for (int i = 0; i < 100; ++i) p.step(1);
+  p.bus.cut = true;
+  for (int i = 0; i < 3000; ++i) p.step(i % 2);  // five minutes apart
+  p.bus.cut = false;
+  const int64_t resent_before = p.a.outbox.counters().repaired;
+  for (int i = 0; i < 3000 && p.delivered.size() < p.sent.size(); ++i) p.step();
+  CHECK(p.delivered == p.sent);
+  CHECK(p.b.inbox.counters().lost == 0);
+  CHECK(p.a.outbox.counters().repaired - resent_before >= 1500 * 2);
+  CHECK(p.a.outbox.counters().repair_limited > 0);  // the backlog came at the rate, not at once
+}
+
+TEST_CASE("fleet exchange: beyond `retain` the missing part is counted lost and the stream resumes with what is left") {
+  Pair p;
+  auto o = options();
+  o.retain = 50;
+  p.a = FleetExchange("a", o);
+  for (int i = 0; i < 20; ++i) p.step(1);
+  p.bus.cut = true;
+  for (int i = 0; i < 100; ++i) p.step(1);
+  p.bus.cut = false;
+  for (int i = 0; i < 200; ++i) p.step();
+  const auto& c = p.b.inbox.counters();
+  CHECK(c.lost > 0);
+  CHECK(static_cast<int64_t>(p.delivered.size()) + c.lost == static_cast<int64_t>(p.sent.size()));
+  // What was delivered is the sent stream with a hole: a prefix, then the last 50 the owner kept.
+  const size_t tail = 50;
+  REQUIRE(p.delivered.size() >= tail);
+  CHECK(std::equal(p.delivered.end() - tail, p.delivered.end(), p.sent.end() - tail));
+  CHECK(std::equal(p.delivered.begin(), p.delivered.begin() + 40, p.sent.begin()));
+  CHECK(p.a.outbox.first_retained("r1") == p.a.outbox.next_seq("r1") - 50);
+  CHECK(p.b.inbox.held() == 0);
+}
+
+TEST_CASE("fleet exchange: a receiver restarted from saved state asks only for what it missed") {
+  Pair p;
+  p.bus.loss = 0.2;
+  for (int i = 0; i < 100; ++i) p.step(1);
+  for (int i = 0; i < 100; ++i) p.step();  // caught up
+  REQUIRE(p.delivered == p.sent);
+  archive::ArchiveWriter w;
+  p.b.save(w);
+  const std::string saved = w.data();
+  const size_t at_save = p.delivered.size();
+  for (int i = 0; i < 50; ++i) p.step(1);  // then killed: what it received since is lost with it
+  p.delivered.resize(at_save);
+  const auto missed = static_cast<int64_t>(p.sent.size() - at_save);
+  FleetExchange restarted("b", options());
+  archive::ArchiveReader r(saved.data(), saved.size(), "state");
+  restarted.load(r);
+  r.expect_end();
+  p.b = std::move(restarted);
+  CHECK(p.b.inbox.next_expected("r1") == static_cast<int64_t>(at_save) + 1);
+  // The owner's next heartbeat shows the restarted daemon its gap: it asks from where its state ends, not from 1.
+  p.now += 100000;
+  for (const auto& h : p.a.outbox.heartbeat(p.now + 10000000)) CHECK(p.b.inbox.receive(h, p.now).empty());
+  const auto requests = p.b.inbox.repair_requests(p.now + 1000000);
+  REQUIRE(requests.size() == 1);
+  REQUIRE(requests[0].streams.size() == 1);
+  CHECK(requests[0].streams[0].first == static_cast<int64_t>(at_save) + 1);
+  CHECK(requests[0].streams[0].last == static_cast<int64_t>(p.sent.size()));
+  CHECK(missed == 100);
+  for (int i = 0; i < 600 && p.delivered.size() < p.sent.size(); ++i) p.step(i < 20 ? 1 : 0);
+  CHECK(p.delivered == p.sent);
+}
+
+TEST_CASE("fleet exchange: an owner restarted from saved state continues its numbering and answers from its log") {
+  Pair p;
+  for (int i = 0; i < 30; ++i) p.step(1);
+  archive::ArchiveWriter w;
+  p.a.save(w);
+  FleetExchange restarted("a", options());
+  archive::ArchiveReader r(w.data().data(), w.data().size(), "state");
+  restarted.load(r);
+  r.expect_end();
+  CHECK(restarted.outbox.next_seq("r1") == p.a.outbox.next_seq("r1"));
+  CHECK(restarted.outbox.first_retained("r1") == 1);
+  FleetControl ask{p.now, "c", FleetControl::Kind::kRepair, "a", {FleetRange{"r1", 1, 60}}};
+  const auto answer = restarted.outbox.answer(ask, p.now);
+  REQUIRE(!answer.empty());
+  Inbox late("c", options());  // a daemon that joins late gets the stream from the start
+  std::vector<std::string> got;
+  for (const auto& m : answer)
+    for (const auto& c : late.receive(m, p.now)) got.push_back(key(c.what));
+  CHECK(got == p.sent);
+  CHECK(restarted.inbox.owner("r1").empty());
+  CHECK(restarted.inbox.own("r1"));  // still its own body
+}
+
+TEST_CASE("fleet exchange: damaged saved state is refused, never half-loaded") {
+  Pair p;
+  for (int i = 0; i < 5; ++i) p.step(1);
+  archive::ArchiveWriter w;
+  p.b.save(w);
+  std::string bytes = w.data();
+  for (size_t cut : {size_t{3}, bytes.size() / 2, bytes.size() - 1}) {
+    FleetExchange fresh("b", options());
+    archive::ArchiveReader r(bytes.data(), cut, "state");
+    CHECK_THROWS_AS(fresh.load(r), archive::ArchiveError);
+  }
+}
+
+TEST_CASE("fleet exchange: senders that are not to be believed cannot open streams, take bodies or grow memory") {
+  auto o = options();
+  o.max_streams_per_sender = 4;
+  Inbox in("b", o);
+  REQUIRE(in.own("mine"));
+  const auto msg = [](std::string sender, std::string body, int64_t first) {
+    FleetContributions m;
+    m.sender = std::move(sender);
+    m.body = std::move(body);
+    m.first = first;
+    m.contributions.push_back(keyframe(m.body, first).what);
+    return m;
+  };
+  CHECK(in.receive(msg("mallory", "r9", 1), 1).empty());  // not a member
+  CHECK(in.receive(msg("b", "r9", 1), 1).empty());        // its own, back from multicast
+  CHECK(in.receive(msg("a", "mine", 1), 1).empty());      // a local body
+  CHECK(in.receive(msg("a", "r1", 1), 1).size() == 1);
+  CHECK(in.receive(msg("c", "r1", 2), 1).empty());  // r1 is a's
+  CHECK(in.owner("r1") == "a");
+  CHECK(in.receive(msg("a", "r1", int64_t{1} << 61), 1).empty());  // a number far ahead: not held
+  CHECK(in.receive(msg("a", "r1", INT64_MAX), 1).empty());
+  CHECK(in.held() == 0);
+  for (int i = 0; i < 1000; ++i) (void)in.receive(msg("c", "flood" + std::to_string(i), 1), 1);
+  CHECK(in.streams() == 1 + 4);
+  FleetControl hb{1, "mallory", FleetControl::Kind::kHeartbeat, "", {FleetRange{"r7", 1, 1000}}};
+  CHECK(in.receive(hb, 1).empty());
+  CHECK(in.repair_requests(100000000).empty());
+  const auto& c = in.counters();
+  CHECK(c.not_member == 2);
+  CHECK(c.own == 1);
+  CHECK(c.local_body == 1);
+  CHECK(c.claimed == 1);
+  CHECK(c.out_of_window == 2);
+  CHECK(c.too_many_streams == 1000 - 4);
+  CHECK(in.next_expected("r1") == 2);
+  CHECK(!in.own("r1"));  // a's: this daemon's sensors of r1 would be a second owner
+}
+
+TEST_CASE("fleet exchange: repair requests are answered within each requester's rate, members only") {
+  auto o = options();
+  o.repair_bytes_per_s = 100000;
+  Outbox out("a", o);
+  for (int64_t i = 0; i < 2000; ++i) out.add(keyframe("r1", i));
+  (void)out.take_messages(0);
+  const auto bytes_of = [](const std::vector<FleetContributions>& msgs) {
+    size_t n = 0;
+    for (const auto& m : msgs) {
+      n += message_overhead_bytes(m.sender, m.body);
+      for (const auto& w : m.contributions) n += item_bytes(w);
+    }
+    return n;
+  };
+  FleetControl storm{0, "b", FleetControl::Kind::kRepair, "a", {FleetRange{"r1", 1, 2000}}};
+  size_t answered = 0;
+  for (int64_t t = 0; t <= 10000000; t += 1000) answered += bytes_of(out.answer(storm, t));  // 1000 requests a second
+  CHECK(answered <= 100000 * 11 + 60000);  // the rate over 10 s and one bucket
+  CHECK(answered >= 100000 * 9);
+  CHECK(out.counters().repair_limited > 0);
+  FleetControl stranger{0, "mallory", FleetControl::Kind::kRepair, "a", {FleetRange{"r1", 1, 10}}};
+  CHECK(out.answer(stranger, 20000000).empty());
+  FleetControl other{0, "b", FleetControl::Kind::kRepair, "c", {FleetRange{"r1", 1, 10}}};
+  CHECK(out.answer(other, 20000000).empty());  // addressed to c
+  FleetControl unknown{0, "b", FleetControl::Kind::kRepair, "a", {FleetRange{"r5", 1, 10}}};
+  CHECK(out.answer(unknown, 20000000).empty());
+  CHECK(out.counters().repair_refused == 2);
+  // One request asks for max_repair_range contributions at most.
+  FleetControl wide{0, "c", FleetControl::Kind::kRepair, "a", {FleetRange{"r1", 1, INT64_MAX}}};
+  size_t n = 0;
+  for (const auto& m : out.answer(wide, 30000000)) n += m.contributions.size();
+  CHECK(n <= 1024);
+}
+
+TEST_CASE("fleet exchange: the retained log is bounded by count and by size") {
+  auto o = options();
+  o.retain = 100;
+  o.retain_mb = 1;
+  Outbox out("a", o);
+  for (int64_t i = 0; i < 1000; ++i) {
+    out.add(keyframe("r1", i));
+    (void)out.take_messages(i);
+  }
+  CHECK(out.next_seq("r1") - out.first_retained("r1") == 100);
+  for (int64_t i = 0; i < 100; ++i) {
+    out.add(sightings("r1", 999, 256));
+    (void)out.take_messages(i);
+  }
+  const int64_t kept = out.next_seq("r1") - out.first_retained("r1");
+  CHECK(kept * static_cast<int64_t>(item_bytes(sightings("r1", 0, 256).what)) <= (1 << 20));
+  CHECK(out.counters().evicted == 1100 - kept);
+}
+
+TEST_CASE("fleet exchange: an owner restarted from an older state than it sent is seen by the others") {
+  Pair p;
+  for (int i = 0; i < 10; ++i) p.step(1);
+  archive::ArchiveWriter w;
+  p.a.save(w);
+  for (int i = 0; i < 10; ++i) p.step(1);  // sent, applied by b, and not in a's saved state
+  CHECK(p.b.inbox.counters().owner_rewound == 0);
+  FleetExchange restarted("a", options());
+  archive::ArchiveReader r(w.data().data(), w.data().size(), "state");
+  restarted.load(r);
+  p.a = std::move(restarted);
+  p.now += 1000000;
+  for (const auto& h : p.a.outbox.heartbeat(p.now)) (void)p.b.inbox.receive(h, p.now);
+  CHECK(p.b.inbox.counters().owner_rewound == 1);
+}
+
+TEST_CASE("fleet exchange: one call per fleet event gives what to apply and what to send, and names every counter") {
+  FleetExchange a("a", options()), c("c", options());
+  CHECK(a.contributed(keyframe("r1", 0)));
+  CHECK(a.contributed(keyframe("r1", 1)));
+  const auto due = a.due(1000000);
+  REQUIRE(due.contributions.size() == 1);
+  REQUIRE(due.control.size() == 1);  // the first heartbeat
+  const auto got = c.received(due.contributions[0], 1000000);
+  CHECK(got.apply.size() == 2);
+  CHECK(got.answers.empty());
+  CHECK_FALSE(c.contributed(keyframe("r1", 5)));  // a's body: c's contribution of it is not sent
+  CHECK(c.outbox.next_seq("r1") == 1);
+  const FleetControl ask{2, "c", FleetControl::Kind::kRepair, "a", {FleetRange{"r1", 1, 2}}};
+  const auto answer = a.received(ask, 2000000);
+  CHECK(answer.apply.empty());
+  REQUIRE(answer.answers.size() == 1);
+  CHECK(answer.answers[0].repair);
+  const auto counters = c.counters();
+  CHECK(counters.size() == 25);
+  CHECK(std::find(counters.begin(), counters.end(), std::pair<std::string, int64_t>{"fleet_in_delivered", 2}) !=
+        counters.end());
+  CHECK(std::find(counters.begin(), counters.end(), std::pair<std::string, int64_t>{"fleet_in_claimed", 1}) !=
+        counters.end());
+}
