@@ -75,6 +75,10 @@ class GraphStage::Outputs final : public slam::SlamListener {
     request(body, utime, "fleet", a, other, b);
   }
 
+  void contributed(const slam::GraphContribution& c) override {
+    if (stage_.exchange_) stage_.exchange_->contributed(c);
+  }
+
  private:
   /// A MATCH_REQUESTS message: keyframe `a` of `body` against keyframe `b` of `body_b`, numbered here.
   void request(const std::string& body, int64_t utime, const char* kind, const slam::KeyframeEstimate& a,
@@ -96,7 +100,9 @@ class GraphStage::Outputs final : public slam::SlamListener {
 };
 
 GraphStage::GraphStage(const GraphConfig& config, std::shared_ptr<GraphCorrectionBoard> corrections)
-    : config_(config), corrections_(std::move(corrections)), slam_(interruptible(config, interrupt_)) {}
+    : config_(config), corrections_(std::move(corrections)), slam_(interruptible(config, interrupt_)) {
+  if (config_.fleet_exchange.enabled) exchange_ = std::make_unique<fleet::FleetExchange>(config_.fleet_exchange);
+}
 
 GraphStage::Feed& GraphStage::feed_of(const std::string& source) {
   auto it = feeds_.find(source);
@@ -112,10 +118,22 @@ void GraphStage::handle(const Event& e, const Emit& emit) {
     slam_.add_loop(l->source, to_input(*l), out);
   else if (const auto* s = std::get_if<LandmarkSightings>(&e))
     slam_.add_sightings(s->source, to_input(*s), out);
-  else if (std::holds_alternative<FleetContributions>(e))
-    ++counters_.fleet_messages_received;
-  else if (std::holds_alternative<FleetControl>(e))
-    ++counters_.fleet_control_received;
+  if (exchange_) exchange(e, out, emit);
+}
+
+void GraphStage::exchange(const Event& e, Outputs& out, const Emit& emit) {
+  exchange_now_ = std::max(exchange_now_, event_utime(e));
+  fleet::FleetExchange::Received r;
+  if (const auto* m = std::get_if<FleetContributions>(&e)) r = exchange_->received(*m, exchange_now_);
+  // A FleetControl without a sender is the daemon's tick (EngineDriver::tick, never from the wire: the codec refuses
+  // an empty sender): only the clock moves, so that heartbeats and repairs go on while no data arrives.
+  if (const auto* c = std::get_if<FleetControl>(&e); c && !c->sender.empty())
+    r = exchange_->received(*c, exchange_now_);
+  for (const slam::GraphContribution& c : r.apply) slam_.apply(c, out);
+  for (FleetContributions& a : r.answers) emit(std::move(a));
+  fleet::FleetExchange::Due due = exchange_->due(exchange_now_);
+  for (FleetContributions& m : due.contributions) emit(std::move(m));
+  for (FleetControl& c : due.control) emit(std::move(c));
 }
 
 void GraphStage::publish_trajectory(const std::string& source, Feed& f, int64_t utime, int solves, bool flush,
@@ -207,66 +225,67 @@ std::vector<Keyframe> GraphStage::keyframes(const std::string& source) const {
 
 Counters GraphStage::counters() const {
   const slam::SlamCounters& s = slam_.counters();
-  return {{"updates", s.updates},
-          {"keyframes", s.keyframes},
-          {"keyframes_rejected", s.keyframes_rejected},
-          {"keyframes_reanchored", s.keyframes_reanchored},
-          {"match_requests", counters_.match_requests},
-          {"loops_accepted", s.loops_accepted},
-          {"loops_rejected", s.loops_rejected},
-          {"loops_unmatched", s.loops_unmatched},
-          {"loops_unknown_source", s.loops_unknown_source},
-          {"loops_waiting", s.loops_waiting},
-          {"loops_waiting_dropped", s.loops_waiting_dropped},
-          {"optimizer_failures", s.optimizer_failures},
-          {"rebuilds", s.rebuilds},
-          {"relinearized_factors", s.relinearized_factors},
-          {"odometry_out_of_order", s.odometry_out_of_order},
-          {"odometry_edges_rejected", s.odometry_edges_rejected},
-          {"landmarks", s.landmarks},
-          {"sightings_accepted", s.sightings_accepted},
-          {"sightings_rejected", s.sightings_rejected},
-          {"sightings_without_id", s.sightings_without_id},
-          {"sightings_unknown_source", s.sightings_unknown_source},
-          {"sightings_before_keyframe", s.sightings_before_keyframe},
-          {"sightings_unmatched", s.sightings_unmatched},
-          {"sightings_malformed", s.sightings_malformed},
-          {"sightings_dropped", s.sightings_dropped},
-          {"last_update_us", static_cast<int64_t>(s.last_update_ms * 1000)},
-          {"trajectory_messages", counters_.trajectory_messages},
-          {"thinnings", s.thinnings},
-          {"thinning_failures", s.thinning_failures},
-          {"keyframes_thinned", s.keyframes_thinned},
-          {"loops_thinned", s.loops_thinned},
-          {"sightings_thinned", s.sightings_thinned},
-          {"landmarks_thinned", s.landmarks_thinned},
-          {"loops_on_thinned_keyframes", s.loops_on_thinned},
-          {"thinning_us_last", s.thinning_us_last},
-          {"thinning_us_max", s.thinning_us_max},
-          {"thinning_solve_us_last", s.thinning_solve_us_last},
-          {"graph_keyframes", graph_keyframes()},
-          {"graph_landmarks", graph_landmarks()},
-          {"graph_factors", graph_factors()},
-          {"trajectory_keyframe_bytes", counters_.trajectory_keyframe_bytes},
-          {"corrections_refused", counters_.corrections_refused},
-          {"fleet_frames", static_cast<int64_t>(slam_.frames().size())},
-          {"fleet_joins", s.fleet_joins},
-          {"fleet_sightings", s.fleet_sightings},
-          {"fleet_loops", s.fleet_loops},
-          {"fleet_pending", s.fleet_pending},
-          {"fleet_outliers", s.fleet_outliers},
-          {"fleet_pending_dropped", s.fleet_pending_dropped},
-          {"fleet_sightings_unplaced", s.fleet_sightings_unplaced},
-          {"fleet_self_sightings", s.fleet_self_sightings},
-          {"fleet_contributions_applied", s.fleet_contributions_applied},
-          {"fleet_contributions_refused", s.fleet_contributions_refused},
-          {"fleet_contributions_waiting", s.fleet_contributions_waiting},
-          {"fleet_contributions_dropped", s.fleet_contributions_dropped},
-          {"fleet_remote_inputs", s.fleet_remote_inputs},
-          {"landmark_map_messages", counters_.landmark_map_messages},
-          {"fleet_messages_received", counters_.fleet_messages_received},
-          {"fleet_control_received", counters_.fleet_control_received},
-          {"solves_interrupted", solves_interrupted()}};
+  Counters c{{"updates", s.updates},
+             {"keyframes", s.keyframes},
+             {"keyframes_rejected", s.keyframes_rejected},
+             {"keyframes_reanchored", s.keyframes_reanchored},
+             {"match_requests", counters_.match_requests},
+             {"loops_accepted", s.loops_accepted},
+             {"loops_rejected", s.loops_rejected},
+             {"loops_unmatched", s.loops_unmatched},
+             {"loops_unknown_source", s.loops_unknown_source},
+             {"loops_waiting", s.loops_waiting},
+             {"loops_waiting_dropped", s.loops_waiting_dropped},
+             {"optimizer_failures", s.optimizer_failures},
+             {"rebuilds", s.rebuilds},
+             {"relinearized_factors", s.relinearized_factors},
+             {"odometry_out_of_order", s.odometry_out_of_order},
+             {"odometry_edges_rejected", s.odometry_edges_rejected},
+             {"landmarks", s.landmarks},
+             {"sightings_accepted", s.sightings_accepted},
+             {"sightings_rejected", s.sightings_rejected},
+             {"sightings_without_id", s.sightings_without_id},
+             {"sightings_unknown_source", s.sightings_unknown_source},
+             {"sightings_before_keyframe", s.sightings_before_keyframe},
+             {"sightings_unmatched", s.sightings_unmatched},
+             {"sightings_malformed", s.sightings_malformed},
+             {"sightings_dropped", s.sightings_dropped},
+             {"last_update_us", static_cast<int64_t>(s.last_update_ms * 1000)},
+             {"trajectory_messages", counters_.trajectory_messages},
+             {"thinnings", s.thinnings},
+             {"thinning_failures", s.thinning_failures},
+             {"keyframes_thinned", s.keyframes_thinned},
+             {"loops_thinned", s.loops_thinned},
+             {"sightings_thinned", s.sightings_thinned},
+             {"landmarks_thinned", s.landmarks_thinned},
+             {"loops_on_thinned_keyframes", s.loops_on_thinned},
+             {"thinning_us_last", s.thinning_us_last},
+             {"thinning_us_max", s.thinning_us_max},
+             {"thinning_solve_us_last", s.thinning_solve_us_last},
+             {"graph_keyframes", graph_keyframes()},
+             {"graph_landmarks", graph_landmarks()},
+             {"graph_factors", graph_factors()},
+             {"trajectory_keyframe_bytes", counters_.trajectory_keyframe_bytes},
+             {"corrections_refused", counters_.corrections_refused},
+             {"fleet_frames", static_cast<int64_t>(slam_.frames().size())},
+             {"fleet_joins", s.fleet_joins},
+             {"fleet_sightings", s.fleet_sightings},
+             {"fleet_loops", s.fleet_loops},
+             {"fleet_pending", s.fleet_pending},
+             {"fleet_outliers", s.fleet_outliers},
+             {"fleet_pending_dropped", s.fleet_pending_dropped},
+             {"fleet_sightings_unplaced", s.fleet_sightings_unplaced},
+             {"fleet_self_sightings", s.fleet_self_sightings},
+             {"fleet_contributions_applied", s.fleet_contributions_applied},
+             {"fleet_contributions_refused", s.fleet_contributions_refused},
+             {"fleet_contributions_waiting", s.fleet_contributions_waiting},
+             {"fleet_contributions_dropped", s.fleet_contributions_dropped},
+             {"fleet_remote_inputs", s.fleet_remote_inputs},
+             {"landmark_map_messages", counters_.landmark_map_messages},
+             {"solves_interrupted", solves_interrupted()}};
+  if (exchange_)
+    for (auto& [name, value] : exchange_->counters()) c.emplace_back(name, value);
+  return c;
 }
 
 void GraphStage::save(archive::ArchiveWriter& w) {
@@ -277,6 +296,8 @@ void GraphStage::save(archive::ArchiveWriter& w) {
     const Feed& f = feed_of(source);
     w(f.feed)(f.newest_utime)(corrections_->get(source));
   }
+  w(exchange_ != nullptr)(exchange_now_);
+  if (exchange_) exchange_->save(w);
 }
 
 void GraphStage::load(archive::ArchiveReader& r) {
@@ -288,6 +309,15 @@ void GraphStage::load(archive::ArchiveReader& r) {
     Feed& f = feed_of(source);
     r(f.feed)(f.newest_utime);
     if (const auto c = r.get<std::optional<GraphCorrection>>()) corrections_->set(source, *c);
+  }
+  // The exchange's numbering and streams as they were; a state saved with the exchange off or on loads either way
+  // (a daemon that turned it off drops what was saved of it; one that turned it on starts its streams afresh).
+  const bool saved_exchange = r.get<bool>();
+  r(exchange_now_);
+  if (saved_exchange) {
+    fleet::FleetExchange saved(config_.fleet_exchange);
+    saved.load(r);
+    if (exchange_) *exchange_ = std::move(saved);
   }
 }
 

@@ -10,6 +10,7 @@
 //  - handles one event at a time and knows no threads: in the daemon a body's odometry may reach it in batches
 //    (daemon/runtime/odometry_batcher.hpp), handed to `handle` one message at a time as replay does;
 //  - counts what it does itself (GraphStageCounters) beside the layer's counters (slam_counters.hpp).
+#include "daemon/engine/fleet_exchange.hpp"
 #include "daemon/engine/graph_correction.hpp"
 #include "daemon/engine/graph_stage_config.hpp"
 #include "daemon/engine/stage.hpp"
@@ -34,8 +35,6 @@ struct GraphStageCounters {
   int64_t trajectory_keyframe_bytes = 0;  // their keyframes (72 bytes each) and removed ids (8 bytes each)
   int64_t corrections_refused = 0;        // solves whose newest keyframe was not finite or not PSD: not published
   int64_t landmark_map_messages = 0;      // LANDMARK_MAP messages published
-  int64_t fleet_messages_received = 0;    // FLEET messages of other members (engine.graph.fleet.exchange), not yet
-  int64_t fleet_control_received = 0;     // applied: the graph's side of the exchange (SlamGraph::apply) is to come
 };
 
 class GraphStage final : public Stage {
@@ -101,8 +100,16 @@ class GraphStage final : public Stage {
   std::atomic<bool> interrupt_{false};  // read by the smoothers (their options' interrupt): before slam_
   slam::SlamGraph slam_;
   std::map<std::string, Feed> feeds_;
-  std::map<std::string, int64_t> maps_published_;      // frame -> utime of its last LANDMARK_MAP
-  std::pair<std::optional<int64_t>, double> chi2_[2];  // [0] 3-D, [1] planar: when chi2 was last evaluated, its value
+  std::map<std::string, int64_t> maps_published_;  // frame -> utime of its last LANDMARK_MAP
+  std::pair<std::optional<int64_t>, double> chi2_[2];
+  /// engine.graph.fleet.exchange (null when off): the local bodies' contributions numbered and sent, the other
+  /// members' applied in their streams' order (fleet_exchange.hpp).  Its clock is the newest time the stage has seen:
+  /// the data's and the fleet messages', and a live daemon's ticks (a FleetControl without a sender, see handle).
+  std::unique_ptr<fleet::FleetExchange> exchange_;
+  int64_t exchange_now_ = 0;
+  /// A fleet event through the exchange: what it makes due applied to the graph and sent.
+  void exchange(const Event& e, Outputs& out,
+                const Emit& emit);  // [0] 3-D, [1] planar: when chi2 was last evaluated, its value
   int64_t next_request_id_ = 0;
   GraphStageCounters counters_;
 };

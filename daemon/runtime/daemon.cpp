@@ -292,11 +292,16 @@ void Daemon::start_periodic_threads() {
 }
 
 int Daemon::handle_until(const std::atomic<bool>& stop) {
+  auto next_tick = Clock::now();
   while (!stop.load()) {
     // A signal interrupts the poll (EINTR) and makes handleTimeout return -1: that is a shutdown, not a failure.
     if (lcm_.handleTimeout(100) < 0 && !stop.load()) {
       spdlog::error("LCM handle failed; stopping. {}", bus_failure_help(cfg_.lcm_url));
       return kExitBus;
+    }
+    if (Clock::now() >= next_tick) {  // the fleet exchange's clock between messages (on this, input()'s, thread)
+      driver_->tick(Arrival::now());
+      next_tick = Clock::now() + std::chrono::milliseconds(200);
     }
   }
   return kExitOk;

@@ -41,6 +41,7 @@ EngineDriver::EngineDriver(const config::DaemonConfig& config, engine::Engine& e
   if (config.engine.graph.enabled && config.engine.graph.fleet_exchange.enabled) {
     intake_.add_channel(ch.fleet, InputKind::kFleet);
     intake_.add_channel(ch.fleet_control, InputKind::kFleetControl);
+    tick_channel_ = ch.fleet_control;
   }
   make_lanes(config);
 }
@@ -100,6 +101,13 @@ bool EngineDriver::input(const std::string& channel, const void* data, size_t si
   if (options_.on_accepted) options_.on_accepted(*event);
   route(channel, QueuedEvent{std::move(*event), std::chrono::steady_clock::now(), intake_.resynced_body()});
   return true;
+}
+
+void EngineDriver::tick(Arrival arrival) {
+  if (tick_channel_.empty()) return;
+  engine::FleetControl tick;  // no sender: the clock only (GraphStage::exchange)
+  tick.utime = arrival.wall_utime;
+  route(tick_channel_, QueuedEvent{engine::Event(std::move(tick)), arrival.steady, {}});
 }
 
 void EngineDriver::start() {

@@ -65,6 +65,11 @@ class EngineDriver {
   /// One message of `channel` that arrived at `arrival`: decoded, checked, and routed to every stage that accepts
   /// it (a full queue is a drop on the channel).  True when the intake accepted it.
   bool input(const std::string& channel, const void* data, size_t size, Arrival arrival);
+  /// The clock of a fleet's exchange (engine.graph.fleet.exchange) moving without data: a FleetControl without a
+  /// sender at `arrival`'s wall time for the graph stage, so that its heartbeats and repairs go on while no data
+  /// arrives (sextantd calls it a few times a second from the thread that calls input()); nothing when the exchange
+  /// is off.
+  void tick(Arrival arrival);
   /// The output path the stages emit into (thread-safe).
   const engine::Emit& emit() const { return emit_; }
 
@@ -104,6 +109,7 @@ class EngineDriver {
   engine::Emit emit_;
   std::vector<std::unique_ptr<StageHost>> hosts_;      // kInline
   std::vector<std::unique_ptr<StageRunner>> runners_;  // kStageThreads
+  std::string tick_channel_;                           // fleet_control when the exchange is on (tick)
   std::vector<int64_t> processed_;                     // kInline: events per stage
 };
 

@@ -24,8 +24,8 @@ def trajectories(path, channel_suffix, sender=None):
 
 
 def rms(a, b):
-    pa = {k.id: k.pose.position for k in a}
-    pb = {k.id: k.pose.position for k in b}
+    pa = {k.id: k.position for k in a}
+    pb = {k.id: k.position for k in b}
     common = sorted(set(pa) & set(pb))
     if not common:
         return math.inf, 0

@@ -42,9 +42,10 @@ lab_loss() {
 lab_cut() { ip link set "lab-v$1" down; }
 lab_heal() { ip link set "lab-v$1" up; }
 
-# in_host N CMD...: CMD on host hN with the lab's LCM URL.
+# in_host N CMD... &: CMD on host hN with the lab's LCM URL, in the background; it replaces the subshell the '&'
+# made, so that $! is CMD itself (a signal to $! reaches it).
 in_host() {
   local n=$1
   shift
-  ip netns exec "h$n" env LCM_DEFAULT_URL="$LCM_LAB_URL" "$@"
+  exec ip netns exec "h$n" env LCM_DEFAULT_URL="$LCM_LAB_URL" "$@"
 }
