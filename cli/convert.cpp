@@ -123,6 +123,7 @@ void add_rosbag(CLI::App* cmd) {
       const auto r = convert_rosbag(*in, *out, o);
       std::printf("%s: written %s; skipped %s; dropped (non-finite) %s\n", out->c_str(), counts(r.written).c_str(),
                   counts(r.skipped).c_str(), counts(r.dropped).c_str());
+      for (const auto& [topic, first] : r.first_dropped) std::printf("  %s\n", first.c_str());
     });
   });
 }

@@ -44,7 +44,8 @@ std::string describe(const sextant::fused_pose_t& m) {
   return fmt("fused_pose_t %s seq %lld t=%.6f %s/%s ", m.sender.c_str(), (long long)m.seq, m.utime * 1e-6,
              m.source.c_str(), m.estimator.c_str()) +
          pose_text(m.position, m.orientation) +
-         fmt(" sigma_xy %.3f m", std::sqrt(std::max(0.0, m.covariance[0] + m.covariance[7])));
+         fmt(" sigma_xy %.3f m lag %.3f s", std::sqrt(std::max(0.0, m.covariance[0] + m.covariance[7])),
+             m.lag_us * 1e-6);
 }
 std::string describe(const sextant::landmarks_t& m) {
   return fmt("landmarks_t %s seq %lld t=%.6f source=%s observations=%d", m.sender.c_str(), (long long)m.seq,

@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <iterator>
 #include <stdexcept>
 #include <vector>
@@ -38,11 +39,16 @@ void body_frame_pose_covariance(const Eigen::Quaterniond& q, const boost::array<
   body = Rt * S * Rt.transpose();
 }
 
-bool pose_finite(const geometry_msgs::PoseWithCovariance& p) {
+constexpr const char* kCovarianceOverflows = "the pose covariance overflows when rotated into the body frame";
+
+// Why the pose of `p` cannot be converted; nullptr when it can.
+const char* pose_refused(const geometry_msgs::PoseWithCovariance& p) {
   const auto& o = p.pose.orientation;
   const double n = o.w * o.w + o.x * o.x + o.y * o.y + o.z * o.z;
-  return std::isfinite(p.pose.position.x + p.pose.position.y + p.pose.position.z) && std::isfinite(n) && n > 1e-12 &&
-         finite(p.covariance);
+  if (!std::isfinite(p.pose.position.x + p.pose.position.y + p.pose.position.z)) return "the position is not finite";
+  if (!(std::isfinite(n) && n > 1e-12)) return "the orientation quaternion is zero or not finite";
+  if (!finite(p.covariance)) return "the pose covariance is not finite";
+  return nullptr;
 }
 
 // The pose of `p` into `m`; false when the rotated covariance is not finite (entries near the largest double
@@ -69,37 +75,44 @@ std::string RosMessageConverter::body(const std::string& frame) const {
   return it == options_.bodies.end() ? frame : it->second;
 }
 
-// False when a name (a frame_id) holds a NUL byte: LCM's encoder ends a string at its first NUL, so the message
+// Why it was not written (nullptr: written): a name (a frame_id) that holds a NUL byte: LCM's encoder ends a string at its first NUL, so the message
 // would be shorter than its stated size and every reader would refuse it.
 template <class Msg>
-bool RosMessageConverter::write(const std::string& channel, Msg& m) {
+const char* RosMessageConverter::write(const std::string& channel, Msg& m) {
   m.sender = kSender;
   m.seq = seq_[channel];
   std::vector<uint8_t> bytes(static_cast<size_t>(m.getEncodedSize()));
   const int n = m.encode(bytes.data(), 0, static_cast<int>(bytes.size()));
   if (n < 0) throw std::runtime_error("cannot encode a message for channel " + channel);
-  if (static_cast<size_t>(n) != bytes.size()) return false;
+  if (static_cast<size_t>(n) != bytes.size()) return "a name (frame_id) holds a NUL byte";
   ++seq_[channel];
   sink_(m.utime, channel, bytes);
   ++result_.written[channel];
-  return true;
+  return nullptr;
+}
+
+void RosMessageConverter::dropped(const std::string& topic, const ros::Time& stamp, const char* why) {
+  ++result_.dropped[topic];
+  char when[32];
+  std::snprintf(when, sizeof when, "%u.%09u", stamp.sec, stamp.nsec);
+  result_.first_dropped.try_emplace(topic, "topic " + topic + ", message stamped " + when + " s: " + why);
 }
 
 void RosMessageConverter::convert(const std::string& topic, const sensor_msgs::Imu& msg) {
-  if (!write_imu(topic, msg)) ++result_.dropped[topic];
+  if (const char* why = write_imu(topic, msg)) dropped(topic, msg.header.stamp, why);
 }
 void RosMessageConverter::convert(const std::string& topic, const nav_msgs::Odometry& msg) {
-  if (!write_odometry(topic, msg)) ++result_.dropped[topic];
+  if (const char* why = write_odometry(topic, msg)) dropped(topic, msg.header.stamp, why);
 }
 void RosMessageConverter::convert(const std::string& topic, const sensor_msgs::NavSatFix& msg) {
-  if (!write_fix(topic, msg)) ++result_.dropped[topic];
+  if (const char* why = write_fix(topic, msg)) dropped(topic, msg.header.stamp, why);
 }
 void RosMessageConverter::convert(const std::string& topic, const geometry_msgs::PoseWithCovarianceStamped& msg) {
-  if (!write_pose(topic, msg)) ++result_.dropped[topic];
+  if (const char* why = write_pose(topic, msg)) dropped(topic, msg.header.stamp, why);
 }
 
 // A group ROS marks as not provided is written as zeros (an identity orientation), whatever its fields hold.
-bool RosMessageConverter::write_imu(const std::string& topic, const sensor_msgs::Imu& r) {
+const char* RosMessageConverter::write_imu(const std::string& topic, const sensor_msgs::Imu& r) {
   sextant::imu_t m{};
   m.utime = utime(r.header.stamp);
   m.source = body(r.header.frame_id);
@@ -121,40 +134,50 @@ bool RosMessageConverter::write_imu(const std::string& topic, const sensor_msgs:
     copy(m.linear_acceleration_covariance, r.linear_acceleration_covariance);
   }
   if (m.has_orientation) {
-    m.orientation[0] = q.w, m.orientation[1] = q.x, m.orientation[2] = q.y, m.orientation[3] = q.z;
+    // Normalized as the odometry's is, after scaling by its largest component (so that one of 1e300s or of
+    // denormals, which overflows or underflows the plain norm, is still the rotation it spells); a quaternion with
+    // a non-finite component spells none: the message is dropped, and the first such says where.
+    const Eigen::Vector4d wxyz(q.w, q.x, q.y, q.z);
+    if (!wxyz.allFinite()) return "the orientation quaternion is not finite";
+    const double scale = wxyz.cwiseAbs().maxCoeff();
+    const Eigen::Vector4d u = (wxyz / scale).normalized();
+    std::copy(u.data(), u.data() + 4, m.orientation);
     copy(m.orientation_covariance, r.orientation_covariance);
   }
-  const bool ok = finite(m.angular_velocity) && finite(m.angular_velocity_covariance) &&
-                  finite(m.linear_acceleration) && finite(m.linear_acceleration_covariance) && finite(m.orientation) &&
-                  finite(m.orientation_covariance);
-  return ok && write(channel(topic, "IMU"), m);
+  if (!finite(m.angular_velocity) || !finite(m.angular_velocity_covariance))
+    return "the angular velocity is not finite";
+  if (!finite(m.linear_acceleration) || !finite(m.linear_acceleration_covariance))
+    return "the linear acceleration is not finite";
+  if (!finite(m.orientation_covariance)) return "the orientation covariance is not finite";
+  return write(channel(topic, "IMU"), m);
 }
 
-bool RosMessageConverter::write_odometry(const std::string& topic, const nav_msgs::Odometry& r) {
-  if (!pose_finite(r.pose)) return false;
+const char* RosMessageConverter::write_odometry(const std::string& topic, const nav_msgs::Odometry& r) {
+  if (const char* why = pose_refused(r.pose)) return why;
   sextant::odometry_t m{};
   m.utime = utime(r.header.stamp);
   m.source = body(r.child_frame_id.empty() ? r.header.frame_id : r.child_frame_id);
-  if (!set_pose(m, r.pose)) return false;
+  if (!set_pose(m, r.pose)) return kCovarianceOverflows;
   const auto& t = r.twist.twist;
   m.linear_velocity[0] = t.linear.x, m.linear_velocity[1] = t.linear.y, m.linear_velocity[2] = t.linear.z;
   m.angular_velocity[0] = t.angular.x, m.angular_velocity[1] = t.angular.y, m.angular_velocity[2] = t.angular.z;
   copy(m.twist_covariance, r.twist.covariance);
   m.has_twist = finite(m.linear_velocity) && finite(m.angular_velocity) && finite(m.twist_covariance);
-  if (!m.has_twist) return false;
+  if (!m.has_twist) return "the twist is not finite";
   return write(channel(topic, "ODOMETRY"), m);
 }
 
-bool RosMessageConverter::write_pose(const std::string& topic, const geometry_msgs::PoseWithCovarianceStamped& r) {
-  if (!pose_finite(r.pose)) return false;
+const char* RosMessageConverter::write_pose(const std::string& topic,
+                                            const geometry_msgs::PoseWithCovarianceStamped& r) {
+  if (const char* why = pose_refused(r.pose)) return why;
   sextant::odometry_t m{};
   m.utime = utime(r.header.stamp);
   m.source = body(r.header.frame_id);
-  if (!set_pose(m, r.pose)) return false;
+  if (!set_pose(m, r.pose)) return kCovarianceOverflows;
   return write(channel(topic, "ODOMETRY"), m);
 }
 
-bool RosMessageConverter::write_fix(const std::string& topic, const sensor_msgs::NavSatFix& r) {
+const char* RosMessageConverter::write_fix(const std::string& topic, const sensor_msgs::NavSatFix& r) {
   sextant::gnss_t m{};
   m.utime = utime(r.header.stamp);
   m.source = body(r.header.frame_id);
@@ -164,7 +187,7 @@ bool RosMessageConverter::write_fix(const std::string& topic, const sensor_msgs:
   if (m.status >= sextant::gnss_t::STATUS_FIX) {
     if (!std::isfinite(r.latitude) || !std::isfinite(r.longitude) || !std::isfinite(r.altitude) ||
         !finite(r.position_covariance))
-      return false;
+      return "a fix with a non-finite position or covariance";
     m.latitude = r.latitude, m.longitude = r.longitude, m.altitude = r.altitude;
     copy(m.position_covariance, r.position_covariance);
   }

@@ -23,7 +23,7 @@ class RosMessageConverter {
 
   /// `msg`, received on `topic`, onto the topic's channel (from `options.channels`, else IMU, ODOMETRY or GNSS by
   /// type); a message with a non-finite value where one is required, or a frame_id with a NUL byte, is counted in
-  /// `dropped` instead.
+  /// `dropped` instead (the first of each topic described in `first_dropped`).
   void convert(const std::string& topic, const sensor_msgs::Imu& msg);
   void convert(const std::string& topic, const nav_msgs::Odometry& msg);
   void convert(const std::string& topic, const sensor_msgs::NavSatFix& msg);
@@ -33,11 +33,14 @@ class RosMessageConverter {
   std::string channel(const std::string& topic, const char* fallback) const;
   std::string body(const std::string& frame) const;
   template <class Msg>
-  bool write(const std::string& channel, Msg& m);
-  bool write_imu(const std::string& topic, const sensor_msgs::Imu& r);
-  bool write_odometry(const std::string& topic, const nav_msgs::Odometry& r);
-  bool write_fix(const std::string& topic, const sensor_msgs::NavSatFix& r);
-  bool write_pose(const std::string& topic, const geometry_msgs::PoseWithCovarianceStamped& r);
+  const char* write(const std::string& channel, Msg& m);
+  /// Counts a message dropped on `topic`; the first one's stamp and `why` go to RosbagConversion::first_dropped.
+  void dropped(const std::string& topic, const ros::Time& stamp, const char* why);
+  // Each writes the message and returns nullptr, or returns why it was not written.
+  const char* write_imu(const std::string& topic, const sensor_msgs::Imu& r);
+  const char* write_odometry(const std::string& topic, const nav_msgs::Odometry& r);
+  const char* write_fix(const std::string& topic, const sensor_msgs::NavSatFix& r);
+  const char* write_pose(const std::string& topic, const geometry_msgs::PoseWithCovarianceStamped& r);
 
   const RosbagConversionOptions& options_;
   const RosbagSink& sink_;

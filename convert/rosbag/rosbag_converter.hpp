@@ -7,6 +7,9 @@
 //    orientation, with their covariances; a group whose covariance[0] is -1 (ROS's "not provided") has has_* false,
 //    and so has an orientation whose quaternion is all zeros; such a group is written as zeros (the orientation as
 //    the identity), whatever its fields held.  orientation_has_yaw unless the topic is listed in `yaw_free_topics`.
+//    The orientation is normalized (as the odometry's: a driver's rounding off unit length is not carried into the
+//    log); one with a non-finite component makes the message dropped, and the first such is described in
+//    `first_dropped` (topic and stamp).
 //  - nav_msgs/Odometry -> odometry_t: pose (position, orientation) and twist (linear, angular, in child_frame_id) with
 //    their covariances.  ROS's pose covariance is about the axes of header.frame_id; sextant's is the right
 //    perturbation in the body frame, so it is rotated: Sigma = diag(R^T, R^T) Sigma_ros diag(R, R).  The twist's
@@ -41,6 +44,9 @@ struct RosbagConversion {
   std::map<std::string, int64_t> written;  // per channel
   std::map<std::string, int64_t> skipped;  // per topic: types sextant does not take, or topics not listed
   std::map<std::string, int64_t> dropped;  // per topic: non-finite values
+  /// Per topic, the first message dropped for a reason found in a value, and why ("topic /imu, message stamped
+  /// 12.500000000 s: the orientation quaternion is not finite").
+  std::map<std::string, std::string> first_dropped;
 };
 
 /// Receives each converted message: its utime, channel and lcm-gen encoding.

@@ -160,8 +160,8 @@ auto parts_of(const T& x) {
 }
 
 /// FNV-1a over a canonical serialization of `x`'s values, field by field (nested aggregates, vectors, arrays, maps,
-/// optionals; arithmetic values and enums by their bytes, strings by length and bytes): two values equal field by
-/// field hash the same, whatever text they were parsed from.
+/// optionals; arithmetic values and enums by their bytes, strings by length and bytes; pointers, run-time handles,
+/// not at all): two values equal field by field hash the same, whatever text they were parsed from.
 class FieldHash {
  public:
   template <class T>
@@ -189,6 +189,9 @@ class FieldHash {
     } else if constexpr (std::is_integral_v<T>) {
       const auto v = static_cast<int64_t>(x);
       bytes(&v, sizeof v);
+    } else if constexpr (std::is_pointer_v<T>) {
+      // A handle its owner sets at run time (graph::IncrementalOptions::interrupt), never a parsed value: no part of
+      // the fingerprint.
     } else if constexpr (std::is_aggregate_v<T>) {
       const auto parts = parts_of(x);
       add(static_cast<uint64_t>(std::tuple_size_v<std::remove_const_t<decltype(parts)>>));

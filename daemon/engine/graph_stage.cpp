@@ -25,6 +25,13 @@ slam::SightingsInput to_input(const LandmarkSightings& s) {
 
 Keyframe to_keyframe(const slam::KeyframeEstimate& k) { return Keyframe{k.id, k.utime, to_pose(k.pose)}; }
 
+// The layer's options with the stage's interrupt flag in every smoother's options.
+slam::SlamOptions interruptible(const GraphConfig& config, const std::atomic<bool>& flag) {
+  slam::SlamOptions o = config;
+  o.smoother.interrupt = &flag;
+  return o;
+}
+
 }  // namespace
 
 /// The layer's reports during one handle() call, as outputs: MATCH_REQUESTS, TRAJECTORY and the correction.
@@ -93,7 +100,7 @@ class GraphStage::Outputs final : public slam::SlamListener {
 };
 
 GraphStage::GraphStage(const GraphConfig& config, std::shared_ptr<GraphCorrectionBoard> corrections)
-    : config_(config), corrections_(std::move(corrections)), slam_(config) {
+    : config_(config), corrections_(std::move(corrections)), slam_(interruptible(config, interrupt_)) {
   if (config_.fleet_exchange.enabled) exchange_ = std::make_unique<fleet::FleetExchange>(config_.fleet_exchange);
 }
 
@@ -203,6 +210,13 @@ void GraphStage::finish(const Emit& emit) {
   }
 }
 
+int64_t GraphStage::solves_interrupted() const {
+  int64_t n = 0;
+  for (bool planar : {false, true})
+    if (const graph::IncrementalSmoother* s = slam_.smoother(planar)) n += s->interrupted_rebuilds();
+  return n;
+}
+
 std::vector<Keyframe> GraphStage::keyframes(const std::string& source) const {
   std::vector<Keyframe> out;
   for (const slam::KeyframeEstimate& k : slam_.keyframes(source)) out.push_back(to_keyframe(k));
@@ -267,7 +281,8 @@ Counters GraphStage::counters() const {
              {"fleet_contributions_waiting", s.fleet_contributions_waiting},
              {"fleet_contributions_dropped", s.fleet_contributions_dropped},
              {"fleet_remote_inputs", s.fleet_remote_inputs},
-             {"landmark_map_messages", counters_.landmark_map_messages}};
+             {"landmark_map_messages", counters_.landmark_map_messages},
+             {"solves_interrupted", solves_interrupted()}};
   if (exchange_)
     for (auto& [name, value] : exchange_->counters()) c.emplace_back(name, value);
   return c;

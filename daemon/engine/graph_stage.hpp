@@ -17,6 +17,7 @@
 #include "daemon/engine/trajectory_feed.hpp"
 #include "estimators/slam/slam_graph.hpp"
 
+#include <atomic>
 #include <map>
 #include <memory>
 #include <optional>
@@ -51,6 +52,10 @@ class GraphStage final : public Stage {
   void finish(const Emit& emit) override;
   /// Refactorizes the smoothers from their graphs (a failed update can leave a factor out of step with the graph).
   void recover(const Event& /*failed*/) override { slam_.rebuild(); }
+  /// A smoother's rebuild under way (a batch of factors, a refactorization, lifelong thinning, the save's canonical
+  /// form) ends after its Gauss-Newton iteration under way (IncrementalOptions::interrupt), and so do later ones;
+  /// counted (`solves_interrupted`: the smoothers' interrupted rebuilds).  Thread-safe.
+  void interrupt() override { interrupt_.store(true); }
   Counters counters() const override;
   /// The state directory: the stage's counters and next request id, the layer's state (SlamGraph::save: graphs,
   /// bodies, waiting loops and sightings, counters), then per body its TRAJECTORY feed and map -> odometry correction.
@@ -69,6 +74,8 @@ class GraphStage final : public Stage {
   int64_t graph_keyframes() const { return slam_.graph_keyframes(); }
   int64_t graph_landmarks() const { return slam_.graph_landmarks(); }
   int64_t graph_factors() const { return slam_.graph_factors(); }
+  /// Rebuilds of the current smoothers ended by interrupt().
+  int64_t solves_interrupted() const;
 
  private:
   /// The layer's reports turned into outputs for one handle() call (graph_stage.cpp).
@@ -90,6 +97,7 @@ class GraphStage final : public Stage {
 
   GraphConfig config_;
   std::shared_ptr<GraphCorrectionBoard> corrections_;
+  std::atomic<bool> interrupt_{false};  // read by the smoothers (their options' interrupt): before slam_
   slam::SlamGraph slam_;
   std::map<std::string, Feed> feeds_;
   std::map<std::string, int64_t> maps_published_;  // frame -> utime of its last LANDMARK_MAP

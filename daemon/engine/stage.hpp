@@ -37,6 +37,11 @@ class Stage {
   /// The body `source` (an odometry source) went silent and the daemon forgot it (daemon.source_idle_s): free every
   /// per-body structure; if it speaks again it starts as a new body.  The default keeps nothing per body.
   virtual void forget(const std::string& /*source*/) {}
+  /// Asks a long computation in progress to end early; called from another thread than the stage's (the daemon's
+  /// shutdown, at its drain deadline: daemon/runtime/stage_runner.hpp), for good: the computation ends after the step
+  /// under way, leaving the state consistent (what `save` writes stays valid), and later ones end early too.  The
+  /// default does nothing: a stage whose work per event is bounded otherwise (budgets) needs none.
+  virtual void interrupt() {}
   /// End of input (replay end, daemon shutdown): emit what is still pending.
   virtual void finish(const Emit& /*emit*/) {}
   virtual Counters counters() const { return {}; }

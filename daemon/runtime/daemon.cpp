@@ -307,16 +307,19 @@ int Daemon::handle_until(const std::atomic<bool>& stop) {
   return kExitOk;
 }
 
-// Intake stops, the queues drain within drain_timeout_s, the stages finish; then the last state save, the recording
+// Intake stops, the queues drain within drain_timeout_s (a stage still at work then is interrupted: it ends after
+// its current step, StageRunner::drain_and_stop), the stages finish; then the last state save, the recording
 // flushed and closed, and a last status.
 int Daemon::shut_down() {
   intake_stopped_ = true;
   spdlog::info("shutting down: draining {} stage queue(s) (at most {} s)", driver_->runners().size(),
                cfg_.drain_timeout_s);
+  const auto begun = Clock::now();
   const auto deadline =
-      Clock::now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(cfg_.drain_timeout_s));
+      begun + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(cfg_.drain_timeout_s));
   if (const int64_t left = driver_->finish(deadline); left > 0)
     spdlog::warn("{} queued event(s) discarded at the drain timeout ({} s)", left, cfg_.drain_timeout_s);
+  spdlog::info("stages drained and finished in {:.3f} s", std::chrono::duration<double>(Clock::now() - begun).count());
   status_thread_.join();
   if (state_thread_.joinable()) state_thread_.join();
   int rc = kExitOk;

@@ -56,11 +56,13 @@ bool Publisher::publish(const engine::Output& output) {
             }
             it->second = o.utime;
           }
-          send(channel, to_message(o, sender_, 0));
-          if (wall_) {
-            lag_.last_us = wall_() - o.utime;
+          sextant::fused_pose_t m = to_message(o, sender_, 0);
+          if (wall_) {  // sextantd: the lag goes out with the pose (replay has no wall clock: 0)
+            m.lag_us = wall_() - o.utime;
+            lag_.last_us = m.lag_us;
             lag_.max_us = std::max(lag_.max_us, lag_.last_us);
           }
+          send(channel, std::move(m));
         } else if constexpr (std::is_same_v<T, engine::Trajectory>) {
           send(channels_.full(channels_.trajectory), to_message(o, sender_, 0));
         } else if constexpr (std::is_same_v<T, engine::MatchRequest>) {

@@ -11,8 +11,9 @@
 // forgotten here too (`forget`), so that its new clock is not refused.
 // Lag (sextantd): given a wall clock (`measure_lag`), each FusedPose published is compared with it; how far behind
 // real time the daemon publishes (wall clock minus the pose's utime: the sender's latency, the queues, a stall) is
-// on the status channel (publish_lag_us, publish_lag_us_max since the previous status), so a backlog published
-// after a stall says that it is late.
+// in the pose itself (fused_pose_t.lag_us) and on the status channel (publish_lag_us, publish_lag_us_max since the
+// previous status), so a backlog published after a stall says that it is late.  Without a wall clock (replay) the
+// poses' lag_us is 0.
 // Thread-safe.
 #include "daemon/config/daemon_config.hpp"
 #include "daemon/engine/outputs.hpp"

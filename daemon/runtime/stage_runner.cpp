@@ -1,5 +1,7 @@
 #include "daemon/runtime/stage_runner.hpp"
 
+#include <spdlog/spdlog.h>
+
 namespace sextant::runtime {
 
 StageRunner::StageRunner(engine::Stage& stage, size_t queue_capacity, engine::Emit emit,
@@ -38,8 +40,15 @@ void StageRunner::drain_and_stop() {
 
 int64_t StageRunner::drain_and_stop(std::chrono::steady_clock::time_point deadline) {
   queue_.close();
-  while (thread_.joinable() && queue_.size() > 0 && std::chrono::steady_clock::now() < deadline)
+  while (thread_.joinable() && !finished_.load() && std::chrono::steady_clock::now() < deadline)
     std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  if (thread_.joinable() && !finished_.load()) {
+    // Still at work at the deadline: a long computation under way ends after its current step (Stage::interrupt).
+    host_.stage().interrupt();
+    ++drain_interrupted_;
+    spdlog::warn("stage '{}': still at work at the drain deadline; interrupted (it ends after its current step)",
+                 host_.stage().name());
+  }
   int64_t left = 0;
   for (const Slot& slot : queue_.discard()) {
     if (const auto* token = std::get_if<OdometryBatcher::Token>(&slot))
@@ -88,6 +97,7 @@ void StageRunner::loop() {
   std::lock_guard stage_lock(stage_mutex_);
   host_.finish();
   copy_counters();
+  finished_ = true;
 }
 
 StageStatus StageRunner::status() const {
@@ -103,6 +113,7 @@ StageStatus StageRunner::status() const {
     s.counters = host_.with_host_counters(counters_);
   }
   if (const int64_t d = drain_discarded_.load(); d > 0) s.counters.push_back({"drain_discarded", d});
+  if (const int64_t d = drain_interrupted_.load(); d > 0) s.counters.push_back({"drain_interrupted", d});
   if (const int64_t f = forget_out_of_order_.load(); f > 0) s.counters.push_back({"forget_out_of_order", f});
   if (batcher_) {
     s.counters.push_back({"odometry_coalesced", batcher_->coalesced()});

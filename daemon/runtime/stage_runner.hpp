@@ -71,8 +71,10 @@ class StageRunner {
   void stop_intake() { queue_.close(); }
   /// Stops intake, processes what is queued, calls the stage's `finish`, joins the thread.
   void drain_and_stop();
-  /// The same, bounded: what is still queued at `deadline` is discarded (counted in `drain_discarded`, returned).
-  /// The event being handled and the stage's `finish` still run to their end.
+  /// The same, bounded: what is still queued at `deadline` is discarded (counted in `drain_discarded`, returned),
+  /// and a stage still at work then is interrupted (Stage::interrupt, counted in `drain_interrupted` and logged): the
+  /// event being handled ends after the step under way (a graph solve after its Gauss-Newton iteration), then the
+  /// stage's `finish` runs.  So the drain takes `deadline` plus one such step.
   int64_t drain_and_stop(std::chrono::steady_clock::time_point deadline);
 
   StageStatus status() const;
@@ -106,6 +108,8 @@ class StageRunner {
   std::thread thread_;
   std::atomic<int64_t> processed_{0};
   std::atomic<int64_t> drain_discarded_{0};
+  std::atomic<int64_t> drain_interrupted_{0};
+  std::atomic<bool> finished_{false};  // the thread has run the stage's finish
   mutable std::mutex counters_mutex_;
   engine::Counters counters_;  // copied from the stage after each event (the stage is not thread-safe)
   std::mutex forget_mutex_;

@@ -218,7 +218,7 @@ const WireLayout& wire_layout<sextant::fused_pose_t>() {
   static const WireLayout l{
       "fused_pose_t",
       {i64("utime"), str("sender"), i64("seq"), str("source"), str("estimator"), str("frame"), boolean("planar"),
-       doubles("position", 3), doubles("orientation", 4), doubles("covariance", 36)}};
+       doubles("position", 3), doubles("orientation", 4), doubles("covariance", 36), i64("lag_us")}};
   return l;
 }
 

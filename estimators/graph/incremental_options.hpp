@@ -6,6 +6,7 @@
 // `relinearize_translation`, rotation components (radians) against `relinearize_rotation`; times are milliseconds.
 #include "estimators/graph/robust_kernel.hpp"
 
+#include <atomic>
 #include <cstdint>
 #include <string>
 
@@ -45,6 +46,13 @@ struct IncrementalOptions {
   double wildfire = 1e-3;
   RobustKernel kernel = RobustKernel::kNone;
   double kernel_width = 1.0;
+  /// Not configuration: a flag of the smoother's owner that asks a rebuild in progress to end after the
+  /// Gauss-Newton iteration under way (the first one always completes, so a factorization of the current
+  /// linearization is in place and the estimates are those of the last iteration done: a consistent state, as a
+  /// rebuild that converged early leaves).  Read between iterations, from the smoother's thread, while another thread
+  /// may set it: how the daemon's shutdown stops a long solve at its drain deadline (daemon/runtime/stage_runner.hpp).
+  /// nullptr: never.
+  const std::atomic<bool>* interrupt = nullptr;
   /// Fault injection, for tests of the callers' recovery: the first factorization (a rank update or a numeric
   /// factorization) at or after update() call number N (1, 2, ...) fails as CHOLMOD does when it runs out of memory.
   /// 0: never.
@@ -74,8 +82,9 @@ struct IncrementalStatus {
   int new_variables = 0, new_factors = 0;
   int deferred_variables = 0;  // new variables not yet determined by their factors (kept pending)
   int relinearized_variables = 0, relinearized_factors = 0;
-  bool rebuilt = false;  // the system was reordered and refactorized in this update (or a spread
-                         // reordering was put in place)
+  bool rebuilt = false;      // the system was reordered and refactorized in this update (or a spread
+                             // reordering was put in place)
+  bool interrupted = false;  // a rebuild ended at IncrementalOptions::interrupt before it converged
   int solves = 0;
 };
 

@@ -31,6 +31,9 @@ IncrementalStatus with_admission(IncrementalStatus r, const IncrementalStatus& s
   return r;
 }
 
+// The owner asked a long computation to end (IncrementalOptions::interrupt).
+bool interrupted(const IncrementalOptions& o) { return o.interrupt && o.interrupt->load(std::memory_order_relaxed); }
+
 // A CHOLMOD failure in the middle of an update: the factorization is dropped, the next update rebuilds it.
 IncrementalStatus cholmod_failed(SmootherState& s, IncrementalStatus st) {
   smoother::drop_factorization(s);
@@ -162,6 +165,11 @@ IncrementalStatus IncrementalSmoother::rebuild_with(int iterations) {
 
   ++s.rebuilds;
   for (int it = 0; it < std::max(1, iterations); ++it) {
+    if (it > 0 && interrupted(s.options)) {  // the last iteration's factorization is installed: consistent
+      st.interrupted = true;
+      ++s.interrupted_rebuilds;
+      break;
+    }
     if (it > 0 && smoother::moved_variables(s).empty()) break;
     // The old factor goes first: the new one then reuses its memory instead of faulting in fresh pages (M3500: peak
     // RSS 34.4 MB with both alive, 30.5 before).
@@ -195,6 +203,7 @@ const std::vector<Variable>& IncrementalSmoother::linearization_point() const { 
 int IncrementalSmoother::dimension() const { return state_->fx.used + state_->fx.capacity - state_->fx.reserve_end; }
 size_t IncrementalSmoother::factor_nonzeros() const { return state_->fx.nonzeros(); }
 int IncrementalSmoother::rebuilds() const { return state_->rebuilds; }
+int64_t IncrementalSmoother::interrupted_rebuilds() const { return state_->interrupted_rebuilds; }
 bool IncrementalSmoother::reordering() const { return state_->reorder.under_way(); }
 const IncrementalOptions& IncrementalSmoother::options() const { return state_->options; }
 

@@ -21,7 +21,8 @@
 // columns run out, the system is rebuilt: a fresh block ordering (constrained AMD with the newest poses and then the
 // landmarks last, or METIS nested dissection above `nested_dissection_above` variables, landmarks moved last), then Gauss-Newton iterations, each
 // relinearizing every factor at the current estimate and factorizing numerically (simplicial LDL', the form the
-// updates need), until no variable moves past the thresholds.
+// updates need), until no variable moves past the thresholds (or the owner's `interrupt` flag is set: the rebuild
+// ends after the iteration under way, counted in interrupted_rebuilds()).
 //
 // Reordering in the background of the updates (systems of more than `reorder_spread_above` variables): when the
 // factor has filled in, the new ordering and factorization are built a slice at a time at the end of the next
@@ -103,6 +104,8 @@ class IncrementalSmoother {
   int dimension() const;
   size_t factor_nonzeros() const;
   int rebuilds() const;
+  /// Rebuilds that ended at IncrementalOptions::interrupt before they converged.
+  int64_t interrupted_rebuilds() const;
   /// True while a spread reordering is being built.
   bool reordering() const;
   const IncrementalOptions& options() const;

@@ -50,6 +50,11 @@ def main():
     # Values: the live daemon publishes exactly what the deterministic replay computes.
     if len(offline) != len(live):
         errors.append(f"replay published {len(offline)} FUSED_POSE, the daemon {len(live)}")
+    # Byte for byte but for lag_us: the daemon's wall clock at publication minus utime live, 0 in replay.
+    if any(b.lag_us != 0 for b in offline):
+        errors.append("replay published a FUSED_POSE with a lag (it has no real time: 0)")
+    for a in live:
+        a.lag_us = 0
     mismatched = sum(1 for a, b in zip(live, offline) if a.encode() != b.encode())
     if mismatched:
         errors.append(f"{mismatched} FUSED_POSE messages differ between the live run and the replay")

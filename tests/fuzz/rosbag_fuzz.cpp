@@ -3,7 +3,8 @@
 // own code is the conversion of the deserialized Imu, Odometry, NavSatFix and PoseWithCovarianceStamped.  The first
 // byte picks the type, the second the options (a yaw-free topic, a channel map, a body map), the rest is the
 // message as ROS serializes it.  Contract checked: every message written decodes as its sextant type with every
-// number finite (a non-finite one is dropped and counted, never written), and the odometry's quaternion is unit.
+// number finite (a non-finite one is dropped and counted, never written, and the first drop says why), and every
+// quaternion written (the odometry's, the IMU's) is unit.
 // Compiled as C++17 (ROS 1's message headers).
 #include "convert/rosbag/ros_message_converter.hpp"
 
@@ -34,14 +35,16 @@ Msg decoded(const std::vector<uint8_t>& bytes) {
   return m;
 }
 
+bool unit(const double (&q)[4]) { return std::abs(std::hypot(std::hypot(q[0], q[1]), q[2], q[3]) - 1) < 1e-9; }
+
 bool sound(const imu_t& m) {
   return finite(m.angular_velocity) && finite(m.angular_velocity_covariance) && finite(m.linear_acceleration) &&
-         finite(m.linear_acceleration_covariance) && finite(m.orientation) && finite(m.orientation_covariance);
+         finite(m.linear_acceleration_covariance) && finite(m.orientation) && finite(m.orientation_covariance) &&
+         unit(m.orientation);
 }
 
 bool sound(const odometry_t& m) {
-  const double n = std::hypot(std::hypot(m.orientation[0], m.orientation[1]), m.orientation[2], m.orientation[3]);
-  return finite(m.position) && finite(m.orientation) && std::abs(n - 1) < 1e-9 && finite(m.covariance) &&
+  return finite(m.position) && finite(m.orientation) && unit(m.orientation) && finite(m.covariance) &&
          finite(m.increment_covariance) && finite(m.linear_velocity) && finite(m.angular_velocity) &&
          finite(m.twist_covariance);
 }
@@ -70,6 +73,7 @@ void run(std::vector<uint8_t> bytes, const tools::RosbagConversionOptions& optio
     if (!sound(decoded<Sextant>(b))) std::abort();
   };
   tools::RosMessageConverter(options, sink, result).convert("/topic", msg);
+  if (result.dropped.size() != result.first_dropped.size()) std::abort();  // every drop says why
 }
 
 }  // namespace

@@ -35,6 +35,7 @@ sextant::fused_pose_t pose() {
   m.position[0] = 1.5, m.position[1] = -2.25, m.position[2] = 0.1;
   m.orientation[0] = 1;
   for (int i = 0; i < 36; ++i) m.covariance[i] = i % 7 == 0 ? 0.01 * (i + 1) : 0;
+  m.lag_us = 250000;
   return m;
 }
 
@@ -63,6 +64,7 @@ TEST_CASE("fused_pose_t: JSON field by field, and back to the same bytes") {
   CHECK((*j)["planar"] == true);
   CHECK((*j)["position"][1] == -2.25);
   CHECK((*j)["covariance"].size() == 36);
+  CHECK((*j)["lag_us"] == 250000);
   CHECK(j->dump().find("\"utime\":1700000000123456,\"sender\":\"sextantd\"") !=
         std::string::npos);  // declaration order
   CHECK(type->encode(Json::parse(j->dump())) == bytes);

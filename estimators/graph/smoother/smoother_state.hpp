@@ -58,8 +58,9 @@ struct SmootherState {
   std::vector<size_t> pending_factors;
   size_t factors_in_system = 0;
   int rebuilds = 0;
-  int64_t updates = 0;       // updates that solved incrementally (relinearize_skip counts these)
-  int64_t update_calls = 0;  // every update(): the clock of spread reorderings and of fault injection
+  int64_t interrupted_rebuilds = 0;  // rebuilds ended at options.interrupt
+  int64_t updates = 0;               // updates that solved incrementally (relinearize_skip counts these)
+  int64_t update_calls = 0;          // every update(): the clock of spread reorderings and of fault injection
   bool gauge_checked = false;
   std::string cholmod_failure;  // what the last failed CHOLMOD call was (rank_update.cpp, linear_system.cpp)
   Factorization fx;
