@@ -190,10 +190,13 @@ TEST_CASE("a fleet's outputs: each body under its map frame, every frame connect
   CHECK(poses > 3 * 3 * 4000);  // three robots, three estimators, 50 Hz for 90 s
   CHECK(maps > 100);
   CHECK(joined_maps == 2);  // robot2's and robot3's own maps, once each when they joined robot1's
-  // The graph placed each robot in its own frame first, then in robot1's.
+  // The graph placed each robot in its own frame first and in robot1's at the end (robot3 may pass through robot2's,
+  // when those two join first).
   CHECK(graph_frames["robot1"] == std::set<std::string>{"robot1"});
   CHECK(graph_frames["robot2"] == std::set<std::string>{"robot1", "robot2"});
-  CHECK(graph_frames["robot3"] == std::set<std::string>{"robot1", "robot3"});
+  CHECK(graph_frames["robot3"].contains("robot3"));
+  CHECK(graph_frames["robot3"].contains("robot1"));
+  CHECK(graph_frames["robot3"].size() <= 3);
   for (const auto& [body, frame] : trajectory_frame) {
     CAPTURE(body);
     CHECK(frame == "robot1");
