@@ -1,6 +1,7 @@
 #include "daemon/runtime/codec.hpp"
 
 #include "daemon/runtime/codec_fields.hpp"
+#include "daemon/runtime/codec_validation.hpp"
 #include "daemon/runtime/wire_layout.hpp"
 #include "estimators/lie/planar_axes.hpp"
 #include "estimators/spd_matrix.hpp"
@@ -14,27 +15,11 @@
 namespace sextant::runtime {
 
 using namespace codec_fields;
+using namespace codec_validation;
 
 namespace {
 
-// Validation failures carry the field name up to the caller; thrown only inside this file.
-struct Invalid {
-  std::string reason;
-  std::string message;
-};
-
-[[noreturn]] void fail(const std::string& reason, const std::string& message) { throw Invalid{reason, message}; }
-
-void check_finite(const double* v, int n, const std::string& field) {
-  for (int i = 0; i < n; ++i)
-    if (!std::isfinite(v[i])) {
-      std::ostringstream s;
-      s << field;
-      if (n > 1) s << "[" << i << "]";
-      s << ": not finite (" << v[i] << ")";
-      fail("non_finite", s.str());
-    }
-}
+using codec_validation::check_finite;  // the array form, beside this one
 
 double check_finite(double v, const std::string& field) {
   check_finite(&v, 1, field);
@@ -98,19 +83,6 @@ Decoded decode_as(const void* data, size_t size, MessageOrigin* origin) {
   if (auto e = safe_decode(data, size, msg)) return Rejection{e->reason, e->message};
   if (origin != nullptr) *origin = MessageOrigin{msg.sender, msg.seq};
   return to_event(msg);
-}
-
-template <class F>
-Decoded guarded(F&& f) {
-  try {
-    return f();
-  } catch (const Invalid& e) {
-    return Rejection{e.reason, e.message};
-  } catch (const std::exception& e) {
-    // Validation itself must never take the daemon down (an allocation failing, an Eigen assertion turned
-    // exception): the message is refused like any invalid one.
-    return Rejection{"invalid", e.what()};
-  }
 }
 
 }  // namespace

@@ -6,6 +6,7 @@
 
 #include "daemon/engine/fleet_exchange.hpp"
 #include "daemon/runtime/codec_fields.hpp"
+#include "daemon/runtime/codec_validation.hpp"
 #include "estimators/spd_matrix.hpp"
 
 #include <cmath>
@@ -14,25 +15,11 @@
 namespace sextant::runtime {
 
 using namespace codec_fields;
+using namespace codec_validation;
 
 namespace {
 
-struct Invalid {
-  std::string reason, message;
-};
-
-[[noreturn]] void fail(const std::string& reason, const std::string& message) { throw Invalid{reason, message}; }
-
 constexpr int64_t kMaxSeq = int64_t{1} << 62;  // as the exchange: numbers far from overflow
-
-void check_finite(const double* v, int n, const std::string& field) {
-  for (int i = 0; i < n; ++i)
-    if (!std::isfinite(v[i])) {
-      std::ostringstream s;
-      s << field << (n > 1 ? "[" + std::to_string(i) + "]" : "") << ": not finite (" << v[i] << ")";
-      fail("non_finite", s.str());
-    }
-}
 
 void check_fleet_name(const std::string& s, const std::string& field, bool may_be_empty = false) {
   if (s.empty() && !may_be_empty) fail("invalid", field + ": empty");
@@ -227,17 +214,6 @@ engine::fleet::What item_of(const sextant::fleet_item_t& it, const std::string& 
   if (it.kind == I::SIGHTINGS || it.kind == I::BODY_SIGHTING_HALF || it.kind == I::BODY_SIGHTING)
     return sightings_of(it, p);
   return loop_of(it, p);
-}
-
-template <class F>
-Decoded guarded(F&& f) {
-  try {
-    return f();
-  } catch (const Invalid& e) {
-    return Rejection{e.reason, e.message};
-  } catch (const std::exception& e) {
-    return Rejection{"invalid", e.what()};
-  }
 }
 
 }  // namespace

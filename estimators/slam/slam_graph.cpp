@@ -134,7 +134,7 @@ void SlamGraph::add_odometry(const std::string& name, const OdometryInput& o, Sl
     for (const auto& l : due) add_loop(name, l, listener);
   }
   // Other bodies' sightings of this one that its odometry had not reached.
-  if (!b.early_seen.empty()) complete_seen(name, b, listener);
+  if (!b.early_seen.empty()) complete_seen(b, listener);
   // Other bodies' loops to a time of this one that its odometry had not reached.
   if (!b.early_halves.empty()) {
     std::vector<std::pair<std::string, BodyLoopHalf>> waiting = std::move(b.early_halves);
@@ -144,7 +144,7 @@ void SlamGraph::add_odometry(const std::string& name, const OdometryInput& o, Sl
   }
 }
 
-void SlamGraph::complete_seen(const std::string& name, Body& b, SlamListener& listener) {
+void SlamGraph::complete_seen(Body& b, SlamListener& listener) {
   std::vector<std::pair<std::string, BodySightingHalf>> due, later;
   for (auto& x : b.early_seen) (x.second.utime <= b.track.last_utime() ? due : later).push_back(std::move(x));
   b.early_seen = std::move(later);
@@ -157,7 +157,6 @@ void SlamGraph::complete_seen(const std::string& name, Body& b, SlamListener& li
   for (const std::string& f : frames) update_frame(f, listener);
   if (options_.fleet.enabled && (!frames.empty() || pending_.sightings.size() != pending_before))
     try_joins(b.frame, listener);
-  (void)name;
 }
 
 void SlamGraph::on_keyframe_candidate(const std::string& name, Body& b, const OdometryInput& o,

@@ -237,8 +237,8 @@ class SlamGraph {
                   std::optional<double> width);
   SE3 estimate(const Body& b, int variable) const;
   void on_keyframe_candidate(const std::string& name, Body& b, const OdometryInput& o, SlamListener& listener);
-  /// The sightings of body `name` that waited for its odometry (early_seen) and are now behind it: anchored.
-  void complete_seen(const std::string& name, Body& b, SlamListener& listener);
+  /// The sightings of body `b` that waited for its odometry (early_seen) and are now behind it: anchored.
+  void complete_seen(Body& b, SlamListener& listener);
 
   // The back end (slam_graph_contributions.cpp): what one contribution adds, the same for a local body's (made by the
   // front end just before) and a remote one's.  Each returns whether a factor entered; the caller solves.
