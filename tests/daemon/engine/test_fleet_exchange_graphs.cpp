@@ -20,41 +20,11 @@ using engine::FleetControl;
 
 namespace {
 
-SlamOptions options() {
-  SlamOptions o;
-  o.propose_loops = false;
-  o.fleet.markers = {{1000, "b"}, {1001, "a"}, {1002, "c"}};
-  return o;
-}
-
-const Robot kRobots[] = {
-    {"a", {0, 0}, 3, 0, 0.3}, {"b", {0.5, 0.5}, 2.5, 2.0, -0.25}, {"c", {-0.5, 0.2}, 2.8, 4.0, 0.2}};
-
-void feed(SlamGraph& g, int k, int i, const std::map<int64_t, Eigen::Vector2d>& world, SlamListener& out) {
-  const Robot& r = kRobots[k];
-  const double t = 0.1 * i;
-  g.add_odometry(r.name, odometry_at(r, t), out);
-  if (i % 2 == 0) {
-    auto points = world;
-    for (int j = 0; j < 3; ++j)
-      if (j != k) points[1000 + (j == 0 ? 1 : j == 1 ? 0 : 2)] = kRobots[j].truth(t).translation();
-    g.add_sightings(r.name, sightings_at(r, t, points), out);
-  }
-  if (k == 0 && i == 60) {
-    LoopInput l;
-    l.utime_from = 5000000, l.utime_to = 5500000;
-    l.relative = (kRobots[0].truth(4).inverse() * kRobots[2].truth(4.5)).to_se3();
-    l.information = Matrix6d::Identity() * 1e4;
-    l.body_to = kRobots[2].name;
-    g.add_loop("a", l, out);
-  }
-}
-
 /// A daemon: its graph, its exchange, and the listener that hands the graph's contributions to the exchange.
 struct Daemon final : SlamListener {
   std::string name;
   engine::fleet::FleetExchange exchange;
-  SlamGraph graph{options()};
+  SlamGraph graph{three_robot_options()};
   Daemon(std::string n, const engine::FleetExchangeOptions& o) : name(n), exchange(n, o) {}
   void updated(const std::string&, int64_t, const graph::IncrementalStatus&) override {}
   void loop_proposed(const std::string&, int64_t, const KeyframeEstimate&, const KeyframeEstimate&, bool) override {}
@@ -75,16 +45,6 @@ struct Daemon final : SlamListener {
 struct Wire {
   std::vector<std::vector<uint8_t>> fleet, control;
 };
-
-double rms_between(const std::vector<KeyframeEstimate>& x, const std::vector<KeyframeEstimate>& y) {
-  REQUIRE(x.size() == y.size());
-  double sum = 0;
-  for (size_t k = 0; k < x.size(); ++k) {
-    CHECK(x[k].id == y[k].id);
-    sum += (x[k].pose.translation() - y[k].pose.translation()).squaredNorm();
-  }
-  return std::sqrt(sum / static_cast<double>(x.size()));
-}
 
 // Delivers `from`'s bytes to every other daemon through the codec, each copy lost with `loss` (or all when `cut` is
 // the sender or the receiver), some twice; answers to repair requests go on the bus in the next round.
@@ -124,7 +84,7 @@ TEST_CASE(
     "fleet exchange: three graphs, one per daemon, over a bus losing 30 % with one daemon cut off for a while, end "
     "with the map one graph fed everything builds") {
   const auto world = random_landmarks(3, 30);
-  SlamGraph single(options());
+  SlamGraph single(three_robot_options());
   Quiet quiet;
   engine::FleetExchangeOptions o;
   o.enabled = true;
@@ -147,8 +107,8 @@ TEST_CASE(
   for (int i = 0; i <= 200; ++i) {
     now += 100000;
     for (int k = 0; k < 3; ++k) {
-      feed(single, k, i, world, quiet);
-      feed(daemons[static_cast<size_t>(k)]->graph, k, i, world, *daemons[static_cast<size_t>(k)]);
+      feed_three_robots(single, k, i, world, quiet);
+      feed_three_robots(daemons[static_cast<size_t>(k)]->graph, k, i, world, *daemons[static_cast<size_t>(k)]);
     }
     round(i >= 80 && i < 140 ? 2 : -1);  // dc hears nothing and is heard by no one for 6 s
   }
@@ -166,7 +126,7 @@ TEST_CASE(
     CHECK(d->graph.frames().size() == 1);
     CHECK(d->graph.counters().fleet_contributions_refused == 0);
     CHECK(d->graph.counters().fleet_contributions_waiting == 0);
-    for (const Robot& r : kRobots) CHECK(rms_between(d->graph.keyframes(r.name), single.keyframes(r.name)) < 0.01);
+    for (const Robot& r : kThreeRobots) CHECK(rms_between(d->graph.keyframes(r.name), single.keyframes(r.name)) < 0.01);
     CHECK(d->graph.landmarks("a").size() == single.landmarks("a").size());
   }
 }

@@ -23,59 +23,17 @@ struct Outbox final : SlamListener {
   void contributed(const GraphContribution& c) override { sent.push_back(c); }
 };
 
-SlamOptions options() {
-  SlamOptions o;
-  o.propose_loops = false;
-  o.fleet.markers = {{1000, "b"}, {1001, "a"}, {1002, "c"}};
-  return o;
-}
-
-const Robot kRobots[] = {
-    {"a", {0, 0}, 3, 0, 0.3}, {"b", {0.5, 0.5}, 2.5, 2.0, -0.25}, {"c", {-0.5, 0.2}, 2.8, 4.0, 0.2}};
-
-/// Robot k's inputs at step i (10 Hz odometry, 5 Hz sightings of the shared landmarks and of the other robots), and
-/// at step 60 an inter-robot loop from a to c.
-void feed(SlamGraph& g, int k, int i, const std::map<int64_t, Eigen::Vector2d>& world, SlamListener& out) {
-  const Robot& r = kRobots[k];
-  const double t = 0.1 * i;
-  g.add_odometry(r.name, odometry_at(r, t), out);
-  if (i % 2 == 0) {
-    auto points = world;
-    for (int j = 0; j < 3; ++j)
-      if (j != k) points[1000 + (j == 0 ? 1 : j == 1 ? 0 : 2)] = kRobots[j].truth(t).translation();
-    g.add_sightings(r.name, sightings_at(r, t, points), out);
-  }
-  if (k == 0 && i == 60) {
-    LoopInput l;
-    l.utime_from = 5000000, l.utime_to = 5500000;  // a at 4 s, c at 4.5 s
-    l.relative = (kRobots[0].truth(4).inverse() * kRobots[2].truth(4.5)).to_se3();
-    l.information = Matrix6d::Identity() * 1e4;
-    l.body_to = "c";
-    g.add_loop("a", l, out);
-  }
-}
-
-double rms_between(const std::vector<KeyframeEstimate>& x, const std::vector<KeyframeEstimate>& y) {
-  REQUIRE(x.size() == y.size());
-  double sum = 0;
-  for (size_t k = 0; k < x.size(); ++k) {
-    CHECK(x[k].id == y[k].id);
-    sum += (x[k].pose.translation() - y[k].pose.translation()).squaredNorm();
-  }
-  return std::sqrt(sum / static_cast<double>(x.size()));
-}
-
 }  // namespace
 
 TEST_CASE(
     "contributions: three graphs, one per robot, exchanging contributions late and in bursts, end with the map one "
     "graph fed everything builds") {
   const auto world = random_landmarks(3, 30);
-  SlamGraph single(options());
+  SlamGraph single(three_robot_options());
   Outbox single_out;
   std::vector<std::unique_ptr<SlamGraph>> graphs;
   std::vector<Outbox> outs(3);
-  for (int k = 0; k < 3; ++k) graphs.push_back(std::make_unique<SlamGraph>(options()));
+  for (int k = 0; k < 3; ++k) graphs.push_back(std::make_unique<SlamGraph>(three_robot_options()));
   std::vector<size_t> delivered(9, 0);  // [from * 3 + to]: how much of from's outbox `to` has applied
   const auto deliver = [&](int to) {
     for (int from = 0; from < 3; ++from) {
@@ -86,8 +44,8 @@ TEST_CASE(
   };
   for (int i = 0; i <= 200; ++i) {
     for (int k = 0; k < 3; ++k) {
-      feed(single, k, i, world, single_out);
-      feed(*graphs[k], k, i, world, outs[k]);
+      feed_three_robots(single, k, i, world, single_out);
+      feed_three_robots(*graphs[k], k, i, world, outs[k]);
     }
     // Robot c's contributions reach the others in bursts every 25 steps, a's and b's every 3 (and c hears late).
     for (int to = 0; to < 3; ++to)
@@ -101,7 +59,7 @@ TEST_CASE(
     CHECK(g->frames().size() == 1);
     CHECK(g->counters().fleet_contributions_refused == 0);
     CHECK(g->counters().fleet_contributions_waiting == 0);
-    for (const Robot& r : kRobots) {
+    for (const Robot& r : kThreeRobots) {
       CHECK(g->frame_of(r.name) == "a");
       CHECK(rms_between(g->keyframes(r.name), single.keyframes(r.name)) < 0.01);
     }
@@ -117,11 +75,11 @@ TEST_CASE(
 
 TEST_CASE("contributions: a local body's, a stream that skips a keyframe and a body without a first keyframe refused") {
   const auto world = random_landmarks(3, 30);
-  SlamGraph a(options()), b(options());
+  SlamGraph a(three_robot_options()), b(three_robot_options());
   Outbox out_a, out_b;
   for (int i = 0; i <= 30; ++i) {
-    feed(a, 0, i, world, out_a);
-    feed(b, 1, i, world, out_b);
+    feed_three_robots(a, 0, i, world, out_a);
+    feed_three_robots(b, 1, i, world, out_b);
   }
   // b's own body, claimed by a's contribution stream: refused, nothing changes.
   const auto before = b.keyframes("b").size();
@@ -142,7 +100,7 @@ TEST_CASE("contributions: a local body's, a stream that skips a keyframe and a b
   CHECK(b.counters().fleet_contributions_refused == 3);
   // Inputs about a body another graph owns are refused too.
   Outbox quiet;
-  b.add_odometry("a", odometry_at(kRobots[0], 10), quiet);
+  b.add_odometry("a", odometry_at(kThreeRobots[0], 10), quiet);
   CHECK(b.counters().fleet_remote_inputs == 1);
 }
 
@@ -150,11 +108,11 @@ TEST_CASE(
     "contributions: a graph holding a remote body and a waiting robot sighting saved and restored continues "
     "bit for bit") {
   const auto world = random_landmarks(3, 30);
-  SlamGraph a(options()), b(options());
+  SlamGraph a(three_robot_options()), b(three_robot_options());
   Outbox out_a, out_b;
   for (int i = 0; i <= 40; ++i) {
-    feed(a, 0, i, world, out_a);
-    feed(b, 1, i, world, out_b);
+    feed_three_robots(a, 0, i, world, out_a);
+    feed_three_robots(b, 1, i, world, out_b);
   }
   // b hears a's stream up to a robot sighting of b by a whose keyframe of a b has not heard yet: hold back a's newest
   // keyframe so that a whole sighting naming it waits.
@@ -167,7 +125,7 @@ TEST_CASE(
   for (size_t k = 0; k < cut; ++k) b.apply(out_a.sent[k], out_b);
   archive::ArchiveWriter w;
   b.save(w);
-  SlamGraph restored(options());
+  SlamGraph restored(three_robot_options());
   archive::ArchiveReader r(w.data().data(), w.data().size(), "test");
   restored.load(r);
   CHECK(restored.remote("a"));
