@@ -16,9 +16,7 @@ struct Invalid {
   std::string message;
 };
 
-[[noreturn]] inline void fail(const std::string& reason, const std::string& message) {
-  throw Invalid{reason, message};
-}
+[[noreturn]] inline void fail(const std::string& reason, const std::string& message) { throw Invalid{reason, message}; }
 
 /// Refuses (non_finite) the first of v[0..n) that is not finite, naming `field` (with its index when n > 1).
 inline void check_finite(const double* v, int n, const std::string& field) {
