@@ -283,8 +283,10 @@ InertialSmoother& InertialSmoother::operator=(InertialSmoother&&) noexcept = def
 
 void InertialSmoother::initialize(double t, const NavState& x, const ImuBias& b, std::optional<SE3> odometry_pose) {
   const InertialSmootherOptions o = s_->o;
+  const InertialSmootherCounters counters = s_->counters;  // they count over restarts
   s_ = std::make_unique<State>(o);
   State& s = *s_;
+  s.counters = counters;
   Keyframe k;
   k.seq = s.next_seq++;
   k.t = t;

@@ -92,6 +92,7 @@ class InertialSmoother {
 
   /// The first keyframe at time t with state x and bias b, and the prior of the options' initial sigmas; with
   /// `odometry_pose` (the wheel odometry's pose at t, in its own frame) the next keyframe gets an odometry factor.
+  /// Called again, it starts over (the counters go on).
   void initialize(double t, const NavState& x, const ImuBias& b = {}, std::optional<SE3> odometry_pose = {});
   bool initialized() const;
 
