@@ -342,9 +342,11 @@ bool InertialSmoother::add_odometry(double t, const SE3& pose, const Matrix6d& i
   return true;
 }
 
-bool InertialSmoother::add_gnss(double t, const Eigen::Vector3d& enu, const Eigen::Matrix3d& covariance) {
+bool InertialSmoother::add_gnss(double t, const Eigen::Vector3d& enu, const Eigen::Matrix3d& covariance,
+                                const std::optional<Eigen::Vector3d>& lever_arm) {
   State& s = *s_;
-  if (!initialized() || !std::isfinite(t) || t < s.integrated_to || !enu.allFinite() ||
+  const Eigen::Vector3d lever = lever_arm.value_or(s.o.gnss_lever_arm);
+  if (!initialized() || !std::isfinite(t) || t < s.integrated_to || !enu.allFinite() || !lever.allFinite() ||
       !is_positive_definite(covariance)) {
     ++s.counters.dropped;
     return false;
@@ -354,11 +356,11 @@ bool InertialSmoother::add_gnss(double t, const Eigen::Vector3d& enu, const Eige
   StoredFactor f;
   f.gnss = true;
   if (s.pim.dt() > 0) {
-    f.factor = std::make_unique<GnssPositionFactor>(kLocal, s.pim, s.o.gravity, enu, covariance, s.o.gnss_lever_arm,
-                                                    s.o.gnss_kernel, s.o.gnss_kernel_width);
+    f.factor = std::make_unique<GnssPositionFactor>(kLocal, s.pim, s.o.gravity, enu, covariance, lever, s.o.gnss_kernel,
+                                                    s.o.gnss_kernel_width);
     f.variables = {{k.seq, kPose}, {k.seq, kVelocity}, {k.seq, kGyroBias}, {k.seq, kAccelBias}};
   } else {
-    f.factor = std::make_unique<GnssPositionFactor>(kPose, enu, covariance, s.o.gnss_lever_arm, s.o.gnss_kernel,
+    f.factor = std::make_unique<GnssPositionFactor>(kPose, enu, covariance, lever, s.o.gnss_kernel,
                                                     s.o.gnss_kernel_width);
     f.variables = {{k.seq, kPose}};
   }
@@ -382,7 +384,7 @@ std::vector<KeyframeEstimate> InertialSmoother::window() const {
   return w;
 }
 
-Observability InertialSmoother::observability() const {
+Matrix6d InertialSmoother::newest_pose_covariance() const {
   const State& s = *s_;
   const graph::FactorGraph g = s.build_graph();
   std::vector<const graph::Factor*> all;
@@ -392,17 +394,24 @@ Observability InertialSmoother::observability() const {
   std::vector<int> others;
   for (int v = 0; v < static_cast<int>(g.variables().size()); ++v)
     if (v != newest_pose) others.push_back(v);
-  Observability out;
   const graph::MarginalInformation m = graph::marginal_information(g.variables(), all, others);
-  const Eigen::Matrix3d R = s.newest().vars[kPose].pose3.rotation().matrix();
-  const Eigen::Matrix3d rotation = Eigen::MatrixXd(m.H.inverse()).bottomRightCorner<3, 3>();
-  const Eigen::Matrix3d world = symmetrized(R * rotation * R.transpose());
+  return symmetrized(Matrix6d(m.H.inverse()));
+}
+
+Observability InertialSmoother::observability() const {
+  return observability_of(newest_pose_covariance(), newest().state.R, s_->o);
+}
+
+Observability observability_of(const Matrix6d& pose_covariance, const Eigen::Matrix3d& R,
+                               const InertialSmootherOptions& o) {
+  const Eigen::Matrix3d world = symmetrized(R * pose_covariance.bottomRightCorner<3, 3>() * R.transpose());
+  Observability out;
   out.yaw_sigma = std::sqrt(std::max(0.0, world(2, 2)));
   out.tilt_sigma = std::sqrt(std::max(0.0, Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(world.topLeftCorner<2, 2>())
                                                .eigenvalues()
                                                .maxCoeff()));
-  out.tilt = out.tilt_sigma < s.o.observable_tilt_sigma;
-  out.yaw = out.yaw_sigma < s.o.observable_yaw_sigma;
+  out.tilt = out.tilt_sigma < o.observable_tilt_sigma;
+  out.yaw = out.yaw_sigma < o.observable_yaw_sigma;
   return out;
 }
 

@@ -76,6 +76,11 @@ struct Observability {
   bool tilt = false, yaw = false;
 };
 
+/// Tilt and yaw sigmas of a pose with rotation R (body to world) and marginal covariance over [rho; phi], and
+/// whether they are below the options' thresholds.
+Observability observability_of(const Matrix6d& pose_covariance, const Eigen::Matrix3d& R,
+                               const InertialSmootherOptions& options);
+
 struct InertialSmootherCounters {
   int64_t keyframes = 0, marginalized = 0, imu = 0, odometry = 0, gnss = 0;
   int64_t dropped = 0;             // out of order, before initialize() or non-finite
@@ -103,8 +108,10 @@ class InertialSmoother {
   /// message (tangent [t; phi] of the body, sextant's right perturbation; regularized by the caller).
   bool add_odometry(double t, const SE3& pose, const Matrix6d& increment_covariance);
   /// A GNSS antenna position at t in the world frame (ENU m, e.g. geodesy::LocalTangentPlane::to_enu of the fix)
-  /// with its covariance.  False when dropped (also when the covariance is not positive definite).
-  bool add_gnss(double t, const Eigen::Vector3d& enu, const Eigen::Matrix3d& covariance);
+  /// with its covariance, the antenna at `lever_arm` in the body frame (the options' gnss_lever_arm when not given).
+  /// False when dropped (also when the covariance is not positive definite).
+  bool add_gnss(double t, const Eigen::Vector3d& enu, const Eigen::Matrix3d& covariance,
+                const std::optional<Eigen::Vector3d>& lever_arm = std::nullopt);
 
   /// The newest keyframe's estimate, and the state at the last IMU sample predicted from it.
   KeyframeEstimate newest() const;
@@ -112,7 +119,10 @@ class InertialSmoother {
   double current_time() const;
   /// The keyframes in the window, oldest first.
   std::vector<KeyframeEstimate> window() const;
-  /// See the file comment; computed on call (one dense elimination of the window).
+  /// The newest keyframe pose's marginal covariance over its tangent [rho; phi] (body frame, right perturbation),
+  /// with every other variable of the window marginalized: one dense elimination of the window, computed on call.
+  Matrix6d newest_pose_covariance() const;
+  /// observability_of the newest pose (see the file comment); computed on call as newest_pose_covariance().
   Observability observability() const;
   const InertialSmootherCounters& counters() const;
 
