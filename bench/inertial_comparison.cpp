@@ -26,7 +26,8 @@ int main(int argc, char** argv) {
   const double duration = argc > 2 ? std::atof(argv[2]) : 1200;
   const int first = argc > 3 ? std::atoi(argv[3]) : 1;
   std::printf(
-      "| seed | ATE odometry / filter / smoother (m) | ATE in outages odometry / filter / smoother (m) | drift over a 60 s "
+      "| seed | ATE odometry / filter / smoother (m) | ATE in outages odometry / filter / smoother (m) | drift over a "
+      "60 s "
       "outage odometry / filter / smoother (m) | worst horizontal error with GNSS filter / smoother (m) | outliers: "
       "simulated, filter gated, smoother down-weighted | time filter / smoother (s) | smoother per keyframe, first "
       "/ last 200 (ms) |\n|---|---|---|---|---|---|---|---|\n");

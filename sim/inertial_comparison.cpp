@@ -28,9 +28,7 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
-double seconds_since(Clock::time_point start) {
-  return std::chrono::duration<double>(Clock::now() - start).count();
-}
+double seconds_since(Clock::time_point start) { return std::chrono::duration<double>(Clock::now() - start).count(); }
 
 SE3 to_se3(const double* position, const double* orientation) {
   const Eigen::Quaterniond q(orientation[0], orientation[1], orientation[2], orientation[3]);
@@ -113,8 +111,8 @@ struct FilterRun {
     inertial::EskfState x;
     x.p = x0.p, x.v = x0.v, x.q = Eigen::Quaterniond(x0.R);
     inertial::ErrorStateEkf::Matrix15 P0 = inertial::ErrorStateEkf::Matrix15::Zero();
-    P0.diagonal() << Eigen::Vector3d::Constant(0.25), Eigen::Vector3d::Constant(0.01),
-        Eigen::Vector3d::Constant(1e-4), Eigen::Vector3d::Constant(0.05 * 0.05), Eigen::Vector3d::Constant(0.005 * 0.005);
+    P0.diagonal() << Eigen::Vector3d::Constant(0.25), Eigen::Vector3d::Constant(0.01), Eigen::Vector3d::Constant(1e-4),
+        Eigen::Vector3d::Constant(0.05 * 0.05), Eigen::Vector3d::Constant(0.005 * 0.005);
     f.initialize(t, x, P0);
   }
   static inertial::EskfOptions eskf_options(const SimulationOptions& o) {

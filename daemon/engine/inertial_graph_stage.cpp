@@ -24,14 +24,14 @@ inertial::InertialSmootherOptions smoother_options(const InertialConfig& c) {
   return o;
 }
 
-// A planar source states nothing about z, roll and pitch: they get a variance of 1 per increment.
+// A planar source states nothing about z, roll and pitch: a ground robot does not move along its own z axis (z gets
+// the larger of the x and y variances), and its roll and pitch follow the ground (0.1 rad per increment).
 Matrix6 odometry_increment_covariance(const Odometry& o, const SE3& delta, const Matrix6& previous_pose_covariance) {
   Matrix6 q = increment_covariance(o, delta, previous_pose_covariance, 1e-10);
   if (o.planar) {
-    for (int i : {2, 3, 4}) {
-      q.row(i).setZero(), q.col(i).setZero();
-      q(i, i) = 1.0;
-    }
+    const double z = std::max(q(0, 0), q(1, 1));
+    for (int i : {2, 3, 4}) q.row(i).setZero(), q.col(i).setZero();
+    q(2, 2) = z, q(3, 3) = q(4, 4) = 0.01;
   }
   return q;
 }
@@ -122,9 +122,11 @@ void InertialGraphStage::on_gnss(const GnssFix& g) {
   const Eigen::Vector3d z = b.plane->to_enu(fix);
   const double t = seconds(b, g.utime);
   if (!b.anchored) return anchor(b, t, z, m->lever_arm);
-  b.smoother->add_gnss(
-      t, z, to_plane * stated_or_default(g.position_covariance, config_.default_gnss_variance) * to_plane.transpose(),
-      m->lever_arm);
+  Eigen::Matrix3d R =
+      to_plane * stated_or_default(g.position_covariance, config_.default_gnss_variance) * to_plane.transpose();
+  for (int i = 0; i < 3; ++i)  // gnss_position: a component not selected carries no information
+    if (!config_.gnss_position[static_cast<size_t>(i)]) R.row(i).setZero(), R.col(i).setZero(), R(i, i) = 1e8;
+  b.smoother->add_gnss(t, z, R, m->lever_arm);
 }
 
 void InertialGraphStage::anchor(Body& b, double t, const Eigen::Vector3d& antenna, const Eigen::Vector3d& lever) {
@@ -168,11 +170,12 @@ void InertialGraphStage::publish(const std::string& source, Body& b, int64_t uti
 }
 
 Counters InertialGraphStage::counters() const {
-  int64_t keyframes = 0, down_weighted = 0, dropped = 0, failed = 0, tilt = 0, yaw = 0;
+  int64_t keyframes = 0, links = 0, down_weighted = 0, dropped = 0, failed = 0, tilt = 0, yaw = 0;
   for (const auto& [name, b] : bodies_) {
     if (!b.smoother) continue;
     const auto& c = b.smoother->counters();
-    keyframes += c.keyframes, down_weighted += c.gnss_down_weighted, dropped += c.dropped, failed += c.failed_solves;
+    keyframes += c.keyframes, links += c.odometry_links, down_weighted += c.gnss_down_weighted, dropped += c.dropped,
+        failed += c.failed_solves;
     tilt += b.observability.tilt ? 1 : 0, yaw += b.observability.yaw ? 1 : 0;
   }
   return {{"bodies", static_cast<int64_t>(bodies_.size())},
@@ -180,6 +183,7 @@ Counters InertialGraphStage::counters() const {
           {"gnss_anchored", anchored_},
           {"unmounted", unmounted_},
           {"keyframes", keyframes},
+          {"odometry_links", links},
           {"gnss_down_weighted", down_weighted},
           {"dropped", dropped},
           {"failed_solves", failed},

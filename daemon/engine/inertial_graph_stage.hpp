@@ -9,7 +9,8 @@
 // filter's (the unit's own, or roll and pitch from gravity with yaw 0), velocity the odometry's twist when it has
 // one, position the origin.  Its first GNSS fix places it: the smoother restarts at its current state moved to the fix
 // (less the lever arm), as the filter's anchor.  A planar odometry source's increments constrain x, y and yaw only
-// (z, roll and pitch get a variance of 1 per increment).
+// (z as x and y: a ground robot does not move along its own z axis; roll and pitch 0.1 rad per increment); a GNSS component that engine.inertial.gnss_position does
+// not select gets a variance of 1e8 m^2 (no information).
 // Outputs at most publish_rate_hz per body (data time): the state predicted to the last IMU sample, with the newest
 // keyframe's marginal covariance (recomputed at each keyframe) over [position (world), rotation error (body)] like
 // the filter's.  Counters: keyframes, fixes down-weighted by the robust kernel, dropped input, failed solves, and how

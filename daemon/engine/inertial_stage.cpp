@@ -5,8 +5,7 @@
 
 namespace sextant::engine {
 
-InertialStage::InertialStage(InertialConfig config)
-    : config_(std::move(config)), mountings_(config_.mountings) {
+InertialStage::InertialStage(InertialConfig config) : config_(std::move(config)), mountings_(config_.mountings) {
   options_.noise.gyro_noise_density = config_.gyro_noise_density;
   options_.noise.accel_noise_density = config_.accel_noise_density;
   options_.noise.gyro_bias_random_walk = config_.gyro_bias_random_walk;
@@ -95,7 +94,8 @@ void InertialStage::on_odometry(const Odometry& o) {
   if (it == bodies_.end() || !it->second.filter) return;  // the IMU starts a body's filter
   Body& b = it->second;
   const Eigen::Vector3d v = o.twist->linear;
-  const Eigen::Matrix3d R = stated_or_default(o.twist->covariance.topLeftCorner<3, 3>(), config_.default_velocity_variance);
+  const Eigen::Matrix3d R =
+      stated_or_default(o.twist->covariance.topLeftCorner<3, 3>(), config_.default_velocity_variance);
   const inertial::FieldMask fields = config_.odometry_velocity;
   count(b.filter->add_measurement(seconds(b, o.utime), [v, R, fields](inertial::ErrorStateEkf& f) {
     return f.update_body_velocity(v, R, inertial::SensorMounting{}, fields);

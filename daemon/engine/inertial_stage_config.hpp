@@ -21,8 +21,8 @@ struct SensorMountingConfig {
 /// The inertial keyframe smoother beside the filter (inertial_graph_stage.hpp), engine.inertial.graph.
 struct InertialGraphConfig {
   bool enabled = false;
-  double keyframe_interval = 0.5;  // s between keyframes (at odometry messages)
-  int window = 20;                 // keyframes kept; the oldest is marginalized
+  double keyframe_interval = 0.5;     // s between keyframes (at odometry messages)
+  int window = 20;                    // keyframes kept; the oldest is marginalized
   double gnss_kernel_width = 2.7955;  // Huber width on the whitened fix error (sqrt of chi-square(3)'s 95 %)
   double initial_yaw_sigma = 0.5;     // rad, the start's yaw (0 without a unit's orientation) until GNSS observes it
 };

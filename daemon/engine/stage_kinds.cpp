@@ -14,9 +14,12 @@ namespace sextant::engine {
 namespace {
 
 constexpr std::pair<PrimaryEstimator, const char*> kPrimaryEstimators[] = {
-    {PrimaryEstimator::kAuto, "auto"},   {PrimaryEstimator::kDeadReckoning, "dead_reckoning"},
-    {PrimaryEstimator::kEkf, "ekf"},     {PrimaryEstimator::kPf, "pf"},
-    {PrimaryEstimator::kGraph, "graph"}, {PrimaryEstimator::kInertial, "inertial"},
+    {PrimaryEstimator::kAuto, "auto"},
+    {PrimaryEstimator::kDeadReckoning, "dead_reckoning"},
+    {PrimaryEstimator::kEkf, "ekf"},
+    {PrimaryEstimator::kPf, "pf"},
+    {PrimaryEstimator::kGraph, "graph"},
+    {PrimaryEstimator::kInertial, "inertial"},
     {PrimaryEstimator::kInertialGraph, "inertial_graph"}};
 constexpr std::pair<FilterType, const char*> kFilterTypes[] = {
     {FilterType::kEkf, "ekf"}, {FilterType::kPf, "pf"}, {FilterType::kNone, "none"}};

@@ -51,9 +51,9 @@ LinearPriorFactor::LinearPriorFactor(std::vector<int> variables, std::vector<Var
   if (!J_.allFinite() || !r0_.allFinite()) throw std::invalid_argument("LinearPriorFactor: non-finite J or r0");
 }
 
-std::unique_ptr<LinearPriorFactor> LinearPriorFactor::from_hessian(std::vector<int> variables,
-                                                                   std::vector<Variable> x0, const Eigen::MatrixXd& H,
-                                                                   const Eigen::VectorXd& b, double rank_tolerance) {
+std::unique_ptr<LinearPriorFactor> LinearPriorFactor::from_hessian(std::vector<int> variables, std::vector<Variable> x0,
+                                                                   const Eigen::MatrixXd& H, const Eigen::VectorXd& b,
+                                                                   double rank_tolerance) {
   if (H.rows() != H.cols() || b.size() != H.rows() || !H.allFinite() || !b.allFinite())
     throw std::invalid_argument("LinearPriorFactor: H and b must be finite, square and of one size");
   Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(symmetrized(H));
@@ -113,8 +113,8 @@ namespace {
 
 // Columns of each variable in the stacked system: eliminated first, then the kept ones in order of appearance.
 struct Columns {
-  std::vector<int> order;  // variable indices
-  std::vector<int> start;  // per entry of order
+  std::vector<int> order;         // variable indices
+  std::vector<int> start;         // per entry of order
   int eliminated = 0, total = 0;  // scalar columns
   size_t eliminated_variables = 0;
   int of(int variable) const {

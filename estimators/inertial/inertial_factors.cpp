@@ -19,7 +19,8 @@ const graph::Variable& at(const std::vector<graph::Variable>& vars, int index) {
 constexpr int kP = 0, kV = 3, kTh = 6, kBa = 9, kBg = 12;
 
 Eigen::MatrixXd preintegrated_information(const ImuPreintegration& pim) {
-  if (!(pim.dt() > 0)) throw std::invalid_argument("ImuFactor: an empty preintegration (no IMU sample between keyframes)");
+  if (!(pim.dt() > 0))
+    throw std::invalid_argument("ImuFactor: an empty preintegration (no IMU sample between keyframes)");
   if (!is_positive_definite(pim.covariance()))
     throw std::invalid_argument("ImuFactor: the preintegrated covariance is not positive definite");
   return symmetrized(pim.covariance().inverse());

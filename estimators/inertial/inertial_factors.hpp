@@ -75,9 +75,9 @@ class GnssPositionFactor final : public graph::Factor {
   GnssPositionFactor(int pose, const Eigen::Vector3d& z, const Eigen::Matrix3d& covariance,
                      const Eigen::Vector3d& lever_arm, graph::RobustKernel kernel, double kernel_width);
   /// A fix `since_keyframe.dt()` seconds after keyframe k.
-  GnssPositionFactor(const KeyframeVariables& k, const ImuPreintegration& since_keyframe, const Eigen::Vector3d& gravity,
-                     const Eigen::Vector3d& z, const Eigen::Matrix3d& covariance, const Eigen::Vector3d& lever_arm,
-                     graph::RobustKernel kernel, double kernel_width);
+  GnssPositionFactor(const KeyframeVariables& k, const ImuPreintegration& since_keyframe,
+                     const Eigen::Vector3d& gravity, const Eigen::Vector3d& z, const Eigen::Matrix3d& covariance,
+                     const Eigen::Vector3d& lever_arm, graph::RobustKernel kernel, double kernel_width);
   std::unique_ptr<graph::Factor> clone() const override { return std::make_unique<GnssPositionFactor>(*this); }
   std::string type() const override { return "GNSS_POSITION"; }
   bool fixes_gauge() const override { return true; }

@@ -135,7 +135,7 @@ struct InertialSmoother::State {
   InertialSmootherOptions o;
   InertialSmootherCounters counters;
   std::deque<Keyframe> keyframes;
-  StoredFactor prior;                      // on the oldest keyframe
+  StoredFactor prior;                        // on the oldest keyframe
   std::vector<graph::Variable> prior_point;  // the oldest keyframe's variables where the prior was linearized
   int64_t next_seq = 0;
   // The IMU since the newest keyframe: preintegrated at its bias, the held sample and the time integrated to.
@@ -194,8 +194,9 @@ struct InertialSmoother::State {
 void InertialSmoother::State::link_factors(Keyframe& k, const Keyframe& previous) {
   auto ref = [](const Keyframe& kf, int slot) { return VariableRef{kf.seq, slot}; };
   const KeyframeVariables j_local{kSlots + kPose, kSlots + kVelocity, -1, -1};
-  const std::vector<VariableRef> pair = {ref(previous, kPose),     ref(previous, kVelocity), ref(previous, kGyroBias),
-                                         ref(previous, kAccelBias), ref(k, kPose),           ref(k, kVelocity)};
+  const std::vector<VariableRef> pair = {
+      ref(previous, kPose), ref(previous, kVelocity), ref(previous, kGyroBias), ref(previous, kAccelBias),
+      ref(k, kPose),        ref(k, kVelocity)};
   k.factors.push_back({std::make_unique<ImuFactor>(kLocal, j_local, pim, o.gravity), pair});
   const double dt = pim.dt();
   k.factors.push_back({std::make_unique<RandomWalkFactor>(0, 1, o.noise.gyro_bias_random_walk, dt),
@@ -204,7 +205,7 @@ void InertialSmoother::State::link_factors(Keyframe& k, const Keyframe& previous
                        {ref(previous, kAccelBias), ref(k, kAccelBias)}});
   if (previous.odometry && k.odometry) {
     auto f = slam::odometry_factor(false, 0, 1, previous.odometry->inverse() * *k.odometry, odometry_covariance);
-    if (f) k.factors.push_back({std::move(f), {ref(previous, kPose), ref(k, kPose)}});
+    if (f) k.factors.push_back({std::move(f), {ref(previous, kPose), ref(k, kPose)}}), ++counters.odometry_links;
   }
 }
 
@@ -360,8 +361,8 @@ bool InertialSmoother::add_gnss(double t, const Eigen::Vector3d& enu, const Eige
                                                     s.o.gnss_kernel_width);
     f.variables = {{k.seq, kPose}, {k.seq, kVelocity}, {k.seq, kGyroBias}, {k.seq, kAccelBias}};
   } else {
-    f.factor = std::make_unique<GnssPositionFactor>(kPose, enu, covariance, lever, s.o.gnss_kernel,
-                                                    s.o.gnss_kernel_width);
+    f.factor =
+        std::make_unique<GnssPositionFactor>(kPose, enu, covariance, lever, s.o.gnss_kernel, s.o.gnss_kernel_width);
     f.variables = {{k.seq, kPose}};
   }
   k.factors.push_back(std::move(f));
@@ -407,9 +408,8 @@ Observability observability_of(const Matrix6d& pose_covariance, const Eigen::Mat
   const Eigen::Matrix3d world = symmetrized(R * pose_covariance.bottomRightCorner<3, 3>() * R.transpose());
   Observability out;
   out.yaw_sigma = std::sqrt(std::max(0.0, world(2, 2)));
-  out.tilt_sigma = std::sqrt(std::max(0.0, Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(world.topLeftCorner<2, 2>())
-                                               .eigenvalues()
-                                               .maxCoeff()));
+  out.tilt_sigma = std::sqrt(std::max(
+      0.0, Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(world.topLeftCorner<2, 2>()).eigenvalues().maxCoeff()));
   out.tilt = out.tilt_sigma < o.observable_tilt_sigma;
   out.yaw = out.yaw_sigma < o.observable_yaw_sigma;
   return out;

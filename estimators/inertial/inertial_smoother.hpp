@@ -47,8 +47,8 @@ struct InertialSmootherOptions {
   double keyframe_interval = 0.5;  // s
   int window = 20;                 // keyframes in the window (>= 2); older ones are marginalized
   ImuNoise noise;
-  Eigen::Vector3d gravity{0, 0, -9.80665};  // world frame, m/s^2
-  bool use_odometry = true;                 // keyframes at odometry messages, with odometry factors
+  Eigen::Vector3d gravity{0, 0, -9.80665};                   // world frame, m/s^2
+  bool use_odometry = true;                                  // keyframes at odometry messages, with odometry factors
   Eigen::Vector3d gnss_lever_arm = Eigen::Vector3d::Zero();  // antenna in the body frame, m
   graph::RobustKernel gnss_kernel = graph::RobustKernel::kHuber;
   double gnss_kernel_width = 2.7955;  // sqrt of chi-square(3)'s 95 % quantile: a fix beyond 2.8 sigma is down-weighted
@@ -57,7 +57,7 @@ struct InertialSmootherOptions {
   double initial_tilt_sigma = 0.1, initial_yaw_sigma = 0.1;
   double initial_gyro_bias_sigma = 0.01, initial_accel_bias_sigma = 0.1;
   double observable_tilt_sigma = 0.02, observable_yaw_sigma = 0.05;  // rad
-  int max_iterations = 10;  // Levenberg-Marquardt iterations per keyframe
+  int max_iterations = 10;                                           // Levenberg-Marquardt iterations per keyframe
 };
 
 /// Throws std::invalid_argument naming the first option out of range.
@@ -83,6 +83,7 @@ Observability observability_of(const Matrix6d& pose_covariance, const Eigen::Mat
 
 struct InertialSmootherCounters {
   int64_t keyframes = 0, marginalized = 0, imu = 0, odometry = 0, gnss = 0;
+  int64_t odometry_links = 0;      // keyframe pairs joined by an odometry factor
   int64_t dropped = 0;             // out of order, before initialize() or non-finite
   int64_t gnss_down_weighted = 0;  // fixes beyond the kernel's width when their keyframe left the window
   int64_t failed_solves = 0;       // optimizer failures (the estimate kept its prediction)

@@ -69,11 +69,11 @@ SE3 to_se3(const double* position, const double* orientation) {
 SE3 to_se3(const engine::Pose& p) { return SE3(SO3::from_unit_quaternion(p.orientation), p.position); }
 
 struct Result {
-  double ate = 0, odometry_ate = 0;               // position RMS at the keyframes after 10 s, m
-  double drift = 0, odometry_drift = 0;           // worst position drift over an outage, m
-  double worst_with_gnss = 0;                     // worst horizontal keyframe error while fixes come (after 20 s), m
+  double ate = 0, odometry_ate = 0;      // position RMS at the keyframes after 10 s, m
+  double drift = 0, odometry_drift = 0;  // worst position drift over an outage, m
+  double worst_with_gnss = 0;            // worst horizontal keyframe error while fixes come (after 20 s), m
   inertial::Observability at_start, at_60s, at_end;
-  double final_yaw_error = 0;                     // rad
+  double final_yaw_error = 0;  // rad
   size_t window_max = 0;
   inertial::InertialSmootherCounters counters;
 };
@@ -113,7 +113,8 @@ Result run(const Simulated& sim, bool gnss, int window = 20) {
         const engine::Pose& truth = sim.truth.at(m.utime);
         const engine::Pose& next = sim.truth.upper_bound(m.utime)->second;
         inertial::NavState x;
-        x.R = Eigen::AngleAxisd(0.1, Eigen::Vector3d::UnitZ()).toRotationMatrix() * truth.orientation.toRotationMatrix();
+        x.R =
+            Eigen::AngleAxisd(0.1, Eigen::Vector3d::UnitZ()).toRotationMatrix() * truth.orientation.toRotationMatrix();
         x.p = truth.position;
         x.v = (next.position - truth.position) * o.odometry_rate_hz;
         smoother.initialize(t, x, {}, pose);
@@ -142,8 +143,8 @@ Result run(const Simulated& sim, bool gnss, int window = 20) {
         const bool outage = std::fmod(since, kPeriod) >= kPeriod - kOutage;
         if (!outage && since > 20 && std::fmod(since, kPeriod) > 5)
           r.worst_with_gnss = std::max(r.worst_with_gnss, e.head<2>().norm());
-        r.final_yaw_error = std::abs(std::remainder(
-            yaw_of(smoother.newest().state.R) - yaw_of(truth.orientation.toRotationMatrix()), 2 * M_PI));
+        r.final_yaw_error = std::abs(
+            std::remainder(yaw_of(smoother.newest().state.R) - yaw_of(truth.orientation.toRotationMatrix()), 2 * M_PI));
       }
     } else if (rec.channel == "IMU" && smoother.initialized()) {
       imu_t m;
@@ -168,8 +169,7 @@ Result run(const Simulated& sim, bool gnss, int window = 20) {
   for (double a : {kPeriod - kOutage, 2 * kPeriod - kOutage}) {
     const double b = a + kOutage - 0.02;
     r.drift = std::max(r.drift, drift(marks[a].first, marks[b].first, truth_at(a), truth_at(b)));
-    r.odometry_drift =
-        std::max(r.odometry_drift, drift(marks[a].second, marks[b].second, truth_at(a), truth_at(b)));
+    r.odometry_drift = std::max(r.odometry_drift, drift(marks[a].second, marks[b].second, truth_at(a), truth_at(b)));
   }
   return r;
 }
@@ -179,13 +179,13 @@ Result run(const Simulated& sim, bool gnss, int window = 20) {
 TEST_CASE("inertial smoother, simulated spatial run: ATE and outage drift against the odometry, outliers, yaw") {
   const Simulated sim = simulate_run(5);
   const Result with = run(sim, true);
-  MESSAGE("smoother with GNSS: ATE ", with.ate, " m (odometry alone ", with.odometry_ate, " m); drift over a 60 s outage ",
-          with.drift, " m (odometry alone ", with.odometry_drift, " m); worst horizontal error with fixes ",
-          with.worst_with_gnss, " m; fixes ", with.counters.gnss, ", down-weighted ", with.counters.gnss_down_weighted,
-          " (", sim.summary.gnss_outliers, " outliers simulated); yaw sigma at start ", with.at_start.yaw_sigma,
-          ", at 60 s ", with.at_60s.yaw_sigma, ", tilt sigma at 60 s ", with.at_60s.tilt_sigma, "; final yaw error ",
-          with.final_yaw_error, " rad; keyframes ", with.counters.keyframes, ", failed solves ",
-          with.counters.failed_solves);
+  MESSAGE("smoother with GNSS: ATE ", with.ate, " m (odometry alone ", with.odometry_ate,
+          " m); drift over a 60 s outage ", with.drift, " m (odometry alone ", with.odometry_drift,
+          " m); worst horizontal error with fixes ", with.worst_with_gnss, " m; fixes ", with.counters.gnss,
+          ", down-weighted ", with.counters.gnss_down_weighted, " (", sim.summary.gnss_outliers,
+          " outliers simulated); yaw sigma at start ", with.at_start.yaw_sigma, ", at 60 s ", with.at_60s.yaw_sigma,
+          ", tilt sigma at 60 s ", with.at_60s.tilt_sigma, "; final yaw error ", with.final_yaw_error,
+          " rad; keyframes ", with.counters.keyframes, ", failed solves ", with.counters.failed_solves);
   CHECK(with.ate < 0.5 * with.odometry_ate);
   CHECK(with.drift <= 0.5 * with.odometry_drift);
   CHECK(with.worst_with_gnss < sim.options.gnss.horizontal_sigma);
@@ -197,8 +197,8 @@ TEST_CASE("inertial smoother, simulated spatial run: ATE and outage drift agains
   CHECK(with.final_yaw_error < 0.02);
 
   const Result without = run(sim, false, 5);  // a marginalization at nearly every keyframe
-  MESSAGE("smoother without GNSS (its initial yaw error of 0.1 rad stays): ATE ", without.ate, " m; yaw sigma at the end ", without.at_end.yaw_sigma,
-          ", tilt sigma ", without.at_end.tilt_sigma);
+  MESSAGE("smoother without GNSS (its initial yaw error of 0.1 rad stays): ATE ", without.ate,
+          " m; yaw sigma at the end ", without.at_end.yaw_sigma, ", tilt sigma ", without.at_end.tilt_sigma);
   CHECK(without.at_end.tilt);
   CHECK_FALSE(without.at_end.yaw);
   // Nothing observes yaw without GNSS: its sigma stays near what the initial prior gives (0.3 rad on yaw, and

@@ -78,8 +78,8 @@ graph::Variable vector_variable(int64_t id, const Eigen::Vector3d& x) {
 
 // Variables of keyframes i (0..3) and j (4, 5) in the factors' order.
 std::vector<graph::Variable> keyframe_pair(const NavState& xi, const ImuBias& bi, const NavState& xj) {
-  return {pose_variable(0, xi), vector_variable(1, xi.v), vector_variable(2, bi.gyro), vector_variable(3, bi.accel),
-          pose_variable(4, xj), vector_variable(5, xj.v)};
+  return {pose_variable(0, xi),         vector_variable(1, xi.v), vector_variable(2, bi.gyro),
+          vector_variable(3, bi.accel), pose_variable(4, xj),     vector_variable(5, xj.v)};
 }
 
 const KeyframeVariables kI{0, 1, 2, 3}, kJ{4, 5, -1, -1};
