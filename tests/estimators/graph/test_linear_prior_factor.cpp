@@ -138,3 +138,19 @@ TEST_CASE("marginalize: a linear chain's kept variables have the full problem's 
   // Nothing determines an eliminated variable without factors.
   CHECK_THROWS_AS(marginalize(initial.variables(), {fs[3].get()}, {0}), std::invalid_argument);
 }
+
+TEST_CASE("optimize: a factor on six variables (the IMU factor's count) reaches the minimum of its quadratic") {
+  // The normal equations once kept J'W of at most four variables per factor: six wrote past the end.
+  std::mt19937 rng(6);
+  FactorGraph g;
+  std::vector<Variable> x0;
+  for (int k = 0; k < 6; ++k) {
+    g.add_variable(vec(k, Eigen::Vector3d::Zero()));
+    x0.push_back(vec(k, Eigen::Vector3d(k, -k, 2.0 * k)));
+  }
+  g.add_factor(LinearPriorFactor::gaussian({0, 1, 2, 3, 4, 5}, x0, random_spd(rng, 18)));
+  OptimizerOptions o;
+  REQUIRE(optimize(g, o).usable());
+  for (int k = 0; k < 6; ++k)
+    CHECK((g.variables()[static_cast<size_t>(k)].point - x0[static_cast<size_t>(k)].point).norm() < 1e-9);
+}
