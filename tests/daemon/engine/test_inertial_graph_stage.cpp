@@ -86,7 +86,7 @@ TEST_CASE("inertial graph stage: a body at rest stays under its antenna, tilt ob
   CHECK(counter(stage, "yaw_observable") == 0);
 }
 
-TEST_CASE("inertial graph stage: a sample from a frame without a mounting is counted; the engine makes it on request") {
+TEST_CASE("inertial graph stage: a sample from a frame without a mounting is counted, the engine makes it on request") {
   InertialGraphStage stage(config());
   int published = 0;
   const Emit emit = [&](Output) { ++published; };
