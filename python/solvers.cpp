@@ -93,6 +93,7 @@ py::list variable_values(const graph::Variable& v) {
       for (double x : {v.point.x(), v.point.y()}) l.append(x);
       break;
     case graph::VariableKind::kPoint3:
+    case graph::VariableKind::kVector3:
       for (double x : {v.point.x(), v.point.y(), v.point.z()}) l.append(x);
       break;
   }

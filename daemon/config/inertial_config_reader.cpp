@@ -57,6 +57,15 @@ void read_mountings(Section& s, engine::InertialConfig& c) {
   }
 }
 
+void read_graph(Section& s, engine::InertialGraphConfig& c) {
+  s.get("enabled", c.enabled);
+  s.get("keyframe_interval", c.keyframe_interval, in_range(0.01, 60));
+  s.get("window", c.window, int_in_range(2, 1000));
+  s.get("gnss_kernel_width", c.gnss_kernel_width, positive());
+  s.get("initial_yaw_sigma", c.initial_yaw_sigma, positive());
+  s.reject_unknown_keys();
+}
+
 }  // namespace
 
 void read_stage_config(Section& s, engine::InertialConfig& c) {
@@ -85,6 +94,8 @@ void read_stage_config(Section& s, engine::InertialConfig& c) {
             return "latitude in [-90, 90], longitude in [-180, 180], altitude within 100 km";
           return std::nullopt;
         }));
+  Section graph = s.child("graph");
+  read_graph(graph, c.graph);
   s.reject_unknown_keys();
 }
 

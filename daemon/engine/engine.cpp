@@ -5,6 +5,7 @@
 #include "daemon/engine/filter_stage.hpp"
 #include "daemon/engine/graph_pose_stage.hpp"
 #include "daemon/engine/graph_stage.hpp"
+#include "daemon/engine/inertial_graph_stage.hpp"
 #include "daemon/engine/inertial_stage.hpp"
 #include "daemon/engine/particle_filter_stage.hpp"
 
@@ -25,6 +26,8 @@ std::vector<std::unique_ptr<Stage>> make_stages(const EngineConfig& config,
   }
   if (config.association.enabled) stages.push_back(std::make_unique<AssociationStage>(config.association));
   if (config.inertial.enabled) stages.push_back(std::make_unique<InertialStage>(config.inertial));
+  if (config.inertial.enabled && config.inertial.graph.enabled)
+    stages.push_back(std::make_unique<InertialGraphStage>(config.inertial));
   return stages;
 }
 
@@ -33,12 +36,15 @@ Engine::Engine(const EngineConfig& config, std::shared_ptr<GraphCorrectionBoard>
 
 namespace {
 
-// How capable an estimator is, for "auto": graph > inertial filter > filter > dead reckoning.
+// How capable an estimator is, for "auto": graph > inertial filter > inertial smoother > filter > dead reckoning
+// (the inertial smoother publishes beside the inertial filter, which stays FUSED_POSE unless chosen).
 int capability(PrimaryEstimator estimator) {
   switch (estimator) {
     case PrimaryEstimator::kGraph:
-      return 4;
+      return 5;
     case PrimaryEstimator::kInertial:
+      return 4;
+    case PrimaryEstimator::kInertialGraph:
       return 3;
     case PrimaryEstimator::kEkf:
     case PrimaryEstimator::kPf:

@@ -4,33 +4,12 @@
 #include <stdexcept>
 
 namespace sextant::engine {
-namespace {
 
-Eigen::Matrix3d or_default(const Eigen::Matrix3d& stated, double variance) {
-  return stated.isZero(0) ? Eigen::Matrix3d(Eigen::Matrix3d::Identity() * variance) : stated;
-}
-
-// The body's orientation at the start: the unit's own (through its mounting) when it has one, else roll and pitch
-// from gravity in the specific force (f = R^T (a - g) at rest: f points up in the body frame), yaw 0.
-Eigen::Quaterniond initial_orientation(const ImuSample& s, const inertial::SensorMounting& m,
-                                       const inertial::BodyImuSample& body) {
-  if (s.orientation) return Eigen::Quaterniond(s.orientation->toRotationMatrix() * m.rotation.transpose()).normalized();
-  const Eigen::Vector3d up = body.accel.normalized();  // the world's z in the body frame
-  return Eigen::Quaterniond::FromTwoVectors(up, Eigen::Vector3d::UnitZ());
-}
-
-}  // namespace
-
-InertialStage::InertialStage(InertialConfig config) : config_(std::move(config)) {
+InertialStage::InertialStage(InertialConfig config) : config_(std::move(config)), mountings_(config_.mountings) {
   options_.noise.gyro_noise_density = config_.gyro_noise_density;
   options_.noise.accel_noise_density = config_.accel_noise_density;
   options_.noise.gyro_bias_random_walk = config_.gyro_bias_random_walk;
   options_.noise.accel_bias_random_walk = config_.accel_bias_random_walk;
-  for (const auto& c : config_.mountings) {
-    const auto m = inertial::SensorMounting::from_xyz_rpy({c.xyz[0], c.xyz[1], c.xyz[2]}, c.rpy[0], c.rpy[1], c.rpy[2]);
-    m.check(("engine.inertial.mountings: frame " + c.frame).c_str());
-    mountings_[{c.source, c.frame}] = m;
-  }
 }
 
 bool InertialStage::accepts(const Event& e) const {
@@ -40,9 +19,7 @@ bool InertialStage::accepts(const Event& e) const {
 }
 
 const inertial::SensorMounting* InertialStage::mounting(const std::string& source, const std::string& frame) const {
-  if (auto it = mountings_.find({source, frame}); it != mountings_.end()) return &it->second;
-  if (auto it = mountings_.find({"", frame}); it != mountings_.end()) return &it->second;
-  return nullptr;
+  return mountings_.find(source, frame);
 }
 
 void InertialStage::handle(const Event& e, const Emit& emit) {
@@ -104,7 +81,7 @@ void InertialStage::on_imu(const ImuSample& s, const Emit& emit) {
     inertial::FieldMask fields = config_.imu_orientation;
     fields[2] = fields[2] && s.orientation_has_yaw;
     const Eigen::Quaterniond q = *s.orientation;
-    const Eigen::Matrix3d R = or_default(s.orientation_covariance, config_.default_orientation_variance);
+    const Eigen::Matrix3d R = stated_or_default(s.orientation_covariance, config_.default_orientation_variance);
     const inertial::SensorMounting mount = *m;
     count(b.filter->add_measurement(
         t, [q, R, mount, fields](inertial::ErrorStateEkf& f) { return f.update_orientation(q, R, mount, fields); }));
@@ -117,7 +94,8 @@ void InertialStage::on_odometry(const Odometry& o) {
   if (it == bodies_.end() || !it->second.filter) return;  // the IMU starts a body's filter
   Body& b = it->second;
   const Eigen::Vector3d v = o.twist->linear;
-  const Eigen::Matrix3d R = or_default(o.twist->covariance.topLeftCorner<3, 3>(), config_.default_velocity_variance);
+  const Eigen::Matrix3d R =
+      stated_or_default(o.twist->covariance.topLeftCorner<3, 3>(), config_.default_velocity_variance);
   const inertial::FieldMask fields = config_.odometry_velocity;
   count(b.filter->add_measurement(seconds(b, o.utime), [v, R, fields](inertial::ErrorStateEkf& f) {
     return f.update_body_velocity(v, R, inertial::SensorMounting{}, fields);
@@ -142,7 +120,7 @@ void InertialStage::on_gnss(const GnssFix& g) {
   const Eigen::Matrix3d to_plane = b.plane->enu_at(fix);
   const Eigen::Vector3d z = b.plane->to_enu(fix);
   const Eigen::Matrix3d R =
-      to_plane * or_default(g.position_covariance, config_.default_gnss_variance) * to_plane.transpose();
+      to_plane * stated_or_default(g.position_covariance, config_.default_gnss_variance) * to_plane.transpose();
   const Eigen::Vector3d lever = m->lever_arm;
   if (first) {
     anchor(b, z, R, lever);
@@ -157,7 +135,7 @@ void InertialStage::on_gnss(const GnssFix& g) {
   if (g.velocity && (config_.gnss_velocity[0] || config_.gnss_velocity[1] || config_.gnss_velocity[2])) {
     const Eigen::Vector3d v = to_plane * *g.velocity;
     const Eigen::Matrix3d Rv =
-        to_plane * or_default(g.velocity_covariance, config_.default_velocity_variance) * to_plane.transpose();
+        to_plane * stated_or_default(g.velocity_covariance, config_.default_velocity_variance) * to_plane.transpose();
     const inertial::FieldMask vfields = config_.gnss_velocity;
     count(b.filter->add_measurement(t, [v, Rv, lever, vfields](inertial::ErrorStateEkf& f) {
       return f.update_gnss_velocity(v, Rv, lever, vfields);

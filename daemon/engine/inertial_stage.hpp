@@ -16,6 +16,7 @@
 // Frames: the world frame is the filter's: ENU at the datum when GNSS is fused (and the IMU's yaw is ENU), else the
 // frame the first orientation gives.  Outputs at most engine.inertial.publish_rate_hz per body (data time), pose and
 // 6x6 covariance over [position, rotation error] (the filter's p and theta blocks, right perturbation).
+#include "daemon/engine/inertial_inputs.hpp"
 #include "daemon/engine/inertial_stage_config.hpp"
 #include "daemon/engine/stage.hpp"
 #include "estimators/geodesy/local_tangent_plane.hpp"
@@ -63,7 +64,7 @@ class InertialStage final : public Stage {
 
   InertialConfig config_;
   inertial::EskfOptions options_;
-  std::map<std::pair<std::string, std::string>, inertial::SensorMounting> mountings_;  // (source or "", frame)
+  SensorMountings mountings_;
   std::map<std::string, Body> bodies_;
   int64_t imu_ = 0, started_ = 0, unmounted_ = 0, imu_refused_ = 0, updates_ = 0, refused_ = 0, gated_ = 0,
           too_old_ = 0, published_ = 0, no_filter_yet_ = 0, anchored_ = 0;

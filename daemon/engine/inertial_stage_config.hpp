@@ -18,6 +18,15 @@ struct SensorMountingConfig {
   std::array<double, 3> rpy{0, 0, 0};
 };
 
+/// The inertial keyframe smoother beside the filter (inertial_graph_stage.hpp), engine.inertial.graph.
+struct InertialGraphConfig {
+  bool enabled = false;
+  double keyframe_interval = 0.5;     // s between keyframes (at odometry messages)
+  int window = 20;                    // keyframes kept; the oldest is marginalized
+  double gnss_kernel_width = 2.7955;  // Huber width on the whitened fix error (sqrt of chi-square(3)'s 95 %)
+  double initial_yaw_sigma = 0.5;     // rad, the start's yaw (0 without a unit's orientation) until GNSS observes it
+};
+
 struct InertialConfig {
   bool enabled = false;  // the stage runs only for users who say they have an IMU
   std::vector<SensorMountingConfig> mountings;
@@ -43,6 +52,7 @@ struct InertialConfig {
   std::vector<double> datum;
   /// Initial standard deviations of the biases.
   double initial_sigma_gyro_bias = 0.01, initial_sigma_accel_bias = 0.1;
+  InertialGraphConfig graph;
 };
 
 }  // namespace sextant::engine

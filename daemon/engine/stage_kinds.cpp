@@ -14,9 +14,13 @@ namespace sextant::engine {
 namespace {
 
 constexpr std::pair<PrimaryEstimator, const char*> kPrimaryEstimators[] = {
-    {PrimaryEstimator::kAuto, "auto"},   {PrimaryEstimator::kDeadReckoning, "dead_reckoning"},
-    {PrimaryEstimator::kEkf, "ekf"},     {PrimaryEstimator::kPf, "pf"},
-    {PrimaryEstimator::kGraph, "graph"}, {PrimaryEstimator::kInertial, "inertial"}};
+    {PrimaryEstimator::kAuto, "auto"},
+    {PrimaryEstimator::kDeadReckoning, "dead_reckoning"},
+    {PrimaryEstimator::kEkf, "ekf"},
+    {PrimaryEstimator::kPf, "pf"},
+    {PrimaryEstimator::kGraph, "graph"},
+    {PrimaryEstimator::kInertial, "inertial"},
+    {PrimaryEstimator::kInertialGraph, "inertial_graph"}};
 constexpr std::pair<FilterType, const char*> kFilterTypes[] = {
     {FilterType::kEkf, "ekf"}, {FilterType::kPf, "pf"}, {FilterType::kNone, "none"}};
 constexpr std::pair<AssociationSolver, const char*> kAssociationSolvers[] = {{AssociationSolver::kLagrangian, "lr"},
@@ -28,6 +32,7 @@ constexpr std::pair<StageKind, const char*> kStageKinds[] = {{StageKind::kDeadRe
                                                              {StageKind::kGraphPose, "graph_pose"},
                                                              {StageKind::kAssociation, "association"},
                                                              {StageKind::kInertial, "inertial"},
+                                                             {StageKind::kInertialGraph, "inertial_graph"},
                                                              {StageKind::kOther, "other"}};
 
 }  // namespace

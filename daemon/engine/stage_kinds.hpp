@@ -15,6 +15,7 @@ enum class PrimaryEstimator {
   kPf,             // "pf"
   kGraph,          // "graph"
   kInertial,       // "inertial"
+  kInertialGraph,  // "inertial_graph"
 };
 /// The kind of a config spelling; throws std::invalid_argument naming the spellings for any other name.
 PrimaryEstimator primary_estimator_from_name(const std::string& name);
@@ -30,6 +31,7 @@ enum class StageKind {
   kGraphPose,       // "graph_pose": the graph's fused pose (graph_pose_stage.hpp)
   kAssociation,     // "association" (association_stage.hpp)
   kInertial,        // "inertial": IMU-driven error-state filter (inertial_stage.hpp)
+  kInertialGraph,   // "inertial_graph": the inertial keyframe smoother (inertial_graph_stage.hpp)
   kOther,           // "other"
 };
 const char* stage_kind_name(StageKind kind);

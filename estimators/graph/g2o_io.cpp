@@ -362,6 +362,9 @@ void write_g2o(const std::string& path, const FactorGraph& g) {
         std::fprintf(f.get(), "VERTEX_TRACKXYZ %lld %.17g %.17g %.17g\n", (long long)v.id, v.point.x(), v.point.y(),
                      v.point.z());
         break;
+      case VariableKind::kVector3:
+        throw std::invalid_argument("cannot write " + path + ": g2o has no vertex for the vector variable " +
+                                    std::to_string(v.id) + " (a velocity or an IMU bias)");
     }
   }
   auto info = [&](const Eigen::MatrixXd& I) {

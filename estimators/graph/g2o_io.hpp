@@ -59,7 +59,9 @@ G2oGraph read_g2o(std::istream& in, const std::string& name, const G2oReadOption
 /// The information matrix `I` made positive definite as `policy` says (kReject: returned unchanged); see above.
 Eigen::MatrixXd repair_information(const Eigen::MatrixXd& I, InformationPolicy policy);
 /// Writes vertices (current estimates), FIX lines, and the factors g2o can express (relative poses and point
-/// positions; each distinct sensor offset of the 3-D point factors as a PARAMS_SE3OFFSET line, numbered from 0).  Throws std::runtime_error when the file cannot be written.
+/// positions; each distinct sensor offset of the 3-D point factors as a PARAMS_SE3OFFSET line, numbered from 0).
+/// Throws std::runtime_error when the file cannot be written, std::invalid_argument for a vector variable (g2o has no
+/// vertex for a velocity or a bias).
 void write_g2o(const std::string& path, const FactorGraph& graph);
 
 }  // namespace sextant::graph

@@ -22,6 +22,7 @@ void save(archive::ArchiveWriter& w, const Variable& v) {
       break;
     case VariableKind::kPoint2:
     case VariableKind::kPoint3:
+    case VariableKind::kVector3:
       w(v.point);
       break;
   }
@@ -39,6 +40,7 @@ void load(archive::ArchiveReader& r, Variable& v) {
       break;
     case VariableKind::kPoint2:
     case VariableKind::kPoint3:
+    case VariableKind::kVector3:
       r(v.point);
       break;
     default:

@@ -173,8 +173,8 @@ void SparseNormalEquations::add(int factor_index, const Factor& f, const Lineari
   const auto& fv = f.variables();
   const Eigen::MatrixXd W = weight * f.information();
   const size_t nvars = fv.size();
-  // J_u' W for each free variable u.
-  Eigen::MatrixXd JtW[4];
+  // J_u' W for each free variable u (a factor may have any number of variables: the IMU factor has six).
+  std::vector<Eigen::MatrixXd> JtW(nvars);
   for (size_t i = 0; i < nvars; ++i) {
     const int bu = var_block_[static_cast<size_t>(fv[i])];
     if (bu < 0) continue;

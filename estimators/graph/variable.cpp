@@ -16,6 +16,7 @@ void Variable::retract(const double* d) {
       point.x() += d[0], point.y() += d[1];
       break;
     case VariableKind::kPoint3:
+    case VariableKind::kVector3:
       point += Eigen::Vector3d(d[0], d[1], d[2]);
       break;
   }

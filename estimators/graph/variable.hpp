@@ -1,6 +1,7 @@
 #pragma once
-// The variables of a factor graph: planar and spatial poses and points.  Each is updated on its manifold by
-// X <- X (+) delta (right perturbation for poses, addition for points); `dim` is the size of delta.
+// The variables of a factor graph: planar and spatial poses, points, and plain 3-vectors of a keyframe's state
+// (a velocity in m/s, an IMU bias in rad/s or m/s^2).  Each is updated on its manifold by X <- X (+) delta (right
+// perturbation for poses, addition for points and vectors); `dim` is the size of delta.
 #include "estimators/lie/se2.hpp"
 #include "estimators/lie/se3.hpp"
 
@@ -8,9 +9,9 @@
 
 namespace sextant::graph {
 
-enum class VariableKind { kPose2, kPose3, kPoint2, kPoint3 };
+enum class VariableKind { kPose2, kPose3, kPoint2, kPoint3, kVector3 };
 
-/// Tangent dimension of a kind: 3, 6, 2, 3.
+/// Tangent dimension of a kind: 3, 6, 2, 3, 3.
 constexpr int tangent_dim(VariableKind k) {
   return k == VariableKind::kPose2 ? 3 : k == VariableKind::kPose3 ? 6 : k == VariableKind::kPoint2 ? 2 : 3;
 }
@@ -21,12 +22,14 @@ struct Variable {
   bool fixed = false;
   SE2 pose2;
   SE3 pose3;
-  Eigen::Vector3d point = Eigen::Vector3d::Zero();  // Point2 uses x, y
+  Eigen::Vector3d point = Eigen::Vector3d::Zero();  // Point2 uses x, y; Vector3 holds its vector here
 
   int dim() const { return tangent_dim(kind); }
   /// X <- X (+) delta.
   void retract(const double* delta);
   bool is_pose() const { return kind == VariableKind::kPose2 || kind == VariableKind::kPose3; }
+  /// A landmark (a point in the map), as opposed to a pose or a vector attached to one.
+  bool is_point() const { return kind == VariableKind::kPoint2 || kind == VariableKind::kPoint3; }
   /// The pose as SE(3) (planar poses embedded with z = 0).
   SE3 as_se3() const { return kind == VariableKind::kPose3 ? pose3 : pose2.to_se3(); }
   /// False when any coordinate is NaN or infinite.

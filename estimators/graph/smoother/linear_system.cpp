@@ -40,7 +40,7 @@ bool order_blocks(SmootherState& s, const std::vector<char>& in, System& sys) {
   // with 40 landmarks in view that cost grew with every keyframe since the last ordering.  Before them, a sighting's
   // update walks the new keyframe's column and the landmarks' dense block only.
   std::vector<char> hub(nb, 0);
-  for (size_t b = 0; b < nb; ++b) hub[b] = !vars[static_cast<size_t>(block_var[b])].is_pose();
+  for (size_t b = 0; b < nb; ++b) hub[b] = vars[static_cast<size_t>(block_var[b])].is_point();
   std::vector<int> order;
   try {
     if (static_cast<int>(nb) > s.options.nested_dissection_above) {

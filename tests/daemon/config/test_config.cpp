@@ -75,8 +75,28 @@ TEST_CASE("a value out of range names its line and the bound") {
 TEST_CASE("enumerations list the allowed values") {
   const std::string e = error_of("engine:\n  primary_estimator: kalman\n");
   CHECK(e.find("test.yaml:2:22:") == 0);
-  CHECK(e.find("'engine.primary_estimator': unknown estimator 'kalman' (auto, dead_reckoning, ekf, pf, graph or "
-               "inertial)") != std::string::npos);
+  CHECK(e.find("'engine.primary_estimator': unknown estimator 'kalman' (auto, dead_reckoning, ekf, pf, graph, "
+               "inertial or inertial_graph)") != std::string::npos);
+}
+
+TEST_CASE("engine.inertial.graph: its keys reach the config, out-of-range values and unknown keys name their line") {
+  const auto none = parse_daemon_config("", "t").engine.inertial.graph;
+  CHECK_FALSE(none.enabled);
+  CHECK(none.window == 20);
+  const auto set = parse_daemon_config(
+                       "engine:\n  inertial:\n    graph:\n      enabled: true\n      keyframe_interval: 0.25\n"
+                       "      window: 8\n      gnss_kernel_width: 3\n      initial_yaw_sigma: 1.5\n",
+                       "t")
+                       .engine.inertial.graph;
+  CHECK(set.enabled);
+  CHECK(set.keyframe_interval == 0.25);
+  CHECK(set.window == 8);
+  CHECK(set.gnss_kernel_width == 3);
+  CHECK(set.initial_yaw_sigma == 1.5);
+  CHECK(error_of("engine:\n  inertial:\n    graph:\n      window: 1\n").find("test.yaml:4:15:") == 0);
+  const std::string unknown = error_of("engine:\n  inertial:\n    graph:\n      windw: 5\n");
+  CHECK(unknown.find("test.yaml:4:7:") == 0);
+  CHECK(unknown.find("windw") != std::string::npos);
 }
 
 TEST_CASE("kinds are parsed once into enums: every spelling maps to its kind, an unknown name names its file:line") {

@@ -1,0 +1,107 @@
+// The inertial keyframe smoother stage: a body at rest with wheel odometry and GNSS stays under its antenna, published
+// as "inertial_graph" at the configured rate with a finite positive semi-definite covariance, its tilt observable and
+// its yaw not (nothing moves); a sensor without a mounting is counted; the engine makes the stage only when asked.
+#include "daemon/engine/engine.hpp"
+#include "daemon/engine/inertial_graph_stage.hpp"
+
+#include <doctest/doctest.h>
+
+#include <Eigen/Eigenvalues>
+
+using namespace sextant;
+using namespace sextant::engine;
+
+namespace {
+
+constexpr int64_t kT0 = 1'700'000'000'000'000;
+
+InertialConfig config() {
+  InertialConfig c;
+  c.enabled = true;
+  c.graph.enabled = true;
+  c.mountings.push_back({"", "imu", {0, 0, 0}, {0, 0, 0}});
+  c.mountings.push_back({"", "gps", {0, 0, 1}, {0, 0, 0}});
+  c.publish_rate_hz = 10;
+  return c;
+}
+
+ImuSample at_rest(int64_t utime, const std::string& frame = "imu") {
+  ImuSample s;
+  s.utime = utime;
+  s.source = "robot";
+  s.frame = frame;
+  s.angular_velocity = Eigen::Vector3d::Zero();
+  s.linear_acceleration = Eigen::Vector3d(0, 0, 9.80665);
+  return s;
+}
+
+Odometry still(int64_t utime) {
+  Odometry o;
+  o.utime = utime;
+  o.source = "robot";
+  o.planar = true;
+  o.increment_covariance = Matrix6::Identity() * 1e-8;
+  o.twist = Odometry::Twist{};
+  return o;
+}
+
+int64_t counter(const Stage& s, const std::string& name) {
+  for (const auto& [n, v] : s.counters())
+    if (n == name) return v;
+  return -1;
+}
+
+}  // namespace
+
+TEST_CASE("inertial graph stage: a body at rest stays under its antenna, tilt observable, yaw not") {
+  InertialGraphStage stage(config());
+  std::vector<FusedPose> out;
+  const Emit emit = [&](Output o) { out.push_back(std::get<FusedPose>(o)); };
+  GnssFix fix;
+  fix.source = "robot";
+  fix.frame = "gps";
+  fix.latitude = 47.0, fix.longitude = 8.0, fix.altitude = 500;
+  fix.position_covariance = Eigen::Matrix3d::Identity() * 0.25;
+  for (int k = 0; k <= 20 * 200; ++k) {  // 20 s: IMU 200 Hz, odometry 50 Hz, GNSS 5 Hz
+    const int64_t t = kT0 + 5'000 * k;
+    stage.handle(at_rest(t), emit);
+    if (k % 4 == 0) stage.handle(still(t), emit);
+    if (k % 40 == 0) {
+      fix.utime = t;
+      stage.handle(fix, emit);  // the datum is the first fix: the antenna (1 m up) at the origin
+    }
+  }
+  REQUIRE(!out.empty());
+  const FusedPose& last = out.back();
+  CHECK(last.estimator == "inertial_graph");
+  CHECK(out.size() >= 195);  // 10 Hz over 20 s
+  CHECK((last.pose.position - Eigen::Vector3d(0, 0, -1)).norm() < 0.05);
+  CHECK(last.covariance.allFinite());
+  CHECK(Eigen::SelfAdjointEigenSolver<Matrix6>(last.covariance).eigenvalues().minCoeff() >= -1e-12);
+  CHECK(counter(stage, "started") == 1);
+  CHECK(counter(stage, "gnss_anchored") == 1);
+  CHECK(counter(stage, "keyframes") >= 38);
+  CHECK(counter(stage, "failed_solves") == 0);
+  CHECK(counter(stage, "tilt_observable") == 1);
+  CHECK(counter(stage, "yaw_observable") == 0);
+}
+
+TEST_CASE("inertial graph stage: a sample from a frame without a mounting is counted, the engine makes it on request") {
+  InertialGraphStage stage(config());
+  int published = 0;
+  const Emit emit = [&](Output) { ++published; };
+  stage.handle(at_rest(kT0, "unknown_frame"), emit);
+  CHECK(published == 0);
+  CHECK(counter(stage, "unmounted") == 1);
+
+  EngineConfig c;
+  c.inertial = config();
+  auto has_it = [](const std::vector<std::unique_ptr<Stage>>& stages) {
+    for (const auto& s : stages)
+      if (s->kind() == StageKind::kInertialGraph) return true;
+    return false;
+  };
+  CHECK(has_it(make_stages(c, nullptr)));
+  c.inertial.graph.enabled = false;
+  CHECK_FALSE(has_it(make_stages(c, nullptr)));
+}
