@@ -40,10 +40,12 @@ struct IncrementalOptions {
   double capacity_growth = 1.0;  // reserved columns at a rebuild: this fraction of the used ones (and >= 64)
   /// Updates over which a fill-triggered reordering is spread (incremental_smoother.hpp); 0: reorder within the update.
   int reorder_spread = 8;
-  /// Spread reorderings (and rebuilds for relinearization) only in systems of more than this many variables: below,
-  /// a rebuild takes a few ms, and holding two factors at once would cost more memory than it saves time.  3-D graphs
-  /// of a few thousand poses already take 150-350 ms per rebuild (sphere2500), M3500 pays ~5 MB peak RSS.
-  int reorder_spread_above = 2000;
+  /// Spread reorderings (and rebuilds for relinearization) only in systems of more than this many variables, or
+  /// whose factor L has more than reorder_spread_nonzeros entries: below both, a rebuild takes a few ms, and holding
+  /// two factors at once would cost more memory than it saves time (M3500: +5 MB peak RSS, p99 unchanged).  3-D
+  /// graphs fill in: sphere2500's rebuilds took 150-350 ms with 0.8-1.6 million entries in L, at 1000-2500 poses.
+  int reorder_spread_above = 5000;
+  int reorder_spread_nonzeros = 500000;
   /// ms: an update works on a spread reordering until this long after it began, and at least for its share of the
   /// time the last one took (1.25 x that time / reorder_spread), so that the installing update is left little.
   double reorder_slice_ms = 4.0;

@@ -72,6 +72,7 @@ std::vector<int> within_work_budget(const SmootherState& s, std::vector<int> mov
   std::vector<char> mark(s.graph.factors().size(), 0);
   std::vector<int> chosen;
   double work = 0;
+  const size_t limit = update_limit(s);
   for (int v : moved) {
     double own = 0;
     std::vector<size_t> fresh;
@@ -83,7 +84,8 @@ std::vector<int> within_work_budget(const SmootherState& s, std::vector<int> mov
       own += s.graph.factors()[f]->residual_dim() * path_work(s.fx, first, memo);
       fresh.push_back(f);
     }
-    if (!chosen.empty() && work + own > s.options.relinearize_work) continue;  // waits for a later update
+    if (!chosen.empty() && (work + own > s.options.relinearize_work || factors.size() + fresh.size() > limit))
+      continue;  // waits for a later update
     work += own;
     chosen.push_back(v);
     for (size_t f : fresh) mark[f] = 1, factors.push_back(f);

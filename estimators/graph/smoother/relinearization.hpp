@@ -18,8 +18,8 @@ size_t update_limit(const SmootherState& s);
 
 /// The variables of `moved` relinearized in this round: by how far their steps are past the thresholds, largest
 /// first, as long as the rank-update work of their factors (the sum, over the factors, of residual dimension x the
-/// column counts along the factor's path to the root) stays within IncrementalOptions::relinearize_work; the first
-/// is always taken.  Appends their factors (each once) to `factors`.
+/// column counts along the factor's path to the root) stays within IncrementalOptions::relinearize_work and their
+/// factors number at most update_limit(); the first is always taken.  Appends their factors (each once) to `factors`.
 std::vector<int> within_work_budget(const SmootherState& s, std::vector<int> moved, std::vector<size_t>& factors);
 
 enum class Relinearized {
