@@ -36,6 +36,8 @@ Shape shape_of(const What& what) {
           return {0, 1, 0, 0};
         else if constexpr (std::is_same_v<T, BodyLoopHalf>)
           return {x.loop.body_to.size(), 1, 1, 0};
+        else if constexpr (std::is_same_v<T, FrameJoin>)
+          return {x.keep.size(), 1, 0, 0};
         else
           return {x.from.size(), 1, 0, 0};
       },
@@ -68,6 +70,8 @@ void what_fields(A& a, X& x) {
   } else if constexpr (std::is_same_v<T, BodyLoopHalf>) {
     a(x.loop);
     anchor_fields(a, x.from);
+  } else if constexpr (std::is_same_v<T, FrameJoin>) {
+    a(x.keep)(x.keep_from_gone);
   } else {
     static_assert(std::is_same_v<T, BodyLoop>);
     a(x.from)(x.from_keyframe)(x.to_keyframe)(x.z)(x.information);
@@ -422,9 +426,18 @@ void Inbox::schedule(Stream& s, int64_t now, bool moved) {
   }
 }
 
+void Inbox::heard(Stream& s, int64_t now) {
+  if (s.ask_at != 0 && s.heard_at != 0 && now - s.heard_at > micros(s.backoff_s)) {
+    s.backoff_s = options_.repair_backoff_s;
+    s.ask_at = std::min(s.ask_at, now + std::max<int64_t>(micros(s.backoff_s), 1));
+  }
+  s.heard_at = now;
+}
+
 std::vector<slam::GraphContribution> Inbox::receive(const FleetContributions& m, int64_t now_utime) {
   Stream* s = stream_for(m.sender, m.body);
   if (s == nullptr) return {};
+  heard(*s, now_utime);
   ++counters_.messages;
   if (!m.repair) s->sent_utime = std::max(s->sent_utime, m.utime);
   const auto n = static_cast<int64_t>(m.contributions.size());
@@ -454,6 +467,7 @@ std::vector<slam::GraphContribution> Inbox::receive(const FleetControl& m, int64
     if (range.last < 1 || range.last > kMaxSeq || range.first < 0 || range.first > range.last) continue;
     Stream* s = stream_for(m.sender, range.body);
     if (s == nullptr) continue;
+    heard(*s, now_utime);
     if (m.utime > s->sent_utime) {
       if (range.last < std::max(s->beat_last, s->next - 1)) ++counters_.owner_rewound;
       s->sent_utime = m.utime;

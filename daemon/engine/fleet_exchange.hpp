@@ -216,6 +216,7 @@ class Inbox {
     double backoff_s = 0;
     int64_t sent_utime = 0;  // the owner's clock: its newest message (data or heartbeat) heard, for owner_rewound
     int64_t beat_last = 0;   // ... and the stream's last number it stated then
+    int64_t heard_at = 0;    // this daemon's clock when the owner was last heard (not saved)
     void save(archive::ArchiveWriter& w) const;
     void load(archive::ArchiveReader& r);
   };
@@ -227,6 +228,9 @@ class Inbox {
   void hold(Stream& s, int64_t seq, What what);
   /// Schedules or clears `s`'s repair after the stream moved or learned of a gap.
   void schedule(Stream& s, int64_t now, bool moved);
+  /// The owner of `s` spoke (data or heartbeat).  After a silence longer than the back-off (a link healed, the owner
+  /// restarted) a gap is asked for again at once, not at the end of a back-off that grew while nothing could arrive.
+  void heard(Stream& s, int64_t now);
   /// The holes of `s` to ask for, at most max_repair_range contributions.
   std::vector<FleetRange> holes(const std::string& body, const Stream& s) const;
 

@@ -269,6 +269,8 @@ Counters GraphStage::counters() const {
              {"corrections_refused", counters_.corrections_refused},
              {"fleet_frames", static_cast<int64_t>(slam_.frames().size())},
              {"fleet_joins", s.fleet_joins},
+             {"fleet_joins_remote", s.fleet_joins_remote},
+             {"fleet_joins_refused", s.fleet_joins_refused},
              {"fleet_sightings", s.fleet_sightings},
              {"fleet_loops", s.fleet_loops},
              {"fleet_pending", s.fleet_pending},

@@ -101,6 +101,8 @@ Counts counts_of(const sextant::fleet_item_t& it, const std::string& field) {
     case I::BODY_LOOP_HALF:
     case I::BODY_LOOP:
       return {1, it.kind == I::BODY_LOOP_HALF ? 1 : 0, 0, 0, 0};
+    case I::FRAME_JOIN:
+      return {1, 0, 0, 0, 0};
     default:
       fail("invalid", field + ".kind: unknown (" + std::to_string(it.kind) + ")");
   }
@@ -121,7 +123,7 @@ void check_counts(const sextant::fleet_item_t& it, const std::string& field) {
                         std::to_string(c.min_sightings) + ", " + std::to_string(c.max_sightings) + "]");
   const bool other = it.kind == sextant::fleet_item_t::BODY_SIGHTING_HALF ||
                      it.kind == sextant::fleet_item_t::BODY_SIGHTING || it.kind == sextant::fleet_item_t::BODY_LOOP ||
-                     it.kind == sextant::fleet_item_t::BODY_LOOP_HALF;
+                     it.kind == sextant::fleet_item_t::BODY_LOOP_HALF || it.kind == sextant::fleet_item_t::FRAME_JOIN;
   check_fleet_name(it.other, field + ".other", !other);
   if (!other && !it.other.empty()) fail("invalid", field + ".other: set on a kind without another body");
 }
@@ -201,7 +203,7 @@ engine::fleet::What loop_of(const sextant::fleet_item_t& it, Parts& p) {
 engine::fleet::What item_of(const sextant::fleet_item_t& it, const std::string& field) {
   using I = sextant::fleet_item_t;
   check_counts(it, field);
-  const bool timed = it.kind != I::LOOP && it.kind != I::BODY_LOOP;
+  const bool timed = it.kind != I::LOOP && it.kind != I::BODY_LOOP && it.kind != I::FRAME_JOIN;
   if (timed && it.utime <= 0) fail("invalid", field + ".utime: not positive (" + std::to_string(it.utime) + ")");
   if (it.kind == I::BODY_LOOP_HALF && it.utime_to <= 0) fail("invalid", field + ".utime_to: not positive");
   if (it.kind == I::KEYFRAME && it.keyframe_a < 0) fail("invalid", field + ".keyframe_a: negative keyframe id");
@@ -211,6 +213,7 @@ engine::fleet::What item_of(const sextant::fleet_item_t& it, const std::string& 
     fail("invalid", field + ".keyframe_a/keyframe_b: below -1 (unknown)");
   Parts p = check_parts(it, field);
   if (it.kind == I::KEYFRAME) return keyframe_of(it, p);
+  if (it.kind == I::FRAME_JOIN) return slam::FrameJoin{it.other, p.poses[0]};
   if (it.kind == I::SIGHTINGS || it.kind == I::BODY_SIGHTING_HALF || it.kind == I::BODY_SIGHTING)
     return sightings_of(it, p);
   return loop_of(it, p);
@@ -344,6 +347,12 @@ void fill_item(sextant::fleet_item_t& it, const slam::BodyLoopHalf& h) {
   it.keyframe_a = h.loop.keyframe_from, it.keyframe_b = h.loop.keyframe_to;
   it.poses.push_back(pose_message(h.loop.relative, h.loop.information));
   it.anchors.push_back(anchor_message(h.from));
+}
+
+void fill_item(sextant::fleet_item_t& it, const slam::FrameJoin& j) {
+  it.kind = sextant::fleet_item_t::FRAME_JOIN;
+  it.other = j.keep;
+  it.poses.push_back(pose_message(j.keep_from_gone, Matrix6d::Zero()));
 }
 
 void fill_item(sextant::fleet_item_t& it, const slam::BodyLoop& l) {

@@ -22,10 +22,14 @@ bool close(const SE3& x, const SE3& y, const PlacementOptions& o) {
   return d.translation().norm() <= o.inlier_distance && d.rotation().log().norm() <= o.inlier_angle;
 }
 
-bool explains(const PlacementEvidence& e, const SE3& t, bool planar, const PlacementOptions& o) {
-  if (e.kind == Kind::kLoop) return close(t, e.a_from_b, o);
-  return planar_distance(t * e.in_b, e.in_a, planar) <= std::max(o.inlier_distance, e.tolerance);
+}  // namespace
+
+bool agrees(const PlacementEvidence& e, const SE3& a_from_b, bool planar, const PlacementOptions& options) {
+  if (e.kind == Kind::kLoop) return close(a_from_b, e.a_from_b, options);
+  return planar_distance(a_from_b * e.in_b, e.in_a, planar) <= std::max(options.inlier_distance, e.tolerance);
 }
+
+namespace {
 
 /// The correspondences (b -> a) that stand for the evidence in a least-squares fit: a point itself, a loop its
 /// frame's origin and unit axes.
@@ -122,7 +126,7 @@ Placement place_frames(const std::vector<PlacementEvidence>& evidence, bool plan
   // sample confirms: a sample always explains itself).
   std::vector<int> support(hs.size(), 0);
   for (size_t h = 0; h < hs.size(); ++h)
-    for (const PlacementEvidence* e : es) support[h] += explains(*e, hs[h].placement, planar, o) ? 1 : 0;
+    for (const PlacementEvidence* e : es) support[h] += agrees(*e, hs[h].placement, planar, o) ? 1 : 0;
   const size_t best = static_cast<size_t>(std::max_element(support.begin(), support.end()) - support.begin());
   for (size_t h = 0; h < hs.size(); ++h)
     if (support[h] > hs[h].sample && !close(hs[best].placement, hs[h].placement, o))
@@ -130,11 +134,11 @@ Placement place_frames(const std::vector<PlacementEvidence>& evidence, bool plan
   // Step 3: refine on the inliers, and count them again on the refined placement.
   std::vector<const PlacementEvidence*> inliers;
   for (const PlacementEvidence* e : es)
-    if (explains(*e, hs[best].placement, planar, o)) inliers.push_back(e);
+    if (agrees(*e, hs[best].placement, planar, o)) inliers.push_back(e);
   p.a_from_b = fit(inliers, planar);
   inliers.clear();
   for (size_t k = 0; k < es.size(); ++k)
-    if (explains(*es[k], p.a_from_b, planar, o)) inliers.push_back(es[k]), p.inliers.push_back(first + k);
+    if (agrees(*es[k], p.a_from_b, planar, o)) inliers.push_back(es[k]), p.inliers.push_back(first + k);
   p.support = static_cast<int>(inliers.size());
   p.spread = spread_of(inliers, planar);
   const bool has_loop = std::any_of(inliers.begin(), inliers.end(), [](auto* e) { return !is_point(*e); });

@@ -64,6 +64,10 @@ struct Placement {
   std::string reason;  // why not placed ("" when placed)
 };
 
+/// Whether one measurement agrees with the placement T_AB (step 2's test: a point within its tolerance, a loop within
+/// the inlier distance and angle).
+bool agrees(const PlacementEvidence& e, const SE3& a_from_b, bool planar, const PlacementOptions& options);
+
 /// The placement of frame B in frame A from `evidence` (oldest first; only the newest max_evidence are used) by the
 /// rule above.  `planar`: SE(2) hypotheses (z and the tilt ignored).
 Placement place_frames(const std::vector<PlacementEvidence>& evidence, bool planar, const PlacementOptions& options);

@@ -16,6 +16,12 @@
 // other end and contributes the whole (BodySighting, BodyLoop, in that body's stream).  When both bodies are local the
 // graph does both at once.
 //
+// Joining two map frames (frame_placement.hpp) is decided once, by the graph that owns the root body of the frame
+// that moves (the later name): the others apply its decision (FrameJoin, in that root's stream) instead of running the
+// placement rule on the evidence they happen to hold, which arrives in a different order on every daemon and could
+// fold the maps differently.  Each frame moves at most once and only into a frame of an earlier name, so the
+// decisions of several owners never conflict.
+//
 // Each body's contributions are applied in the order its owner made them (a stream; the exchange numbers them).  A
 // whole sighting or loop between two bodies names keyframes of both: where the other body's keyframe has not arrived
 // yet, it waits (bounded) and is applied when it does.
@@ -151,10 +157,25 @@ struct BodyLoop {
   void load(archive::ArchiveReader& r) { fields(r, *this); }
 };
 
+/// The frame whose root is the contributing body joins the frame whose root is `keep`: a point p of the moving frame
+/// is keep_from_gone * p in keep's (both frames as they were when the owner decided; a graph where `keep`'s frame has
+/// joined another since composes that join's placement).  The evidence between the two frames that agrees with the
+/// placement becomes factors, the rest is counted as outliers (slam_graph_fleet.cpp).
+struct FrameJoin {
+  std::string keep;
+  SE3 keep_from_gone;
+  template <class Archive, class Self>
+  static void fields(Archive& a, Self& x) {
+    a(x.keep)(x.keep_from_gone);
+  }
+  void save(archive::ArchiveWriter& w) const { fields(w, *this); }
+  void load(archive::ArchiveReader& r) { fields(r, *this); }
+};
+
 /// One contribution of `body` (the stream it belongs to).
 struct GraphContribution {
   using What = std::variant<KeyframeContribution, SightingsContribution, BodySightingHalf, BodySighting,
-                            LoopContribution, BodyLoopHalf, BodyLoop>;
+                            LoopContribution, BodyLoopHalf, BodyLoop, FrameJoin>;
   std::string body;
   What what;
 

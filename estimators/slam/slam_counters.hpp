@@ -40,6 +40,8 @@ struct SlamCounters {
   // another body's keyframe, and dropped from that wait beyond FleetOptions::max_pending.
   int64_t fleet_contributions_applied = 0, fleet_contributions_refused = 0, fleet_contributions_waiting = 0;
   int64_t fleet_contributions_dropped = 0;
+  int64_t fleet_joins_remote = 0;   // joins applied as another graph decided them (FrameJoin), within fleet_joins
+  int64_t fleet_joins_refused = 0;  // such decisions that could not apply here
   int64_t fleet_remote_inputs = 0;  // inputs about a remote body, refused (its owner's daemon has its sensors)
   int64_t keyframes_thinned = 0, loops_thinned = 0, sightings_thinned = 0, landmarks_thinned = 0;
   // Wall clock (not saved): the last update, the last and the longest thinning, the last thinning's solve.
@@ -58,7 +60,7 @@ struct SlamCounters {
         c.fleet_sightings)(c.fleet_loops)(c.fleet_pending)(c.fleet_outliers)(c.fleet_pending_dropped)(
         c.fleet_sightings_unplaced)(c.fleet_self_sightings)(c.fleet_contributions_applied)(
         c.fleet_contributions_refused)(c.fleet_contributions_waiting)(c.fleet_contributions_dropped)(
-        c.fleet_remote_inputs);
+        c.fleet_remote_inputs)(c.fleet_joins_remote)(c.fleet_joins_refused);
   }
 };
 

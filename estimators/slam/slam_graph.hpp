@@ -313,9 +313,19 @@ class SlamGraph {
   /// The placement evidence between frames `a` and `b` (T_ab) and which pending item each came from.
   struct Evidence;
   Evidence evidence_between(const std::string& a, const std::string& b);
-  /// Tries to place frame `b` in `a` (or the reverse) and joins them when the rule holds; true when joined.
+  /// Tries to place frame `b` in `a` (or the reverse) and joins them when the rule holds; true when joined.  Only the
+  /// owner of the moving frame's root decides (graph_contribution.hpp, FrameJoin): it contributes its decision.
   bool try_join(const std::string& a, const std::string& b, SlamListener& listener);
-  void join(const std::string& keep, const std::string& gone, const SE3& keep_from_gone);
+  /// Joins frame `gone` into `keep` at `keep_from_gone`: the evidence `ev` between them leaves the pending lists,
+  /// the items flagged in `inlier` become factors and the others count as outliers; the variables move; solved.
+  void join_frames(const std::string& keep, const std::string& gone, const SE3& keep_from_gone, const Evidence& ev,
+                   const std::vector<char>& inlier, SlamListener& listener);
+  /// Another graph's decision that the frame of remote root `gone` joins (false when it cannot apply here: `gone`
+  /// is no frame's root, or the kept frame's root is unknown or of the other kind).
+  bool apply_join(const std::string& gone, const FrameJoin& j, SlamListener& listener);
+  /// Where frame `frame` is now: the root of the frame it moved into by joins since (itself when it never moved) and
+  /// the placement of its old coordinates there.
+  std::pair<std::string, SE3> current_frame(const std::string& frame) const;
   /// Moves the frame `gone`'s variables into `keep` and rebuilds the smoother (landmarks of one id merged).
   void merge_frame_variables(const std::string& keep, const std::string& gone, const SE3& keep_from_gone);
   /// After a join or a new link: a smoother update reported for every body of the frame.
@@ -348,6 +358,7 @@ class SlamGraph {
   Pending pending_;
   std::vector<GraphContribution> waiting_wholes_;  // robot sightings and loops waiting for a keyframe (oldest first)
   std::map<std::pair<std::string, std::string>, int64_t> join_attempts_;  // frame pair -> keyframes at the last try
+  std::map<std::string, std::pair<std::string, SE3>> moved_frames_;       // a joined frame -> (into, into_from_it)
   int64_t next_variable_id_ = 0;
   double loop_gate_[2] = {0, 0}, sighting_gate_[2] = {0, 0};  // chi-square thresholds, [0] 3-D, [1] planar
   double sighting_width_[2] = {0, 0};                         // sighting_kernel_width_for

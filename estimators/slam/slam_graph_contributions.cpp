@@ -181,6 +181,7 @@ bool SlamGraph::keyframes_present(const GraphContribution& c) const {
     return arrived(s->observer, s->observer_anchor.keyframe) && arrived(c.body, s->observed_anchor.keyframe);
   if (const auto* l = std::get_if<BodyLoop>(&c.what))
     return arrived(l->from, l->from_keyframe) && arrived(c.body, l->to_keyframe);
+  if (const auto* j = std::get_if<FrameJoin>(&c.what)) return arrived(j->keep, 0);
   return true;
 }
 
@@ -255,6 +256,11 @@ bool SlamGraph::apply_contribution(const GraphContribution& c, SlamListener& lis
   const size_t sightings_before = pending_.sightings.size(), loops_before = pending_.loops.size();
   bool added = false;
   if (const auto* k = std::get_if<KeyframeContribution>(&c.what)) return add_keyframe_to_graph(c.body, b, *k, listener);
+  if (const auto* j = std::get_if<FrameJoin>(&c.what)) {
+    if (keyframes_present(c)) return apply_join(c.body, *j, listener);
+    wait_for_keyframes(c);  // the kept frame's root has not arrived here yet
+    return true;
+  }
   if (const auto* s = std::get_if<SightingsContribution>(&c.what)) {
     const auto anchor = point_of(b, s->anchor);
     if (!anchor) return false;

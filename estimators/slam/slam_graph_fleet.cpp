@@ -247,14 +247,59 @@ void SlamGraph::try_joins(const std::string& frame, SlamListener& listener) {
 
 bool SlamGraph::try_join(const std::string& a, const std::string& b, SlamListener& listener) {
   if (!options_.fleet.enabled || a == b) return false;
+  const std::string keep = std::min(a, b), gone = std::max(a, b);
+  if (bodies_.at(gone).remote) return false;  // its owner decides (FrameJoin)
   const Evidence ev = evidence_between(a, b);
   if (ev.items.size() < static_cast<size_t>(options_.fleet.placement.min_support)) return false;
   const Placement p = place_frames(ev.items, bodies_.at(a).planar, options_.fleet.placement);
   if (!p.placed) return false;
-  // The links between the two frames leave the pending lists: those that agree with the placement become factors
-  // once the frames are one, the others are outliers.
   std::vector<char> inlier(ev.items.size(), 0);
   for (size_t i : p.inliers) inlier[i] = 1;
+  const SE3 keep_from_gone = keep == a ? p.a_from_b : p.a_from_b.inverse();
+  listener.contributed({gone, FrameJoin{keep, keep_from_gone}});
+  join_frames(keep, gone, keep_from_gone, ev, inlier, listener);
+  return true;
+}
+
+bool SlamGraph::apply_join(const std::string& gone, const FrameJoin& j, SlamListener& listener) {
+  const auto named = bodies_.find(j.keep);
+  if (bodies_.at(gone).frame != gone || named == bodies_.end() || named->second.planar != bodies_.at(gone).planar) {
+    ++counters_.fleet_joins_refused;
+    return false;
+  }
+  const auto [keep, keep_from_named] = current_frame(j.keep);
+  if (keep != named->second.frame || !(keep < gone)) {  // frames move only into earlier names
+    ++counters_.fleet_joins_refused;
+    return false;
+  }
+  const SE3 keep_from_gone = keep_from_named * j.keep_from_gone;
+  // The evidence this graph holds between the two frames is classified by the owner's placement, as the owner's
+  // own evidence was by it (this graph may hold items the owner did not have yet, and the reverse).
+  const Evidence ev = evidence_between(keep, gone);
+  std::vector<char> inlier(ev.items.size(), 0);
+  for (size_t i = 0; i < ev.items.size(); ++i)
+    inlier[i] = agrees(ev.items[i], keep_from_gone, bodies_.at(gone).planar, options_.fleet.placement) ? 1 : 0;
+  join_frames(keep, gone, keep_from_gone, ev, inlier, listener);
+  ++counters_.fleet_joins_remote;
+  return true;
+}
+
+std::pair<std::string, SE3> SlamGraph::current_frame(const std::string& frame) const {
+  std::pair<std::string, SE3> at{frame, SE3()};
+  // Joins lead to earlier names, so the chain ends; a forgotten root's successor (hand_over_frame) may break that
+  // order, hence the bound.
+  for (size_t step = 0; step <= moved_frames_.size(); ++step) {
+    const auto it = moved_frames_.find(at.first);
+    if (it == moved_frames_.end()) break;
+    at = {it->second.first, it->second.second * at.second};
+  }
+  return at;
+}
+
+void SlamGraph::join_frames(const std::string& keep, const std::string& gone, const SE3& keep_from_gone,
+                            const Evidence& ev, const std::vector<char>& inlier, SlamListener& listener) {
+  // The links between the two frames leave the pending lists: those that agree with the placement become factors
+  // once the frames are one, the others are outliers.
   std::vector<SightingLink> sightings;
   std::vector<LoopLink> loops;
   std::set<int> taken_sightings, taken_loops;
@@ -277,13 +322,12 @@ bool SlamGraph::try_join(const std::string& a, const std::string& b, SlamListene
   erase_taken(pending_.sightings, taken_sightings);
   erase_taken(pending_.loops, taken_loops);
   counters_.fleet_pending -= static_cast<int64_t>(taken_sightings.size() + taken_loops.size());
-  const std::string keep = std::min(a, b), gone = std::max(a, b);
-  merge_frame_variables(keep, gone, keep == a ? p.a_from_b : p.a_from_b.inverse());
+  merge_frame_variables(keep, gone, keep_from_gone);
+  moved_frames_[gone] = {keep, keep_from_gone};
   ++counters_.fleet_joins;
   for (const SightingLink& s : sightings) add_sighting_factor(s);
   for (const LoopLink& l : loops) add_loop_factor(l);
   update_frame(keep, listener);
-  return true;
 }
 
 void SlamGraph::update_frame(const std::string& frame, SlamListener& listener) {

@@ -36,6 +36,8 @@ void SlamGraph::save(archive::ArchiveWriter& w) {
   w(static_cast<uint64_t>(pending_.loops.size()));
   for (const LoopLink& l : pending_.loops) LoopLink::fields(w, l);
   w(waiting_wholes_);
+  w(static_cast<uint64_t>(moved_frames_.size()));
+  for (const auto& [gone, into] : moved_frames_) w(gone)(into.first)(into.second);
   // The canonical form both this layer and a restored one continue from (slam_graph.hpp, save).
   for (int kind = 0; kind < 2; ++kind) {
     if (smoothers_[kind]) counters_.rebuilds += smoothers_[kind]->rebuild().ok ? 1 : 0;
@@ -122,8 +124,17 @@ void SlamGraph::load_fleet(archive::ArchiveReader& r) {
   }
   r(waiting_wholes_);
   for (const GraphContribution& c : waiting_wholes_)
-    if (!std::holds_alternative<BodySighting>(c.what) && !std::holds_alternative<BodyLoop>(c.what))
-      r.fail("a waiting contribution of body '" + c.body + "' that is not a robot sighting or an inter-robot loop");
+    if (!std::holds_alternative<BodySighting>(c.what) && !std::holds_alternative<BodyLoop>(c.what) &&
+        !std::holds_alternative<FrameJoin>(c.what))
+      r.fail("a waiting contribution of body '" + c.body +
+             "' that is not a robot sighting, an inter-robot loop or a join");
+  for (uint64_t n = r.count(1, "the joined frames"), k = 0; k < n; ++k) {
+    std::string gone, into;
+    SE3 placement;
+    r(gone)(into)(placement);
+    if (!(into < gone)) r.fail("frame '" + gone + "' joined into '" + into + "', a later name");
+    moved_frames_[gone] = {into, placement};
+  }
 }
 
 SlamGraph::Rebuilt SlamGraph::rebuilt(int kind, const std::vector<graph::Variable>& vars,
@@ -189,6 +200,9 @@ std::string SlamGraph::hand_over_frame(const std::string& root) {
       if (next.empty()) next = name;
       b.frame = next;
     }
+  for (auto& [gone, into] : moved_frames_)
+    if (into.first == root) into.first = next;  // empty when alone: such joins lead nowhere any more
+  std::erase_if(moved_frames_, [&](const auto& m) { return m.second.first.empty() || m.first == next; });
   if (next.empty()) return next;  // alone: its landmarks leave with it
   bodies_.at(next).landmarks = std::move(old.landmarks);
   old.landmarks.clear();
@@ -200,6 +214,7 @@ void SlamGraph::forget(const std::string& name) {
   if (it == bodies_.end()) return;
   const bool planar = it->second.planar;
   const int kind = planar ? 1 : 0;
+  moved_frames_.erase(name);
   const std::string next_root = hand_over_frame(name);
   std::vector<graph::Variable> vars = smoothers_[kind]->graph().variables();
   std::vector<int> merge_into(vars.size(), -1);
@@ -233,7 +248,8 @@ void SlamGraph::forget(const std::string& name) {
   std::erase_if(waiting_wholes_, [&](const GraphContribution& c) {
     const auto* s = std::get_if<BodySighting>(&c.what);
     const auto* l = std::get_if<BodyLoop>(&c.what);
-    return c.body == name || (s && s->observer == name) || (l && l->from == name);
+    const auto* j = std::get_if<FrameJoin>(&c.what);
+    return c.body == name || (s && s->observer == name) || (l && l->from == name) || (j && j->keep == name);
   });
   counters_.fleet_contributions_waiting -= static_cast<int64_t>(waiting_before - waiting_wholes_.size());
   bodies_.erase(it);

@@ -185,6 +185,25 @@ TEST_CASE("fleet exchange: a lost tail is found from the heartbeat, and asked fo
   CHECK(p.b.inbox.repair_requests(p.now + 20000000).empty());
 }
 
+TEST_CASE("fleet exchange: a gap is asked for again as soon as its owner is heard after a silence") {
+  for (const bool heard : {false, true}) {
+    CAPTURE(heard);
+    Pair p;
+    p.contribute(1);
+    (void)p.a.due(p.now);                                                               // sent, and lost on the way
+    for (auto& h : p.a.outbox.heartbeat(p.now + 5000000)) p.b.inbox.receive(h, p.now);  // b learns of the gap
+    // The owner is cut off: b's requests go unanswered and its back-off grows to repair_backoff_max_s.
+    int64_t last_ask = 0;
+    for (int64_t t = p.now; t < p.now + 10000000; t += 10000)
+      if (!p.b.inbox.repair_requests(t).empty()) last_ask = t;
+    REQUIRE(last_ask > p.now + 5000000);
+    const int64_t healed = last_ask + 500000;
+    if (heard)
+      for (auto& h : p.a.outbox.heartbeat(healed + 20000000)) p.b.inbox.receive(h, healed);
+    CHECK(p.b.inbox.repair_requests(healed + 200001).empty() == !heard);  // else: 5 s after the last request
+  }
+}
+
 TEST_CASE("fleet exchange: after a long cut the stream resumes from repairs, at the requester's rate") {
   Pair p;
   p.bus.loss = 0.1;

@@ -58,7 +58,8 @@ std::vector<engine::fleet::What> every_kind() {
   loop_half.loop.relative = anchor(0).motion;
   loop_half.from = anchor(1);
   const slam::BodyLoop body_loop{"robot2", 7, 1, anchor(0).motion, Matrix6d::Identity() * 50};
-  return {first, k, s, half, whole, loop, loop_half, body_loop};
+  const slam::FrameJoin join{"robot0", anchor(2).motion};
+  return {first, k, s, half, whole, loop, loop_half, body_loop, join};
 }
 
 FleetContributions batch() {
@@ -95,7 +96,8 @@ TEST_CASE("fleet codec: every kind of contribution goes to the wire and back to 
   const auto& e = std::get<FleetContributions>(std::get<engine::Event>(d));
   CHECK(e.first == 7);
   CHECK(e.body == "robot1");
-  REQUIRE(e.contributions.size() == 8);
+  REQUIRE(e.contributions.size() == 9);
+  CHECK(std::get<slam::FrameJoin>(e.contributions[8]).keep == "robot0");
   CHECK(std::get<slam::KeyframeContribution>(e.contributions[1]).reanchored);
   CHECK(std::get<slam::LoopContribution>(e.contributions[5]).widened);
   CHECK(std::get<slam::BodyLoopHalf>(e.contributions[6]).loop.body_to == "robot2");
@@ -164,6 +166,12 @@ TEST_CASE("fleet codec: each bad value is refused naming its field") {
   CHECK(refused([](auto& m) {
           m.contributions[0].other = "robot9";
         }).starts_with("invalid: fleet_contribution_t.contributions[0].other"));
+  CHECK(refused([](auto& m) { m.contributions[8].other = ""; }) ==
+        "invalid: fleet_contribution_t.contributions[8].other: empty");
+  CHECK(refused([](auto& m) {
+          m.contributions[8].anchors.push_back(m.contributions[2].anchors[0]);
+          m.contributions[8].num_anchors = 1;
+        }).starts_with("invalid: fleet_contribution_t.contributions[8].num_anchors: 1, its kind has 0"));
   CHECK(refused([](auto& m) { m.body = std::string(300, 'b'); }) ==
         "invalid: fleet_contribution_t.body: longer than 256 characters");
   CHECK(refused([](auto& m) { m.sender = ""; }) == "invalid: fleet_contribution_t.sender: empty");

@@ -142,3 +142,77 @@ TEST_CASE(
   }
   CHECK(restored.counters().fleet_contributions_waiting == 0);
 }
+
+namespace {
+
+/// Three graphs, one per robot of kThreeRobots, and what each has applied of the others' contributions.
+struct ThreeGraphs {
+  std::vector<std::unique_ptr<SlamGraph>> graphs;
+  std::vector<Outbox> outs = std::vector<Outbox>(3);
+  size_t delivered[3][3] = {};
+  ThreeGraphs() {
+    for (int k = 0; k < 3; ++k) graphs.push_back(std::make_unique<SlamGraph>(three_robot_options()));
+  }
+  void deliver(int from, int to) {
+    for (auto& next = delivered[from][to]; next < outs[static_cast<size_t>(from)].sent.size(); ++next)
+      CHECK(graphs[static_cast<size_t>(to)]->apply(outs[static_cast<size_t>(from)].sent[next],
+                                                   outs[static_cast<size_t>(to)]));
+  }
+  int64_t joins_made(int k) const {
+    int64_t n = 0;
+    for (const GraphContribution& c : outs[static_cast<size_t>(k)].sent) n += std::holds_alternative<FrameJoin>(c.what);
+    return n;
+  }
+};
+
+}  // namespace
+
+TEST_CASE(
+    "contributions: a frame joins only as its root's owner decides, and a graph that hears the joins in another "
+    "order composes them into the same map") {
+  const auto world = random_landmarks(3, 0);  // robot sightings only: which graph holds what evidence is controlled
+  ThreeGraphs t;
+  // b and c exchange; a is alone.  Both b's and c's graph hold the evidence between frames b and c; only c's owner
+  // (the frame that moves: the later name) decides.
+  for (int i = 0; i <= 100; ++i) {
+    for (int k = 0; k < 3; ++k) feed_three_robots(*t.graphs[static_cast<size_t>(k)], k, i, world, t.outs[k]);
+    t.deliver(1, 2), t.deliver(2, 1);
+  }
+  CHECK(t.joins_made(2) == 1);
+  CHECK(t.joins_made(1) == 0);
+  CHECK(t.graphs[1]->frame_of("c") == "b");
+  CHECK(t.graphs[1]->counters().fleet_joins_remote == 1);
+  // a's stream reaches b's and c's graphs, whose sightings of a place frame b (holding c) in a: b's owner decides,
+  // c's graph follows.  a's graph holds evidence too (its own sightings of b and c) but hears nothing yet.
+  t.deliver(0, 2);
+  CHECK(t.graphs[2]->frame_of("c") == "b");  // the frame that would move is b's: c's graph does not decide
+  t.deliver(0, 1);
+  t.deliver(1, 2), t.deliver(2, 1);
+  CHECK(t.joins_made(1) == 1);
+  CHECK(t.graphs[2]->frame_of("c") == "a");
+  CHECK(t.graphs[0]->frames().size() == 1);  // a's own frame only: it decides nothing for b
+  // a's graph hears b's stream (b joins a) before c's (c joins b): it composes c's placement through b's.
+  t.deliver(1, 0);
+  CHECK(t.graphs[0]->frame_of("b") == "a");
+  t.deliver(2, 0);
+  for (int round = 0; round < 2; ++round)
+    for (int from = 0; from < 3; ++from)
+      for (int to = 0; to < 3; ++to)
+        if (from != to) t.deliver(from, to);
+  for (int k = 0; k < 3; ++k) {
+    const SlamGraph& g = *t.graphs[static_cast<size_t>(k)];
+    CHECK(g.frames().size() == 1);
+    CHECK(g.counters().fleet_joins == 2);
+    CHECK(g.counters().fleet_joins_remote == (k == 0 ? 2 : 1));
+    CHECK(g.counters().fleet_joins_refused == 0);
+    for (const Robot& r : kThreeRobots) {
+      CHECK(g.frame_of(r.name) == "a");
+      CHECK(rms_between(g.keyframes(r.name), t.graphs[1]->keyframes(r.name)) < 0.01);
+      // In a's frame: a's first keyframe is the origin of a's odometry, so the truth maps by a's first pose.
+      const auto kf = g.keyframes(r.name);
+      const SE2 truth =
+          kThreeRobots[0].truth(0).inverse() * r.truth(static_cast<double>(kf.back().utime - 1000000) / 1e6);
+      CHECK((kf.back().pose.translation().head<2>() - truth.translation()).norm() < 0.05);
+    }
+  }
+}
