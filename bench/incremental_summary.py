@@ -16,6 +16,9 @@ for f in sorted(glob.glob(os.path.join(out, '*.json'))):
     parts = os.path.basename(f).split('.')
     ds = parts[0]
     label = 'iSAM2' if parts[1] == 'isam2' else f'{parts[2]} (skip {parts[1][1:]})'
+    if os.path.getsize(f) == 0:  # a run that failed (or is still running) left no JSON
+        print(f'skipped {f}: empty', file=sys.stderr)
+        continue
     runs[(ds, label)].append(json.load(open(f)))
 
 batch = {}
