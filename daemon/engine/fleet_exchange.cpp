@@ -17,7 +17,7 @@ constexpr int64_t kMaxSeq = int64_t{1} << 62;
 
 // What fleet_item_t carries of a contribution: the other body's name and how many poses, anchors and sightings.
 struct Shape {
-  size_t other = 0, poses = 0, anchors = 0, sightings = 0;
+  size_t other = 0, poses = 0, anchors = 0, sightings = 0, keyframes = 0;
 };
 
 Shape shape_of(const What& what) {
@@ -38,6 +38,8 @@ Shape shape_of(const What& what) {
           return {x.loop.body_to.size(), 1, 1, 0};
         else if constexpr (std::is_same_v<T, FrameJoin>)
           return {x.keep.size(), 1, 0, 0};
+        else if constexpr (std::is_same_v<T, KeyframesThinned>)
+          return {0, 0, 0, 0, x.keyframes.size()};
         else
           return {x.from.size(), 1, 0, 0};
       },
@@ -72,6 +74,8 @@ void what_fields(A& a, X& x) {
     anchor_fields(a, x.from);
   } else if constexpr (std::is_same_v<T, FrameJoin>) {
     a(x.keep)(x.keep_from_gone);
+  } else if constexpr (std::is_same_v<T, KeyframesThinned>) {
+    a(x.keyframes);
   } else {
     static_assert(std::is_same_v<T, BodyLoop>);
     a(x.from)(x.from_keyframe)(x.to_keyframe)(x.z)(x.information);
@@ -109,10 +113,10 @@ int64_t micros(double seconds) { return static_cast<int64_t>(seconds * 1e6); }
 
 size_t item_bytes(const What& what) {
   // fleet_item_t: kind, flags (1 + 1), utime, utime_to (8 + 8), planar (1), other (4 + n + 1), keyframe_a, keyframe_b
-  // (8 + 8), three counts (4 each); a fleet_pose_t is 43 doubles, a fleet_anchor_t 44 values of 8 bytes, a
-  // landmark_observation_t 13.
+  // (8 + 8), four counts (4 each); a fleet_pose_t is 43 doubles, a fleet_anchor_t 44 values of 8 bytes, a
+  // landmark_observation_t 13, a keyframe id 8.
   const Shape s = shape_of(what);
-  return 52 + s.other + 344 * s.poses + 352 * s.anchors + 104 * s.sightings;
+  return 56 + s.other + 344 * s.poses + 352 * s.anchors + 104 * s.sightings + 8 * s.keyframes;
 }
 
 size_t message_overhead_bytes(const std::string& sender, const std::string& body) {
@@ -121,6 +125,15 @@ size_t message_overhead_bytes(const std::string& sender, const std::string& body
 }
 
 std::vector<What> split_for_wire(const What& what) {
+  if (const auto* t = std::get_if<KeyframesThinned>(&what)) {
+    std::vector<What> parts;
+    for (size_t i = 0; i < t->keyframes.size(); i += kMaxThinnedPerItem) {
+      const auto from = t->keyframes.begin() + static_cast<std::ptrdiff_t>(i);
+      const auto n = static_cast<std::ptrdiff_t>(std::min(kMaxThinnedPerItem, t->keyframes.size() - i));
+      parts.push_back(KeyframesThinned{{from, from + n}});
+    }
+    return parts;
+  }
   const auto* s = std::get_if<SightingsContribution>(&what);
   if (s == nullptr) return {what};
   const auto& all = s->sightings.sightings;

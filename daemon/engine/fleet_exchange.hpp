@@ -60,6 +60,8 @@ using What = slam::GraphContribution::What;
 /// The identified sightings of one contribution at most (fleet_item_t.num_sightings): a message's sightings beyond are
 /// split into contributions of their own with the same anchor.
 inline constexpr size_t kMaxSightingsPerItem = 256;
+/// The keyframe ids of one KeyframesThinned contribution at most (fleet_item_t.num_keyframes): more are split likewise.
+inline constexpr size_t kMaxThinnedPerItem = 1024;
 /// The contributions of one FLEET message, and the ranges of one FLEET_CONTROL message, at most.
 inline constexpr size_t kMaxItemsPerMessage = 1024;
 inline constexpr size_t kMaxRangesPerMessage = 1024;
@@ -71,7 +73,8 @@ inline constexpr size_t kMaxNameLength = 256;
 size_t item_bytes(const What& what);
 size_t message_overhead_bytes(const std::string& sender, const std::string& body);
 /// `what` as it goes on the wire: a SightingsContribution of more than kMaxSightingsPerItem sightings becomes several,
-/// in order, each with the same anchor; anything else is itself.
+/// in order, each with the same anchor, a KeyframesThinned of more than kMaxThinnedPerItem ids several; anything else
+/// is itself.
 std::vector<What> split_for_wire(const What& what);
 
 /// One contribution with its number in its stream.

@@ -83,6 +83,7 @@ slam::LandmarkSighting check_sighting(const sextant::landmark_observation_t& o, 
 struct Counts {
   int poses, anchors, min_sightings, max_sightings;
   int flags;  // the flags the kind may have
+  int min_keyframes = 0, max_keyframes = 0;
 };
 
 Counts counts_of(const sextant::fleet_item_t& it, const std::string& field) {
@@ -103,6 +104,8 @@ Counts counts_of(const sextant::fleet_item_t& it, const std::string& field) {
       return {1, it.kind == I::BODY_LOOP_HALF ? 1 : 0, 0, 0, 0};
     case I::FRAME_JOIN:
       return {1, 0, 0, 0, 0};
+    case I::THINNED:
+      return {0, 0, 0, 0, 0, 1, static_cast<int>(engine::fleet::kMaxThinnedPerItem)};
     default:
       fail("invalid", field + ".kind: unknown (" + std::to_string(it.kind) + ")");
   }
@@ -121,6 +124,12 @@ void check_counts(const sextant::fleet_item_t& it, const std::string& field) {
       static_cast<int>(it.sightings.size()) != it.num_sightings)
     fail("invalid", field + ".num_sightings: " + std::to_string(it.num_sightings) + " outside [" +
                         std::to_string(c.min_sightings) + ", " + std::to_string(c.max_sightings) + "]");
+  if (it.num_keyframes < c.min_keyframes || it.num_keyframes > c.max_keyframes ||
+      static_cast<int>(it.keyframes.size()) != it.num_keyframes)
+    fail("invalid", field + ".num_keyframes: " + std::to_string(it.num_keyframes) + " outside [" +
+                        std::to_string(c.min_keyframes) + ", " + std::to_string(c.max_keyframes) + "]");
+  for (size_t i = 0; i < it.keyframes.size(); ++i)
+    if (it.keyframes[i] < 0) fail("invalid", field + ".keyframes[" + std::to_string(i) + "]: negative keyframe id");
   const bool other = it.kind == sextant::fleet_item_t::BODY_SIGHTING_HALF ||
                      it.kind == sextant::fleet_item_t::BODY_SIGHTING || it.kind == sextant::fleet_item_t::BODY_LOOP ||
                      it.kind == sextant::fleet_item_t::BODY_LOOP_HALF || it.kind == sextant::fleet_item_t::FRAME_JOIN;
@@ -203,7 +212,7 @@ engine::fleet::What loop_of(const sextant::fleet_item_t& it, Parts& p) {
 engine::fleet::What item_of(const sextant::fleet_item_t& it, const std::string& field) {
   using I = sextant::fleet_item_t;
   check_counts(it, field);
-  const bool timed = it.kind != I::LOOP && it.kind != I::BODY_LOOP && it.kind != I::FRAME_JOIN;
+  const bool timed = it.kind != I::LOOP && it.kind != I::BODY_LOOP && it.kind != I::FRAME_JOIN && it.kind != I::THINNED;
   if (timed && it.utime <= 0) fail("invalid", field + ".utime: not positive (" + std::to_string(it.utime) + ")");
   if (it.kind == I::BODY_LOOP_HALF && it.utime_to <= 0) fail("invalid", field + ".utime_to: not positive");
   if (it.kind == I::KEYFRAME && it.keyframe_a < 0) fail("invalid", field + ".keyframe_a: negative keyframe id");
@@ -214,6 +223,7 @@ engine::fleet::What item_of(const sextant::fleet_item_t& it, const std::string& 
   Parts p = check_parts(it, field);
   if (it.kind == I::KEYFRAME) return keyframe_of(it, p);
   if (it.kind == I::FRAME_JOIN) return slam::FrameJoin{it.other, p.poses[0]};
+  if (it.kind == I::THINNED) return slam::KeyframesThinned{it.keyframes};
   if (it.kind == I::SIGHTINGS || it.kind == I::BODY_SIGHTING_HALF || it.kind == I::BODY_SIGHTING)
     return sightings_of(it, p);
   return loop_of(it, p);
@@ -355,6 +365,11 @@ void fill_item(sextant::fleet_item_t& it, const slam::FrameJoin& j) {
   it.poses.push_back(pose_message(j.keep_from_gone, Matrix6d::Zero()));
 }
 
+void fill_item(sextant::fleet_item_t& it, const slam::KeyframesThinned& t) {
+  it.kind = sextant::fleet_item_t::THINNED;
+  it.keyframes = t.keyframes;
+}
+
 void fill_item(sextant::fleet_item_t& it, const slam::BodyLoop& l) {
   it.kind = sextant::fleet_item_t::BODY_LOOP;
   it.other = l.from, it.keyframe_a = l.from_keyframe, it.keyframe_b = l.to_keyframe;
@@ -369,6 +384,7 @@ sextant::fleet_item_t to_item(const engine::fleet::What& what) {
   it.num_poses = static_cast<int32_t>(it.poses.size());
   it.num_anchors = static_cast<int32_t>(it.anchors.size());
   it.num_sightings = static_cast<int32_t>(it.sightings.size());
+  it.num_keyframes = static_cast<int32_t>(it.keyframes.size());
   return it;
 }
 

@@ -312,7 +312,8 @@ const WireLayout& wire_layout<sextant::fleet_contribution_t>() {
       "fleet_item_t",
       {i8("kind"), i8("flags"), i64("utime"), i64("utime_to"), boolean("planar"), str("other"), i64("keyframe_a"),
        i64("keyframe_b"), count("num_poses", 2), array("poses", pose), count("num_anchors", 2),
-       array("anchors", anchor), count("num_sightings", 256), array("sightings", observation)}};
+       array("anchors", anchor), count("num_sightings", 256), array("sightings", observation),
+       count("num_keyframes", 1024), array("keyframes", kInt64Element)}};
   static const WireLayout l{"fleet_contribution_t",
                             {i64("utime"), str("sender"), i64("seq"), str("body"), boolean("repair"), i64("first"),
                              count("num_contributions", 1024), array("contributions", item)}};

@@ -172,10 +172,23 @@ struct FrameJoin {
   void load(archive::ArchiveReader& r) { fields(r, *this); }
 };
 
+/// Lifelong thinning (slam_graph.hpp) is decided by a body's owner too: the keyframes of the body it took out of its
+/// graph.  Another graph takes the same ones out at its own next thinning (until then it holds them: a graph larger
+/// by a little for a while, the same keyframes after), so every daemon keeps the same keyframes of every body.
+struct KeyframesThinned {
+  std::vector<int64_t> keyframes;  // ids
+  template <class Archive, class Self>
+  static void fields(Archive& a, Self& x) {
+    a(x.keyframes);
+  }
+  void save(archive::ArchiveWriter& w) const { fields(w, *this); }
+  void load(archive::ArchiveReader& r) { fields(r, *this); }
+};
+
 /// One contribution of `body` (the stream it belongs to).
 struct GraphContribution {
   using What = std::variant<KeyframeContribution, SightingsContribution, BodySightingHalf, BodySighting,
-                            LoopContribution, BodyLoopHalf, BodyLoop, FrameJoin>;
+                            LoopContribution, BodyLoopHalf, BodyLoop, FrameJoin, KeyframesThinned>;
   std::string body;
   What what;
 

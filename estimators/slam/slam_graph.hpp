@@ -54,6 +54,7 @@
 #include "estimators/slam/slam_options.hpp"
 
 #include <map>
+#include <set>
 #include <memory>
 #include <optional>
 #include <string>
@@ -195,6 +196,7 @@ class SlamGraph {
                                                                        // this one's odometry has not reached
     std::vector<std::pair<std::string, BodySightingHalf>> early_seen;  // sightings of this body (observer, half)
                                                                        // ahead of its odometry
+    std::set<int64_t> owner_thinned;  // a remote body's keyframes its owner thinned, taken out at the next thinning
   };
   /// A body's sighting of another body's marker, anchored on a keyframe of each (by keyframe id: thinning renumbers
   /// positions) with the odometry motion from it to the sighting's time and that motion's covariance.
@@ -337,8 +339,11 @@ class SlamGraph {
   /// Lifelong thinning (slam_graph_thinning.cpp): over the kind's budget, rebuild the smoother of that kind with the
   /// keyframes keyframes_to_keep() keeps (estimators/keyframe/keyframe_thinning.hpp): odometry composed across the
   /// thinned ones, loops and sightings of thinned keyframes dropped, landmarks left without sightings dropped.
-  void maybe_thin(bool planar);
-  void thin(bool planar);
+  /// A local body's thinned keyframes are contributed (KeyframesThinned); a remote body's are its owner's.
+  void maybe_thin(bool planar, SlamListener& listener);
+  void thin(bool planar, SlamListener& listener);
+  /// A remote body's keyframes that stay at a thinning: all but those its owner thinned (never its newest).
+  std::vector<char> owner_kept(const Body& b) const;
   /// thin's steps (slam_graph_thinning.cpp), on the plan they fill in turn.
   struct ThinningPlan;
   bool choose_kept_keyframes(ThinningPlan& p);

@@ -82,7 +82,7 @@ bool SlamGraph::add_keyframe_to_graph(const std::string& name, Body& b, const Ke
   update(name, b, k.utime, listener);
   if (!b.remote && options_.propose_loops) propose_loops(name, b, k.utime, listener);
   if (!b.remote && options_.propose_loops && options_.fleet.enabled) propose_fleet_loops(name, b, k.utime, listener);
-  maybe_thin(b.planar);
+  maybe_thin(b.planar, listener);
   retry_waiting(listener);
   return true;
 }
@@ -256,6 +256,12 @@ bool SlamGraph::apply_contribution(const GraphContribution& c, SlamListener& lis
   const size_t sightings_before = pending_.sightings.size(), loops_before = pending_.loops.size();
   bool added = false;
   if (const auto* k = std::get_if<KeyframeContribution>(&c.what)) return add_keyframe_to_graph(c.body, b, *k, listener);
+  if (const auto* t = std::get_if<KeyframesThinned>(&c.what)) {
+    // Taken out at this graph's next thinning; ids the body never had here, or has not yet, are ignored.
+    for (int64_t id : t->keyframes)
+      if (b.track.position_of(id)) b.owner_thinned.insert(id);
+    return true;
+  }
   if (const auto* j = std::get_if<FrameJoin>(&c.what)) {
     if (keyframes_present(c)) return apply_join(c.body, *j, listener);
     wait_for_keyframes(c);  // the kept frame's root has not arrived here yet

@@ -27,7 +27,7 @@ void SlamGraph::save(archive::ArchiveWriter& w) {
   w(static_cast<uint64_t>(bodies_.size()));
   for (const auto& [name, b] : bodies_) {
     w(name)(b.planar)(b.frame)(b.selector)(b.track)(b.early_loops)(b.early_sightings)(b.remote)(b.early_halves)(
-        b.early_seen);
+        b.early_seen)(std::vector<int64_t>(b.owner_thinned.begin(), b.owner_thinned.end()));
     w(static_cast<uint64_t>(b.landmarks.size()));
     for (const auto& [id, l] : b.landmarks) w(id)(l.variable)(l.sightings);
   }
@@ -78,6 +78,8 @@ void SlamGraph::load(archive::ArchiveReader& r) {
     ko.planar = b.planar;
     b.selector = KeyframeSelector(ko);
     r(b.selector)(b.track)(b.early_loops)(b.early_sightings)(b.remote)(b.early_halves)(b.early_seen);
+    const auto thinned = r.get<std::vector<int64_t>>();
+    b.owner_thinned = std::set<int64_t>(thinned.begin(), thinned.end());
     b.smoother = &smoother_for(b.planar);
     const int variables = static_cast<int>(b.smoother->graph().variables().size());
     const auto check_variable = [&](int v, bool pose) {

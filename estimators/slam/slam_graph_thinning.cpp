@@ -11,7 +11,7 @@
 
 namespace sextant::slam {
 
-void SlamGraph::maybe_thin(bool planar) {
+void SlamGraph::maybe_thin(bool planar, SlamListener& listener) {
   if (!options_.lifelong.enabled) return;
   // Over the budget, and a quarter of it added since the last thinning (a map whose places alone exceed the budget
   // is thinned at that pace rather than at every keyframe).
@@ -23,7 +23,7 @@ void SlamGraph::maybe_thin(bool planar) {
   const int budget = options_.lifelong.budget(planar).max_keyframes;
   if (in_graph <= budget || since < std::max(1, budget / 4)) return;
   since = 0;
-  thin(planar);
+  thin(planar, listener);
 }
 
 // What one thinning keeps and builds, filled step by step by thin().
@@ -56,7 +56,7 @@ struct SlamGraph::ThinningPlan {
   int64_t thinned_count = 0;
 };
 
-void SlamGraph::thin(bool planar) {
+void SlamGraph::thin(bool planar, SlamListener& listener) {
   const auto started = std::chrono::steady_clock::now();
   const int kind = planar ? 1 : 0;
   graph::IncrementalSmoother& old = *smoothers_[kind];
@@ -78,11 +78,24 @@ void SlamGraph::thin(bool planar) {
     ++counters_.thinning_failures;  // the old graph stays
     return;
   }
+  for (const auto& plan : p.plans) {
+    if (plan.body->remote || plan.thinned.empty()) continue;
+    KeyframesThinned t;
+    for (const ThinnedKeyframe& k : plan.thinned) t.keyframes.push_back(k.id);
+    for (const auto& [name, b] : bodies_)
+      if (&b == plan.body) listener.contributed({name, std::move(t)});
+  }
   commit_thinning(p);
   counters_.thinning_us_last =
       std::chrono::duration_cast<std::chrono::microseconds>(std::chrono::steady_clock::now() - started).count();
   counters_.thinning_us_max = std::max(counters_.thinning_us_max, counters_.thinning_us_last);
   factor_tags_[kind] = std::move(p.fresh_tags);
+}
+
+std::vector<char> SlamGraph::owner_kept(const Body& b) const {
+  std::vector<char> keep(b.track.keyframes().size(), 1);
+  for (size_t i = 0; i + 1 < keep.size(); ++i) keep[i] = b.owner_thinned.contains(b.track.keyframes()[i].id) ? 0 : 1;
+  return keep;
 }
 
 // 1. Which keyframes stay, per body of this kind; false when all do.
@@ -101,7 +114,7 @@ bool SlamGraph::choose_kept_keyframes(ThinningPlan& p) {
       candidates.push_back({k.id, p.vars[static_cast<size_t>(k.variable)].as_se3()});
     KeyframeThinningOptions thinning = options_.lifelong.thinning;
     thinning.window = std::max(1, options_.lifelong.budget(p.planar).window / std::max(bodies, 1));
-    auto keep = keyframes_to_keep(candidates, p.planar, thinning);
+    auto keep = b.remote ? owner_kept(b) : keyframes_to_keep(candidates, p.planar, thinning);
     for (size_t i = 0; i < keep.size(); ++i)
       if (!keep[i]) p.keep_var[static_cast<size_t>(b.track.keyframes()[i].variable)] = 0, any = true;
     p.keep_of.emplace(&b, std::move(keep));
@@ -195,6 +208,7 @@ void SlamGraph::commit_thinning(ThinningPlan& p) {
   for (auto& plan : p.plans) {
     Body& b = *plan.body;
     b.track.replace_keyframes(std::move(plan.keyframes), plan.thinned);
+    for (const ThinnedKeyframe& k : plan.thinned) b.owner_thinned.erase(k.id);
     for (auto it = b.landmarks.begin(); it != b.landmarks.end();) {
       const int v = p.remap[static_cast<size_t>(it->second.variable)];
       if (v < 0) {

@@ -143,6 +143,12 @@ TEST_CASE(
   CHECK(parts == std::vector<size_t>{256, 256, 88});
   CHECK(out.take_messages(6).empty());  // each sent once
   CHECK(split_for_wire(sightings("r1", 0, 0).what).empty());
+  slam::KeyframesThinned thinned;
+  for (int64_t id = 0; id < 2500; ++id) thinned.keyframes.push_back(id);
+  const auto pieces = split_for_wire(thinned);
+  REQUIRE(pieces.size() == 3);
+  CHECK(std::get<slam::KeyframesThinned>(pieces[2]).keyframes.size() == 452);
+  CHECK(std::get<slam::KeyframesThinned>(pieces[1]).keyframes.front() == 1024);
 }
 
 TEST_CASE("fleet exchange: the stream arrives whole and in order through loss, reordering and duplication") {

@@ -59,7 +59,8 @@ std::vector<engine::fleet::What> every_kind() {
   loop_half.from = anchor(1);
   const slam::BodyLoop body_loop{"robot2", 7, 1, anchor(0).motion, Matrix6d::Identity() * 50};
   const slam::FrameJoin join{"robot0", anchor(2).motion};
-  return {first, k, s, half, whole, loop, loop_half, body_loop, join};
+  const slam::KeyframesThinned thinned{{3, 4, 9}};
+  return {first, k, s, half, whole, loop, loop_half, body_loop, join, thinned};
 }
 
 FleetContributions batch() {
@@ -96,7 +97,8 @@ TEST_CASE("fleet codec: every kind of contribution goes to the wire and back to 
   const auto& e = std::get<FleetContributions>(std::get<engine::Event>(d));
   CHECK(e.first == 7);
   CHECK(e.body == "robot1");
-  REQUIRE(e.contributions.size() == 9);
+  REQUIRE(e.contributions.size() == 10);
+  CHECK(std::get<slam::KeyframesThinned>(e.contributions[9]).keyframes == std::vector<int64_t>{3, 4, 9});
   CHECK(std::get<slam::FrameJoin>(e.contributions[8]).keep == "robot0");
   CHECK(std::get<slam::KeyframeContribution>(e.contributions[1]).reanchored);
   CHECK(std::get<slam::LoopContribution>(e.contributions[5]).widened);
@@ -147,8 +149,8 @@ TEST_CASE("fleet codec: each bad value is refused naming its field") {
   CHECK(refused([](auto& m) {
           m.contributions[0].poses[0].orientation[0] = 2;
         }).starts_with("quaternion: fleet_contribution_t.contributions[0].poses[0].orientation"));
-  CHECK(refused([](auto& m) { m.contributions[3].kind = 9; }) ==
-        "invalid: fleet_contribution_t.contributions[3].kind: unknown (9)");
+  CHECK(refused([](auto& m) { m.contributions[3].kind = 10; }) ==
+        "invalid: fleet_contribution_t.contributions[3].kind: unknown (10)");
   CHECK(refused([](auto& m) {
           m.contributions[5].flags = sextant::fleet_item_t::FIRST;
         }).starts_with("invalid: fleet_contribution_t.contributions[5].flags"));
@@ -172,6 +174,16 @@ TEST_CASE("fleet codec: each bad value is refused naming its field") {
           m.contributions[8].anchors.push_back(m.contributions[2].anchors[0]);
           m.contributions[8].num_anchors = 1;
         }).starts_with("invalid: fleet_contribution_t.contributions[8].num_anchors: 1, its kind has 0"));
+  CHECK(refused([](auto& m) { m.contributions[9].keyframes[1] = -4; }) ==
+        "invalid: fleet_contribution_t.contributions[9].keyframes[1]: negative keyframe id");
+  CHECK(refused([](auto& m) {
+          m.contributions[9].keyframes.clear();
+          m.contributions[9].num_keyframes = 0;
+        }) == "invalid: fleet_contribution_t.contributions[9].num_keyframes: 0 outside [1, 1024]");
+  CHECK(refused([](auto& m) {
+          m.contributions[0].keyframes = {1};
+          m.contributions[0].num_keyframes = 1;
+        }) == "invalid: fleet_contribution_t.contributions[0].num_keyframes: 1 outside [0, 0]");
   CHECK(refused([](auto& m) { m.body = std::string(300, 'b'); }) ==
         "invalid: fleet_contribution_t.body: longer than 256 characters");
   CHECK(refused([](auto& m) { m.sender = ""; }) == "invalid: fleet_contribution_t.sender: empty");

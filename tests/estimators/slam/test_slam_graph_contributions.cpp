@@ -216,3 +216,49 @@ TEST_CASE(
     }
   }
 }
+
+TEST_CASE(
+    "contributions: lifelong thinning of a body is its owner's: every graph keeps the keyframes its owner keeps") {
+  const auto world = random_landmarks(3, 30);
+  ThreeGraphs t;
+  for (int k = 0; k < 3; ++k) {
+    SlamOptions o = three_robot_options();
+    o.lifelong.planar = {120, 60};  // thinned many times over the run
+    t.graphs[static_cast<size_t>(k)] = std::make_unique<SlamGraph>(o);
+  }
+  for (int i = 0; i <= 400; ++i) {
+    for (int k = 0; k < 3; ++k) feed_three_robots(*t.graphs[static_cast<size_t>(k)], k, i, world, t.outs[k]);
+    for (int to = 0; to < 3; ++to)  // c's graph hears late, in bursts: it thins at other moments than the others
+      if (i % (to == 2 ? 25 : 3) == 0)
+        for (int from = 0; from < 3; ++from)
+          if (from != to) t.deliver(from, to);
+  }
+  for (int from = 0; from < 3; ++from)
+    for (int to = 0; to < 3; ++to)
+      if (from != to) t.deliver(from, to);
+  const auto ids = [](const std::vector<KeyframeEstimate>& ks) {
+    std::map<int64_t, Eigen::Vector3d> out;
+    for (const auto& k : ks) out[k.id] = k.pose.translation();
+    return out;
+  };
+  for (int owner = 0; owner < 3; ++owner) {
+    const std::string body = kThreeRobots[owner].name;
+    const auto kept = ids(t.graphs[static_cast<size_t>(owner)]->keyframes(body));
+    CHECK(t.graphs[static_cast<size_t>(owner)]->counters().thinnings > 3);
+    for (int g = 0; g < 3; ++g) {
+      if (g == owner) continue;
+      CAPTURE(body);
+      CAPTURE(g);
+      const auto here = ids(t.graphs[static_cast<size_t>(g)]->keyframes(body));
+      // Every keyframe the owner kept is here; what is here beyond waits for this graph's next thinning, which takes
+      // out only what the owner took out.
+      double sum = 0;
+      for (const auto& [id, p] : kept) {
+        REQUIRE(here.contains(id));
+        sum += (here.at(id) - p).squaredNorm();
+      }
+      CHECK(std::sqrt(sum / static_cast<double>(kept.size())) < 0.01);
+      CHECK(here.size() - kept.size() <= 60);
+    }
+  }
+}
