@@ -1,11 +1,20 @@
 #!/bin/bash
-# Incremental smoother benchmark: `sextant optimize --incremental` on M3500, sphere2500, city10000 (RUNS
-# runs each, default 3) and torus3D (TORUS_RUNS, default 1), with --relin-skip in SKIPS (default "1 10": ours and
-# iSAM2's), one JSON per run in OUT, then a markdown table of the medians.
-# With a second build directory BASE, every run of BUILD is followed by the same run of BASE (interleaved, so that
-# both see the same machine load) and the table gets a BASE row and a new/base ratio row per data set.
-# Usage: bench/incremental_smoother.sh [BUILD_DIR] [OUT_DIR] [BASE_BUILD_DIR]
-#   e.g. SKIPS=1 bench/incremental_smoother.sh build /tmp/inc /work/wt-old/build
+# Incremental smoother against iSAM2 in the same run: `sextant optimize --incremental` (one pose per update) and
+# GTSAM's iSAM2 driven the same way (isam2_bench, default ISAM2Params) on M3500, sphere2500, city10000 and torus3D,
+# RUNS rounds (default 3; TORUS_RUNS for torus3D, default RUNS).  Within a round every data set runs sextant and the
+# peer back to back, the order alternating between rounds, so that both see the same machine load.  One JSON per run
+# in OUT, then bench/incremental_summary.py prints the medians and the ratios sextant / iSAM2 (mean, p99, max step;
+# final chi2 against sextant's batch solve of the same graph from the same start).
+#
+# The peer is not part of the project: build it once per machine outside the repository,
+#   ../shared/peers/gtsam/build.sh DIR          (about 15 minutes on two cores)
+# and give its driver in ISAM2_BENCH=DIR/isam2_build/isam2_bench.  Without it the bench says so and measures sextant
+# alone (REQUIRE_PEER=1: it stops instead).
+# With a second build directory BASE, every sextant run of BUILD is followed by the same run of BASE, and the summary
+# adds new / base ratios.  SKIPS: sextant's --relin-skip values (default 1, its default; iSAM2 runs with its own 10).
+# DATASETS overrides the list of sets (names in ../shared/data/posegraph, without .g2o).
+# Usage: [ISAM2_BENCH=PATH] bench/incremental_smoother.sh [BUILD_DIR] [OUT_DIR] [BASE_BUILD_DIR]
+#   e.g. ISAM2_BENCH=/work/gtsam-peer/isam2_build/isam2_bench RUNS=3 bench/incremental_smoother.sh build /tmp/inc
 set -euo pipefail
 here=$(cd "$(dirname "$0")/.." && pwd)
 build=${1:-$here/build}
@@ -13,39 +22,34 @@ out=${2:-$(mktemp -d)}
 base=${3:-}
 data=$here/../shared/data/posegraph
 runs=${RUNS:-3}
+peer=${ISAM2_BENCH:-}
 mkdir -p "$out"
-labels="new"
-[ -n "$base" ] && labels="new base"
-for ds in M3500 sphere2500 city10000 torus3D; do
-  n=$runs
-  [ "$ds" = torus3D ] && n=${TORUS_RUNS:-1}
-  for skip in ${SKIPS:-1 10}; do
-    for r in $(seq 1 "$n"); do
-      for label in $labels; do
-        bin=$build/bin/sextant
-        [ "$label" = base ] && bin=$base/bin/sextant
-        "$bin" optimize "$data/$ds.g2o" --incremental --relin-skip "$skip" --json > "$out/$ds.s$skip.$label.r$r.json"
-        echo "$ds skip $skip run $r $label, load $(cut -d' ' -f1-3 /proc/loadavg)" >&2
-      done
+if [ -z "$peer" ] || [ ! -x "$peer" ]; then
+  echo "iSAM2 peer NOT BUILT (ISAM2_BENCH='$peer' is not an executable): measuring sextant alone, no ratios to" \
+       "iSAM2.  Build it with ../shared/peers/gtsam/build.sh DIR, then ISAM2_BENCH=DIR/isam2_build/isam2_bench." >&2
+  [ "${REQUIRE_PEER:-0}" = 1 ] && exit 2
+  peer=""
+  echo "no peer" > "$out/PEER_NOT_BUILT"
+fi
+load() { cut -d' ' -f1-3 /proc/loadavg; }
+run_sextant() {  # label bin ds skip round
+  "$2" optimize "$data/$3.g2o" --incremental --relin-skip "$4" --json > "$out/$3.s$4.$1.r$5.json"
+  echo "$3 round $5 sextant $1 skip $4, load $(load)" >&2
+}
+run_peer() {  # ds round
+  [ -n "$peer" ] || return 0
+  "$peer" "$data/$1.g2o" > "$out/$1.isam2.r$2.json"
+  echo "$1 round $2 iSAM2, load $(load)" >&2
+}
+for r in $(seq 1 "$runs"); do
+  for ds in ${DATASETS:-M3500 sphere2500 city10000 torus3D}; do
+    [ "$ds" = torus3D ] && [ "$r" -gt "${TORUS_RUNS:-$runs}" ] && continue
+    [ $((r % 2)) = 0 ] && run_peer "$ds" "$r"
+    for skip in ${SKIPS:-1}; do
+      run_sextant new "$build/bin/sextant" "$ds" "$skip" "$r"
+      [ -n "$base" ] && run_sextant base "$base/bin/sextant" "$ds" "$skip" "$r"
     done
+    [ $((r % 2)) = 1 ] && run_peer "$ds" "$r"
   done
 done
-python3 - "$out" <<'PY'
-import collections, glob, json, statistics, sys
-rows = collections.defaultdict(list)
-for f in sorted(glob.glob(sys.argv[1] + '/*.json')):
-    ds, skip, label = f.split('/')[-1].split('.')[:3]
-    rows[(ds, skip[1:], label)].append(json.load(open(f)))
-keys = ['step_ms_mean', 'step_ms_p50', 'step_ms_p99', 'step_ms_max', 'final_chi2_batch_ratio', 'rebuilds', 'peak_rss_mb']
-print("| data set | relinearize skip | build | runs | step mean [ms] | p50 | p99 | max | final chi2 / batch | rebuilds | peak RSS [MB] |")
-print("|---|---|---|---|---|---|---|---|---|---|---|")
-for (ds, skip, label), runs in sorted(rows.items(), key=lambda kv: (kv[0][0], kv[0][1], kv[0][2] != 'new')):
-    m = {k: statistics.median(d[k] for d in runs) for k in keys}
-    print(f"| {ds} | {skip} | {label} | {len(runs)} | {m['step_ms_mean']:.3f} | {m['step_ms_p50']:.3f} | {m['step_ms_p99']:.2f} | "
-          f"{m['step_ms_max']:.1f} | {m['final_chi2_batch_ratio']:.7f} | {m['rebuilds']:.0f} | {m['peak_rss_mb']:.1f} |")
-    if label == 'base' and (ds, skip, 'new') in rows:
-        new = rows[(ds, skip, 'new')]
-        r = lambda k: statistics.median(d[k] for d in new) / m[k]
-        print(f"| {ds} | {skip} | new / base | | {r('step_ms_mean'):.2f} | {r('step_ms_p50'):.2f} | {r('step_ms_p99'):.2f} | "
-              f"{r('step_ms_max'):.2f} | | | {r('peak_rss_mb'):.2f} |")
-PY
+python3 "$here/bench/incremental_summary.py" "$out"

@@ -165,6 +165,7 @@ void read_smoother(Section& s, engine::GraphConfig& c) {
   m.get("update_fraction", o.update_fraction, in_range(0.0, 1.0));
   m.get("min_update_factors", o.min_update_factors, int_in_range(1, 1 << 20));
   m.get("max_update_factors", o.max_update_factors, int_in_range(1, 1 << 20));
+  m.get("relinearize_work", o.relinearize_work, positive());
   m.get("rebuild_iterations", o.rebuild_iterations, int_in_range(1, 1 << 20));
   m.get("refill_ratio", o.refill_ratio, Check<double>([](const double& v) -> std::optional<std::string> {
           if (v > 1 && std::isfinite(v)) return std::nullopt;  // at 1 any fill-in would reorder at every update
@@ -173,6 +174,7 @@ void read_smoother(Section& s, engine::GraphConfig& c) {
   m.get("nested_dissection_above", o.nested_dissection_above, int_in_range(0, std::numeric_limits<int>::max()));
   m.get("reorder_spread", o.reorder_spread, int_in_range(0, 1000));
   m.get("reorder_spread_above", o.reorder_spread_above, int_in_range(0, std::numeric_limits<int>::max()));
+  m.get("reorder_spread_nonzeros", o.reorder_spread_nonzeros, int_in_range(0, std::numeric_limits<int>::max()));
   m.get("reorder_slice_ms", o.reorder_slice_ms, non_negative());
   if (o.max_update_factors < o.min_update_factors) {
     // The smoother would quietly take the larger; name the key that was set.

@@ -31,6 +31,7 @@ std::string invalid_option(const IncrementalOptions& o) {
   if (o.min_update_factors < 1) return wrong("min_update_factors", o.min_update_factors, ">= 1");
   if (o.max_update_factors < o.min_update_factors)
     return wrong("max_update_factors", o.max_update_factors, ">= min_update_factors");
+  if (!positive(o.relinearize_work)) return wrong("relinearize_work", o.relinearize_work, "a positive number");
   if (o.rebuild_iterations < 1) return wrong("rebuild_iterations", o.rebuild_iterations, ">= 1");
   // At 1 any fill-in would reorder at every update.
   if (!(std::isfinite(o.refill_ratio) && o.refill_ratio > 1))
@@ -39,6 +40,7 @@ std::string invalid_option(const IncrementalOptions& o) {
   if (!non_negative(o.capacity_growth)) return wrong("capacity_growth", o.capacity_growth, "a number >= 0");
   if (o.reorder_spread < 0) return wrong("reorder_spread", o.reorder_spread, ">= 0");
   if (o.reorder_spread_above < 0) return wrong("reorder_spread_above", o.reorder_spread_above, ">= 0");
+  if (o.reorder_spread_nonzeros < 0) return wrong("reorder_spread_nonzeros", o.reorder_spread_nonzeros, ">= 0");
   if (!(o.reorder_slice_ms >= 0)) return wrong("reorder_slice_ms", o.reorder_slice_ms, "a number >= 0 (ms)");
   if (!non_negative(o.wildfire)) return wrong("wildfire", o.wildfire, "a number >= 0 (m or rad)");
   if (!positive(o.kernel_width)) return wrong("kernel_width", o.kernel_width, "a positive number");

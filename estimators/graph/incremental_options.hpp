@@ -24,6 +24,11 @@ struct IncrementalOptions {
   double update_fraction = 0.02;
   int min_update_factors = 32;
   int max_update_factors = 128;
+  /// Rank-update work one relinearization round may spend (sum over its factors of residual dimension x the column
+  /// counts of L along the factor's path to the root: the entries CHOLMOD's update touches).  The variables whose
+  /// steps are furthest past the thresholds go first; the others wait for the next updates, so that a correction
+  /// spreads over several updates instead of spiking one (sphere2500: 40-80 factors at once took 130-370 ms).
+  double relinearize_work = 4e6;
   int rebuild_iterations = 10;  // Gauss-Newton iterations of a rebuild for new factors that would cost more as
                                 // rank updates (until no variable moves past the thresholds); a rebuild for
                                 // relinearization or reordering takes one
@@ -35,9 +40,12 @@ struct IncrementalOptions {
   double capacity_growth = 1.0;  // reserved columns at a rebuild: this fraction of the used ones (and >= 64)
   /// Updates over which a fill-triggered reordering is spread (incremental_smoother.hpp); 0: reorder within the update.
   int reorder_spread = 8;
-  /// Spread reorderings only in systems of more than this many variables: below, a reordering takes a few ms, and
-  /// holding two factors at once would cost more memory than it saves time (M3500: +5 MB peak RSS, p99 unchanged).
+  /// Spread reorderings (and rebuilds for relinearization) only in systems of more than this many variables, or
+  /// whose factor L has more than reorder_spread_nonzeros entries: below both, a rebuild takes a few ms, and holding
+  /// two factors at once would cost more memory than it saves time (M3500: +5 MB peak RSS, p99 unchanged).  3-D
+  /// graphs fill in: sphere2500's rebuilds took 150-350 ms with 0.8-1.6 million entries in L, at 1000-2500 poses.
   int reorder_spread_above = 5000;
+  int reorder_spread_nonzeros = 500000;
   /// ms: an update works on a spread reordering until this long after it began, and at least for its share of the
   /// time the last one took (1.25 x that time / reorder_spread), so that the installing update is left little.
   double reorder_slice_ms = 4.0;

@@ -115,9 +115,10 @@ IncrementalStatus IncrementalSmoother::update() {
   const bool filled =
       static_cast<double>(s.fx.nonzeros()) > s.options.refill_ratio * static_cast<double>(s.fx.ordered_nnz);
   const bool spread =
-      s.options.reorder_spread > 0 && static_cast<int>(s.graph.variables().size()) > s.options.reorder_spread_above;
+      s.options.reorder_spread > 0 && (static_cast<int>(s.graph.variables().size()) > s.options.reorder_spread_above ||
+                                       s.fx.nonzeros() > static_cast<size_t>(s.options.reorder_spread_nonzeros));
   if (filled && !spread) return with_admission(rebuild_with(1), st);  // the new ordering is the point: one iteration
-  const bool began_reordering =
+  bool began_reordering =
       !s.reorder.under_way() && spread && (filled || 4 * (s.fx.reserve_end - s.fx.used) < s.fx.reserve_at_order);
   if (began_reordering) s.reorder.begin(s);
 
@@ -129,12 +130,17 @@ IncrementalStatus IncrementalSmoother::update() {
   for (int pass = 0; check && pass < s.options.relinearization_passes; ++pass) {
     const std::vector<int> moved = smoother::moved_variables(s);
     if (moved.empty()) break;
-    switch (smoother::relinearize(s, moved, st)) {
+    // While a rebuild is spread, relinearization goes on within its work budget until the rebuild lands.
+    switch (smoother::relinearize(s, moved, st, !(spread && s.reorder.under_way()))) {
       case smoother::Relinearized::kDone:
         break;
-      // Relinearizing everything at the estimate is the point: one iteration.
+      // Relinearizing everything at the estimate is the point: one iteration, now (small systems) or spread over
+      // the next updates as a reordering is (the current factor stays exact meanwhile, only linearized further away).
       case smoother::Relinearized::kTooMany:
-        return with_admission(rebuild_with(1), st);
+        if (!spread) return with_admission(rebuild_with(1), st);
+        s.reorder.begin(s);
+        began_reordering = true;
+        continue;
       case smoother::Relinearized::kCholmodFailed:
         return cholmod_failed(s, st);
     }

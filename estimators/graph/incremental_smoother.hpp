@@ -16,18 +16,23 @@
 //      and those that depend on a step that moved by more than `wildfire` (iSAM2's wildfire, at column granularity);
 //   3. fluid relinearization: every variable whose step |dx_v| exceeds the thresholds moves its linearization point,
 //      x0_v <- x0_v (+) dx_v, and each factor touching it is downdated at its old linearization and updated at the
-//      new one; then dx is solved again (at most `relinearization_passes` rounds per update).
+//      new one; then dx is solved again (at most `relinearization_passes` rounds per update).  A round takes the
+//      variables furthest past the thresholds first, within `relinearize_work` (the entries the rank updates touch
+//      along each factor's path to the root); the others wait for the next updates, their steps still in dx.
 // When one round would change more factors than rank updates do cheaply (`update_fraction`), or when the reserved
-// columns run out, the system is rebuilt: a fresh block ordering (constrained AMD with the newest poses and then the
+// columns run out, the system is rebuilt (in a large system, spread over the next updates as a reordering is, see
+// below): a fresh block ordering (constrained AMD with the newest poses and then the
 // landmarks last, or METIS nested dissection above `nested_dissection_above` variables, landmarks moved last), then Gauss-Newton iterations, each
 // relinearizing every factor at the current estimate and factorizing numerically (simplicial LDL', the form the
 // updates need), until no variable moves past the thresholds (or the owner's `interrupt` flag is set: the rebuild
 // ends after the iteration under way, counted in interrupted_rebuilds()).
 //
-// Reordering in the background of the updates (systems of more than `reorder_spread_above` variables): when the
-// factor has filled in, the new ordering and factorization are built a slice at a time at the end of the next
-// `reorder_spread` updates and replace the current system at a fixed update, so the estimates do not depend on the
-// clock (smoother/reorder_scheduler.hpp).
+// Reordering in the background of the updates (systems of more than `reorder_spread_above` variables, or whose L has
+// more than `reorder_spread_nonzeros` entries): when the factor has filled in, or a relinearization round is too
+// large for rank updates, the new ordering and factorization (relinearized at the current estimates) are built a
+// slice at a time at the end of the next `reorder_spread` updates and replace the current system at a fixed update,
+// so the estimates do not depend on the clock (smoother/reorder_scheduler.hpp); relinearization by rank updates goes
+// on meanwhile, within its work budget.
 //
 // The steps, one file each under estimators/graph/smoother/: admission.hpp (which variables and factors enter, the
 // gauge), rank_update.hpp (rank updates and storage packing), linear_system.hpp (ordering, assembly, sliced

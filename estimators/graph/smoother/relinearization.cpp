@@ -33,15 +33,82 @@ size_t update_limit(const SmootherState& s) {
   return std::min(fraction, static_cast<size_t>(std::max(o.max_update_factors, o.min_update_factors)));
 }
 
-Relinearized relinearize(SmootherState& s, const std::vector<int>& moved, IncrementalStatus& st) {
+namespace {
+
+// Rank-update work of a modification starting at column j: CHOLMOD's rank update walks the path from j to the root
+// of the elimination tree and touches every entry of each column on it, so the work is the sum of the column counts
+// along the path.  Memoized per column in `memo` (-1: not yet), as paths share their upper parts.
+double path_work(const Factorization& fx, int j, std::vector<double>& memo) {
+  const int* Lnz = static_cast<const int*>(fx.L->nz);
+  std::vector<int> walk;
+  for (int c = j; c >= 0 && memo[static_cast<size_t>(c)] < 0; c = fx.parent_of(c)) walk.push_back(c);
+  for (size_t k = walk.size(); k-- > 0;) {
+    const int c = walk[k], parent = fx.parent_of(c);
+    memo[static_cast<size_t>(c)] = Lnz[c] + (parent >= 0 ? memo[static_cast<size_t>(parent)] : 0.0);
+  }
+  return memo[static_cast<size_t>(j)];
+}
+
+// How far past its thresholds variable v's step is (the largest ratio over its components).
+double urgency(const SmootherState& s, int v) {
+  const Variable& x = s.lin[static_cast<size_t>(v)];
+  double most = 0;
+  for (int i = 0; i < x.dim(); ++i) {
+    const double limit =
+        is_rotation_component(x.kind, i) ? s.options.relinearize_rotation : s.options.relinearize_translation;
+    most = std::max(most, std::abs(s.fx.dx[s.pos[static_cast<size_t>(v)] + i]) / limit);
+  }
+  return most;
+}
+
+}  // namespace
+
+std::vector<int> within_work_budget(const SmootherState& s, std::vector<int> moved, std::vector<size_t>& factors) {
+  std::vector<double> how_far(s.lin.size(), 0.0);
+  for (int v : moved) how_far[static_cast<size_t>(v)] = urgency(s, v);
+  std::stable_sort(moved.begin(), moved.end(),
+                   [&](int a, int b) { return how_far[static_cast<size_t>(a)] > how_far[static_cast<size_t>(b)]; });
+  std::vector<double> memo(static_cast<size_t>(s.fx.capacity), -1.0);
+  std::vector<char> mark(s.graph.factors().size(), 0);
+  std::vector<int> chosen;
+  double work = 0;
+  const size_t limit = update_limit(s);
+  for (int v : moved) {
+    double own = 0;
+    std::vector<size_t> fresh;
+    for (size_t f : s.var_factors[static_cast<size_t>(v)]) {
+      if (mark[f]) continue;
+      int first = s.fx.capacity;
+      for (int u : s.graph.factors()[f]->variables())
+        if (s.pos[static_cast<size_t>(u)] >= 0) first = std::min(first, s.pos[static_cast<size_t>(u)]);
+      own += s.graph.factors()[f]->residual_dim() * path_work(s.fx, first, memo);
+      fresh.push_back(f);
+    }
+    if (!chosen.empty() && (work + own > s.options.relinearize_work || factors.size() + fresh.size() > limit))
+      continue;  // waits for a later update
+    work += own;
+    chosen.push_back(v);
+    for (size_t f : fresh) mark[f] = 1, factors.push_back(f);
+  }
+  return chosen;
+}
+
+Relinearized relinearize(SmootherState& s, const std::vector<int>& all_moved, IncrementalStatus& st,
+                         bool rebuild_if_many) {
   // Rank updates cost about the path of each factor's columns to the root of the elimination tree; past a few
   // dozen factors a rebuild is cheaper (measured on M3500: bench/RESULTS.md), and the caller rebuilds instead.
-  std::vector<char> mark(s.graph.factors().size(), 0);
+  // Below that, the most-moved variables are relinearized within relinearize_work and the others at the next
+  // updates (their steps stay in the solution meanwhile, at their old linearization point): on 3-D graphs, whose
+  // paths are long and dense, no update pays for a whole correction at once.
+  if (rebuild_if_many) {
+    std::vector<char> mark(s.graph.factors().size(), 0);
+    size_t touching = 0;
+    for (int v : all_moved)
+      for (size_t f : s.var_factors[static_cast<size_t>(v)]) touching += mark[f] ? 0 : 1, mark[f] = 1;
+    if (touching > update_limit(s)) return Relinearized::kTooMany;
+  }
   std::vector<size_t> factors;
-  for (int v : moved)
-    for (size_t f : s.var_factors[static_cast<size_t>(v)])
-      if (!mark[f]) mark[f] = 1, factors.push_back(f);
-  if (factors.size() > update_limit(s)) return Relinearized::kTooMany;
+  const std::vector<int> moved = within_work_budget(s, all_moved, factors);
   std::vector<Contribution> before, after;
   before.reserve(factors.size());
   after.reserve(factors.size());

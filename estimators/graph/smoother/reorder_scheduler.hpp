@@ -2,8 +2,9 @@
 // Reordering in the background of the updates: the only code of the incremental smoother that reads a clock.
 //
 // When the factor has filled in past refill_ratio times its size after the last ordering (or the reserved columns
-// are three quarters used) in a system of more than reorder_spread_above variables, the current factor is still
-// exact, only slower to update; so the new ordering and factorization are built a slice at a time at the end of the
+// are three quarters used, or a relinearization round would change more factors than rank updates do cheaply) in a
+// system of more than reorder_spread_above variables or reorder_spread_nonzeros entries of L, the current factor is
+// still exact, only slower to update (or linearized further away); so the new ordering and factorization are built a slice at a time at the end of the
 // next reorder_spread updates (each spends on it what is left of reorder_slice_ms after its own work, and at least
 // its share of the time the previous reordering took), and the new system replaces the old one at the start of the
 // update reorder_spread after the one that began it, whatever the clock said: the estimates after every update are
