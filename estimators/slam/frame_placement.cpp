@@ -16,16 +16,18 @@ double planar_distance(const Eigen::Vector3d& x, const Eigen::Vector3d& y, bool 
   return planar ? (x - y).head<2>().norm() : (x - y).norm();
 }
 
-/// Two placements within the inlier thresholds of each other.
-bool close(const SE3& x, const SE3& y, const PlacementOptions& o) {
-  const SE3 d = x.inverse() * y;
-  return d.translation().norm() <= o.inlier_distance && d.rotation().log().norm() <= o.inlier_angle;
+/// Two placements within the inlier thresholds of each other where the evidence lies: the point `at` (in B) lands
+/// within inlier_distance under both, and their rotations differ by at most inlier_angle.  Compared at B's origin
+/// instead, placements that agree on evidence 30 m away would differ by 0.3 m for every hundredth of a radian.
+bool close(const SE3& x, const SE3& y, const Eigen::Vector3d& at, const PlacementOptions& o) {
+  return (x * at - y * at).norm() <= o.inlier_distance &&
+         (x.rotation().inverse() * y.rotation()).log().norm() <= o.inlier_angle;
 }
 
 }  // namespace
 
 bool agrees(const PlacementEvidence& e, const SE3& a_from_b, bool planar, const PlacementOptions& options) {
-  if (e.kind == Kind::kLoop) return close(a_from_b, e.a_from_b, options);
+  if (e.kind == Kind::kLoop) return close(a_from_b, e.a_from_b, e.in_b, options);
   return planar_distance(a_from_b * e.in_b, e.in_a, planar) <= std::max(options.inlier_distance, e.tolerance);
 }
 
@@ -99,6 +101,33 @@ std::vector<Hypothesis> hypotheses(const std::vector<const PlacementEvidence*>& 
   return out;
 }
 
+/// Where the evidence lies in B: the mean of its points (a loop's: the pose of its end in B).
+Eigen::Vector3d centroid_in_b(const std::vector<const PlacementEvidence*>& es) {
+  Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+  for (const PlacementEvidence* e : es) sum += e->in_b;
+  return es.empty() ? sum : (sum / static_cast<double>(es.size())).eval();
+}
+
+/// The rule's rival: among the hypotheses farther from the best than the inlier thresholds (at `at`, where the best's
+/// evidence lies) and confirmed beyond their own sample, the most measurements one explains that the best does not.
+/// One that explains the best's own measurements a little differently is the same placement seen through the
+/// noise, not a rival: counted on all its support, every hypothesis from a pair of nearby points on collinear
+/// evidence 30 m from B's origin would block the decision for ever.
+int strongest_rival(const std::vector<const PlacementEvidence*>& es, const std::vector<Hypothesis>& hs,
+                    const std::vector<int>& support, size_t best, const Eigen::Vector3d& at, bool planar,
+                    const PlacementOptions& o) {
+  std::vector<char> explained(es.size());
+  for (size_t k = 0; k < es.size(); ++k) explained[k] = agrees(*es[k], hs[best].placement, planar, o) ? 1 : 0;
+  int strongest = 0;
+  for (size_t h = 0; h < hs.size(); ++h) {
+    if (support[h] <= hs[h].sample || close(hs[best].placement, hs[h].placement, at, o)) continue;
+    int own = 0;
+    for (size_t k = 0; k < es.size(); ++k) own += !explained[k] && agrees(*es[k], hs[h].placement, planar, o) ? 1 : 0;
+    strongest = std::max(strongest, own);
+  }
+  return strongest;
+}
+
 double spread_of(const std::vector<const PlacementEvidence*>& inliers, bool planar) {
   double spread = 0;
   for (size_t i = 0; i < inliers.size(); ++i)
@@ -128,13 +157,11 @@ Placement place_frames(const std::vector<PlacementEvidence>& evidence, bool plan
   for (size_t h = 0; h < hs.size(); ++h)
     for (const PlacementEvidence* e : es) support[h] += agrees(*e, hs[h].placement, planar, o) ? 1 : 0;
   const size_t best = static_cast<size_t>(std::max_element(support.begin(), support.end()) - support.begin());
-  for (size_t h = 0; h < hs.size(); ++h)
-    if (support[h] > hs[h].sample && !close(hs[best].placement, hs[h].placement, o))
-      p.rival_support = std::max(p.rival_support, support[h]);
-  // Step 3: refine on the inliers, and count them again on the refined placement.
   std::vector<const PlacementEvidence*> inliers;
   for (const PlacementEvidence* e : es)
     if (agrees(*e, hs[best].placement, planar, o)) inliers.push_back(e);
+  p.rival_support = strongest_rival(es, hs, support, best, centroid_in_b(inliers), planar, o);
+  // Step 3: refine on the inliers, and count them again on the refined placement.
   p.a_from_b = fit(inliers, planar);
   inliers.clear();
   for (size_t k = 0; k < es.size(); ++k)

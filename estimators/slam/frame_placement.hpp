@@ -22,7 +22,10 @@
 // that only look alike -- the same ids at unrelated places -- agree by chance on a few points, never on most), its
 // inlier points span at least `min_spread` metres (or a loop
 // is among them: a loop alone fixes the rotation), and no rival -- a hypothesis farther than the inlier thresholds
-// from the best that some measurement beyond its own sample confirms -- has `rival_ratio` of its support or more.
+// from the best where the best's evidence lies (its inliers' centroid in B, and the rotation), confirmed by some
+// measurement beyond its own sample -- explains `rival_ratio` of the best's support or more among the measurements
+// the best does not explain (maps that look alike in two ways split the evidence between two placements; a
+// hypothesis explaining the best's own measurements a little differently is the same placement through the noise).
 // Until then the frames stay apart.
 #include "estimators/lie/se3.hpp"
 
@@ -36,8 +39,9 @@ namespace sextant::slam {
 struct PlacementEvidence {
   enum class Kind { kLandmark, kBodySighting, kLoop };
   Kind kind = Kind::kLandmark;
-  Eigen::Vector3d in_a = Eigen::Vector3d::Zero(), in_b = Eigen::Vector3d::Zero();  // points (metres)
-  SE3 a_from_b;                                                                    // kLoop: T_AB it implies
+  /// Points (metres); kLoop: the loop's two ends (where the placement it implies is compared with others).
+  Eigen::Vector3d in_a = Eigen::Vector3d::Zero(), in_b = Eigen::Vector3d::Zero();
+  SE3 a_from_b;  // kLoop: T_AB it implies
   /// Points: the distance within which this measurement agrees (m); 0: inlier_distance.  A sighting far away is
   /// uncertain by more than a near one (its bearing's error times its range): its own 3-sigma, never less than
   /// inlier_distance.
@@ -59,7 +63,8 @@ struct Placement {
   bool placed = false;
   SE3 a_from_b;                 // T_AB, refined on the inliers
   std::vector<size_t> inliers;  // indices into the evidence
-  int support = 0, rival_support = 0;
+  int support = 0;
+  int rival_support = 0;  // the strongest rival's measurements that the best does not explain
   double spread = 0;
   std::string reason;  // why not placed ("" when placed)
 };

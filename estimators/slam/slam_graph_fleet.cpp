@@ -205,9 +205,12 @@ SlamGraph::Evidence SlamGraph::evidence_between(const std::string& a, const std:
     const auto kt = to.track.position_of(l.to_keyframe);
     if (!kf || !kt) continue;
     // T_from_to = X_from z X_to^-1 (each X in its own frame).
-    const SE3 t = estimate(from, from.track.keyframes()[*kf].variable) * l.z *
-                  estimate(to, to.track.keyframes()[*kt].variable).inverse();
-    ev.items.push_back({PlacementEvidence::Kind::kLoop, {}, {}, forward ? t : t.inverse()});
+    const SE3 x_from = estimate(from, from.track.keyframes()[*kf].variable);
+    const SE3 x_to = estimate(to, to.track.keyframes()[*kt].variable);
+    const SE3 t = x_from * l.z * x_to.inverse();
+    const Eigen::Vector3d &p_from = x_from.translation(), &p_to = x_to.translation();
+    ev.items.push_back(
+        {PlacementEvidence::Kind::kLoop, forward ? p_from : p_to, forward ? p_to : p_from, forward ? t : t.inverse()});
     ev.origin.emplace_back(false, static_cast<int>(k));
   }
   return ev;

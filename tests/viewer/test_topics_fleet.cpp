@@ -188,7 +188,7 @@ TEST_CASE("a fleet's outputs: each body under its map frame, every frame connect
     }
   }
   CHECK(poses > 3 * 3 * 4000);  // three robots, three estimators, 50 Hz for 90 s
-  CHECK(maps > 100);
+  CHECK(maps > 80);         // robot1's frame at the trajectory's rate (1 Hz) for 90 s, the others' before they joined
   CHECK(joined_maps == 2);  // robot2's and robot3's own maps, once each when they joined robot1's
   // The graph placed each robot in its own frame first and in robot1's at the end (robot3 may pass through robot2's,
   // when those two join first).

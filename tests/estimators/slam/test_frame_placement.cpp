@@ -72,6 +72,22 @@ TEST_CASE("frame placement: consensus over landmarks, robot sightings and loops,
     CHECK_FALSE(p.placed);
     CHECK(p.reason.find("ambiguous") != std::string::npos);
   }
+  SUBCASE("evidence far from B's origin: placements that agree on it are not rivals") {
+    // Robot sightings 30-40 m from B's origin, each good to its 3-sigma of 0.5 m.  Two hypotheses from different
+    // pairs differ by a hundredth of a radian, which moves B's origin by more than inlier_distance but the evidence
+    // by millimetres: that is one placement known to within the noise, not two.
+    std::vector<PlacementEvidence> e;
+    for (int k = 0; k < 24; ++k) {
+      const double s = 0.4 * k;
+      e.push_back(point(truth, {25 + s, 20 + 0.3 * s, 0}, rng, 0.12));
+      e.back().kind = PlacementEvidence::Kind::kBodySighting;
+      e.back().tolerance = 0.5;
+    }
+    const Placement p = place_frames(e, true, o);
+    CHECK_MESSAGE(p.placed, p.reason);
+    CHECK(p.rival_support == 0);
+    CHECK((p.a_from_b * Eigen::Vector3d(30, 21.5, 0) - truth * Eigen::Vector3d(30, 21.5, 0)).norm() < 0.1);
+  }
   SUBCASE("a loop and two agreeing robot sightings place the frame; a wrong loop alone does not") {
     PlacementEvidence loop;
     loop.kind = PlacementEvidence::Kind::kLoop;
