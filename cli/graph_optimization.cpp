@@ -122,6 +122,7 @@ GraphOptimizationResult optimize_graph(graph::G2oGraph& g, const GraphOptimizati
     if (auto why = sgd ? graph::initialize_sgd(g.graph) : graph::initialize_chordal(g.graph); !why.empty())
       throw std::runtime_error(why);
   }
+  const double init_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   graph::OptimizerOptions opt;
   opt.method = o.solver;
   opt.max_iterations = o.max_iters;
@@ -144,7 +145,7 @@ GraphOptimizationResult optimize_graph(graph::G2oGraph& g, const GraphOptimizati
   s.add("repaired_information", g.repaired_information);
   s.add("termination", st.message);
   s.add("linearize_seconds", st.linearize_seconds).add("factorize_seconds", st.factorize_seconds);
-  s.add("linear_solve_seconds", st.solve_seconds);
+  s.add("linear_solve_seconds", st.solve_seconds).add("init_seconds", init_seconds);
   if (o.robust != graph::RobustKernel::kNone) s.add("final_robust_cost", st.final_cost);
   res.ok = st.usable();
   res.message = st.usable() ? "" : st.message;

@@ -25,6 +25,7 @@
 #include <Eigen/Eigenvalues>
 
 #include <algorithm>
+#include <type_traits>
 
 namespace sextant {
 
@@ -34,10 +35,20 @@ typename Derived::PlainObject symmetrized(const Eigen::MatrixBase<Derived>& m) {
   return (0.5 * (m + m.transpose())).eval();
 }
 
-/// The smallest eigenvalue of the symmetric matrix m (its lower triangle is read).
+/// The smallest eigenvalue of the symmetric matrix m (its lower triangle is read).  A dynamic-size m of a pose's
+/// size (2, 3 or 6: planar and 3-D edges, every factor's information) is solved at fixed size: the same algorithm
+/// without heap allocation, which is most of the cost at these sizes.
 template <typename Derived>
 double smallest_eigenvalue(const Eigen::MatrixBase<Derived>& m) {
   using Plain = typename Derived::PlainObject;
+  if constexpr (Plain::RowsAtCompileTime == Eigen::Dynamic && std::is_same_v<typename Plain::Scalar, double>) {
+    if (m.rows() == m.cols()) switch (m.rows()) {
+        case 2: return smallest_eigenvalue(Eigen::Matrix2d(m));
+        case 3: return smallest_eigenvalue(Eigen::Matrix3d(m));
+        case 6: return smallest_eigenvalue(Eigen::Matrix<double, 6, 6>(m));
+        default: break;
+      }
+  }
   return Eigen::SelfAdjointEigenSolver<Plain>(Plain(m), Eigen::EigenvaluesOnly).eigenvalues().minCoeff();
 }
 

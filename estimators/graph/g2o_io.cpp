@@ -7,6 +7,7 @@
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
 
+#include <cctype>
 #include <cerrno>
 #include <cstdio>
 #include <cstdlib>
@@ -16,44 +17,66 @@
 #include <memory>
 #include <sstream>
 #include <stdexcept>
+#include <string_view>
 
 namespace sextant::graph {
 namespace {
 
+// One line's tokens, read where they lie: the line is split in place (each token's end overwritten with a NUL, so
+// strtod reads it without a copy), one allocation per file rather than a string per token.
 struct LineReader {
   std::string file;
   int line = 0;
-  std::vector<std::string> tokens;
+  std::vector<std::string_view> tokens;  // into the current line, each followed by a NUL
   size_t next = 1;
 
+  // Splits `text` (changed: separators become NULs) into tokens at whitespace, as a stream's >> would.
+  void split(std::string& text) {
+    tokens.clear();
+    next = 1;
+    char* p = text.data();
+    char* const end = p + text.size();
+    while (true) {
+      while (p < end && std::isspace(static_cast<unsigned char>(*p))) ++p;
+      if (p == end) return;
+      char* const first = p;
+      while (p < end && !std::isspace(static_cast<unsigned char>(*p))) ++p;
+      tokens.emplace_back(first, static_cast<size_t>(p - first));
+      if (p == end) return;  // text's own terminating NUL follows
+      *p++ = '\0';
+    }
+  }
+  std::string tag() const { return std::string(tokens[0]); }
   [[noreturn]] void fail(const std::string& msg) const {
     throw std::runtime_error(file + ":" + std::to_string(line) + ": " + msg);
   }
   double number() {
     if (next >= tokens.size())
-      fail(tokens[0] + ": expected more values (got " + std::to_string(tokens.size() - 1) + ")");
-    const std::string& t = tokens[next++];
+      fail(tag() + ": expected more values (got " + std::to_string(tokens.size() - 1) + ")");
+    const std::string_view t = tokens[next++];
     char* end = nullptr;
-    const double v = std::strtod(t.c_str(), &end);
-    if (end == t.c_str() || *end != '\0') fail(tokens[0] + ": not a number: '" + t + "'");
+    const double v = std::strtod(t.data(), &end);
+    if (end != t.data() + t.size()) fail(tag() + ": not a number: '" + std::string(t) + "'");
     return v;
   }
   int64_t integer() {
     const double v = number();
     // The range first: casting a double outside int64's range is undefined behaviour.
-    if (!(v >= -0x1p63 && v < 0x1p63)) fail(tokens[0] + ": id out of range: '" + tokens[next - 1] + "'");
+    if (!(v >= -0x1p63 && v < 0x1p63)) fail(tag() + ": id out of range: '" + std::string(tokens[next - 1]) + "'");
     if (v != static_cast<double>(static_cast<int64_t>(v)))
-      fail(tokens[0] + ": not an integer id: '" + tokens[next - 1] + "'");
+      fail(tag() + ": not an integer id: '" + std::string(tokens[next - 1]) + "'");
     return static_cast<int64_t>(v);
   }
   void done() const {
     if (next != tokens.size())
-      fail(tokens[0] + ": " + std::to_string(tokens.size() - next) + " unexpected extra value(s)");
+      fail(tag() + ": " + std::to_string(tokens.size() - next) + " unexpected extra value(s)");
   }
-  Eigen::MatrixXd upper_information(int n) {
-    Eigen::MatrixXd I(n, n);
-    for (int r = 0; r < n; ++r)
-      for (int c = r; c < n; ++c) I(r, c) = I(c, r) = number();
+  // The N x N information matrix from its upper triangle, row by row (fixed size: no allocation).
+  template <int N>
+  Eigen::Matrix<double, N, N> upper_information() {
+    Eigen::Matrix<double, N, N> I;
+    for (int r = 0; r < N; ++r)
+      for (int c = r; c < N; ++c) I(r, c) = I(c, r) = number();
     return I;
   }
   // Several values in order (function arguments have no evaluation order, so never read inside a call).
@@ -74,7 +97,7 @@ struct LineReader {
     const Eigen::VectorXd c = numbers(4);
     const double x = c[0], y = c[1], z = c[2], w = c[3];
     const Eigen::Quaterniond q(w, x, y, z);
-    if (!(q.norm() > 1e-9)) fail(tokens[0] + ": zero quaternion");
+    if (!(q.norm() > 1e-9)) fail(tag() + ": zero quaternion");
     return q.normalized();
   }
 };
@@ -138,10 +161,7 @@ class G2oReader {
       ++r_.line;
       const size_t hash = text.find('#');
       if (hash != std::string::npos) text.resize(hash);
-      std::istringstream s(text);
-      r_.tokens.clear();
-      r_.next = 1;
-      for (std::string t; s >> t;) r_.tokens.push_back(t);
+      r_.split(text);
       if (!r_.tokens.empty()) read_line();
     }
     throw_if_bad_information();
@@ -156,7 +176,7 @@ class G2oReader {
  private:
   // One line's tokens (a tag and its values): a vertex, an edge, a parameter or FIX.
   void read_line() {
-    const std::string& tag = r_.tokens[0];
+    const std::string tag = r_.tag();
     if (tag.rfind("VERTEX_", 0) == 0) {
       const Variable v = read_vertex(tag);
       r_.done();
@@ -210,7 +230,7 @@ class G2oReader {
     if (tag == "EDGE_SE2") {
       const int64_t a = r_.integer(), b = r_.integer();
       const SE2 z = r_.se2();
-      const Eigen::Matrix3d I = information(r_.upper_information(3), a, b);
+      const Eigen::Matrix3d I = information(r_.upper_information<3>(), a, b);
       saw2_ = true;
       edges_.push_back(
           {r_.line, tag, a, b, [z, I](int i, int j) { return std::make_unique<RelativePoseFactor>(i, j, z, I); }});
@@ -218,14 +238,14 @@ class G2oReader {
       const int64_t a = r_.integer(), b = r_.integer();
       const Eigen::Vector3d t = r_.vector3();
       const SE3 z(r_.quaternion_xyzw(), t);
-      const Matrix6d I = information(r_.upper_information(6), a, b);
+      const Matrix6d I = information(r_.upper_information<6>(), a, b);
       saw3_ = true;
       edges_.push_back(
           {r_.line, tag, a, b, [z, I](int i, int j) { return std::make_unique<RelativePoseFactor>(i, j, z, I); }});
     } else if (tag == "EDGE_SE2_XY") {
       const int64_t a = r_.integer(), b = r_.integer();
       const Eigen::VectorXd z = r_.numbers(2);
-      const Eigen::MatrixXd I = information(r_.upper_information(2), a, b);
+      const Eigen::MatrixXd I = information(r_.upper_information<2>(), a, b);
       edges_.push_back({r_.line, tag, a, b, [z, I](int i, int j) {
                           return std::make_unique<PointObservationFactor>(
                               i, j, PointObservationFactor::Model::kPosition, z, I);
@@ -233,7 +253,7 @@ class G2oReader {
     } else if (tag == "EDGE_SE3_TRACKXYZ") {
       const int64_t a = r_.integer(), b = r_.integer(), param = r_.integer();
       const Eigen::VectorXd z = r_.numbers(3);
-      const Eigen::MatrixXd I = information(r_.upper_information(3), a, b);
+      const Eigen::MatrixXd I = information(r_.upper_information<3>(), a, b);
       if (!offsets_.count(param))
         r_.fail("EDGE_SE3_TRACKXYZ: unknown parameter id " + std::to_string(param) +
                 " (PARAMS_SE3OFFSET must come first)");
@@ -249,15 +269,16 @@ class G2oReader {
 
   // An edge's information matrix: kept when positive definite; else repaired (options.information), or listed for
   // the error about bad information matrices.
-  Eigen::MatrixXd information(const Eigen::MatrixXd& I, int64_t a, int64_t b) {
+  template <int N>
+  Eigen::Matrix<double, N, N> information(const Eigen::Matrix<double, N, N>& I, int64_t a, int64_t b) {
     const DefinitenessCheck check = check_positive_definite(I);
     if (check.ok()) return I;
     if (check.problem == DefinitenessCheck::Problem::kNotFinite)
-      r_.fail(r_.tokens[0] + " " + std::to_string(a) + " " + std::to_string(b) +
+      r_.fail(r_.tag() + " " + std::to_string(a) + " " + std::to_string(b) +
               ": information matrix has a NaN or infinite entry");
     if (options_.information != InformationPolicy::kReject) {
       ++out_.repaired_information;
-      return repair_information(I, options_.information);
+      return repair_information(I, options_.information);  // N x N, as I
     }
     std::ostringstream m;
     m << path_ << ":" << r_.line << " (" << r_.tokens[0] << " " << a << " " << b << ", smallest eigenvalue "
