@@ -46,55 +46,6 @@ Shape shape_of(const What& what) {
       what);
 }
 
-// Every field of each kind, for the writer and the reader alike (the order written is the order read).
-template <class A, class K>
-void anchor_fields(A& a, K& x) {
-  a(x.keyframe)(x.motion)(x.covariance);
-}
-
-template <class A, class X>
-void what_fields(A& a, X& x) {
-  using T = std::remove_const_t<X>;
-  if constexpr (std::is_same_v<T, KeyframeContribution>) {
-    a(x.id)(x.utime)(x.planar)(x.first)(x.reanchored)(x.odom)(x.odom_covariance)(x.edge)(x.edge_covariance);
-  } else if constexpr (std::is_same_v<T, SightingsContribution>) {
-    anchor_fields(a, x.anchor);
-    a(x.sightings);
-  } else if constexpr (std::is_same_v<T, BodySightingHalf>) {
-    a(x.observed)(x.utime)(x.sensor_in_body)(x.sighting);
-    anchor_fields(a, x.observer);
-  } else if constexpr (std::is_same_v<T, BodySighting>) {
-    a(x.observer)(x.utime)(x.sensor_in_body)(x.sighting);
-    anchor_fields(a, x.observer_anchor);
-    anchor_fields(a, x.observed_anchor);
-  } else if constexpr (std::is_same_v<T, LoopContribution>) {
-    a(x.from_keyframe)(x.to_keyframe)(x.z)(x.information)(x.widened);
-  } else if constexpr (std::is_same_v<T, BodyLoopHalf>) {
-    a(x.loop);
-    anchor_fields(a, x.from);
-  } else if constexpr (std::is_same_v<T, FrameJoin>) {
-    a(x.keep)(x.keep_from_gone);
-  } else if constexpr (std::is_same_v<T, KeyframesThinned>) {
-    a(x.keyframes);
-  } else {
-    static_assert(std::is_same_v<T, BodyLoop>);
-    a(x.from)(x.from_keyframe)(x.to_keyframe)(x.z)(x.information);
-  }
-}
-
-template <size_t I = 0>
-void load_alternative(archive::ArchiveReader& r, uint32_t index, What& what) {
-  if constexpr (I < std::variant_size_v<What>) {
-    if (index == I) {
-      std::variant_alternative_t<I, What> x;
-      what_fields(r, x);
-      what = std::move(x);
-      return;
-    }
-    load_alternative<I + 1>(r, index, what);
-  }
-}
-
 template <class A, class C>
 void outbox_counter_fields(A& a, C& c) {
   a(c.contributions)(c.messages)(c.evicted)(c.repair_requests)(c.repair_refused)(c.repaired)(c.repair_messages)(
@@ -152,27 +103,10 @@ std::vector<What> split_for_wire(const What& what) {
   return parts;  // none for a contribution without sightings: it adds nothing to a graph
 }
 
-void save_what(archive::ArchiveWriter& w, const What& what) {
-  w(static_cast<uint32_t>(what.index()));
-  std::visit([&](const auto& x) { what_fields(w, x); }, what);
-}
+// A contribution's archive is its own (graph_contribution.hpp: the alternative's index, then its fields).
+void Numbered::save(archive::ArchiveWriter& w) const { w(seq)(what); }
 
-void load_what(archive::ArchiveReader& r, What& what) {
-  uint32_t index = 0;
-  r(index);
-  if (index >= std::variant_size_v<What>) r.fail("a graph contribution of unknown kind " + std::to_string(index));
-  load_alternative(r, index, what);
-}
-
-void Numbered::save(archive::ArchiveWriter& w) const {
-  w(seq);
-  save_what(w, what);
-}
-
-void Numbered::load(archive::ArchiveReader& r) {
-  r(seq);
-  load_what(r, what);
-}
+void Numbered::load(archive::ArchiveReader& r) { r(seq)(what); }
 
 // ---- Outbox ----------------------------------------------------------------------------------------------------
 
@@ -553,10 +487,7 @@ size_t Inbox::held() const {
 
 void Inbox::Stream::save(archive::ArchiveWriter& w) const {
   w(owner)(next)(known_last)(owner_first)(static_cast<uint64_t>(held.size()));
-  for (const auto& [seq, what] : held) {
-    w(seq);
-    save_what(w, what);
-  }
+  for (const auto& [seq, what] : held) w(seq)(what);
 }
 
 void Inbox::Stream::load(archive::ArchiveReader& r) {
@@ -567,8 +498,7 @@ void Inbox::Stream::load(archive::ArchiveReader& r) {
   for (uint64_t i = 0; i < n; ++i) {
     int64_t seq = 0;
     What what;
-    r(seq);
-    load_what(r, what);
+    r(seq)(what);
     if (seq <= next || !held.emplace(seq, std::move(what)).second)
       r.fail("an inbox stream holding a contribution at or before its next number, or twice");
   }
