@@ -7,7 +7,7 @@
 #include "convert/euroc_converter.hpp"
 #include "convert/g2o_converter.hpp"
 #include "convert/mrclam_converter.hpp"
-#include "convert/rosbag/rosbag_converter.hpp"
+#include "cli/rosbag_plugin/rosbag_plugin.hpp"
 #include "convert/tum_converter.hpp"
 #include "eval/trajectory_io.hpp"
 
@@ -120,7 +120,7 @@ void add_rosbag(CLI::App* cmd) {
       o.channels = key_values(*topics, "--topic");
       o.bodies = key_values(*frames, "--frame");
       o.yaw_free_topics.insert(yaw_free->begin(), yaw_free->end());
-      const auto r = convert_rosbag(*in, *out, o);
+      const auto r = sextant::cli::convert_rosbag_via_module(*in, *out, o);
       std::printf("%s: written %s; skipped %s; dropped (non-finite) %s\n", out->c_str(), counts(r.written).c_str(),
                   counts(r.skipped).c_str(), counts(r.dropped).c_str());
       for (const auto& [topic, first] : r.first_dropped) std::printf("  %s\n", first.c_str());

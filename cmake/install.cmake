@@ -1,6 +1,7 @@
 # `cmake --install BUILD [--prefix P]`: what an adopter needs, laid out as Debian packages lay theirs out.
 #   bin/                          sextantd, sextant
 #   lib/libsextant_*.a            the libraries (position-independent static archives)
+#   lib/sextant/libsextant_rosbag.so  the module `sextant convert rosbag` loads (ROS's bag library)
 #   include/sextant/              their headers, included by path from the project root ("estimators/graph/optimizer.hpp"),
 #                                 and lcm-gen's C++ message headers ("sextant/odometry_t.hpp")
 #   lib/cmake/sextant/            the CMake package: find_package(sextant) -> sextant::estimators, sextant::assoc, ...
@@ -22,6 +23,7 @@ install(TARGETS ${sextant_export_targets} EXPORT sextantTargets
         ARCHIVE DESTINATION ${CMAKE_INSTALL_LIBDIR}
         INCLUDES DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}/sextant)
 install(TARGETS sextantd sextant RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR})
+install(TARGETS sextant_rosbag_module LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR}/sextant)  # for `sextant convert rosbag`
 install(EXPORT sextantTargets NAMESPACE sextant:: DESTINATION ${SEXTANT_CMAKE_DIR})
 
 configure_package_config_file(${CMAKE_SOURCE_DIR}/cmake/sextantConfig.cmake.in
