@@ -8,6 +8,7 @@
 #include <Eigen/Eigenvalues>
 
 #include <cctype>
+#include <charconv>
 #include <cerrno>
 #include <cstdio>
 #include <cstdlib>
@@ -54,8 +55,14 @@ struct LineReader {
     if (next >= tokens.size())
       fail(tag() + ": expected more values (got " + std::to_string(tokens.size() - 1) + ")");
     const std::string_view t = tokens[next++];
+    // from_chars for the plain decimals of a g2o file (correctly rounded, as strtod, and several times faster);
+    // strtod, and its verdict, for the rest (a leading '+', hexadecimal, out of range).
+    double v = 0;
+    if (const auto [end, ec] = std::from_chars(t.data(), t.data() + t.size(), v);
+        ec == std::errc() && end == t.data() + t.size())
+      return v;
     char* end = nullptr;
-    const double v = std::strtod(t.data(), &end);
+    v = std::strtod(t.data(), &end);
     if (end != t.data() + t.size()) fail(tag() + ": not a number: '" + std::string(t) + "'");
     return v;
   }
