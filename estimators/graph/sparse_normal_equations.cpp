@@ -102,7 +102,12 @@ void SparseNormalEquations::map_factor_pairs(const std::map<std::pair<int, int>,
 void SparseNormalEquations::start_cholmod(Ordering ordering, const std::vector<int>& colptr,
                                           const std::vector<int>& rowind) {
   cholmod_start(&common_);
-  common_.supernodal = CHOLMOD_SUPERNODAL;
+  // Supernodal (dense BLAS on supernodes) where the factor is dense enough to pay (3-D graphs, big 2-D ones),
+  // simplicial otherwise: CHOLMOD's own choice (flops / nnz(L) >= 40).  A small planar graph's factor spent more in
+  // BLAS calls on tiny supernodes (and in waking the BLAS threads) than in arithmetic.  Simplicial is LL' too
+  // (final_ll), so a matrix that is not positive definite fails the same way in both.
+  common_.supernodal = CHOLMOD_AUTO;
+  common_.final_ll = 1;
   common_.print = 0;
   switch (ordering) {
     case Ordering::kBlockAmd:

@@ -30,7 +30,7 @@ TEST_CASE("g2o: an id outside int64's range is an error naming FILE:LINE, not a 
   std::remove(path.c_str());
 }
 
-TEST_CASE("g2o: every spelling strtod reads gives strtod's value, however blanks, tabs, CR and comments space the line") {
+TEST_CASE("g2o: every spelling strtod reads is strtod's value, however blanks, tabs, CR, comments space the line") {
   // Decimals (through from_chars) and what only strtod reads (a '+', hexadecimal, out of range) must agree with
   // strtod to the bit, however the line is spaced.
   const char* spellings[] = {"0.1", "-2.5e-3", "+1.25", "0x1.8p1", "1e-320", "3.14159265358979323846", "7"};
