@@ -14,3 +14,5 @@ echo "== pose graphs against Ceres 2.1"
 cmake -S ../shared/peers/ceres_posegraph -B build-bench/ceres -DCMAKE_BUILD_TYPE=Release > /dev/null
 make -s -C build-bench/ceres
 python3 bench/posegraph_vs_ceres.py "$build" build-bench/ceres/ceres_posegraph --reps 3 --out bench/results/graph.md
+echo "== small pose graphs as whole processes against Ceres 2.1"
+python3 bench/posegraph_vs_ceres.py "$build" build-bench/ceres/ceres_posegraph --process --reps 11 --datasets intel,kitti_00,kitti_02
