@@ -24,6 +24,10 @@ for f in bin/sextantd bin/sextant lib/libsextant_estimators.a lib/libsextant_ass
   [ -e "$p/$f" ] || fail "not installed: $f"
 done
 [ ! -e "$p/include/sextant/cli/command.hpp" ] || fail "the CLI's private headers were installed"
+# `sextant convert rosbag` finds its module where it was installed (not a bag: the bag library's own error).
+[ -e "$p/lib/sextant/libsextant_rosbag.so" ] || fail "not installed: lib/sextant/libsextant_rosbag.so"
+rosbag_out=$("$p/bin/sextant" convert rosbag "$prefix/install.log" -o "$prefix/x.lcm" 2>&1 || true)
+case "$rosbag_out" in *"version line"*) ;; *) fail "installed sextant convert rosbag: $rosbag_out" ;; esac
 [ ! -e "$p/include/sextant/estimators/graph/smoother" ] || fail "the smoother's internal headers were installed"
 [ -e "$p/include/sextant/estimators/graph/incremental_smoother.hpp" ] || fail "not installed: the smoother's public header"
 # The public graph headers a consumer includes reach no internal smoother header and no CHOLMOD (their dependency
