@@ -4,7 +4,6 @@
 #include "cli/command.hpp"
 #include "cli/graph_optimization.hpp"
 
-#include <chrono>
 #include <cstdio>
 
 namespace {
@@ -130,9 +129,7 @@ void run(Args& a) {
   a.o.init = tools::initial_estimate_from_name(a.init);
   a.o.robust = graph::robust_kernel_from_name(a.robust);
   a.o.ordering = tools::ordering_from_name(a.ordering);
-  const auto t0 = std::chrono::steady_clock::now();
   graph::G2oGraph g = read_graph(a);
-  const double read_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   tools::GraphOptimizationResult r;
   try {
     r = tools::optimize_graph(g, a.o, a.output);
@@ -143,7 +140,6 @@ void run(Args& a) {
     std::fprintf(stderr, "sextant optimize: %s\n", e.what());
     throw CLI::RuntimeError(1);
   }
-  r.summary.add("read_seconds", read_seconds);
   print_summary(a, r.summary);
   if (!r.ok) {
     std::fprintf(stderr, "sextant optimize: %s\n", r.message.c_str());
