@@ -73,6 +73,7 @@ void read_gnss_heading(Section& s, engine::GnssHeadingConfig& c) {
   c.align = align == "always" ? Align::kAlways : align == "never" ? Align::kNever : Align::kAuto;
   s.get("baseline_m", c.baseline_m, in_range(1, 1e4));
   s.get("min_inlier_fraction", c.min_inlier_fraction, in_range(0.01, 1));
+  s.get("reacquire_after", c.reacquire_after, int_in_range(0, 100000));
   s.reject_unknown_keys();
 }
 

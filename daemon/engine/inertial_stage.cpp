@@ -134,7 +134,7 @@ void InertialStage::on_gnss(const GnssFix& g) {
   if (first) return;
   const inertial::FieldMask fields = config_.gnss_position;
   const double gate = config_.gnss_gate;
-  count(b.filter->add_measurement(t, [z, R, lever, fields, gate](inertial::ErrorStateEkf& f) {
+  count_fix(b, b.filter->add_measurement(t, [z, R, lever, fields, gate](inertial::ErrorStateEkf& f) {
     return f.update_gnss_position(z, R, lever, fields, gate);
   }));
   if (g.velocity && (config_.gnss_velocity[0] || config_.gnss_velocity[1] || config_.gnss_velocity[2])) {
@@ -160,6 +160,17 @@ void InertialStage::anchor(Body& b, const Eigen::Vector3d& antenna, const Eigen:
   P.block<3, 3>(E::kP, E::kP) = R;
   b.filter->initialize(f.time(), x, P);
   ++anchored_;
+}
+
+void InertialStage::count_fix(Body& b, const filter::UpdateResult& r) {
+  count(r);
+  b.consecutive_gated = r.reason == filter::UpdateReason::kGate ? b.consecutive_gated + 1 : 0;
+  const int limit = config_.gnss_heading.reacquire_after;
+  if (limit == 0 || b.consecutive_gated < limit || config_.gnss_heading.align == GnssHeadingConfig::Align::kNever)
+    return;
+  b.heading.emplace(gnss_heading_options(config_));
+  b.consecutive_gated = 0;
+  ++reacquired_;
 }
 
 void InertialStage::wait_for_heading(Body& b, double t, const Eigen::Vector3d& antenna, const Eigen::Matrix3d& R,
@@ -205,6 +216,7 @@ Counters InertialStage::counters() const {
           {"gnss_anchored", anchored_},
           {"gnss_heading_waiting", waiting},
           {"gnss_heading_aligned", heading_aligned_},
+          {"gnss_heading_reacquired", reacquired_},
           {"unmounted", unmounted_},
           {"before_start", no_filter_yet_},
           {"imu_refused", imu_refused_},

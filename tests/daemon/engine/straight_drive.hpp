@@ -1,7 +1,8 @@
 #pragma once
 // A ground robot driving straight on a heading it does not know, for the inertial stages' tests: level IMU samples
 // (200 Hz, no orientation), planar wheel odometry with its twist (50 Hz) and GNSS fixes (5 Hz, antenna 1 m above the
-// body, 0.5 m noise per horizontal axis, the third fix 29 m off: multipath), in time order.  At rest for 1 s, then
+// body, 0.5 m noise per horizontal axis, the third fix 29 m off: multipath; from `jump_at_s` on, every fix 15 m
+// further east, as when a receiver changes its corrections), in time order.  At rest for 1 s, then
 // 1 m/s^2 along the body's x for 2 s, then 2 m/s.  The datum is the first fix (noise-free), so the body's true
 // East-North-Up position at time t is (0, 0, -1) + Rz(heading) [s(t), 0, 0].
 #include "daemon/engine/events.hpp"
@@ -27,7 +28,7 @@ struct StraightDrive {
     return Eigen::Vector3d(0, 0, -1) + distance(t) * Eigen::Vector3d(std::cos(heading), std::sin(heading), 0);
   }
 
-  StraightDrive(double heading_rad, double seconds) : heading(heading_rad) {
+  StraightDrive(double heading_rad, double seconds, double jump_at_s = 1e9) : heading(heading_rad) {
     const geodesy::LocalTangentPlane plane({47.0, 8.0, 500.0});
     std::mt19937 rng(7);
     std::normal_distribution<double> noise(0, 0.5);
@@ -52,6 +53,7 @@ struct StraightDrive {
         Eigen::Vector3d antenna = body_enu(t) + Eigen::Vector3d(0, 0, 1);
         if (fixes > 0) antenna += Eigen::Vector3d(noise(rng), noise(rng), noise(rng));
         if (fixes == 2) antenna += Eigen::Vector3d(25, -15, 0);
+        if (t >= jump_at_s) antenna += Eigen::Vector3d(15, 0, 0);
         const geodesy::Geodetic g = plane.to_geodetic(antenna);
         GnssFix f;
         f.utime = utime, f.source = "robot", f.frame = "gps";

@@ -106,7 +106,7 @@ namespace {
 
 struct DriveResult {
   FusedPose last;
-  int64_t gated, aligned, waiting;
+  int64_t gated, aligned, waiting, reacquired;
 };
 
 DriveResult drive(const test::StraightDrive& d, GnssHeadingConfig::Align align) {
@@ -117,7 +117,7 @@ DriveResult drive(const test::StraightDrive& d, GnssHeadingConfig::Align align) 
   const Emit emit = [&](Output o) { last = std::get<FusedPose>(o); };
   for (const Event& e : d.events) stage.handle(e, emit);
   return {last, counter(stage, "updates_gated"), counter(stage, "gnss_heading_aligned"),
-          counter(stage, "gnss_heading_waiting")};
+          counter(stage, "gnss_heading_waiting"), counter(stage, "gnss_heading_reacquired")};
 }
 
 double yaw_of(const Eigen::Quaterniond& q) {
@@ -148,4 +148,17 @@ TEST_CASE("inertial stage: an unknown heading (160, -170, 90 degrees) is found f
   CHECK(r.aligned == 0);
   CHECK(r.gated > 200);  // of 300 fixes
   CHECK((r.last.pose.position - d.body_enu(60)).head<2>().norm() > 50);
+}
+
+TEST_CASE("inertial stage: fixes that jump 15 m for good are gated, then the heading and position are found anew") {
+  const test::StraightDrive d(160 * std::numbers::pi / 180, 60, 30);
+  const DriveResult r = drive(d, GnssHeadingConfig::Align::kAuto);
+  CHECK(r.reacquired == 1);
+  CHECK(r.gated == 10);  // reacquire_after
+  CHECK(r.aligned == 2);
+  CHECK(r.waiting == 0);
+  const double t_end = static_cast<double>(r.last.utime - test::StraightDrive::kT0) * 1e-6;
+  const Eigen::Vector3d jumped = d.body_enu(t_end) + Eigen::Vector3d(15, 0, 0);
+  CHECK((r.last.pose.position - jumped).head<2>().norm() < 1.0);
+  CHECK(std::abs(std::remainder(yaw_of(r.last.pose.orientation) - d.heading, 2 * std::numbers::pi)) < 0.03);
 }
