@@ -1,6 +1,7 @@
 #include "convert/euroc_converter.hpp"
 
 #include "daemon/runtime/lcm_log.hpp"
+#include "estimators/lie/unit_quaternion.hpp"
 #include "eval/trajectory_io.hpp"
 
 #include <sextant/imu_t.hpp>
@@ -100,13 +101,10 @@ sextant::truth_t truth_message(const Row& r, int64_t seq, const std::string& sou
   m.seq = seq;
   m.kind = "robot";
   m.source = source;
-  // Normalized after scaling by its largest component, so that a quaternion of 1e300s or of denormals, which
-  // overflows or underflows the plain norm, is still the rotation it spells.
-  const Eigen::Vector4d wxyz(r.values[3], r.values[4], r.values[5], r.values[6]);
-  const double scale = wxyz.cwiseAbs().maxCoeff();
-  if (!(scale > 0)) throw std::runtime_error(r.where + "the orientation quaternion is zero");
-  const Eigen::Vector4d u = (wxyz / scale).normalized();
-  const Eigen::Quaterniond q(u[0], u[1], u[2], u[3]);
+  // The CSV's values are finite (read_row); a quaternion of 1e300s or of denormals is still the rotation it spells.
+  const auto unit = unit_quaternion(r.values[3], r.values[4], r.values[5], r.values[6]);
+  if (!unit) throw std::runtime_error(r.where + "the orientation quaternion is zero");
+  const Eigen::Quaterniond& q = *unit;
   for (int i = 0; i < 3; ++i) m.position[i] = r.values[static_cast<size_t>(i)];
   m.orientation[0] = q.w(), m.orientation[1] = q.x(), m.orientation[2] = q.y(), m.orientation[3] = q.z();
   return m;

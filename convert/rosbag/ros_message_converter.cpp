@@ -1,6 +1,8 @@
 // Compiled as C++17: ROS 1's generated message headers use std::allocator<void>::rebind, gone in C++20.
 #include "convert/rosbag/ros_message_converter.hpp"
 
+#include "estimators/lie/unit_quaternion.hpp"
+
 #include <Eigen/Geometry>
 #include <sextant/gnss_t.hpp>
 #include <sextant/imu_t.hpp>
@@ -44,9 +46,8 @@ constexpr const char* kCovarianceOverflows = "the pose covariance overflows when
 // Why the pose of `p` cannot be converted; nullptr when it can.
 const char* pose_refused(const geometry_msgs::PoseWithCovariance& p) {
   const auto& o = p.pose.orientation;
-  const double n = o.w * o.w + o.x * o.x + o.y * o.y + o.z * o.z;
   if (!std::isfinite(p.pose.position.x + p.pose.position.y + p.pose.position.z)) return "the position is not finite";
-  if (!(std::isfinite(n) && n > 1e-12)) return "the orientation quaternion is zero or not finite";
+  if (!unit_quaternion(o.w, o.x, o.y, o.z)) return "the orientation quaternion is zero or not finite";
   if (!finite(p.covariance)) return "the pose covariance is not finite";
   return nullptr;
 }
@@ -54,9 +55,8 @@ const char* pose_refused(const geometry_msgs::PoseWithCovariance& p) {
 // The pose of `p` into `m`; false when the rotated covariance is not finite (entries near the largest double
 // overflow when summed by the rotation).
 bool set_pose(sextant::odometry_t& m, const geometry_msgs::PoseWithCovariance& p) {
-  const Eigen::Quaterniond q =
-      Eigen::Quaterniond(p.pose.orientation.w, p.pose.orientation.x, p.pose.orientation.y, p.pose.orientation.z)
-          .normalized();
+  const auto& o = p.pose.orientation;
+  const Eigen::Quaterniond q = *unit_quaternion(o.w, o.x, o.y, o.z);  // pose_refused said it spells one
   m.position[0] = p.pose.position.x, m.position[1] = p.pose.position.y, m.position[2] = p.pose.position.z;
   m.orientation[0] = q.w(), m.orientation[1] = q.x(), m.orientation[2] = q.y(), m.orientation[3] = q.z();
   body_frame_pose_covariance(q, p.covariance, m.covariance);
@@ -134,14 +134,11 @@ const char* RosMessageConverter::write_imu(const std::string& topic, const senso
     copy(m.linear_acceleration_covariance, r.linear_acceleration_covariance);
   }
   if (m.has_orientation) {
-    // Normalized as the odometry's is, after scaling by its largest component (so that one of 1e300s or of
-    // denormals, which overflows or underflows the plain norm, is still the rotation it spells); a quaternion with
-    // a non-finite component spells none: the message is dropped, and the first such says where.
-    const Eigen::Vector4d wxyz(q.w, q.x, q.y, q.z);
-    if (!wxyz.allFinite()) return "the orientation quaternion is not finite";
-    const double scale = wxyz.cwiseAbs().maxCoeff();
-    const Eigen::Vector4d u = (wxyz / scale).normalized();
-    std::copy(u.data(), u.data() + 4, m.orientation);
+    // As the odometry's (unit_quaternion); one that spells no rotation drops the message, and the first such says
+    // where.
+    const auto u = unit_quaternion(q.w, q.x, q.y, q.z);
+    if (!u) return "the orientation quaternion is zero or not finite";
+    m.orientation[0] = u->w(), m.orientation[1] = u->x(), m.orientation[2] = u->y(), m.orientation[3] = u->z();
     copy(m.orientation_covariance, r.orientation_covariance);
   }
   if (!finite(m.angular_velocity) || !finite(m.angular_velocity_covariance))

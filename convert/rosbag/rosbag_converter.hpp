@@ -45,7 +45,7 @@ struct RosbagConversion {
   std::map<std::string, int64_t> skipped;  // per topic: types sextant does not take, or topics not listed
   std::map<std::string, int64_t> dropped;  // per topic: non-finite values
   /// Per topic, the first message dropped for a reason found in a value, and why ("topic /imu, message stamped
-  /// 12.500000000 s: the orientation quaternion is not finite").
+  /// 12.500000000 s: the orientation quaternion is zero or not finite").
   std::map<std::string, std::string> first_dropped;
 };
 

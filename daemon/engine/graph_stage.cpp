@@ -129,7 +129,7 @@ void GraphStage::exchange(const Event& e, Outputs& out, const Emit& emit) {
   // an empty sender): only the clock moves, so that heartbeats and repairs go on while no data arrives.
   if (const auto* c = std::get_if<FleetControl>(&e); c && !c->sender.empty())
     r = exchange_->received(*c, exchange_now_);
-  for (const slam::GraphContribution& c : r.apply) slam_.apply(c, out);
+  slam_.apply_all(r.apply, out);
   for (FleetContributions& a : r.answers) emit(std::move(a));
   fleet::FleetExchange::Due due = exchange_->due(exchange_now_);
   for (FleetContributions& m : due.contributions) emit(std::move(m));

@@ -245,9 +245,12 @@ engine::Counters Daemon::runtime_counters() const {
   const Publisher::Lag lag = driver_->publisher().take_lag();
   c.push_back({"publish_lag_us", lag.last_us});
   c.push_back({"publish_lag_us_max", lag.max_us});
-  if (lag.max_us > 1'000'000)
-    spdlog::warn("published up to {:.1f} s behind real time since the last status (a stall, or a backlog)",
-                 lag.max_us * 1e-6);
+  c.push_back({"publish_lag_usual_us", lag.usual_us});
+  if (lag.excess_us() > 1'000'000)
+    spdlog::warn(
+        "published up to {:.1f} s later than usual since the last status (a stall, or a backlog; the usual "
+        "lag, {:.3f} s, includes the senders' clock offset)",
+        lag.excess_us() * 1e-6, lag.usual_us * 1e-6);
   if (!state_path_.empty()) {
     c.push_back({"state_saves", state_saves_.load()});
     c.push_back({"state_save_failures", state_failures_.load()});

@@ -61,6 +61,7 @@ bool Publisher::publish(const engine::Output& output) {
             m.lag_us = wall_() - o.utime;
             lag_.last_us = m.lag_us;
             lag_.max_us = std::max(lag_.max_us, lag_.last_us);
+            lag_min_ = std::min(lag_min_.value_or(lag_.last_us), lag_.last_us);
           }
           send(channel, std::move(m));
         } else if constexpr (std::is_same_v<T, engine::Trajectory>) {
@@ -88,7 +89,13 @@ void Publisher::measure_lag(std::function<int64_t()> wall_utime) {
 
 Publisher::Lag Publisher::take_lag() {
   std::lock_guard lock(mutex_);
-  const Lag out = lag_;
+  if (lag_min_) {
+    lag_minima_.push_back(*lag_min_);
+    if (lag_minima_.size() > kUsualLagReports) lag_minima_.pop_front();
+    lag_min_.reset();
+  }
+  Lag out = lag_;
+  out.usual_us = lag_minima_.empty() ? 0 : *std::min_element(lag_minima_.begin(), lag_minima_.end());
   lag_.max_us = lag_.last_us;
   return out;
 }

@@ -12,8 +12,10 @@
 // Lag (sextantd): given a wall clock (`measure_lag`), each FusedPose published is compared with it; how far behind
 // real time the daemon publishes (wall clock minus the pose's utime: the sender's latency, the queues, a stall) is
 // in the pose itself (fused_pose_t.lag_us) and on the status channel (publish_lag_us, publish_lag_us_max since the
-// previous status), so a backlog published after a stall says that it is late.  Without a wall clock (replay) the
-// poses' lag_us is 0.
+// previous status), so a backlog published after a stall says that it is late.  The lag includes the offset between
+// the sender's clock and the daemon's (years, for a log played live with its original stamps), so what signals a
+// stall is the lag beyond the usual one: the smallest of the last kUsualLagReports reports (publish_lag_usual_us).
+// Without a wall clock (replay) the poses' lag_us is 0.
 // Thread-safe.
 #include "daemon/config/daemon_config.hpp"
 #include "daemon/engine/outputs.hpp"
@@ -21,9 +23,11 @@
 #include <sextant/status_t.hpp>
 
 #include <cstdint>
+#include <deque>
 #include <functional>
 #include <map>
 #include <mutex>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -58,10 +62,16 @@ class Publisher {
   /// Measures each FusedPose's lag against `wall_utime()` (microseconds since the epoch) from now on.
   void measure_lag(std::function<int64_t()> wall_utime);
   struct Lag {
-    int64_t last_us = 0;  // of the last FusedPose published
-    int64_t max_us = 0;   // the largest since the previous take_lag
+    int64_t last_us = 0;   // of the last FusedPose published
+    int64_t max_us = 0;    // the largest since the previous take_lag
+    int64_t usual_us = 0;  // the smallest over the last kUsualLagReports calls that saw a pose (0: none yet)
+    /// How far the largest exceeds the usual (a stall, or a backlog), microseconds.
+    int64_t excess_us() const { return max_us - usual_us; }
   };
-  /// The lag since the previous call (its maximum restarts).
+  /// Reports (take_lag calls, one per status period) over which the usual lag is the smallest seen: long enough
+  /// that a stall does not become the usual, short enough to follow a sender whose clock was set.
+  static constexpr size_t kUsualLagReports = 120;
+  /// The lag since the previous call (its maximum and minimum restart).
   Lag take_lag();
   /// The channel a FusedPose of `estimator` is published on.
   std::string fused_pose_channel(const std::string& estimator) const;
@@ -82,6 +92,8 @@ class Publisher {
   int64_t not_monotonic_ = 0, forgotten_ = 0, evicted_ = 0;
   std::function<int64_t()> wall_;
   Lag lag_;
+  std::optional<int64_t> lag_min_;  // the smallest since the previous take_lag
+  std::deque<int64_t> lag_minima_;  // of the last kUsualLagReports take_lag calls that saw a pose
 };
 
 }  // namespace sextant::runtime

@@ -245,9 +245,9 @@ void SlamGraph::add_loop(const std::string& name, const LoopInput& l, SlamListen
   update(name, b, b.track.newest().utime, listener);
 }
 
-graph::IncrementalStatus SlamGraph::solve(Body& b) {
+graph::IncrementalStatus SlamGraph::solve(graph::IncrementalSmoother& smoother) {
   const auto t0 = std::chrono::steady_clock::now();
-  const graph::IncrementalStatus st = b.smoother->update();
+  const graph::IncrementalStatus st = smoother.update();
   counters_.last_update_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
   ++counters_.updates;
   counters_.rebuilds += st.rebuilt ? 1 : 0;
@@ -257,7 +257,12 @@ graph::IncrementalStatus SlamGraph::solve(Body& b) {
 }
 
 void SlamGraph::update(const std::string& name, Body& b, int64_t utime, SlamListener& listener) {
-  const graph::IncrementalStatus st = solve(b);
+  if (deferred_.active) {
+    deferred_.dirty[b.planar ? 1 : 0] = true;
+    deferred_.updated[name] = utime;
+    return;
+  }
+  const graph::IncrementalStatus st = solve(*b.smoother);
   if (st.ok) listener.updated(name, utime, st);
 }
 

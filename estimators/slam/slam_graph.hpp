@@ -117,6 +117,12 @@ class SlamGraph {
   /// nothing else changes.  A whole robot sighting or inter-robot loop whose other body's keyframe has not arrived
   /// waits (at most FleetOptions::max_pending) and is applied when it does.  True when applied.
   bool apply(const GraphContribution& contribution, SlamListener& listener);
+  /// Several contributions in their order (a FLEET message; a burst of repairs after a cut) as apply() takes them
+  /// one by one, but with one smoother update per kind at the end instead of one per contribution: catching up on
+  /// minutes of another robot's data costs a solve per message, not per keyframe and sighting.  A contribution whose
+  /// gate reads the estimate (a loop, an inter-robot loop's half, a frame join) sees it solved first; frames are
+  /// placed (try_joins) after the last update.  Returns how many were applied.
+  int apply_all(const std::vector<GraphContribution>& contributions, SlamListener& listener);
   /// Whether a body's graph is built from contributions (another graph owns its inputs).
   bool remote(const std::string& body) const;
   /// Drops the body with its map: its keyframes, landmarks and their factors leave the smoother of its kind (rebuilt
@@ -277,8 +283,18 @@ class SlamGraph {
   void propose_loops(const std::string& name, const Body& b, int64_t utime, SlamListener& listener);
   /// For the newest keyframe of `name`: each other body of its frame's nearest keyframe within proposal_radius.
   void propose_fleet_loops(const std::string& name, const Body& b, int64_t utime, SlamListener& listener);
-  /// One smoother update of b's smoother, counted.
-  graph::IncrementalStatus solve(Body& b);
+  /// One smoother update, counted.
+  graph::IncrementalStatus solve(graph::IncrementalSmoother& smoother);
+  /// While apply_all runs: the updates, frame updates and placements asked for, done by run_deferred once for all.
+  struct Deferred {
+    bool active = false;
+    bool dirty[2] = {false, false};          // per kind: a smoother update is owed
+    std::map<std::string, int64_t> updated;  // body -> the time its update was asked for at
+    std::set<std::string> frames, joins;     // frames whose bodies are reported; frames whose placement is tried
+  };
+  /// The smoother updates owed (one per kind), reported as update() and update_frame() would have, then the
+  /// placements; apply_all's batch goes on afterwards.
+  void run_deferred(SlamListener& listener);
   /// One smoother update for `b`, counted and reported when it succeeds.
   void update(const std::string& name, Body& b, int64_t utime, SlamListener& listener);
   /// The sightings of one message at `anchor` (slam_graph_sightings.cpp): landmarks and markers, contributed.
@@ -364,6 +380,7 @@ class SlamGraph {
   std::vector<GraphContribution> waiting_wholes_;  // robot sightings and loops waiting for a keyframe (oldest first)
   std::map<std::pair<std::string, std::string>, int64_t> join_attempts_;  // frame pair -> keyframes at the last try
   std::map<std::string, std::pair<std::string, SE3>> moved_frames_;       // a joined frame -> (into, into_from_it)
+  Deferred deferred_;
   int64_t next_variable_id_ = 0;
   double loop_gate_[2] = {0, 0}, sighting_gate_[2] = {0, 0};  // chi-square thresholds, [0] 3-D, [1] planar
   double sighting_width_[2] = {0, 0};                         // sighting_kernel_width_for

@@ -251,6 +251,41 @@ bool SlamGraph::apply(const GraphContribution& c, SlamListener& listener) {
   return applied;
 }
 
+int SlamGraph::apply_all(const std::vector<GraphContribution>& contributions, SlamListener& listener) {
+  int applied = 0;
+  deferred_.active = contributions.size() > 1;
+  for (const GraphContribution& c : contributions) {
+    // Their gates and the placement's classification read the estimate: solved first.
+    const bool reads_estimate = std::holds_alternative<LoopContribution>(c.what) ||
+                                std::holds_alternative<BodyLoopHalf>(c.what) ||
+                                std::holds_alternative<BodyLoop>(c.what) || std::holds_alternative<FrameJoin>(c.what);
+    if (deferred_.active && reads_estimate) run_deferred(listener);
+    applied += apply(c, listener) ? 1 : 0;
+  }
+  if (deferred_.active) run_deferred(listener);
+  deferred_.active = false;
+  return applied;
+}
+
+void SlamGraph::run_deferred(SlamListener& listener) {
+  const Deferred owed = std::move(deferred_);
+  deferred_ = Deferred{};  // inactive while the owed work runs: a join it makes updates at once
+  graph::IncrementalStatus st[2];
+  for (int kind = 0; kind < 2; ++kind)
+    if (owed.dirty[kind] && smoothers_[kind]) st[kind] = solve(*smoothers_[kind]);
+  const auto report = [&](const std::string& name, const Body& b, int64_t utime) {
+    if (owed.dirty[b.planar ? 1 : 0] && st[b.planar ? 1 : 0].ok) listener.updated(name, utime, st[b.planar ? 1 : 0]);
+  };
+  for (const auto& [name, utime] : owed.updated)
+    if (const auto it = bodies_.find(name); it != bodies_.end()) report(name, it->second, utime);
+  for (const auto& [name, b] : bodies_)
+    if (owed.frames.contains(b.frame) && !owed.updated.contains(name) && !b.track.empty())
+      report(name, b, b.track.newest().utime);
+  for (const std::string& frame : owed.joins)
+    if (bodies_.contains(frame) && bodies_.at(frame).frame == frame) try_joins(frame, listener);
+  deferred_.active = owed.active;
+}
+
 bool SlamGraph::apply_contribution(const GraphContribution& c, SlamListener& listener) {
   Body& b = bodies_.at(c.body);
   const size_t sightings_before = pending_.sightings.size(), loops_before = pending_.loops.size();

@@ -238,6 +238,10 @@ std::vector<std::string> SlamGraph::linked_frames(const std::string& frame) cons
 
 void SlamGraph::try_joins(const std::string& frame, SlamListener& listener) {
   if (!options_.fleet.enabled) return;
+  if (deferred_.active) {
+    deferred_.joins.insert(frame);
+    return;
+  }
   std::string current = frame;
   for (const std::string& other : linked_frames(frame)) {
     if (!bodies_.contains(other) || bodies_.at(other).frame != other) continue;  // joined meanwhile
@@ -334,7 +338,12 @@ void SlamGraph::join_frames(const std::string& keep, const std::string& gone, co
 }
 
 void SlamGraph::update_frame(const std::string& frame, SlamListener& listener) {
-  const graph::IncrementalStatus st = solve(bodies_.at(frame));
+  if (deferred_.active) {
+    deferred_.dirty[bodies_.at(frame).planar ? 1 : 0] = true;
+    deferred_.frames.insert(frame);
+    return;
+  }
+  const graph::IncrementalStatus st = solve(*bodies_.at(frame).smoother);
   if (!st.ok) return;
   for (const auto& [name, b] : bodies_)
     if (b.frame == frame && !b.track.empty()) listener.updated(name, b.track.newest().utime, st);

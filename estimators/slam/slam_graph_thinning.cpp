@@ -23,6 +23,9 @@ void SlamGraph::maybe_thin(bool planar, SlamListener& listener) {
   const int budget = options_.lifelong.budget(planar).max_keyframes;
   if (in_graph <= budget || since < std::max(1, budget / 4)) return;
   since = 0;
+  // Which keyframes stay is read off the estimate, and the rebuilt smoother starts from it: solved first when
+  // apply_all has deferred the updates.
+  if (deferred_.active) run_deferred(listener);
   thin(planar, listener);
 }
 

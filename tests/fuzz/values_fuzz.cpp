@@ -34,7 +34,7 @@ const std::vector<Record>& clean() {
 }
 
 const std::vector<Record>& victim() {
-  static const auto run = simulated_run("victim", kSeconds, 6);
+  static const auto run = simulated_run("victim", kSeconds, 6, false, /*loops=*/true);
   return run;
 }
 

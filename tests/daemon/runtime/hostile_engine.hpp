@@ -13,6 +13,7 @@
 #include "sim/simulator.hpp"
 
 #include <sextant/landmarks_t.hpp>
+#include <sextant/loop_closure_t.hpp>
 #include <sextant/odometry_t.hpp>
 
 #include <unistd.h>
@@ -35,15 +36,17 @@ struct Record {
   std::vector<uint8_t> bytes;
 };
 
-/// A simulated planar run of `source` as the bus would carry it (its odometry, sightings and bearings; the
-/// simulator's loop closures need poses 20 s old, so a short run has none).
+/// A simulated planar run of `source` as the bus would carry it (its odometry, sightings and bearings).  The
+/// simulator's loop closures need poses 20 s old, so a short run has none; `loops`: a closure about every second
+/// instead, to a pose within 6 m and at least 2 s back.
 inline std::vector<Record> simulated_run(const std::string& source, double duration_s, uint64_t seed,
-                                         bool unknown_ids = false) {
+                                         bool unknown_ids = false, bool loops = false) {
   tools::SimulationOptions sim;
   sim.duration_s = duration_s;
   sim.seed = seed;
   sim.source = source;
   sim.unknown_ids = unknown_ids;
+  if (loops) sim.loop_distance = 6, sim.loop_min_age_s = 2;
   const auto path = (std::filesystem::temp_directory_path() /
                      ("sextant_hostile_" + std::to_string(::getpid()) + "_" + source + ".lcm"))
                         .string();
@@ -117,6 +120,14 @@ struct Run {
     for (const auto& p : poses)
       if (p.source == source) out.push_back(p);
     return out;
+  }
+  /// A counter of the stage named `stage` (0 when it has none of that name).
+  int64_t counter(std::string_view stage, const std::string& name) const {
+    for (const auto& s : engine->stages())
+      if (s->name() == stage)
+        for (const auto& [n, v] : s->counters())
+          if (n == name) return v;
+    return 0;
   }
   int64_t rejected(const std::string& channel, const std::string& reason) const {
     const auto s = stats.snapshot();
@@ -214,6 +225,19 @@ inline void mutate(sextant::landmarks_t& m, const Choose& choose) {
   jump_in_time(m.utime, choose);
 }
 
+inline void mutate(sextant::loop_closure_t& m, const Choose& choose) {
+  std::vector<double*> fields;
+  for (auto& v : m.position) fields.push_back(&v);
+  for (auto& v : m.orientation) fields.push_back(&v);
+  for (auto& v : m.information) fields.push_back(&v);
+  fields.push_back(&m.score);
+  set_extreme(fields, choose);
+  if (choose(16) == 0) m.planar = !m.planar;
+  if (choose(8) == 0) (choose(2) ? m.keyframe_from : m.keyframe_to) = static_cast<int64_t>(choose(1u << 30));
+  jump_in_time(choose(2) ? m.utime_from : m.utime_to, choose);
+  jump_in_time(m.utime, choose);
+}
+
 /// `r` with its message mutated; false (and `r` unchanged) for a channel the fuzzer does not mutate (bearings go to
 /// the association stage, which these runs leave off).
 inline bool mutate(Record& r, const Choose& choose) {
@@ -223,6 +247,10 @@ inline bool mutate(Record& r, const Choose& choose) {
     r.bytes = encoded(m);
   } else if (r.channel == "LANDMARKS") {
     auto m = decoded<sextant::landmarks_t>(r);
+    mutate(m, choose);
+    r.bytes = encoded(m);
+  } else if (r.channel == "LOOP_CLOSURES") {
+    auto m = decoded<sextant::loop_closure_t>(r);
     mutate(m, choose);
     r.bytes = encoded(m);
   } else {

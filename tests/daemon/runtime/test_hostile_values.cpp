@@ -8,6 +8,7 @@
 
 #include <doctest/doctest.h>
 
+#include <algorithm>
 #include <cstdlib>
 #include <random>
 
@@ -106,12 +107,17 @@ TEST_CASE(
 }
 
 TEST_CASE(
-    "value fuzzer: extreme finite values in every odometry and sighting field of one body never harm the published "
-    "poses or the other body") {
+    "value fuzzer: extreme finite values in every odometry, sighting and loop closure field of one body never harm "
+    "the published poses or the other body") {
   const int messages =
       std::getenv("SEXTANT_VALUE_FUZZ_MESSAGES") ? std::atoi(std::getenv("SEXTANT_VALUE_FUZZ_MESSAGES")) : 400;
   const auto clean = simulated_run("clean", 20, 5);
-  const auto victim = simulated_run("victim", 20, 6);
+  const auto victim = simulated_run("victim", 20, 6, false, /*loops=*/true);
+  {  // the victim's loop closures, unharmed, reach its graph: the fuzzer's mutated ones are tried where it matters
+    Run unharmed;
+    for (const auto& r : victim) unharmed.feed(r);
+    REQUIRE(unharmed.counter("graph", "loops_accepted") > 10);
+  }
   for (bool pf : {false, true}) {
     CAPTURE(pf);
     Run alone(pf);

@@ -56,7 +56,10 @@ TEST_CASE("the publisher says how far behind real time it publishes: a backlog a
     publisher.publish(p);
     wall += 10'000;
   }
-  CHECK(publisher.take_lag().max_us == 5'000);
+  const auto live = publisher.take_lag();
+  CHECK(live.max_us == 5'000);
+  CHECK(live.usual_us == 5'000);
+  CHECK(live.excess_us() == 0);
   // Stopped for 20 s: the backlog (stamped during the stall) is published late, and says so.
   const int64_t stalled_from = wall;
   wall += 20'000'000;
@@ -67,5 +70,55 @@ TEST_CASE("the publisher says how far behind real time it publishes: a backlog a
   const auto lag = publisher.take_lag();
   CHECK(lag.max_us == 20'000'000);
   CHECK(lag.last_us == 20'000'000 - 40'000);
+  CHECK(lag.usual_us == 5'000);  // the stall is beyond the usual lag
+  CHECK(lag.excess_us() == 20'000'000 - 5'000);
   CHECK(publisher.take_lag().max_us == lag.last_us);  // the maximum restarts at each status
+}
+
+TEST_CASE("the publisher's usual lag: a sender's clock offset is not a stall, a stall beyond it is") {
+  config::Channels channels;
+  runtime::Publisher publisher(channels, "t", "ekf", [](const std::string&, const std::vector<uint8_t>&, int64_t) {});
+  int64_t wall = 1'800'000'000'000'000;
+  publisher.measure_lag([&wall] { return wall; });
+  engine::FusedPose p;
+  p.source = "robot";
+  p.estimator = "ekf";
+  p.covariance = engine::Matrix6::Identity();
+  const int64_t offset = 3LL * 365 * 86'400 * 1'000'000;  // a log played live with its stamps of three years ago
+  int64_t stamp = wall - offset;
+  const auto publish_for = [&](double seconds, int64_t delay_us) {
+    for (int i = 0; i < static_cast<int>(seconds * 100); ++i) {
+      p.utime = stamp;
+      wall += delay_us;
+      publisher.publish(p);
+      wall += 10'000 - delay_us;
+      stamp += 10'000;
+    }
+  };
+  for (int report = 0; report < 5; ++report) {  // status every second, poses 2-4 ms late on the sender's clock
+    publish_for(1.0, 2'000 + 500 * report);
+    const auto lag = publisher.take_lag();
+    CHECK(lag.max_us > offset);
+    CHECK(lag.usual_us == offset + 2'000);
+    CHECK(lag.excess_us() < 10'000);
+  }
+  // A 5 s stall: the backlog is published 5 s later than usual.
+  wall += 5'000'000;
+  publish_for(1.0, 0);
+  const auto stalled = publisher.take_lag();
+  CHECK(stalled.excess_us() >= 5'000'000 - 2'000);
+  CHECK(stalled.usual_us == offset + 2'000);
+  // The usual lag follows a clock that was set: the daemon's stepped 10 s ahead reads as late for kUsualLagReports
+  // reports, then as the usual lag.
+  stamp = wall - offset;  // the backlog drained
+  wall += 10'000'000;
+  for (size_t report = 0; report < runtime::Publisher::kUsualLagReports; ++report) {
+    publish_for(0.05, 2'000);
+    const auto lag = publisher.take_lag();
+    if (report < runtime::Publisher::kUsualLagReports - 6) CHECK(lag.excess_us() >= 9'990'000);  // 6 older reports
+  }
+  publish_for(0.05, 2'000);
+  const auto followed = publisher.take_lag();
+  CHECK(followed.usual_us == offset + 10'000'000 + 2'000);
+  CHECK(followed.excess_us() == 0);
 }

@@ -1,0 +1,188 @@
+// The exchange's sending side, Outbox (fleet_exchange.hpp).
+#include "daemon/engine/fleet_exchange.hpp"
+#include "daemon/engine/fleet_exchange_detail.hpp"
+
+#include <algorithm>
+
+namespace sextant::engine::fleet {
+namespace {
+
+using namespace slam;
+using detail::kMegabyte;
+using detail::micros;
+
+template <class A, class C>
+void outbox_counter_fields(A& a, C& c) {
+  a(c.contributions)(c.messages)(c.evicted)(c.repair_requests)(c.repair_refused)(c.repaired)(c.repair_messages)(
+      c.repair_limited)(c.repair_not_retained);
+}
+
+}  // namespace
+
+Outbox::Outbox(std::string self, FleetExchangeOptions options)
+    : self_(std::move(self)),
+      options_(std::move(options)),
+      members_(options_.members.begin(), options_.members.end()) {}
+
+void Outbox::add(const slam::GraphContribution& c) {
+  Stream& s = streams_[c.body];
+  for (What& what : split_for_wire(c.what)) {
+    s.retained_bytes += item_bytes(what);
+    s.retained.push_back(Numbered{s.next_seq++, std::move(what)});
+    ++s.pending;
+    ++counters_.contributions;
+  }
+  evict(s);
+}
+
+void Outbox::evict(Stream& s) {
+  const size_t max_count = static_cast<size_t>(std::max(options_.retain, 0));
+  const size_t max_bytes = static_cast<size_t>(std::max(options_.retain_mb, 0)) * kMegabyte;
+  // What is not sent yet stays (it goes with the next take_messages, then may go from here).
+  while (s.retained.size() > s.pending && (s.retained.size() > max_count || s.retained_bytes > max_bytes)) {
+    s.retained_bytes -= item_bytes(s.retained.front().what);
+    s.retained.pop_front();
+    ++counters_.evicted;
+  }
+}
+
+std::vector<FleetContributions> Outbox::pack(const std::string& body, std::deque<Numbered>::const_iterator begin,
+                                             std::deque<Numbered>::const_iterator end, bool repair, int64_t now) const {
+  std::vector<FleetContributions> out;
+  const size_t overhead = message_overhead_bytes(self_, body);
+  const size_t budget = static_cast<size_t>(std::max(options_.max_message_bytes, 1));
+  size_t bytes = 0;
+  for (auto it = begin; it != end; ++it) {
+    const size_t b = item_bytes(it->what);
+    if (out.empty() || out.back().contributions.size() >= kMaxItemsPerMessage || bytes + b > budget) {
+      out.push_back(FleetContributions{now, self_, body, repair, it->seq, {}});
+      bytes = overhead;
+    }
+    out.back().contributions.push_back(it->what);
+    bytes += b;
+  }
+  return out;
+}
+
+std::vector<FleetContributions> Outbox::take_messages(int64_t now_utime) {
+  std::vector<FleetContributions> out;
+  for (auto& [body, s] : streams_) {
+    if (s.pending == 0) continue;
+    auto msgs =
+        pack(body, s.retained.end() - static_cast<std::ptrdiff_t>(s.pending), s.retained.end(), false, now_utime);
+    counters_.messages += static_cast<int64_t>(msgs.size());
+    std::move(msgs.begin(), msgs.end(), std::back_inserter(out));
+    s.pending = 0;
+    evict(s);
+  }
+  return out;
+}
+
+std::vector<FleetControl> Outbox::heartbeat(int64_t now_utime) {
+  if (streams_.empty()) return {};
+  if (last_heartbeat_ && now_utime - *last_heartbeat_ < micros(options_.heartbeat_period_s)) return {};
+  last_heartbeat_ = now_utime;
+  std::vector<FleetControl> out;
+  for (const auto& [body, s] : streams_) {
+    if (out.empty() || out.back().streams.size() >= kMaxRangesPerMessage)
+      out.push_back(FleetControl{now_utime, self_, FleetControl::Kind::kHeartbeat, "", {}});
+    const int64_t sent = s.next_seq - 1 - static_cast<int64_t>(s.pending);
+    const int64_t first = s.retained.empty() || s.retained.front().seq > sent ? 0 : s.retained.front().seq;
+    out.back().streams.push_back(FleetRange{body, first, sent});
+  }
+  return out;
+}
+
+Outbox::Bucket& Outbox::bucket(const std::string& requester, int64_t now) {
+  const double capacity = std::max(options_.repair_bytes_per_s, static_cast<double>(options_.max_message_bytes));
+  auto [it, fresh] = buckets_.try_emplace(requester, Bucket{capacity, now});
+  Bucket& b = it->second;
+  if (!fresh && now > b.utime) {
+    b.tokens = std::min(capacity, b.tokens + options_.repair_bytes_per_s * static_cast<double>(now - b.utime) * 1e-6);
+    b.utime = now;
+  }
+  return b;
+}
+
+std::vector<FleetContributions> Outbox::answer(const FleetControl& request, int64_t now_utime) {
+  if (request.kind != FleetControl::Kind::kRepair || request.daemon != self_) return {};
+  if (request.sender == self_ || !members_.contains(request.sender)) {
+    ++counters_.repair_refused;
+    return {};
+  }
+  ++counters_.repair_requests;
+  Bucket& b = bucket(request.sender, now_utime);
+  std::vector<FleetContributions> out;
+  for (const FleetRange& range : request.streams) answer_range(range, b, now_utime, out);
+  return out;
+}
+
+void Outbox::answer_range(const FleetRange& range, Bucket& b, int64_t now, std::vector<FleetContributions>& out) {
+  auto it = streams_.find(range.body);
+  if (it == streams_.end()) {
+    ++counters_.repair_refused;
+    return;
+  }
+  const Stream& s = it->second;
+  const int64_t sent = s.next_seq - 1 - static_cast<int64_t>(s.pending);  // what is queued goes anyway
+  int64_t first = std::max<int64_t>(range.first, 1);
+  const int64_t last = std::min({range.last, sent, first + std::max(options_.max_repair_range, 1) - 1});
+  if (last < first) return;
+  const int64_t oldest = s.retained.empty() ? s.next_seq : s.retained.front().seq;
+  if (first < oldest) {
+    counters_.repair_not_retained += std::min(last, oldest - 1) - first + 1;
+    first = oldest;
+  }
+  if (last < first) return;
+  const auto begin = s.retained.begin() + (first - oldest);
+  const auto end = begin + (last - first + 1);
+  auto stop = begin;
+  for (; stop != end; ++stop) {
+    const double bytes = static_cast<double>(item_bytes(stop->what));
+    if (b.tokens < bytes) break;
+    b.tokens -= bytes;
+  }
+  counters_.repair_limited += end - stop;
+  counters_.repaired += stop - begin;
+  auto msgs = pack(range.body, begin, stop, true, now);
+  b.tokens -= static_cast<double>(msgs.size() * message_overhead_bytes(self_, range.body));
+  counters_.repair_messages += static_cast<int64_t>(msgs.size());
+  std::move(msgs.begin(), msgs.end(), std::back_inserter(out));
+}
+
+int64_t Outbox::next_seq(const std::string& body) const {
+  auto it = streams_.find(body);
+  return it == streams_.end() ? 1 : it->second.next_seq;
+}
+
+int64_t Outbox::first_retained(const std::string& body) const {
+  auto it = streams_.find(body);
+  return it == streams_.end() || it->second.retained.empty() ? 0 : it->second.retained.front().seq;
+}
+
+void Outbox::Stream::save(archive::ArchiveWriter& w) const { w(next_seq)(static_cast<uint64_t>(pending))(retained); }
+
+void Outbox::Stream::load(archive::ArchiveReader& r) {
+  uint64_t p = 0;
+  r(next_seq)(p)(retained);
+  pending = static_cast<size_t>(p);
+  if (pending > retained.size()) r.fail("an outbox stream with more queued contributions than it holds");
+  for (size_t i = 0; i < retained.size(); ++i)
+    if (retained[i].seq != next_seq - static_cast<int64_t>(retained.size() - i))
+      r.fail("an outbox stream whose retained contributions are not numbered up to its next number");
+  retained_bytes = 0;
+  for (const Numbered& n : retained) retained_bytes += item_bytes(n.what);
+}
+
+void Outbox::save(archive::ArchiveWriter& w) const {
+  w(streams_)(last_heartbeat_);
+  outbox_counter_fields(w, counters_);
+}
+
+void Outbox::load(archive::ArchiveReader& r) {
+  r(streams_)(last_heartbeat_);
+  outbox_counter_fields(r, counters_);
+  last_heartbeat_.reset();  // the clock of the saved run: the first heartbeat goes at once
+}
+
+}  // namespace sextant::engine::fleet
