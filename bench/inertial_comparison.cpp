@@ -29,7 +29,8 @@ void print_anees(const std::vector<std::vector<double>>& nees) {
   size_t steps = nees.front().size();
   for (const auto& v : nees) steps = std::min(steps, v.size());
   const int m = static_cast<int>(nees.size());
-  const double lower = sextant::assoc::chi2_quantile(6 * m, 0.025) / m, upper = sextant::assoc::chi2_quantile(6 * m, 0.975) / m;
+  const double lower = sextant::assoc::chi2_quantile(6 * m, 0.025) / m,
+               upper = sextant::assoc::chi2_quantile(6 * m, 0.975) / m;
   size_t inside = 0, above = 0;
   std::vector<double> anees(steps);
   for (size_t k = 0; k < steps; ++k) {

@@ -148,15 +148,16 @@ void InertialGraphStage::anchor(Body& b, double t, const Eigen::Vector3d& antenn
   ++anchored_;
 }
 
-void InertialGraphStage::wait_for_heading(Body& b, double t, const Eigen::Vector3d& antenna,
-                                          const Eigen::Matrix3d& R, const Eigen::Vector3d& lever) {
+void InertialGraphStage::wait_for_heading(Body& b, double t, const Eigen::Vector3d& antenna, const Eigen::Matrix3d& R,
+                                          const Eigen::Vector3d& lever) {
   const inertial::NavState x = b.smoother->current();
   const Eigen::Vector3d track = x.p + x.v * (t - b.smoother->current_time()) + x.R * lever;
   const auto a = b.heading->add(track.head<2>(), antenna.head<2>(), R.topLeftCorner<2, 2>());
   if (!a) return;
-  const double position_sigma =
-      std::sqrt(Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(a->covariance_at(x.p.head<2>())).eigenvalues().maxCoeff());
-  b.smoother->initialize(b.smoother->current_time(), inertial::realigned(*a, x), b.smoother->newest().bias, std::nullopt,
+  const double position_sigma = std::sqrt(
+      Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(a->covariance_at(x.p.head<2>())).eigenvalues().maxCoeff());
+  b.smoother->initialize(b.smoother->current_time(), inertial::realigned(*a, x), b.smoother->newest().bias,
+                         std::nullopt,
                          inertial::InertialSmoother::PriorSigmas{std::max(position_sigma, 0.1), a->yaw_sigma});
   b.heading.reset();
   ++heading_aligned_;

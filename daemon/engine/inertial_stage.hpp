@@ -83,8 +83,7 @@ class InertialStage final : public Stage {
   SensorMountings mountings_;
   std::map<std::string, Body> bodies_;
   int64_t imu_ = 0, started_ = 0, unmounted_ = 0, imu_refused_ = 0, updates_ = 0, refused_ = 0, gated_ = 0,
-          too_old_ = 0, published_ = 0, no_filter_yet_ = 0, anchored_ = 0,
-          heading_aligned_ = 0, reacquired_ = 0;
+          too_old_ = 0, published_ = 0, no_filter_yet_ = 0, anchored_ = 0, heading_aligned_ = 0, reacquired_ = 0;
 };
 
 }  // namespace sextant::engine

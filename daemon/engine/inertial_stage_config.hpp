@@ -36,8 +36,8 @@ struct GnssHeadingConfig {
   /// kAuto: when the body's yaw is not ENU already (the IMU's yaw is not fused, or the unit has none); kAlways; kNever
   /// (the start's yaw is trusted as ENU: fixes are fused from the first).
   Align align = Align::kAuto;
-  double baseline_m = 20;             // m of dead-reckoned track before the heading is estimated
-  double min_inlier_fraction = 0.6;   // of the fixes so far the heading must explain (multipath: wait for more)
+  double baseline_m = 20;            // m of dead-reckoned track before the heading is estimated
+  double min_inlier_fraction = 0.6;  // of the fixes so far the heading must explain (multipath: wait for more)
   /// The filter (whose gate refuses fixes, unlike the smoother's robust kernel): after this many consecutive gated
   /// fixes the estimate has left them (its heading drifted, or the fixes jumped) and would never take one again, so the
   /// heading and position are estimated anew from the next fixes; 0: never.  Not with align kNever.

@@ -48,7 +48,8 @@ std::optional<PlanarAlignment> GnssHeadingAlignment::add(const Eigen::Vector2d& 
                                                          const Eigen::Matrix2d& covariance) {
   if (found_) return found_;
   if (!track.allFinite() || !fix.allFinite() || !covariance.allFinite()) return std::nullopt;
-  const double fix_variance = std::max(0.0, Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(covariance).eigenvalues().mean());
+  const double fix_variance =
+      std::max(0.0, Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(covariance).eigenvalues().mean());
   pairs_.push_back({track, fix, 1.0 / (fix_variance + o_.track_sigma * o_.track_sigma)});
   while (pairs_.size() > static_cast<size_t>(o_.max_fixes)) pairs_.pop_front();
   found_ = estimate();

@@ -45,13 +45,13 @@ void check_options(const GnssHeadingOptions& o);
 
 /// enu = Rz(yaw) track + translation, with its first-order uncertainty.
 struct PlanarAlignment {
-  double yaw = 0;                                       // rad, counter-clockwise (about Up)
-  Eigen::Vector2d translation = Eigen::Vector2d::Zero();  // m
-  double yaw_sigma = 0;                                 // rad
+  double yaw = 0;                                            // rad, counter-clockwise (about Up)
+  Eigen::Vector2d translation = Eigen::Vector2d::Zero();     // m
+  double yaw_sigma = 0;                                      // rad
   Eigen::Vector2d track_centroid = Eigen::Vector2d::Zero();  // m, the weighted centroid of the inliers' track
-  double centroid_variance = 0;                         // m^2 per axis, of the aligned centroid
+  double centroid_variance = 0;                              // m^2 per axis, of the aligned centroid
   int inliers = 0, points = 0;
-  double rms = 0;                                       // m, the inliers' residuals
+  double rms = 0;  // m, the inliers' residuals
 
   Eigen::Matrix2d rotation() const;
   /// A track point in ENU.

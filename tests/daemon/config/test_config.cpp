@@ -104,9 +104,10 @@ TEST_CASE("engine.inertial.gnss_heading: its keys reach the config, a bad value 
   const auto none = parse_daemon_config("", "t").engine.inertial.gnss_heading;
   CHECK(none.align == Align::kAuto);
   CHECK(none.baseline_m == 20);
-  const auto set = parse_daemon_config("engine:\n  inertial:\n    gnss_heading:\n      align: always\n"
-                                       "      baseline_m: 35\n      min_inlier_fraction: 0.8\n      reacquire_after: 0\n",
-                                       "t")
+  const auto set = parse_daemon_config(
+                       "engine:\n  inertial:\n    gnss_heading:\n      align: always\n"
+                       "      baseline_m: 35\n      min_inlier_fraction: 0.8\n      reacquire_after: 0\n",
+                       "t")
                        .engine.inertial.gnss_heading;
   CHECK(set.align == Align::kAlways);
   CHECK(set.baseline_m == 35);

@@ -37,9 +37,7 @@ std::vector<Eigen::Vector2d> track(int points) {
   return out;
 }
 
-Eigen::Vector2d rotated(double yaw, const Eigen::Vector2d& p) {
-  return Eigen::Rotation2Dd(yaw) * p;
-}
+Eigen::Vector2d rotated(double yaw, const Eigen::Vector2d& p) { return Eigen::Rotation2Dd(yaw) * p; }
 
 double wrapped(double a) { return std::remainder(a, 2 * std::numbers::pi); }
 
@@ -67,11 +65,11 @@ TEST_CASE("gnss heading: a rotated, shifted track with noise and one early outli
     CAPTURE(deg);
     const auto [a, used] = run(deg * kDeg, 1.0, 2, 11);
     REQUIRE(a.has_value());
-    CHECK(used >= 21);                                        // not before the 20 m baseline
+    CHECK(used >= 21);  // not before the 20 m baseline
     CHECK(std::abs(wrapped(a->yaw - deg * kDeg)) < 3 * a->yaw_sigma);
     CHECK(std::abs(wrapped(a->yaw - deg * kDeg)) < 8 * kDeg);
     CHECK(a->yaw_sigma < 5 * kDeg);
-    CHECK(a->inliers == a->points - 1);                        // the outlier is out of the consensus
+    CHECK(a->inliers == a->points - 1);  // the outlier is out of the consensus
     // The aligned track follows the true fixes (without noise) within the stated covariance.
     const Eigen::Vector2d p = track(60)[static_cast<size_t>(used - 1)];
     const Eigen::Vector2d e = a->apply(p) - (rotated(deg * kDeg, p) + Eigen::Vector2d(-120, 45));
@@ -126,7 +124,8 @@ TEST_CASE("gnss heading: the least-squares fit minimizes the weighted residuals 
   std::mt19937 rng(9);
   std::normal_distribution<double> n(0, 1.5);
   std::deque<GnssHeadingAlignment::Pair> pairs;
-  for (const auto& p : track(50)) pairs.push_back({p, rotated(-2.0, p) + Eigen::Vector2d(n(rng), 3 + n(rng)), 1.0 + (p.x() > 20)});
+  for (const auto& p : track(50))
+    pairs.push_back({p, rotated(-2.0, p) + Eigen::Vector2d(n(rng), 3 + n(rng)), 1.0 + (p.x() > 20)});
   const std::vector<bool> all(pairs.size(), true);
   const auto a = GnssHeadingAlignment::fit(pairs, all);
   REQUIRE(a.has_value());
