@@ -65,8 +65,6 @@ inline constexpr size_t kMaxThinnedPerItem = 1024;
 /// The contributions of one FLEET message, and the ranges of one FLEET_CONTROL message, at most.
 inline constexpr size_t kMaxItemsPerMessage = 1024;
 inline constexpr size_t kMaxRangesPerMessage = 1024;
-/// A body or daemon name's length at most (as the other inputs' names).
-inline constexpr size_t kMaxNameLength = 256;
 
 /// The encoded size of one contribution as fleet_item_t (bytes), and of a FLEET message's fields around its
 /// contributions (the fingerprint included); the codec's tests check both against lcm-gen's encoder.

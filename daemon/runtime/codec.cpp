@@ -72,10 +72,6 @@ Eigen::Matrix<double, N, N> check_covariance(const double* v, const std::string&
 const std::vector<int> kAll3{0, 1, 2};
 const std::vector<int> kPlanar3{0, 1};
 
-void check_name(const std::string& s, const std::string& field) {
-  if (s.size() > 256) fail("invalid", field + ": longer than 256 characters");
-}
-
 template <class Msg>
 Decoded decode_as(const void* data, size_t size, MessageOrigin* origin) {
   Msg msg;

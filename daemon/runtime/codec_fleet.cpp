@@ -21,13 +21,6 @@ namespace {
 
 constexpr int64_t kMaxSeq = int64_t{1} << 62;  // as the exchange: numbers far from overflow
 
-void check_fleet_name(const std::string& s, const std::string& field, bool may_be_empty = false) {
-  if (s.empty() && !may_be_empty) fail("invalid", field + ": empty");
-  if (s.size() > engine::fleet::kMaxNameLength) fail("invalid", field + ": longer than 256 characters");
-  for (unsigned char c : s)
-    if (c < 0x20 || c == 0x7f) fail("invalid", field + ": a control character");
-}
-
 SE3 check_pose(const double p[3], const double q[4], const std::string& field) {
   check_finite(p, 3, field + ".position");
   check_finite(q, 4, field + ".orientation");
@@ -133,7 +126,7 @@ void check_counts(const sextant::fleet_item_t& it, const std::string& field) {
   const bool other = it.kind == sextant::fleet_item_t::BODY_SIGHTING_HALF ||
                      it.kind == sextant::fleet_item_t::BODY_SIGHTING || it.kind == sextant::fleet_item_t::BODY_LOOP ||
                      it.kind == sextant::fleet_item_t::BODY_LOOP_HALF || it.kind == sextant::fleet_item_t::FRAME_JOIN;
-  check_fleet_name(it.other, field + ".other", !other);
+  check_name(it.other, field + ".other", !other);
   if (!other && !it.other.empty()) fail("invalid", field + ".other: set on a kind without another body");
 }
 
@@ -233,8 +226,8 @@ engine::fleet::What item_of(const sextant::fleet_item_t& it, const std::string& 
 
 Decoded to_event(const sextant::fleet_contribution_t& m) {
   return guarded([&]() -> Decoded {
-    check_fleet_name(m.sender, "fleet_contribution_t.sender");
-    check_fleet_name(m.body, "fleet_contribution_t.body");
+    check_name(m.sender, "fleet_contribution_t.sender", false);
+    check_name(m.body, "fleet_contribution_t.body", false);
     const auto n = static_cast<int64_t>(m.num_contributions);
     if (n < 1 || n > static_cast<int64_t>(engine::fleet::kMaxItemsPerMessage) ||
         static_cast<int64_t>(m.contributions.size()) != n)
@@ -258,10 +251,10 @@ Decoded to_event(const sextant::fleet_contribution_t& m) {
 Decoded to_event(const sextant::fleet_control_t& m) {
   return guarded([&]() -> Decoded {
     using C = sextant::fleet_control_t;
-    check_fleet_name(m.sender, "fleet_control_t.sender");
+    check_name(m.sender, "fleet_control_t.sender", false);
     if (m.kind != C::HEARTBEAT && m.kind != C::REPAIR)
       fail("invalid", "fleet_control_t.kind: unknown (" + std::to_string(m.kind) + ")");
-    check_fleet_name(m.daemon, "fleet_control_t.daemon", m.kind == C::HEARTBEAT);
+    check_name(m.daemon, "fleet_control_t.daemon", m.kind == C::HEARTBEAT);
     if (m.kind == C::HEARTBEAT && !m.daemon.empty()) fail("invalid", "fleet_control_t.daemon: set on a heartbeat");
     if (m.num_streams < 0 || m.num_streams > static_cast<int>(engine::fleet::kMaxRangesPerMessage) ||
         static_cast<int>(m.streams.size()) != m.num_streams)
@@ -274,7 +267,7 @@ Decoded to_event(const sextant::fleet_control_t& m) {
     for (size_t i = 0; i < m.streams.size(); ++i) {
       const auto& r = m.streams[i];
       const std::string f = "fleet_control_t.streams[" + std::to_string(i) + "]";
-      check_fleet_name(r.body, f + ".body");
+      check_name(r.body, f + ".body", false);
       const int64_t lo = m.kind == C::HEARTBEAT ? 0 : 1;
       if (r.first < lo || r.last < r.first || r.last > kMaxSeq)
         fail("invalid",

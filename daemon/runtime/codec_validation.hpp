@@ -5,6 +5,7 @@
 #include "daemon/runtime/codec.hpp"
 
 #include <cmath>
+#include <cstddef>
 #include <exception>
 #include <sstream>
 #include <string>
@@ -28,6 +29,18 @@ inline void check_finite(const double* v, int n, const std::string& field) {
       s << ": not finite (" << v[i] << ")";
       fail("non_finite", s.str());
     }
+}
+
+/// A name's length at most (a body, a sender, a frame, a daemon), characters.
+inline constexpr size_t kMaxNameLength = 256;
+
+/// Refuses (invalid) a name longer than kMaxNameLength or holding a control character (names reach logs, channel
+/// and topic names), and an empty one unless `may_be_empty`.
+inline void check_name(const std::string& s, const std::string& field, bool may_be_empty = true) {
+  if (s.empty() && !may_be_empty) fail("invalid", field + ": empty");
+  if (s.size() > kMaxNameLength) fail("invalid", field + ": longer than 256 characters");
+  for (unsigned char c : s)
+    if (c < 0x20 || c == 0x7f) fail("invalid", field + ": a control character");
 }
 
 /// f(), or the Rejection of the refusal it threw.

@@ -254,6 +254,12 @@ bool SlamGraph::apply(const GraphContribution& c, SlamListener& listener) {
 int SlamGraph::apply_all(const std::vector<GraphContribution>& contributions, SlamListener& listener) {
   int applied = 0;
   deferred_.active = contributions.size() > 1;
+  // Whatever happens (a contribution that throws is the stage's to recover from), later calls solve at once again;
+  // the updates owed are the smoother's pending work, which its next update does.
+  struct EndOfBatch {
+    Deferred& d;
+    ~EndOfBatch() { d = Deferred{}; }
+  } end_of_batch{deferred_};
   for (const GraphContribution& c : contributions) {
     // Their gates and the placement's classification read the estimate: solved first.
     const bool reads_estimate = std::holds_alternative<LoopContribution>(c.what) ||
@@ -263,7 +269,6 @@ int SlamGraph::apply_all(const std::vector<GraphContribution>& contributions, Sl
     applied += apply(c, listener) ? 1 : 0;
   }
   if (deferred_.active) run_deferred(listener);
-  deferred_.active = false;
   return applied;
 }
 

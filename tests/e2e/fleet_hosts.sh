@@ -2,7 +2,8 @@
 # A fleet of daemons across hosts: three test hosts (network namespaces on one bridge), one robot each; each host's
 # sextantd is fed only its own robot's sensors (a simulated planar fleet split per robot, channels prefixed
 # ROBOTn_) and exchanges graph contributions with the others over LCM (FLEET, FLEET_CONTROL).  Every host drops 10 %
-# of the datagrams it receives, and host 3's link is cut for 8 s in the middle of the run.  After the run, every
+# of the datagrams it receives, host 2 (its daemon and its robot) starts 3 s after the others and takes their history
+# by repair, and host 3's link is cut for 8 s in the middle of the run.  After the run, every
 # daemon's view of every robot (its TRAJECTORY) must be the single daemon's (`sextant replay` of the whole fleet)
 # within 1 cm RMS with no keyframe missing, all in one map frame.
 set -euo pipefail
@@ -50,22 +51,23 @@ source "$e2e/fleet_lab.bash"
 trap 'kill \$(jobs -p) 2> /dev/null || true' EXIT
 lab_init
 for n in 1 2 3; do lab_host \$n; lab_loss \$n 10; done
-pids=()
-for n in 1 2 3; do
+start_host() {  # its logger, its daemon (waited for), then its robot's log
+  local n=\$1
   in_host \$n lcm-logger -f "$work/bus\$n.lcm" --channel="ROBOT\${n}_.*" > /dev/null 2>&1 &
   loggers[\$n]=\$!
   in_host \$n "$SEXTANT_BIN/sextantd" --config "$work/host\$n.yaml" > "$work/daemon\$n.log" 2>&1 &
   daemons[\$n]=\$!
-done
-for n in 1 2 3; do
   until grep -q "running on" "$work/daemon\$n.log" 2> /dev/null; do
     kill -0 \${daemons[\$n]} || { cat "$work/daemon\$n.log"; exit 1; }
     sleep 0.1
   done
-done
-sleep 0.3
-for n in 1 2 3; do in_host \$n lcm-logplayer -s 4 "$work/robot\$n.lcm" > /dev/null & players[\$n]=\$!; done
-sleep 4; lab_cut 3; sleep 8; lab_heal 3
+  sleep 0.3
+  in_host \$n lcm-logplayer -s 4 "$work/robot\$n.lcm" > /dev/null &
+  players[\$n]=\$!
+}
+start_host 1; start_host 3
+sleep 3; start_host 2  # robot 2 joins late: its daemon takes the others' history by repair
+sleep 1; lab_cut 3; sleep 8; lab_heal 3
 for n in 1 2 3; do wait \${players[\$n]}; done
 sleep 10  # repairs after the heal and the last heartbeats
 rc=0

@@ -142,6 +142,23 @@ TEST_CASE("non-finite fields are rejected with the field's name") {
   CHECK(rejection(runtime::to_event(m2)).message.find("odometry_t.covariance[7]") == 0);
 }
 
+TEST_CASE("names longer than 256 characters or holding a control character are rejected with the field's name") {
+  for (const std::string& name :
+       {std::string(257, 'r'), std::string("robot\n1"), std::string("a\0b", 3), std::string("robot\x7f")}) {
+    CAPTURE(name.size());
+    auto m = runtime::to_message(sample_odometry(), "t", 0);
+    m.source = name;
+    const auto& r = rejection(runtime::to_event(m));
+    CHECK(r.reason == "invalid");
+    CHECK(r.message.rfind("odometry_t.source: ", 0) == 0);
+  }
+  auto ok = runtime::to_message(sample_odometry(), "t", 0);
+  ok.source = std::string(256, 'r') + "";
+  CHECK(std::holds_alternative<engine::Event>(runtime::to_event(ok)));
+  ok.source = "robot 1 (Ünïcode)";  // spaces and UTF-8 are names
+  CHECK(std::holds_alternative<engine::Event>(runtime::to_event(ok)));
+}
+
 TEST_CASE("non-positive-definite and asymmetric covariances are rejected") {
   auto m = runtime::to_message(sample_odometry(), "t", 0);
   for (double& v : m.covariance) v = 0;
