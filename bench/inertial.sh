@@ -6,16 +6,18 @@
 #  2. robot_localization's bag 1 with its GNSS fused (bench/inertial/bag1_gnss.yaml): the filter's and the smoother's
 #     horizontal RMS against the fixes, and with the fixes of 60 s in the middle removed, the distance to the first fix
 #     after the gap (bench/inertial/bag1_gnss_eval.py).
-# Usage: bench/inertial.sh BUILD OUT   (BUILD configured with -DSEXTANT_BENCH=ON; data from $SEXTANT_SHARED_DIR or
-# /work/shared).  Writes OUT/simulated.md and OUT/bag1_gnss.txt.
+# Usage: bench/inertial.sh BUILD OUT [PART]   (BUILD configured with -DSEXTANT_BENCH=ON; data from $SEXTANT_SHARED_DIR
+# or /work/shared; PART 1 or 2 runs that part only).  Writes OUT/simulated.md and OUT/bag1_gnss.txt.
 set -euo pipefail
 build=${1:?usage: bench/inertial.sh BUILD OUT}
 out=${2:?usage: bench/inertial.sh BUILD OUT}
 src=$(cd "$(dirname "$0")/.." && pwd)
 shared=${SEXTANT_SHARED_DIR:-/work/shared}
+part=${3:-all}
 mkdir -p "$out"
 
-"$build/bin/inertial_comparison" 5 1200 1 | tee "$out/simulated.md"
+if [ "$part" != 2 ]; then "$build/bin/inertial_comparison" 5 1200 1 | tee "$out/simulated.md"; fi
+[ "$part" != 1 ] || exit 0
 
 bag="$shared/data/inertial/robot_localization_bag1/test1.bag"
 [ -f "$bag" ] || { echo "SKIP bag 1: $bag not found"; exit 0; }

@@ -41,6 +41,18 @@ double median(std::vector<double> v) {
   return v[v.size() / 2];
 }
 
+// The filter's pose NEES against the truth (InertialComparison::filter_nees).
+double pose_nees(const inertial::ErrorStateEkf& f, const engine::Pose& truth) {
+  using E = inertial::ErrorStateEkf;
+  const Eigen::AngleAxisd rotation(f.state().q.conjugate() * truth.orientation.normalized());
+  Eigen::Matrix<double, 6, 1> e;
+  e << truth.position - f.state().p, rotation.angle() * rotation.axis();
+  Eigen::Matrix<double, 6, 6> P;
+  P << f.covariance().block<3, 3>(E::kP, E::kP), f.covariance().block<3, 3>(E::kP, E::kTheta),
+      f.covariance().block<3, 3>(E::kTheta, E::kP), f.covariance().block<3, 3>(E::kTheta, E::kTheta);
+  return e.dot(P.ldlt().solve(e));
+}
+
 // Position errors of one estimate at the odometry times: RMS overall and in outages, drift over each outage.
 struct Scorer {
   double sq = 0, sq_outage = 0, worst_with_gnss = 0, drift = 0;
@@ -156,6 +168,7 @@ struct Runs {
   Scorer odometry_score, filter_score, smoother_score;
   double filter_seconds = 0, smoother_seconds = 0;
   std::vector<double> keyframe_cost;
+  std::vector<double> filter_nees;
 
   void start(const odometry_t& m);
   void on_odometry(const odometry_t& m);
@@ -207,6 +220,7 @@ void Runs::on_odometry(const odometry_t& m) {
   const Eigen::Vector3d p = truth.at(m.utime).position;
   odometry_score.add((truth_start * first_odometry->inverse() * pose).translation() - p, outage, settled);
   filter_score.add(filter->f.state().p - p, outage, settled);
+  filter_nees.push_back(pose_nees(filter->f, truth.at(m.utime)));
   smoother_score.add(smoother->current().p - p, outage, settled);
 }
 
@@ -261,6 +275,7 @@ InertialComparison compare_inertial(const InertialComparisonOptions& options) {
   c.gnss_outliers = summary.gnss_outliers;
   c.filter_gated = runs.filter->gated;
   c.smoother_down_weighted = runs.smoother->counters().gnss_down_weighted;
+  c.filter_nees = std::move(runs.filter_nees);
   c.filter_seconds = runs.filter_seconds;
   c.smoother_seconds = runs.smoother_seconds;
   const auto& k = runs.keyframe_cost;

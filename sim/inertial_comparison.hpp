@@ -9,6 +9,7 @@
 #include "sim/simulator.hpp"
 
 #include <cstdint>
+#include <vector>
 
 namespace sextant::tools {
 
@@ -36,6 +37,9 @@ struct InertialComparison {
   // The smoother's cost per keyframe (wall clock, s): median over the first and over the last 200 keyframes.
   double keyframe_cost_first = 0, keyframe_cost_last = 0;
   int64_t keyframes = 0;
+  /// The filter's pose NEES at each scored odometry message: e^T P^-1 e over e = [p_true - p; Log(R^T R_true)] and the
+  /// filter's covariance of [position, rotation error] (6 dof; chi-square(6) when the filter is consistent).
+  std::vector<double> filter_nees;
 };
 
 /// Throws std::runtime_error when the simulation cannot be written (temporary file).

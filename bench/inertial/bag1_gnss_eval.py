@@ -4,7 +4,8 @@
   bag1_gnss_eval.py LOG GAP_START GAP_END NAME=TUM [NAME=TUM ...]
 
 Prints per estimate the horizontal RMS against the fixes outside the gap (at each fix's time, the pose nearest in
-time), and the horizontal distance at the gap's end between the estimate and the first fix after it (the drift
+time), the same from 30 s on (once an estimator that finds its heading from the first fixes has it: before, its
+track runs on the start's heading), and the horizontal distance at the gap's end between the estimate and the first fix after it (the drift
 accumulated without GNSS).  The fixes are turned into East-North-Up at the first fix with WGS-84 (ECEF, then the
 tangent plane): the daemon's datum when none is configured.
 """
@@ -16,6 +17,7 @@ import lcmlog
 from sextant import gnss_t
 
 A, F = 6378137.0, 1 / 298.257223563
+HEADING_KNOWN_S = 30.0
 E2 = F * (2 - F)
 
 
@@ -56,17 +58,19 @@ def main():
     for spec in sys.argv[4:]:
         name, path = spec.split("=", 1)
         times, poses = read_tum(path)
-        sq, n = 0.0, 0
+        sq, n, sq_late, n_late = 0.0, 0, 0.0, 0
         for t, z in points:
             if gap_start <= t - t0 < gap_end:
                 continue
             p = poses[nearest(times, t)]
-            sq += (p[0] - z[0]) ** 2 + (p[1] - z[1]) ** 2
-            n += 1
+            e2 = (p[0] - z[0]) ** 2 + (p[1] - z[1]) ** 2
+            sq, n = sq + e2, n + 1
+            if t - t0 >= HEADING_KNOWN_S:
+                sq_late, n_late = sq_late + e2, n_late + 1
         p = poses[nearest(times, after_gap[0])]
         drift = math.hypot(p[0] - after_gap[1][0], p[1] - after_gap[1][1])
-        print(f"{name}: horizontal RMS against {n} fixes {math.sqrt(sq / n):.3f} m; at the gap's end "
-              f"({after_gap[0] - t0:.1f} s) {drift:.3f} m from the fix")
+        print(f"{name}: horizontal RMS against {n} fixes {math.sqrt(sq / n):.3f} m ({math.sqrt(sq_late / n_late):.3f} m "
+              f"from {HEADING_KNOWN_S:.0f} s); at the gap's end ({after_gap[0] - t0:.1f} s) {drift:.3f} m from the fix")
 
 
 if __name__ == "__main__":

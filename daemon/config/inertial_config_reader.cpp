@@ -66,6 +66,17 @@ void read_graph(Section& s, engine::InertialGraphConfig& c) {
   s.reject_unknown_keys();
 }
 
+void read_gnss_heading(Section& s, engine::GnssHeadingConfig& c) {
+  using Align = engine::GnssHeadingConfig::Align;
+  std::string align = c.align == Align::kAlways ? "always" : c.align == Align::kNever ? "never" : "auto";
+  s.get("align", align, one_of({"auto", "always", "never"}));
+  c.align = align == "always" ? Align::kAlways : align == "never" ? Align::kNever : Align::kAuto;
+  s.get("baseline_m", c.baseline_m, in_range(1, 1e4));
+  s.get("min_inlier_fraction", c.min_inlier_fraction, in_range(0.01, 1));
+  s.get("reacquire_after", c.reacquire_after, int_in_range(0, 100000));
+  s.reject_unknown_keys();
+}
+
 }  // namespace
 
 void read_stage_config(Section& s, engine::InertialConfig& c) {
@@ -94,6 +105,8 @@ void read_stage_config(Section& s, engine::InertialConfig& c) {
             return "latitude in [-90, 90], longitude in [-180, 180], altitude within 100 km";
           return std::nullopt;
         }));
+  Section heading = s.child("gnss_heading");
+  read_gnss_heading(heading, c.gnss_heading);
   Section graph = s.child("graph");
   read_graph(graph, c.graph);
   s.reject_unknown_keys();

@@ -1,6 +1,9 @@
 #include "daemon/engine/inertial_graph_stage.hpp"
 
 #include "daemon/engine/pose_covariance.hpp"
+#include "estimators/inertial/gnss_realign.hpp"
+
+#include <Eigen/Eigenvalues>
 
 #include <cmath>
 
@@ -82,6 +85,7 @@ void InertialGraphStage::start(Body& b, const Odometry& o) {
             .toRotationMatrix();
   if (o.twist) x.v = x.R * o.twist->linear;
   b.t0 = o.utime;
+  b.yaw_known = yaw_known_in_enu(config_, s);
   b.smoother.emplace(options_);
   b.smoother->initialize(0, x, {}, SE3(SO3::from_unit_quaternion(o.pose.orientation), o.pose.position));
   ++started_;
@@ -121,9 +125,14 @@ void InertialGraphStage::on_gnss(const GnssFix& g) {
   const Eigen::Matrix3d to_plane = b.plane->enu_at(fix);
   const Eigen::Vector3d z = b.plane->to_enu(fix);
   const double t = seconds(b, g.utime);
-  if (!b.anchored) return anchor(b, t, z, m->lever_arm);
   Eigen::Matrix3d R =
       to_plane * stated_or_default(g.position_covariance, config_.default_gnss_variance) * to_plane.transpose();
+  if (!b.anchored) {
+    anchor(b, t, z, m->lever_arm);
+    if (!b.anchored || b.yaw_known) return;
+    b.heading.emplace(gnss_heading_options(config_));
+  }
+  if (b.heading) return wait_for_heading(b, t, z, R, m->lever_arm);
   for (int i = 0; i < 3; ++i)  // gnss_position: a component not selected carries no information
     if (!config_.gnss_position[static_cast<size_t>(i)]) R.row(i).setZero(), R.col(i).setZero(), R(i, i) = 1e8;
   b.smoother->add_gnss(t, z, R, m->lever_arm);
@@ -137,6 +146,21 @@ void InertialGraphStage::anchor(Body& b, double t, const Eigen::Vector3d& antenn
   b.smoother->initialize(t, x, bias);
   b.anchored = true;
   ++anchored_;
+}
+
+void InertialGraphStage::wait_for_heading(Body& b, double t, const Eigen::Vector3d& antenna, const Eigen::Matrix3d& R,
+                                          const Eigen::Vector3d& lever) {
+  const inertial::NavState x = b.smoother->current();
+  const Eigen::Vector3d track = x.p + x.v * (t - b.smoother->current_time()) + x.R * lever;
+  const auto a = b.heading->add(track.head<2>(), antenna.head<2>(), R.topLeftCorner<2, 2>());
+  if (!a) return;
+  const double position_sigma = std::sqrt(
+      Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(a->covariance_at(x.p.head<2>())).eigenvalues().maxCoeff());
+  b.smoother->initialize(b.smoother->current_time(), inertial::realigned(*a, x), b.smoother->newest().bias,
+                         std::nullopt,
+                         inertial::InertialSmoother::PriorSigmas{std::max(position_sigma, 0.1), a->yaw_sigma});
+  b.heading.reset();
+  ++heading_aligned_;
 }
 
 void InertialGraphStage::refresh(Body& b) {
@@ -170,8 +194,9 @@ void InertialGraphStage::publish(const std::string& source, Body& b, int64_t uti
 }
 
 Counters InertialGraphStage::counters() const {
-  int64_t keyframes = 0, links = 0, down_weighted = 0, dropped = 0, failed = 0, tilt = 0, yaw = 0;
+  int64_t keyframes = 0, links = 0, down_weighted = 0, dropped = 0, failed = 0, tilt = 0, yaw = 0, waiting = 0;
   for (const auto& [name, b] : bodies_) {
+    waiting += b.heading ? 1 : 0;
     if (!b.smoother) continue;
     const auto& c = b.smoother->counters();
     keyframes += c.keyframes, links += c.odometry_links, down_weighted += c.gnss_down_weighted, dropped += c.dropped,
@@ -181,6 +206,8 @@ Counters InertialGraphStage::counters() const {
   return {{"bodies", static_cast<int64_t>(bodies_.size())},
           {"started", started_},
           {"gnss_anchored", anchored_},
+          {"gnss_heading_waiting", waiting},
+          {"gnss_heading_aligned", heading_aligned_},
           {"unmounted", unmounted_},
           {"keyframes", keyframes},
           {"odometry_links", links},

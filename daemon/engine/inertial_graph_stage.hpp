@@ -8,7 +8,10 @@
 // A body starts at its first odometry message after an IMU sample with rates and acceleration: orientation as the
 // filter's (the unit's own, or roll and pitch from gravity with yaw 0), velocity the odometry's twist when it has
 // one, position the origin.  Its first GNSS fix places it: the smoother restarts at its current state moved to the fix
-// (less the lever arm), as the filter's anchor.  A planar odometry source's increments constrain x, y and yaw only
+// (less the lever arm), as the filter's anchor.  A body whose start yaw is not ENU (engine.inertial.gnss_heading, as
+// the filter's) adds no fix to the smoother until its track against the fixes gives the heading
+// (estimators/inertial/gnss_heading.hpp); the smoother then restarts in ENU with the alignment's position and yaw
+// sigmas as its prior (gnss_realign.hpp).  Status: gnss_heading_waiting, gnss_heading_aligned.  A planar odometry source's increments constrain x, y and yaw only
 // (z as x and y: a ground robot does not move along its own z axis; roll and pitch 0.1 rad per increment); a GNSS component that engine.inertial.gnss_position does
 // not select gets a variance of 1e8 m^2 (no information).
 // Outputs at most publish_rate_hz per body (data time): the state predicted to the last IMU sample, with the newest
@@ -49,6 +52,8 @@ class InertialGraphStage final : public Stage {
     Matrix6 last_odometry_covariance = Matrix6::Zero();
     std::optional<geodesy::LocalTangentPlane> plane;
     bool anchored = false;
+    bool yaw_known = true;                                  // the start's yaw is ENU
+    std::optional<inertial::GnssHeadingAlignment> heading;  // from the first fix until the heading is known
     Matrix6 covariance = Matrix6::Identity();  // the newest keyframe's, over [position (world), rotation (body)]
     inertial::Observability observability;
   };
@@ -60,6 +65,9 @@ class InertialGraphStage final : public Stage {
   void start(Body& b, const Odometry& o);
   /// The first fix: the smoother restarts at its current state with the body under the antenna.
   void anchor(Body& b, double t, const Eigen::Vector3d& antenna, const Eigen::Vector3d& lever);
+  /// A fix at t while the heading is not known (the filter stage's wait_for_heading, for the smoother).
+  void wait_for_heading(Body& b, double t, const Eigen::Vector3d& antenna, const Eigen::Matrix3d& R,
+                        const Eigen::Vector3d& lever);
   /// After a keyframe: the newest pose's covariance and observability.
   void refresh(Body& b);
   void publish(const std::string& source, Body& b, int64_t utime, const Emit& emit);
@@ -68,7 +76,7 @@ class InertialGraphStage final : public Stage {
   inertial::InertialSmootherOptions options_;
   SensorMountings mountings_;
   std::map<std::string, Body> bodies_;
-  int64_t unmounted_ = 0, started_ = 0, anchored_ = 0, published_ = 0;
+  int64_t unmounted_ = 0, started_ = 0, anchored_ = 0, published_ = 0, heading_aligned_ = 0;
 };
 
 }  // namespace sextant::engine

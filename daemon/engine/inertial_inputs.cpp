@@ -20,6 +20,25 @@ Eigen::Matrix3d stated_or_default(const Eigen::Matrix3d& stated, double variance
   return stated.isZero(0) ? Eigen::Matrix3d(Eigen::Matrix3d::Identity() * variance) : stated;
 }
 
+bool yaw_known_in_enu(const InertialConfig& c, const ImuSample& s) {
+  switch (c.gnss_heading.align) {
+    case GnssHeadingConfig::Align::kAlways:
+      return false;
+    case GnssHeadingConfig::Align::kNever:
+      return true;
+    case GnssHeadingConfig::Align::kAuto:
+      break;
+  }
+  return s.orientation && s.orientation_has_yaw && c.imu_orientation[2];
+}
+
+inertial::GnssHeadingOptions gnss_heading_options(const InertialConfig& c) {
+  inertial::GnssHeadingOptions o;
+  o.baseline_m = c.gnss_heading.baseline_m;
+  o.min_inlier_fraction = c.gnss_heading.min_inlier_fraction;
+  return o;
+}
+
 Eigen::Quaterniond initial_orientation(const ImuSample& s, const inertial::SensorMounting& m,
                                        const inertial::BodyImuSample& body) {
   if (s.orientation) return Eigen::Quaterniond(s.orientation->toRotationMatrix() * m.rotation.transpose()).normalized();

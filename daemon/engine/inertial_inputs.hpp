@@ -4,6 +4,7 @@
 // the start.
 #include "daemon/engine/events.hpp"
 #include "daemon/engine/inertial_stage_config.hpp"
+#include "estimators/inertial/gnss_heading.hpp"
 #include "estimators/inertial/sensor_mounting.hpp"
 
 #include <map>
@@ -27,6 +28,13 @@ class SensorMountings {
 
 /// `stated`, or variance * I where the message states none (all zeros).
 Eigen::Matrix3d stated_or_default(const Eigen::Matrix3d& stated, double variance);
+
+/// Whether a body whose filter starts with sample `s` has its yaw in East-North-Up (engine.inertial.gnss_heading.align:
+/// kAuto: the unit states a yaw and imu_orientation fuses it).
+bool yaw_known_in_enu(const InertialConfig& c, const ImuSample& s);
+
+/// The heading alignment's options from engine.inertial.gnss_heading.
+inertial::GnssHeadingOptions gnss_heading_options(const InertialConfig& c);
 
 /// The body's orientation at the start from an IMU sample at mounting m (`body` its sample moved to the body): the
 /// unit's own orientation when it has one, else roll and pitch from gravity in the specific force (f = R^T (a - g)

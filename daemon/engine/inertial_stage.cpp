@@ -1,5 +1,7 @@
 #include "daemon/engine/inertial_stage.hpp"
 
+#include "estimators/inertial/gnss_realign.hpp"
+
 #include <cmath>
 #include <stdexcept>
 
@@ -51,6 +53,7 @@ void InertialStage::start(Body& b, const ImuSample& s, const inertial::SensorMou
   P.diagonal() << Eigen::Vector3d::Constant(1e-9), Eigen::Vector3d::Constant(1e-4), Eigen::Vector3d::Constant(1e-3),
       Eigen::Vector3d::Constant(sa * sa), Eigen::Vector3d::Constant(sg * sg);
   b.t0 = s.utime;
+  b.yaw_known = yaw_known_in_enu(config_, s);
   b.filter = std::make_unique<inertial::LaggedEskf>(options_, config_.history_s);
   b.filter->initialize(0, x, P);
   ++started_;
@@ -122,14 +125,16 @@ void InertialStage::on_gnss(const GnssFix& g) {
   const Eigen::Matrix3d R =
       to_plane * stated_or_default(g.position_covariance, config_.default_gnss_variance) * to_plane.transpose();
   const Eigen::Vector3d lever = m->lever_arm;
+  const double t = seconds(b, g.utime);
   if (first) {
     anchor(b, z, R, lever);
-    return;
+    if (!b.yaw_known) b.heading.emplace(gnss_heading_options(config_));
   }
+  if (b.heading) return wait_for_heading(b, t, z, R, lever);
+  if (first) return;
   const inertial::FieldMask fields = config_.gnss_position;
   const double gate = config_.gnss_gate;
-  const double t = seconds(b, g.utime);
-  count(b.filter->add_measurement(t, [z, R, lever, fields, gate](inertial::ErrorStateEkf& f) {
+  count_fix(b, b.filter->add_measurement(t, [z, R, lever, fields, gate](inertial::ErrorStateEkf& f) {
     return f.update_gnss_position(z, R, lever, fields, gate);
   }));
   if (g.velocity && (config_.gnss_velocity[0] || config_.gnss_velocity[1] || config_.gnss_velocity[2])) {
@@ -157,6 +162,29 @@ void InertialStage::anchor(Body& b, const Eigen::Vector3d& antenna, const Eigen:
   ++anchored_;
 }
 
+void InertialStage::count_fix(Body& b, const filter::UpdateResult& r) {
+  count(r);
+  b.consecutive_gated = r.reason == filter::UpdateReason::kGate ? b.consecutive_gated + 1 : 0;
+  const int limit = config_.gnss_heading.reacquire_after;
+  if (limit == 0 || b.consecutive_gated < limit || config_.gnss_heading.align == GnssHeadingConfig::Align::kNever)
+    return;
+  b.heading.emplace(gnss_heading_options(config_));
+  b.consecutive_gated = 0;
+  ++reacquired_;
+}
+
+void InertialStage::wait_for_heading(Body& b, double t, const Eigen::Vector3d& antenna, const Eigen::Matrix3d& R,
+                                     const Eigen::Vector3d& lever) {
+  const inertial::ErrorStateEkf& f = b.filter->filter();
+  const inertial::EskfState& x = f.state();
+  const Eigen::Vector3d track = x.p + x.v * (t - f.time()) + x.q * lever;
+  const auto a = b.heading->add(track.head<2>(), antenna.head<2>(), R.topLeftCorner<2, 2>());
+  if (!a) return;
+  b.filter->initialize(f.time(), inertial::realigned(*a, x), inertial::realigned_covariance(*a, x, f.covariance()));
+  b.heading.reset();
+  ++heading_aligned_;
+}
+
 void InertialStage::publish(const std::string& source, Body& b, int64_t utime, const Emit& emit) {
   const auto period = static_cast<int64_t>(1e6 / std::max(config_.publish_rate_hz, 1e-6));
   if (b.last_published != 0 && utime - b.last_published < period) return;
@@ -180,10 +208,15 @@ void InertialStage::publish(const std::string& source, Body& b, int64_t utime, c
 }
 
 Counters InertialStage::counters() const {
+  int64_t waiting = 0;
+  for (const auto& [name, b] : bodies_) waiting += b.heading ? 1 : 0;
   return {{"bodies", static_cast<int64_t>(bodies_.size())},
           {"imu_samples", imu_},
           {"started", started_},
           {"gnss_anchored", anchored_},
+          {"gnss_heading_waiting", waiting},
+          {"gnss_heading_aligned", heading_aligned_},
+          {"gnss_heading_reacquired", reacquired_},
           {"unmounted", unmounted_},
           {"before_start", no_filter_yet_},
           {"imu_refused", imu_refused_},

@@ -27,6 +27,23 @@ struct InertialGraphConfig {
   double initial_yaw_sigma = 0.5;     // rad, the start's yaw (0 without a unit's orientation) until GNSS observes it
 };
 
+/// The heading of a body's frame in East-North-Up from its first GNSS fixes (estimators/inertial/gnss_heading.hpp),
+/// engine.inertial.gnss_heading.  While the heading is not known, fixes are not fused: the body dead-reckons in its
+/// own frame (placed at the first fix) until its track spans `baseline_m`; then its state is moved into ENU and the
+/// fixes are gated and fused from there on.
+struct GnssHeadingConfig {
+  enum class Align { kAuto, kAlways, kNever };
+  /// kAuto: when the body's yaw is not ENU already (the IMU's yaw is not fused, or the unit has none); kAlways; kNever
+  /// (the start's yaw is trusted as ENU: fixes are fused from the first).
+  Align align = Align::kAuto;
+  double baseline_m = 20;            // m of dead-reckoned track before the heading is estimated
+  double min_inlier_fraction = 0.6;  // of the fixes so far the heading must explain (multipath: wait for more)
+  /// The filter (whose gate refuses fixes, unlike the smoother's robust kernel): after this many consecutive gated
+  /// fixes the estimate has left them (its heading drifted, or the fixes jumped) and would never take one again, so the
+  /// heading and position are estimated anew from the next fixes; 0: never.  Not with align kNever.
+  int reacquire_after = 10;
+};
+
 struct InertialConfig {
   bool enabled = false;  // the stage runs only for users who say they have an IMU
   std::vector<SensorMountingConfig> mountings;
@@ -52,6 +69,7 @@ struct InertialConfig {
   std::vector<double> datum;
   /// Initial standard deviations of the biases.
   double initial_sigma_gyro_bias = 0.01, initial_sigma_accel_bias = 0.1;
+  GnssHeadingConfig gnss_heading;
   InertialGraphConfig graph;
 };
 

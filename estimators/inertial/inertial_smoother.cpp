@@ -282,8 +282,11 @@ InertialSmoother::~InertialSmoother() = default;
 InertialSmoother::InertialSmoother(InertialSmoother&&) noexcept = default;
 InertialSmoother& InertialSmoother::operator=(InertialSmoother&&) noexcept = default;
 
-void InertialSmoother::initialize(double t, const NavState& x, const ImuBias& b, std::optional<SE3> odometry_pose) {
+void InertialSmoother::initialize(double t, const NavState& x, const ImuBias& b, std::optional<SE3> odometry_pose,
+                                  std::optional<PriorSigmas> sigmas) {
   const InertialSmootherOptions o = s_->o;
+  InertialSmootherOptions prior = o;
+  if (sigmas) prior.initial_position_sigma = sigmas->position, prior.initial_yaw_sigma = sigmas->yaw;
   const InertialSmootherCounters counters = s_->counters;  // they count over restarts
   s_ = std::make_unique<State>(o);
   State& s = *s_;
@@ -294,7 +297,7 @@ void InertialSmoother::initialize(double t, const NavState& x, const ImuBias& b,
   k.odometry = odometry_pose;
   k.vars = keyframe_variables(k.seq, x, b);
   const std::vector<int> slots = {kPose, kVelocity, kGyroBias, kAccelBias};
-  s.prior = {graph::LinearPriorFactor::gaussian(slots, k.vars, initial_information(o, x.R)),
+  s.prior = {graph::LinearPriorFactor::gaussian(slots, k.vars, initial_information(prior, x.R)),
              {{k.seq, kPose}, {k.seq, kVelocity}, {k.seq, kGyroBias}, {k.seq, kAccelBias}}};
   s.prior_point = k.vars;
   s.keyframes.push_back(std::move(k));

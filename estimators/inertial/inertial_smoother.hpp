@@ -98,8 +98,13 @@ class InertialSmoother {
 
   /// The first keyframe at time t with state x and bias b, and the prior of the options' initial sigmas; with
   /// `odometry_pose` (the wheel odometry's pose at t, in its own frame) the next keyframe gets an odometry factor.
-  /// Called again, it starts over (the counters go on).
-  void initialize(double t, const NavState& x, const ImuBias& b = {}, std::optional<SE3> odometry_pose = {});
+  /// Called again, it starts over (the counters go on).  `sigmas`: the prior's position and yaw sigmas instead of
+  /// the options' (a restart where GNSS determined them, gnss_heading.hpp).
+  struct PriorSigmas {
+    double position = 1, yaw = 0.1;  // m, rad
+  };
+  void initialize(double t, const NavState& x, const ImuBias& b = {}, std::optional<SE3> odometry_pose = {},
+                  std::optional<PriorSigmas> sigmas = {});
   bool initialized() const;
 
   /// An IMU sample in the body frame at time t (held until the next: zero-order hold, as the filter).  False when

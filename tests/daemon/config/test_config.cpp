@@ -99,6 +99,29 @@ TEST_CASE("engine.inertial.graph: its keys reach the config, out-of-range values
   CHECK(unknown.find("windw") != std::string::npos);
 }
 
+TEST_CASE("engine.inertial.gnss_heading: its keys reach the config, a bad value names its line") {
+  using Align = sextant::engine::GnssHeadingConfig::Align;
+  const auto none = parse_daemon_config("", "t").engine.inertial.gnss_heading;
+  CHECK(none.align == Align::kAuto);
+  CHECK(none.baseline_m == 20);
+  const auto set = parse_daemon_config(
+                       "engine:\n  inertial:\n    gnss_heading:\n      align: always\n"
+                       "      baseline_m: 35\n      min_inlier_fraction: 0.8\n      reacquire_after: 0\n",
+                       "t")
+                       .engine.inertial.gnss_heading;
+  CHECK(set.align == Align::kAlways);
+  CHECK(set.baseline_m == 35);
+  CHECK(set.min_inlier_fraction == 0.8);
+  CHECK(set.reacquire_after == 0);
+  CHECK(none.reacquire_after == 10);
+  CHECK(parse_daemon_config("engine:\n  inertial:\n    gnss_heading:\n      align: never\n", "t")
+            .engine.inertial.gnss_heading.align == Align::kNever);
+  const std::string bad = error_of("engine:\n  inertial:\n    gnss_heading:\n      align: compass\n");
+  CHECK(bad.find("test.yaml:4:14:") == 0);
+  CHECK(bad.find("compass") != std::string::npos);
+  CHECK(error_of("engine:\n  inertial:\n    gnss_heading:\n      baseline_m: 0\n").find("test.yaml:4:19:") == 0);
+}
+
 TEST_CASE("kinds are parsed once into enums: every spelling maps to its kind, an unknown name names its file:line") {
   using sextant::engine::AssociationSolver;
   using sextant::engine::FilterType;

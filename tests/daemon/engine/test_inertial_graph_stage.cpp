@@ -1,12 +1,16 @@
 // The inertial keyframe smoother stage: a body at rest with wheel odometry and GNSS stays under its antenna, published
 // as "inertial_graph" at the configured rate with a finite positive semi-definite covariance, its tilt observable and
-// its yaw not (nothing moves); a sensor without a mounting is counted; the engine makes the stage only when asked.
+// its yaw not (nothing moves); a sensor without a mounting is counted; the engine makes the stage only when asked; a
+// body driving on a heading it does not know finds it from its first fixes and then follows them.
 #include "daemon/engine/engine.hpp"
 #include "daemon/engine/inertial_graph_stage.hpp"
+#include "daemon/engine/straight_drive.hpp"
 
 #include <doctest/doctest.h>
 
 #include <Eigen/Eigenvalues>
+
+#include <numbers>
 
 using namespace sextant;
 using namespace sextant::engine;
@@ -54,7 +58,9 @@ int64_t counter(const Stage& s, const std::string& name) {
 }  // namespace
 
 TEST_CASE("inertial graph stage: a body at rest stays under its antenna, tilt observable, yaw not") {
-  InertialGraphStage stage(config());
+  InertialConfig c = config();
+  c.gnss_heading.align = GnssHeadingConfig::Align::kNever;  // at rest: the start's yaw is taken as ENU
+  InertialGraphStage stage(c);
   std::vector<FusedPose> out;
   const Emit emit = [&](Output o) { out.push_back(std::get<FusedPose>(o)); };
   GnssFix fix;
@@ -104,4 +110,19 @@ TEST_CASE("inertial graph stage: a sample from a frame without a mounting is cou
   CHECK(has_it(make_stages(c, nullptr)));
   c.inertial.graph.enabled = false;
   CHECK_FALSE(has_it(make_stages(c, nullptr)));
+}
+
+TEST_CASE("inertial graph stage: an unknown heading (160 degrees) is found from the first fixes, then followed") {
+  const test::StraightDrive d(160 * std::numbers::pi / 180, 60);
+  InertialGraphStage stage(config());
+  FusedPose last;
+  const Emit emit = [&](Output o) { last = std::get<FusedPose>(o); };
+  for (const Event& e : d.events) stage.handle(e, emit);
+  CHECK(counter(stage, "gnss_heading_aligned") == 1);
+  CHECK(counter(stage, "gnss_heading_waiting") == 0);
+  CHECK(counter(stage, "failed_solves") == 0);
+  const double t_end = static_cast<double>(last.utime - test::StraightDrive::kT0) * 1e-6;
+  CHECK((last.pose.position - d.body_enu(t_end)).head<2>().norm() < 1.0);
+  const Eigen::Vector3d x = last.pose.orientation * Eigen::Vector3d::UnitX();
+  CHECK(std::abs(std::remainder(std::atan2(x.y(), x.x()) - d.heading, 2 * std::numbers::pi)) < 0.03);
 }

@@ -1,10 +1,15 @@
 // The inertial filter stage: a body at rest stays put with a finite, positive semi-definite covariance, published at
-// the configured rate; a sensor without a mounting is refused and counted; a GNSS fix far from the estimate is gated.
+// the configured rate; a sensor without a mounting is refused and counted; a GNSS fix far from the estimate is gated;
+// a body driving on a heading it does not know finds it from its first fixes and then follows them, where trusting
+// its start yaw has the gate refuse them.
 #include "daemon/engine/inertial_stage.hpp"
+#include "daemon/engine/straight_drive.hpp"
 
 #include <doctest/doctest.h>
 
 #include <Eigen/Eigenvalues>
+
+#include <numbers>
 
 using namespace sextant;
 using namespace sextant::engine;
@@ -66,7 +71,9 @@ TEST_CASE("inertial stage: a sample from a frame without a mounting is refused a
 }
 
 TEST_CASE("inertial stage: GNSS fixes at the datum hold the body, a fix 200 m off is gated, not fused") {
-  InertialStage stage(config());
+  InertialConfig c = config();
+  c.gnss_heading.align = GnssHeadingConfig::Align::kNever;  // at rest: the start's yaw is taken as ENU
+  InertialStage stage(c);
   std::vector<FusedPose> out;
   const Emit emit = [&](Output o) { out.push_back(std::get<FusedPose>(o)); };
   GnssFix fix;
@@ -93,4 +100,65 @@ TEST_CASE("inertial stage: GNSS fixes at the datum hold the body, a fix 200 m of
   stage.handle(at_rest(kT0 + 5'000 * 2002), emit);
   CHECK(counter(stage, "updates_gated") == 1);
   CHECK((out.back().pose.position.norm() - before) < 0.01);
+}
+
+namespace {
+
+struct DriveResult {
+  FusedPose last;
+  int64_t gated, aligned, waiting, reacquired;
+};
+
+DriveResult drive(const test::StraightDrive& d, GnssHeadingConfig::Align align) {
+  InertialConfig c = config();
+  c.gnss_heading.align = align;
+  InertialStage stage(c);
+  FusedPose last;
+  const Emit emit = [&](Output o) { last = std::get<FusedPose>(o); };
+  for (const Event& e : d.events) stage.handle(e, emit);
+  return {last, counter(stage, "updates_gated"), counter(stage, "gnss_heading_aligned"),
+          counter(stage, "gnss_heading_waiting"), counter(stage, "gnss_heading_reacquired")};
+}
+
+double yaw_of(const Eigen::Quaterniond& q) {
+  const Eigen::Vector3d x = q * Eigen::Vector3d::UnitX();
+  return std::atan2(x.y(), x.x());
+}
+
+}  // namespace
+
+TEST_CASE("inertial stage: an unknown heading (160, -170, 90 degrees) is found from the first fixes, then followed") {
+  for (double deg : {160.0, -170.0, 90.0}) {
+    CAPTURE(deg);
+    const test::StraightDrive d(deg * std::numbers::pi / 180, 60);
+    const DriveResult r = drive(d, GnssHeadingConfig::Align::kAuto);
+    const double t_end = static_cast<double>(r.last.utime - test::StraightDrive::kT0) * 1e-6;
+    CHECK(r.aligned == 1);
+    CHECK(r.waiting == 0);
+    CHECK(r.gated <= 2);
+    const Eigen::Vector3d e = r.last.pose.position - d.body_enu(t_end);
+    CHECK(e.head<2>().norm() < 1.0);  // after 116 m
+    CHECK(std::abs(std::remainder(yaw_of(r.last.pose.orientation) - d.heading, 2 * std::numbers::pi)) < 0.03);
+    const double var = e.head<2>().dot(r.last.covariance.topLeftCorner<2, 2>().inverse() * e.head<2>());
+    CHECK(var < 13.8);  // chi-square(2) 99.9 %: the covariance covers the error
+  }
+  // Trusting the start's yaw (0, the unit has none): the fixes disagree with the track and the gate refuses them.
+  const test::StraightDrive d(160 * std::numbers::pi / 180, 60);
+  const DriveResult r = drive(d, GnssHeadingConfig::Align::kNever);
+  CHECK(r.aligned == 0);
+  CHECK(r.gated > 200);  // of 300 fixes
+  CHECK((r.last.pose.position - d.body_enu(60)).head<2>().norm() > 50);
+}
+
+TEST_CASE("inertial stage: fixes that jump 15 m for good are gated, then the heading and position are found anew") {
+  const test::StraightDrive d(160 * std::numbers::pi / 180, 60, 30);
+  const DriveResult r = drive(d, GnssHeadingConfig::Align::kAuto);
+  CHECK(r.reacquired == 1);
+  CHECK(r.gated == 10);  // reacquire_after
+  CHECK(r.aligned == 2);
+  CHECK(r.waiting == 0);
+  const double t_end = static_cast<double>(r.last.utime - test::StraightDrive::kT0) * 1e-6;
+  const Eigen::Vector3d jumped = d.body_enu(t_end) + Eigen::Vector3d(15, 0, 0);
+  CHECK((r.last.pose.position - jumped).head<2>().norm() < 1.0);
+  CHECK(std::abs(std::remainder(yaw_of(r.last.pose.orientation) - d.heading, 2 * std::numbers::pi)) < 0.03);
 }
