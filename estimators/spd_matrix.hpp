@@ -43,10 +43,14 @@ double smallest_eigenvalue(const Eigen::MatrixBase<Derived>& m) {
   using Plain = typename Derived::PlainObject;
   if constexpr (Plain::RowsAtCompileTime == Eigen::Dynamic && std::is_same_v<typename Plain::Scalar, double>) {
     if (m.rows() == m.cols()) switch (m.rows()) {
-        case 2: return smallest_eigenvalue(Eigen::Matrix2d(m));
-        case 3: return smallest_eigenvalue(Eigen::Matrix3d(m));
-        case 6: return smallest_eigenvalue(Eigen::Matrix<double, 6, 6>(m));
-        default: break;
+        case 2:
+          return smallest_eigenvalue(Eigen::Matrix2d(m));
+        case 3:
+          return smallest_eigenvalue(Eigen::Matrix3d(m));
+        case 6:
+          return smallest_eigenvalue(Eigen::Matrix<double, 6, 6>(m));
+        default:
+          break;
       }
   }
   return Eigen::SelfAdjointEigenSolver<Plain>(Plain(m), Eigen::EigenvaluesOnly).eigenvalues().minCoeff();

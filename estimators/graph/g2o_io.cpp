@@ -52,8 +52,7 @@ struct LineReader {
     throw std::runtime_error(file + ":" + std::to_string(line) + ": " + msg);
   }
   double number() {
-    if (next >= tokens.size())
-      fail(tag() + ": expected more values (got " + std::to_string(tokens.size() - 1) + ")");
+    if (next >= tokens.size()) fail(tag() + ": expected more values (got " + std::to_string(tokens.size() - 1) + ")");
     const std::string_view t = tokens[next++];
     // from_chars for the plain decimals of a g2o file (correctly rounded, as strtod, and several times faster);
     // strtod, and its verdict, for the rest (a leading '+', hexadecimal, out of range).
@@ -75,8 +74,7 @@ struct LineReader {
     return static_cast<int64_t>(v);
   }
   void done() const {
-    if (next != tokens.size())
-      fail(tag() + ": " + std::to_string(tokens.size() - next) + " unexpected extra value(s)");
+    if (next != tokens.size()) fail(tag() + ": " + std::to_string(tokens.size() - next) + " unexpected extra value(s)");
   }
   // The N x N information matrix from its upper triangle, row by row (fixed size: no allocation).
   template <int N>

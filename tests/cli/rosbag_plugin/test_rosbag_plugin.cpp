@@ -16,7 +16,7 @@
 namespace {
 
 struct Output {
-  int status = -1;  // the exit status
+  int status = -1;   // the exit status
   std::string text;  // standard output and error
 };
 
@@ -54,8 +54,8 @@ TEST_CASE("rosbag module: sextant convert rosbag writes the log the in-process c
   const auto dir = std::filesystem::temp_directory_path() / ("sextant_rosbag_module_" + std::to_string(::getpid()));
   std::filesystem::create_directories(dir);
   const std::string via_module = (dir / "module.lcm").string(), in_process = (dir / "direct.lcm").string();
-  const Output o = run(kSextant + " convert rosbag " + kBag + " --frame base_link=husky --frame imu_link=husky -o " +
-                       via_module);
+  const Output o =
+      run(kSextant + " convert rosbag " + kBag + " --frame base_link=husky --frame imu_link=husky -o " + via_module);
   REQUIRE_MESSAGE(o.status == 0, o.text);
   CHECK(o.text.find("IMU 11865") != std::string::npos);
   sextant::tools::RosbagConversionOptions conv;
@@ -74,8 +74,8 @@ TEST_CASE("rosbag module: a sextant without its module says so and exits 2") {
   std::filesystem::copy_file(kSextant, dir / "bin" / "sextant");
   std::filesystem::permissions(dir / "bin" / "sextant", std::filesystem::perms::owner_exec,
                                std::filesystem::perm_options::add);
-  const Output o = run((dir / "bin" / "sextant").string() + " convert rosbag " + kBag + " -o " +
-                       (dir / "out.lcm").string());
+  const Output o =
+      run((dir / "bin" / "sextant").string() + " convert rosbag " + kBag + " -o " + (dir / "out.lcm").string());
   CHECK(o.status == 2);
   CHECK(o.text.find("cannot load the rosbag module") != std::string::npos);
   CHECK(o.text.find("libsextant_rosbag.so") != std::string::npos);

@@ -48,8 +48,7 @@ TEST_CASE("g2o: every spelling strtod reads is strtod's value, however blanks, t
   }
   const auto path = temp("bad_number.g2o");
   std::ofstream(path) << "VERTEX_SE2 0 0 0 0\nVERTEX_SE2 1 0.5x 0 0\n";
-  CHECK_THROWS_WITH(graph::read_g2o(path),
-                    doctest::Contains((path + ":2: VERTEX_SE2: not a number: '0.5x'").c_str()));
+  CHECK_THROWS_WITH(graph::read_g2o(path), doctest::Contains((path + ":2: VERTEX_SE2: not a number: '0.5x'").c_str()));
   std::ofstream(path) << "VERTEX_SE2 0 0 0 0 9\n";
   CHECK_THROWS_WITH(graph::read_g2o(path), doctest::Contains((path + ":1: VERTEX_SE2: 1 unexpected extra").c_str()));
   std::remove(path.c_str());
