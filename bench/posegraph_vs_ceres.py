@@ -67,6 +67,15 @@ def with_odometry_vertices(path, tmpdir):
     return out
 
 
+def write_table(lines, out_path):
+    """Prints the table's lines and writes them to OUT_PATH when given."""
+    text = "\n".join(lines) + "\n"
+    print(text)
+    if out_path:
+        with open(out_path, "w") as f:
+            f.write(text)
+
+
 def timed(cmd):
     """Wall seconds of the whole process CMD and its standard output."""
     t0 = time.perf_counter()
@@ -108,11 +117,7 @@ def process_main(build, ceres_bin, reps, out_path, names):
         per_round = statistics.median(a["wall"] / b["wall"] for a, b in zip(s, c))
         lines.append(f"| {name} | {s[0]['chi2']:.6f} | {s[0]['iters']} ({s[0]['init']}) | {ms:.3f} | "
                      f"{c[0]['chi2']:.6f} | {mc:.3f} | {ms / mc:.2f} | {per_round:.2f} |")
-    text = "\n".join(lines) + "\n"
-    print(text)
-    if out_path:
-        with open(out_path, "w") as f:
-            f.write(text)
+    write_table(lines, out_path)
 
 
 def main():
@@ -151,11 +156,7 @@ def main():
             med = statistics.median(r["solve"] for r in rs)
             lines.append(f"| {name} | {label} | {rs[0]['iters']} | {rs[0]['chi2']:.6f} | {med:.3f} | "
                          f"{med / base:.2f} |")
-    text = "\n".join(lines) + "\n"
-    print(text)
-    if out_path:
-        with open(out_path, "w") as f:
-            f.write(text)
+    write_table(lines, out_path)
 
 
 if __name__ == "__main__":

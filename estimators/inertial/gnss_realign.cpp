@@ -1,5 +1,7 @@
 #include "estimators/inertial/gnss_realign.hpp"
 
+#include "estimators/spd_matrix.hpp"
+
 namespace sextant::inertial {
 
 Eigen::Matrix3d yaw_rotation(const PlanarAlignment& a) {
@@ -48,7 +50,7 @@ ErrorStateEkf::Matrix15 realigned_covariance(const PlanarAlignment& a, const Esk
   G.block<3, 1>(E::kTheta, 2) = y.q.toRotationMatrix().transpose() * ez;
   const Eigen::Vector3d S(a.centroid_variance, a.centroid_variance, a.yaw_sigma * a.yaw_sigma);
   out += G * S.asDiagonal() * G.transpose();
-  return 0.5 * (out + out.transpose());
+  return symmetrized(out);
 }
 
 NavState realigned(const PlanarAlignment& a, const NavState& x) {

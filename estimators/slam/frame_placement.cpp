@@ -113,11 +113,10 @@ Eigen::Vector3d centroid_in_b(const std::vector<const PlacementEvidence*>& es) {
 /// One that explains the best's own measurements a little differently is the same placement seen through the
 /// noise, not a rival: counted on all its support, every hypothesis from a pair of nearby points on collinear
 /// evidence 30 m from B's origin would block the decision for ever.
-int strongest_rival(const std::vector<const PlacementEvidence*>& es, const std::vector<Hypothesis>& hs,
-                    const std::vector<int>& support, size_t best, const Eigen::Vector3d& at, bool planar,
-                    const PlacementOptions& o) {
-  std::vector<char> explained(es.size());
-  for (size_t k = 0; k < es.size(); ++k) explained[k] = agrees(*es[k], hs[best].placement, planar, o) ? 1 : 0;
+/// `explained[k]`: the best agrees with es[k].
+int strongest_rival(const std::vector<const PlacementEvidence*>& es, const std::vector<char>& explained,
+                    const std::vector<Hypothesis>& hs, const std::vector<int>& support, size_t best,
+                    const Eigen::Vector3d& at, bool planar, const PlacementOptions& o) {
   int strongest = 0;
   for (size_t h = 0; h < hs.size(); ++h) {
     if (support[h] <= hs[h].sample || close(hs[best].placement, hs[h].placement, at, o)) continue;
@@ -157,10 +156,11 @@ Placement place_frames(const std::vector<PlacementEvidence>& evidence, bool plan
   for (size_t h = 0; h < hs.size(); ++h)
     for (const PlacementEvidence* e : es) support[h] += agrees(*e, hs[h].placement, planar, o) ? 1 : 0;
   const size_t best = static_cast<size_t>(std::max_element(support.begin(), support.end()) - support.begin());
+  std::vector<char> explained(es.size());
   std::vector<const PlacementEvidence*> inliers;
-  for (const PlacementEvidence* e : es)
-    if (agrees(*e, hs[best].placement, planar, o)) inliers.push_back(e);
-  p.rival_support = strongest_rival(es, hs, support, best, centroid_in_b(inliers), planar, o);
+  for (size_t k = 0; k < es.size(); ++k)
+    if ((explained[k] = agrees(*es[k], hs[best].placement, planar, o) ? 1 : 0)) inliers.push_back(es[k]);
+  p.rival_support = strongest_rival(es, explained, hs, support, best, centroid_in_b(inliers), planar, o);
   // Step 3: refine on the inliers, and count them again on the refined placement.
   p.a_from_b = fit(inliers, planar);
   inliers.clear();
