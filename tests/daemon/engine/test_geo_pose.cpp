@@ -26,8 +26,8 @@ Eigen::Vector3d ecef(double lat_deg, double lon_deg, double h) {
 Eigen::Matrix3d enu_basis(double lat_deg, double lon_deg) {
   const double lat = lat_deg * kDeg, lon = lon_deg * kDeg;
   Eigen::Matrix3d b;
-  b << -std::sin(lon), std::cos(lon), 0, -std::sin(lat) * std::cos(lon), -std::sin(lat) * std::sin(lon),
-      std::cos(lat), std::cos(lat) * std::cos(lon), std::cos(lat) * std::sin(lon), std::sin(lat);
+  b << -std::sin(lon), std::cos(lon), 0, -std::sin(lat) * std::cos(lon), -std::sin(lat) * std::sin(lon), std::cos(lat),
+      std::cos(lat) * std::cos(lon), std::cos(lat) * std::sin(lon), std::sin(lat);
   return b;
 }
 
@@ -49,14 +49,14 @@ TEST_CASE("to_geo_pose: the position on WGS84, orientation and covariance in the
   const geodesy::LocalTangentPlane plane(datum);
   const Eigen::Matrix3d B0 = enu_basis(datum.latitude, datum.longitude);
   for (const Eigen::Vector3d& p : {Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(350, -120, 4),
-                                  Eigen::Vector3d(10'000, 25'000, -30), Eigen::Vector3d(-80'000, 5'000, 900)}) {
+                                   Eigen::Vector3d(10'000, 25'000, -30), Eigen::Vector3d(-80'000, 5'000, 900)}) {
     CAPTURE(p.transpose());
     FusedPose f = pose_at(p, 0.7);
     f.covariance(0, 0) = 4.0;  // 2 m along the body's x axis
     const GeoPose g = to_geo_pose(f, plane, true);
     // The geodetic point is the plane's point: ENU at the datum of its ECEF position gives p back.
-    const Eigen::Vector3d back = B0 * (ecef(g.latitude, g.longitude, g.altitude) -
-                                       ecef(datum.latitude, datum.longitude, datum.altitude));
+    const Eigen::Vector3d back =
+        B0 * (ecef(g.latitude, g.longitude, g.altitude) - ecef(datum.latitude, datum.longitude, datum.altitude));
     CHECK((back - p).norm() < 1e-6);
     // The body's x axis, seen in the local ENU at the body, is the plane's x axis carried through ECEF.
     const Eigen::Matrix3d B = enu_basis(g.latitude, g.longitude);
