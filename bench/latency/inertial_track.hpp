@@ -17,9 +17,9 @@ namespace sextant::bench {
 
 struct InertialSensors {
   engine::ImuSample imu;
-  engine::Odometry odometry;             // the step's odometry (published every odometry_every steps)
+  engine::Odometry odometry;  // the step's odometry (published every odometry_every steps)
   bool publish_odometry = false;
-  std::optional<engine::GnssFix> fix;    // every gnss_every steps
+  std::optional<engine::GnssFix> fix;  // every gnss_every steps
 };
 
 class InertialTrack {

@@ -3,6 +3,7 @@
 // its yaw not (nothing moves); a sensor without a mounting is counted; the engine makes the stage only when asked; a
 // body driving on a heading it does not know finds it from its first fixes and then follows them.
 #include "daemon/engine/engine.hpp"
+#include "daemon/stage_counters.hpp"
 #include "daemon/engine/inertial_graph_stage.hpp"
 #include "daemon/engine/straight_drive.hpp"
 
@@ -14,6 +15,8 @@
 
 using namespace sextant;
 using namespace sextant::engine;
+
+using sextant::stage_counters::counter;
 
 namespace {
 
@@ -47,12 +50,6 @@ Odometry still(int64_t utime) {
   o.increment_covariance = Matrix6::Identity() * 1e-8;
   o.twist = Odometry::Twist{};
   return o;
-}
-
-int64_t counter(const Stage& s, const std::string& name) {
-  for (const auto& [n, v] : s.counters())
-    if (n == name) return v;
-  return -1;
 }
 
 }  // namespace

@@ -3,6 +3,7 @@
 // a body driving on a heading it does not know finds it from its first fixes and then follows them, where trusting
 // its start yaw has the gate refuse them.
 #include "daemon/engine/inertial_stage.hpp"
+#include "daemon/stage_counters.hpp"
 #include "daemon/engine/straight_drive.hpp"
 
 #include <doctest/doctest.h>
@@ -14,6 +15,8 @@
 
 using namespace sextant;
 using namespace sextant::engine;
+
+using sextant::stage_counters::counter;
 
 namespace {
 
@@ -36,12 +39,6 @@ ImuSample at_rest(int64_t utime, const std::string& frame = "imu") {
   s.angular_velocity = Eigen::Vector3d::Zero();
   s.linear_acceleration = Eigen::Vector3d(0, 0, 9.80665);  // level, at rest: the specific force points up
   return s;
-}
-
-int64_t counter(const Stage& s, const std::string& name) {
-  for (const auto& [n, v] : s.counters())
-    if (n == name) return v;
-  return -1;
 }
 
 }  // namespace
