@@ -12,6 +12,8 @@
 #include "estimators/filter/estimate_health.hpp"
 #include "sim/simulator.hpp"
 
+#include <sextant/gnss_t.hpp>
+#include <sextant/imu_t.hpp>
 #include <sextant/landmarks_t.hpp>
 #include <sextant/loop_closure_t.hpp>
 #include <sextant/odometry_t.hpp>
@@ -38,13 +40,15 @@ struct Record {
 
 /// A simulated planar run of `source` as the bus would carry it (its odometry, sightings and bearings).  The
 /// simulator's loop closures need poses 20 s old, so a short run has none; `loops`: a closure about every second
-/// instead, to a pose within 6 m and at least 2 s back.
+/// instead, to a pose within 6 m and at least 2 s back.  `inertial`: its IMU (100 Hz, frame "imu") and GNSS (5 Hz,
+/// frame "gnss") too.
 inline std::vector<Record> simulated_run(const std::string& source, double duration_s, uint64_t seed,
-                                         bool unknown_ids = false, bool loops = false) {
+                                         bool unknown_ids = false, bool loops = false, bool inertial = false) {
   tools::SimulationOptions sim;
   sim.duration_s = duration_s;
   sim.seed = seed;
   sim.source = source;
+  if (inertial) sim.imu_rate_hz = 100, sim.gnss_rate_hz = 5;
   sim.unknown_ids = unknown_ids;
   if (loops) sim.loop_distance = 6, sim.loop_min_age_s = 2;
   const auto path = (std::filesystem::temp_directory_path() /
@@ -56,8 +60,7 @@ inline std::vector<Record> simulated_run(const std::string& source, double durat
   }
   std::vector<Record> out;
   for (auto& r : runtime::LogReader::read_all(path))
-    if (r.channel == "ODOMETRY" || r.channel == "LANDMARKS" || r.channel == "LOOP_CLOSURES" || r.channel == "BEARINGS")
-      out.push_back({r.channel, std::vector<uint8_t>(r.data.begin(), r.data.end())});
+    if (r.channel != "GROUND_TRUTH") out.push_back({r.channel, std::vector<uint8_t>(r.data.begin(), r.data.end())});
   std::filesystem::remove(path);
   return out;
 }
@@ -66,6 +69,8 @@ inline runtime::InputKind kind_of(const std::string& channel) {
   if (channel == "ODOMETRY") return runtime::InputKind::kOdometry;
   if (channel == "LANDMARKS") return runtime::InputKind::kLandmarks;
   if (channel == "BEARINGS") return runtime::InputKind::kBearings;
+  if (channel == "IMU") return runtime::InputKind::kImu;
+  if (channel == "GNSS") return runtime::InputKind::kGnss;
   return runtime::InputKind::kLoopClosures;
 }
 
@@ -76,24 +81,40 @@ inline bool healthy(const engine::FusedPose& p) {
   return filter::estimate_health(x, p.covariance, 6) == filter::Health::kHealthy && x.allFinite();
 }
 
-/// The engine of config/default.yaml's defaults (a particle filter in place of the EKF when `pf`) behind an intake,
-/// fed one bus message at a time; keeps what it publishes and the longest event.
+/// A published pose on the Earth is finite, on it, with a positive semi-definite covariance.
+inline bool healthy(const engine::GeoPose& g) {
+  return std::isfinite(g.latitude) && std::abs(g.latitude) <= 90 && std::isfinite(g.longitude) &&
+         std::isfinite(g.altitude) && g.orientation.coeffs().allFinite() &&
+         filter::estimate_health(Eigen::Vector3d(g.latitude, g.longitude, g.altitude), g.position_covariance, 3) ==
+             filter::Health::kHealthy;
+}
+
+/// The engine of config/default.yaml's defaults (a particle filter in place of the EKF when `pf`; with `inertial`,
+/// the inertial filter and smoother too, for sensors mounted as "imu" and "gnss") behind an intake, fed one bus
+/// message at a time; keeps what it publishes and the longest event.
 struct Run {
   config::DaemonConfig cfg;
   runtime::ChannelStats stats;
   std::unique_ptr<runtime::Intake> intake;
   std::unique_ptr<engine::Engine> engine;
   std::vector<engine::FusedPose> poses;
+  int geo_poses = 0;
   double max_event_ms = 0;
   std::string slowest;  // the stage of max_event_ms
   int unhealthy = 0;
 
-  explicit Run(bool pf = false) {
+  explicit Run(bool pf = false, bool inertial = false) {
     if (pf) cfg.engine.filter.type = engine::FilterType::kPf;
     cfg.engine.association.enabled = false;
+    if (inertial) {
+      cfg.engine.inertial.enabled = true;
+      cfg.engine.inertial.graph.enabled = true;
+      cfg.engine.inertial.mountings = {{"", "imu", {0, 0, 0}, {0, 0, 0}}, {"", "gnss", {0, 0, 0}, {0, 0, 0}}};
+    }
     intake =
         std::make_unique<runtime::Intake>(stats, runtime::Intake::RejectHook{}, runtime::intake_options(cfg, false));
-    for (const char* c : {"ODOMETRY", "LANDMARKS", "BEARINGS", "LOOP_CLOSURES"}) intake->add_channel(c, kind_of(c));
+    for (const char* c : {"ODOMETRY", "LANDMARKS", "BEARINGS", "LOOP_CLOSURES", "IMU", "GNSS"})
+      intake->add_channel(c, kind_of(c));
     engine = std::make_unique<engine::Engine>(cfg.engine);
   }
   void feed(const Record& r) {
@@ -103,6 +124,10 @@ struct Run {
       if (auto* p = std::get_if<engine::FusedPose>(&o)) {
         if (!healthy(*p)) ++unhealthy;
         poses.push_back(*p);
+      }
+      if (auto* g = std::get_if<engine::GeoPose>(&o)) {
+        if (!healthy(*g)) ++unhealthy;
+        ++geo_poses;
       }
     };
     if (!intake->resynced_body().empty())
@@ -238,6 +263,33 @@ inline void mutate(sextant::loop_closure_t& m, const Choose& choose) {
   jump_in_time(m.utime, choose);
 }
 
+inline void mutate(sextant::imu_t& m, const Choose& choose) {
+  std::vector<double*> fields;
+  for (auto& v : m.angular_velocity) fields.push_back(&v);
+  for (auto& v : m.angular_velocity_covariance) fields.push_back(&v);
+  for (auto& v : m.linear_acceleration) fields.push_back(&v);
+  for (auto& v : m.linear_acceleration_covariance) fields.push_back(&v);
+  for (auto& v : m.orientation) fields.push_back(&v);
+  for (auto& v : m.orientation_covariance) fields.push_back(&v);
+  set_extreme(fields, choose);
+  if (choose(8) == 0) m.has_orientation = !m.has_orientation;
+  if (choose(8) == 0) m.orientation_has_yaw = !m.orientation_has_yaw;
+  if (choose(16) == 0) (choose(2) ? m.has_angular_velocity : m.has_linear_acceleration) = false;
+  jump_in_time(m.utime, choose);
+}
+
+inline void mutate(sextant::gnss_t& m, const Choose& choose) {
+  std::vector<double*> fields{&m.latitude, &m.longitude, &m.altitude, &m.heading, &m.heading_variance};
+  for (auto& v : m.position_covariance) fields.push_back(&v);
+  for (auto& v : m.velocity) fields.push_back(&v);
+  for (auto& v : m.velocity_covariance) fields.push_back(&v);
+  set_extreme(fields, choose);
+  if (choose(8) == 0) m.has_velocity = !m.has_velocity;
+  if (choose(8) == 0) m.has_heading = !m.has_heading;
+  if (choose(16) == 0) m.status = static_cast<int8_t>(static_cast<int>(choose(6)) - 1);
+  jump_in_time(m.utime, choose);
+}
+
 /// `r` with its message mutated; false (and `r` unchanged) for a channel the fuzzer does not mutate (bearings go to
 /// the association stage, which these runs leave off).
 inline bool mutate(Record& r, const Choose& choose) {
@@ -251,6 +303,14 @@ inline bool mutate(Record& r, const Choose& choose) {
     r.bytes = encoded(m);
   } else if (r.channel == "LOOP_CLOSURES") {
     auto m = decoded<sextant::loop_closure_t>(r);
+    mutate(m, choose);
+    r.bytes = encoded(m);
+  } else if (r.channel == "IMU") {
+    auto m = decoded<sextant::imu_t>(r);
+    mutate(m, choose);
+    r.bytes = encoded(m);
+  } else if (r.channel == "GNSS") {
+    auto m = decoded<sextant::gnss_t>(r);
     mutate(m, choose);
     r.bytes = encoded(m);
   } else {

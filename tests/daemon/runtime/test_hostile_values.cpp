@@ -137,6 +137,32 @@ TEST_CASE(
   }
 }
 
+TEST_CASE(
+    "value fuzzer: extreme finite values in every IMU and GNSS field of one body (and its odometry and sightings) "
+    "never harm the published poses, on the Earth too, or the other body") {
+  const int messages =
+      std::getenv("SEXTANT_VALUE_FUZZ_MESSAGES") ? std::atoi(std::getenv("SEXTANT_VALUE_FUZZ_MESSAGES")) : 400;
+  const auto clean = simulated_run("clean", 20, 5, false, false, /*inertial=*/true);
+  const auto victim = simulated_run("victim", 20, 6, false, false, /*inertial=*/true);
+  Run alone(false, /*inertial=*/true);
+  for (const auto& r : clean) alone.feed(r);
+  REQUIRE(alone.geo_poses > 100);  // the inertial filter and smoother run, anchored by the fixes
+  std::mt19937_64 rng(13);
+  const Choose choose = [&](size_t n) { return std::uniform_int_distribution<size_t>(0, n - 1)(rng); };
+  int mutated = 0;
+  const auto input = mixed(
+      clean, victim, [&] { return rng() % 4 == 0; }, choose, messages, mutated);
+  Run run(false, /*inertial=*/true);
+  for (const auto& r : input) run.feed(r);
+  CHECK(mutated > 100);
+  CHECK(run.unhealthy == 0);
+  CHECK(run.max_event_ms < 2000);
+  check_same(run.of("clean"), alone.of("clean"));
+  const auto victim_poses = run.of("victim");
+  CHECK(std::count_if(victim_poses.begin(), victim_poses.end(),
+                      [](const engine::FusedPose& p) { return p.estimator == "inertial"; }) > 100);
+}
+
 TEST_CASE("bounded work: five landmark messages of 4096 unknown sightings each are handled in bounded time") {
   auto run = simulated_run("robot1", 6, 8, /*unknown_ids=*/true);
   Run x;
