@@ -14,10 +14,9 @@ GeoPose to_geo_pose(const FusedPose& pose, const geodesy::LocalTangentPlane& pla
   g.latitude = at.latitude;
   g.longitude = at.longitude;
   g.altitude = at.altitude;
-  const Eigen::Matrix3d E = plane.enu_at(at);
-  const Eigen::Matrix3d R = pose.pose.orientation.normalized().toRotationMatrix();
-  g.orientation = Eigen::Quaterniond(E.transpose() * R).normalized();
-  const Eigen::Matrix3d to_local = E.transpose() * R;
+  // Body to local ENU: E' R (E takes local ENU vectors into the plane's).
+  const Eigen::Matrix3d to_local = plane.enu_at(at).transpose() * pose.pose.orientation.normalized().toRotationMatrix();
+  g.orientation = Eigen::Quaterniond(to_local).normalized();
   g.position_covariance =
       symmetrized(Eigen::Matrix3d(to_local * pose.covariance.topLeftCorner<3, 3>() * to_local.transpose()));
   g.datum = {plane.datum().latitude, plane.datum().longitude, plane.datum().altitude};
