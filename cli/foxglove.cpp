@@ -50,9 +50,7 @@ sextant::cli::RegisterCommand reg{
       auto o = std::make_shared<FoxgloveBridgeOptions>();
       auto url = std::make_shared<std::string>();
       auto stats_seconds = std::make_shared<double>(0);
-      // LCM drops, silently, what a subscription has queued beyond its capacity (30 by default) while the handler
-      // is busy: a burst on the bus (a log player, a daemon's trajectory snapshot) while the bridge maps a batch.
-      auto lcm_queue = std::make_shared<int>(8192);
+      auto lcm_queue = std::make_shared<int>(sextant::runtime::kDefaultLcmQueue);
       cmd->add_option("--port", o->port, "TCP port (0: any free one)");
       cmd->add_option("--bind", o->bind_address,
                       "address to listen on (default 127.0.0.1: this machine only; 0.0.0.0: every "
@@ -85,7 +83,7 @@ sextant::cli::RegisterCommand reg{
                     o->bind_address.c_str(), bridge->port());
         std::fflush(stdout);
         Feed feed{bridge.get()};
-        lcm_subscription_set_queue_capacity(sextant::runtime::subscribe_raw(lcm, ".*", &feed), *lcm_queue);
+        sextant::runtime::subscribe_raw(lcm, ".*", &feed, *lcm_queue);
         const int64_t drops_at_start = sextant::runtime::udp_receive_drops().value_or(0);
         const auto kernel_drops = [&]() -> std::optional<int64_t> {
           const auto d = sextant::runtime::udp_receive_drops();

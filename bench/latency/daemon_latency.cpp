@@ -89,7 +89,7 @@ int run_echo(const std::string& url, const std::string& ping, const std::string&
     return 3;
   }
   Echo echo{lcm, pong};
-  lcm_subscription_set_queue_capacity(sextant::runtime::subscribe_raw(lcm, ping, &echo), 100000);
+  sextant::runtime::subscribe_raw(lcm, ping, &echo, 100000);
   std::signal(SIGINT, [](int) { g_interrupted = true; });
   std::signal(SIGTERM, [](int) { g_interrupted = true; });
   handle_until(lcm, g_interrupted);
@@ -349,15 +349,14 @@ int run_measure(const MeasureOptions& o) {
   receiver.start_utime = start_utime;
   receiver.period_us = period_us;
   receiver.count = count;
-  lcm_subscription_set_queue_capacity(sextant::runtime::subscribe_raw(rx_lcm, o.fused_prefix + ".*", &receiver),
-                                      100000);
-  lcm_subscription_set_queue_capacity(sextant::runtime::subscribe_raw(rx_lcm, o.pong, &receiver), 100000);
+  sextant::runtime::subscribe_raw(rx_lcm, o.fused_prefix + ".*", &receiver, 100000);
+  sextant::runtime::subscribe_raw(rx_lcm, o.pong, &receiver, 100000);
   Monitor monitor;
   monitor.fed_source = o.fed_source;
   monitor.trajectory_channel = o.trajectory;
   monitor.status_channel = o.status;
-  lcm_subscription_set_queue_capacity(sextant::runtime::subscribe_raw(mon_lcm, o.trajectory, &monitor), 100000);
-  lcm_subscription_set_queue_capacity(sextant::runtime::subscribe_raw(mon_lcm, o.status, &monitor), 1000);
+  sextant::runtime::subscribe_raw(mon_lcm, o.trajectory, &monitor, 100000);
+  sextant::runtime::subscribe_raw(mon_lcm, o.status, &monitor, 1000);
 
   std::atomic<bool> stop_rx{false}, stop_feed{false};
   std::thread rx_thread([&] { handle_until(rx_lcm, stop_rx); });

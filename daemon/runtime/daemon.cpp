@@ -208,7 +208,7 @@ void Daemon::on_message(const lcm_recv_buf_t& rbuf, const std::string& channel) 
 void Daemon::subscribe() {
   // LCM keeps 30 undelivered messages per subscription by default and silently drops beyond that; our own bounded
   // queues do the counting, so give LCM's queue room for bursts.
-  lcm_subscription_set_queue_capacity(subscribe_raw(lcm_, ".*", this), cfg_.queue_capacity * 8);
+  subscribe_raw(lcm_, ".*", this, static_cast<int>(cfg_.queue_capacity * 8));
   const std::string primary = engine_->primary_estimator();
   spdlog::info("sextantd '{}' running on {}; stages: {}; primary estimator: {}", cfg_.name,
                cfg_.lcm_url.empty() ? "the default LCM URL" : cfg_.lcm_url, driver_->runners().size(),
