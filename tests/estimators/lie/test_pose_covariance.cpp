@@ -125,7 +125,7 @@ TEST_CASE("nearest_psd: eigenvalues floored at zero, eigenvectors kept (Higham 1
   CHECK(max_abs(nearest_psd(already) - already) < 1e-14);
 }
 
-TEST_CASE("right_perturbation_from_world_position: an error-state filter's [dp world; theta] as [rho; theta]") {
+TEST_CASE("right_perturbation_from_world_position: an error-state filter's [dp world, theta] as [rho, theta]") {
   // The filter's error (p_hat + dp, R_hat Exp(theta)) seen as a right perturbation xi = Log(T_hat^-1 T): its
   // Jacobian at zero by central differences, against the closed form blockdiag(R_hat', I).
   const SE3 T_hat = pose(1.0, -2.0, 0.5, 0.3, -0.2, 1.1);
