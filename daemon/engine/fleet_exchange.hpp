@@ -83,6 +83,27 @@ struct Numbered {
   void load(archive::ArchiveReader& r);
 };
 
+/// The newest contributions of one stream, oldest first and numbered without a gap: the owner's log it resends from,
+/// and a receiver's copy of another owner's stream, from which it answers that owner's restart.  Bounded by
+/// FleetExchangeOptions::retain (contributions) and retain_mb (wire size, item_bytes).
+struct Retained {
+  std::deque<Numbered> items;
+  size_t bytes = 0;
+  /// Appends the contribution numbered after the newest (the caller keeps the numbers contiguous).
+  void push(Numbered n);
+  /// Drops the oldest beyond the bounds, always keeping the newest `keep`; returns how many went.
+  int64_t evict(const FleetExchangeOptions& o, size_t keep);
+  void clear() {
+    items.clear();
+    bytes = 0;
+  }
+  /// The oldest and newest numbers held (0 when empty).
+  int64_t first() const { return items.empty() ? 0 : items.front().seq; }
+  int64_t last() const { return items.empty() ? 0 : items.back().seq; }
+};
+
+class Inbox;
+
 struct OutboxCounters {
   int64_t contributions = 0;        // numbered (after splitting)
   int64_t messages = 0;             // FLEET messages made, first sendings
@@ -93,6 +114,8 @@ struct OutboxCounters {
   int64_t repair_messages = 0;      // FLEET messages of resent contributions
   int64_t repair_limited = 0;       // contributions asked for and not resent for the requester's rate
   int64_t repair_not_retained = 0;  // contributions asked for that are no longer retained
+  int64_t tail_requests = 0;        // restarted members' requests for their own streams' tails, answered from the
+                                    // copies of those streams held here
 };
 
 /// The sending side: numbers the contributions of the local bodies, keeps the last ones for repair, makes the FLEET
@@ -105,6 +128,7 @@ class Outbox {
   void add(const slam::GraphContribution& c);
   /// Whether `body` is a local body (it contributed here).
   bool owns(const std::string& body) const { return streams_.contains(body); }
+  std::vector<std::string> bodies() const;
   /// The FLEET messages of what was added since the last call: per body, runs of consecutive contributions, each
   /// message at most max_message_bytes and kMaxItemsPerMessage contributions.
   std::vector<FleetContributions> take_messages(int64_t now_utime);
@@ -114,6 +138,13 @@ class Outbox {
   /// The answer to a REPAIR request: the retained contributions asked for, as far as the requester's rate allows.
   /// A request addressed to another daemon is not for this one (nothing, not counted).
   std::vector<FleetContributions> answer(const FleetControl& request, int64_t now_utime);
+  /// The answer to a restarted member's request for the tails of its own streams (a REPAIR whose `daemon` is its
+  /// sender): what `copies` (this daemon's Inbox) applied of those streams and still holds, from the numbers asked,
+  /// within the same per-requester rate.  Nothing for a non-member (counted as refused) or this daemon itself.
+  std::vector<FleetContributions> answer_tail(const FleetControl& request, const Inbox& copies, int64_t now_utime);
+  /// Takes back a contribution of a local body's stream that this daemon sent before it restarted from an older
+  /// state (TailFetch): it must be numbered next_seq(body); it is retained as sent.  False (nothing changes) otherwise.
+  bool adopt(const std::string& body, const Numbered& n);
   /// The numbers of `body`'s stream: the next to be given and the oldest retained (0: none).
   int64_t next_seq(const std::string& body) const;
   int64_t first_retained(const std::string& body) const;
@@ -127,8 +158,7 @@ class Outbox {
  private:
   struct Stream {
     int64_t next_seq = 1;
-    std::deque<Numbered> retained;
-    size_t retained_bytes = 0;
+    Retained retained;
     size_t pending = 0;  // the newest `pending` of `retained` are not sent yet
     void save(archive::ArchiveWriter& w) const;
     void load(archive::ArchiveReader& r);
@@ -143,8 +173,10 @@ class Outbox {
   /// The bytes `requester` may be sent now (its bucket refilled to `now`).
   Bucket& bucket(const std::string& requester, int64_t now);
   void evict(Stream& s);
-  /// One range of a repair request answered into `out`, within the requester's bucket.
-  void answer_range(const FleetRange& range, Bucket& b, int64_t now, std::vector<FleetContributions>& out);
+  /// One range of a repair request answered from `log` (up to its number `last`) into `out`, within the requester's
+  /// bucket.
+  void answer_range(const FleetRange& range, const Retained& log, int64_t last, Bucket& b, int64_t now,
+                    std::vector<FleetContributions>& out);
 
   std::string self_;
   FleetExchangeOptions options_;
@@ -171,7 +203,9 @@ struct InboxCounters {
   int64_t heartbeats = 0;        // heartbeats of members taken in
   int64_t owner_rewound = 0;     // heartbeats, newer than every message heard of their stream, that end the stream
                                  // before what was heard (the owner restarted from a state older than what it had
-                                 // sent: its next numbers repeat ones already applied here)
+                                 // sent and did not take its tail back: its next numbers repeat ones applied here)
+  int64_t repairs_overheard = 0;  // resent contributions of a stream not known here from its owner, of another
+                                  // member's stream, or of a local body (another daemon's repair or restart; ignored)
 };
 
 /// The receiving side: per (owner, body) stream, the contributions in order.
@@ -194,6 +228,9 @@ class Inbox {
 
   /// The next number expected of `body`'s stream (1 for a stream not heard of) and its owner (empty: none).
   int64_t next_expected(const std::string& body) const;
+  /// What was applied here of `body`'s stream and is still held (its newest, at most retain and retain_mb, since
+  /// this daemon started: the copies are not saved), when `owner` owns it; nullptr otherwise.
+  const Retained* copy_of(const std::string& body, const std::string& owner) const;
   std::string owner(const std::string& body) const;
   /// Streams now, and contributions held ahead of their turn (all streams).
   size_t streams() const { return streams_.size(); }
@@ -218,9 +255,12 @@ class Inbox {
     int64_t sent_utime = 0;  // the owner's clock: its newest message (data or heartbeat) heard, for owner_rewound
     int64_t beat_last = 0;   // ... and the stream's last number it stated then
     int64_t heard_at = 0;    // this daemon's clock when the owner was last heard (not saved)
+    Retained copy;           // what was delivered, for the owner's restart (not saved)
     void save(archive::ArchiveWriter& w) const;
     void load(archive::ArchiveReader& r);
   };
+  /// A repair message about a stream not known here from its sender, or about a local body: counted, ignored.
+  bool overheard(const FleetContributions& m);
   /// Whether `sender` may speak for `body` (counting why not); the stream when it may, opened if new.
   Stream* stream_for(const std::string& sender, const std::string& body);
   /// Delivers what is next in `s` into `out`, skipping (as lost) what is below the owner's first retained number.
@@ -244,10 +284,49 @@ class Inbox {
   InboxCounters counters_;
 };
 
+struct TailCounters {
+  int64_t requests = 0;      // requests for the tails of the own streams, sent to the fleet
+  int64_t adopted = 0;       // contributions of the own streams taken back, in order, numbered as they were
+  int64_t duplicates = 0;    // ... already taken (every member answers the same)
+  int64_t out_of_order = 0;  // ... not continuing what was taken (dropped: asked for again)
+  int64_t refused = 0;       // answers of a non-member, about a body this daemon does not own, or with bad numbers
+};
+
+/// A restarted owner taking the tails of its own streams back from the fleet ("A restart" above): one REPAIR request
+/// to every member at once (its `daemon` is its sender), repeated with the repairs' back-off; the answers taken only
+/// from members, only for the own streams, only in order from each stream's next number.  The wait ends
+/// restart_wait_s after the last contribution taken (or after the start when none comes).  Not saved.
+class TailFetch {
+ public:
+  TailFetch(std::string self, FleetExchangeOptions options);
+  /// Starts the wait for every stream of `outbox` (nothing to wait for without one, or without another member).
+  void start(const Outbox& outbox);
+  bool waiting() const { return waiting_; }
+  void stop() { waiting_ = false; }
+  /// An answer (a FLEET message with repair set): the contributions that continue their stream from
+  /// outbox.next_seq(body), in order; the caller adopts them (Outbox::adopt) before the next answer.
+  std::vector<Numbered> receive(const FleetContributions& m, const Outbox& outbox, int64_t now_utime);
+  /// The request due now (none, or one per kMaxRangesPerMessage streams), each range from the stream's next number
+  /// and at most max_repair_range long; ends the wait when it is over (the first call starts its clock).
+  std::vector<FleetControl> requests(const Outbox& outbox, int64_t now_utime);
+  const TailCounters& counters() const { return counters_; }
+
+ private:
+  std::string self_;
+  FleetExchangeOptions options_;
+  std::set<std::string> members_;
+  std::set<std::string> bodies_;
+  bool waiting_ = false;
+  int64_t quiet_until_ = 0;  // the wait's end (0: its clock not started)
+  int64_t ask_at_ = 0;
+  double backoff_s_ = 0;
+  TailCounters counters_;
+};
+
 /// Both sides of one daemon, the unit the graph stage holds and saves.
 struct FleetExchange {
   FleetExchange(const std::string& self, const FleetExchangeOptions& options)
-      : outbox(self, options), inbox(self, options) {}
+      : outbox(self, options), inbox(self, options), tail(self, options) {}
   explicit FleetExchange(const FleetExchangeOptions& options) : FleetExchange(options.self, options) {}
   /// A contribution made from a local body's inputs: its body is local from now on, and it is numbered and queued.
   /// False (nothing sent) when another member already contributes that body (Inbox::own: the same robot fed to two
@@ -258,19 +337,23 @@ struct FleetExchange {
     return true;
   }
   /// A fleet event heard on the bus: the contributions now next in their streams, to apply in this order
-  /// (SlamGraph::apply), and for a repair request addressed to this daemon the messages that answer it, to send.
+  /// (SlamGraph::apply); for a repair request addressed to this daemon, or a restarted member's request for its
+  /// tails, the messages that answer it, to send; while this daemon fetches its own tails, what it took back of them
+  /// (already in the outbox), to apply as its own in this order (SlamGraph::adopt).
   struct Received {
     std::vector<slam::GraphContribution> apply;
     std::vector<FleetContributions> answers;
+    std::vector<slam::GraphContribution> own;
   };
-  Received received(const FleetContributions& m, int64_t now_utime) { return {inbox.receive(m, now_utime), {}}; }
-  Received received(const FleetControl& m, int64_t now_utime) {
-    if (m.kind == FleetControl::Kind::kRepair) return {{}, outbox.answer(m, now_utime)};
-    return {inbox.receive(m, now_utime), {}};
-  }
+  Received received(const FleetContributions& m, int64_t now_utime);
+  Received received(const FleetControl& m, int64_t now_utime);
+  /// Whether this daemon, restarted, waits for the tails of its own streams (TailFetch): meanwhile it sends no
+  /// heartbeat, and its graph makes no contribution (GraphStage holds its inputs back).
+  bool fetching() const { return tail.waiting(); }
   /// The counters of both sides and the sizes now, named for the status channel (fleet_out_*, fleet_in_*).
   std::vector<std::pair<std::string, int64_t>> counters() const;
-  /// What is due now: the FLEET messages queued, the heartbeat and the repair requests.
+  /// What is due now: the FLEET messages queued, the heartbeat (or while fetching, the request for the tails) and the
+  /// repair requests.
   struct Due {
     std::vector<FleetContributions> contributions;
     std::vector<FleetControl> control;
@@ -280,13 +363,16 @@ struct FleetExchange {
     outbox.save(w);
     inbox.save(w);
   }
+  /// A loaded exchange is a restarted daemon's: it starts fetching its own streams' tails.
   void load(archive::ArchiveReader& r) {
     outbox.load(r);
     inbox.load(r);
+    tail.start(outbox);
   }
 
   Outbox outbox;
   Inbox inbox;
+  TailFetch tail;
 };
 
 /// The contributions' own archive (every field, exactly), for the retained and held logs.

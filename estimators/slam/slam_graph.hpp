@@ -123,6 +123,14 @@ class SlamGraph {
   /// gate reads the estimate (a loop, an inter-robot loop's half, a frame join) sees it solved first; frames are
   /// placed (try_joins) after the last update.  Returns how many were applied.
   int apply_all(const std::vector<GraphContribution>& contributions, SlamListener& listener);
+  /// A contribution of a local body that this graph made before it was restarted from an older saved state (its
+  /// tail, taken back from the graphs that applied it; daemon/engine/fleet_exchange.hpp), in its stream's order:
+  /// applied as apply() applies a remote body's (not gated again, not contributed again: the others have it), and
+  /// the body's front end goes on from it (the track and the keyframe selector at its newest keyframe; the next
+  /// keyframe id after it).  A half of a robot sighting or of an inter-robot loop adds nothing here: its whole is in
+  /// the other body's stream.  Refused (counted as apply() counts) for a remote body, or a new body's first
+  /// contribution that is not a keyframe.  True when applied.
+  bool adopt(const GraphContribution& contribution, SlamListener& listener);
   /// Whether a body's graph is built from contributions (another graph owns its inputs).
   bool remote(const std::string& body) const;
   /// Drops the body with its map: its keyframes, landmarks and their factors leave the smoother of its kind (rebuilt

@@ -251,6 +251,29 @@ bool SlamGraph::apply(const GraphContribution& c, SlamListener& listener) {
   return applied;
 }
 
+bool SlamGraph::adopt(const GraphContribution& c, SlamListener& listener) {
+  auto it = bodies_.find(c.body);
+  const auto* k = std::get_if<KeyframeContribution>(&c.what);
+  const bool acceptable =
+      it != bodies_.end() ? !it->second.remote && (k == nullptr || k->planar == it->second.planar) : k != nullptr;
+  if (!acceptable) {
+    ++counters_.fleet_contributions_refused;
+    return false;
+  }
+  if (std::holds_alternative<BodySightingHalf>(c.what) || std::holds_alternative<BodyLoopHalf>(c.what)) return true;
+  Body& b = it != bodies_.end() ? it->second : body_for(c.body, k->planar);
+  // The back end's remote path is the one that takes a contribution as it is: the body is remote while it runs.
+  struct Local {
+    Body& b;
+    ~Local() { b.remote = false; }
+  } local{b};
+  b.remote = true;
+  const bool applied = apply_contribution(c, listener);
+  if (applied && k) b.selector.reset_reference(b.track.newest().odom);
+  ++(applied ? counters_.fleet_contributions_applied : counters_.fleet_contributions_refused);
+  return applied;
+}
+
 int SlamGraph::apply_all(const std::vector<GraphContribution>& contributions, SlamListener& listener) {
   int applied = 0;
   deferred_.active = contributions.size() > 1;
