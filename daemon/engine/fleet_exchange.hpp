@@ -15,13 +15,22 @@
 // repair_backoff_s, again after twice as long while nothing arrives (up to repair_backoff_max_s), from the start
 // when the stream moves.
 //
-// The limit of a restart: an owner restarted from its state directory continues from what it saved (the state is
-// written every daemon.state_period_s).  What it sent after that save and before it stopped was applied by the others
-// and is not in its own graph; its next contributions take those numbers again and the others drop them as already
-// delivered.  A receiver sees this (a heartbeat whose stream ends before what it delivered) and counts it
-// (`owner_rewound`); the maps of that body then differ until the state directory is saved at shutdown (SIGTERM saves
-// it, README "State directory"): a daemon that is killed, not stopped, loses up to state_period_s of its own
-// contributions from the fleet's agreement.
+// A restart: an owner restarted from its state directory continues from what it saved (the state is written every
+// daemon.state_period_s).  What it sent after that save and before it stopped (killed, not stopped: SIGTERM saves
+// the state at shutdown) was applied by the others and is not in its own graph, so before it contributes again it
+// takes that tail back from them (TailFetch): every receiver keeps a copy of what it applied of each other member's
+// streams (the newest `retain` of each, at most retain_mb, like the owner's log; not saved), and answers the
+// restarted owner's request (a REPAIR to every member: its `daemon` is its sender) from it, at the repairs' rate.
+// The owner takes the answers only from members, only for its own streams, only in order from each stream's next
+// number (duplicates from several answering members dropped), puts them back in its log as sent and applies them to
+// its graph as its own (SlamGraph::adopt: its keyframe ids go on after the tail's); meanwhile it sends no heartbeat
+// and its graph stage holds back what would make a contribution.  The wait ends restart_wait_s after the last of
+// the tail arrived, or after the start when nothing comes (alone in the fleet, or nobody has more); then it goes on
+// numbering after the tail, and the others see the stream go on where they have it.  What no receiver holds any more
+// (all of them cut off, or more than `retain` behind) is not taken back: the owner's next numbers repeat those, and
+// a receiver that applied them counts it (`owner_rewound`, from a heartbeat that ends the stream before what it
+// heard).  The others' answers, heard by every daemon on the multicast, open no stream and change none
+// (`repairs_overheard`).
 //
 // The limit of `retain`: the owner keeps the last `retain` contributions of each body (and at most retain_mb of them)
 // to resend.  A receiver that misses older ones (cut off for longer, or a daemon that joins after the fleet made more
