@@ -197,22 +197,22 @@ class Outbox {
 };
 
 struct InboxCounters {
-  int64_t messages = 0;          // FLEET messages from members, taken in
-  int64_t delivered = 0;         // contributions handed to the graph, in their stream's order
-  int64_t duplicates = 0;        // contributions already delivered or already held
-  int64_t out_of_window = 0;     // contributions beyond the reorder window (dropped; a repair fetches them later)
-  int64_t own = 0;               // messages of this daemon, brought back by multicast (ignored)
-  int64_t not_member = 0;        // messages of a sender not in `members` (refused)
-  int64_t local_body = 0;        // messages about a body this daemon owns (refused)
-  int64_t claimed = 0;           // messages about a body another member owns (refused)
-  int64_t too_many_streams = 0;  // messages that would open a stream beyond max_streams_per_sender (refused)
-  int64_t lost = 0;              // contributions the owner no longer retained when asked for (skipped)
-  int64_t repair_requests = 0;   // REPAIR requests made
-  int64_t repair_asked = 0;      // contributions asked for in them
-  int64_t heartbeats = 0;        // heartbeats of members taken in
-  int64_t owner_rewound = 0;     // heartbeats, newer than every message heard of their stream, that end the stream
-                                 // before what was heard (the owner restarted from a state older than what it had
-                                 // sent and did not take its tail back: its next numbers repeat ones applied here)
+  int64_t messages = 0;           // FLEET messages from members, taken in
+  int64_t delivered = 0;          // contributions handed to the graph, in their stream's order
+  int64_t duplicates = 0;         // contributions already delivered or already held
+  int64_t out_of_window = 0;      // contributions beyond the reorder window (dropped; a repair fetches them later)
+  int64_t own = 0;                // messages of this daemon, brought back by multicast (ignored)
+  int64_t not_member = 0;         // messages of a sender not in `members` (refused)
+  int64_t local_body = 0;         // messages about a body this daemon owns (refused)
+  int64_t claimed = 0;            // messages about a body another member owns (refused)
+  int64_t too_many_streams = 0;   // messages that would open a stream beyond max_streams_per_sender (refused)
+  int64_t lost = 0;               // contributions the owner no longer retained when asked for (skipped)
+  int64_t repair_requests = 0;    // REPAIR requests made
+  int64_t repair_asked = 0;       // contributions asked for in them
+  int64_t heartbeats = 0;         // heartbeats of members taken in
+  int64_t owner_rewound = 0;      // heartbeats, newer than every message heard of their stream, that end the stream
+                                  // before what was heard (the owner restarted from a state older than what it had
+                                  // sent and did not take its tail back: its next numbers repeat ones applied here)
   int64_t repairs_overheard = 0;  // resent contributions of a stream not known here from its owner, of another
                                   // member's stream, or of a local body (another daemon's repair or restart; ignored)
 };

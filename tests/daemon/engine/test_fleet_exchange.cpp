@@ -529,7 +529,8 @@ TEST_CASE("fleet exchange: a receiver's copy of another owner's stream is bounde
   o.retain = 7;
   FleetExchange a("a", o), b("b", o);
   for (int64_t id = 0; id < 20; ++id) CHECK(a.contributed(keyframe("r1", id)));
-  for (const auto& m : a.due(1000000).contributions) CHECK(b.received(m, 1000000).apply.size() == m.contributions.size());
+  for (const auto& m : a.due(1000000).contributions)
+    CHECK(b.received(m, 1000000).apply.size() == m.contributions.size());
   const Retained* copy = b.inbox.copy_of("r1", "a");
   REQUIRE(copy != nullptr);
   CHECK(copy->items.size() == 7);
@@ -600,7 +601,7 @@ TEST_CASE("fleet exchange: a restarted owner nobody answers waits restart_wait_s
     heartbeats += round.heartbeats;
     if (round.heartbeats > 0) break;
   }
-  CHECK(rounds == 20);  // 2 s of 0.1 s steps
+  CHECK(rounds == 20);   // 2 s of 0.1 s steps
   CHECK(requests == 4);  // at 0, 0.2, 0.6 and 1.4 s: the repairs' back-off
   CHECK(heartbeats == 1);
   CHECK(restarted.outbox.next_seq("r1") == p.a.outbox.next_seq("r1"));
