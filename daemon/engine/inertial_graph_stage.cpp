@@ -167,13 +167,9 @@ void InertialGraphStage::refresh(Body& b) {
   const int64_t k = b.smoother->counters().keyframes;
   if (k == b.keyframes) return;
   b.keyframes = k;
-  const Matrix6d c = b.smoother->newest_pose_covariance();
-  const Eigen::Matrix3d R = b.smoother->newest().state.R;
-  // [rho; phi] (dp = R rho) -> [position in the world; rotation in the body], the filter's convention.
-  Matrix6d T = Matrix6d::Identity();
-  T.topLeftCorner<3, 3>() = R;
-  b.covariance = T * c * T.transpose();
-  b.observability = inertial::observability_of(c, R, options_);
+  const Matrix6d c = b.smoother->newest_pose_covariance();  // [rho; phi]: sextant's right perturbation already
+  b.covariance = c;
+  b.observability = inertial::observability_of(c, b.smoother->newest().state.R, options_);
 }
 
 void InertialGraphStage::publish(const std::string& source, Body& b, int64_t utime, const Emit& emit) {

@@ -15,8 +15,8 @@
 // (z as x and y: a ground robot does not move along its own z axis; roll and pitch 0.1 rad per increment); a GNSS component that engine.inertial.gnss_position does
 // not select gets a variance of 1e8 m^2 (no information).
 // Outputs at most publish_rate_hz per body (data time): the state predicted to the last IMU sample, with the newest
-// keyframe's marginal covariance (recomputed at each keyframe) over [position (world), rotation error (body)] like
-// the filter's.  Counters: keyframes, fixes down-weighted by the robust kernel, dropped input, failed solves, and how
+// keyframe's marginal covariance (recomputed at each keyframe) over sextant's right perturbation [rho; phi] (both in
+// the body frame, fused_pose_t's convention, as every estimator publishes).  Counters: keyframes, fixes down-weighted by the robust kernel, dropped input, failed solves, and how
 // many bodies have their tilt and their yaw observable (the smoother's test on the newest keyframe).
 #include "daemon/engine/inertial_inputs.hpp"
 #include "daemon/engine/inertial_stage_config.hpp"
@@ -54,7 +54,7 @@ class InertialGraphStage final : public Stage {
     bool anchored = false;
     bool yaw_known = true;                                  // the start's yaw is ENU
     std::optional<inertial::GnssHeadingAlignment> heading;  // from the first fix until the heading is known
-    Matrix6 covariance = Matrix6::Identity();  // the newest keyframe's, over [position (world), rotation (body)]
+    Matrix6 covariance = Matrix6::Identity();  // the newest keyframe's, over the right perturbation [rho; phi]
     inertial::Observability observability;
   };
 

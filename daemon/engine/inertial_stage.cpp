@@ -1,6 +1,7 @@
 #include "daemon/engine/inertial_stage.hpp"
 
 #include "estimators/inertial/gnss_realign.hpp"
+#include "estimators/lie/pose_covariance.hpp"
 
 #include <cmath>
 #include <stdexcept>
@@ -198,10 +199,12 @@ void InertialStage::publish(const std::string& source, Body& b, int64_t utime, c
   out.pose.position = x.p;
   out.pose.orientation = x.q.normalized();
   using E = inertial::ErrorStateEkf;
-  out.covariance.topLeftCorner<3, 3>() = f.covariance().block<3, 3>(E::kP, E::kP);
-  out.covariance.topRightCorner<3, 3>() = f.covariance().block<3, 3>(E::kP, E::kTheta);
-  out.covariance.bottomLeftCorner<3, 3>() = f.covariance().block<3, 3>(E::kTheta, E::kP);
-  out.covariance.bottomRightCorner<3, 3>() = f.covariance().block<3, 3>(E::kTheta, E::kTheta);
+  Matrix6 world;  // the filter's [dp world; theta body]
+  world.topLeftCorner<3, 3>() = f.covariance().block<3, 3>(E::kP, E::kP);
+  world.topRightCorner<3, 3>() = f.covariance().block<3, 3>(E::kP, E::kTheta);
+  world.bottomLeftCorner<3, 3>() = f.covariance().block<3, 3>(E::kTheta, E::kP);
+  world.bottomRightCorner<3, 3>() = f.covariance().block<3, 3>(E::kTheta, E::kTheta);
+  out.covariance = right_perturbation_from_world_position(x.q.normalized().toRotationMatrix(), world);
   b.last_published = utime;
   ++published_;
   emit(out);

@@ -22,7 +22,8 @@
 // (gnss_heading_reacquired).
 // Frames: the world frame is the filter's: ENU at the datum when GNSS is fused (once the heading is known), else the
 // frame the first orientation gives.  Outputs at most engine.inertial.publish_rate_hz per body (data time), pose and
-// 6x6 covariance over [position, rotation error] (the filter's p and theta blocks, right perturbation).
+// 6x6 covariance over sextant's right perturbation (fused_pose_t: translation and rotation in the body frame; the
+// filter's position error, in the world frame, rotated into the body: right_perturbation_from_world_position).
 #include "daemon/engine/inertial_inputs.hpp"
 #include "daemon/engine/inertial_stage_config.hpp"
 #include "daemon/engine/stage.hpp"

@@ -246,7 +246,7 @@ engine::Counters Daemon::runtime_counters() const {
   c.push_back({"publish_lag_us", lag.last_us});
   c.push_back({"publish_lag_us_max", lag.max_us});
   c.push_back({"publish_lag_usual_us", lag.usual_us});
-  if (lag.excess_us() > 1'000'000)
+  if (lag.falling_behind(1'000'000))
     spdlog::warn(
         "published up to {:.1f} s later than usual since the last status (a stall, or a backlog; the usual "
         "lag, {:.3f} s, includes the senders' clock offset)",

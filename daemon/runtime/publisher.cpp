@@ -89,13 +89,16 @@ void Publisher::measure_lag(std::function<int64_t()> wall_utime) {
 
 Publisher::Lag Publisher::take_lag() {
   std::lock_guard lock(mutex_);
-  if (lag_min_) {
+  const bool saw_pose = lag_min_.has_value();
+  if (saw_pose) {
     lag_minima_.push_back(*lag_min_);
     if (lag_minima_.size() > kUsualLagReports) lag_minima_.pop_front();
     lag_min_.reset();
   }
   Lag out = lag_;
   out.usual_us = lag_minima_.empty() ? 0 : *std::min_element(lag_minima_.begin(), lag_minima_.end());
+  out.previous_us = lag_reported_.value_or(out.max_us);  // at the first report: nothing to compare with
+  if (saw_pose) lag_reported_ = lag_.last_us;
   lag_.max_us = lag_.last_us;
   return out;
 }

@@ -14,7 +14,8 @@
 // in the pose itself (fused_pose_t.lag_us) and on the status channel (publish_lag_us, publish_lag_us_max since the
 // previous status), so a backlog published after a stall says that it is late.  The lag includes the offset between
 // the sender's clock and the daemon's (years, for a log played live with its original stamps), so what signals a
-// stall is the lag beyond the usual one: the smallest of the last kUsualLagReports reports (publish_lag_usual_us).
+// stall is the lag beyond the usual one: the smallest of the last kUsualLagReports reports (publish_lag_usual_us),
+// and the daemon warns when the lag grows (Lag::falling_behind), not when it falls back towards the usual.
 // Without a wall clock (replay) the poses' lag_us is 0.
 // Thread-safe.
 #include "daemon/config/daemon_config.hpp"
@@ -62,11 +63,20 @@ class Publisher {
   /// Measures each FusedPose's lag against `wall_utime()` (microseconds since the epoch) from now on.
   void measure_lag(std::function<int64_t()> wall_utime);
   struct Lag {
-    int64_t last_us = 0;   // of the last FusedPose published
-    int64_t max_us = 0;    // the largest since the previous take_lag
-    int64_t usual_us = 0;  // the smallest over the last kUsualLagReports calls that saw a pose (0: none yet)
+    int64_t last_us = 0;      // of the last FusedPose published
+    int64_t max_us = 0;       // the largest since the previous take_lag
+    int64_t usual_us = 0;     // the smallest over the last kUsualLagReports calls that saw a pose (0: none yet)
+    int64_t previous_us = 0;  // last_us at the previous call that saw a pose (max_us at the first)
     /// How far the largest exceeds the usual (a stall, or a backlog), microseconds.
     int64_t excess_us() const { return max_us - usual_us; }
+    /// Whether the daemon fell behind since the previous call: the lag jumped by more than `threshold_us` over its
+    /// previous value (a stall, now published as a backlog), or it stands more than `threshold_us` over the usual
+    /// and still grows (by over a tenth of the threshold: input faster than the daemon).  A lag that falls is not
+    /// (a log played faster than real time, a backlog draining), however far it is from the usual.
+    bool falling_behind(int64_t threshold_us) const {
+      return max_us - previous_us > threshold_us ||
+             (excess_us() > threshold_us && last_us - previous_us > threshold_us / 10);
+    }
   };
   /// Reports (take_lag calls, one per status period) over which the usual lag is the smallest seen: long enough
   /// that a stall does not become the usual, short enough to follow a sender whose clock was set.
@@ -92,8 +102,9 @@ class Publisher {
   int64_t not_monotonic_ = 0, forgotten_ = 0, evicted_ = 0;
   std::function<int64_t()> wall_;
   Lag lag_;
-  std::optional<int64_t> lag_min_;  // the smallest since the previous take_lag
-  std::deque<int64_t> lag_minima_;  // of the last kUsualLagReports take_lag calls that saw a pose
+  std::optional<int64_t> lag_min_;       // the smallest since the previous take_lag
+  std::deque<int64_t> lag_minima_;       // of the last kUsualLagReports take_lag calls that saw a pose
+  std::optional<int64_t> lag_reported_;  // last_us at the last take_lag call that saw a pose
 };
 
 }  // namespace sextant::runtime

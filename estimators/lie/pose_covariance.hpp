@@ -68,4 +68,14 @@ inline Matrix6d regularized_increment_covariance(const Matrix6d& pose_covariance
   return q;
 }
 
+/// An error-state filter's pose covariance, over [position error in the world frame; rotation error in the body]
+/// (p = p_hat + dp, R = R_hat Exp(theta)), as sextant's right perturbation [rho; theta]: T_hat Exp(xi) moves the
+/// position by R_hat rho to first order, so rho = R_hat' dp and the covariance is J P J', J = blockdiag(R_hat', I).
+inline Matrix6d right_perturbation_from_world_position(const Eigen::Matrix3d& R_hat,
+                                                       const Matrix6d& world_position_body_rotation) {
+  Matrix6d J = Matrix6d::Identity();
+  J.topLeftCorner<3, 3>() = R_hat.transpose();
+  return symmetrized(Matrix6d(J * world_position_body_rotation * J.transpose()));
+}
+
 }  // namespace sextant

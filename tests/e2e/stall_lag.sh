@@ -2,7 +2,8 @@
 # Lag made visible: sextantd stopped (SIGSTOP) for STALL_S (3 s) while a robot's odometry goes on at 10 Hz, over a
 # real LCM bus in a private network namespace.  After SIGCONT the daemon publishes the backlog that waited in its
 # socket; each of those FUSED_POSE messages says how late it is (fused_pose_t.lag_us at least the time it waited,
-# the first at least the stall), and the poses outside the stall say they are not (stall_lag.py checks).
+# the first at least the stall), and the poses outside the stall say they are not (stall_lag.py checks); the daemon's
+# log warns of the stall once (or twice), not before.
 set -euo pipefail
 source "$(dirname "$0")/netns.bash"
 require_netns
@@ -36,4 +37,10 @@ kill -INT \$logger; wait \$logger || true
 EOS
 in_netns bash "$work/run.sh"
 python3 "$here/stall_lag.py" check "$work/bus.lcm" "$(cat "$work/stop")" "$(cat "$work/cont")"
+# The daemon's log says it fell behind: after the stall, once or twice (the backlog may span two status periods),
+# never while it kept up.
+warned=$(grep -c "later than usual" "$work/daemon.log" || true)
+if [ "$warned" -lt 1 ] || [ "$warned" -gt 2 ]; then
+  echo "stall_lag: expected 1 or 2 warnings of a stall in the daemon's log, found $warned"; cat "$work/daemon.log"; exit 1
+fi
 echo "stall_lag: ok"

@@ -101,6 +101,7 @@ TEST_CASE("the publisher's usual lag: a sender's clock offset is not a stall, a 
     CHECK(lag.max_us > offset);
     CHECK(lag.usual_us == offset + 2'000);
     CHECK(lag.excess_us() < 10'000);
+    CHECK_FALSE(lag.falling_behind(1'000'000));
   }
   // A 5 s stall: the backlog is published 5 s later than usual.
   wall += 5'000'000;
@@ -108,6 +109,7 @@ TEST_CASE("the publisher's usual lag: a sender's clock offset is not a stall, a 
   const auto stalled = publisher.take_lag();
   CHECK(stalled.excess_us() >= 5'000'000 - 2'000);
   CHECK(stalled.usual_us == offset + 2'000);
+  CHECK(stalled.falling_behind(1'000'000));
   // The usual lag follows a clock that was set: the daemon's stepped 10 s ahead reads as late for kUsualLagReports
   // reports, then as the usual lag.
   stamp = wall - offset;  // the backlog drained
@@ -121,4 +123,49 @@ TEST_CASE("the publisher's usual lag: a sender's clock offset is not a stall, a 
   const auto followed = publisher.take_lag();
   CHECK(followed.usual_us == offset + 10'000'000 + 2'000);
   CHECK(followed.excess_us() == 0);
+}
+
+TEST_CASE("the publisher's lag: falling behind is a lag that grows, not one that falls back") {
+  config::Channels channels;
+  runtime::Publisher publisher(channels, "t", "ekf", [](const std::string&, const std::vector<uint8_t>&, int64_t) {});
+  int64_t wall = 1'800'000'000'000'000;
+  publisher.measure_lag([&wall] { return wall; });
+  engine::FusedPose p;
+  p.source = "robot";
+  p.estimator = "ekf";
+  p.covariance = engine::Matrix6::Identity();
+  int64_t stamp = wall - 3'600'000'000;  // a log of an hour ago
+  // One report per wall second, poses every 10 ms of data time, played at `rate` times real time.
+  const auto report_at = [&](double rate) {
+    const auto wall_step = static_cast<int64_t>(10'000 / rate);
+    for (int64_t t = 0; t < 1'000'000; t += wall_step) {
+      p.utime = stamp;
+      publisher.publish(p);
+      stamp += 10'000;
+      wall += wall_step;
+    }
+    return publisher.take_lag();
+  };
+  // Played 2.5x faster than real time: the lag falls by 1.5 s a second; far from the usual within each second,
+  // yet never behind.
+  for (int report = 0; report < 10; ++report) {
+    const auto lag = report_at(2.5);
+    if (report > 0) CHECK(lag.excess_us() > 1'400'000);
+    CHECK_FALSE(lag.falling_behind(1'000'000));
+  }
+  // Played at 0.5x (the daemon or its input half as fast as the data): the lag grows by 0.5 s a second; behind
+  // once it stands a second over the usual, and from then on at every report.
+  int behind = 0;
+  for (int report = 0; report < 10; ++report) {
+    const auto lag = report_at(0.5);
+    CHECK(lag.falling_behind(1'000'000) == (lag.excess_us() > 1'000'000));
+    behind += lag.falling_behind(1'000'000) ? 1 : 0;
+  }
+  CHECK(behind >= 7);
+  // Back to real time at the lag reached: it no longer grows, so no longer behind, though still over the usual.
+  for (int report = 0; report < 5; ++report) {
+    const auto lag = report_at(1.0);
+    CHECK(lag.excess_us() > 4'000'000);
+    CHECK_FALSE(lag.falling_behind(1'000'000));
+  }
 }

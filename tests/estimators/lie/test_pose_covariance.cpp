@@ -9,6 +9,7 @@
 
 #include <Eigen/Eigenvalues>
 
+#include <numbers>
 #include <optional>
 
 using namespace sextant;
@@ -122,4 +123,31 @@ TEST_CASE("nearest_psd: eigenvalues floored at zero, eigenvectors kept (Higham 1
   CHECK(max_abs(nearest_psd(m) - expected) < 1e-14);
   const Matrix6d already = spd(5);
   CHECK(max_abs(nearest_psd(already) - already) < 1e-14);
+}
+
+TEST_CASE("right_perturbation_from_world_position: an error-state filter's [dp world; theta] as [rho; theta]") {
+  // The filter's error (p_hat + dp, R_hat Exp(theta)) seen as a right perturbation xi = Log(T_hat^-1 T): its
+  // Jacobian at zero by central differences, against the closed form blockdiag(R_hat', I).
+  const SE3 T_hat = pose(1.0, -2.0, 0.5, 0.3, -0.2, 1.1);
+  const double h = 1e-6;
+  Matrix6d J;
+  for (int k = 0; k < 6; ++k) {
+    Vector6d e = Vector6d::Zero();
+    e[k] = h;
+    const auto perturbed = [&](const Vector6d& err) {
+      return SE3(T_hat.rotation() * SO3::exp(err.tail<3>()), T_hat.translation() + err.head<3>());
+    };
+    J.col(k) = (T_hat.between(perturbed(e)).log() - T_hat.between(perturbed(-e)).log()) / (2 * h);
+  }
+  const Matrix6d P = spd(3);
+  const Matrix6d expected = J * P * J.transpose();
+  const Matrix6d got = right_perturbation_from_world_position(T_hat.rotation().matrix(), P);
+  CHECK(max_abs(got - expected) < 1e-8 * max_abs(expected));
+  // A body facing north (yaw 90 degrees) that is uncertain along east is uncertain along its own y axis (west).
+  Matrix6d east = Matrix6d::Zero();
+  east(0, 0) = 4.0;
+  const Matrix6d facing_north =
+      right_perturbation_from_world_position(pose(0, 0, 0, 0, 0, std::numbers::pi / 2).rotation().matrix(), east);
+  CHECK(facing_north(1, 1) == doctest::Approx(4.0));
+  CHECK(facing_north(0, 0) == doctest::Approx(0.0).epsilon(1e-12));
 }
