@@ -299,6 +299,7 @@ struct TailCounters {
   int64_t duplicates = 0;    // ... already taken (every member answers the same)
   int64_t out_of_order = 0;  // ... not continuing what was taken (dropped: asked for again)
   int64_t refused = 0;       // answers of a non-member, about a body this daemon does not own, or with bad numbers
+                             // (this daemon's own repairs, which multicast brings back, are ignored, not counted)
 };
 
 /// A restarted owner taking the tails of its own streams back from the fleet ("A restart" above): one REPAIR request

@@ -116,7 +116,7 @@ class GraphStage final : public Stage {
   /// fetches it again).
   bool held_back(const Event& e) const;
   void release_held(const Emit& emit);
-  static constexpr size_t kMaxHeldBack = 65536;
+  static constexpr size_t kMaxHeldBack = 8192;  // a few MB of events; 2 s of inputs are a few hundred
   std::vector<Event> held_;
   int64_t next_request_id_ = 0;
   GraphStageCounters counters_;
