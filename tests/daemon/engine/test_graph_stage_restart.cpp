@@ -10,6 +10,8 @@
 #include <doctest/doctest.h>
 
 #include <memory>
+#include <set>
+#include <tuple>
 
 using namespace sextant;
 using namespace sextant::engine;
@@ -57,6 +59,7 @@ struct Fleet {
   std::unique_ptr<GraphStage> stage[2];
   std::vector<Event> to[2];
   bool down[2] = {false, false};
+  std::map<int64_t, slam::GraphContribution::What> sent_of_a;  // robot a's stream as its daemon sent it, by number
 
   Fleet() {
     for (int k = 0; k < 2; ++k) stage[k] = fresh(k);
@@ -70,7 +73,11 @@ struct Fleet {
     for (int k = 0; k < 2; ++k) {
       if (down[k]) continue;
       const Emit emit = [&, k](Output o) {
-        if (auto* m = std::get_if<FleetContributions>(&o)) next[1 - k].push_back(std::move(*m));
+        if (auto* m = std::get_if<FleetContributions>(&o)) {
+          for (size_t j = 0; k == 0 && m->body == "a" && j < m->contributions.size(); ++j)
+            sent_of_a[m->first + static_cast<int64_t>(j)] = m->contributions[j];
+          next[1 - k].push_back(std::move(*m));
+        }
         if (auto* c = std::get_if<FleetControl>(&o)) next[1 - k].push_back(std::move(*c));
       };
       for (const Event& e : to[k]) stage[k]->handle(e, emit);
@@ -132,6 +139,14 @@ TEST_CASE(
   CHECK(counter(other, "fleet_contributions_refused") == 0);
   CHECK(counter(restarted, "fleet_contributions_refused") == 0);
   CHECK(counter(other, "fleet_contributions_waiting") == 0);
+  // b's sightings of a are completed by a's daemon (wholes in a's stream), each once: b's halves that it delivers
+  // again to the restarted daemon (its state is older than they) do not make a second whole of what it took back.
+  std::set<std::tuple<std::string, int64_t, int64_t>> wholes;
+  for (const auto& [seq, what] : fleet.sent_of_a)
+    if (const auto* w = std::get_if<slam::BodySighting>(&what))
+      CHECK(wholes.emplace(w->observer, w->utime, w->sighting.id).second);
+  CHECK(wholes.size() > 10);
+  CHECK(fleet.sent_of_a.rbegin()->first == static_cast<int64_t>(fleet.sent_of_a.size()));  // 1, 2, ... all sent
   for (const char* body : {"a", "b"}) {
     CAPTURE(body);
     const auto mine = restarted.keyframes(body), theirs = other.keyframes(body);
