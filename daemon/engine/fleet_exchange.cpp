@@ -125,6 +125,7 @@ std::vector<std::pair<std::string, int64_t>> FleetExchange::counters() const {
           {"fleet_tail_duplicates", t.duplicates},
           {"fleet_tail_out_of_order", t.out_of_order},
           {"fleet_tail_refused", t.refused},
+          {"fleet_tail_lost", t.lost},
           {"fleet_tail_waiting", fetching() ? 1 : 0},
           {"fleet_in_streams", static_cast<int64_t>(inbox.streams())},
           {"fleet_in_held", static_cast<int64_t>(inbox.held())}};
@@ -151,7 +152,12 @@ FleetExchange::Due FleetExchange::due(int64_t now_utime) {
   d.contributions = outbox.take_messages(now_utime);
   // While the tails are fetched the heartbeat waits: it would state the streams as this daemon's saved state ends
   // them, before what the others hold.
-  d.control = tail.requests(outbox, now_utime);
+  std::vector<std::pair<std::string, Numbered>> ended;
+  d.control = tail.requests(outbox, now_utime, ended);
+  for (auto& [body, n] : ended) {
+    outbox.adopt(body, n);  // numbered next by TailFetch
+    d.own.push_back(slam::GraphContribution{body, std::move(n.what)});
+  }
   if (!fetching())
     for (FleetControl& h : outbox.heartbeat(now_utime)) d.control.push_back(std::move(h));
   for (FleetControl& r : inbox.repair_requests(now_utime)) d.control.push_back(std::move(r));

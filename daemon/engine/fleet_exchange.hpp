@@ -21,9 +21,11 @@
 // takes that tail back from them (TailFetch): every receiver keeps a copy of what it applied of each other member's
 // streams (the newest `retain` of each, at most retain_mb, like the owner's log; not saved), and answers the
 // restarted owner's request (a REPAIR to every member: its `daemon` is its sender) from it, at the repairs' rate.
-// The owner takes the answers only from members, only for its own streams, only in order from each stream's next
-// number (duplicates from several answering members dropped), puts them back in its log as sent and applies them to
-// its graph as its own (SlamGraph::adopt: its keyframe ids go on after the tail's); meanwhile it sends no heartbeat
+// The owner takes the answers only from members, only for its own streams, in order from each stream's next number
+// (duplicates from several answering members dropped; what a member holds ahead of a gap of its own is answered too
+// and held), puts them back in its log as sent and applies them to its graph as its own (SlamGraph::adopt: its
+// keyframe ids go on after the tail's); a number nobody gave back below one a member holds becomes kNothing, which
+// changes no graph, so that member, asking for it, applies what the owner did.  Meanwhile it sends no heartbeat
 // and its graph stage holds back what would make a contribution.  The wait ends restart_wait_s after the last of
 // the tail arrived, or after the start when nothing comes (alone in the fleet, or nobody has more); then it goes on
 // numbering after the tail, and the others see the stream go on where they have it.  What no receiver holds any more
@@ -149,7 +151,7 @@ class Outbox {
   std::vector<FleetContributions> answer(const FleetControl& request, int64_t now_utime);
   /// The answer to a restarted member's request for the tails of its own streams (a REPAIR whose `daemon` is its
   /// sender): what `copies` (this daemon's Inbox) applied of those streams and still holds, from the numbers asked,
-  /// within the same per-requester rate.  Nothing for a non-member (counted as refused) or this daemon itself.
+  /// then what it holds ahead of a gap, within the same per-requester rate.  Nothing for a non-member (counted as refused) or this daemon itself.
   std::vector<FleetContributions> answer_tail(const FleetControl& request, const Inbox& copies, int64_t now_utime);
   /// Takes back a contribution of a local body's stream that this daemon sent before it restarted from an older
   /// state (TailFetch): it must be numbered next_seq(body); it is retained as sent.  False (nothing changes) otherwise.
@@ -240,6 +242,8 @@ class Inbox {
   /// What was applied here of `body`'s stream and is still held (its newest, at most retain and retain_mb, since
   /// this daemon started: the copies are not saved), when `owner` owns it; nullptr otherwise.
   const Retained* copy_of(const std::string& body, const std::string& owner) const;
+  /// The contributions of `body`'s stream held here ahead of a gap, by number, when `owner` owns it; nullptr otherwise.
+  const std::map<int64_t, What>* held_of(const std::string& body, const std::string& owner) const;
   std::string owner(const std::string& body) const;
   /// Streams now, and contributions held ahead of their turn (all streams).
   size_t streams() const { return streams_.size(); }
@@ -300,25 +304,35 @@ struct TailCounters {
   int64_t out_of_order = 0;  // ... not continuing what was taken (dropped: asked for again)
   int64_t refused = 0;       // answers of a non-member, about a body this daemon does not own, or with bad numbers
                              // (this daemon's own repairs, which multicast brings back, are ignored, not counted)
+  int64_t lost = 0;          // numbers no member gave back, below ones a member holds: filled with kNothing
 };
+
+/// What stands at a number of its own stream that a restarted owner could not take back while a member holds later
+/// ones (that member lost it, and the owner died before resending it): a contribution that changes no graph (it thins
+/// a keyframe id no body ever has), so that the owner and every member apply the same sequence after it.
+inline const What kNothing = slam::KeyframesThinned{{INT64_MAX}};
 
 /// A restarted owner taking the tails of its own streams back from the fleet ("A restart" above): one REPAIR request
 /// to every member at once (its `daemon` is its sender), repeated with the repairs' back-off; the answers taken only
-/// from members, only for the own streams, only in order from each stream's next number.  The wait ends
-/// restart_wait_s after the last contribution taken (or after the start when none comes).  Not saved.
+/// from members, only for the own streams, in order from each stream's next number (what comes ahead of it is held,
+/// at most reorder_window per stream).  The wait ends restart_wait_s after the last contribution taken (or after the
+/// start when none comes); what is still held then follows its numbers with kNothing in the holes.  Not saved.
 class TailFetch {
  public:
   TailFetch(std::string self, FleetExchangeOptions options);
   /// Starts the wait for every stream of `outbox` (nothing to wait for without one, or without another member).
   void start(const Outbox& outbox);
   bool waiting() const { return waiting_; }
-  void stop() { waiting_ = false; }
+  /// The wait ends at the next call of requests(), whatever the time.
+  void stop() { stop_ = true; }
   /// An answer (a FLEET message with repair set): the contributions that continue their stream from
   /// outbox.next_seq(body), in order; the caller adopts them (Outbox::adopt) before the next answer.
   std::vector<Numbered> receive(const FleetContributions& m, const Outbox& outbox, int64_t now_utime);
   /// The request due now (none, or one per kMaxRangesPerMessage streams), each range from the stream's next number
-  /// and at most max_repair_range long; ends the wait when it is over (the first call starts its clock).
-  std::vector<FleetControl> requests(const Outbox& outbox, int64_t now_utime);
+  /// and at most max_repair_range long.  When the wait is over (the first call starts its clock) it ends, and `ended`
+  /// receives what was held ahead, per stream in order from its next number with kNothing in the holes, to adopt.
+  std::vector<FleetControl> requests(const Outbox& outbox, int64_t now_utime,
+                                     std::vector<std::pair<std::string, Numbered>>& ended);
   const TailCounters& counters() const { return counters_; }
 
  private:
@@ -326,7 +340,10 @@ class TailFetch {
   FleetExchangeOptions options_;
   std::set<std::string> members_;
   std::set<std::string> bodies_;
-  bool waiting_ = false;
+  /// The contributions held ahead of the stream's next number, in order from it with kNothing in the holes.
+  std::vector<std::pair<std::string, Numbered>> fill_holes(const Outbox& outbox);
+  std::map<std::string, std::map<int64_t, What>> ahead_;  // per stream, by number
+  bool waiting_ = false, stop_ = false;
   int64_t quiet_until_ = 0;  // the wait's end (0: its clock not started)
   int64_t ask_at_ = 0;
   double backoff_s_ = 0;
@@ -363,10 +380,12 @@ struct FleetExchange {
   /// The counters of both sides and the sizes now, named for the status channel (fleet_out_*, fleet_in_*).
   std::vector<std::pair<std::string, int64_t>> counters() const;
   /// What is due now: the FLEET messages queued, the heartbeat (or while fetching, the request for the tails) and the
-  /// repair requests.
+  /// repair requests; when the fetch ends, what it held ahead of the streams (already in the outbox), to adopt in this
+  /// order (SlamGraph::adopt).
   struct Due {
     std::vector<FleetContributions> contributions;
     std::vector<FleetControl> control;
+    std::vector<slam::GraphContribution> own;
   };
   Due due(int64_t now_utime);
   void save(archive::ArchiveWriter& w) const {

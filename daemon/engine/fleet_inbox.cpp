@@ -238,6 +238,11 @@ const Retained* Inbox::copy_of(const std::string& body, const std::string& owner
   return it == streams_.end() || it->second.owner != owner ? nullptr : &it->second.copy;
 }
 
+const std::map<int64_t, What>* Inbox::held_of(const std::string& body, const std::string& owner) const {
+  const auto it = streams_.find(body);
+  return it == streams_.end() || it->second.owner != owner ? nullptr : &it->second.held;
+}
+
 std::string Inbox::owner(const std::string& body) const {
   auto it = streams_.find(body);
   return it == streams_.end() ? std::string() : it->second.owner;

@@ -156,9 +156,22 @@ std::vector<FleetContributions> Outbox::answer_tail(const FleetControl& request,
   ++counters_.tail_requests;
   Bucket& b = bucket(request.sender, now_utime);
   std::vector<FleetContributions> out;
-  for (const FleetRange& range : request.streams)
+  for (const FleetRange& range : request.streams) {
     if (const Retained* copy = copies.copy_of(range.body, request.sender))
       answer_range(range, *copy, copy->last(), b, now_utime, out);
+    // What is held ahead of a gap, run by run: the owner may have lost the gap too, and then numbers its next
+    // contributions after these (TailFetch), as this daemon will apply them.
+    const std::map<int64_t, What>* held = copies.held_of(range.body, request.sender);
+    Retained run;
+    for (auto it = held ? held->lower_bound(range.first) : std::map<int64_t, What>::const_iterator{};
+         held && it != held->end(); ++it) {
+      run.push(Numbered{it->first, it->second});
+      const auto next = std::next(it);
+      if (next != held->end() && next->first == it->first + 1) continue;
+      answer_range(FleetRange{range.body, run.first(), range.last}, run, run.last(), b, now_utime, out);
+      run.clear();
+    }
+  }
   return out;
 }
 

@@ -19,6 +19,8 @@ void TailFetch::start(const Outbox& outbox) {
   bodies_ = std::set<std::string>(bodies.begin(), bodies.end());
   const bool others = std::any_of(members_.begin(), members_.end(), [&](const auto& m) { return m != self_; });
   waiting_ = others && !bodies_.empty();
+  stop_ = false;
+  ahead_.clear();
   quiet_until_ = 0;
   ask_at_ = 0;
   backoff_s_ = options_.repair_backoff_s;
@@ -33,18 +35,23 @@ std::vector<Numbered> TailFetch::receive(const FleetContributions& m, const Outb
     return {};
   }
   int64_t next = outbox.next_seq(m.body);
-  if (m.first > next) {  // it does not continue the stream: the next request asks from `next` again
-    counters_.out_of_order += n;
-    return {};
-  }
+  std::map<int64_t, What>& ahead = ahead_[m.body];
   std::vector<Numbered> out;
   for (int64_t i = 0; i < n; ++i) {
-    if (m.first + i < next) {
+    const int64_t seq = m.first + i;
+    const What& what = m.contributions[static_cast<size_t>(i)];
+    if (seq < next || ahead.contains(seq)) {
       ++counters_.duplicates;
-      continue;
+    } else if (seq == next) {
+      out.push_back(Numbered{next++, what});
+    } else if (seq - next < options_.reorder_window) {
+      ahead.emplace(seq, what);  // the next request asks from `next` again
+    } else {
+      ++counters_.out_of_order;
     }
-    out.push_back(Numbered{next++, m.contributions[static_cast<size_t>(i)]});
   }
+  for (auto it = ahead.begin(); it != ahead.end() && it->first <= next; it = ahead.erase(it))
+    if (it->first == next) out.push_back(Numbered{next++, std::move(it->second)});
   if (!out.empty()) {  // more may follow: the wait goes on, and the rest is asked for soon
     counters_.adopted += static_cast<int64_t>(out.size());
     quiet_until_ = now_utime + std::max<int64_t>(micros(options_.restart_wait_s), 1);
@@ -54,14 +61,31 @@ std::vector<Numbered> TailFetch::receive(const FleetContributions& m, const Outb
   return out;
 }
 
-std::vector<FleetControl> TailFetch::requests(const Outbox& outbox, int64_t now_utime) {
+std::vector<std::pair<std::string, Numbered>> TailFetch::fill_holes(const Outbox& outbox) {
+  std::vector<std::pair<std::string, Numbered>> out;
+  for (auto& [body, ahead] : ahead_) {
+    int64_t next = outbox.next_seq(body);
+    for (auto& [seq, what] : ahead) {
+      if (seq < next) continue;
+      counters_.lost += seq - next;
+      for (; next < seq; ++next) out.emplace_back(body, Numbered{next, kNothing});
+      out.emplace_back(body, Numbered{next++, std::move(what)});
+    }
+  }
+  ahead_.clear();
+  return out;
+}
+
+std::vector<FleetControl> TailFetch::requests(const Outbox& outbox, int64_t now_utime,
+                                              std::vector<std::pair<std::string, Numbered>>& ended) {
   if (!waiting_) return {};
   if (quiet_until_ == 0) {  // the first call after the restart: this run's clock
     quiet_until_ = now_utime + std::max<int64_t>(micros(options_.restart_wait_s), 1);
     ask_at_ = now_utime;
   }
-  if (now_utime >= quiet_until_) {
+  if (stop_ || now_utime >= quiet_until_) {
     waiting_ = false;
+    ended = fill_holes(outbox);
     return {};
   }
   if (now_utime < ask_at_) return {};

@@ -140,6 +140,7 @@ void GraphStage::exchange(const Event& e, Outputs& out, const Emit& emit) {
   slam_.apply_all(r.apply, out);
   for (FleetContributions& a : r.answers) emit(std::move(a));
   fleet::FleetExchange::Due due = exchange_->due(exchange_now_);
+  for (const slam::GraphContribution& c : due.own) slam_.adopt(c, out);
   for (FleetContributions& m : due.contributions) emit(std::move(m));
   for (FleetControl& c : due.control) emit(std::move(c));
   if (!exchange_->fetching()) release_held(emit);
@@ -222,9 +223,10 @@ void GraphStage::publish_map(const std::string& frame, int64_t utime, bool flush
 }
 
 void GraphStage::finish(const Emit& emit) {
-  if (exchange_ && !held_.empty()) {  // stopped while waiting for the tails: the inputs held back are not lost
+  if (exchange_ && exchange_->fetching()) {  // stopped while waiting for the tails: the inputs held back are not lost
     exchange_->tail.stop();
-    release_held(emit);
+    Outputs out(*this, emit);
+    exchange(FleetControl{}, out, emit);
   }
   for (const std::string& source : slam_.bodies()) {
     const slam::KeyframeTrack* track = slam_.track(source);

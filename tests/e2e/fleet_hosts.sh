@@ -4,8 +4,8 @@
 # ROBOTn_) and exchanges graph contributions with the others over LCM (FLEET, FLEET_CONTROL).  Every host drops 10 %
 # of the datagrams it receives, host 2 (its daemon and its robot) starts 3 s after the others and takes their history
 # by repair, and host 3's link is cut for 8 s in the middle of the run.  Meanwhile host 1's daemon is killed (SIGKILL:
-# no final save) a moment after one of its periodic saves, its robot's log held while it is down, and restarted on
-# its state directory: it takes back from host 2 what it sent since that save.  After the run, every
+# no final save) 3.5 s after one of its periodic saves, its robot's log held while it is down, and restarted on its
+# state directory: it takes back from host 2 what it sent since that save.  After the run, every
 # daemon's view of every robot (its TRAJECTORY) must be the single daemon's (`sextant replay` of the whole fleet)
 # within 1 cm RMS with no keyframe missing, all in one map frame; host 1 took its tail back and no daemon saw a
 # stream rewound.
@@ -31,7 +31,7 @@ daemon:
   name: $1
   status_period_s: 0.5
   state_dir: "${4:-}"
-  state_period_s: 3.0
+  state_period_s: 5.0
 channels:
   prefix: "$2"
 engine:
@@ -75,12 +75,14 @@ start_host() {  # its logger, its daemon, then its robot's log
   in_host \$n lcm-logplayer -s 4 "$work/robot\$n.lcm" > /dev/null &
   players[\$n]=\$!
 }
-restart_host1() {  # killed 1.5 s after a periodic save (its robot held meanwhile), restarted on its state directory
+restart_host1() {  # killed 3.5 s after a periodic save (its robot held meanwhile), restarted on its state directory
   touch "$work/mark"
   until [ "$work/state1/sextantd.state" -nt "$work/mark" ]; do sleep 0.05; done
-  sleep 1.5
+  sleep 1
   kill -STOP \${players[1]}
-  sleep 0.5  # what the robot sent is handled (and contributed) before the kill
+  # What the robot sent is handled and contributed, and host 2 has repaired what it lost of it (a heartbeat shows a
+  # lost tail), before the kill: a contribution no other daemon holds cannot be taken back.
+  sleep 2.5
   kill -KILL \${daemons[1]}
   wait \${daemons[1]} || true
   start_daemon 1 "$work/daemon1_restarted.log"

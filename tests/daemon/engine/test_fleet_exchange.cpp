@@ -441,7 +441,7 @@ TEST_CASE("fleet exchange: one call per fleet event gives what to apply and what
   REQUIRE(answer.answers.size() == 1);
   CHECK(answer.answers[0].repair);
   const auto counters = c.counters();
-  CHECK(counters.size() == 33);
+  CHECK(counters.size() == 34);
   CHECK(std::find(counters.begin(), counters.end(), std::pair<std::string, int64_t>{"fleet_in_delivered", 2}) !=
         counters.end());
   CHECK(std::find(counters.begin(), counters.end(), std::pair<std::string, int64_t>{"fleet_in_claimed", 1}) !=
@@ -467,7 +467,9 @@ struct FetchRound {
 
 FetchRound fetch_round(FleetExchange& owner, const std::vector<FleetExchange*>& peers, int64_t now) {
   FetchRound round;
-  for (const FleetControl& c : owner.due(now).control) {
+  const FleetExchange::Due due = owner.due(now);
+  for (const auto& own : due.own) round.adopted.push_back(key(own.what));  // the wait's end: what was held ahead
+  for (const FleetControl& c : due.control) {
     if (c.kind == FleetControl::Kind::kHeartbeat) {
       ++round.heartbeats;
       continue;
@@ -558,9 +560,10 @@ TEST_CASE(
     FleetContributions m{3000000, std::move(sender), "r1", true, first, {keyframe("r1", id).what}};
     return restarted.received(m, 3000000).own.size();
   };
-  CHECK(answer("x", 6, 5) == 0);  // a non-member
-  CHECK(answer("a", 6, 5) == 0);  // itself (its own repairs brought back: not counted)
-  CHECK(answer("b", 8, 7) == 0);  // does not continue the stream (6 is next)
+  CHECK(answer("x", 6, 5) == 0);         // a non-member
+  CHECK(answer("a", 6, 5) == 0);         // itself (its own repairs brought back: not counted)
+  CHECK(answer("b", 8, 7) == 0);         // does not continue the stream (6 is next): held
+  CHECK(answer("b", 6 + 4096, 7) == 0);  // beyond the reorder window: dropped
   CHECK(restarted.tail.counters().refused == 1);
   CHECK(restarted.tail.counters().out_of_order == 1);
   CHECK(restarted.outbox.next_seq("r1") == 6);
@@ -631,4 +634,47 @@ TEST_CASE("fleet exchange: the others' answers to a restarted owner open no stre
   CHECK(d.inbox.owner("r1").empty());
   CHECK(a.received(answers[0], 2000000).own.empty());  // a, not restarted, ignores it
   CHECK(a.inbox.counters().repairs_overheard == 1);
+}
+
+TEST_CASE(
+    "fleet exchange: what a member holds beyond a gap nobody can fill is taken back after a placeholder, and that "
+    "member applies the same sequence") {
+  FleetExchange a("a", options()), b("b", options());
+  for (int64_t id = 0; id < 4; ++id) CHECK(a.contributed(keyframe("r1", id)));
+  for (const auto& m : a.due(1000000).contributions) CHECK(b.received(m, 1000000).apply.size() == 4);
+  archive::ArchiveWriter w;
+  a.save(w);
+  for (int64_t id = 4; id < 8; ++id) CHECK(a.contributed(keyframe("r1", id)));  // numbers 5 to 8
+  for (const auto& m : a.due(1100000).contributions) REQUIRE(m.contributions.size() == 4);
+  // b gets 5, 7 and 8 (6 lost), then a is killed before it resends 6.
+  std::vector<std::string> at_b;
+  const auto to_b = [&](int64_t seq, int64_t now) {
+    FleetContributions m{now, "a", "r1", false, seq, {keyframe("r1", seq - 1).what}};
+    for (const auto& c : b.received(m, now).apply) at_b.push_back(key(c.what));
+  };
+  for (int64_t seq : {5, 7, 8}) to_b(seq, 1100000);
+  CHECK(at_b == std::vector<std::string>{"k4"});
+  FleetExchange restarted = restart("a", w.data(), options());
+  std::vector<std::string> adopted;
+  int64_t now = 2000000;
+  for (; restarted.fetching(); now += 100000) {
+    const FetchRound round = fetch_round(restarted, {&b}, now);
+    adopted.insert(adopted.end(), round.adopted.begin(), round.adopted.end());
+    if (!restarted.fetching()) break;
+  }
+  CHECK(adopted == std::vector<std::string>{"k4", "?", "k6", "k7"});  // 7 and 8 at the wait's end, after 6's place
+  CHECK(restarted.tail.counters().lost == 1);
+  CHECK(restarted.outbox.next_seq("r1") == 9);
+  // b asks the owner for 6: a placeholder that changes no graph, then b applies 7 and 8 as the owner did.
+  for (const auto& request : b.due(now + 1000000).control) {
+    if (request.kind != FleetControl::Kind::kRepair) continue;
+    for (const auto& answer : restarted.received(request, now + 1000000).answers)
+      for (const auto& c : b.received(answer, now + 1000000).apply) at_b.push_back(key(c.what));
+  }
+  CHECK(at_b == std::vector<std::string>{"k4", "?", "k6", "k7"});
+  const Retained* copy = b.inbox.copy_of("r1", "a");
+  REQUIRE(copy != nullptr);
+  CHECK(copy->items.size() == 8);
+  CHECK(std::get<slam::KeyframesThinned>(copy->items[5].what).keyframes == std::vector<int64_t>{INT64_MAX});
+  CHECK(b.inbox.counters().owner_rewound == 0);
 }
