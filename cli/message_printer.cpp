@@ -4,6 +4,7 @@
 
 #include <sextant/bearing_scan_t.hpp>
 #include <sextant/fused_pose_t.hpp>
+#include <sextant/geo_pose_t.hpp>
 #include <sextant/landmarks_t.hpp>
 #include <sextant/loop_closure_t.hpp>
 #include <sextant/match_request_t.hpp>
@@ -46,6 +47,12 @@ std::string describe(const sextant::fused_pose_t& m) {
          pose_text(m.position, m.orientation) +
          fmt(" sigma_xy %.3f m lag %.3f s", std::sqrt(std::max(0.0, m.covariance[0] + m.covariance[7])),
              m.lag_us * 1e-6);
+}
+std::string describe(const sextant::geo_pose_t& m) {
+  return fmt("geo_pose_t %s seq %lld t=%.6f %s/%s lat %.8f lon %.8f alt %.3f sigma_en %.3f m%s", m.sender.c_str(),
+             (long long)m.seq, m.utime * 1e-6, m.source.c_str(), m.estimator.c_str(), m.latitude, m.longitude,
+             m.altitude, std::sqrt(std::max(0.0, m.position_covariance[0] + m.position_covariance[4])),
+             m.heading_known ? "" : " (heading not yet known)");
 }
 std::string describe(const sextant::landmarks_t& m) {
   return fmt("landmarks_t %s seq %lld t=%.6f source=%s observations=%d", m.sender.c_str(), (long long)m.seq,
@@ -106,7 +113,8 @@ bool try_describe(const void* data, size_t size, std::string& out) {
 std::string describe_message(const void* data, size_t size) {
   std::string out;
   if (try_describe<sextant::odometry_t>(data, size, out) || try_describe<sextant::fused_pose_t>(data, size, out) ||
-      try_describe<sextant::landmarks_t>(data, size, out) || try_describe<sextant::bearing_scan_t>(data, size, out) ||
+      try_describe<sextant::geo_pose_t>(data, size, out) || try_describe<sextant::landmarks_t>(data, size, out) ||
+      try_describe<sextant::bearing_scan_t>(data, size, out) ||
       try_describe<sextant::loop_closure_t>(data, size, out) ||
       try_describe<sextant::match_request_t>(data, size, out) || try_describe<sextant::trajectory_t>(data, size, out) ||
       try_describe<sextant::targets_t>(data, size, out) || try_describe<sextant::truth_t>(data, size, out) ||

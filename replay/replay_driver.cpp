@@ -135,6 +135,9 @@ void ReplayCollector::output(const engine::Output& o) {
         using T = std::decay_t<decltype(x)>;
         if constexpr (std::is_same_v<T, engine::FusedPose>) {
           fused_pose(x);
+        } else if constexpr (std::is_same_v<T, engine::GeoPose>) {
+          ++result_.geo_pose_messages;
+          result_.last_geo_poses[x.source + "/" + x.estimator] = x;
         } else if constexpr (std::is_same_v<T, engine::Trajectory>) {
           ++result_.trajectory_messages;
           if (keep_all_) result_.trajectories.push_back(x);

@@ -103,6 +103,8 @@ struct ReplayResult {
   // Totals (what the series above hold may be a sample or nothing: ReplayOptions::max_kept).
   std::map<std::string, int64_t> fused_pose_counts;           // by estimator
   std::map<std::string, engine::FusedPose> last_fused_poses;  // by estimator
+  std::map<std::string, engine::GeoPose> last_geo_poses;      // by "<source>/<estimator>"
+  int64_t geo_pose_messages = 0;
   int64_t trajectory_messages = 0, target_messages = 0, match_request_messages = 0, landmark_map_messages = 0;
   int64_t fleet_messages = 0;           // FLEET and FLEET_CONTROL (engine.graph.fleet.exchange)
   std::vector<SegmentReport> segments;  // ReplayOptions::segment_seconds

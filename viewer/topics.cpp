@@ -240,6 +240,20 @@ struct TopicMapper::Views {
     if (!options.batch_frame_transforms) flush(o);
   }
 
+  /// On Foxglove's Map panel: the body's position on the Earth, with its ENU covariance.
+  void geo_pose(const sextant::geo_pose_t& m, std::vector<ViewerMessage>& o) {
+    Json covariance = Json::array();
+    for (double v : m.position_covariance) covariance.push_back(v);
+    out(o, "/sextant/" + m.source + "/" + m.estimator + "/fix", "foxglove.LocationFix",
+        Json{{"timestamp", stamp(m.utime)},
+             {"frame_id", m.source},
+             {"latitude", m.latitude},
+             {"longitude", m.longitude},
+             {"altitude", m.altitude},
+             {"position_covariance", std::move(covariance)},
+             {"position_covariance_type", 3}});  // KNOWN: the estimator's full covariance
+  }
+
   void flush(std::vector<ViewerMessage>& o) {
     if (pending_transforms.empty()) return;
     out(o, "/tf", "foxglove.FrameTransforms", Json{{"transforms", std::move(pending_transforms)}});
@@ -428,6 +442,9 @@ struct TopicMapper::Views {
     if (type.name == "sextant.fused_pose_t") {
       sextant::fused_pose_t m;
       if (decode(data, size, m)) fused_pose(m, o);
+    } else if (type.name == "sextant.geo_pose_t") {
+      sextant::geo_pose_t m;
+      if (decode(data, size, m)) geo_pose(m, o);
     } else if (type.name == "sextant.trajectory_t") {
       sextant::trajectory_t m;
       if (decode(data, size, m)) trajectory(m, o);

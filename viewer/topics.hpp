@@ -11,6 +11,8 @@
 //                                                                   best estimator so far (graph, then ekf, pf,
 //                                                                   dead_reckoning); one message per pose, or per batch
 //                                                                   (batch_frame_transforms)
+//   geo_pose_t                  /sextant/<source>/<estimator>/fix   foxglove.LocationFix (the Map panel): latitude,
+//                                                                   longitude, altitude and the ENU covariance
 //   trajectory_t                /sextant/trajectories               foxglove.SceneUpdate: each body's optimized trajectory
 //                                                                   rebuilt as trajectory_t.lcm says, a line strip + label
 //   landmark_map_t              /sextant/landmark_map               foxglove.SceneUpdate: each map frame's landmarks,

@@ -21,10 +21,14 @@
 //         queue depth, drops).
 //       --idle: no feeder (the baseline: the same measurement with the optimizer idle but for the measured body's own
 //       keyframes).
+//       --inertial: the sender publishes the body's IMU at --rate instead (inertial_track.hpp), its odometry with the
+//       twist every --odometry-every samples and a GNSS fix every --gnss-every; a fused pose is expected (and timed
+//       from the IMU sample of its utime) at the odometry's times only.
 //       Reports p50 / p99 / max of each latency (nearest rank), samples and lost messages per channel, and the
 //       optimizer's progress during the measurement.  Exit 1 when no fused pose of the body arrives on an expected
 //       channel, when no pong arrives, or when the optimizer did not run during the measurement; 3 when LCM
 //       cannot start.
+#include "bench/latency/inertial_track.hpp"
 #include "bench/latency/odometry_track.hpp"
 #include "daemon/runtime/codec.hpp"
 #include "daemon/runtime/latency_recorder.hpp"
@@ -232,20 +236,20 @@ struct ChannelResult {
   LatencySummary latency;
 };
 
+/// The latencies of the replies to the messages sent; one reply is expected per `every` messages (an estimator
+/// publishing at a fraction of the input's rate, in its own phase), the shortfall counted as lost.
 ChannelResult summarize(const std::string& channel, const std::string& label, const std::vector<int64_t>& arrivals,
-                        const std::vector<int64_t>& sent, size_t sent_count) {
+                        const std::vector<int64_t>& sent, size_t sent_count, size_t every = 1) {
   ChannelResult r;
   r.channel = channel;
   r.label = label;
   LatencyRecorder rec(std::max<size_t>(1, sent_count));
-  for (size_t k = 0; k < sent_count; ++k) {
-    if (arrivals.empty() || arrivals[k] < 0) {
-      ++r.lost;
-      continue;
-    }
+  for (size_t k = 0; k < sent_count && !arrivals.empty(); ++k) {
+    if (arrivals[k] < 0) continue;
     ++r.received;
     rec.add(static_cast<double>(arrivals[k] - sent[k]) * 1e-6);
   }
+  r.lost = std::max<int64_t>(0, static_cast<int64_t>((sent_count + every - 1) / every) - r.received);
   r.latency = rec.summary();
   return r;
 }
@@ -259,8 +263,43 @@ struct MeasureOptions {
   double duration_s = 60, rate_hz = 1000, warmup_s = 2, settle_s = 1.5;
   FeedOptions feed;
   bool idle = false;
+  // The inertial mode (InertialTrack): IMU at --rate, odometry with its twist every odometry_every samples, a GNSS
+  // fix every gnss_every; fused poses are expected at the odometry's times only.
+  bool inertial = false;
+  int64_t odometry_every = 20, gnss_every = 200;
+  std::string imu_channel = "IMU", gnss_channel = "GNSS";
   std::string json, samples;
 };
+
+template <class Msg>
+std::vector<uint8_t> encoded(const Msg& m) {
+  std::vector<uint8_t> bytes(static_cast<size_t>(m.getEncodedSize()));
+  m.encode(bytes.data(), 0, static_cast<int>(bytes.size()));
+  return bytes;
+}
+
+/// What the sender publishes at one step, in order, and the bytes it pings the echo with (the odometry message).
+struct Step {
+  std::vector<std::pair<const std::string*, std::vector<uint8_t>>> messages;
+  std::vector<uint8_t> ping;
+};
+
+Step next_step(const MeasureOptions& o, sextant::bench::OdometryTrack& track,
+               std::optional<sextant::bench::InertialTrack>& inertial, int64_t seq) {
+  using sextant::runtime::to_message;
+  Step s;
+  if (!inertial) {
+    s.ping = encoded(to_message(track.next(), "daemon_latency", seq));
+    s.messages.push_back({&o.odometry_channel, s.ping});
+    return s;
+  }
+  const sextant::bench::InertialSensors x = inertial->next();
+  s.ping = encoded(to_message(x.odometry, "daemon_latency", seq));
+  s.messages.push_back({&o.imu_channel, encoded(to_message(x.imu, "daemon_latency", seq))});
+  if (x.publish_odometry) s.messages.push_back({&o.odometry_channel, s.ping});
+  if (x.fix) s.messages.push_back({&o.gnss_channel, encoded(to_message(*x.fix, "daemon_latency", seq))});
+  return s;
+}
 
 /// The 1-minute load average (/proc/loadavg; -1 where there is none).
 double load_average() {
@@ -353,22 +392,22 @@ int run_measure(const MeasureOptions& o) {
   track_options.start_utime = start_utime;
   track_options.period_us = period_us;
   sextant::bench::OdometryTrack track(track_options);
+  std::optional<sextant::bench::InertialTrack> inertial;
+  if (o.inertial) inertial.emplace(track_options, o.odometry_every, o.gnss_every);
   const double load_begin = load_average();
   const int64_t t_begin = now_ns();
   {
     const auto t0 = Clock::now() + std::chrono::milliseconds(1);
     const std::chrono::microseconds period(period_us);
-    std::vector<uint8_t> bytes;
     for (size_t k = 0; k < count && !g_interrupted.load(); ++k) {
-      const auto msg = sextant::runtime::to_message(track.next(), "daemon_latency", static_cast<int64_t>(k));
-      bytes.resize(static_cast<size_t>(msg.getEncodedSize()));
-      msg.encode(bytes.data(), 0, static_cast<int>(bytes.size()));
+      const Step step = next_step(o, track, inertial, static_cast<int64_t>(k));
       std::this_thread::sleep_until(t0 + period * static_cast<int64_t>(k));
       sent_odo[k] = now_ns();
-      tx_lcm.publish(o.odometry_channel, bytes.data(), static_cast<unsigned>(bytes.size()));
+      for (const auto& [channel, bytes] : step.messages)
+        tx_lcm.publish(*channel, bytes.data(), static_cast<unsigned>(bytes.size()));
       std::this_thread::sleep_until(t0 + period * static_cast<int64_t>(k) + period / 2);
       sent_ping[k] = now_ns();
-      tx_lcm.publish(o.ping, bytes.data(), static_cast<unsigned>(bytes.size()));
+      tx_lcm.publish(o.ping, step.ping.data(), static_cast<unsigned>(step.ping.size()));
     }
   }
   const int64_t t_end = now_ns();
@@ -380,11 +419,13 @@ int run_measure(const MeasureOptions& o) {
 
   // Latencies.
   std::vector<ChannelResult> channels;
+  const auto every = static_cast<size_t>(o.inertial ? o.odometry_every : 1);
   for (const auto& [channel, arrivals] : receiver.arrivals)
     if (channel != o.pong)
-      channels.push_back(summarize(channel, "daemon " + receiver.estimator[channel], arrivals, sent_odo, sent));
+      channels.push_back(summarize(channel, "daemon " + receiver.estimator[channel], arrivals, sent_odo, sent, every));
   for (const auto& e : o.expect)
-    if (!receiver.arrivals.count(e)) channels.push_back(summarize(e, "daemon (nothing received)", {}, sent_odo, sent));
+    if (!receiver.arrivals.count(e))
+      channels.push_back(summarize(e, "daemon (nothing received)", {}, sent_odo, sent, every));
   const auto pong_it = receiver.arrivals.find(o.pong);
   const ChannelResult raw =
       summarize(o.pong, "raw LCM round trip (echo)",
@@ -424,9 +465,9 @@ int run_measure(const MeasureOptions& o) {
 
   // Report.
   std::printf(
-      "daemon latency: %zu odometry messages of '%s' at %.0f Hz over %.1f s; raw round trip: the same bytes at the "
-      "same rate\n",
-      sent, o.source.c_str(), o.rate_hz, window_ms * 1e-3);
+      "daemon latency: %zu %s of '%s' at %.0f Hz over %.1f s; raw round trip: odometry bytes at the same rate\n", sent,
+      o.inertial ? "IMU samples (odometry, GNSS at a fraction)" : "odometry messages", o.source.c_str(), o.rate_hz,
+      window_ms * 1e-3);
   std::printf("  1-minute load average at the start / end of the measurement: %.2f / %.2f\n", load_begin, load_end);
   std::printf("  %-26s %-28s %8s %6s %8s %8s %8s\n", "channel", "path", "samples", "lost", "p50_ms", "p99_ms",
               "max_ms");
@@ -612,6 +653,12 @@ int main(int argc, char** argv) {
   measure->add_option("--expect", mo.expect, "fused-pose channels that must deliver (fail otherwise)");
   measure->add_option("--ping", mo.ping, "ping channel");
   measure->add_option("--pong", mo.pong, "echo channel");
+  measure->add_flag("--inertial", mo.inertial,
+                    "IMU at --rate, odometry with its twist every --odometry-every samples, GNSS every --gnss-every");
+  measure->add_option("--odometry-every", mo.odometry_every, "IMU samples per odometry message (--inertial)")
+      ->check(CLI::PositiveNumber);
+  measure->add_option("--gnss-every", mo.gnss_every, "IMU samples per GNSS fix (--inertial)")
+      ->check(CLI::PositiveNumber);
   measure->add_option("--json", mo.json, "write the figures as JSON to this file");
   measure->add_option("--samples", mo.samples, "write every message's latencies as CSV to this file");
   CLI11_PARSE(app, argc, argv);

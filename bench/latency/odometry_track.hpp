@@ -38,12 +38,18 @@ class OdometryTrack {
     covariance_ = q_;
   }
 
+  /// w(t_k), rad/s.
+  double turn_rate(int64_t k) const {
+    const double t = static_cast<double>(k * o_.period_us) * 1e-6;
+    return o_.max_turn_rate * std::sin(2.0 * std::numbers::pi * t / o_.turn_period_s);
+  }
+  const OdometryTrackOptions& options() const { return o_; }
+
   /// The odometry message of step k = the number of previous calls (k = 0 is the identity pose).
   engine::Odometry next() {
     if (k_ > 0) {
       const double dt = static_cast<double>(o_.period_us) * 1e-6;
-      const double t = static_cast<double>(k_) * dt;
-      const double w = o_.max_turn_rate * std::sin(2.0 * std::numbers::pi * t / o_.turn_period_s);
+      const double w = turn_rate(k_);
       Vector6d xi = Vector6d::Zero();
       xi(0) = o_.speed * dt;
       xi(5) = w * dt;

@@ -16,7 +16,9 @@
 #      TRAJECTORY_RATE (the config's trajectory.rate_hz: TRAJECTORY publications per second, 0 = every update),
 #      COALESCE=0 (the graph stage takes every odometry message through its queue),
 #      SAMPLES (a CSV file: every message's latencies), IDLE=1 (the baseline: no background graph, optimizer idle),
-#      KEEP=1 (keep the work folder with the daemon's log).
+#      KEEP=1 (keep the work folder with the daemon's log),
+#      INERTIAL=1 (the body has an IMU at RATE, odometry with its twist at RATE/20 and GNSS at RATE/200; CONFIG defaults
+#      to bench/latency/inertial.yaml, the optimizer idle as with IDLE=1; FUSED_POSE is the inertial filter's).
 # Prints: the 1-minute load average before and after; per channel (FUSED_POSE = the EKF, FUSED_POSE_GRAPH = the
 # graph's pose, FUSED_POSE_DEAD_RECKONING, LATENCY_PONG = the raw round trip) samples, lost, p50/p99/max in ms and
 # the daemon/raw ratios; the optimizer during the measurement: keyframes and loops (total and per minute), solve
@@ -42,10 +44,10 @@ trap '[ -n "${KEEP:-}" ] || rm -rf "$work"' EXIT
 config="$work/daemon.yaml"
 sed -e "${TRAJECTORY_RATE:+s/rate_hz: [0-9.]*/rate_hz: $TRAJECTORY_RATE/}" \
     -e "${COALESCE:+s/coalesce_odometry: [a-z]*/coalesce_odometry: $([ "$COALESCE" = 0 ] && echo false || echo true)/}" \
-    "${CONFIG:-$root/bench/latency/daemon.yaml}" > "$config"
+    "${CONFIG:-$root/bench/latency/$([ -n "${INERTIAL:-}" ] && echo inertial || echo daemon).yaml}" > "$config"
 
-feed="--idle"
-if [ -z "${IDLE:-}" ]; then
+feed="--idle${INERTIAL:+ --inertial --expect FUSED_POSE}"
+if [ -z "${IDLE:-}" ] && [ -z "${INERTIAL:-}" ]; then
   "$bin/sextant" convert g2o "$graph" -o "$work/graph.lcm" > /dev/null
   feed="--feed $work/graph.lcm"
 fi

@@ -60,8 +60,9 @@ void check_channels(Section& s, const Channels& c) {
   Named inputs{{"odometry", c.odometry}, {"landmarks", c.landmarks},
                {"bearings", c.bearings}, {"loop_closures", c.loop_closures},
                {"imu", c.imu},           {"gnss", c.gnss}};
-  Named outputs{{"fused_pose", c.fused_pose},         {"trajectory", c.trajectory},     {"targets", c.targets},
-                {"match_requests", c.match_requests}, {"landmark_map", c.landmark_map}, {"status", c.status}};
+  Named outputs{{"fused_pose", c.fused_pose}, {"fused_geo", c.fused_geo},           {"trajectory", c.trajectory},
+                {"targets", c.targets},       {"match_requests", c.match_requests}, {"landmark_map", c.landmark_map},
+                {"status", c.status}};
   // The estimators that are not primary publish on FUSED_POSE_<ESTIMATOR> (publisher.hpp).
   for (const char* e : {"_DEAD_RECKONING", "_EKF", "_PF", "_GRAPH", "_INERTIAL"})
     outputs.push_back({"fused_pose", c.fused_pose + e});
@@ -104,6 +105,7 @@ void read_channels(Section s, Channels& c) {
                             {"imu", &c.imu},
                             {"gnss", &c.gnss},
                             {"fused_pose", &c.fused_pose},
+                            {"fused_geo", &c.fused_geo},
                             {"trajectory", &c.trajectory},
                             {"targets", &c.targets},
                             {"match_requests", &c.match_requests},

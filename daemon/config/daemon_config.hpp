@@ -18,6 +18,7 @@ struct Channels {
   std::string imu = "IMU";
   std::string gnss = "GNSS";
   std::string fused_pose = "FUSED_POSE";
+  std::string fused_geo = "FUSED_GEO";  // geo_pose_t: the poses of estimators anchored at a GNSS datum, on the Earth
   std::string trajectory = "TRAJECTORY";
   std::string targets = "TARGETS";
   std::string match_requests = "MATCH_REQUESTS";

@@ -1,4 +1,5 @@
 #include "daemon/engine/inertial_graph_stage.hpp"
+#include "daemon/engine/geo_pose.hpp"
 
 #include "daemon/engine/pose_covariance.hpp"
 #include "estimators/inertial/gnss_realign.hpp"
@@ -187,6 +188,7 @@ void InertialGraphStage::publish(const std::string& source, Body& b, int64_t uti
   b.last_published = utime;
   ++published_;
   emit(out);
+  if (b.plane) emit(to_geo_pose(out, *b.plane, !b.heading));
 }
 
 Counters InertialGraphStage::counters() const {

@@ -1,4 +1,5 @@
 #include "daemon/engine/inertial_stage.hpp"
+#include "daemon/engine/geo_pose.hpp"
 
 #include "estimators/inertial/gnss_realign.hpp"
 #include "estimators/lie/pose_covariance.hpp"
@@ -208,6 +209,7 @@ void InertialStage::publish(const std::string& source, Body& b, int64_t utime, c
   b.last_published = utime;
   ++published_;
   emit(out);
+  if (b.plane) emit(to_geo_pose(out, *b.plane, !b.heading));
 }
 
 Counters InertialStage::counters() const {

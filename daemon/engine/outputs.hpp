@@ -15,6 +15,19 @@ struct FusedPose {
   Matrix6 covariance = Matrix6::Zero();
 };
 
+/// A FusedPose on the Earth (geo_pose_t, channel FUSED_GEO), for the estimators whose map frame is the ENU plane of
+/// a GNSS datum: geodetic position, orientation and position covariance in the local ENU at the body (geo_pose.hpp).
+struct GeoPose {
+  int64_t utime = 0;
+  std::string source;
+  std::string estimator;
+  bool heading_known = false;                        // the map frame's heading is ENU (geo_pose_t.heading_known)
+  double latitude = 0, longitude = 0, altitude = 0;  // degrees, degrees, metres above the WGS84 ellipsoid
+  Eigen::Quaterniond orientation = Eigen::Quaterniond::Identity();  // body to local ENU
+  Eigen::Matrix3d position_covariance = Eigen::Matrix3d::Zero();    // m^2, local ENU
+  Eigen::Vector3d datum = Eigen::Vector3d::Zero();                  // latitude, longitude, altitude of the plane
+};
+
 struct Keyframe {
   int64_t id = 0;
   int64_t utime = 0;
@@ -87,6 +100,6 @@ struct LandmarkMap {
 /// FleetContributions and FleetControl (fleet_events.hpp): the graph stage's contributions, heartbeats, repair
 /// requests and answers for the other daemons of a fleet (FLEET, FLEET_CONTROL); the publisher stamps the sender.
 using Output =
-    std::variant<FusedPose, Trajectory, MatchRequest, Targets, LandmarkMap, FleetContributions, FleetControl>;
+    std::variant<FusedPose, GeoPose, Trajectory, MatchRequest, Targets, LandmarkMap, FleetContributions, FleetControl>;
 
 }  // namespace sextant::engine

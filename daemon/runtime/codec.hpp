@@ -9,6 +9,7 @@
 #include <sextant/fleet_contribution_t.hpp>
 #include <sextant/fleet_control_t.hpp>
 #include <sextant/fused_pose_t.hpp>
+#include <sextant/geo_pose_t.hpp>
 #include <sextant/gnss_t.hpp>
 #include <sextant/imu_t.hpp>
 #include <sextant/landmarks_t.hpp>
@@ -82,6 +83,7 @@ sextant::loop_closure_t to_message(const engine::LoopClosure& e, const std::stri
 sextant::imu_t to_message(const engine::ImuSample& e, const std::string& sender, int64_t seq);
 sextant::gnss_t to_message(const engine::GnssFix& e, const std::string& sender, int64_t seq);
 sextant::fused_pose_t to_message(const engine::FusedPose& o, const std::string& sender, int64_t seq);
+sextant::geo_pose_t to_message(const engine::GeoPose& o, const std::string& sender, int64_t seq);
 sextant::trajectory_t to_message(const engine::Trajectory& o, const std::string& sender, int64_t seq);
 sextant::match_request_t to_message(const engine::MatchRequest& o, const std::string& sender, int64_t seq);
 sextant::targets_t to_message(const engine::Targets& o, const std::string& sender, int64_t seq);
@@ -93,6 +95,7 @@ sextant::fleet_item_t to_item(const slam::GraphContribution::What& what);
 
 /// Message -> output (for replay reports, tests and `sextant listen`); no validation beyond decoding.
 engine::FusedPose to_output(const sextant::fused_pose_t& m);
+engine::GeoPose to_output(const sextant::geo_pose_t& m);
 engine::Trajectory to_output(const sextant::trajectory_t& m);
 engine::MatchRequest to_output(const sextant::match_request_t& m);
 engine::Targets to_output(const sextant::targets_t& m);

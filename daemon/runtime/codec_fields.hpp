@@ -16,19 +16,28 @@ void copy_row_major(const Eigen::Matrix<double, N, N>& m, double* out) {
   dst = m;
 }
 
-inline void copy_pose(const engine::Pose& p, double pos[3], double quat[4]) {
-  for (int i = 0; i < 3; ++i) pos[i] = p.position[i];
-  const Eigen::Quaterniond q = p.orientation.normalized();
+/// A rotation as the messages' quaternion [w, x, y, z], normalized.
+inline void copy_quaternion(const Eigen::Quaterniond& orientation, double quat[4]) {
+  const Eigen::Quaterniond q = orientation.normalized();
   quat[0] = q.w();
   quat[1] = q.x();
   quat[2] = q.y();
   quat[3] = q.z();
 }
 
+inline void copy_pose(const engine::Pose& p, double pos[3], double quat[4]) {
+  for (int i = 0; i < 3; ++i) pos[i] = p.position[i];
+  copy_quaternion(p.orientation, quat);
+}
+
+inline Eigen::Quaterniond read_quaternion(const double quat[4]) {
+  return Eigen::Quaterniond(quat[0], quat[1], quat[2], quat[3]);
+}
+
 inline engine::Pose read_pose(const double pos[3], const double quat[4]) {
   engine::Pose p;
   p.position = Eigen::Vector3d(pos[0], pos[1], pos[2]);
-  p.orientation = Eigen::Quaterniond(quat[0], quat[1], quat[2], quat[3]);
+  p.orientation = read_quaternion(quat);
   return p;
 }
 

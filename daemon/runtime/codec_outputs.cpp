@@ -18,6 +18,20 @@ sextant::fused_pose_t to_message(const engine::FusedPose& o, const std::string& 
   return m;
 }
 
+sextant::geo_pose_t to_message(const engine::GeoPose& o, const std::string& sender, int64_t seq) {
+  auto m = message_header<sextant::geo_pose_t>(o.utime, sender, seq);
+  m.source = o.source;
+  m.estimator = o.estimator;
+  m.heading_known = o.heading_known;
+  m.latitude = o.latitude;
+  m.longitude = o.longitude;
+  m.altitude = o.altitude;
+  copy_quaternion(o.orientation, m.orientation);
+  copy_row_major<3>(o.position_covariance, m.position_covariance);
+  for (int i = 0; i < 3; ++i) m.datum[i] = o.datum[i];
+  return m;
+}
+
 sextant::trajectory_t to_message(const engine::Trajectory& o, const std::string& sender, int64_t seq) {
   auto m = message_header<sextant::trajectory_t>(o.utime, sender, seq);
   m.source = o.source;
@@ -111,6 +125,21 @@ engine::FusedPose to_output(const sextant::fused_pose_t& m) {
   o.planar = m.planar;
   o.pose = read_pose(m.position, m.orientation);
   o.covariance = read_matrix<6>(m.covariance);
+  return o;
+}
+
+engine::GeoPose to_output(const sextant::geo_pose_t& m) {
+  engine::GeoPose o;
+  o.utime = m.utime;
+  o.source = m.source;
+  o.estimator = m.estimator;
+  o.heading_known = m.heading_known;
+  o.latitude = m.latitude;
+  o.longitude = m.longitude;
+  o.altitude = m.altitude;
+  o.orientation = read_quaternion(m.orientation);
+  o.position_covariance = read_matrix<3>(m.position_covariance);
+  o.datum = Eigen::Vector3d(m.datum[0], m.datum[1], m.datum[2]);
   return o;
 }
 

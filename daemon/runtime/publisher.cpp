@@ -64,6 +64,8 @@ bool Publisher::publish(const engine::Output& output) {
             lag_min_ = std::min(lag_min_.value_or(lag_.last_us), lag_.last_us);
           }
           send(channel, std::move(m));
+        } else if constexpr (std::is_same_v<T, engine::GeoPose>) {
+          send(channels_.full(channels_.fused_geo), to_message(o, sender_, 0));
         } else if constexpr (std::is_same_v<T, engine::Trajectory>) {
           send(channels_.full(channels_.trajectory), to_message(o, sender_, 0));
         } else if constexpr (std::is_same_v<T, engine::MatchRequest>) {

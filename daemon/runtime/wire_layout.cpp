@@ -223,6 +223,16 @@ const WireLayout& wire_layout<sextant::fused_pose_t>() {
 }
 
 template <>
+const WireLayout& wire_layout<sextant::geo_pose_t>() {
+  static const WireLayout l{
+      "geo_pose_t",
+      {i64("utime"), str("sender"), i64("seq"), str("source"), str("estimator"), boolean("heading_known"),
+       doubles("latitude", 1), doubles("longitude", 1), doubles("altitude", 1), doubles("orientation", 4),
+       doubles("position_covariance", 9), doubles("datum", 3)}};
+  return l;
+}
+
+template <>
 const WireLayout& wire_layout<sextant::status_t>() {
   static const WireLayout channel{
       "channel_status_t",

@@ -14,6 +14,7 @@
 #include <sextant/fleet_contribution_t.hpp>
 #include <sextant/fleet_control_t.hpp>
 #include <sextant/fused_pose_t.hpp>
+#include <sextant/geo_pose_t.hpp>
 #include <sextant/gnss_t.hpp>
 #include <sextant/imu_t.hpp>
 #include <sextant/landmarks_t.hpp>
@@ -93,6 +94,8 @@ const WireLayout& wire_layout<sextant::match_request_t>();
 template <>
 const WireLayout& wire_layout<sextant::fused_pose_t>();
 template <>
+const WireLayout& wire_layout<sextant::geo_pose_t>();
+template <>
 const WireLayout& wire_layout<sextant::status_t>();
 template <>
 const WireLayout& wire_layout<sextant::trajectory_t>();
@@ -126,6 +129,8 @@ template <>
 inline constexpr bool kHasWireLayout<sextant::match_request_t> = true;
 template <>
 inline constexpr bool kHasWireLayout<sextant::fused_pose_t> = true;
+template <>
+inline constexpr bool kHasWireLayout<sextant::geo_pose_t> = true;
 template <>
 inline constexpr bool kHasWireLayout<sextant::status_t> = true;
 template <>

@@ -4,6 +4,7 @@
 
 #include <doctest/doctest.h>
 #include <sextant/fused_pose_t.hpp>
+#include <sextant/geo_pose_t.hpp>
 #include <sextant/targets_t.hpp>
 #include <sextant/trajectory_t.hpp>
 
@@ -70,6 +71,32 @@ TEST_CASE("a fused pose: its as-is topic, a PoseInFrame and the frames map -> so
   const Json tf2 = Json::parse(on(map(mapper, "FUSED_POSE", pose("dead_reckoning", 9)), "/tf").data);
   CHECK(tf2["transforms"].size() == 1);
   CHECK(tf2["transforms"][0]["child_frame_id"] == "robot1/dead_reckoning");
+}
+
+TEST_CASE("a pose on the Earth: its as-is topic and a LocationFix for the Map panel, with its ENU covariance") {
+  TopicMapper mapper;
+  sextant::geo_pose_t g{};
+  g.utime = 3'250'000;
+  g.source = "husky";
+  g.estimator = "inertial";
+  g.heading_known = true;
+  g.latitude = 40.5, g.longitude = -73.25, g.altitude = 12.5;
+  g.orientation[0] = 1;
+  for (int i = 0; i < 9; ++i) g.position_covariance[i] = i % 4 == 0 ? 0.25 * (1 + i / 4) : 0.01;
+  const auto out = map(mapper, "FUSED_GEO", g);
+  REQUIRE(out.size() == 2);
+  CHECK(out[0].schema->name == "sextant.geo_pose_t");
+  const ViewerMessage& fix = on(out, "/sextant/husky/inertial/fix");
+  CHECK(fix.schema->name == "foxglove.LocationFix");
+  const Json j = Json::parse(fix.data);
+  CHECK(j["timestamp"]["sec"] == 3);
+  CHECK(j["timestamp"]["nsec"] == 250'000'000);
+  CHECK(j["latitude"] == 40.5);
+  CHECK(j["longitude"] == -73.25);
+  CHECK(j["altitude"] == 12.5);
+  REQUIRE(j["position_covariance"].size() == 9);
+  for (int i = 0; i < 9; ++i) CHECK(j["position_covariance"][i].get<double>() == g.position_covariance[i]);
+  CHECK(j["position_covariance_type"] == 3);
 }
 
 namespace {

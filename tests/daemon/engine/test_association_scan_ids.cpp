@@ -2,6 +2,7 @@
 // make every later scan "late", whether it is associated at once (expected_sensors), at the end of input (finish at
 // shutdown) or carried through a saved state; a true renumbering is followed after a run of scans that agree on it.
 #include "daemon/engine/association_stage.hpp"
+#include "daemon/stage_counters.hpp"
 
 #include <doctest/doctest.h>
 
@@ -11,6 +12,8 @@
 
 using namespace sextant;
 using namespace sextant::engine;
+
+using sextant::stage_counters::counter;
 
 namespace {
 
@@ -47,13 +50,6 @@ struct Sink {
 void feed(AssociationStage& stage, int64_t from, int64_t to, const Emit& emit) {
   for (int64_t id = from; id <= to; ++id)
     for (int sensor = 1; sensor <= 3; ++sensor) stage.handle(scan_of(sensor, id), emit);
-}
-
-int64_t counter(const Stage& stage, const std::string& name) {
-  for (const auto& [n, v] : stage.counters())
-    if (n == name) return v;
-  FAIL("no counter " << name);
-  return -1;
 }
 
 }  // namespace

@@ -4,6 +4,7 @@
 // holding the keyframes near the truth, mis-identified sightings stopped by the gate (and by the robust kernel when
 // the gate is open), a 3-D body mapping 3-D landmarks, and the sightings the stage cannot use counted.
 #include "assoc/chi_square.hpp"
+#include "daemon/stage_counters.hpp"
 #include "daemon/engine/engine.hpp"
 #include "daemon/engine/graph_pose_stage.hpp"
 #include "daemon/engine/graph_stage.hpp"
@@ -25,6 +26,8 @@
 
 using namespace sextant;
 using namespace sextant::engine;
+
+using sextant::stage_counters::counter;
 
 namespace {
 
@@ -177,12 +180,6 @@ GraphStage& graph_stage_of(Engine& engine) {
   for (auto& s : engine.stages())
     if (s->kind() == StageKind::kGraph) return dynamic_cast<GraphStage&>(*s);
   throw std::runtime_error("no graph stage");
-}
-
-int64_t counter(const Stage& s, const std::string& name) {
-  for (const auto& [k, v] : s.counters())
-    if (k == name) return v;
-  return -1;
 }
 
 double keyframe_error(const GraphStage& g, const Run& r) {

@@ -3,6 +3,7 @@
 // work stay flat from the first quarter of the run to the last; loops to old places still close; the accuracy stays
 // close to the full-history graph's; TRAJECTORY rebuilt from its messages equals the final keyframes.
 #include "daemon/config/daemon_config.hpp"
+#include "daemon/stage_counters.hpp"
 #include "daemon/engine/trajectory_rebuild.hpp"
 #include "daemon/runtime/lcm_log.hpp"
 #include "replay/replay_driver.hpp"
@@ -18,18 +19,13 @@
 
 using namespace sextant;
 
+using sextant::stage_counters::counter;
+
 namespace {
 
 std::string temp_path(const std::string& name) {
   return (std::filesystem::temp_directory_path() / ("sextant_test_" + std::to_string(::getpid()) + "_" + name))
       .string();
-}
-
-int64_t counter(const engine::Counters& c, const std::string& name) {
-  for (const auto& [n, v] : c)
-    if (n == name) return v;
-  FAIL("no counter " << name);
-  return 0;
 }
 
 config::DaemonConfig graph_config(bool lifelong) {

@@ -2,6 +2,7 @@
 // IncrementalOptions::fail_factorization_at_update): the failed update is counted, the stage keeps taking keyframes
 // and loops and publishing, and its map ends where the map of a stage without the fault ends.
 #include "daemon/engine/graph_stage.hpp"
+#include "daemon/stage_counters.hpp"
 #include "daemon/engine/pose_conversion.hpp"
 
 #include <doctest/doctest.h>
@@ -14,6 +15,8 @@
 
 using namespace sextant;
 using namespace sextant::engine;
+
+using sextant::stage_counters::counter;
 
 namespace {
 
@@ -59,12 +62,6 @@ std::vector<Event> circle_with_loops(double seconds, uint64_t seed) {
     }
   }
   return events;
-}
-
-int64_t counter(const Stage& s, const std::string& name) {
-  for (const auto& [k, v] : s.counters())
-    if (k == name) return v;
-  return -1;
 }
 
 }  // namespace

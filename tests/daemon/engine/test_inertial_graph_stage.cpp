@@ -3,6 +3,7 @@
 // its yaw not (nothing moves); a sensor without a mounting is counted; the engine makes the stage only when asked; a
 // body driving on a heading it does not know finds it from its first fixes and then follows them.
 #include "daemon/engine/engine.hpp"
+#include "daemon/stage_counters.hpp"
 #include "daemon/engine/inertial_graph_stage.hpp"
 #include "daemon/engine/straight_drive.hpp"
 
@@ -14,6 +15,8 @@
 
 using namespace sextant;
 using namespace sextant::engine;
+
+using sextant::stage_counters::counter;
 
 namespace {
 
@@ -49,12 +52,6 @@ Odometry still(int64_t utime) {
   return o;
 }
 
-int64_t counter(const Stage& s, const std::string& name) {
-  for (const auto& [n, v] : s.counters())
-    if (n == name) return v;
-  return -1;
-}
-
 }  // namespace
 
 TEST_CASE("inertial graph stage: a body at rest stays under its antenna, tilt observable, yaw not") {
@@ -62,7 +59,11 @@ TEST_CASE("inertial graph stage: a body at rest stays under its antenna, tilt ob
   c.gnss_heading.align = GnssHeadingConfig::Align::kNever;  // at rest: the start's yaw is taken as ENU
   InertialGraphStage stage(c);
   std::vector<FusedPose> out;
-  const Emit emit = [&](Output o) { out.push_back(std::get<FusedPose>(o)); };
+  std::vector<GeoPose> geo;
+  const Emit emit = [&](Output o) {
+    if (const auto* f = std::get_if<FusedPose>(&o)) out.push_back(*f);
+    if (const auto* g = std::get_if<GeoPose>(&o)) geo.push_back(*g);
+  };
   GnssFix fix;
   fix.source = "robot";
   fix.frame = "gps";
@@ -90,6 +91,12 @@ TEST_CASE("inertial graph stage: a body at rest stays under its antenna, tilt ob
   CHECK(counter(stage, "failed_solves") == 0);
   CHECK(counter(stage, "tilt_observable") == 1);
   CHECK(counter(stage, "yaw_observable") == 0);
+  // Its poses on the Earth too: 1 m under the antenna at the datum, as "inertial_graph".
+  REQUIRE(!geo.empty());
+  CHECK(geo.back().estimator == "inertial_graph");
+  CHECK(geo.back().utime == last.utime);
+  CHECK(std::abs(geo.back().latitude - 47.0) * 111'000 < 0.05);
+  CHECK(geo.back().altitude == doctest::Approx(499).epsilon(1e-4));
 }
 
 TEST_CASE("inertial graph stage: a sample from a frame without a mounting is counted, the engine makes it on request") {
@@ -116,7 +123,9 @@ TEST_CASE("inertial graph stage: an unknown heading (160 degrees) is found from 
   const test::StraightDrive d(160 * std::numbers::pi / 180, 60);
   InertialGraphStage stage(config());
   FusedPose last;
-  const Emit emit = [&](Output o) { last = std::get<FusedPose>(o); };
+  const Emit emit = [&](Output o) {
+    if (const auto* f = std::get_if<FusedPose>(&o)) last = *f;
+  };
   for (const Event& e : d.events) stage.handle(e, emit);
   CHECK(counter(stage, "gnss_heading_aligned") == 1);
   CHECK(counter(stage, "gnss_heading_waiting") == 0);

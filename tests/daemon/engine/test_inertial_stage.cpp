@@ -3,16 +3,20 @@
 // a body driving on a heading it does not know finds it from its first fixes and then follows them, where trusting
 // its start yaw has the gate refuse them.
 #include "daemon/engine/inertial_stage.hpp"
+#include "daemon/stage_counters.hpp"
 #include "daemon/engine/straight_drive.hpp"
 
 #include <doctest/doctest.h>
 
 #include <Eigen/Eigenvalues>
 
+#include <algorithm>
 #include <numbers>
 
 using namespace sextant;
 using namespace sextant::engine;
+
+using sextant::stage_counters::counter;
 
 namespace {
 
@@ -37,18 +41,14 @@ ImuSample at_rest(int64_t utime, const std::string& frame = "imu") {
   return s;
 }
 
-int64_t counter(const Stage& s, const std::string& name) {
-  for (const auto& [n, v] : s.counters())
-    if (n == name) return v;
-  return -1;
-}
-
 }  // namespace
 
 TEST_CASE("inertial stage: a level IMU at rest keeps the body at rest, published at the configured rate") {
   InertialStage stage(config());
   std::vector<FusedPose> out;
-  const Emit emit = [&](Output o) { out.push_back(std::get<FusedPose>(o)); };
+  const Emit emit = [&](Output o) {
+    if (const auto* f = std::get_if<FusedPose>(&o)) out.push_back(*f);
+  };
   for (int k = 0; k <= 1000; ++k) stage.handle(at_rest(kT0 + 5'000 * k), emit);  // 200 Hz for 5 s
   CHECK(out.size() == 251);                                                      // 50 Hz over 5 s, and the first sample
   const FusedPose& last = out.back();
@@ -75,7 +75,11 @@ TEST_CASE("inertial stage: GNSS fixes at the datum hold the body, a fix 200 m of
   c.gnss_heading.align = GnssHeadingConfig::Align::kNever;  // at rest: the start's yaw is taken as ENU
   InertialStage stage(c);
   std::vector<FusedPose> out;
-  const Emit emit = [&](Output o) { out.push_back(std::get<FusedPose>(o)); };
+  std::vector<GeoPose> geo;
+  const Emit emit = [&](Output o) {
+    if (const auto* f = std::get_if<FusedPose>(&o)) out.push_back(*f);
+    if (const auto* g = std::get_if<GeoPose>(&o)) geo.push_back(*g);
+  };
   GnssFix fix;
   fix.source = "robot";
   fix.frame = "gps";
@@ -93,6 +97,16 @@ TEST_CASE("inertial stage: GNSS fixes at the datum hold the body, a fix 200 m of
   CHECK(counter(stage, "updates_gated") == 0);
   const double before = out.back().pose.position.norm();
   CHECK(before < 1.1);  // the body 1 m under its antenna
+  // From the first fix on, every pose also on the Earth, at the pose's time: 1 m under the antenna at (47, 8, 500).
+  REQUIRE(!geo.empty());
+  CHECK(geo.back().utime == out.back().utime);
+  CHECK(static_cast<size_t>(std::count_if(
+            out.begin(), out.end(), [&](const FusedPose& f) { return f.utime >= geo.front().utime; })) == geo.size());
+  CHECK(geo.back().heading_known);
+  CHECK(std::abs(geo.back().latitude - 47.0) * 111'000 < 0.1);
+  CHECK(std::abs(geo.back().longitude - 8.0) * 111'000 * std::cos(47.0 * std::numbers::pi / 180) < 0.1);
+  CHECK(geo.back().altitude == doctest::Approx(499).epsilon(1e-4));
+  CHECK(geo.back().datum == Eigen::Vector3d(47.0, 8.0, 500));
   GnssFix outlier = fix;
   outlier.utime = kT0 + 5'000 * 2001;
   outlier.latitude += 200.0 / 111'000;  // 200 m north
@@ -107,17 +121,28 @@ namespace {
 struct DriveResult {
   FusedPose last;
   int64_t gated, aligned, waiting, reacquired;
+  GeoPose last_geo;
+  int geo_heading_unknown = 0, geo_heading_known = 0;  // GeoPoses published before and after the heading was known
 };
 
 DriveResult drive(const test::StraightDrive& d, GnssHeadingConfig::Align align) {
   InertialConfig c = config();
   c.gnss_heading.align = align;
   InertialStage stage(c);
-  FusedPose last;
-  const Emit emit = [&](Output o) { last = std::get<FusedPose>(o); };
+  DriveResult r;
+  const Emit emit = [&](Output o) {
+    if (const auto* f = std::get_if<FusedPose>(&o)) r.last = *f;
+    if (const auto* g = std::get_if<GeoPose>(&o)) {
+      r.last_geo = *g;
+      ++(g->heading_known ? r.geo_heading_known : r.geo_heading_unknown);
+    }
+  };
   for (const Event& e : d.events) stage.handle(e, emit);
-  return {last, counter(stage, "updates_gated"), counter(stage, "gnss_heading_aligned"),
-          counter(stage, "gnss_heading_waiting"), counter(stage, "gnss_heading_reacquired")};
+  r.gated = counter(stage, "updates_gated");
+  r.aligned = counter(stage, "gnss_heading_aligned");
+  r.waiting = counter(stage, "gnss_heading_waiting");
+  r.reacquired = counter(stage, "gnss_heading_reacquired");
+  return r;
 }
 
 double yaw_of(const Eigen::Quaterniond& q) {
@@ -136,6 +161,11 @@ TEST_CASE("inertial stage: an unknown heading (160, -170, 90 degrees) is found f
     CHECK(r.aligned == 1);
     CHECK(r.waiting == 0);
     CHECK(r.gated <= 2);
+    // On the Earth from the first fix, saying that the heading is not known until it is.
+    CHECK(r.geo_heading_unknown > 0);
+    CHECK(r.geo_heading_known > 0);
+    CHECK(r.last_geo.heading_known);
+    CHECK(r.last_geo.utime == r.last.utime);
     const Eigen::Vector3d e = r.last.pose.position - d.body_enu(t_end);
     CHECK(e.head<2>().norm() < 1.0);  // after 116 m
     CHECK(std::abs(std::remainder(yaw_of(r.last.pose.orientation) - d.heading, 2 * std::numbers::pi)) < 0.03);

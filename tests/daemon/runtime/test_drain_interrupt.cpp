@@ -8,6 +8,7 @@
 // with `rebuild_iterations` Gauss-Newton iterations (a million here) and relinearization thresholds so small that
 // no iteration counts as converged: a solve of minutes, each iteration a full relinearization and factorization.
 #include "daemon/config/daemon_config.hpp"
+#include "daemon/stage_counters.hpp"
 #include "daemon/engine/graph_stage.hpp"
 #include "daemon/engine/simulated_events.hpp"
 #include "daemon/runtime/stage_runner.hpp"
@@ -20,6 +21,8 @@
 
 using namespace sextant;
 using namespace sextant::engine;
+
+using sextant::stage_counters::counter;
 
 namespace {
 
@@ -66,12 +69,6 @@ LandmarkSightings new_landmarks(int64_t utime) {
     s.observations.push_back(o);
   }
   return s;
-}
-
-int64_t counter(const Counters& counters, const std::string& name) {
-  for (const auto& [k, v] : counters)
-    if (k == name) return v;
-  return -1;
 }
 
 }  // namespace

@@ -2,6 +2,7 @@
 // per body, the batch bound, a refused token and a refused event, the bounds on waiting messages; and behind a real
 // stage thread, every message handled once, in each body's order.
 #include "daemon/runtime/odometry_batcher.hpp"
+#include "daemon/stage_counters.hpp"
 #include "daemon/runtime/stage_runner.hpp"
 
 #include <doctest/doctest.h>
@@ -17,6 +18,8 @@
 using namespace sextant;
 using runtime::OdometryBatcher;
 using runtime::QueuedEvent;
+
+using sextant::stage_counters::counter;
 
 namespace {
 
@@ -184,12 +187,6 @@ class RecordingStage final : public engine::Stage {
   std::map<std::string, std::vector<int64_t>> handled;
   int64_t count = 0;
 };
-
-int64_t counter(const runtime::StageStatus& s, const std::string& name) {
-  for (const auto& [n, v] : s.counters)
-    if (n == name) return v;
-  return -1;
-}
 
 }  // namespace
 

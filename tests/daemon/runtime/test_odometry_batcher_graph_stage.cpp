@@ -4,6 +4,7 @@
 // cases that needed the old coalescer's mirror of the keyframe selector kept in step; and a 3-D one), with their
 // landmark sightings and loop closures.
 #include "daemon/engine/graph_stage.hpp"
+#include "daemon/stage_counters.hpp"
 #include "daemon/engine/pose_conversion.hpp"
 #include "daemon/runtime/stage_runner.hpp"
 #include "daemon/engine/simulated_events.hpp"
@@ -17,6 +18,8 @@
 
 using namespace sextant;
 using namespace sextant::engine;
+
+using sextant::stage_counters::counter;
 
 namespace {
 
@@ -67,18 +70,6 @@ std::vector<Event> events_for(const Stage& stage, const std::vector<Event>& even
   for (const auto& e : events)
     if (stage.accepts(e)) out.push_back(e);
   return out;
-}
-
-int64_t counter(const Stage& s, const std::string& name) {
-  for (const auto& [k, v] : s.counters())
-    if (k == name) return v;
-  return -1;
-}
-
-int64_t counter(const runtime::StageStatus& s, const std::string& name) {
-  for (const auto& [k, v] : s.counters)
-    if (k == name) return v;
-  return -1;
 }
 
 // The same graph: every body's keyframes (times and poses) and landmarks, the stage's counters.

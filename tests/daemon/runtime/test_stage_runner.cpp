@@ -1,6 +1,7 @@
 // Fault injection into a stage thread: an exception from `handle` (a CHOLMOD failure in the smoother) used to reach
 // std::terminate.  Now it is counted, kept as the last failure, the stage recovers, and the next events go on.
 #include "daemon/runtime/stage_runner.hpp"
+#include "daemon/stage_counters.hpp"
 
 #include <doctest/doctest.h>
 
@@ -9,6 +10,8 @@
 #include <thread>
 
 using namespace sextant;
+
+using sextant::stage_counters::counter;
 
 namespace {
 
@@ -38,12 +41,6 @@ class FaultyStage final : public engine::Stage {
  private:
   int64_t every_;
 };
-
-int64_t counter(const runtime::StageStatus& s, const std::string& name) {
-  for (const auto& [n, v] : s.counters)
-    if (n == name) return v;
-  return -1;
-}
 
 runtime::QueuedEvent odometry(int64_t utime) {
   engine::Odometry o;
@@ -155,7 +152,7 @@ TEST_CASE("a stage runner forgets a body in order with the events before, and ke
     runner.start();
     runner.drain_and_stop();
     CHECK(stage.calls == std::vector<std::string>{"handle 1", "forget a", "handle 2"});
-    CHECK(counter(runner.status(), "forget_out_of_order") == -1);  // none
+    CHECK_FALSE(sextant::stage_counters::has_counter(runner.status().counters, "forget_out_of_order"));  // none
   }
   ForgettingStage stage;
   runtime::StageRunner runner(stage, 16, [](engine::Output) {});

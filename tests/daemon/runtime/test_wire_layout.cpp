@@ -102,6 +102,13 @@ sextant::fused_pose_t random_fused(std::mt19937& rng) {
   return m;
 }
 
+sextant::geo_pose_t random_geo(std::mt19937& rng) {
+  sextant::geo_pose_t m{};
+  m.sender = random_string(rng), m.source = random_string(rng), m.estimator = random_string(rng);
+  m.heading_known = rng() % 2 == 0, m.latitude = 45.0, m.position_covariance[8] = 2.0;
+  return m;
+}
+
 sextant::status_t random_status(std::mt19937& rng) {
   sextant::status_t m{};
   m.utime = static_cast<int64_t>(rng()), m.sender = random_string(rng), m.seq = rng(), m.version = random_string(rng);
@@ -198,6 +205,7 @@ TEST_CASE("wire layouts end where lcm-gen's encodings end, for random messages o
     check_layout_matches(random_truth(rng));
     check_layout_matches(random_request(rng));
     check_layout_matches(random_fused(rng));
+    check_layout_matches(random_geo(rng));
     check_layout_matches(random_status(rng));
     check_layout_matches(random_trajectory(rng));
     check_layout_matches(random_targets(rng));
