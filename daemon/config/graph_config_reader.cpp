@@ -107,6 +107,7 @@ void read_exchange(Section& f, engine::GraphConfig& c) {
   x.get("repair_bytes_per_s", o.repair_bytes_per_s, in_range(1000, 1e9));
   // The largest item (256 sightings, two names of 256 characters) and its message's fields must fit.
   x.get("max_message_bytes", o.max_message_bytes, int_in_range(32768, 65000));
+  x.get("restart_wait_s", o.restart_wait_s, in_range(0.01, 3600));
   if (o.repair_backoff_max_s < o.repair_backoff_s)
     throw x.error("'" + x.path() + "': repair_backoff_max_s must not be smaller than repair_backoff_s");
   if (o.enabled && o.members.empty())

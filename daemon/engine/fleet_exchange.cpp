@@ -94,6 +94,7 @@ void Numbered::load(archive::ArchiveReader& r) { r(seq)(what); }
 std::vector<std::pair<std::string, int64_t>> FleetExchange::counters() const {
   const OutboxCounters& o = outbox.counters();
   const InboxCounters& i = inbox.counters();
+  const TailCounters& t = tail.counters();
   return {{"fleet_out_contributions", o.contributions},
           {"fleet_out_messages", o.messages},
           {"fleet_out_evicted", o.evicted},
@@ -117,14 +118,48 @@ std::vector<std::pair<std::string, int64_t>> FleetExchange::counters() const {
           {"fleet_in_repair_asked", i.repair_asked},
           {"fleet_in_heartbeats", i.heartbeats},
           {"fleet_in_owner_rewound", i.owner_rewound},
+          {"fleet_in_repairs_overheard", i.repairs_overheard},
+          {"fleet_out_tail_requests", o.tail_requests},
+          {"fleet_tail_requests", t.requests},
+          {"fleet_tail_adopted", t.adopted},
+          {"fleet_tail_duplicates", t.duplicates},
+          {"fleet_tail_out_of_order", t.out_of_order},
+          {"fleet_tail_refused", t.refused},
+          {"fleet_tail_lost", t.lost},
+          {"fleet_tail_waiting", fetching() ? 1 : 0},
           {"fleet_in_streams", static_cast<int64_t>(inbox.streams())},
           {"fleet_in_held", static_cast<int64_t>(inbox.held())}};
+}
+
+FleetExchange::Received FleetExchange::received(const FleetContributions& m, int64_t now_utime) {
+  if (!(fetching() && m.repair && outbox.owns(m.body))) return {inbox.receive(m, now_utime), {}, {}};
+  Received r;
+  for (Numbered& n : tail.receive(m, outbox, now_utime)) {
+    outbox.adopt(m.body, n);  // numbered next by TailFetch
+    r.own.push_back(slam::GraphContribution{m.body, std::move(n.what)});
+  }
+  return r;
+}
+
+FleetExchange::Received FleetExchange::received(const FleetControl& m, int64_t now_utime) {
+  if (m.kind != FleetControl::Kind::kRepair) return {inbox.receive(m, now_utime), {}, {}};
+  if (m.daemon == m.sender) return {{}, outbox.answer_tail(m, inbox, now_utime), {}};
+  return {{}, outbox.answer(m, now_utime), {}};
 }
 
 FleetExchange::Due FleetExchange::due(int64_t now_utime) {
   Due d;
   d.contributions = outbox.take_messages(now_utime);
-  d.control = outbox.heartbeat(now_utime);
+  // While the tails are fetched the heartbeat waits: it would state the streams as this daemon's saved state ends
+  // them, before what the others hold.
+  std::vector<std::pair<std::string, Numbered>> ended;
+  d.control = tail.requests(outbox, now_utime, ended);
+  for (auto& [body, n] : ended) {
+    outbox.adopt(body, n);  // numbered next by TailFetch
+    d.own.push_back(slam::GraphContribution{body, std::move(n.what)});
+  }
+  if (!fetching())
+    for (FleetControl& h : outbox.heartbeat(now_utime)) d.control.push_back(std::move(h));
   for (FleetControl& r : inbox.repair_requests(now_utime)) d.control.push_back(std::move(r));
   return d;
 }

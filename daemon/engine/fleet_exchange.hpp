@@ -15,13 +15,24 @@
 // repair_backoff_s, again after twice as long while nothing arrives (up to repair_backoff_max_s), from the start
 // when the stream moves.
 //
-// The limit of a restart: an owner restarted from its state directory continues from what it saved (the state is
-// written every daemon.state_period_s).  What it sent after that save and before it stopped was applied by the others
-// and is not in its own graph; its next contributions take those numbers again and the others drop them as already
-// delivered.  A receiver sees this (a heartbeat whose stream ends before what it delivered) and counts it
-// (`owner_rewound`); the maps of that body then differ until the state directory is saved at shutdown (SIGTERM saves
-// it, README "State directory"): a daemon that is killed, not stopped, loses up to state_period_s of its own
-// contributions from the fleet's agreement.
+// A restart: an owner restarted from its state directory continues from what it saved (the state is written every
+// daemon.state_period_s).  What it sent after that save and before it stopped (killed, not stopped: SIGTERM saves
+// the state at shutdown) was applied by the others and is not in its own graph, so before it contributes again it
+// takes that tail back from them (TailFetch): every receiver keeps a copy of what it applied of each other member's
+// streams (the newest `retain` of each, at most retain_mb, like the owner's log; not saved), and answers the
+// restarted owner's request (a REPAIR to every member: its `daemon` is its sender) from it, at the repairs' rate.
+// The owner takes the answers only from members, only for its own streams, in order from each stream's next number
+// (duplicates from several answering members dropped; what a member holds ahead of a gap of its own is answered too
+// and held), puts them back in its log as sent and applies them to its graph as its own (SlamGraph::adopt: its
+// keyframe ids go on after the tail's); a number nobody gave back below one a member holds becomes kNothing, which
+// changes no graph, so that member, asking for it, applies what the owner did.  Meanwhile it sends no heartbeat
+// and its graph stage holds back what would make a contribution.  The wait ends restart_wait_s after the last of
+// the tail arrived, or after the start when nothing comes (alone in the fleet, or nobody has more); then it goes on
+// numbering after the tail, and the others see the stream go on where they have it.  What no receiver holds any more
+// (all of them cut off, or more than `retain` behind) is not taken back: the owner's next numbers repeat those, and
+// a receiver that applied them counts it (`owner_rewound`, from a heartbeat that ends the stream before what it
+// heard).  The others' answers, heard by every daemon on the multicast, open no stream and change none
+// (`repairs_overheard`).
 //
 // The limit of `retain`: the owner keeps the last `retain` contributions of each body (and at most retain_mb of them)
 // to resend.  A receiver that misses older ones (cut off for longer, or a daemon that joins after the fleet made more
@@ -83,6 +94,27 @@ struct Numbered {
   void load(archive::ArchiveReader& r);
 };
 
+/// The newest contributions of one stream, oldest first and numbered without a gap: the owner's log it resends from,
+/// and a receiver's copy of another owner's stream, from which it answers that owner's restart.  Bounded by
+/// FleetExchangeOptions::retain (contributions) and retain_mb (wire size, item_bytes).
+struct Retained {
+  std::deque<Numbered> items;
+  size_t bytes = 0;
+  /// Appends the contribution numbered after the newest (the caller keeps the numbers contiguous).
+  void push(Numbered n);
+  /// Drops the oldest beyond the bounds, always keeping the newest `keep`; returns how many went.
+  int64_t evict(const FleetExchangeOptions& o, size_t keep);
+  void clear() {
+    items.clear();
+    bytes = 0;
+  }
+  /// The oldest and newest numbers held (0 when empty).
+  int64_t first() const { return items.empty() ? 0 : items.front().seq; }
+  int64_t last() const { return items.empty() ? 0 : items.back().seq; }
+};
+
+class Inbox;
+
 struct OutboxCounters {
   int64_t contributions = 0;        // numbered (after splitting)
   int64_t messages = 0;             // FLEET messages made, first sendings
@@ -93,6 +125,8 @@ struct OutboxCounters {
   int64_t repair_messages = 0;      // FLEET messages of resent contributions
   int64_t repair_limited = 0;       // contributions asked for and not resent for the requester's rate
   int64_t repair_not_retained = 0;  // contributions asked for that are no longer retained
+  int64_t tail_requests = 0;        // restarted members' requests for their own streams' tails, answered from the
+                                    // copies of those streams held here
 };
 
 /// The sending side: numbers the contributions of the local bodies, keeps the last ones for repair, makes the FLEET
@@ -105,6 +139,7 @@ class Outbox {
   void add(const slam::GraphContribution& c);
   /// Whether `body` is a local body (it contributed here).
   bool owns(const std::string& body) const { return streams_.contains(body); }
+  std::vector<std::string> bodies() const;
   /// The FLEET messages of what was added since the last call: per body, runs of consecutive contributions, each
   /// message at most max_message_bytes and kMaxItemsPerMessage contributions.
   std::vector<FleetContributions> take_messages(int64_t now_utime);
@@ -114,6 +149,13 @@ class Outbox {
   /// The answer to a REPAIR request: the retained contributions asked for, as far as the requester's rate allows.
   /// A request addressed to another daemon is not for this one (nothing, not counted).
   std::vector<FleetContributions> answer(const FleetControl& request, int64_t now_utime);
+  /// The answer to a restarted member's request for the tails of its own streams (a REPAIR whose `daemon` is its
+  /// sender): what `copies` (this daemon's Inbox) applied of those streams and still holds, from the numbers asked,
+  /// then what it holds ahead of a gap, within the same per-requester rate.  Nothing for a non-member (counted as refused) or this daemon itself.
+  std::vector<FleetContributions> answer_tail(const FleetControl& request, const Inbox& copies, int64_t now_utime);
+  /// Takes back a contribution of a local body's stream that this daemon sent before it restarted from an older
+  /// state (TailFetch): it must be numbered next_seq(body); it is retained as sent.  False (nothing changes) otherwise.
+  bool adopt(const std::string& body, const Numbered& n);
   /// The numbers of `body`'s stream: the next to be given and the oldest retained (0: none).
   int64_t next_seq(const std::string& body) const;
   int64_t first_retained(const std::string& body) const;
@@ -127,8 +169,7 @@ class Outbox {
  private:
   struct Stream {
     int64_t next_seq = 1;
-    std::deque<Numbered> retained;
-    size_t retained_bytes = 0;
+    Retained retained;
     size_t pending = 0;  // the newest `pending` of `retained` are not sent yet
     void save(archive::ArchiveWriter& w) const;
     void load(archive::ArchiveReader& r);
@@ -143,8 +184,10 @@ class Outbox {
   /// The bytes `requester` may be sent now (its bucket refilled to `now`).
   Bucket& bucket(const std::string& requester, int64_t now);
   void evict(Stream& s);
-  /// One range of a repair request answered into `out`, within the requester's bucket.
-  void answer_range(const FleetRange& range, Bucket& b, int64_t now, std::vector<FleetContributions>& out);
+  /// One range of a repair request answered from `log` (up to its number `last`) into `out`, within the requester's
+  /// bucket.
+  void answer_range(const FleetRange& range, const Retained& log, int64_t last, Bucket& b, int64_t now,
+                    std::vector<FleetContributions>& out);
 
   std::string self_;
   FleetExchangeOptions options_;
@@ -156,22 +199,24 @@ class Outbox {
 };
 
 struct InboxCounters {
-  int64_t messages = 0;          // FLEET messages from members, taken in
-  int64_t delivered = 0;         // contributions handed to the graph, in their stream's order
-  int64_t duplicates = 0;        // contributions already delivered or already held
-  int64_t out_of_window = 0;     // contributions beyond the reorder window (dropped; a repair fetches them later)
-  int64_t own = 0;               // messages of this daemon, brought back by multicast (ignored)
-  int64_t not_member = 0;        // messages of a sender not in `members` (refused)
-  int64_t local_body = 0;        // messages about a body this daemon owns (refused)
-  int64_t claimed = 0;           // messages about a body another member owns (refused)
-  int64_t too_many_streams = 0;  // messages that would open a stream beyond max_streams_per_sender (refused)
-  int64_t lost = 0;              // contributions the owner no longer retained when asked for (skipped)
-  int64_t repair_requests = 0;   // REPAIR requests made
-  int64_t repair_asked = 0;      // contributions asked for in them
-  int64_t heartbeats = 0;        // heartbeats of members taken in
-  int64_t owner_rewound = 0;     // heartbeats, newer than every message heard of their stream, that end the stream
-                                 // before what was heard (the owner restarted from a state older than what it had
-                                 // sent: its next numbers repeat ones already applied here)
+  int64_t messages = 0;           // FLEET messages from members, taken in
+  int64_t delivered = 0;          // contributions handed to the graph, in their stream's order
+  int64_t duplicates = 0;         // contributions already delivered or already held
+  int64_t out_of_window = 0;      // contributions beyond the reorder window (dropped; a repair fetches them later)
+  int64_t own = 0;                // messages of this daemon, brought back by multicast (ignored)
+  int64_t not_member = 0;         // messages of a sender not in `members` (refused)
+  int64_t local_body = 0;         // messages about a body this daemon owns (refused)
+  int64_t claimed = 0;            // messages about a body another member owns (refused)
+  int64_t too_many_streams = 0;   // messages that would open a stream beyond max_streams_per_sender (refused)
+  int64_t lost = 0;               // contributions the owner no longer retained when asked for (skipped)
+  int64_t repair_requests = 0;    // REPAIR requests made
+  int64_t repair_asked = 0;       // contributions asked for in them
+  int64_t heartbeats = 0;         // heartbeats of members taken in
+  int64_t owner_rewound = 0;      // heartbeats, newer than every message heard of their stream, that end the stream
+                                  // before what was heard (the owner restarted from a state older than what it had
+                                  // sent and did not take its tail back: its next numbers repeat ones applied here)
+  int64_t repairs_overheard = 0;  // resent contributions of a stream not known here from its owner, of another
+                                  // member's stream, or of a local body (another daemon's repair or restart; ignored)
 };
 
 /// The receiving side: per (owner, body) stream, the contributions in order.
@@ -194,6 +239,11 @@ class Inbox {
 
   /// The next number expected of `body`'s stream (1 for a stream not heard of) and its owner (empty: none).
   int64_t next_expected(const std::string& body) const;
+  /// What was applied here of `body`'s stream and is still held (its newest, at most retain and retain_mb, since
+  /// this daemon started: the copies are not saved), when `owner` owns it; nullptr otherwise.
+  const Retained* copy_of(const std::string& body, const std::string& owner) const;
+  /// The contributions of `body`'s stream held here ahead of a gap, by number, when `owner` owns it; nullptr otherwise.
+  const std::map<int64_t, What>* held_of(const std::string& body, const std::string& owner) const;
   std::string owner(const std::string& body) const;
   /// Streams now, and contributions held ahead of their turn (all streams).
   size_t streams() const { return streams_.size(); }
@@ -218,9 +268,12 @@ class Inbox {
     int64_t sent_utime = 0;  // the owner's clock: its newest message (data or heartbeat) heard, for owner_rewound
     int64_t beat_last = 0;   // ... and the stream's last number it stated then
     int64_t heard_at = 0;    // this daemon's clock when the owner was last heard (not saved)
+    Retained copy;           // what was delivered, for the owner's restart (not saved)
     void save(archive::ArchiveWriter& w) const;
     void load(archive::ArchiveReader& r);
   };
+  /// A repair message about a stream not known here from its sender, or about a local body: counted, ignored.
+  bool overheard(const FleetContributions& m);
   /// Whether `sender` may speak for `body` (counting why not); the stream when it may, opened if new.
   Stream* stream_for(const std::string& sender, const std::string& body);
   /// Delivers what is next in `s` into `out`, skipping (as lost) what is below the owner's first retained number.
@@ -244,10 +297,63 @@ class Inbox {
   InboxCounters counters_;
 };
 
+struct TailCounters {
+  int64_t requests = 0;      // requests for the tails of the own streams, sent to the fleet
+  int64_t adopted = 0;       // contributions of the own streams taken back, in order, numbered as they were
+  int64_t duplicates = 0;    // ... already taken (every member answers the same)
+  int64_t out_of_order = 0;  // ... not continuing what was taken (dropped: asked for again)
+  int64_t refused = 0;       // answers of a non-member, about a body this daemon does not own, or with bad numbers
+                             // (this daemon's own repairs, which multicast brings back, are ignored, not counted)
+  int64_t lost = 0;          // numbers no member gave back, below ones a member holds: filled with kNothing
+};
+
+/// What stands at a number of its own stream that a restarted owner could not take back while a member holds later
+/// ones (that member lost it, and the owner died before resending it): a contribution that changes no graph (it thins
+/// a keyframe id no body ever has), so that the owner and every member apply the same sequence after it.
+inline const What kNothing = slam::KeyframesThinned{{INT64_MAX}};
+
+/// A restarted owner taking the tails of its own streams back from the fleet ("A restart" above): one REPAIR request
+/// to every member at once (its `daemon` is its sender), repeated with the repairs' back-off; the answers taken only
+/// from members, only for the own streams, in order from each stream's next number (what comes ahead of it is held,
+/// at most reorder_window per stream).  The wait ends restart_wait_s after the last contribution taken (or after the
+/// start when none comes); what is still held then follows its numbers with kNothing in the holes.  Not saved.
+class TailFetch {
+ public:
+  TailFetch(std::string self, FleetExchangeOptions options);
+  /// Starts the wait for every stream of `outbox` (nothing to wait for without one, or without another member).
+  void start(const Outbox& outbox);
+  bool waiting() const { return waiting_; }
+  /// The wait ends at the next call of requests(), whatever the time.
+  void stop() { stop_ = true; }
+  /// An answer (a FLEET message with repair set): the contributions that continue their stream from
+  /// outbox.next_seq(body), in order; the caller adopts them (Outbox::adopt) before the next answer.
+  std::vector<Numbered> receive(const FleetContributions& m, const Outbox& outbox, int64_t now_utime);
+  /// The request due now (none, or one per kMaxRangesPerMessage streams), each range from the stream's next number
+  /// and at most max_repair_range long.  When the wait is over (the first call starts its clock) it ends, and `ended`
+  /// receives what was held ahead, per stream in order from its next number with kNothing in the holes, to adopt.
+  std::vector<FleetControl> requests(const Outbox& outbox, int64_t now_utime,
+                                     std::vector<std::pair<std::string, Numbered>>& ended);
+  const TailCounters& counters() const { return counters_; }
+
+ private:
+  std::string self_;
+  FleetExchangeOptions options_;
+  std::set<std::string> members_;
+  std::set<std::string> bodies_;
+  /// The contributions held ahead of the stream's next number, in order from it with kNothing in the holes.
+  std::vector<std::pair<std::string, Numbered>> fill_holes(const Outbox& outbox);
+  std::map<std::string, std::map<int64_t, What>> ahead_;  // per stream, by number
+  bool waiting_ = false, stop_ = false;
+  int64_t quiet_until_ = 0;  // the wait's end (0: its clock not started)
+  int64_t ask_at_ = 0;
+  double backoff_s_ = 0;
+  TailCounters counters_;
+};
+
 /// Both sides of one daemon, the unit the graph stage holds and saves.
 struct FleetExchange {
   FleetExchange(const std::string& self, const FleetExchangeOptions& options)
-      : outbox(self, options), inbox(self, options) {}
+      : outbox(self, options), inbox(self, options), tail(self, options) {}
   explicit FleetExchange(const FleetExchangeOptions& options) : FleetExchange(options.self, options) {}
   /// A contribution made from a local body's inputs: its body is local from now on, and it is numbered and queued.
   /// False (nothing sent) when another member already contributes that body (Inbox::own: the same robot fed to two
@@ -258,35 +364,44 @@ struct FleetExchange {
     return true;
   }
   /// A fleet event heard on the bus: the contributions now next in their streams, to apply in this order
-  /// (SlamGraph::apply), and for a repair request addressed to this daemon the messages that answer it, to send.
+  /// (SlamGraph::apply); for a repair request addressed to this daemon, or a restarted member's request for its
+  /// tails, the messages that answer it, to send; while this daemon fetches its own tails, what it took back of them
+  /// (already in the outbox), to apply as its own in this order (SlamGraph::adopt).
   struct Received {
     std::vector<slam::GraphContribution> apply;
     std::vector<FleetContributions> answers;
+    std::vector<slam::GraphContribution> own;
   };
-  Received received(const FleetContributions& m, int64_t now_utime) { return {inbox.receive(m, now_utime), {}}; }
-  Received received(const FleetControl& m, int64_t now_utime) {
-    if (m.kind == FleetControl::Kind::kRepair) return {{}, outbox.answer(m, now_utime)};
-    return {inbox.receive(m, now_utime), {}};
-  }
+  Received received(const FleetContributions& m, int64_t now_utime);
+  Received received(const FleetControl& m, int64_t now_utime);
+  /// Whether this daemon, restarted, waits for the tails of its own streams (TailFetch): meanwhile it sends no
+  /// heartbeat, and its graph makes no contribution (GraphStage holds its inputs back).
+  bool fetching() const { return tail.waiting(); }
   /// The counters of both sides and the sizes now, named for the status channel (fleet_out_*, fleet_in_*).
   std::vector<std::pair<std::string, int64_t>> counters() const;
-  /// What is due now: the FLEET messages queued, the heartbeat and the repair requests.
+  /// What is due now: the FLEET messages queued, the heartbeat (or while fetching, the request for the tails) and the
+  /// repair requests; when the fetch ends, what it held ahead of the streams (already in the outbox), to adopt in this
+  /// order (SlamGraph::adopt).
   struct Due {
     std::vector<FleetContributions> contributions;
     std::vector<FleetControl> control;
+    std::vector<slam::GraphContribution> own;
   };
   Due due(int64_t now_utime);
   void save(archive::ArchiveWriter& w) const {
     outbox.save(w);
     inbox.save(w);
   }
+  /// A loaded exchange is a restarted daemon's: it starts fetching its own streams' tails.
   void load(archive::ArchiveReader& r) {
     outbox.load(r);
     inbox.load(r);
+    tail.start(outbox);
   }
 
   Outbox outbox;
   Inbox inbox;
+  TailFetch tail;
 };
 
 /// The contributions' own archive (every field, exactly), for the retained and held logs.

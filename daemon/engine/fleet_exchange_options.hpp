@@ -22,6 +22,7 @@ struct FleetExchangeOptions {
   int max_repair_range = 1024;        // contributions asked for in one request per stream
   double repair_bytes_per_s = 1.0e6;  // resent per requester at most
   int max_message_bytes = 60000;      // a FLEET message's encoded size at most (under one 64 KB datagram)
+  double restart_wait_s = 2.0;        // a restarted owner waits this long after the last of its tail it took back
 };
 
 }  // namespace sextant::engine

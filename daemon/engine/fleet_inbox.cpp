@@ -87,6 +87,8 @@ void Inbox::deliver(const std::string& body, Stream& s, int64_t now, std::vector
     auto it = s.held.begin();
     if (it != s.held.end() && it->first == s.next) {
       s.held_bytes -= item_bytes(it->second);
+      s.copy.push(Numbered{s.next, it->second});
+      s.copy.evict(options_, 0);
       out.push_back(slam::GraphContribution{body, std::move(it->second)});
       s.held.erase(it);
       ++s.next;
@@ -96,6 +98,7 @@ void Inbox::deliver(const std::string& body, Stream& s, int64_t now, std::vector
       const int64_t to = it == s.held.end() ? s.owner_first : std::min(s.owner_first, it->first);
       counters_.lost += to - s.next;
       s.next = to;
+      s.copy.clear();  // the copy holds a run without a gap
     } else {
       break;
     }
@@ -123,7 +126,21 @@ void Inbox::heard(Stream& s, int64_t now) {
   s.heard_at = now;
 }
 
+bool Inbox::overheard(const FleetContributions& m) {
+  if (!m.repair || m.sender == self_ || !members_.contains(m.sender)) return false;
+  // A repair answers a request for a stream its requester knows from the owner: one that is not known here from its
+  // sender (another member's answer to a restarted owner, or a repair of a stream this daemon has not heard of yet)
+  // opens no stream and changes none.
+  const auto it = streams_.find(m.body);
+  if (local_.contains(m.body) || it == streams_.end() || it->second.owner != m.sender) {
+    ++counters_.repairs_overheard;
+    return true;
+  }
+  return false;
+}
+
 std::vector<slam::GraphContribution> Inbox::receive(const FleetContributions& m, int64_t now_utime) {
+  if (overheard(m)) return {};
   Stream* s = stream_for(m.sender, m.body);
   if (s == nullptr) return {};
   heard(*s, now_utime);
@@ -214,6 +231,16 @@ std::vector<FleetControl> Inbox::repair_requests(int64_t now_utime) {
 int64_t Inbox::next_expected(const std::string& body) const {
   auto it = streams_.find(body);
   return it == streams_.end() ? 1 : it->second.next;
+}
+
+const Retained* Inbox::copy_of(const std::string& body, const std::string& owner) const {
+  const auto it = streams_.find(body);
+  return it == streams_.end() || it->second.owner != owner ? nullptr : &it->second.copy;
+}
+
+const std::map<int64_t, What>* Inbox::held_of(const std::string& body, const std::string& owner) const {
+  const auto it = streams_.find(body);
+  return it == streams_.end() || it->second.owner != owner ? nullptr : &it->second.held;
 }
 
 std::string Inbox::owner(const std::string& body) const {

@@ -24,27 +24,47 @@ Outbox::Outbox(std::string self, FleetExchangeOptions options)
       options_(std::move(options)),
       members_(options_.members.begin(), options_.members.end()) {}
 
+void Retained::push(Numbered n) {
+  bytes += item_bytes(n.what);
+  items.push_back(std::move(n));
+}
+
+int64_t Retained::evict(const FleetExchangeOptions& o, size_t keep) {
+  const size_t max_count = static_cast<size_t>(std::max(o.retain, 0));
+  const size_t max_bytes = static_cast<size_t>(std::max(o.retain_mb, 0)) * kMegabyte;
+  int64_t gone = 0;
+  while (items.size() > keep && (items.size() > max_count || bytes > max_bytes)) {
+    bytes -= item_bytes(items.front().what);
+    items.pop_front();
+    ++gone;
+  }
+  return gone;
+}
+
 void Outbox::add(const slam::GraphContribution& c) {
   Stream& s = streams_[c.body];
   for (What& what : split_for_wire(c.what)) {
-    s.retained_bytes += item_bytes(what);
-    s.retained.push_back(Numbered{s.next_seq++, std::move(what)});
+    s.retained.push(Numbered{s.next_seq++, std::move(what)});
     ++s.pending;
     ++counters_.contributions;
   }
   evict(s);
 }
 
-void Outbox::evict(Stream& s) {
-  const size_t max_count = static_cast<size_t>(std::max(options_.retain, 0));
-  const size_t max_bytes = static_cast<size_t>(std::max(options_.retain_mb, 0)) * kMegabyte;
-  // What is not sent yet stays (it goes with the next take_messages, then may go from here).
-  while (s.retained.size() > s.pending && (s.retained.size() > max_count || s.retained_bytes > max_bytes)) {
-    s.retained_bytes -= item_bytes(s.retained.front().what);
-    s.retained.pop_front();
-    ++counters_.evicted;
-  }
+bool Outbox::adopt(const std::string& body, const Numbered& n) {
+  auto it = streams_.find(body);
+  if (it == streams_.end() || n.seq != it->second.next_seq) return false;
+  Stream& s = it->second;
+  s.retained.push(n);
+  ++s.next_seq;
+  // Newer than what is still queued: it goes with it (a duplicate to the others, dropped there).
+  if (s.pending > 0) ++s.pending;
+  evict(s);
+  return true;
 }
+
+// What is not sent yet stays (it goes with the next take_messages, then may go from here).
+void Outbox::evict(Stream& s) { counters_.evicted += s.retained.evict(options_, s.pending); }
 
 std::vector<FleetContributions> Outbox::pack(const std::string& body, std::deque<Numbered>::const_iterator begin,
                                              std::deque<Numbered>::const_iterator end, bool repair, int64_t now) const {
@@ -68,8 +88,8 @@ std::vector<FleetContributions> Outbox::take_messages(int64_t now_utime) {
   std::vector<FleetContributions> out;
   for (auto& [body, s] : streams_) {
     if (s.pending == 0) continue;
-    auto msgs =
-        pack(body, s.retained.end() - static_cast<std::ptrdiff_t>(s.pending), s.retained.end(), false, now_utime);
+    auto msgs = pack(body, s.retained.items.end() - static_cast<std::ptrdiff_t>(s.pending), s.retained.items.end(),
+                     false, now_utime);
     counters_.messages += static_cast<int64_t>(msgs.size());
     std::move(msgs.begin(), msgs.end(), std::back_inserter(out));
     s.pending = 0;
@@ -87,7 +107,7 @@ std::vector<FleetControl> Outbox::heartbeat(int64_t now_utime) {
     if (out.empty() || out.back().streams.size() >= kMaxRangesPerMessage)
       out.push_back(FleetControl{now_utime, self_, FleetControl::Kind::kHeartbeat, "", {}});
     const int64_t sent = s.next_seq - 1 - static_cast<int64_t>(s.pending);
-    const int64_t first = s.retained.empty() || s.retained.front().seq > sent ? 0 : s.retained.front().seq;
+    const int64_t first = s.retained.items.empty() || s.retained.first() > sent ? 0 : s.retained.first();
     out.back().streams.push_back(FleetRange{body, first, sent});
   }
   return out;
@@ -113,28 +133,60 @@ std::vector<FleetContributions> Outbox::answer(const FleetControl& request, int6
   ++counters_.repair_requests;
   Bucket& b = bucket(request.sender, now_utime);
   std::vector<FleetContributions> out;
-  for (const FleetRange& range : request.streams) answer_range(range, b, now_utime, out);
+  for (const FleetRange& range : request.streams) {
+    auto it = streams_.find(range.body);
+    if (it == streams_.end()) {
+      ++counters_.repair_refused;
+      continue;
+    }
+    const Stream& s = it->second;
+    answer_range(range, s.retained, s.next_seq - 1 - static_cast<int64_t>(s.pending), b, now_utime, out);
+  }
   return out;
 }
 
-void Outbox::answer_range(const FleetRange& range, Bucket& b, int64_t now, std::vector<FleetContributions>& out) {
-  auto it = streams_.find(range.body);
-  if (it == streams_.end()) {
+std::vector<FleetContributions> Outbox::answer_tail(const FleetControl& request, const Inbox& copies,
+                                                    int64_t now_utime) {
+  if (request.kind != FleetControl::Kind::kRepair || request.daemon != request.sender || request.sender == self_)
+    return {};
+  if (!members_.contains(request.sender)) {
     ++counters_.repair_refused;
-    return;
+    return {};
   }
-  const Stream& s = it->second;
-  const int64_t sent = s.next_seq - 1 - static_cast<int64_t>(s.pending);  // what is queued goes anyway
+  ++counters_.tail_requests;
+  Bucket& b = bucket(request.sender, now_utime);
+  std::vector<FleetContributions> out;
+  for (const FleetRange& range : request.streams) {
+    if (const Retained* copy = copies.copy_of(range.body, request.sender))
+      answer_range(range, *copy, copy->last(), b, now_utime, out);
+    // What is held ahead of a gap, run by run: the owner may have lost the gap too, and then numbers its next
+    // contributions after these (TailFetch), as this daemon will apply them.
+    const std::map<int64_t, What>* held = copies.held_of(range.body, request.sender);
+    Retained run;
+    for (auto it = held ? held->lower_bound(range.first) : std::map<int64_t, What>::const_iterator{};
+         held && it != held->end(); ++it) {
+      run.push(Numbered{it->first, it->second});
+      const auto next = std::next(it);
+      if (next != held->end() && next->first == it->first + 1) continue;
+      answer_range(FleetRange{range.body, run.first(), range.last}, run, run.last(), b, now_utime, out);
+      run.clear();
+    }
+  }
+  return out;
+}
+
+void Outbox::answer_range(const FleetRange& range, const Retained& log, int64_t last_held, Bucket& b, int64_t now,
+                          std::vector<FleetContributions>& out) {
   int64_t first = std::max<int64_t>(range.first, 1);
-  const int64_t last = std::min({range.last, sent, first + std::max(options_.max_repair_range, 1) - 1});
+  const int64_t last = std::min({range.last, last_held, first + std::max(options_.max_repair_range, 1) - 1});
   if (last < first) return;
-  const int64_t oldest = s.retained.empty() ? s.next_seq : s.retained.front().seq;
+  const int64_t oldest = log.items.empty() ? last_held + 1 : log.first();
   if (first < oldest) {
     counters_.repair_not_retained += std::min(last, oldest - 1) - first + 1;
     first = oldest;
   }
   if (last < first) return;
-  const auto begin = s.retained.begin() + (first - oldest);
+  const auto begin = log.items.begin() + (first - oldest);
   const auto end = begin + (last - first + 1);
   auto stop = begin;
   for (; stop != end; ++stop) {
@@ -155,23 +207,32 @@ int64_t Outbox::next_seq(const std::string& body) const {
   return it == streams_.end() ? 1 : it->second.next_seq;
 }
 
-int64_t Outbox::first_retained(const std::string& body) const {
-  auto it = streams_.find(body);
-  return it == streams_.end() || it->second.retained.empty() ? 0 : it->second.retained.front().seq;
+std::vector<std::string> Outbox::bodies() const {
+  std::vector<std::string> out;
+  for (const auto& [body, s] : streams_) out.push_back(body);
+  return out;
 }
 
-void Outbox::Stream::save(archive::ArchiveWriter& w) const { w(next_seq)(static_cast<uint64_t>(pending))(retained); }
+int64_t Outbox::first_retained(const std::string& body) const {
+  auto it = streams_.find(body);
+  return it == streams_.end() ? 0 : it->second.retained.first();
+}
+
+void Outbox::Stream::save(archive::ArchiveWriter& w) const {
+  w(next_seq)(static_cast<uint64_t>(pending))(retained.items);
+}
 
 void Outbox::Stream::load(archive::ArchiveReader& r) {
   uint64_t p = 0;
-  r(next_seq)(p)(retained);
+  std::deque<Numbered> items;
+  r(next_seq)(p)(items);
   pending = static_cast<size_t>(p);
-  if (pending > retained.size()) r.fail("an outbox stream with more queued contributions than it holds");
-  for (size_t i = 0; i < retained.size(); ++i)
-    if (retained[i].seq != next_seq - static_cast<int64_t>(retained.size() - i))
+  if (pending > items.size()) r.fail("an outbox stream with more queued contributions than it holds");
+  for (size_t i = 0; i < items.size(); ++i)
+    if (items[i].seq != next_seq - static_cast<int64_t>(items.size() - i))
       r.fail("an outbox stream whose retained contributions are not numbered up to its next number");
-  retained_bytes = 0;
-  for (const Numbered& n : retained) retained_bytes += item_bytes(n.what);
+  retained.clear();
+  for (Numbered& n : items) retained.push(std::move(n));
 }
 
 void Outbox::save(archive::ArchiveWriter& w) const {

@@ -112,6 +112,13 @@ GraphStage::Feed& GraphStage::feed_of(const std::string& source) {
 
 void GraphStage::handle(const Event& e, const Emit& emit) {
   Outputs out(*this, emit);
+  if (exchange_ && exchange_->fetching() && held_back(e)) {
+    held_.push_back(e);
+    if (held_.size() >= kMaxHeldBack) exchange_->tail.stop();
+    exchange_now_ = std::max(exchange_now_, event_utime(e));
+    exchange(FleetControl{}, out, emit);  // the clock moved: the wait may end
+    return;
+  }
   if (const auto* o = std::get_if<Odometry>(&e))
     slam_.add_odometry(o->source, to_input(*o), out);
   else if (const auto* l = std::get_if<LoopClosure>(&e))
@@ -129,11 +136,30 @@ void GraphStage::exchange(const Event& e, Outputs& out, const Emit& emit) {
   // an empty sender): only the clock moves, so that heartbeats and repairs go on while no data arrives.
   if (const auto* c = std::get_if<FleetControl>(&e); c && !c->sender.empty())
     r = exchange_->received(*c, exchange_now_);
+  for (const slam::GraphContribution& c : r.own) slam_.adopt(c, out);
   slam_.apply_all(r.apply, out);
   for (FleetContributions& a : r.answers) emit(std::move(a));
   fleet::FleetExchange::Due due = exchange_->due(exchange_now_);
+  for (const slam::GraphContribution& c : due.own) slam_.adopt(c, out);
   for (FleetContributions& m : due.contributions) emit(std::move(m));
   for (FleetControl& c : due.control) emit(std::move(c));
+  if (!exchange_->fetching()) release_held(emit);
+}
+
+bool GraphStage::held_back(const Event& e) const {
+  // What the wait needs goes through: the tails' answers, the ticks, and the others' requests (answered from the
+  // logs, not the graph).  Everything else may make a contribution of a local body (its inputs, and the others'
+  // contributions that a local body completes).
+  if (const auto* m = std::get_if<FleetContributions>(&e)) return !(m->repair && exchange_->outbox.owns(m->body));
+  if (const auto* c = std::get_if<FleetControl>(&e))
+    return !c->sender.empty() && c->kind != FleetControl::Kind::kRepair;
+  return true;
+}
+
+void GraphStage::release_held(const Emit& emit) {
+  std::vector<Event> held = std::move(held_);
+  held_.clear();
+  for (const Event& e : held) handle(e, emit);
 }
 
 void GraphStage::publish_trajectory(const std::string& source, Feed& f, int64_t utime, int solves, bool flush,
@@ -197,6 +223,11 @@ void GraphStage::publish_map(const std::string& frame, int64_t utime, bool flush
 }
 
 void GraphStage::finish(const Emit& emit) {
+  if (exchange_ && exchange_->fetching()) {  // stopped while waiting for the tails: the inputs held back are not lost
+    exchange_->tail.stop();
+    Outputs out(*this, emit);
+    exchange(FleetControl{}, out, emit);
+  }
   for (const std::string& source : slam_.bodies()) {
     const slam::KeyframeTrack* track = slam_.track(source);
     if (track->empty()) continue;

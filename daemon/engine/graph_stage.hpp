@@ -108,8 +108,16 @@ class GraphStage final : public Stage {
   std::unique_ptr<fleet::FleetExchange> exchange_;
   int64_t exchange_now_ = 0;
   /// A fleet event through the exchange: what it makes due applied to the graph and sent.
-  void exchange(const Event& e, Outputs& out,
-                const Emit& emit);  // [0] 3-D, [1] planar: when chi2 was last evaluated, its value
+  void exchange(const Event& e, Outputs& out, const Emit& emit);
+  /// While a restarted exchange fetches the tails of this daemon's own streams (FleetExchange::fetching), the events
+  /// that would make or apply contributions wait here (at most kMaxHeldBack: the wait ends when it is full), so that
+  /// the own contributions go on after the tail, numbered and with keyframe ids after it; handled in their order
+  /// when the wait ends.  Not saved (a state saved meanwhile is the one loaded, without the tail: the next start
+  /// fetches it again).
+  bool held_back(const Event& e) const;
+  void release_held(const Emit& emit);
+  static constexpr size_t kMaxHeldBack = 8192;  // a few MB of events; 2 s of inputs are a few hundred
+  std::vector<Event> held_;
   int64_t next_request_id_ = 0;
   GraphStageCounters counters_;
 };

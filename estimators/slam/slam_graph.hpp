@@ -58,6 +58,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <tuple>
 #include <vector>
 
 namespace sextant::slam {
@@ -123,6 +124,15 @@ class SlamGraph {
   /// gate reads the estimate (a loop, an inter-robot loop's half, a frame join) sees it solved first; frames are
   /// placed (try_joins) after the last update.  Returns how many were applied.
   int apply_all(const std::vector<GraphContribution>& contributions, SlamListener& listener);
+  /// A contribution of a local body that this graph made before it was restarted from an older saved state (its
+  /// tail, taken back from the graphs that applied it; daemon/engine/fleet_exchange.hpp), in its stream's order:
+  /// applied as apply() applies a remote body's (not gated again, not contributed again: the others have it), and
+  /// the body's front end goes on from it (the track and the keyframe selector at its newest keyframe; the next
+  /// keyframe id after it).  A half of a robot sighting or of an inter-robot loop adds nothing here: its whole is in
+  /// the other body's stream.  A whole it had completed from another body's half is not completed again when that
+  /// half is delivered again (this graph's state is older than it).  Refused (counted as apply() counts) for a remote body, or a new body's first
+  /// contribution that is not a keyframe.  True when applied.
+  bool adopt(const GraphContribution& contribution, SlamListener& listener);
   /// Whether a body's graph is built from contributions (another graph owns its inputs).
   bool remote(const std::string& body) const;
   /// Drops the body with its map: its keyframes, landmarks and their factors leave the smoother of its kind (rebuilt
@@ -378,6 +388,14 @@ class SlamGraph {
   std::map<std::string, Body> bodies_;
   Pending pending_;
   std::vector<GraphContribution> waiting_wholes_;  // robot sightings and loops waiting for a keyframe (oldest first)
+  /// The robot sightings and inter-robot loops this graph completed before it restarted and took back (adopt): the
+  /// other body's half, delivered again since (the restarted graph's inputs are older than it), is not completed
+  /// twice.  At most one per contribution taken back; not saved.
+  using WholeKey = std::tuple<int, std::string, std::string, int64_t, int64_t>;
+  static WholeKey whole_key(const GraphContribution& whole);
+  /// Whether `whole` was taken back (and is forgotten now): then it is neither contributed nor added again.
+  bool completed_before_restart(const GraphContribution& whole) { return adopted_wholes_.erase(whole_key(whole)) > 0; }
+  std::set<WholeKey> adopted_wholes_;
   std::map<std::pair<std::string, std::string>, int64_t> join_attempts_;  // frame pair -> keyframes at the last try
   std::map<std::string, std::pair<std::string, SE3>> moved_frames_;       // a joined frame -> (into, into_from_it)
   Deferred deferred_;

@@ -137,6 +137,7 @@ bool SlamGraph::complete_body_sighting(const std::string& observer, const BodySi
   }
   const GraphContribution whole{h.observed, BodySighting{observer, h.utime, h.sensor_in_body, h.sighting, h.observer,
                                                          anchor_of(it->second, *at)}};
+  if (completed_before_restart(whole)) return false;
   listener.contributed(whole);
   return add_whole(whole);
 }
@@ -162,6 +163,7 @@ bool SlamGraph::complete_body_loop(const std::string& from, const BodyLoopHalf& 
       loop_on_keyframes(o.planar, h.loop.relative, h.loop.information, {0, h.from.motion, h.from.covariance}, *end_to);
   const GraphContribution whole{
       h.loop.body_to, BodyLoop{from, h.from.keyframe, o.track.keyframes()[end_to->keyframe].id, kl.z, kl.information}};
+  if (completed_before_restart(whole)) return false;
   listener.contributed(whole);
   const size_t pending_before = pending_.loops.size();
   const bool added = add_whole(whole);
@@ -249,6 +251,38 @@ bool SlamGraph::apply(const GraphContribution& c, SlamListener& listener) {
   const bool applied = acceptable && apply_contribution(c, listener);
   ++(applied ? counters_.fleet_contributions_applied : counters_.fleet_contributions_refused);
   return applied;
+}
+
+bool SlamGraph::adopt(const GraphContribution& c, SlamListener& listener) {
+  auto it = bodies_.find(c.body);
+  const auto* k = std::get_if<KeyframeContribution>(&c.what);
+  const bool acceptable =
+      it != bodies_.end() ? !it->second.remote && (k == nullptr || k->planar == it->second.planar) : k != nullptr;
+  if (!acceptable) {
+    ++counters_.fleet_contributions_refused;
+    return false;
+  }
+  if (std::holds_alternative<BodySightingHalf>(c.what) || std::holds_alternative<BodyLoopHalf>(c.what)) return true;
+  if (std::holds_alternative<BodySighting>(c.what) || std::holds_alternative<BodyLoop>(c.what))
+    adopted_wholes_.insert(whole_key(c));
+  Body& b = it != bodies_.end() ? it->second : body_for(c.body, k->planar);
+  // The back end's remote path is the one that takes a contribution as it is: the body is remote while it runs.
+  struct Local {
+    Body& b;
+    ~Local() { b.remote = false; }
+  } local{b};
+  b.remote = true;
+  const bool applied = apply_contribution(c, listener);
+  if (applied && k) b.selector.reset_reference(b.track.newest().odom);
+  ++(applied ? counters_.fleet_contributions_applied : counters_.fleet_contributions_refused);
+  return applied;
+}
+
+SlamGraph::WholeKey SlamGraph::whole_key(const GraphContribution& c) {
+  // What the other body's half determines: a sighting's observer, time and marker id; a loop's two keyframes.
+  if (const auto* s = std::get_if<BodySighting>(&c.what)) return {0, c.body, s->observer, s->utime, s->sighting.id};
+  const auto& l = std::get<BodyLoop>(c.what);
+  return {1, c.body, l.from, l.from_keyframe, l.to_keyframe};
 }
 
 int SlamGraph::apply_all(const std::vector<GraphContribution>& contributions, SlamListener& listener) {

@@ -1,16 +1,18 @@
 """Checks a fleet of daemons, one per robot on its own test host, against one daemon fed every robot's data.
 
-Usage: check_fleet_hosts.py SINGLE_OUT.lcm TOLERANCE_M HOST=BUS.lcm ...
+Usage: check_fleet_hosts.py [--restarted HOST] SINGLE_OUT.lcm TOLERANCE_M HOST=BUS.lcm ...
 SINGLE_OUT.lcm is the output log of `sextant replay` of the whole fleet (TRAJECTORY); each BUS.lcm is what a logger on
 that host recorded of its daemon's outputs (PREFIX_TRAJECTORY of the daemon named HOST, its prefix inferred).  For
 every host and every robot: the daemon's final trajectory of the robot (its own view, TRAJECTORY rebuilt) holds the
 same keyframes as the single daemon's (ids; none lost) within TOLERANCE_M RMS over positions, and all robots end in
-one map frame."""
+one map frame.  With --restarted HOST (a daemon killed and restarted on its state directory): its graph stage's
+last status shows it took back what it had sent since its last save (fleet_tail_adopted > 0), and no daemon's shows
+a stream rewound (fleet_in_owner_rewound = 0)."""
 import math
 import sys
 
 from lcmlog import read_log, rebuild_trajectories
-from sextant import trajectory_t
+from sextant import status_t, trajectory_t
 
 
 def trajectories(path, channel_suffix, sender=None):
@@ -21,6 +23,19 @@ def trajectories(path, channel_suffix, sender=None):
     for m in msgs:
         frames[m.source] = m.frame
     return rebuild_trajectories(msgs), frames
+
+
+def graph_counters(path, sender):
+    """The graph stage's counters in the last status of `sender` in the bus log at `path`."""
+    counters = {}
+    for _, c, b in read_log(path):
+        if c.endswith("SEXTANT_STATUS"):
+            status = status_t.decode(b)
+            if status.sender == sender:
+                for st in status.stages:
+                    if st.name == "graph":
+                        counters = dict(zip(st.counter_names, st.counter_values))
+    return counters
 
 
 def rms(a, b):
@@ -34,8 +49,12 @@ def rms(a, b):
 
 
 def main():
-    single_path, tolerance = sys.argv[1], float(sys.argv[2])
-    hosts = dict(a.split("=", 1) for a in sys.argv[3:])
+    args = sys.argv[1:]
+    restarted = None
+    if args[0] == "--restarted":
+        restarted, args = args[1], args[2:]
+    single_path, tolerance = args[0], float(args[1])
+    hosts = dict(a.split("=", 1) for a in args[2:])
     single, single_frames = trajectories(single_path, "TRAJECTORY")
     robots = single.sources()
     failures = []
@@ -53,6 +72,13 @@ def main():
                   f"RMS {err * 100:.2f} cm, {lost} of the single daemon's missing")
             if err > tolerance or lost > 0:
                 failures.append(f"{host}: {robot}: RMS {err:.4f} m, {lost} keyframes missing")
+        counters = graph_counters(path, host)
+        rewound, adopted = counters.get("fleet_in_owner_rewound"), counters.get("fleet_tail_adopted")
+        print(f"{host}: fleet_in_owner_rewound {rewound}, fleet_tail_adopted {adopted}")
+        if rewound != 0:
+            failures.append(f"{host}: fleet_in_owner_rewound {rewound}")
+        if host == restarted and not adopted:
+            failures.append(f"{host}: restarted, took nothing back (fleet_tail_adopted {adopted})")
     if failures:
         sys.exit("\n".join(failures))
     print("fleet hosts: every daemon holds the single daemon's map")

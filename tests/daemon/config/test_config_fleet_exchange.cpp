@@ -42,7 +42,8 @@ TEST_CASE("config: fleet exchange off by default, on with its members and every 
                                               "        reorder_mb: 2\n"
                                               "        max_repair_range: 50\n"
                                               "        repair_bytes_per_s: 20000\n"
-                                              "        max_message_bytes: 40000\n") +
+                                              "        max_message_bytes: 40000\n"
+                                              "        restart_wait_s: 0.5\n") +
                                          "channels:\n  prefix: ROBOT1_\n  fleet: TEAM\n",
                                      "t.yaml");
   const auto& x = c.engine.graph.fleet_exchange;
@@ -60,6 +61,7 @@ TEST_CASE("config: fleet exchange off by default, on with its members and every 
   CHECK(x.max_repair_range == 50);
   CHECK(x.repair_bytes_per_s == 20000);
   CHECK(x.max_message_bytes == 40000);
+  CHECK(x.restart_wait_s == 0.5);
   CHECK(c.channels.fleet == "TEAM");  // the prefix is not the fleet's
   CHECK(c.channels.full(c.channels.odometry) == "ROBOT1_ODOMETRY");
 }
@@ -75,6 +77,7 @@ TEST_CASE("config: a wrong fleet exchange is refused at its file:line") {
   CHECK(config_error_of(exchange("        members: [\"\"]\n")).starts_with("test.yaml:7:"));
   CHECK(config_error_of(exchange("        retain: 0\n")).starts_with("test.yaml:7:"));
   CHECK(config_error_of(exchange("        max_message_bytes: 70000\n")).starts_with("test.yaml:7:"));
+  CHECK(config_error_of(exchange("        restart_wait_s: 0\n")).starts_with("test.yaml:7:"));
   CHECK(config_error_of(exchange("        repair_backoff_s: 2\n        repair_backoff_max_s: 1\n"))
             .find("repair_backoff_max_s") != std::string::npos);
   CHECK(config_error_of(exchange("        retian: 5\n")).starts_with("test.yaml:7:"));  // unknown key

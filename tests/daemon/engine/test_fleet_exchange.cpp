@@ -294,6 +294,7 @@ TEST_CASE("fleet exchange: an owner restarted from saved state continues its num
   const auto answer = restarted.outbox.answer(ask, p.now);
   REQUIRE(!answer.empty());
   Inbox late("c", options());  // a daemon that joins late gets the stream from the start
+  for (const auto& h : restarted.outbox.heartbeat(p.now)) (void)late.receive(h, p.now);  // known from its owner
   std::vector<std::string> got;
   for (const auto& m : answer)
     for (const auto& c : late.receive(m, p.now)) got.push_back(key(c.what));
@@ -440,9 +441,240 @@ TEST_CASE("fleet exchange: one call per fleet event gives what to apply and what
   REQUIRE(answer.answers.size() == 1);
   CHECK(answer.answers[0].repair);
   const auto counters = c.counters();
-  CHECK(counters.size() == 25);
+  CHECK(counters.size() == 34);
   CHECK(std::find(counters.begin(), counters.end(), std::pair<std::string, int64_t>{"fleet_in_delivered", 2}) !=
         counters.end());
   CHECK(std::find(counters.begin(), counters.end(), std::pair<std::string, int64_t>{"fleet_in_claimed", 1}) !=
         counters.end());
+}
+
+namespace {
+
+// A restarted owner from `saved`, and one round of its tail fetch at `now` over a lossless bus: its requests go to
+// `peers`, their answers back; what it adopted (keys), and whether it sent a heartbeat.
+FleetExchange restart(const std::string& name, const std::string& saved, const FleetExchangeOptions& o) {
+  FleetExchange restarted(name, o);
+  archive::ArchiveReader r(saved.data(), saved.size(), "state");
+  restarted.load(r);
+  r.expect_end();
+  return restarted;
+}
+
+struct FetchRound {
+  std::vector<std::string> adopted;
+  int requests = 0, heartbeats = 0;
+};
+
+FetchRound fetch_round(FleetExchange& owner, const std::vector<FleetExchange*>& peers, int64_t now) {
+  FetchRound round;
+  const FleetExchange::Due due = owner.due(now);
+  for (const auto& own : due.own) round.adopted.push_back(key(own.what));  // the wait's end: what was held ahead
+  for (const FleetControl& c : due.control) {
+    if (c.kind == FleetControl::Kind::kHeartbeat) {
+      ++round.heartbeats;
+      continue;
+    }
+    ++round.requests;
+    CHECK(c.daemon == c.sender);  // to every member
+    for (FleetExchange* peer : peers)
+      for (const FleetContributions& m : peer->received(c, now).answers) {
+        const auto got = owner.received(m, now);
+        CHECK(got.apply.empty());
+        for (const auto& own : got.own) round.adopted.push_back(key(own.what));
+      }
+  }
+  return round;
+}
+
+}  // namespace
+
+TEST_CASE(
+    "fleet exchange: an owner restarted from an older state than it sent takes its tail back from the others, then "
+    "numbers after it, and the others see no rewind") {
+  Pair p;
+  for (int i = 0; i < 10; ++i) p.step(1);
+  archive::ArchiveWriter w;
+  p.a.save(w);
+  const size_t at_save = p.sent.size();
+  for (int i = 0; i < 10; ++i) p.step(1);  // sent and applied by b, not in a's saved state
+  REQUIRE(p.delivered == p.sent);
+  p.a = restart("a", w.data(), options());
+  CHECK(p.a.fetching());
+  CHECK(p.a.outbox.next_seq("r1") == static_cast<int64_t>(at_save) + 1);
+  std::vector<std::string> adopted;
+  int requests = 0, rounds = 0;
+  for (; p.a.fetching() && rounds < 100; ++rounds) {
+    p.now += 100000;
+    const FetchRound round = fetch_round(p.a, {&p.b}, p.now);
+    if (p.a.fetching()) CHECK(round.heartbeats == 0);  // it would state the stream before what b holds
+    requests += round.requests;
+    adopted.insert(adopted.end(), round.adopted.begin(), round.adopted.end());
+  }
+  CHECK(adopted == std::vector<std::string>(p.sent.begin() + static_cast<std::ptrdiff_t>(at_save), p.sent.end()));
+  CHECK(p.a.outbox.next_seq("r1") == static_cast<int64_t>(p.sent.size()) + 1);
+  CHECK(p.a.tail.counters().adopted == static_cast<int64_t>(p.sent.size() - at_save));
+  CHECK(requests >= 2);  // the first is answered in full; the next finds nothing more
+  CHECK(requests <= 5);  // then backs off until the wait ends
+  CHECK(rounds == 21);   // restart_wait_s after the last contribution taken back
+  // The next contributions follow the tail, the heartbeat states what b holds, and b takes the stream on.
+  p.next_id = static_cast<int64_t>(p.sent.size()) / 2;
+  for (int i = 0; i < 30; ++i) p.step(i < 10 ? 1 : 0);
+  CHECK(p.delivered == p.sent);
+  CHECK(p.b.inbox.counters().owner_rewound == 0);
+  CHECK(p.b.inbox.counters().duplicates == 0);
+  // What was taken back is the owner's log again: a late daemon gets the whole stream from it.
+  CHECK(p.a.outbox.first_retained("r1") == 1);
+}
+
+TEST_CASE("fleet exchange: a receiver's copy of another owner's stream is bounded like the owner's log") {
+  auto o = options();
+  o.retain = 7;
+  FleetExchange a("a", o), b("b", o);
+  for (int64_t id = 0; id < 20; ++id) CHECK(a.contributed(keyframe("r1", id)));
+  for (const auto& m : a.due(1000000).contributions)
+    CHECK(b.received(m, 1000000).apply.size() == m.contributions.size());
+  const Retained* copy = b.inbox.copy_of("r1", "a");
+  REQUIRE(copy != nullptr);
+  CHECK(copy->items.size() == 7);
+  CHECK(copy->first() == 14);
+  CHECK(copy->last() == 20);
+  CHECK(b.inbox.copy_of("r1", "c") == nullptr);  // not c's stream
+}
+
+TEST_CASE(
+    "fleet exchange: a restarted owner adopts each contribution once from several members, in order from its next "
+    "number, and nothing from a non-member or out of order") {
+  FleetExchange a("a", options()), b("b", options()), c("c", options());
+  for (int64_t id = 0; id < 5; ++id) CHECK(a.contributed(keyframe("r1", id)));
+  for (const auto& m : a.due(1000000).contributions) {
+    (void)b.received(m, 1000000);
+    (void)c.received(m, 1000000);
+  }
+  archive::ArchiveWriter w;
+  a.save(w);
+  for (int64_t id = 5; id < 9; ++id) CHECK(a.contributed(keyframe("r1", id)));
+  const auto tail = a.due(2000000).contributions;
+  for (const auto& m : tail) (void)b.received(m, 2000000);  // c missed the tail
+  FleetExchange restarted = restart("a", w.data(), options());
+  const auto answer = [&](std::string sender, int64_t first, int64_t id) {
+    FleetContributions m{3000000, std::move(sender), "r1", true, first, {keyframe("r1", id).what}};
+    return restarted.received(m, 3000000).own.size();
+  };
+  CHECK(answer("x", 6, 5) == 0);         // a non-member
+  CHECK(answer("a", 6, 5) == 0);         // itself (its own repairs brought back: not counted)
+  CHECK(answer("b", 8, 7) == 0);         // does not continue the stream (6 is next): held
+  CHECK(answer("b", 6 + 4096, 7) == 0);  // beyond the reorder window: dropped
+  CHECK(restarted.tail.counters().refused == 1);
+  CHECK(restarted.tail.counters().out_of_order == 1);
+  CHECK(restarted.outbox.next_seq("r1") == 6);
+  int rounds = 0;
+  std::vector<std::string> adopted;
+  for (int64_t now = 3000000; restarted.fetching() && rounds < 100; now += 100000, ++rounds) {
+    const FetchRound round = fetch_round(restarted, {&c, &b}, now);  // c answers nothing, b the tail
+    adopted.insert(adopted.end(), round.adopted.begin(), round.adopted.end());
+  }
+  CHECK(adopted == std::vector<std::string>{"k5", "k6", "k7", "k8"});
+  // Answered again by b on a repeated request, or by two members: dropped as duplicates.
+  FleetExchange again = restart("a", w.data(), options());
+  for (FleetExchange* peer : {&b, &b}) {
+    const FleetControl ask{4000000, "a", FleetControl::Kind::kRepair, "a", {FleetRange{"r1", 6, 100}}};
+    for (const auto& m : peer->received(ask, 4000000).answers) (void)again.received(m, 4000000);
+  }
+  CHECK(again.outbox.next_seq("r1") == 10);
+  CHECK(again.tail.counters().adopted == 4);
+  CHECK(again.tail.counters().duplicates == 4);
+  // A non-member's request for a tail is not answered.
+  const FleetControl hostile{4000000, "x", FleetControl::Kind::kRepair, "x", {FleetRange{"r1", 1, 100}}};
+  CHECK(b.received(hostile, 4000000).answers.empty());
+  CHECK(b.outbox.counters().repair_refused == 1);
+}
+
+TEST_CASE("fleet exchange: a restarted owner nobody answers waits restart_wait_s, then goes on as before") {
+  Pair p;
+  for (int i = 0; i < 5; ++i) p.step(1);
+  archive::ArchiveWriter w;
+  p.a.save(w);
+  FleetExchange restarted = restart("a", w.data(), options());
+  FleetExchange silent("c", options());  // holds no copy of r1
+  int requests = 0, heartbeats = 0, rounds = 0;
+  for (int64_t now = 5000000; rounds < 40; now += 100000, ++rounds) {
+    const FetchRound round = fetch_round(restarted, {&silent}, now);
+    CHECK(round.adopted.empty());
+    requests += round.requests;
+    heartbeats += round.heartbeats;
+    if (round.heartbeats > 0) break;
+  }
+  CHECK(rounds == 20);   // 2 s of 0.1 s steps
+  CHECK(requests == 4);  // at 0, 0.2, 0.6 and 1.4 s: the repairs' back-off
+  CHECK(heartbeats == 1);
+  CHECK(restarted.outbox.next_seq("r1") == p.a.outbox.next_seq("r1"));
+  // Alone in its configuration (no other member), or without a stream of its own, it does not wait at all.
+  CHECK_FALSE(restart("a", w.data(), options({"a"})).fetching());
+  archive::ArchiveWriter wb;
+  p.b.save(wb);
+  CHECK_FALSE(restart("b", wb.data(), options()).fetching());
+}
+
+TEST_CASE("fleet exchange: the others' answers to a restarted owner open no stream and change none elsewhere") {
+  FleetExchange a("a", options()), b("b", options()), c("c", options()), d("d", options({"a", "b", "c", "d"}));
+  CHECK(a.contributed(keyframe("r1", 0)));
+  for (const auto& m : a.due(1000000).contributions) {
+    (void)b.received(m, 1000000);
+    (void)c.received(m, 1000000);
+  }
+  const FleetControl ask{2000000, "a", FleetControl::Kind::kRepair, "a", {FleetRange{"r1", 1, 10}}};
+  const auto answers = b.received(ask, 2000000).answers;
+  REQUIRE(answers.size() == 1);
+  CHECK(answers[0].repair);
+  CHECK(c.received(answers[0], 2000000).apply.empty());  // c knows r1 as a's: b's copy is not for it
+  CHECK(c.inbox.counters().repairs_overheard == 1);
+  CHECK(c.inbox.owner("r1") == "a");
+  CHECK(c.inbox.counters().claimed == 0);
+  CHECK(d.received(answers[0], 2000000).apply.empty());  // d never heard of r1: b does not become its owner
+  CHECK(d.inbox.owner("r1").empty());
+  CHECK(a.received(answers[0], 2000000).own.empty());  // a, not restarted, ignores it
+  CHECK(a.inbox.counters().repairs_overheard == 1);
+}
+
+TEST_CASE(
+    "fleet exchange: what a member holds beyond a gap nobody can fill is taken back after a placeholder, and that "
+    "member applies the same sequence") {
+  FleetExchange a("a", options()), b("b", options());
+  for (int64_t id = 0; id < 4; ++id) CHECK(a.contributed(keyframe("r1", id)));
+  for (const auto& m : a.due(1000000).contributions) CHECK(b.received(m, 1000000).apply.size() == 4);
+  archive::ArchiveWriter w;
+  a.save(w);
+  for (int64_t id = 4; id < 8; ++id) CHECK(a.contributed(keyframe("r1", id)));  // numbers 5 to 8
+  for (const auto& m : a.due(1100000).contributions) REQUIRE(m.contributions.size() == 4);
+  // b gets 5, 7 and 8 (6 lost), then a is killed before it resends 6.
+  std::vector<std::string> at_b;
+  const auto to_b = [&](int64_t seq, int64_t now) {
+    FleetContributions m{now, "a", "r1", false, seq, {keyframe("r1", seq - 1).what}};
+    for (const auto& c : b.received(m, now).apply) at_b.push_back(key(c.what));
+  };
+  for (int64_t seq : {5, 7, 8}) to_b(seq, 1100000);
+  CHECK(at_b == std::vector<std::string>{"k4"});
+  FleetExchange restarted = restart("a", w.data(), options());
+  std::vector<std::string> adopted;
+  int64_t now = 2000000;
+  for (; restarted.fetching(); now += 100000) {
+    const FetchRound round = fetch_round(restarted, {&b}, now);
+    adopted.insert(adopted.end(), round.adopted.begin(), round.adopted.end());
+    if (!restarted.fetching()) break;
+  }
+  CHECK(adopted == std::vector<std::string>{"k4", "?", "k6", "k7"});  // 7 and 8 at the wait's end, after 6's place
+  CHECK(restarted.tail.counters().lost == 1);
+  CHECK(restarted.outbox.next_seq("r1") == 9);
+  // b asks the owner for 6: a placeholder that changes no graph, then b applies 7 and 8 as the owner did.
+  for (const auto& request : b.due(now + 1000000).control) {
+    if (request.kind != FleetControl::Kind::kRepair) continue;
+    for (const auto& answer : restarted.received(request, now + 1000000).answers)
+      for (const auto& c : b.received(answer, now + 1000000).apply) at_b.push_back(key(c.what));
+  }
+  CHECK(at_b == std::vector<std::string>{"k4", "?", "k6", "k7"});
+  const Retained* copy = b.inbox.copy_of("r1", "a");
+  REQUIRE(copy != nullptr);
+  CHECK(copy->items.size() == 8);
+  CHECK(std::get<slam::KeyframesThinned>(copy->items[5].what).keyframes == std::vector<int64_t>{INT64_MAX});
+  CHECK(b.inbox.counters().owner_rewound == 0);
 }
