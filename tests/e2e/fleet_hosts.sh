@@ -79,14 +79,15 @@ restart_host1() {  # killed 3.5 s after a periodic save (its robot held meanwhil
   touch "$work/mark"
   until [ "$work/state1/sextantd.state" -nt "$work/mark" ]; do sleep 0.05; done
   sleep 1
-  kill -STOP \${players[1]}
+  # (On a slow machine the robot's log may have ended already: then nothing is held, nothing is lost.)
+  kill -STOP \${players[1]} 2> /dev/null || true
   # What the robot sent is handled and contributed, and host 2 has repaired what it lost of it (a heartbeat shows a
   # lost tail), before the kill: a contribution no other daemon holds cannot be taken back.
   sleep 2.5
   kill -KILL \${daemons[1]}
   wait \${daemons[1]} || true
   start_daemon 1 "$work/daemon1_restarted.log"
-  kill -CONT \${players[1]}
+  kill -CONT \${players[1]} 2> /dev/null || true
 }
 mkdir -p "$work/state1"
 start_host 1; start_host 3
