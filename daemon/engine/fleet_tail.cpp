@@ -29,8 +29,7 @@ void TailFetch::start(const Outbox& outbox) {
 std::vector<Numbered> TailFetch::receive(const FleetContributions& m, const Outbox& outbox, int64_t now_utime) {
   if (!waiting_ || m.sender == self_) return {};  // this daemon's own repairs, brought back by multicast
   const auto n = static_cast<int64_t>(m.contributions.size());
-  if (m.sender == self_ || !members_.contains(m.sender) || !bodies_.contains(m.body) || m.first < 1 ||
-      m.first > kMaxSeq - n) {
+  if (!members_.contains(m.sender) || !bodies_.contains(m.body) || m.first < 1 || m.first > kMaxSeq - n) {
     ++counters_.refused;
     return {};
   }
