@@ -41,15 +41,30 @@ TEST_CASE("the publisher's last FusedPose times are forgotten with their body an
   CHECK(sent == 3 + 100 + 1);
 }
 
-TEST_CASE("the publisher says how far behind real time it publishes: a backlog after a stall shows its lag") {
-  config::Channels channels;
-  runtime::Publisher publisher(channels, "t", "ekf", [](const std::string&, const std::vector<uint8_t>&, int64_t) {});
-  int64_t wall = 1'000'000'000;
-  publisher.measure_lag([&wall] { return wall; });
+namespace {
+
+/// A publisher whose wall clock is `wall` (microseconds, set by the test), and a pose of body "robot" from the EKF.
+struct LagClock {
+  runtime::Publisher publisher;
+  int64_t wall;
   engine::FusedPose p;
-  p.source = "robot";
-  p.estimator = "ekf";
-  p.covariance = engine::Matrix6::Identity();
+  explicit LagClock(int64_t start)
+      : publisher(config::Channels{}, "t", "ekf", [](const std::string&, const std::vector<uint8_t>&, int64_t) {}),
+        wall(start) {
+    publisher.measure_lag([this] { return wall; });
+    p.source = "robot";
+    p.estimator = "ekf";
+    p.covariance = engine::Matrix6::Identity();
+  }
+  LagClock(const LagClock&) = delete;
+  LagClock& operator=(const LagClock&) = delete;
+};
+
+}  // namespace
+
+TEST_CASE("the publisher says how far behind real time it publishes: a backlog after a stall shows its lag") {
+  LagClock clock(1'000'000'000);
+  auto& [publisher, wall, p] = clock;
   // Live: each pose published 5 ms after its stamp.
   for (int i = 1; i <= 10; ++i) {
     p.utime = wall - 5'000;
@@ -76,14 +91,8 @@ TEST_CASE("the publisher says how far behind real time it publishes: a backlog a
 }
 
 TEST_CASE("the publisher's usual lag: a sender's clock offset is not a stall, a stall beyond it is") {
-  config::Channels channels;
-  runtime::Publisher publisher(channels, "t", "ekf", [](const std::string&, const std::vector<uint8_t>&, int64_t) {});
-  int64_t wall = 1'800'000'000'000'000;
-  publisher.measure_lag([&wall] { return wall; });
-  engine::FusedPose p;
-  p.source = "robot";
-  p.estimator = "ekf";
-  p.covariance = engine::Matrix6::Identity();
+  LagClock clock(1'800'000'000'000'000);
+  auto& [publisher, wall, p] = clock;
   const int64_t offset = 3LL * 365 * 86'400 * 1'000'000;  // a log played live with its stamps of three years ago
   int64_t stamp = wall - offset;
   const auto publish_for = [&](double seconds, int64_t delay_us) {
@@ -126,14 +135,8 @@ TEST_CASE("the publisher's usual lag: a sender's clock offset is not a stall, a 
 }
 
 TEST_CASE("the publisher's lag: falling behind is a lag that grows, not one that falls back") {
-  config::Channels channels;
-  runtime::Publisher publisher(channels, "t", "ekf", [](const std::string&, const std::vector<uint8_t>&, int64_t) {});
-  int64_t wall = 1'800'000'000'000'000;
-  publisher.measure_lag([&wall] { return wall; });
-  engine::FusedPose p;
-  p.source = "robot";
-  p.estimator = "ekf";
-  p.covariance = engine::Matrix6::Identity();
+  LagClock clock(1'800'000'000'000'000);
+  auto& [publisher, wall, p] = clock;
   int64_t stamp = wall - 3'600'000'000;  // a log of an hour ago
   // One report per wall second, poses every 10 ms of data time, played at `rate` times real time.
   const auto report_at = [&](double rate) {
