@@ -7,35 +7,17 @@ Prints per estimate the horizontal RMS against the fixes outside the gap (at eac
 time), the same from 30 s on (once an estimator that finds its heading from the first fixes has it: before, its
 track runs on the start's heading), and the horizontal distance at the gap's end between the estimate and the first fix after it (the drift
 accumulated without GNSS).  The fixes are turned into East-North-Up at the first fix with WGS-84 (ECEF, then the
-tangent plane): the daemon's datum when none is configured.
+tangent plane, tests/e2e/wgs84.py): the daemon's datum when none is configured.
 """
 import bisect
 import math
 import sys
 
 import lcmlog
+from wgs84 import enu
 from sextant import gnss_t
 
-A, F = 6378137.0, 1 / 298.257223563
 HEADING_KNOWN_S = 30.0
-E2 = F * (2 - F)
-
-
-def ecef(lat, lon, alt):
-    la, lo = math.radians(lat), math.radians(lon)
-    n = A / math.sqrt(1 - E2 * math.sin(la) ** 2)
-    return ((n + alt) * math.cos(la) * math.cos(lo), (n + alt) * math.cos(la) * math.sin(lo),
-            (n * (1 - E2) + alt) * math.sin(la))
-
-
-def enu(origin, lat, lon, alt):
-    la, lo = math.radians(origin[0]), math.radians(origin[1])
-    o, p = ecef(*origin), ecef(lat, lon, alt)
-    d = [p[i] - o[i] for i in range(3)]
-    e = -math.sin(lo) * d[0] + math.cos(lo) * d[1]
-    n = -math.sin(la) * math.cos(lo) * d[0] - math.sin(la) * math.sin(lo) * d[1] + math.cos(la) * d[2]
-    u = math.cos(la) * math.cos(lo) * d[0] + math.cos(la) * math.sin(lo) * d[1] + math.sin(la) * d[2]
-    return e, n, u
 
 
 def read_tum(path):

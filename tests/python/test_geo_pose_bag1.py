@@ -1,34 +1,19 @@
 """FUSED_GEO on robot_localization's bag 1 with its GNSS fused (bench/inertial/bag1_gnss.yaml), replayed: every pose
 of the GNSS-anchored estimators also on the Earth, at the same time, at the same point (the geodetic position put
-back into the datum's East-North-Up plane by WGS84's formulas written here, not GeographicLib), near the receiver's
-own fixes once the heading is known, and saying when it is not yet."""
+back into the datum's East-North-Up plane by WGS84's formulas written out in tests/e2e/wgs84.py, not
+GeographicLib), near the receiver's own fixes once the heading is known, and saying when it is not yet."""
 import bisect
 import math
 import os
+import sys
 
 import sextant
 
 from conftest import SHARED, SOURCE, tool
 
 BAG = os.path.join(SHARED, "data", "inertial", "robot_localization_bag1", "test1.bag")
-A, F = 6378137.0, 1 / 298.257223563
-E2 = F * (2 - F)
-
-
-def ecef(lat, lon, h):
-    lat, lon = math.radians(lat), math.radians(lon)
-    n = A / math.sqrt(1 - E2 * math.sin(lat) ** 2)
-    return ((n + h) * math.cos(lat) * math.cos(lon), (n + h) * math.cos(lat) * math.sin(lon),
-            (n * (1 - E2) + h) * math.sin(lat))
-
-
-def enu(point, datum):
-    lat0, lon0 = math.radians(datum[0]), math.radians(datum[1])
-    d = [a - b for a, b in zip(ecef(*point), ecef(*datum))]
-    e = -math.sin(lon0) * d[0] + math.cos(lon0) * d[1]
-    n = (-math.sin(lat0) * math.cos(lon0) * d[0] - math.sin(lat0) * math.sin(lon0) * d[1] + math.cos(lat0) * d[2])
-    u = math.cos(lat0) * math.cos(lon0) * d[0] + math.cos(lat0) * math.sin(lon0) * d[1] + math.sin(lat0) * d[2]
-    return e, n, u
+sys.path.insert(0, os.path.join(SOURCE, "tests", "e2e"))
+from wgs84 import enu  # noqa: E402  (WGS84 written out in Python, not GeographicLib)
 
 
 def test_fused_geo_on_bag1(tmp_path):
@@ -57,7 +42,7 @@ def test_fused_geo_on_bag1(tmp_path):
         # Placed at the first fix on the unit's magnetic yaw: not known until the track spans 20 m (22 s here; the
         # filter, drifting off the fixes in turns, waits for it again a few times: gnss_heading.reacquire_after).
         assert not mine[0]["heading_known"] and sum(g["heading_known"] for g in mine) > len(mine) // 2
-        worst = max(math.dist(enu((g["latitude"], g["longitude"], g["altitude"]), g["datum"]),
+        worst = max(math.dist(enu(g["datum"], g["latitude"], g["longitude"], g["altitude"]),
                               poses[(name, g["utime"])]) for g in mine)
         assert worst < 1e-3, f"{name}: a geodetic pose {worst} m from its FUSED_POSE"
         # Against the receiver's fixes (horizontal, metres) once the heading is known: the filter's and the
@@ -68,8 +53,8 @@ def test_fused_geo_on_bag1(tmp_path):
         for t, lat, lon in fixes:
             i = bisect.bisect_left(times, t)
             if i < len(known) and known[i]["utime"] - t < 100000:
-                e, n, _ = enu((lat, lon, known[i]["altitude"]), (known[i]["latitude"], known[i]["longitude"],
-                                                                  known[i]["altitude"]))
+                here = (known[i]["latitude"], known[i]["longitude"], known[i]["altitude"])
+                e, n, _ = enu(here, lat, lon, known[i]["altitude"])
                 d.append(math.hypot(e, n))
         d.sort()
         print(f"{name}: median {d[len(d) // 2]:.2f} m, p90 {d[int(0.9 * len(d))]:.2f} m over {len(d)} fixes")
