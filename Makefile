@@ -38,16 +38,17 @@ bench:
 # what was built, e.g. the daemon's threads and its end-to-end scripts:
 #   make tsan SAN_TARGETS="sextantd sextant test_daemon" SAN_TESTS='^(daemon|e2e):'
 # (doctest's ctest names are 'daemon:NAME', no space; the e2e scripts are 'e2e: NAME')
+# CMAKE_FLAGS reaches their configure step too, e.g. CMAKE_FLAGS=-DCMAKE_CXX_COMPILER_LAUNCHER=ccache.
 SAN_TARGETS ?= all
 SAN_TESTS ?= .
 asan: deps
-	@cmake -S . -B build-asan -DCMAKE_BUILD_TYPE=RelWithDebInfo -DSEXTANT_SANITIZE=address,undefined >/dev/null
+	@cmake -S . -B build-asan -DCMAKE_BUILD_TYPE=RelWithDebInfo -DSEXTANT_SANITIZE=address,undefined $(CMAKE_FLAGS) >/dev/null
 	@cmake --build build-asan -j $(JOBS) --target $(SAN_TARGETS)
 	@ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1 \
 	  ctest --test-dir build-asan -R '$(SAN_TESTS)' --output-on-failure -j $(JOBS) --timeout 1200
 
 tsan: deps
-	@cmake -S . -B build-tsan -DCMAKE_BUILD_TYPE=RelWithDebInfo -DSEXTANT_SANITIZE=thread >/dev/null
+	@cmake -S . -B build-tsan -DCMAKE_BUILD_TYPE=RelWithDebInfo -DSEXTANT_SANITIZE=thread $(CMAKE_FLAGS) >/dev/null
 	@cmake --build build-tsan -j $(JOBS) --target $(SAN_TARGETS)
 	@TSAN_OPTIONS=halt_on_error=1:second_deadlock_stack=1:suppressions=$(CURDIR)/tests/tsan.supp \
 	  ctest --test-dir build-tsan -R '$(SAN_TESTS)' --output-on-failure -j $(JOBS) --timeout 1200
