@@ -38,7 +38,8 @@ struct IncrementalOptions {
   /// dissection above (city10000: half the factorization flops; M3500: its ordering time outweighs the gain).
   int nested_dissection_above = 5000;
   double capacity_growth = 1.0;  // reserved columns at a rebuild: this fraction of the used ones (and >= 64)
-  /// Updates over which a fill-triggered reordering is spread (incremental_smoother.hpp); 0: reorder within the update.
+  /// Updates over which a fill-triggered reordering, or a first factorization begun by begin_spread_build, is spread
+  /// (incremental_smoother.hpp); 0: reorder within the update.
   int reorder_spread = 8;
   /// Spread reorderings (and rebuilds for relinearization) only in systems of more than this many variables, or
   /// whose factor L has more than reorder_spread_nonzeros entries: below both, a rebuild takes a few ms, and holding
@@ -93,6 +94,8 @@ struct IncrementalStatus {
   bool rebuilt = false;      // the system was reordered and refactorized in this update (or a spread
                              // reordering was put in place)
   bool interrupted = false;  // a rebuild ended at IncrementalOptions::interrupt before it converged
+  bool building = false;     // a spread first factorization is under way (begin_spread_build): nothing was solved,
+                             // the estimates are those it began with (new variables at their initial values)
   int solves = 0;
 };
 

@@ -80,8 +80,18 @@ IncrementalStatus IncrementalSmoother::update() {
   ++s.update_calls;
   if (s.update_calls == s.options.fail_factorization_at_update) s.workspace.arm_fault();
   smoother::hold_gauge(s);
-  if (s.fx.L == nullptr) return rebuild();
+  if (s.fx.L == nullptr && !s.reorder.under_way()) return rebuild();
   IncrementalStatus st;
+  if (s.fx.L == nullptr) {  // a spread first build: this update works on it only, until it is due
+    const bool begins = s.reorder.first_build_requested();
+    if (begins) smoother::begin_first_build(s);
+    if (!s.reorder.due(s.update_calls)) {
+      st.building = true;
+      st.deferred_variables = static_cast<int>(s.pending_vars.size());
+      s.reorder.work(s, begins);
+      return st;
+    }
+  }
   if (s.reorder.due(s.update_calls)) {
     switch (s.reorder.finish(s)) {
       case smoother::ReorderScheduler::Finished::kInstalled:
@@ -155,6 +165,13 @@ IncrementalStatus IncrementalSmoother::update() {
 
 IncrementalStatus IncrementalSmoother::rebuild() { return rebuild_with(state_->options.rebuild_iterations); }
 
+bool IncrementalSmoother::begin_spread_build() {
+  SmootherState& s = *state_;
+  if (s.fx.L != nullptr || s.reorder.under_way() || s.options.reorder_spread <= 0) return false;
+  s.reorder.request_first_build();  // begun by the next update: the caller has just built the whole graph
+  return true;
+}
+
 IncrementalStatus IncrementalSmoother::rebuild_with(int iterations) {
   SmootherState& s = *state_;
   IncrementalStatus st;
@@ -211,6 +228,7 @@ size_t IncrementalSmoother::factor_nonzeros() const { return state_->fx.nonzeros
 int IncrementalSmoother::rebuilds() const { return state_->rebuilds; }
 int64_t IncrementalSmoother::interrupted_rebuilds() const { return state_->interrupted_rebuilds; }
 bool IncrementalSmoother::reordering() const { return state_->reorder.under_way(); }
+bool IncrementalSmoother::factorized() const { return state_->fx.L != nullptr; }
 const IncrementalOptions& IncrementalSmoother::options() const { return state_->options; }
 
 double IncrementalSmoother::chi2() const {
