@@ -43,6 +43,14 @@ IncrementalStatus cholmod_failed(SmootherState& s, IncrementalStatus st) {
   return st;
 }
 
+// An update during a spread first build: nothing solved, everything new waits.
+IncrementalStatus building(const SmootherState& s) {
+  IncrementalStatus st;
+  st.building = true;
+  st.deferred_variables = static_cast<int>(s.pending_vars.size());
+  return st;
+}
+
 }  // namespace
 
 IncrementalSmoother::IncrementalSmoother(IncrementalOptions options)
@@ -82,16 +90,7 @@ IncrementalStatus IncrementalSmoother::update() {
   smoother::hold_gauge(s);
   if (s.fx.L == nullptr && !s.reorder.under_way()) return rebuild();
   IncrementalStatus st;
-  if (s.fx.L == nullptr) {  // a spread first build: this update works on it only, until it is due
-    const bool begins = s.reorder.first_build_requested();
-    if (begins) smoother::begin_first_build(s);
-    if (!s.reorder.due(s.update_calls)) {
-      st.building = true;
-      st.deferred_variables = static_cast<int>(s.pending_vars.size());
-      s.reorder.work(s, begins);
-      return st;
-    }
-  }
+  if (s.fx.L == nullptr && smoother::first_build_slice(s)) return building(s);  // a spread first build, not yet due
   if (s.reorder.due(s.update_calls)) {
     switch (s.reorder.finish(s)) {
       case smoother::ReorderScheduler::Finished::kInstalled:

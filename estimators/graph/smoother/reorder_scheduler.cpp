@@ -62,4 +62,12 @@ void begin_first_build(SmootherState& s) {
   s.reorder.begin(s, in);
 }
 
+bool first_build_slice(SmootherState& s) {
+  const bool begins = s.reorder.first_build_requested();
+  if (begins) begin_first_build(s);
+  if (s.reorder.due(s.update_calls)) return false;
+  s.reorder.work(s, begins);
+  return true;
+}
+
 }  // namespace sextant::graph::smoother

@@ -57,5 +57,8 @@ class ReorderScheduler {
 /// variables are then in enter at their current estimates (admission.hpp, as for a rebuild), and the scheduler
 /// begins their system (ordering and H's pattern).
 void begin_first_build(SmootherState& s);
+/// An update while a first build is under way: begins it when requested; then, unless it is due, works this
+/// update's slice of it and returns true (the update has nothing else to do: nothing can be solved yet).
+bool first_build_slice(SmootherState& s);
 
 }  // namespace sextant::graph::smoother
