@@ -47,6 +47,11 @@ struct IncrementalOptions {
   /// graphs fill in: sphere2500's rebuilds took 150-350 ms with 0.8-1.6 million entries in L, at 1000-2500 poses.
   int reorder_spread_above = 5000;
   int reorder_spread_nonzeros = 500000;
+  /// ... or more factors: a rebuild relinearizes every factor, and a map of landmarks seen from every keyframe has
+  /// many (a 5-minute simulated planar run: 1,800 keyframes, 15,000 factors, 5 Mflop of factorization, and its
+  /// fill-triggered rebuilds took 20-40 ms, most of it relinearizing the sightings).  M3500 (5,453 factors) and
+  /// sphere2500 (4,949) stay below: spread, their rebuilds cost more at installation than they save.
+  int reorder_spread_factors = 6000;
   /// ms: an update works on a spread reordering until this long after it began, and at least for its share of the
   /// time the last one took (1.25 x that time / reorder_spread), so that the installing update is left little.
   double reorder_slice_ms = 4.0;

@@ -125,7 +125,8 @@ IncrementalStatus IncrementalSmoother::update() {
       static_cast<double>(s.fx.nonzeros()) > s.options.refill_ratio * static_cast<double>(s.fx.ordered_nnz);
   const bool spread =
       s.options.reorder_spread > 0 && (static_cast<int>(s.graph.variables().size()) > s.options.reorder_spread_above ||
-                                       s.fx.nonzeros() > static_cast<size_t>(s.options.reorder_spread_nonzeros));
+                                       s.fx.nonzeros() > static_cast<size_t>(s.options.reorder_spread_nonzeros) ||
+                                       s.factors_in_system > static_cast<size_t>(s.options.reorder_spread_factors));
   if (filled && !spread) return with_admission(rebuild_with(1), st);  // the new ordering is the point: one iteration
   bool began_reordering =
       !s.reorder.under_way() && spread && (filled || 4 * (s.fx.reserve_end - s.fx.used) < s.fx.reserve_at_order);

@@ -3,7 +3,8 @@
 //
 // When the factor has filled in past refill_ratio times its size after the last ordering (or the reserved columns
 // are three quarters used, or a relinearization round would change more factors than rank updates do cheaply) in a
-// system of more than reorder_spread_above variables or reorder_spread_nonzeros entries of L, the current factor is
+// system of more than reorder_spread_above variables, reorder_spread_nonzeros entries of L or reorder_spread_factors
+// factors, the current factor is
 // still exact, only slower to update (or linearized further away); so the new ordering and factorization are built a slice at a time at the end of the
 // next reorder_spread updates (each spends on it what is left of reorder_slice_ms after its own work, and at least
 // its share of the time the previous reordering took), and the new system replaces the old one at the start of the
