@@ -176,6 +176,7 @@ void read_smoother(Section& s, engine::GraphConfig& c) {
   m.get("reorder_spread", o.reorder_spread, int_in_range(0, 1000));
   m.get("reorder_spread_above", o.reorder_spread_above, int_in_range(0, std::numeric_limits<int>::max()));
   m.get("reorder_spread_nonzeros", o.reorder_spread_nonzeros, int_in_range(0, std::numeric_limits<int>::max()));
+  m.get("reorder_spread_factors", o.reorder_spread_factors, int_in_range(0, std::numeric_limits<int>::max()));
   m.get("reorder_slice_ms", o.reorder_slice_ms, non_negative());
   if (o.max_update_factors < o.min_update_factors) {
     // The smoother would quietly take the larger; name the key that was set.

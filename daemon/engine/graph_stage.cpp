@@ -47,6 +47,9 @@ class GraphStage::Outputs final : public slam::SlamListener {
     // A remote body (its graph built from another daemon's contributions) has its trajectory here, this daemon's
     // view of it; its fused pose comes from the daemon that has its odometry.
     if (stage_.slam_.remote(body)) return;
+    // While a thinned graph's factorization is being built over a few updates nothing is solved: the standing
+    // correction is still this graph's (a new keyframe's estimate is the one before it composed with its odometry).
+    if (status.building) return;
     const slam::SlamGraph::NewestKeyframe newest = stage_.slam_.newest_keyframe(body);
     GraphCorrection c;
     c.keyframe_utime = newest.keyframe->utime;

@@ -41,6 +41,7 @@ std::string invalid_option(const IncrementalOptions& o) {
   if (o.reorder_spread < 0) return wrong("reorder_spread", o.reorder_spread, ">= 0");
   if (o.reorder_spread_above < 0) return wrong("reorder_spread_above", o.reorder_spread_above, ">= 0");
   if (o.reorder_spread_nonzeros < 0) return wrong("reorder_spread_nonzeros", o.reorder_spread_nonzeros, ">= 0");
+  if (o.reorder_spread_factors < 0) return wrong("reorder_spread_factors", o.reorder_spread_factors, ">= 0");
   if (!(o.reorder_slice_ms >= 0)) return wrong("reorder_slice_ms", o.reorder_slice_ms, "a number >= 0 (ms)");
   if (!non_negative(o.wildfire)) return wrong("wildfire", o.wildfire, "a number >= 0 (m or rad)");
   if (!positive(o.kernel_width)) return wrong("kernel_width", o.kernel_width, "a positive number");

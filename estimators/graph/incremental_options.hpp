@@ -38,7 +38,8 @@ struct IncrementalOptions {
   /// dissection above (city10000: half the factorization flops; M3500: its ordering time outweighs the gain).
   int nested_dissection_above = 5000;
   double capacity_growth = 1.0;  // reserved columns at a rebuild: this fraction of the used ones (and >= 64)
-  /// Updates over which a fill-triggered reordering is spread (incremental_smoother.hpp); 0: reorder within the update.
+  /// Updates over which a fill-triggered reordering, or a first factorization begun by begin_spread_build, is spread
+  /// (incremental_smoother.hpp); 0: reorder within the update.
   int reorder_spread = 8;
   /// Spread reorderings (and rebuilds for relinearization) only in systems of more than this many variables, or
   /// whose factor L has more than reorder_spread_nonzeros entries: below both, a rebuild takes a few ms, and holding
@@ -46,6 +47,11 @@ struct IncrementalOptions {
   /// graphs fill in: sphere2500's rebuilds took 150-350 ms with 0.8-1.6 million entries in L, at 1000-2500 poses.
   int reorder_spread_above = 5000;
   int reorder_spread_nonzeros = 500000;
+  /// ... or more factors: a rebuild relinearizes every factor, and a map of landmarks seen from every keyframe has
+  /// many (a 5-minute simulated planar run: 1,800 keyframes, 15,000 factors, 5 Mflop of factorization, and its
+  /// fill-triggered rebuilds took 20-40 ms, most of it relinearizing the sightings).  M3500 (5,453 factors) and
+  /// sphere2500 (4,949) stay below: spread, their rebuilds cost more at installation than they save.
+  int reorder_spread_factors = 6000;
   /// ms: an update works on a spread reordering until this long after it began, and at least for its share of the
   /// time the last one took (1.25 x that time / reorder_spread), so that the installing update is left little.
   double reorder_slice_ms = 4.0;
@@ -93,6 +99,8 @@ struct IncrementalStatus {
   bool rebuilt = false;      // the system was reordered and refactorized in this update (or a spread
                              // reordering was put in place)
   bool interrupted = false;  // a rebuild ended at IncrementalOptions::interrupt before it converged
+  bool building = false;     // a spread first factorization is under way (begin_spread_build): nothing was solved,
+                             // the estimates are those it began with (new variables at their initial values)
   int solves = 0;
 };
 

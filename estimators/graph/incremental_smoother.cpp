@@ -43,6 +43,14 @@ IncrementalStatus cholmod_failed(SmootherState& s, IncrementalStatus st) {
   return st;
 }
 
+// An update during a spread first build: nothing solved, everything new waits.
+IncrementalStatus building(const SmootherState& s) {
+  IncrementalStatus st;
+  st.building = true;
+  st.deferred_variables = static_cast<int>(s.pending_vars.size());
+  return st;
+}
+
 }  // namespace
 
 IncrementalSmoother::IncrementalSmoother(IncrementalOptions options)
@@ -80,8 +88,9 @@ IncrementalStatus IncrementalSmoother::update() {
   ++s.update_calls;
   if (s.update_calls == s.options.fail_factorization_at_update) s.workspace.arm_fault();
   smoother::hold_gauge(s);
-  if (s.fx.L == nullptr) return rebuild();
+  if (s.fx.L == nullptr && !s.reorder.under_way()) return rebuild();
   IncrementalStatus st;
+  if (s.fx.L == nullptr && smoother::first_build_slice(s)) return building(s);  // a spread first build, not yet due
   if (s.reorder.due(s.update_calls)) {
     switch (s.reorder.finish(s)) {
       case smoother::ReorderScheduler::Finished::kInstalled:
@@ -116,7 +125,8 @@ IncrementalStatus IncrementalSmoother::update() {
       static_cast<double>(s.fx.nonzeros()) > s.options.refill_ratio * static_cast<double>(s.fx.ordered_nnz);
   const bool spread =
       s.options.reorder_spread > 0 && (static_cast<int>(s.graph.variables().size()) > s.options.reorder_spread_above ||
-                                       s.fx.nonzeros() > static_cast<size_t>(s.options.reorder_spread_nonzeros));
+                                       s.fx.nonzeros() > static_cast<size_t>(s.options.reorder_spread_nonzeros) ||
+                                       s.factors_in_system > static_cast<size_t>(s.options.reorder_spread_factors));
   if (filled && !spread) return with_admission(rebuild_with(1), st);  // the new ordering is the point: one iteration
   bool began_reordering =
       !s.reorder.under_way() && spread && (filled || 4 * (s.fx.reserve_end - s.fx.used) < s.fx.reserve_at_order);
@@ -154,6 +164,13 @@ IncrementalStatus IncrementalSmoother::update() {
 }
 
 IncrementalStatus IncrementalSmoother::rebuild() { return rebuild_with(state_->options.rebuild_iterations); }
+
+bool IncrementalSmoother::begin_spread_build() {
+  SmootherState& s = *state_;
+  if (s.fx.L != nullptr || s.reorder.under_way() || s.options.reorder_spread <= 0) return false;
+  s.reorder.request_first_build();  // begun by the next update: the caller has just built the whole graph
+  return true;
+}
 
 IncrementalStatus IncrementalSmoother::rebuild_with(int iterations) {
   SmootherState& s = *state_;
@@ -211,6 +228,7 @@ size_t IncrementalSmoother::factor_nonzeros() const { return state_->fx.nonzeros
 int IncrementalSmoother::rebuilds() const { return state_->rebuilds; }
 int64_t IncrementalSmoother::interrupted_rebuilds() const { return state_->interrupted_rebuilds; }
 bool IncrementalSmoother::reordering() const { return state_->reorder.under_way(); }
+bool IncrementalSmoother::factorized() const { return state_->fx.L != nullptr; }
 const IncrementalOptions& IncrementalSmoother::options() const { return state_->options; }
 
 double IncrementalSmoother::chi2() const {

@@ -28,7 +28,7 @@
 // ends after the iteration under way, counted in interrupted_rebuilds()).
 //
 // Reordering in the background of the updates (systems of more than `reorder_spread_above` variables, or whose L has
-// more than `reorder_spread_nonzeros` entries): when the factor has filled in, or a relinearization round is too
+// more than `reorder_spread_nonzeros` entries, or more than `reorder_spread_factors` factors): when the factor has filled in, or a relinearization round is too
 // large for rank updates, the new ordering and factorization (relinearized at the current estimates) are built a
 // slice at a time at the end of the next `reorder_spread` updates and replace the current system at a fixed update,
 // so the estimates do not depend on the clock (smoother/reorder_scheduler.hpp); relinearization by rank updates goes
@@ -84,6 +84,13 @@ class IncrementalSmoother {
   IncrementalStatus update();
   /// Relinearizes everything at the current estimate, reorders and refactorizes; then solves.
   IncrementalStatus rebuild();
+  /// For a smoother not yet factorized (one built whole at once, e.g. a thinned copy of another, whose estimates are
+  /// already a solution): begins its first factorization, of everything added so far, at the current estimates, as a
+  /// rebuild spread over the next options().reorder_spread updates instead of within the first one.  Until the one
+  /// that puts it in place, update() only works on it (status `building`): nothing is solved, the estimates stay,
+  /// new variables and factors wait and enter in that update.  False (nothing begun) when the smoother is factorized
+  /// already or reorder_spread is 0; the next update() then rebuilds as usual.
+  bool begin_spread_build();
 
   /// Recomputes every variable's step from the current factorization: update() leaves steps that would change by
   /// less than options().wildfire stale (as iSAM2's calculateEstimate), this is the exact solution of the current
@@ -111,8 +118,11 @@ class IncrementalSmoother {
   int rebuilds() const;
   /// Rebuilds that ended at IncrementalOptions::interrupt before they converged.
   int64_t interrupted_rebuilds() const;
-  /// True while a spread reordering is being built.
+  /// True while a spread reordering (or a spread first factorization) is being built.
   bool reordering() const;
+  /// True when there is a factorization to solve with: false before the first update and while a spread first build
+  /// (begin_spread_build) is under way.
+  bool factorized() const;
   const IncrementalOptions& options() const;
 
  private:

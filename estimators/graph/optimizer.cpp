@@ -39,12 +39,12 @@ std::string validate_factor(const std::vector<Variable>& vars, const Factor& f, 
   for (int v : f.variables())
     if (v < 0 || static_cast<size_t>(v) >= vars.size())
       return "factor " + std::to_string(index) + " (" + f.type() + ") refers to a variable that does not exist";
-  const auto& I = f.information();
+  const DefinitenessCheck check = check_positive_definite(f.information());
+  if (check.problem == DefinitenessCheck::Problem::kNone) return "";  // the common case builds no message
   const std::string name =
       "factor " + std::to_string(index) + " (" + f.type() + " on variable " +
       std::to_string(vars[static_cast<size_t>(f.variables()[0])].id) +
       (f.variables().size() > 1 ? " and " + std::to_string(vars[static_cast<size_t>(f.variables()[1])].id) : "") + ")";
-  const DefinitenessCheck check = check_positive_definite(I);
   switch (check.problem) {
     case DefinitenessCheck::Problem::kNone:
       return "";

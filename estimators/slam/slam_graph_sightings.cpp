@@ -17,7 +17,7 @@ Eigen::MatrixXd SlamGraph::gate_marginal(const Body& b, int variable) {
   auto it = cache.find(variable);
   if (it != cache.end() && counters_.updates - it->second.first < kGateMarginalUpdates) return it->second.second;
   Eigen::MatrixXd m = b.smoother->marginal_covariance(variable);
-  cache[variable] = {counters_.updates, m};
+  if (m.size() > 0) cache[variable] = {counters_.updates, m};  // none yet (a pending variable, no factorization)
   return m;
 }
 

@@ -73,12 +73,16 @@ void SlamGraph::thin(bool planar, SlamListener& listener) {
     ++counters_.thinning_failures;
     return;
   }
+  // The new graph's estimates are the old one's solution, so its factorization need not be built before it takes
+  // over: spread over the next updates (which only work on it meanwhile, the estimates standing), the thinning costs
+  // an update no spike.  Without spreading, it is solved now, and a failure keeps the old graph.
   const auto solve_started = std::chrono::steady_clock::now();
-  const graph::IncrementalStatus st = p.fresh->update();
+  const bool spread = p.fresh->begin_spread_build();
+  const graph::IncrementalStatus st = spread ? graph::IncrementalStatus{} : p.fresh->update();
   counters_.thinning_solve_us_last =
       std::chrono::duration_cast<std::chrono::microseconds>(std::chrono::steady_clock::now() - solve_started).count();
   if (!st.ok) {
-    ++counters_.thinning_failures;  // the old graph stays
+    ++counters_.thinning_failures;
     return;
   }
   for (const auto& plan : p.plans) {
@@ -227,7 +231,13 @@ void SlamGraph::commit_thinning(ThinningPlan& p) {
   counters_.keyframes_thinned += p.thinned_count;
   ++counters_.thinnings;
   smoothers_[p.kind] = std::move(p.fresh);
-  gate_marginals_[p.kind].clear();  // the variables' indices changed
+  // The gates' marginals move to the variables' new indices: the estimates did not change, and while the new
+  // factorization is being built there is no other.  (A thinned graph holds less information, so they are a little
+  // narrower than its own until they age out after kGateMarginalUpdates updates.)
+  std::map<int, std::pair<int64_t, Eigen::MatrixXd>> moved;
+  for (auto& [v, m] : gate_marginals_[p.kind])
+    if (const int to = p.remap[static_cast<size_t>(v)]; to >= 0) moved.emplace(to, std::move(m));
+  gate_marginals_[p.kind] = std::move(moved);
 }
 
 }  // namespace sextant::slam

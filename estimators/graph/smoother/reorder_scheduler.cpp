@@ -1,5 +1,6 @@
 #include "estimators/graph/smoother/reorder_scheduler.hpp"
 
+#include "estimators/graph/smoother/admission.hpp"
 #include "estimators/graph/smoother/smoother_state.hpp"
 
 #include <algorithm>
@@ -14,6 +15,11 @@ double ms_since(Clock::time_point t) { return std::chrono::duration<double, std:
 void ReorderScheduler::begin(SmootherState& s) {
   std::vector<char> in(s.graph.variables().size(), 0);
   for (size_t v = 0; v < s.pos.size(); ++v) in[v] = s.pos[v] >= 0;
+  begin(s, in);
+}
+
+void ReorderScheduler::begin(SmootherState& s, const std::vector<char>& in) {
+  first_build_requested_ = false;
   system_ = begin_system(s, in, false);
   due_ = s.update_calls + s.options.reorder_spread;
   spent_ms_ = 0.0;
@@ -44,6 +50,24 @@ void ReorderScheduler::work(SmootherState& s, bool began_now) {
       now + std::chrono::duration<double, std::milli>(std::max(s.options.reorder_slice_ms - own, share));
   advance(s, *system_, [&] { return Clock::now() >= deadline; });
   spent_ms_ += ms_since(now);
+}
+
+void begin_first_build(SmootherState& s) {
+  std::vector<char> in(s.graph.variables().size(), 0);
+  for (size_t v = 0; v < in.size(); ++v) in[v] = s.graph.variables()[v].fixed;
+  IncrementalStatus admitted;
+  admit_for_rebuild(s, in, admitted);
+  for (size_t v = 0; v < s.lin.size(); ++v)
+    if (in[v]) s.lin[v] = s.graph.variables()[v];
+  s.reorder.begin(s, in);
+}
+
+bool first_build_slice(SmootherState& s) {
+  const bool begins = s.reorder.first_build_requested();
+  if (begins) begin_first_build(s);
+  if (s.reorder.due(s.update_calls)) return false;
+  s.reorder.work(s, begins);
+  return true;
 }
 
 }  // namespace sextant::graph::smoother

@@ -3,7 +3,8 @@
 //
 // When the factor has filled in past refill_ratio times its size after the last ordering (or the reserved columns
 // are three quarters used, or a relinearization round would change more factors than rank updates do cheaply) in a
-// system of more than reorder_spread_above variables or reorder_spread_nonzeros entries of L, the current factor is
+// system of more than reorder_spread_above variables, reorder_spread_nonzeros entries of L or reorder_spread_factors
+// factors, the current factor is
 // still exact, only slower to update (or linearized further away); so the new ordering and factorization are built a slice at a time at the end of the
 // next reorder_spread updates (each spends on it what is left of reorder_slice_ms after its own work, and at least
 // its share of the time the previous reordering took), and the new system replaces the old one at the start of the
@@ -23,11 +24,18 @@ class ReorderScheduler {
  public:
   /// Notes when an update began: its own work counts against its slice budget.
   void update_begins() { update_started_ = std::chrono::steady_clock::now(); }
-  bool under_way() const { return system_ != nullptr; }
+  bool under_way() const { return system_ != nullptr || first_build_requested_; }
   /// A reordering under way is due at update() call number `update_call`.
-  bool due(int64_t update_call) const { return system_ && update_call >= due_; }
+  bool due(int64_t update_call) const { return under_way() && update_call >= due_; }
   /// Begins a reordering of everything in the system at the current estimates, due reorder_spread updates later.
   void begin(SmootherState& s);
+  /// The same for the free variables marked in `in` and the factors of weight > 0 (a first build: nothing is in the
+  /// system yet).
+  void begin(SmootherState& s, const std::vector<char>& in);
+  /// A first build asked for (IncrementalSmoother::begin_spread_build), to be begun by the next update: under way
+  /// from now on, though there is no system yet.
+  void request_first_build() { first_build_requested_ = true; }
+  bool first_build_requested() const { return first_build_requested_; }
   enum class Finished { kInstalled, kFailed, kCholmodFailed };
   /// Completes the due reordering and puts it in place.  kFailed: the new system could not be factorized (the
   /// caller rebuilds, which names the cause); kCholmodFailed: CHOLMOD failed while installing it.
@@ -35,14 +43,23 @@ class ReorderScheduler {
   /// This update's slice of the reordering under way (`began_now`: the update that began it has paid the ordering).
   void work(SmootherState& s, bool began_now);
   /// Drops a reordering under way (a rebuild supersedes it).
-  void cancel() { system_.reset(); }
+  void cancel() { system_.reset(), first_build_requested_ = false; }
 
  private:
   std::unique_ptr<System> system_;  // the reordering under way
-  int64_t due_ = 0;                 // the update() call at which it replaces the current system
-  double spent_ms_ = 0.0;           // time its slices have taken so far
-  double work_ms_ = 0.0;            // time the last reordering took from its first slice to its installation
+  bool first_build_requested_ = false;
+  int64_t due_ = 0;        // the update() call at which it replaces the current system
+  double spent_ms_ = 0.0;  // time its slices have taken so far
+  double work_ms_ = 0.0;   // time the last reordering took from its first slice to its installation
   std::chrono::steady_clock::time_point update_started_{};
 };
+
+/// Begins a requested first build: the pending variables their factors determine and the factors all of whose
+/// variables are then in enter at their current estimates (admission.hpp, as for a rebuild), and the scheduler
+/// begins their system (ordering and H's pattern).
+void begin_first_build(SmootherState& s);
+/// An update while a first build is under way: begins it when requested; then, unless it is due, works this
+/// update's slice of it and returns true (the update has nothing else to do: nothing can be solved yet).
+bool first_build_slice(SmootherState& s);
 
 }  // namespace sextant::graph::smoother

@@ -266,6 +266,7 @@ void check_smoother_options(const sextant::graph::IncrementalOptions& got,
   CHECK(got.reorder_spread == want.reorder_spread);
   CHECK(got.reorder_spread_above == want.reorder_spread_above);
   CHECK(got.reorder_spread_nonzeros == want.reorder_spread_nonzeros);
+  CHECK(got.reorder_spread_factors == want.reorder_spread_factors);
   CHECK(got.reorder_slice_ms == want.reorder_slice_ms);
   CHECK(got.rebuild_iterations == want.rebuild_iterations);
   CHECK(got.relinearize_work == want.relinearize_work);
@@ -291,7 +292,8 @@ TEST_CASE("engine.graph.smoother: defaults are IncrementalOptions' own, every ke
           "      relinearize_skip: 4\n      wildfire: 0\n      update_fraction: 0.1\n      min_update_factors: 16\n"
           "      max_update_factors: 512\n      refill_ratio: 2.5\n      nested_dissection_above: 100\n"
           "      reorder_spread: 3\n      reorder_spread_above: 0\n      reorder_slice_ms: 1.5\n"
-          "      rebuild_iterations: 4\n      relinearize_work: 1000\n      reorder_spread_nonzeros: 7\n",
+          "      rebuild_iterations: 4\n      relinearize_work: 1000\n      reorder_spread_nonzeros: 7\n"
+          "      reorder_spread_factors: 9\n",
           "t")
           .engine.graph;
   sextant::graph::IncrementalOptions want = defaults;
@@ -299,7 +301,7 @@ TEST_CASE("engine.graph.smoother: defaults are IncrementalOptions' own, every ke
   want.relinearize_skip = 4, want.wildfire = 0, want.update_fraction = 0.1, want.min_update_factors = 16;
   want.max_update_factors = 512, want.refill_ratio = 2.5, want.nested_dissection_above = 100;
   want.reorder_spread = 3, want.reorder_spread_above = 0, want.reorder_slice_ms = 1.5, want.rebuild_iterations = 4;
-  want.relinearize_work = 1000, want.reorder_spread_nonzeros = 7;
+  want.relinearize_work = 1000, want.reorder_spread_nonzeros = 7, want.reorder_spread_factors = 9;
   const sextant::graph::IncrementalOptions got = planar_smoother_options(set);
   check_smoother_options(got, want);
   // The kernel stays the loops' (DCS, auto width), whatever the smoother section says.
@@ -317,6 +319,7 @@ TEST_CASE("engine.graph.smoother: defaults are IncrementalOptions' own, every ke
   CHECK(defaults.rebuild_iterations != want.rebuild_iterations);
   CHECK(defaults.relinearize_work != want.relinearize_work);
   CHECK(defaults.reorder_spread_nonzeros != want.reorder_spread_nonzeros);
+  CHECK(defaults.reorder_spread_factors != want.reorder_spread_factors);
 }
 
 TEST_CASE("engine.graph.smoother: each bad value stops parsing with its line, column and key") {

@@ -40,6 +40,7 @@ TEST_CASE("incremental options: defaults are valid, an option out of range is na
       {"reorder_spread", [](IncrementalOptions& o) { o.reorder_spread = -1; }},
       {"reorder_spread_above", [](IncrementalOptions& o) { o.reorder_spread_above = -1; }},
       {"reorder_spread_nonzeros", [](IncrementalOptions& o) { o.reorder_spread_nonzeros = -1; }},
+      {"reorder_spread_factors", [](IncrementalOptions& o) { o.reorder_spread_factors = -1; }},
       {"reorder_slice_ms", [&](IncrementalOptions& o) { o.reorder_slice_ms = nan; }},
       {"wildfire", [](IncrementalOptions& o) { o.wildfire = -1e-3; }},
       {"kernel_width", [](IncrementalOptions& o) { o.kernel_width = 0; }},
