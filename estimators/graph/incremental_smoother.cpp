@@ -177,14 +177,10 @@ IncrementalStatus IncrementalSmoother::rebuild_with(int iterations) {
   IncrementalStatus st;
   st.rebuilt = true;
   s.reorder.cancel();  // superseded
-  // Everything in the system is relinearized at the current estimate (begin_system).
-  for (size_t v = 0; v < s.lin.size(); ++v)
-    if (s.pos[v] >= 0) s.lin[v] = s.graph.variables()[v];
   const std::vector<int> pending_vars = s.pending_vars;
   const std::vector<size_t> pending_factors = s.pending_factors;
-  std::vector<char> in(s.graph.variables().size(), 0);
-  for (size_t v = 0; v < s.pos.size(); ++v) in[v] = s.pos[v] >= 0 || s.graph.variables()[v].fixed;
-  smoother::admit_for_rebuild(s, in, st);
+  // Everything in the system relinearized at the current estimate (begin_system), with what enters now.
+  const std::vector<char> in = smoother::admit_for_rebuild(s, st);
 
   ++s.rebuilds;
   for (int it = 0; it < std::max(1, iterations); ++it) {

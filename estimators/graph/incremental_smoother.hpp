@@ -28,11 +28,11 @@
 // ends after the iteration under way, counted in interrupted_rebuilds()).
 //
 // Reordering in the background of the updates (systems of more than `reorder_spread_above` variables, or whose L has
-// more than `reorder_spread_nonzeros` entries, or more than `reorder_spread_factors` factors): when the factor has filled in, or a relinearization round is too
-// large for rank updates, the new ordering and factorization (relinearized at the current estimates) are built a
-// slice at a time at the end of the next `reorder_spread` updates and replace the current system at a fixed update,
-// so the estimates do not depend on the clock (smoother/reorder_scheduler.hpp); relinearization by rank updates goes
-// on meanwhile, within its work budget.
+// more than `reorder_spread_nonzeros` entries, or of more than `reorder_spread_factors` factors): when the factor has
+// filled in, or a relinearization round is too large for rank updates, the new ordering and factorization
+// (relinearized at the current estimates) are built a slice at a time at the end of the next `reorder_spread` updates
+// and replace the current system at a fixed update, so the estimates do not depend on the clock
+// (smoother/reorder_scheduler.hpp); relinearization by rank updates goes on meanwhile, within its work budget.
 //
 // The steps, one file each under estimators/graph/smoother/: admission.hpp (which variables and factors enter, the
 // gauge), rank_update.hpp (rank updates and storage packing), linear_system.hpp (ordering, assembly, sliced

@@ -75,7 +75,7 @@ void SlamGraph::thin(bool planar, SlamListener& listener) {
   }
   // The new graph's estimates are the old one's solution, so its factorization need not be built before it takes
   // over: spread over the next updates (which only work on it meanwhile, the estimates standing), the thinning costs
-  // an update no spike.  Without spreading, it is solved now, and a failure keeps the old graph.
+  // an update, not a spike.  Without spreading, it is solved now, and a failure keeps the old graph.
   const auto solve_started = std::chrono::steady_clock::now();
   const bool spread = p.fresh->begin_spread_build();
   const graph::IncrementalStatus st = spread ? graph::IncrementalStatus{} : p.fresh->update();

@@ -90,7 +90,12 @@ Admission admit(const SmootherState& s) {
   return a;
 }
 
-void admit_for_rebuild(SmootherState& s, std::vector<char>& in, IncrementalStatus& st) {
+std::vector<char> admit_for_rebuild(SmootherState& s, IncrementalStatus& st) {
+  std::vector<char> in(s.graph.variables().size(), 0);
+  for (size_t v = 0; v < s.pos.size(); ++v) {
+    in[v] = s.pos[v] >= 0 || s.graph.variables()[v].fixed;
+    if (s.pos[v] >= 0) s.lin[v] = s.graph.variables()[v];
+  }
   std::vector<char> ready;
   find_determined(s, s.pending_vars, s.pending_factors, ready);
   std::vector<int> wait;
@@ -116,6 +121,7 @@ void admit_for_rebuild(SmootherState& s, std::vector<char>& in, IncrementalStatu
   s.pending_vars = wait;
   s.pending_factors = factors_wait;
   st.deferred_variables = static_cast<int>(wait.size());
+  return in;
 }
 
 }  // namespace sextant::graph::smoother

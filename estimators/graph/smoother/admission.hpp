@@ -22,9 +22,10 @@ struct Admission {
 };
 Admission admit(const SmootherState& s);
 
-/// The same for a rebuild, which takes every pending factor whose variables are then all in: marks the entering
-/// variables in `in` (which holds the variables in the system and the fixed ones), gives the entering factors
-/// weight 1 and leaves the others pending.  Counts them in `st`.
-void admit_for_rebuild(SmootherState& s, std::vector<char>& in, IncrementalStatus& st);
+/// The same for a new system built from scratch (a rebuild, a first build): every variable in the system is
+/// relinearized at its current estimate; the pending variables their factors determine enter, and every pending
+/// factor whose variables are then all in (entering factors get weight 1, the others stay pending).  Returns the
+/// variables of the new system (those in it, the entering ones and the fixed ones); counts the entering in `st`.
+std::vector<char> admit_for_rebuild(SmootherState& s, IncrementalStatus& st);
 
 }  // namespace sextant::graph::smoother

@@ -53,13 +53,8 @@ void ReorderScheduler::work(SmootherState& s, bool began_now) {
 }
 
 void begin_first_build(SmootherState& s) {
-  std::vector<char> in(s.graph.variables().size(), 0);
-  for (size_t v = 0; v < in.size(); ++v) in[v] = s.graph.variables()[v].fixed;
   IncrementalStatus admitted;
-  admit_for_rebuild(s, in, admitted);
-  for (size_t v = 0; v < s.lin.size(); ++v)
-    if (in[v]) s.lin[v] = s.graph.variables()[v];
-  s.reorder.begin(s, in);
+  s.reorder.begin(s, admit_for_rebuild(s, admitted));
 }
 
 bool first_build_slice(SmootherState& s) {

@@ -4,12 +4,12 @@
 // When the factor has filled in past refill_ratio times its size after the last ordering (or the reserved columns
 // are three quarters used, or a relinearization round would change more factors than rank updates do cheaply) in a
 // system of more than reorder_spread_above variables, reorder_spread_nonzeros entries of L or reorder_spread_factors
-// factors, the current factor is
-// still exact, only slower to update (or linearized further away); so the new ordering and factorization are built a slice at a time at the end of the
-// next reorder_spread updates (each spends on it what is left of reorder_slice_ms after its own work, and at least
-// its share of the time the previous reordering took), and the new system replaces the old one at the start of the
-// update reorder_spread after the one that began it, whatever the clock said: the estimates after every update are
-// the same on a fast or a slow machine (deterministic replay), only the per-update latency depends on the slices.
+// factors, the current factor is still exact, only slower to update (or linearized further away); so the new
+// ordering and factorization are built a slice at a time at the end of the next reorder_spread updates (each spends
+// on it what is left of reorder_slice_ms after its own work, and at least its share of the time the previous
+// reordering took), and the new system replaces the old one at the start of the update reorder_spread after the one
+// that began it, whatever the clock said: the estimates after every update are the same on a fast or a slow machine
+// (deterministic replay), only the per-update latency depends on the slices.
 // The new system is linearized at the estimates of the update that began it; the factors and variables that arrived
 // in between enter it as the pending ones of the replacing update (install, linear_system.hpp).
 #include "estimators/graph/smoother/linear_system.hpp"
