@@ -12,16 +12,37 @@ Section::Section(YAML::Node node, std::string path, std::string file)
 
 Section Section::child(const std::string& key) {
   known_.insert(key);
-  YAML::Node v = node_.IsMap() ? node_[key] : YAML::Node();
-  return Section(v, qualified(key), file_);
+  return Section(lookup(key), qualified(key), file_);
+}
+
+YAML::Node Section::lookup(const std::string& key) const {
+  if (!node_.IsMap()) return YAML::Node(YAML::NodeType::Undefined);
+  const YAML::Node& map = node_;
+  const YAML::Node found = map[key];
+  // A const lookup of a missing key gives an invalid node that throws on most queries: hand out a plain undefined one.
+  return found.IsDefined() ? found : YAML::Node(YAML::NodeType::Undefined);
+}
+
+void Section::check_plain_key(const YAML::Node& key) const {
+  if (!key.IsScalar())
+    throw error_at(key, "'" + (path_.empty() ? std::string("<top>") : path_) + "': a key must be a plain name, got " +
+                            scalar_text(key));
+}
+
+std::vector<YAML::Node> Section::keys() const {
+  std::vector<YAML::Node> out;
+  if (!node_.IsMap()) return out;
+  for (const auto& kv : node_) {
+    check_plain_key(kv.first);
+    out.push_back(kv.first);
+  }
+  return out;
 }
 
 void Section::reject_unknown_keys() const {
   if (!node_.IsMap()) return;
   for (const auto& kv : node_) {
-    if (!kv.first.IsScalar())
-      throw error_at(kv.first, "'" + (path_.empty() ? std::string("<top>") : path_) +
-                                   "': a key must be a plain name, got " + scalar_text(kv.first));
+    check_plain_key(kv.first);
     const auto key = kv.first.Scalar();
     if (known_.count(key)) continue;
     std::ostringstream known;

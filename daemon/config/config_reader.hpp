@@ -33,7 +33,7 @@ class Section {
   void get(const std::string& key, T& out, const Check<T>& check = {}) {
     known_.insert(key);
     if (!node_.IsMap()) return;
-    const YAML::Node v = node_[key];
+    const YAML::Node v = lookup(key);
     if (!v.IsDefined() || v.IsNull()) return;
     T value;
     try {
@@ -54,7 +54,7 @@ class Section {
   void get_parsed(const std::string& key, T& out, T (*parse)(const std::string&)) {
     known_.insert(key);
     if (!node_.IsMap()) return;
-    const YAML::Node v = node_[key];
+    const YAML::Node v = lookup(key);
     if (!v.IsDefined() || v.IsNull()) return;
     std::string name;
     get(key, name);
@@ -65,11 +65,22 @@ class Section {
     }
   }
 
-  /// A nested section (possibly missing).
+  /// A nested section (possibly missing).  Lookups never insert: a missing key is left missing.
   Section child(const std::string& key);
+
+  /// The keys of this mapping in file order (none when the section is missing), each a plain name; a key that is not
+  /// (null, a list, a mapping) throws ConfigError at its place.  For sections whose keys are names the user chooses
+  /// (sources, mountings, markers): iterate these, then read each with child() or get().
+  std::vector<YAML::Node> keys() const;
 
   /// Throws ConfigError naming the line of the first key that no `get`/`child` asked for.
   void reject_unknown_keys() const;
+
+  /// Where an error about `key` points: the key's value if present, else this section.
+  YAML::Node place_of(const std::string& key) const {
+    const YAML::Node v = lookup(key);
+    return v.IsDefined() ? v : node_;
+  }
 
   /// An error at this section's own position.
   ConfigError error(const std::string& message) const { return error_at(node_, message); }
@@ -79,6 +90,10 @@ class Section {
   const std::string& path() const { return path_; }
 
  private:
+  /// The value at `key`, or an undefined node.  Through a const node: yaml-cpp's non-const operator[] inserts a
+  /// missing key, which would move the entries of a map that a caller is iterating over.
+  YAML::Node lookup(const std::string& key) const;
+  void check_plain_key(const YAML::Node& key) const;
   std::string qualified(const std::string& key) const { return path_.empty() ? key : path_ + "." + key; }
   static std::string scalar_text(const YAML::Node& v);
   template <class T>

@@ -31,31 +31,23 @@ Check<std::string> channel_name() {
 void check_fleet_channels(Section& s, const Channels& c, const std::vector<std::pair<std::string, std::string>>& inputs,
                           const std::vector<std::pair<std::string, std::string>>& outputs) {
   constexpr size_t kLcmMaxChannel = 63;
-  const auto at = [&](const std::string& key) {
-    const YAML::Node n = s.node().IsMap() ? s.node()[key] : YAML::Node();
-    return n.IsDefined() ? n : s.node();
-  };
   for (const auto& [key, name] : {std::pair{"fleet", c.fleet}, std::pair{"fleet_control", c.fleet_control}}) {
     if (name.size() > kLcmMaxChannel)
-      throw s.error_at(at(key), "'" + s.path() + "." + key + "': channel '" + name + "' is longer than LCM's " +
-                                    std::to_string(kLcmMaxChannel) + " characters");
+      throw s.error_at(s.place_of(key), "'" + s.path() + "." + key + "': channel '" + name + "' is longer than LCM's " +
+                                            std::to_string(kLcmMaxChannel) + " characters");
     for (const auto* list : {&inputs, &outputs})
       for (const auto& [other, other_name] : *list)
         if (c.full(other_name) == name)
-          throw s.error_at(at(key), "'" + s.path() + "." + key + "': the same channel as " + s.path() + "." + other +
-                                        " ('" + name + "')");
+          throw s.error_at(s.place_of(key), "'" + s.path() + "." + key + "': the same channel as " + s.path() + "." +
+                                                other + " ('" + name + "')");
   }
   if (c.fleet == c.fleet_control)
-    throw s.error_at(at("fleet_control"), "'" + s.path() + ".fleet_control': the same channel as " + s.path() +
-                                              ".fleet ('" + c.fleet + "')");
+    throw s.error_at(s.place_of("fleet_control"), "'" + s.path() + ".fleet_control': the same channel as " + s.path() +
+                                                      ".fleet ('" + c.fleet + "')");
 }
 
 void check_channels(Section& s, const Channels& c) {
   constexpr size_t kLcmMaxChannel = 63;  // LCM_MAX_CHANNEL_NAME_LENGTH
-  const auto at = [&](const std::string& key) {
-    const YAML::Node n = s.node().IsMap() ? s.node()[key] : YAML::Node();
-    return n.IsDefined() ? n : s.node();
-  };
   using Named = std::vector<std::pair<std::string, std::string>>;
   Named inputs{{"odometry", c.odometry}, {"landmarks", c.landmarks},
                {"bearings", c.bearings}, {"loop_closures", c.loop_closures},
@@ -69,28 +61,29 @@ void check_channels(Section& s, const Channels& c) {
   for (const Named* list : {&inputs, &outputs})
     for (const auto& [key, name] : *list)
       if (c.full(name).size() > kLcmMaxChannel)
-        throw s.error_at(c.prefix.size() > name.size() ? at("prefix") : at(key),
+        throw s.error_at(c.prefix.size() > name.size() ? s.place_of("prefix") : s.place_of(key),
                          "'" + s.path() + "." + key + "': channel '" + c.full(name) + "' is " +
                              std::to_string(c.full(name).size()) + " characters with the prefix; LCM allows " +
                              std::to_string(kLcmMaxChannel));
   for (size_t i = 0; i < inputs.size(); ++i)
     for (size_t j = 0; j < i; ++j)
       if (inputs[i].second == inputs[j].second)
-        throw s.error_at(at(inputs[i].first), "'" + s.path() + "." + inputs[i].first + "': the same channel as " +
-                                                  s.path() + "." + inputs[j].first + " ('" + c.full(inputs[i].second) +
-                                                  "'); every input needs a channel of its own");
+        throw s.error_at(s.place_of(inputs[i].first), "'" + s.path() + "." + inputs[i].first +
+                                                          "': the same channel as " + s.path() + "." + inputs[j].first +
+                                                          " ('" + c.full(inputs[i].second) +
+                                                          "'); every input needs a channel of its own");
   for (const auto& [okey, oname] : outputs)
     for (const auto& [ikey, iname] : inputs)
       if (oname == iname)
-        throw s.error_at(at(okey), "'" + s.path() + "." + okey + "': output channel '" + c.full(oname) +
-                                       "' is also the input " + s.path() + "." + ikey +
-                                       " (the daemon would read its own output)");
+        throw s.error_at(s.place_of(okey), "'" + s.path() + "." + okey + "': output channel '" + c.full(oname) +
+                                               "' is also the input " + s.path() + "." + ikey +
+                                               " (the daemon would read its own output)");
   for (size_t i = 0; i < outputs.size(); ++i)
     for (size_t j = 0; j < i; ++j)
       if (outputs[i].second == outputs[j].second)
-        throw s.error_at(at(outputs[i].first), "'" + s.path() + "." + outputs[i].first + "': the same channel as " +
-                                                   s.path() + "." + outputs[j].first + " ('" +
-                                                   c.full(outputs[i].second) + "')");
+        throw s.error_at(s.place_of(outputs[i].first), "'" + s.path() + "." + outputs[i].first +
+                                                           "': the same channel as " + s.path() + "." +
+                                                           outputs[j].first + " ('" + c.full(outputs[i].second) + "')");
   check_fleet_channels(s, c, inputs, outputs);
 }
 
@@ -172,8 +165,7 @@ static void check_fleet_member(const YAML::Node& root, const std::string& file, 
   if (!x.enabled) return;
   if (std::find(x.members.begin(), x.members.end(), c.name) == x.members.end()) {
     Section s(root["engine"]["graph"]["fleet"]["exchange"], "engine.graph.fleet.exchange", file);
-    const YAML::Node members = s.node()["members"];
-    throw s.error_at(members.IsDefined() ? members : s.node(),
+    throw s.error_at(s.place_of("members"),
                      "'engine.graph.fleet.exchange.members': daemon.name '" + c.name + "' is not among the members");
   }
   x.self = c.name;

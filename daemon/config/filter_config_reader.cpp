@@ -14,8 +14,8 @@ void read_odometry_sources(Section& s, engine::FilterConfig& c) {
   if (!list.node().IsDefined() || list.node().IsNull()) return;
   if (!list.node().IsMap()) throw list.error("'" + list.path() + "': expected a map of source name -> settings");
   const std::vector<std::string> names{"x", "y", "yaw", "vx", "vy", "vyaw"};
-  for (const auto& kv : list.node()) {
-    const auto name = kv.first.as<std::string>();
+  for (const YAML::Node& key : list.keys()) {
+    const auto name = key.Scalar();
     Section e = list.child(name);
     engine::FilterConfig::OdometrySource o;
     e.get("body", o.body);

@@ -129,13 +129,13 @@ void read_fleet(Section& s, engine::GraphConfig& c) {
   Section markers = f.child("markers");
   if (markers.node().IsDefined() && !markers.node().IsNull()) {
     if (!markers.node().IsMap()) throw markers.error("'" + markers.path() + "': expected a map of landmark id -> body");
-    for (const auto& kv : markers.node()) {
+    for (const YAML::Node& key : markers.keys()) {
       int64_t id = -1;
-      if (!YAML::convert<int64_t>::decode(kv.first, id) || id < 0)
-        throw markers.error_at(kv.first, "'" + markers.path() + "': a marker id must be a non-negative integer, not '" +
-                                             kv.first.Scalar() + "'");
+      if (!YAML::convert<int64_t>::decode(key, id) || id < 0)
+        throw markers.error_at(
+            key, "'" + markers.path() + "': a marker id must be a non-negative integer, not '" + key.Scalar() + "'");
       std::string body;
-      markers.get(kv.first.Scalar(), body, body_name());
+      markers.get(key.Scalar(), body, body_name());
       o.markers[id] = body;
     }
   }
@@ -195,10 +195,10 @@ void read_smoother(Section& s, engine::GraphConfig& c) {
 void reject_moved_smoother_keys(Section& s) {
   // The relinearization thresholds were keys of this section in earlier versions.
   if (s.node().IsMap())
-    for (const auto& kv : s.node())
+    for (const YAML::Node& key : s.keys())
       for (const char* moved : {"relinearize_translation", "relinearize_rotation"})
-        if (kv.first.as<std::string>() == moved)
-          throw s.error_at(kv.first,
+        if (key.Scalar() == moved)
+          throw s.error_at(key,
                            "'" + s.path() + "." + moved + "' has moved to '" + s.path() + ".smoother." + moved + "'");
 }
 

@@ -31,9 +31,9 @@ void read_mountings(Section& s, engine::InertialConfig& c) {
   Section list = s.child("mountings");
   if (!list.node().IsDefined() || list.node().IsNull()) return;
   if (!list.node().IsMap()) throw list.error("'" + list.path() + "': expected a map of sensor frame -> mounting");
-  for (const auto& kv : list.node()) {
+  for (const YAML::Node& key : list.keys()) {
     engine::SensorMountingConfig m;
-    m.frame = kv.first.as<std::string>();
+    m.frame = key.Scalar();
     Section e = list.child(m.frame);
     e.get("body", m.source);
     std::vector<double> xyz{0, 0, 0}, rpy{0, 0, 0};

@@ -1,5 +1,6 @@
 // Config parsing: defaults, overrides, and every error naming its file:line.
 #include "assoc/chi_square.hpp"
+#include "daemon/config/config_reader.hpp"
 #include "daemon/config/daemon_config.hpp"
 #include "daemon/engine/engine.hpp"
 #include "daemon/engine/graph_stage.hpp"
@@ -15,6 +16,7 @@
 #include <memory>
 #include <stdexcept>
 #include <string>
+#include <utility>
 #include <vector>
 
 using sextant::config::ConfigError;
@@ -406,6 +408,36 @@ TEST_CASE("a key that is not a plain name is a ConfigError with file:line, not a
   CHECK(e.find("test.yaml:2:3:") == 0);
   CHECK(e.find("a key must be a plain name") != std::string::npos);
   CHECK(error_of("{a: 1}: 2\n").find("test.yaml") == 0);
+}
+
+TEST_CASE("a key of a user-named map that is not a plain name is refused with its line (sources, mountings, markers)") {
+  // A null key once read as the name "null", and looking that name up inserted it into the map being iterated.
+  const std::string sources = "engine:\n  filter:\n    sources:\n      :\n      wheel: {body: r}\n";
+  const std::string mountings = "engine:\n  inertial:\n    mountings:\n      wheel: {}\n      ~: {}\n";
+  const std::string markers = "engine:\n  graph:\n    fleet:\n      markers: {1: robot1, [2]: robot2}\n";
+  for (const auto& [yaml, place] : {std::pair{sources, "test.yaml:4:7:"}, std::pair{mountings, "test.yaml:5:7:"},
+                                    std::pair{markers, "test.yaml:4:28:"}}) {
+    std::string e;
+    CHECK_NOTHROW(e = error_of(yaml));
+    CHECK_MESSAGE(e.find(place) == 0, e);
+    CHECK_MESSAGE(e.find("a key must be a plain name") != std::string::npos, e);
+  }
+}
+
+TEST_CASE("reading a section never adds a key to the YAML it reads") {
+  YAML::Node root = YAML::Load("a: 1\nb: {c: 2}\n");
+  sextant::config::Section s(root, "", "t.yaml");
+  int a = 0, missing = 7;
+  s.get("a", a);
+  s.get("absent", missing);
+  sextant::config::Section absent = s.child("no_such_section");
+  absent.get("x", missing);
+  CHECK(s.place_of("also_absent").IsMap());
+  CHECK(a == 1);
+  CHECK(missing == 7);
+  CHECK_FALSE(absent.node().IsDefined());
+  CHECK(root.size() == 2);
+  CHECK(s.keys().size() == 2);
 }
 
 TEST_CASE("load_daemon_config names the file in every error") {
