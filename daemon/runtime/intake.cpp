@@ -1,5 +1,6 @@
 #include "daemon/runtime/intake.hpp"
 
+#include <algorithm>
 #include <chrono>
 
 namespace sextant::runtime {
@@ -41,7 +42,14 @@ Arrival Arrival::now() {
 }
 
 Arrival Arrival::at_log_time(int64_t utime) {
-  return {std::chrono::steady_clock::time_point(std::chrono::microseconds(utime)), utime};
+  // The steady clock counts nanoseconds: a stamp beyond +-2^62 ns (about 146 years) of its epoch, as only a damaged
+  // or hostile message carries, saturates there instead of overflowing, and the headroom keeps the guard's
+  // differences and sums with idle times representable.
+  using std::chrono::nanoseconds;
+  constexpr int64_t kLimitUs = (int64_t{1} << 62) / 1000;
+  const int64_t us = std::clamp(utime, -kLimitUs, kLimitUs);
+  return {std::chrono::steady_clock::time_point(std::chrono::duration_cast<nanoseconds>(std::chrono::microseconds(us))),
+          utime};
 }
 
 IntakeOptions intake_options(const config::DaemonConfig& c, bool live) {

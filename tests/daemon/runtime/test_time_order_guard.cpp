@@ -242,6 +242,26 @@ TEST_CASE(
   CHECK(std::find(gone.begin(), gone.end(), "b") != gone.end());
 }
 
+TEST_CASE("a replay's arrival clock keeps the order of every log stamp, a damaged one's saturating without overflow") {
+  // The steady clock counts nanoseconds: a microsecond stamp past about 292 years does not fit (a plain conversion
+  // would wrap it to a time before the epoch, so that the largest stamp came first).
+  constexpr int64_t kMax = std::numeric_limits<int64_t>::max(), kMin = std::numeric_limits<int64_t>::min();
+  const std::vector<int64_t> stamps{kMin, kMin / 1000, -k2100, 0, kT0, k2100, kMax / 1000, kMax / 2, kMax};
+  for (size_t i = 1; i < stamps.size(); ++i) {
+    const runtime::Arrival a = runtime::Arrival::at_log_time(stamps[i - 1]), b = runtime::Arrival::at_log_time(stamps[i]);
+    CAPTURE(stamps[i]);
+    CHECK(a.steady <= b.steady);
+    CHECK(b.wall_utime == stamps[i]);
+  }
+  // Ordinary stamps are exact, and the extremes leave room for the guard's differences and sums with idle times.
+  using std::chrono::microseconds;
+  CHECK(runtime::Arrival::at_log_time(kT0).steady.time_since_epoch() == microseconds(kT0));
+  CHECK(runtime::Arrival::at_log_time(k2100).steady.time_since_epoch() == microseconds(k2100));
+  const auto top = runtime::Arrival::at_log_time(kMax).steady, bottom = runtime::Arrival::at_log_time(kMin).steady;
+  CHECK(top - bottom > std::chrono::hours(24 * 365 * 200));
+  CHECK(top + std::chrono::hours(24 * 365) > top);
+}
+
 TEST_CASE("the intake counts sequence gaps per channel and sender as lost") {
   runtime::ChannelStats stats;
   runtime::Intake intake(stats);
