@@ -248,7 +248,8 @@ TEST_CASE("a replay's arrival clock keeps the order of every log stamp, a damage
   constexpr int64_t kMax = std::numeric_limits<int64_t>::max(), kMin = std::numeric_limits<int64_t>::min();
   const std::vector<int64_t> stamps{kMin, kMin / 1000, -k2100, 0, kT0, k2100, kMax / 1000, kMax / 2, kMax};
   for (size_t i = 1; i < stamps.size(); ++i) {
-    const runtime::Arrival a = runtime::Arrival::at_log_time(stamps[i - 1]), b = runtime::Arrival::at_log_time(stamps[i]);
+    const runtime::Arrival a = runtime::Arrival::at_log_time(stamps[i - 1]),
+                           b = runtime::Arrival::at_log_time(stamps[i]);
     CAPTURE(stamps[i]);
     CHECK(a.steady <= b.steady);
     CHECK(b.wall_utime == stamps[i]);
