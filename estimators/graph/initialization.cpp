@@ -69,6 +69,7 @@ class ChordalRelaxation {
   /// Initializes the unknown poses (and the points seen from them); returns why it could not, or "".
   std::string run() {
     if (number_unknown_poses() == 0) return "";
+    order_unknown_poses();
     if (!solve_rotations()) return "chordal relaxation: the rotation system is singular (disconnected graph?)";
     if (!solve_translations()) return "chordal relaxation: the translation system is singular (disconnected graph?)";
     std::vector<bool> known(vars_.size(), true);
@@ -108,11 +109,14 @@ class ChordalRelaxation {
   }
 
   // Scalar weights from the information blocks (SE-Sync's isotropic approximation).
+  // Fixed-size blocks: their inverses are closed forms, not a dynamic LU per edge.
   static void weights(const RelativePoseFactor* f, double& kappa, double& tau) {
     const Eigen::MatrixXd& I = f->information();
-    const int rdim = D == 2 ? 1 : 3;
-    tau = D / I.topLeftCorner(D, D).inverse().trace();
-    kappa = D == 2 ? I(2, 2) : 3.0 / (2.0 * I.bottomRightCorner(rdim, rdim).inverse().trace());
+    tau = D / MatD(I.template topLeftCorner<D, D>()).inverse().trace();
+    if constexpr (D == 2)
+      kappa = I(2, 2);
+    else
+      kappa = 3.0 / (2.0 * Eigen::Matrix3d(I.template bottomRightCorner<3, 3>()).inverse().trace());
   }
 
   // Rotations: unknowns R_i, residual R_j - R_i Z_ij weighted by kappa.  Row r of the residual,
@@ -197,12 +201,33 @@ class ChordalRelaxation {
     return true;
   }
 
-  // x = H^-1 rhs for the symmetric H of `trip` (size x size, duplicates summed); false when H is singular.
+  // Renumbers the unknown poses in an approximate minimum degree order of the pose graph (AMD on its Laplacian's
+  // pattern), so that both systems factor as they are numbered: the translations' is that Laplacian, the rotations'
+  // its block expansion.  One ordering for both, on the smaller pattern.
+  void order_unknown_poses() {
+    std::vector<Eigen::Triplet<double>> pattern;
+    for (int k = 0; k < n_; ++k) pattern.emplace_back(k, k, 1.0);
+    for (const auto& e : edges_) {
+      const int ii = index_[static_cast<size_t>(e.i)], jj = index_[static_cast<size_t>(e.j)];
+      if (ii >= 0 && jj >= 0) pattern.emplace_back(ii, jj, 1.0), pattern.emplace_back(jj, ii, 1.0);
+    }
+    Eigen::SparseMatrix<double> L(n_, n_);
+    L.setFromTriplets(pattern.begin(), pattern.end());
+    Eigen::PermutationMatrix<Eigen::Dynamic, Eigen::Dynamic, int> order;  // order.indices()[k]: the k-th eliminated
+    Eigen::AMDOrdering<int>()(L, order);
+    std::vector<int> position(static_cast<size_t>(n_));
+    for (int k = 0; k < n_; ++k) position[static_cast<size_t>(order.indices()[k])] = k;
+    for (int& i : index_)
+      if (i >= 0) i = position[static_cast<size_t>(i)];
+  }
+
+  // x = H^-1 rhs for the symmetric H of `trip` (size x size, duplicates summed), factored in its own numbering
+  // (order_unknown_poses chose it); false when H is singular.
   static bool solve_sparse(int size, const std::vector<Eigen::Triplet<double>>& trip, const Eigen::MatrixXd& rhs,
                            Eigen::MatrixXd& x) {
     Eigen::SparseMatrix<double> H(size, size);
     H.setFromTriplets(trip.begin(), trip.end());
-    Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> chol(H);
+    Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>, Eigen::Lower, Eigen::NaturalOrdering<int>> chol(H);
     if (chol.info() != Eigen::Success) return false;
     x = chol.solve(rhs);
     return chol.info() == Eigen::Success && x.allFinite();
