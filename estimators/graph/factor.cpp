@@ -38,9 +38,14 @@ Linearization Factor::make_linearization(const std::vector<Variable>& vars) cons
 }
 
 double Factor::chi2(const std::vector<Variable>& vars) const {
-  Eigen::VectorXd e(residual_dim());
+  Eigen::VectorXd e, weighted;
+  return chi2(vars, e, weighted);
+}
+
+double Factor::chi2(const std::vector<Variable>& vars, Eigen::VectorXd& e, Eigen::VectorXd& weighted) const {
+  e.resize(residual_dim());
   error(vars, e);
-  return e.dot(information_ * e);
+  return weighted_square(e, weighted);
 }
 
 RelativePoseFactor::RelativePoseFactor(int i, int j, const SE2& z, Eigen::Matrix3d information)

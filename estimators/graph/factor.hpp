@@ -40,6 +40,14 @@ class Factor {
 
   Linearization make_linearization(const std::vector<Variable>& vars) const;
   double chi2(const std::vector<Variable>& vars) const;
+  /// The same with the caller's scratch vectors (no allocation once they have the residual's size); `e` is left
+  /// holding the residual.
+  double chi2(const std::vector<Variable>& vars, Eigen::VectorXd& e, Eigen::VectorXd& weighted) const;
+  /// e' Omega e for a residual `e` of this factor, `weighted` a scratch vector.
+  double weighted_square(const Eigen::VectorXd& e, Eigen::VectorXd& weighted) const {
+    weighted.noalias() = information_ * e;
+    return e.dot(weighted);
+  }
 
   /// A copy of this factor.
   virtual std::unique_ptr<Factor> clone() const = 0;

@@ -22,7 +22,8 @@ void FactorGraph::add_factor(std::unique_ptr<Factor> f) { factors_.push_back(std
 
 double FactorGraph::chi2() const {
   double s = 0;
-  for (const auto& f : factors_) s += f->chi2(variables_);
+  Eigen::VectorXd e, weighted;
+  for (const auto& f : factors_) s += f->chi2(variables_, e, weighted);
   return s;
 }
 

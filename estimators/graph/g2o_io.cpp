@@ -31,6 +31,9 @@ struct LineReader {
   std::vector<std::string_view> tokens;  // into the current line, each followed by a NUL
   size_t next = 1;
 
+  // The C locale's white space (what a stream's >> skips), without a call per character.
+  static bool blank(char c) { return c == ' ' || (c >= '\t' && c <= '\r'); }
+
   // Splits `text` (changed: separators become NULs) into tokens at whitespace, as a stream's >> would.
   void split(std::string& text) {
     tokens.clear();
@@ -38,10 +41,10 @@ struct LineReader {
     char* p = text.data();
     char* const end = p + text.size();
     while (true) {
-      while (p < end && std::isspace(static_cast<unsigned char>(*p))) ++p;
+      while (p < end && blank(*p)) ++p;
       if (p == end) return;
       char* const first = p;
-      while (p < end && !std::isspace(static_cast<unsigned char>(*p))) ++p;
+      while (p < end && !blank(*p)) ++p;
       tokens.emplace_back(first, static_cast<size_t>(p - first));
       if (p == end) return;  // text's own terminating NUL follows
       *p++ = '\0';

@@ -69,6 +69,7 @@ class ChordalRelaxation {
   /// Initializes the unknown poses (and the points seen from them); returns why it could not, or "".
   std::string run() {
     if (number_unknown_poses() == 0) return "";
+    order_unknown_poses();
     if (!solve_rotations()) return "chordal relaxation: the rotation system is singular (disconnected graph?)";
     if (!solve_translations()) return "chordal relaxation: the translation system is singular (disconnected graph?)";
     std::vector<bool> known(vars_.size(), true);
@@ -108,19 +109,23 @@ class ChordalRelaxation {
   }
 
   // Scalar weights from the information blocks (SE-Sync's isotropic approximation).
+  // Fixed-size blocks: their inverses are closed forms, not a dynamic LU per edge.
   static void weights(const RelativePoseFactor* f, double& kappa, double& tau) {
     const Eigen::MatrixXd& I = f->information();
-    const int rdim = D == 2 ? 1 : 3;
-    tau = D / I.topLeftCorner(D, D).inverse().trace();
-    kappa = D == 2 ? I(2, 2) : 3.0 / (2.0 * I.bottomRightCorner(rdim, rdim).inverse().trace());
+    tau = D / MatD(I.template topLeftCorner<D, D>()).inverse().trace();
+    if constexpr (D == 2)
+      kappa = I(2, 2);
+    else
+      kappa = 3.0 / (2.0 * Eigen::Matrix3d(I.template bottomRightCorner<3, 3>()).inverse().trace());
   }
 
-  // Rotations: unknowns vec(R_i) (column-major), D*D per pose.  Residual vec(R_j) - K vec(R_i), K = Z' (x) I.
-  // Solved, then projected onto SO(D) into R_; false when the system is singular.
+  // Rotations: unknowns R_i, residual R_j - R_i Z_ij weighted by kappa.  Row r of the residual,
+  // x_j - Z' x_i with x = R(r, :)', involves row r of each rotation only, and every row has the same normal matrix:
+  // one sparse LDL' of an (n D) x (n D) matrix with D right-hand sides (column r for row r) instead of one of
+  // (n D^2) x (n D^2).  Solved, then projected onto SO(D) into R_; false when the system is singular.
   bool solve_rotations() {
-    const int nr = D * D, n = n_;
     std::vector<Eigen::Triplet<double>> trip;
-    Eigen::VectorXd rhs = Eigen::VectorXd::Zero(n * nr);
+    Eigen::MatrixXd rhs = Eigen::MatrixXd::Zero(n_ * D, D);
     for (const auto& e : edges_) {
       double kappa, tau;
       weights(e.f, kappa, tau);
@@ -129,50 +134,40 @@ class ChordalRelaxation {
         Z = e.f->measurement2().rotation().matrix();
       else
         Z = e.f->measurement3().rotation().matrix();
-      Eigen::Matrix<double, D * D, D* D> K = Eigen::Matrix<double, D * D, D * D>::Zero();
-      for (int a = 0; a < D; ++a)
-        for (int b = 0; b < D; ++b) K.template block<D, D>(a * D, b * D) = Z(b, a) * MatD::Identity();
       const int ii = index_[static_cast<size_t>(e.i)], jj = index_[static_cast<size_t>(e.j)];
-      // H += kappa [K'K, -K'; -K, I] over (i, j); known poses move to the right-hand side.
-      // vec(R) of the two ends (copies: rotation() returns a temporary).
-      const MatD Ri = rotation(e.i), Rj = rotation(e.j);
-      const Eigen::Map<const Eigen::Matrix<double, D * D, 1>> ri(Ri.data()), rj(Rj.data());
+      // kappa |x_j - Z' x_i|^2: H += kappa [Z Z' = I, -Z; -Z', I] over (i, j); a known end moves to the right.
       if (ii >= 0) {
-        for (int a = 0; a < nr; ++a) trip.emplace_back(ii * nr + a, ii * nr + a, kappa);  // K'K = I
-        if (jj < 0) rhs.segment<D * D>(ii * nr) += kappa * K.transpose() * rj;
+        for (int a = 0; a < D; ++a) trip.emplace_back(ii * D + a, ii * D + a, kappa);
+        if (jj < 0) rhs.template block<D, D>(ii * D, 0) += kappa * Z * rotation(e.j).transpose();
       }
       if (jj >= 0) {
-        for (int a = 0; a < nr; ++a) trip.emplace_back(jj * nr + a, jj * nr + a, kappa);
-        if (ii < 0) rhs.segment<D * D>(jj * nr) += kappa * K * ri;
+        for (int a = 0; a < D; ++a) trip.emplace_back(jj * D + a, jj * D + a, kappa);
+        if (ii < 0) rhs.template block<D, D>(jj * D, 0) += kappa * Z.transpose() * rotation(e.i).transpose();
       }
       if (ii >= 0 && jj >= 0)
-        for (int a = 0; a < nr; ++a)
-          for (int b = 0; b < nr; ++b)
-            if (K(a, b) != 0) {
-              trip.emplace_back(jj * nr + a, ii * nr + b, -kappa * K(a, b));
-              trip.emplace_back(ii * nr + b, jj * nr + a, -kappa * K(a, b));
-            }
+        for (int a = 0; a < D; ++a)
+          for (int b = 0; b < D; ++b) {
+            trip.emplace_back(ii * D + a, jj * D + b, -kappa * Z(a, b));
+            trip.emplace_back(jj * D + b, ii * D + a, -kappa * Z(a, b));
+          }
     }
-    Eigen::SparseMatrix<double> H(n * nr, n * nr);
-    H.setFromTriplets(trip.begin(), trip.end());
-    Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> chol(H);
-    if (chol.info() != Eigen::Success) return false;
-    const Eigen::VectorXd r = chol.solve(rhs);
+    Eigen::MatrixXd x;
+    if (!solve_sparse(n_ * D, trip, rhs, x)) return false;
     R_.resize(vars_.size());
     for (size_t v = 0; v < vars_.size(); ++v) {
       if (!vars_[v].is_pose()) continue;
-      R_[v] = index_[v] >= 0 ? project_to_so<D>(Eigen::Map<const MatD>(r.data() + index_[v] * nr))
+      R_[v] = index_[v] >= 0 ? project_to_so<D>(x.template block<D, D>(index_[v] * D, 0).transpose())
                              : rotation(static_cast<int>(v));
     }
     return true;
   }
 
-  // Translations: t_j - t_i = R_i t_ij, weighted least squares; written with R_ into the unknown poses.  False when
-  // the system is singular.
+  // Translations: t_j - t_i = R_i t_ij weighted by tau (isotropic), so each coordinate is its own problem with the
+  // same matrix, the graph's weighted Laplacian over the unknown poses: one n x n LDL' with D right-hand sides.
+  // Written with R_ into the unknown poses; false when the system is singular.
   bool solve_translations() {
-    const int n = n_;
     std::vector<Eigen::Triplet<double>> trip;
-    Eigen::VectorXd rt = Eigen::VectorXd::Zero(n * D);
+    Eigen::MatrixXd rhs = Eigen::MatrixXd::Zero(n_, D);
     for (const auto& e : edges_) {
       double kappa, tau;
       weights(e.f, kappa, tau);
@@ -183,29 +178,59 @@ class ChordalRelaxation {
         tij = e.f->measurement3().translation();
       const VecD c = R_[static_cast<size_t>(e.i)] * tij;
       const int ii = index_[static_cast<size_t>(e.i)], jj = index_[static_cast<size_t>(e.j)];
-      for (int a = 0; a < D; ++a) {
-        if (ii >= 0) trip.emplace_back(ii * D + a, ii * D + a, tau), rt[ii * D + a] -= tau * c[a];
-        if (jj >= 0) trip.emplace_back(jj * D + a, jj * D + a, tau), rt[jj * D + a] += tau * c[a];
-        if (ii >= 0 && jj >= 0)
-          trip.emplace_back(ii * D + a, jj * D + a, -tau), trip.emplace_back(jj * D + a, ii * D + a, -tau);
-        if (ii < 0 && jj >= 0) rt[jj * D + a] += tau * translation(e.i)[a];
-        if (jj < 0 && ii >= 0) rt[ii * D + a] += tau * translation(e.j)[a];
+      if (ii >= 0) {
+        trip.emplace_back(ii, ii, tau);
+        rhs.row(ii) -= tau * (jj >= 0 ? c : VecD(c - translation(e.j))).transpose();
       }
+      if (jj >= 0) {
+        trip.emplace_back(jj, jj, tau);
+        rhs.row(jj) += tau * (ii >= 0 ? c : VecD(c + translation(e.i))).transpose();
+      }
+      if (ii >= 0 && jj >= 0) trip.emplace_back(ii, jj, -tau), trip.emplace_back(jj, ii, -tau);
     }
-    Eigen::SparseMatrix<double> Ht(n * D, n * D);
-    Ht.setFromTriplets(trip.begin(), trip.end());
-    Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> chol_t(Ht);
-    if (chol_t.info() != Eigen::Success) return false;
-    const Eigen::VectorXd t = chol_t.solve(rt);
+    Eigen::MatrixXd t;
+    if (!solve_sparse(n_, trip, rhs, t)) return false;
     for (size_t v = 0; v < vars_.size(); ++v) {
       if (index_[v] < 0) continue;
-      const VecD tv = t.segment<D>(index_[v] * D);
+      const VecD tv = t.row(index_[v]).transpose();
       if constexpr (D == 2)
         vars_[v].pose2 = SE2(SO2(std::atan2(R_[v](1, 0), R_[v](0, 0))), tv);
       else
         vars_[v].pose3 = SE3(SO3(Eigen::Matrix3d(R_[v])), tv);
     }
     return true;
+  }
+
+  // Renumbers the unknown poses in an approximate minimum degree order of the pose graph (AMD on its Laplacian's
+  // pattern), so that both systems factor as they are numbered: the translations' is that Laplacian, the rotations'
+  // its block expansion.  One ordering for both, on the smaller pattern.
+  void order_unknown_poses() {
+    std::vector<Eigen::Triplet<double>> pattern;
+    for (int k = 0; k < n_; ++k) pattern.emplace_back(k, k, 1.0);
+    for (const auto& e : edges_) {
+      const int ii = index_[static_cast<size_t>(e.i)], jj = index_[static_cast<size_t>(e.j)];
+      if (ii >= 0 && jj >= 0) pattern.emplace_back(ii, jj, 1.0), pattern.emplace_back(jj, ii, 1.0);
+    }
+    Eigen::SparseMatrix<double> L(n_, n_);
+    L.setFromTriplets(pattern.begin(), pattern.end());
+    Eigen::PermutationMatrix<Eigen::Dynamic, Eigen::Dynamic, int> order;  // order.indices()[k]: the k-th eliminated
+    Eigen::AMDOrdering<int>()(L, order);
+    std::vector<int> position(static_cast<size_t>(n_));
+    for (int k = 0; k < n_; ++k) position[static_cast<size_t>(order.indices()[k])] = k;
+    for (int& i : index_)
+      if (i >= 0) i = position[static_cast<size_t>(i)];
+  }
+
+  // x = H^-1 rhs for the symmetric H of `trip` (size x size, duplicates summed), factored in its own numbering
+  // (order_unknown_poses chose it); false when H is singular.
+  static bool solve_sparse(int size, const std::vector<Eigen::Triplet<double>>& trip, const Eigen::MatrixXd& rhs,
+                           Eigen::MatrixXd& x) {
+    Eigen::SparseMatrix<double> H(size, size);
+    H.setFromTriplets(trip.begin(), trip.end());
+    Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>, Eigen::Lower, Eigen::NaturalOrdering<int>> chol(H);
+    if (chol.info() != Eigen::Success) return false;
+    x = chol.solve(rhs);
+    return chol.info() == Eigen::Success && x.allFinite();
   }
 
   FactorGraph& g_;

@@ -6,7 +6,10 @@
 //    2015): rotations first, as the linear least-squares problem min sum kappa_ij |R_j - R_i Z_ij|_F^2 over
 //    unconstrained matrices, each projected back onto SO(d) by SVD; then translations by linear least squares
 //    min sum tau_ij |t_j - t_i - R_i t_ij|^2 with those rotations.  Gets 3-D graphs into the basin of the global
-//    optimum where Gauss-Newton from odometry stops in a local minimum (torus, sphere, grid).
+//    optimum where Gauss-Newton from odometry stops in a local minimum (torus, sphere, grid).  Both problems
+//    separate: row r of R_j - R_i Z_ij involves row r of each rotation only, with one normal matrix for all rows,
+//    and the isotropic weights tau give each coordinate of t the graph's weighted Laplacian; so one sparse LDL' of
+//    size n d with d right-hand sides, and one of size n with d (n unknown poses).
 //  - SGD (Olson, Leonard, Teller, "Fast iterative optimization of pose graphs with poor initial estimates",
 //    ICRA 2006), planar graphs: poses in Olson's incremental parameterization (pose j = sum of increments 1..j in
 //    global x, y, theta); each constraint (a, b) in turn removes a fraction of its global-frame residual

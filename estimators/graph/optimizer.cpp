@@ -22,11 +22,9 @@ struct Cost {
 
 Cost evaluate(const FactorGraph& g, const OptimizerOptions& o) {
   Cost c;
-  Eigen::VectorXd e;
+  Eigen::VectorXd e, weighted;
   for (const auto& f : g.factors()) {
-    e.resize(f->residual_dim());
-    f->error(g.variables(), e);
-    const double s = e.dot(f->information() * e);
+    const double s = f->chi2(g.variables(), e, weighted);
     c.chi2 += s;
     c.robust += robust_cost(o.kernel, o.kernel_width, s);
   }
@@ -135,7 +133,7 @@ class OptimizerRun {
     const auto& factors = graph_.factors();
     for (size_t i = 0; i < factors.size(); ++i) {
       factors[i]->linearize(vars_, lin_[i]);
-      const double s = lin_[i].error.dot(factors[i]->information() * lin_[i].error);
+      const double s = factors[i]->weighted_square(lin_[i].error, weighted_);
       ne_->add(static_cast<int>(i), *factors[i], lin_[i], robust_weight(o_.kernel, o_.kernel_width, s));
     }
     sum_.linearize_seconds += seconds_since(tl);
@@ -246,7 +244,7 @@ class OptimizerRun {
   Cost cost_, best_cost_;
   double lambda_ = 0, nu_ = 2;
   bool relinearize_ = true;
-  Eigen::VectorXd dx_;
+  Eigen::VectorXd dx_, weighted_;
   std::vector<Variable> backup_, best_;  // `best_` is empty while the current estimate is the best seen
   std::string why_;                      // why the last solve failed
 };

@@ -9,6 +9,7 @@ namespace sextant {
 
 /// Wraps an angle to (-pi, pi].
 inline double wrap_angle(double a) {
+  if (a > -M_PI && a <= M_PI) return a;  // what remainder gives there, without its cost (most calls)
   a = std::remainder(a, 2 * M_PI);
   return a <= -M_PI ? a + 2 * M_PI : a;
 }
