@@ -213,12 +213,13 @@ void InertialSmoother::State::add_keyframe(double t, const std::optional<SE3>& o
   integrate_to(t);
   const KeyframeEstimate last = estimate(newest());
   Keyframe k;
-  k.seq = next_seq++;
+  k.seq = next_seq;  // taken only once the keyframe is in: the window's indices count keyframes without gaps
   k.t = t;
   k.odometry = odometry;
   k.vars = keyframe_variables(k.seq, pim.predict(last.state, last.bias, o.gravity), last.bias);
   if (pim.dt() > 0) link_factors(k, newest());
   keyframes.push_back(std::move(k));
+  ++next_seq;
   ++counters.keyframes;
   solve();
   if (static_cast<int>(keyframes.size()) > o.window) marginalize_oldest();
@@ -274,6 +275,22 @@ void InertialSmoother::State::marginalize_oldest() {
   ++counters.marginalized;
 }
 
+// A keyframe that cannot be added (its IMU link refuses a preintegration that absurd samples made indefinite, or the
+// window's solve or marginalization fails on it) must not leave the smoother half-updated nor stuck with that
+// preintegration: it starts over at t from the newest keyframe that stood, carried to t at constant velocity (the
+// preintegration since then is what cannot be trusted), with the options' prior.
+void InertialSmoother::add_keyframe_or_restart(double t, const std::optional<SE3>& odometry) {
+  const KeyframeEstimate before = s_->estimate(s_->newest());
+  try {
+    s_->add_keyframe(t, odometry);
+  } catch (const std::exception&) {
+    NavState x = before.state;
+    x.p += x.v * (t - before.t);
+    initialize(t, x, before.bias, odometry);
+    ++s_->counters.restarts;
+  }
+}
+
 InertialSmoother::InertialSmoother(const InertialSmootherOptions& options) {
   check_options(options);
   s_ = std::make_unique<State>(options);
@@ -323,7 +340,7 @@ bool InertialSmoother::add_imu(double t, const BodyImuSample& sample) {
   ++s.counters.imu;
   const double since = t - s.newest().t;
   const bool odometry_late = s.o.use_odometry && since >= 2 * s.o.keyframe_interval;
-  if ((!s.o.use_odometry && since >= s.o.keyframe_interval) || odometry_late) s.add_keyframe(t, std::nullopt);
+  if ((!s.o.use_odometry && since >= s.o.keyframe_interval) || odometry_late) add_keyframe_or_restart(t, std::nullopt);
   return true;
 }
 
@@ -342,7 +359,7 @@ bool InertialSmoother::add_odometry(double t, const SE3& pose, const Matrix6d& i
   s.last_odometry_t = t;
   ++s.counters.odometry;
   if (!s.held) return true;  // no IMU yet: nothing to preintegrate
-  if (t - s.newest().t >= s.o.keyframe_interval) s.add_keyframe(t, pose);
+  if (t - s.newest().t >= s.o.keyframe_interval) add_keyframe_or_restart(t, pose);
   return true;
 }
 

@@ -87,6 +87,8 @@ struct InertialSmootherCounters {
   int64_t dropped = 0;             // out of order, before initialize() or non-finite
   int64_t gnss_down_weighted = 0;  // fixes beyond the kernel's width when their keyframe left the window
   int64_t failed_solves = 0;       // optimizer failures (the estimate kept its prediction)
+  int64_t restarts = 0;  // keyframes that could not be added (a preintegration gone bad on absurd samples): the
+                         // smoother started over from its newest keyframe's estimate
 };
 
 class InertialSmoother {
@@ -135,6 +137,7 @@ class InertialSmoother {
  private:
   struct State;
   std::unique_ptr<State> s_;
+  void add_keyframe_or_restart(double t, const std::optional<SE3>& odometry);
 };
 
 }  // namespace sextant::inertial

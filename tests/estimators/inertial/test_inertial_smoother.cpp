@@ -84,3 +84,26 @@ TEST_CASE("InertialSmoother options out of range are named") {
   CHECK(message(o).find("initial_yaw_sigma") != std::string::npos);
   CHECK_THROWS_AS(InertialSmoother{o}, std::invalid_argument);
 }
+
+TEST_CASE("InertialSmoother: a keyframe whose IMU link cannot be built restarts the smoother, which goes on") {
+  // One sample of absurd but finite rates makes the preintegrated covariance indefinite, so the next keyframe's IMU
+  // factor refuses it.  The smoother must not stay stuck with that preintegration (every later keyframe refused),
+  // nor number its keyframes with a gap (later links referring to variables past the window).
+  InertialSmootherOptions o;
+  o.window = 6;
+  o.use_odometry = false;
+  InertialSmoother s(o);
+  BodyImuSample still, wild;
+  still.accel = Eigen::Vector3d(0, 0, 9.80665);
+  wild.gyro = Eigen::Vector3d::Constant(1e300);
+  wild.accel = Eigen::Vector3d::Constant(-1e308);
+  s.initialize(0, NavState{}, ImuBias{});
+  for (int k = 1; k <= 10 * 200; ++k) CHECK_NOTHROW(s.add_imu(k / 200.0, k == 600 ? wild : still));
+  CHECK(s.counters().restarts == 1);
+  CHECK(s.counters().keyframes >= 20);  // one every 0.5 s over 10 s, the refused one not among them
+  CHECK(s.window().size() == 6);
+  CHECK(s.newest().t == doctest::Approx(10.0));
+  CHECK(s.counters().failed_solves == 0);
+  CHECK(s.newest().state.p.allFinite());
+  CHECK(std::isfinite(s.newest_pose_covariance().trace()));
+}
