@@ -192,13 +192,14 @@ void InertialGraphStage::publish(const std::string& source, Body& b, int64_t uti
 }
 
 Counters InertialGraphStage::counters() const {
-  int64_t keyframes = 0, links = 0, down_weighted = 0, dropped = 0, failed = 0, tilt = 0, yaw = 0, waiting = 0;
+  int64_t keyframes = 0, links = 0, down_weighted = 0, dropped = 0, failed = 0, restarts = 0, tilt = 0, yaw = 0,
+          waiting = 0;
   for (const auto& [name, b] : bodies_) {
     waiting += b.heading ? 1 : 0;
     if (!b.smoother) continue;
     const auto& c = b.smoother->counters();
     keyframes += c.keyframes, links += c.odometry_links, down_weighted += c.gnss_down_weighted, dropped += c.dropped,
-        failed += c.failed_solves;
+        failed += c.failed_solves, restarts += c.restarts;
     tilt += b.observability.tilt ? 1 : 0, yaw += b.observability.yaw ? 1 : 0;
   }
   return {{"bodies", static_cast<int64_t>(bodies_.size())},
@@ -212,6 +213,7 @@ Counters InertialGraphStage::counters() const {
           {"gnss_down_weighted", down_weighted},
           {"dropped", dropped},
           {"failed_solves", failed},
+          {"restarts", restarts},
           {"tilt_observable", tilt},
           {"yaw_observable", yaw},
           {"published", published_}};

@@ -1,6 +1,7 @@
 // The inertial keyframe smoother stage: a body at rest with wheel odometry and GNSS stays under its antenna, published
 // as "inertial_graph" at the configured rate with a finite positive semi-definite covariance, its tilt observable and
-// its yaw not (nothing moves); a sensor without a mounting is counted; the engine makes the stage only when asked; a
+// its yaw not (nothing moves); a smoother restarted by a sample of absurd rates is counted; a sensor without a
+// mounting is counted; the engine makes the stage only when asked; a
 // body driving on a heading it does not know finds it from its first fixes and then follows them.
 #include "daemon/engine/engine.hpp"
 #include "daemon/stage_counters.hpp"
@@ -89,6 +90,7 @@ TEST_CASE("inertial graph stage: a body at rest stays under its antenna, tilt ob
   CHECK(counter(stage, "gnss_anchored") == 1);
   CHECK(counter(stage, "keyframes") >= 38);
   CHECK(counter(stage, "failed_solves") == 0);
+  CHECK(counter(stage, "restarts") == 0);
   CHECK(counter(stage, "tilt_observable") == 1);
   CHECK(counter(stage, "yaw_observable") == 0);
   // Its poses on the Earth too: 1 m under the antenna at the datum, as "inertial_graph".
@@ -97,6 +99,30 @@ TEST_CASE("inertial graph stage: a body at rest stays under its antenna, tilt ob
   CHECK(geo.back().utime == last.utime);
   CHECK(std::abs(geo.back().latitude - 47.0) * 111'000 < 0.05);
   CHECK(geo.back().altitude == doctest::Approx(499).epsilon(1e-4));
+}
+
+TEST_CASE(
+    "inertial graph stage: a smoother restarted by a sample of absurd rates is counted on the status, and goes on") {
+  InertialConfig c = config();
+  c.gnss_heading.align = GnssHeadingConfig::Align::kNever;
+  InertialGraphStage stage(c);
+  FusedPose last;
+  const Emit emit = [&](Output o) {
+    if (const auto* f = std::get_if<FusedPose>(&o)) last = *f;
+  };
+  for (int k = 0; k <= 10 * 200; ++k) {  // 10 s at rest, IMU 200 Hz and odometry 50 Hz; one wild sample at 3 s
+    const int64_t t = kT0 + 5'000 * k;
+    ImuSample s = at_rest(t);
+    if (k == 600)
+      s.angular_velocity = Eigen::Vector3d::Constant(1e300), s.linear_acceleration = Eigen::Vector3d::Constant(-1e308);
+    stage.handle(s, emit);
+    if (k % 4 == 0) stage.handle(still(t), emit);
+  }
+  CHECK(counter(stage, "restarts") == 1);
+  CHECK(last.utime >= kT0 + 9'900'000);  // published to the end
+  CHECK(last.pose.position.allFinite());
+  CHECK(last.pose.position.norm() < 0.05);
+  CHECK(last.covariance.allFinite());
 }
 
 TEST_CASE("inertial graph stage: a sample from a frame without a mounting is counted, the engine makes it on request") {
