@@ -252,9 +252,8 @@ double IncrementalSmoother::robust_weight_of(size_t fi) const {
   const SmootherState& s = *state_;
   if (s.kernel_width[fi] == 0) return 1.0;
   const Factor& f = *s.graph.factors()[fi];
-  Eigen::VectorXd e(f.residual_dim());
-  f.error(s.lin, e);
-  return s.kernel_weight(fi, e.dot(f.information() * e));
+  Eigen::VectorXd e, weighted;
+  return s.kernel_weight(fi, f.chi2(s.lin, e, weighted));
 }
 
 Eigen::MatrixXd IncrementalSmoother::marginal_covariance(int index) const {

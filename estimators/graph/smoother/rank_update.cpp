@@ -12,7 +12,8 @@ Contribution linearize(const SmootherState& s, size_t fi) {
   const Factor& f = *s.graph.factors()[fi];
   Linearization lin = f.make_linearization(s.lin);
   f.linearize(s.lin, lin);
-  const Eigen::MatrixXd W = s.kernel_weight(fi, lin.error.dot(f.information() * lin.error)) * f.information();
+  Eigen::VectorXd weighted;
+  const Eigen::MatrixXd W = s.kernel_weight(fi, f.weighted_square(lin.error, weighted)) * f.information();
   const Eigen::MatrixXd U = W.llt().matrixU();
   Contribution c;
   std::vector<std::pair<int, int>> blocks;  // (first column, variable slot in the factor)

@@ -103,8 +103,7 @@ void assemble_values(const SmootherState& s, System& sys, size_t end) {
       same_shape = lin.jacobians[k].cols() == vars[static_cast<size_t>(fv[k])].dim();
     if (!same_shape) lin = fac.make_linearization(sys.lin);
     fac.linearize(sys.lin, lin);
-    We.noalias() = fac.information() * lin.error;
-    const double w = s.kernel_weight(f, lin.error.dot(We));
+    const double w = s.kernel_weight(f, fac.weighted_square(lin.error, We));  // leaves We = Omega e
     We *= w;
     for (size_t ka = 0; ka < fv.size(); ++ka) {
       const int pa = sys.pos[static_cast<size_t>(fv[ka])];
