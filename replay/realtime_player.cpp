@@ -2,13 +2,13 @@
 
 #include "daemon/runtime/daemon.hpp"
 #include "daemon/runtime/lcm_log.hpp"
-#include "replay/replay_driver.hpp"
+#include "replay/time_ordered_log.hpp"
 
 #include <lcm/lcm-cpp.hpp>
 
 #include <algorithm>
 #include <chrono>
-#include <numeric>
+#include <optional>
 #include <stdexcept>
 #include <thread>
 
@@ -16,25 +16,21 @@ namespace sextant::tools {
 
 int64_t play_realtime(const std::string& log_path, double speed, const std::string& lcm_url,
                       runtime::LogDamage* damage) {
-  auto records = runtime::LogReader::read_all(log_path, damage);
-  std::vector<int64_t> keys(records.size());
-  for (size_t i = 0; i < records.size(); ++i) keys[i] = peek_utime(records[i].data).value_or(records[i].timestamp);
-  std::vector<size_t> order(records.size());
-  std::iota(order.begin(), order.end(), size_t{0});
-  std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) { return keys[a] < keys[b]; });
-
+  TimeOrderedLog log(log_path);
+  if (damage != nullptr) *damage = log.damage();
   lcm::LCM lcm(lcm_url);
   if (!lcm.good()) throw std::runtime_error(runtime::bus_failure_help(lcm_url));
-  if (order.empty()) return 0;
   const auto wall0 = std::chrono::steady_clock::now();
-  const int64_t t0 = keys[order.front()];
+  std::optional<int64_t> t0;
   int64_t published = 0;
-  for (size_t i : order) {
-    const auto due = wall0 + std::chrono::microseconds(static_cast<int64_t>(static_cast<double>(keys[i] - t0) / speed));
+  log.for_each([&](const runtime::LogRecord& r) {
+    const int64_t t = peek_utime(r.data).value_or(r.timestamp);
+    if (!t0) t0 = t;
+    const auto due = wall0 + std::chrono::microseconds(static_cast<int64_t>(static_cast<double>(t - *t0) / speed));
     std::this_thread::sleep_until(due);
-    lcm.publish(records[i].channel, records[i].data.data(), static_cast<unsigned>(records[i].data.size()));
+    lcm.publish(r.channel, r.data.data(), static_cast<unsigned>(r.data.size()));
     ++published;
-  }
+  });
   return published;
 }
 

@@ -6,6 +6,7 @@
 #include "daemon/runtime/lcm_log.hpp"
 #include "daemon/runtime/nearest_rank_percentile.hpp"
 #include "replay/even_sample.hpp"
+#include "replay/time_ordered_log.hpp"
 
 #include <sextant/truth_t.hpp>
 
@@ -31,41 +32,6 @@ int64_t resident_kb() {
   while (std::getline(f, line))
     if (line.rfind("VmRSS:", 0) == 0) return std::atoll(line.c_str() + 6);
   return 0;
-}
-
-/// Pass 1, the order: rank[i] is the turn of the file's i-th record, by message utime with ties in file order;
-/// records that are not ours (or too short to carry a utime) keep their log stamp so that they still get counted.
-/// The reader skips damaged events (and reports them) the same way in both passes.
-std::vector<uint32_t> replay_order(const std::string& log_path, runtime::LogDamage& damage) {
-  std::vector<std::pair<int64_t, uint32_t>> keys;
-  runtime::LogReader reader(log_path);
-  while (auto r = reader.next())
-    keys.emplace_back(peek_utime(r->data).value_or(r->timestamp), static_cast<uint32_t>(keys.size()));
-  damage = reader.damage();
-  std::stable_sort(keys.begin(), keys.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
-  std::vector<uint32_t> rank(keys.size());
-  for (size_t turn = 0; turn < keys.size(); ++turn) rank[keys[turn].second] = static_cast<uint32_t>(turn);
-  return rank;
-}
-
-/// Pass 2: the records in their turn; one read early waits (in memory) for its turn.
-template <class Step>
-void for_each_in_turn(const std::string& log_path, const std::vector<uint32_t>& rank, Step&& step) {
-  runtime::LogReader reader(log_path);
-  std::map<uint32_t, runtime::LogRecord> early;
-  uint32_t next_turn = 0, index = 0;
-  while (auto r = reader.next()) {
-    if (index >= rank.size()) break;  // the file grew since pass 1
-    const uint32_t turn = rank[index++];
-    if (turn != next_turn) {
-      early.emplace(turn, std::move(*r));
-      continue;
-    }
-    step(*r);
-    ++next_turn;
-    for (auto it = early.begin(); it != early.end() && it->first == next_turn; it = early.erase(it), ++next_turn)
-      step(it->second);
-  }
 }
 
 /// What a replay keeps of what it sees: outputs, ground truth, the stages' processing times, the segments.
@@ -232,19 +198,13 @@ void ReplayCollector::finish(runtime::EngineDriver& driver) {
 
 }  // namespace
 
-std::optional<int64_t> peek_utime(const std::vector<uint8_t>& b) {
-  if (b.size() < 16) return std::nullopt;
-  uint64_t v = 0;
-  for (int i = 8; i < 16; ++i) v = (v << 8) | b[static_cast<size_t>(i)];  // LCM encodes big-endian
-  return static_cast<int64_t>(v);
-}
-
 ReplayResult replay_log(const std::string& log_path, const config::DaemonConfig& cfg, const Progress& progress,
                         const ReplayOptions& options) {
   const auto wall_start = std::chrono::steady_clock::now();
   ReplayResult result;
-  const std::vector<uint32_t> rank = replay_order(log_path, result.log_damage);
-  result.records = static_cast<int64_t>(rank.size());
+  TimeOrderedLog log(log_path);
+  result.log_damage = log.damage();
+  result.records = static_cast<int64_t>(log.records());
 
   engine::Engine engine(cfg.engine);
   result.primary_estimator = engine.primary_estimator();
@@ -263,7 +223,7 @@ ReplayResult replay_log(const std::string& log_path, const config::DaemonConfig&
       std::move(o));
 
   int64_t done = 0;
-  for_each_in_turn(log_path, rank, [&](const runtime::LogRecord& r) {
+  log.for_each([&](const runtime::LogRecord& r) {
     if (r.channel == kTruthChannel) {
       collector.truth(r);
     } else {

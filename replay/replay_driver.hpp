@@ -115,13 +115,10 @@ using Progress = std::function<void(int64_t, int64_t)>;
 
 /// Replays `log_path` through the engine configured by `config`.  Throws std::runtime_error when the log cannot
 /// be read.
-/// The log is read twice (once for the utime of every record, once to feed them), so memory holds an index of 16
-/// bytes per record and the records that arrive ahead of their turn, not the log.
+/// The log is read twice (once for the utime of every record, once to feed them; see TimeOrderedLog), so memory holds
+/// an index of 4 bytes per record and at most TimeOrderedLog::kHeldBytes of records that arrive ahead of their turn,
+/// not the log.
 ReplayResult replay_log(const std::string& log_path, const config::DaemonConfig& config, const Progress& progress = {},
                         const ReplayOptions& options = {});
-
-/// The utime of an encoded sextant message: every sextant type starts with `int64_t utime` right after LCM's 8-byte
-/// fingerprint.  nullopt when the buffer is too short.
-std::optional<int64_t> peek_utime(const std::vector<uint8_t>& bytes);
 
 }  // namespace sextant::tools

@@ -2,7 +2,7 @@
 
 #include "daemon/runtime/lcm_log.hpp"
 #include "daemon/runtime/version.hpp"
-#include "replay/replay_driver.hpp"
+#include "replay/time_ordered_log.hpp"
 
 #include <algorithm>
 #include <filesystem>

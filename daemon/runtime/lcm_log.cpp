@@ -8,6 +8,7 @@
 #include <cerrno>
 #include <cstring>
 #include <sstream>
+#include <utility>
 
 namespace sextant::runtime {
 namespace {
@@ -215,7 +216,7 @@ std::optional<LogRecord> LogReader::next() {
       damage_.missing_event_numbers +=
           std::min(event_number - *last_event_number_ - 1, skipped_since_good / (kHeaderBytes + 1) + 1);
     last_event_number_ = event_number;
-    pos_ = end;
+    last_offset_ = std::exchange(pos_, end);
     return r;
   }
   return std::nullopt;

@@ -81,6 +81,13 @@ class LogReader {
   /// The next good event, or nullopt at the end of the file.  Corrupt events are skipped and counted in `damage`.
   std::optional<LogRecord> next();
   const LogDamage& damage() const { return damage_; }
+  /// Where the event `next` returned last starts in the file (bytes), for reading it again after `seek`.
+  int64_t last_offset() const { return last_offset_; }
+  /// The next call of `next` reads from byte `offset` on (a place `last_offset` gave, to read an event again).
+  void seek(int64_t offset) {
+    pos_ = offset;
+    last_event_number_.reset();
+  }
 
   /// Every good event of the file, in file order; what was skipped goes into `damage` when given.
   static std::vector<LogRecord> read_all(const std::string& path, LogDamage* damage = nullptr);
@@ -92,7 +99,7 @@ class LogReader {
   void problem(int64_t at, const std::string& what);
 
   std::unique_ptr<Source> source_;
-  int64_t pos_ = 0;
+  int64_t pos_ = 0, last_offset_ = 0;
   std::optional<int64_t> last_event_number_;
   LogDamage damage_;
 };
