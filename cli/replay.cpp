@@ -27,6 +27,7 @@ struct Options {
   bool realtime = false;
   bool tolerate_damage = false;
   double speed = 1.0;
+  double max_gap_s = 10.0;
   double segment_seconds = 0;
   std::string lcm_url;
 };
@@ -152,16 +153,22 @@ void add_options(CLI::App* cmd, Options& o) {
   cmd->add_option("--report", o.report, "write an HTML report with plots (and report.json) into this folder");
   cmd->add_flag("--realtime", o.realtime, "republish the log to the live bus at the pace of message utimes");
   cmd->add_option("--speed", o.speed, "playback speed for --realtime (2 = twice as fast)")->check(CLI::PositiveNumber);
+  cmd->add_option("--max-gap", o.max_gap_s,
+                  "for --realtime: a longer stretch of log time between two messages plays as this many seconds")
+      ->check(CLI::PositiveNumber);
   cmd->add_option("--lcm-url", o.lcm_url, "LCM URL for --realtime");
   cmd->add_flag("--tolerate-damage", o.tolerate_damage, cli::kTolerateDamageHelp);
 }
 
 // --realtime: the log republished on the live bus at the pace of its utimes.
 void replay_in_realtime(const Options& o) {
-  runtime::LogDamage damage;
-  const auto n = tools::play_realtime(o.log, o.speed, o.lcm_url, &damage);
-  if (!o.json) std::printf("republished %lld messages\n", static_cast<long long>(n));
-  cli::report_log_damage("sextant replay", o.log, damage, o.tolerate_damage);
+  const auto played = tools::play_realtime(o.log, {o.speed, o.max_gap_s, o.lcm_url});
+  if (!o.json) std::printf("republished %lld messages\n", static_cast<long long>(played.published));
+  if (played.gaps_shortened > 0)
+    std::fprintf(stderr,
+                 "sextant replay: %lld gaps longer than --max-gap %g s played as %g s (%.6g s of log time skipped)\n",
+                 static_cast<long long>(played.gaps_shortened), o.max_gap_s, o.max_gap_s, played.log_seconds_skipped);
+  cli::report_log_damage("sextant replay", o.log, played.damage, o.tolerate_damage);
 }
 
 // --config's configuration (the defaults without one); a bad one exits 2 with its place.

@@ -14,24 +14,34 @@
 
 namespace sextant::tools {
 
-int64_t play_realtime(const std::string& log_path, double speed, const std::string& lcm_url,
-                      runtime::LogDamage* damage) {
+RealtimePlayback play_realtime(const std::string& log_path, const RealtimeOptions& options) {
   TimeOrderedLog log(log_path);
-  if (damage != nullptr) *damage = log.damage();
-  lcm::LCM lcm(lcm_url);
-  if (!lcm.good()) throw std::runtime_error(runtime::bus_failure_help(lcm_url));
+  RealtimePlayback out;
+  out.damage = log.damage();
+  lcm::LCM lcm(options.lcm_url);
+  if (!lcm.good()) throw std::runtime_error(runtime::bus_failure_help(options.lcm_url));
   const auto wall0 = std::chrono::steady_clock::now();
-  std::optional<int64_t> t0;
-  int64_t published = 0;
+  const auto max_gap = static_cast<int64_t>(options.max_gap_s * 1e6);
+  std::optional<int64_t> previous;
+  int64_t played = 0;  // microseconds of log time played so far, long gaps shortened
   log.for_each([&](const runtime::LogRecord& r) {
     const int64_t t = peek_utime(r.data).value_or(r.timestamp);
-    if (!t0) t0 = t;
-    const auto due = wall0 + std::chrono::microseconds(static_cast<int64_t>(static_cast<double>(t - *t0) / speed));
-    std::this_thread::sleep_until(due);
+    if (previous) {
+      // The difference as a double: stamps at int64's ends must not overflow it.
+      const double gap = static_cast<double>(t) - static_cast<double>(*previous);
+      if (gap > static_cast<double>(max_gap)) {
+        ++out.gaps_shortened;
+        out.log_seconds_skipped += (gap - static_cast<double>(max_gap)) * 1e-6;
+      }
+      played += static_cast<int64_t>(std::min(gap, static_cast<double>(max_gap)));
+    }
+    previous = t;
+    std::this_thread::sleep_until(
+        wall0 + std::chrono::microseconds(static_cast<int64_t>(static_cast<double>(played) / options.speed)));
     lcm.publish(r.channel, r.data.data(), static_cast<unsigned>(r.data.size()));
-    ++published;
+    ++out.published;
   });
-  return published;
+  return out;
 }
 
 }  // namespace sextant::tools
