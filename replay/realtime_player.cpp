@@ -21,23 +21,22 @@ RealtimePlayback play_realtime(const std::string& log_path, const RealtimeOption
   lcm::LCM lcm(options.lcm_url);
   if (!lcm.good()) throw std::runtime_error(runtime::bus_failure_help(options.lcm_url));
   const auto wall0 = std::chrono::steady_clock::now();
-  const auto max_gap = static_cast<int64_t>(options.max_gap_s * 1e6);
+  const double max_gap_us = options.max_gap_s * 1e6;
   std::optional<int64_t> previous;
-  int64_t played = 0;  // microseconds of log time played so far, long gaps shortened
+  double played_us = 0;  // log time played so far, long gaps shortened
   log.for_each([&](const runtime::LogRecord& r) {
-    const int64_t t = peek_utime(r.data).value_or(r.timestamp);
+    const int64_t t = replay_stamp(r);
     if (previous) {
       // The difference as a double: stamps at int64's ends must not overflow it.
       const double gap = static_cast<double>(t) - static_cast<double>(*previous);
-      if (gap > static_cast<double>(max_gap)) {
+      if (gap > max_gap_us) {
         ++out.gaps_shortened;
-        out.log_seconds_skipped += (gap - static_cast<double>(max_gap)) * 1e-6;
+        out.log_seconds_skipped += (gap - max_gap_us) * 1e-6;
       }
-      played += static_cast<int64_t>(std::min(gap, static_cast<double>(max_gap)));
+      played_us += std::min(gap, max_gap_us);
     }
     previous = t;
-    std::this_thread::sleep_until(
-        wall0 + std::chrono::microseconds(static_cast<int64_t>(static_cast<double>(played) / options.speed)));
+    std::this_thread::sleep_until(wall0 + std::chrono::microseconds(static_cast<int64_t>(played_us / options.speed)));
     lcm.publish(r.channel, r.data.data(), static_cast<unsigned>(r.data.size()));
     ++out.published;
   });

@@ -228,7 +228,7 @@ ReplayResult replay_log(const std::string& log_path, const config::DaemonConfig&
       collector.truth(r);
     } else {
       // The log's time is the clock: the intake's idle expiry goes by it, not by how fast the replay runs.
-      const int64_t utime = peek_utime(r.data).value_or(r.timestamp);
+      const int64_t utime = replay_stamp(r);
       driver.input(r.channel, r.data.data(), r.data.size(), runtime::Arrival::at_log_time(utime));
     }
     if (progress && (++done % 4096 == 0)) progress(done, result.records);

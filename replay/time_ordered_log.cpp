@@ -16,8 +16,7 @@ std::optional<int64_t> peek_utime(const std::vector<uint8_t>& data) {
 TimeOrderedLog::TimeOrderedLog(std::string path, size_t held_bytes) : path_(std::move(path)), budget_(held_bytes) {
   std::vector<std::pair<int64_t, uint32_t>> keys;
   runtime::LogReader reader(path_);
-  while (auto r = reader.next())
-    keys.emplace_back(peek_utime(r->data).value_or(r->timestamp), static_cast<uint32_t>(keys.size()));
+  while (auto r = reader.next()) keys.emplace_back(replay_stamp(*r), static_cast<uint32_t>(keys.size()));
   damage_ = reader.damage();
   std::stable_sort(keys.begin(), keys.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
   rank_.resize(keys.size());

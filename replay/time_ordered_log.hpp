@@ -21,13 +21,15 @@ namespace sextant::tools {
 
 /// The utime a message carries after its 8-byte fingerprint, or nullopt for a message too short to carry one.
 std::optional<int64_t> peek_utime(const std::vector<uint8_t>& data);
+/// The stamp a replay orders and paces a record by: its message's utime, or the log's stamp for a message without one.
+inline int64_t replay_stamp(const runtime::LogRecord& r) { return peek_utime(r.data).value_or(r.timestamp); }
 
 class TimeOrderedLog {
  public:
   /// Bytes of records held in memory while they wait for their turn, by default.
   static constexpr size_t kHeldBytes = size_t{64} << 20;
 
-  /// Pass 1: reads `path` and sorts its good records by peek_utime (the log's stamp for a message without one), ties
+  /// Pass 1: reads `path` and sorts its good records by replay_stamp, ties
   /// in file order.  Throws std::runtime_error naming the path when it cannot be read.
   explicit TimeOrderedLog(std::string path, size_t held_bytes = kHeldBytes);
 

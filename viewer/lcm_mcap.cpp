@@ -63,7 +63,7 @@ ReplayMcapRecorder::ReplayMcapRecorder(const std::string& log_path, const std::s
 
 void ReplayMcapRecorder::inputs_until(int64_t utime) {
   while (next_input_) {
-    const int64_t t = tools::peek_utime(next_input_->data).value_or(next_input_->timestamp);
+    const int64_t t = tools::replay_stamp(*next_input_);
     if (t > utime) return;
     recorder_.add(next_input_->channel, t, next_input_->data.data(), next_input_->data.size());
     next_input_ = inputs_.next();
