@@ -3,7 +3,8 @@
 # wrong inter-robot loops and with 10 % wrong ones, replayed with config/default.yaml (lifelong on) plus the fleet's
 # markers, per 5-minute segment the real-time factor, the graph stage's p99/max time per event and the RSS; then every
 # robot's fleet-frame ATE (`sextant eval fleet`).
-#   bench/fleet_lifelong.sh BUILD OUT [MINUTES] [ROBOTS]       (defaults: 60 minutes, 8 robots)
+#   [SOLVE_PERIOD=S] bench/fleet_lifelong.sh BUILD OUT [MINUTES] [ROBOTS]   (defaults: 60 minutes, 8 robots, S = 0:
+#   config/default.yaml's graph.solve_period_s, an update after every input; S = 0.05: at most one per 50 ms)
 # -> OUT/fleet_lifelong.md (the table), OUT/*.json (replay --json), OUT/eval_*.txt.  A benchmark, not a test: the
 # 60-minute run of 8 robots takes tens of minutes.
 set -euo pipefail
@@ -20,7 +21,9 @@ for wrong in 0 0.1; do
   "$sextant" simulate planar --robots "$robots" --duration $((minutes * 60)) --seed 1 --wrong-loops "$wrong" \
     -o "$run.lcm" --config-out "$run.markers.yaml" > /dev/null
   markers=$(grep markers "$run.markers.yaml" | sed 's/^ *//')
-  sed "s/^      markers: {}  .*/      $markers/" "$root/config/default.yaml" > "$run.yaml"
+  sed -e "s/^      markers: {}  .*/      $markers/" \
+    -e "s/^    solve_period_s: 0 .*/    solve_period_s: ${SOLVE_PERIOD:-0}/" "$root/config/default.yaml" > "$run.yaml"
+  grep -q "^    solve_period_s: ${SOLVE_PERIOD:-0}\$" "$run.yaml"  # the default config's line is still there
   /usr/bin/time -f "%M" -o "$run.maxrss" "$sextant" replay "$run.lcm" --config "$run.yaml" --estimator graph --json \
     --segment-seconds 300 --out-log "$run.out.lcm" > "$run.json"
   "$sextant" eval fleet --out-log "$run.out.lcm" --gt-prefix "${run}_gt_" --estimator graph > "$run.eval.txt"
@@ -29,7 +32,8 @@ done
 python3 - "$out" "$robots" "$minutes" > "$out/fleet_lifelong.md" <<'EOP'
 import glob, json, os, sys
 out, robots, minutes = sys.argv[1:4]
-print(f"# Fleet in lifelong mode: {robots} simulated planar robots, {minutes} minutes\n")
+print(f"# Fleet in lifelong mode: {robots} simulated planar robots, {minutes} minutes, "
+      f"graph.solve_period_s {os.environ.get('SOLVE_PERIOD', '0')}\n")
 print("| wrong loops | real-time factor | segment | segment real-time factor | graph p99 (ms) | graph max (ms) | RSS (MB) |")
 print("|---|---|---|---|---|---|---|")
 for wrong in ("0", "0.1"):

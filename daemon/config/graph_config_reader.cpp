@@ -255,6 +255,7 @@ void read_trajectory(Section& s, engine::GraphConfig& c) {
 
 void read_stage_config(Section& s, engine::GraphConfig& c) {
   s.get("enabled", c.enabled);
+  s.get("solve_period_s", c.solve_period_s, in_range(0.0, 10.0));
   read_keyframes(s, c);
   read_loops(s, c);
   read_landmarks(s, c);

@@ -226,11 +226,12 @@ void GraphStage::publish_map(const std::string& frame, int64_t utime, bool flush
 }
 
 void GraphStage::finish(const Emit& emit) {
+  Outputs out(*this, emit);
   if (exchange_ && exchange_->fetching()) {  // stopped while waiting for the tails: the inputs held back are not lost
     exchange_->tail.stop();
-    Outputs out(*this, emit);
     exchange(FleetControl{}, out, emit);
   }
+  slam_.flush(out);  // the updates the solve period holds back: the final estimates are solved ones
   for (const std::string& source : slam_.bodies()) {
     const slam::KeyframeTrack* track = slam_.track(source);
     if (track->empty()) continue;

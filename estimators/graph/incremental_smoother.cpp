@@ -225,6 +225,9 @@ int IncrementalSmoother::rebuilds() const { return state_->rebuilds; }
 int64_t IncrementalSmoother::interrupted_rebuilds() const { return state_->interrupted_rebuilds; }
 bool IncrementalSmoother::reordering() const { return state_->reorder.under_way(); }
 bool IncrementalSmoother::factorized() const { return state_->fx.L != nullptr; }
+bool IncrementalSmoother::in_system(int index) const {
+  return index >= 0 && static_cast<size_t>(index) < state_->pos.size() && state_->pos[static_cast<size_t>(index)] >= 0;
+}
 const IncrementalOptions& IncrementalSmoother::options() const { return state_->options; }
 
 double IncrementalSmoother::chi2() const {

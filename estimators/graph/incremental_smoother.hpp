@@ -120,6 +120,8 @@ class IncrementalSmoother {
   int64_t interrupted_rebuilds() const;
   /// True while a spread reordering (or a spread first factorization) is being built.
   bool reordering() const;
+  /// True when variable `index` is in the factorized system (false: fixed, or added since the last update).
+  bool in_system(int index) const;
   /// True when there is a factorization to solve with: false before the first update and while a spread first build
   /// (begin_spread_build) is under way.
   bool factorized() const;

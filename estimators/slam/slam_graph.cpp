@@ -68,6 +68,7 @@ SlamGraph::Body& SlamGraph::body_for(const std::string& name, bool planar) {
   body.planar = planar;
   body.selector = KeyframeSelector(ko);
   body.smoother = &smoother_for(planar);
+  if (local_input_ && name == input_body_) body.clock = input_utime_;  // its first input, being handled
   return bodies_.emplace(name, std::move(body)).first->second;
 }
 
@@ -82,6 +83,61 @@ void SlamGraph::add_factor(Body& b, std::unique_ptr<graph::Factor> factor, Facto
 }
 
 void SlamGraph::add_odometry(const std::string& name, const OdometryInput& o, SlamListener& listener) {
+  begin_local_input(name, o.utime);
+  handle_odometry(name, o, listener);
+  end_local_input(o.utime, listener);
+}
+
+void SlamGraph::add_loop(const std::string& name, const LoopInput& l, SlamListener& listener) {
+  const int64_t utime = std::max(l.utime_from, l.utime_to);
+  begin_local_input(name, utime);
+  handle_loop(name, l, listener);
+  end_local_input(utime, listener);
+}
+
+void SlamGraph::begin_local_input(const std::string& body, int64_t utime) {
+  local_input_ = true;
+  input_body_ = body;
+  input_utime_ = utime;
+  if (const auto it = bodies_.find(body); it != bodies_.end()) {
+    Body& root = bodies_.at(it->second.frame);
+    root.clock = std::max(root.clock, utime);
+  }
+}
+
+void SlamGraph::end_local_input(int64_t utime, SlamListener& listener) {
+  const auto it = bodies_.find(input_body_);
+  if (it != bodies_.end() && !it->second.remote) {
+    Body& root = bodies_.at(it->second.frame);
+    root.clock = std::max(root.clock, utime);
+    if (!deferred_.active && frame_owes(it->second.frame) && !waits_for_period(it->second))
+      run_deferred(listener, false);
+  }
+  local_input_ = false;
+}
+
+bool SlamGraph::waits_for_period(const Body& b) const {
+  if (!local_input_ || !(options_.solve_period_s > 0)) return false;
+  const Body& root = bodies_.at(b.frame);
+  if (root.reported == kNever) return false;
+  // A spread reordering advances one slice per update: held back, its updates would span many periods and the one
+  // that puts it in place would take all that waited meanwhile at once (a rebuild of hundreds of factors).
+  if (b.smoother != nullptr && b.smoother->reordering()) return false;
+  return root.clock < root.reported + static_cast<int64_t>(options_.solve_period_s * 1e6);
+}
+
+bool SlamGraph::frame_owes(const std::string& frame) const {
+  if (deferred_.frames.contains(frame)) return true;
+  for (const auto& [name, utime] : deferred_.updated)
+    if (const auto it = bodies_.find(name); it != bodies_.end() && it->second.frame == frame) return true;
+  return false;
+}
+
+void SlamGraph::flush(SlamListener& listener) {
+  if (owes() && !deferred_.active) run_deferred(listener);
+}
+
+void SlamGraph::handle_odometry(const std::string& name, const OdometryInput& o, SlamListener& listener) {
   const auto it = bodies_.find(name);
   const bool known = it != bodies_.end();
   if (known && it->second.remote) {
@@ -131,7 +187,7 @@ void SlamGraph::add_odometry(const std::string& name, const OdometryInput& o, Sl
     }
     b.early_loops = std::move(later);
     counters_.loops_waiting -= static_cast<int64_t>(due.size());
-    for (const auto& l : due) add_loop(name, l, listener);
+    for (const auto& l : due) handle_loop(name, l, listener);
   }
   // Other bodies' sightings of this one that its odometry had not reached.
   if (!b.early_seen.empty()) complete_seen(b, listener);
@@ -210,7 +266,7 @@ void SlamGraph::wait_for_odometry(Body& b, const LoopInput& l) {
   }
 }
 
-void SlamGraph::add_loop(const std::string& name, const LoopInput& l, SlamListener& listener) {
+void SlamGraph::handle_loop(const std::string& name, const LoopInput& l, SlamListener& listener) {
   auto it = bodies_.find(name);
   if (it != bodies_.end() && it->second.remote) {
     ++counters_.fleet_remote_inputs;
@@ -236,6 +292,11 @@ void SlamGraph::add_loop(const std::string& name, const LoopInput& l, SlamListen
     ++counters_.loops_unmatched;
     return;
   }
+  // The gate reads the estimate of both ends: a keyframe added since the last update (the newest, which a matcher's
+  // answer is usually about) is solved first, as it would be without the solve period.
+  const auto solved = [&](size_t k) { return b.smoother->in_system(b.track.keyframes()[k].variable); };
+  if (owes() && !deferred_.active && (!solved(end_from->keyframe) || !solved(end_to->keyframe)))
+    run_deferred(listener, false);
   const KeyframeLoop loop = loop_on_keyframes(b.planar, l.relative, l.information, *end_from, *end_to);
   if (loop.widened) ++counters_.loops_on_thinned;
   const LoopContribution c{b.track.keyframes()[end_from->keyframe].id, b.track.keyframes()[end_to->keyframe].id, loop.z,
@@ -257,13 +318,9 @@ graph::IncrementalStatus SlamGraph::solve(graph::IncrementalSmoother& smoother) 
 }
 
 void SlamGraph::update(const std::string& name, Body& b, int64_t utime, SlamListener& listener) {
-  if (deferred_.active) {
-    deferred_.dirty[b.planar ? 1 : 0] = true;
-    deferred_.updated[name] = utime;
-    return;
-  }
-  const graph::IncrementalStatus st = solve(*b.smoother);
-  if (st.ok) listener.updated(name, utime, st);
+  deferred_.dirty[b.planar ? 1 : 0] = true;
+  deferred_.updated[name] = utime;
+  if (!deferred_.active && !waits_for_period(b)) run_deferred(listener, false);
 }
 
 void SlamGraph::rebuild() {

@@ -53,6 +53,7 @@
 #include "estimators/slam/slam_inputs.hpp"
 #include "estimators/slam/slam_options.hpp"
 
+#include <limits>
 #include <map>
 #include <set>
 #include <memory>
@@ -111,6 +112,9 @@ class SlamGraph {
   void add_loop(const std::string& body, const LoopInput& loop, SlamListener& listener);
   /// Landmark sightings of `body` (see above); nothing when landmarks are disabled.
   void add_sightings(const std::string& body, const SightingsInput& sightings, SlamListener& listener);
+  /// The smoother updates that SlamOptions::solve_period_s is holding back, now (and reported): before the final
+  /// estimates are read (the end of a replay, a daemon's shutdown).  Nothing when none is owed.
+  void flush(SlamListener& listener);
   /// A contribution of a body whose inputs reach another graph (graph_contribution.hpp), in its stream's order: the
   /// back end builds from it what the owner's graph built.  A contribution about a body this graph has inputs of is
   /// refused (a body has one owner); a keyframe that does not follow the body's newest one, a sighting or loop on a
@@ -184,6 +188,7 @@ class SlamGraph {
   void load(archive::ArchiveReader& r);
 
  private:
+  static constexpr int64_t kNever = std::numeric_limits<int64_t>::min();
   /// The fleet's part of load(): frames checked against the bodies, the pending links (slam_graph_state.cpp).
   void load_fleet(archive::ArchiveReader& r);
   /// What a factor of a smoother is, kept beside it (one tag per factor, in the smoother's order) so that lifelong
@@ -213,6 +218,9 @@ class SlamGraph {
     std::vector<std::pair<std::string, BodySightingHalf>> early_seen;  // sightings of this body (observer, half)
                                                                        // ahead of its odometry
     std::set<int64_t> owner_thinned;  // a remote body's keyframes its owner thinned, taken out at the next thinning
+    // Solve cadence, kept by a frame's root body for the whole frame (its bodies share one estimate): the newest
+    // local input's data time, and that clock at the frame's last reported update (us).
+    int64_t clock = kNever, reported = kNever;
   };
   /// A body's sighting of another body's marker, anchored on a keyframe of each (by keyframe id: thinning renumbers
   /// positions) with the odometry motion from it to the sighting's time and that motion's covariance.
@@ -264,8 +272,9 @@ class SlamGraph {
   bool add_keyframe_to_graph(const std::string& name, Body& b, const KeyframeContribution& k, SlamListener& listener);
   /// The landmark sightings of one message at `anchor` (slam_graph_sightings.cpp), markers left out; gated against
   /// the estimate and the accepted ones appended to `accepted` when it is given (the owner), taken as they are when
-  /// not (a remote body's, gated by its owner).
-  bool add_landmark_sightings(Body& b, const SightingsInput& s, const TrackPoint& anchor, SightingsInput* accepted);
+  /// not (a remote body's, gated by its owner).  A known landmark not solved yet (an update owed) is solved first.
+  bool add_landmark_sightings(Body& b, const SightingsInput& s, const TrackPoint& anchor, SightingsInput* accepted,
+                              SlamListener& listener);
   /// The observed body's end of a robot sighting when that body is local: anchored, contributed and added.
   bool complete_body_sighting(const std::string& observer, const BodySightingHalf& h, SlamListener& listener);
   /// A same-body loop on keyframes, gated when the body is local (its owner's gate otherwise).
@@ -295,18 +304,39 @@ class SlamGraph {
   void propose_fleet_loops(const std::string& name, const Body& b, int64_t utime, SlamListener& listener);
   /// One smoother update, counted.
   graph::IncrementalStatus solve(graph::IncrementalSmoother& smoother);
-  /// While apply_all runs: the updates, frame updates and placements asked for, done by run_deferred once for all.
+  /// The updates, frame updates and placements asked for and not done yet, done by run_deferred once for all: while
+  /// apply_all runs (`active`), and between local inputs while SlamOptions::solve_period_s holds the updates back.
   struct Deferred {
-    bool active = false;
+    bool active = false;                     // apply_all's batch
     bool dirty[2] = {false, false};          // per kind: a smoother update is owed
     std::map<std::string, int64_t> updated;  // body -> the time its update was asked for at
     std::set<std::string> frames, joins;     // frames whose bodies are reported; frames whose placement is tried
   };
   /// The smoother updates owed (one per kind), reported as update() and update_frame() would have, then the
-  /// placements; apply_all's batch goes on afterwards.
-  void run_deferred(SlamListener& listener);
-  /// One smoother update for `b`, counted and reported when it succeeds.
+  /// placements; apply_all's batch goes on afterwards.  `all` false: the reports of frames still within their solve
+  /// period stay owed (a solve to read the estimate, not to publish it).
+  void run_deferred(SlamListener& listener, bool all = true);
+  /// One smoother update for `b`, counted and reported when it succeeds: now, or owed (run_deferred) during
+  /// apply_all's batch or while solve_period_s holds it back.
   void update(const std::string& name, Body& b, int64_t utime, SlamListener& listener);
+  /// Solve cadence (SlamOptions::solve_period_s), per map frame: an update asked for while a local input is handled
+  /// waits when `b`'s frame was reported less than the period ago in its data time; contributions (apply) update at
+  /// once.  Frames apart stay apart: another frame's inputs never move when this one's updates are reported.
+  bool waits_for_period(const Body& b) const;
+  bool owes() const { return deferred_.dirty[0] || deferred_.dirty[1]; }
+  /// Whether an update report is owed to a body of `frame`.
+  bool frame_owes(const std::string& frame) const;
+  /// A local input of `body` at `utime`, before it is handled: its frame's clock.
+  void begin_local_input(const std::string& body, int64_t utime);
+  /// After it: the frame's clock again (a new body's frame exists now), and its owed update once the period passed.
+  void end_local_input(int64_t utime, SlamListener& listener);
+  /// add_odometry, add_loop and add_sightings themselves, between begin_local_input and end_local_input.
+  void handle_odometry(const std::string& name, const OdometryInput& o, SlamListener& listener);
+  void handle_loop(const std::string& name, const LoopInput& l, SlamListener& listener);
+  void handle_sightings(const std::string& name, const SightingsInput& s, SlamListener& listener);
+  /// The sighting gate's marginal of the keyframe at `index` of `b`'s track: a keyframe not solved yet (an update
+  /// owed) takes the marginal of the newest solved keyframe before it, a little narrower than its own would be.
+  Eigen::MatrixXd keyframe_gate_marginal(const Body& b, size_t index);
   /// The sightings of one message at `anchor` (slam_graph_sightings.cpp): landmarks and markers, contributed.
   void add_anchored_sightings(const std::string& name, Body& b, const SightingsInput& s, const TrackPoint& anchor,
                               SlamListener& listener);
@@ -382,6 +412,7 @@ class SlamGraph {
   std::unique_ptr<graph::IncrementalSmoother> smoothers_[2];  // [0] 3-D, [1] planar
   std::vector<FactorTag> factor_tags_[2];                     // per smoother, per factor
   static constexpr int64_t kGateMarginalUpdates = 25;
+  static constexpr size_t kGateMarginalSteps = 16;  // keyframes keyframe_gate_marginal looks back at most
   std::map<int, std::pair<int64_t, Eigen::MatrixXd>>
       gate_marginals_[2];  // per variable: (updates when computed, marginal)
   int64_t keyframes_since_thinning_[2] = {0, 0};
@@ -399,6 +430,9 @@ class SlamGraph {
   std::map<std::pair<std::string, std::string>, int64_t> join_attempts_;  // frame pair -> keyframes at the last try
   std::map<std::string, std::pair<std::string, SE3>> moved_frames_;       // a joined frame -> (into, into_from_it)
   Deferred deferred_;
+  bool local_input_ = false;  // a local input is being handled ...
+  std::string input_body_;    // ... of this body
+  int64_t input_utime_ = 0;   // ... at this data time
   int64_t next_variable_id_ = 0;
   double loop_gate_[2] = {0, 0}, sighting_gate_[2] = {0, 0};  // chi-square thresholds, [0] 3-D, [1] planar
   double sighting_width_[2] = {0, 0};                         // sighting_kernel_width_for

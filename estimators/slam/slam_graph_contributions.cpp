@@ -288,11 +288,14 @@ SlamGraph::WholeKey SlamGraph::whole_key(const GraphContribution& c) {
 int SlamGraph::apply_all(const std::vector<GraphContribution>& contributions, SlamListener& listener) {
   int applied = 0;
   deferred_.active = contributions.size() > 1;
-  // Whatever happens (a contribution that throws is the stage's to recover from), later calls solve at once again;
-  // the updates owed are the smoother's pending work, which its next update does.
+  // Whatever happens (a contribution that throws is the stage's to recover from), the batch ends: updates owed stay
+  // owed (the smoother's pending work, done by the next update or flush), placements asked for are not tried.
   struct EndOfBatch {
     Deferred& d;
-    ~EndOfBatch() { d = Deferred{}; }
+    ~EndOfBatch() {
+      d.active = false;
+      d.joins.clear();
+    }
   } end_of_batch{deferred_};
   for (const GraphContribution& c : contributions) {
     // Their gates and the placement's classification read the estimate: solved first.
@@ -306,20 +309,33 @@ int SlamGraph::apply_all(const std::vector<GraphContribution>& contributions, Sl
   return applied;
 }
 
-void SlamGraph::run_deferred(SlamListener& listener) {
+void SlamGraph::run_deferred(SlamListener& listener, bool all) {
   const Deferred owed = std::move(deferred_);
   deferred_ = Deferred{};  // inactive while the owed work runs: a join it makes updates at once
+  // Which frames report now: decided before any report moves a frame's clock.
+  std::set<std::string> due;
+  for (const auto& [name, b] : bodies_)
+    if (b.frame == name && (all || !waits_for_period(b))) due.insert(name);
   graph::IncrementalStatus st[2];
   for (int kind = 0; kind < 2; ++kind)
     if (owed.dirty[kind] && smoothers_[kind]) st[kind] = solve(*smoothers_[kind]);
-  const auto report = [&](const std::string& name, const Body& b, int64_t utime) {
-    if (owed.dirty[b.planar ? 1 : 0] && st[b.planar ? 1 : 0].ok) listener.updated(name, utime, st[b.planar ? 1 : 0]);
+  const auto report = [&](const std::string& name, const Body& b, int64_t utime, bool as_frame) {
+    const int kind = b.planar ? 1 : 0;
+    if (!owed.dirty[kind] || !st[kind].ok) return;
+    if (!due.contains(b.frame)) {  // stays owed, and so does an update of its smoother to report with
+      deferred_.dirty[kind] = true;
+      as_frame ? void(deferred_.frames.insert(b.frame)) : void(deferred_.updated[name] = utime);
+      return;
+    }
+    listener.updated(name, utime, st[kind]);
+    Body& root = bodies_.at(b.frame);
+    root.reported = root.clock;
   };
   for (const auto& [name, utime] : owed.updated)
-    if (const auto it = bodies_.find(name); it != bodies_.end()) report(name, it->second, utime);
+    if (const auto it = bodies_.find(name); it != bodies_.end()) report(name, it->second, utime, false);
   for (const auto& [name, b] : bodies_)
     if (owed.frames.contains(b.frame) && !owed.updated.contains(name) && !b.track.empty())
-      report(name, b, b.track.newest().utime);
+      report(name, b, b.track.newest().utime, true);
   for (const std::string& frame : owed.joins)
     if (bodies_.contains(frame) && bodies_.at(frame).frame == frame) try_joins(frame, listener);
   deferred_.active = owed.active;
@@ -344,7 +360,7 @@ bool SlamGraph::apply_contribution(const GraphContribution& c, SlamListener& lis
   if (const auto* s = std::get_if<SightingsContribution>(&c.what)) {
     const auto anchor = point_of(b, s->anchor);
     if (!anchor) return false;
-    added = add_landmark_sightings(b, s->sightings, *anchor, nullptr);
+    added = add_landmark_sightings(b, s->sightings, *anchor, nullptr, listener);
   } else if (const auto* l = std::get_if<LoopContribution>(&c.what)) {
     if (!add_loop_on_keyframes(b, *l)) return false;
     added = true;

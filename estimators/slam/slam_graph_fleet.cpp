@@ -248,6 +248,7 @@ void SlamGraph::try_joins(const std::string& frame, SlamListener& listener) {
     auto& last = join_attempts_[std::minmax(current, other)];
     if (last != 0 && counters_.keyframes - last < options_.fleet.join_every_keyframes) continue;
     last = std::max<int64_t>(counters_.keyframes, 1);
+    if (owes()) run_deferred(listener);  // the placement reads the estimates: what is owed is solved first
     if (try_join(current, other, listener)) current = std::min(current, other);
   }
 }
@@ -338,15 +339,10 @@ void SlamGraph::join_frames(const std::string& keep, const std::string& gone, co
 }
 
 void SlamGraph::update_frame(const std::string& frame, SlamListener& listener) {
-  if (deferred_.active) {
-    deferred_.dirty[bodies_.at(frame).planar ? 1 : 0] = true;
-    deferred_.frames.insert(frame);
-    return;
-  }
-  const graph::IncrementalStatus st = solve(*bodies_.at(frame).smoother);
-  if (!st.ok) return;
-  for (const auto& [name, b] : bodies_)
-    if (b.frame == frame && !b.track.empty()) listener.updated(name, b.track.newest().utime, st);
+  const Body& root = bodies_.at(frame);
+  deferred_.dirty[root.planar ? 1 : 0] = true;
+  deferred_.frames.insert(frame);
+  if (!deferred_.active && !waits_for_period(root)) run_deferred(listener, false);
 }
 
 void SlamGraph::merge_frame_variables(const std::string& keep, const std::string& gone, const SE3& keep_from_gone) {

@@ -22,6 +22,22 @@ Eigen::MatrixXd SlamGraph::gate_marginal(const Body& b, int variable) {
 }
 
 void SlamGraph::add_sightings(const std::string& name, const SightingsInput& s, SlamListener& listener) {
+  begin_local_input(name, s.utime);
+  handle_sightings(name, s, listener);
+  end_local_input(s.utime, listener);
+}
+
+Eigen::MatrixXd SlamGraph::keyframe_gate_marginal(const Body& b, size_t index) {
+  // An update owed leaves the newest keyframes out of the factorization (no marginal yet); a few steps back is one
+  // that is in, its marginal smaller than the newer keyframe's by the odometry between them only.
+  for (size_t i = index + 1, steps = 0; i-- > 0 && steps < kGateMarginalSteps; ++steps) {
+    Eigen::MatrixXd m = gate_marginal(b, b.track.keyframes()[i].variable);
+    if (m.size() > 0) return m;
+  }
+  return {};
+}
+
+void SlamGraph::handle_sightings(const std::string& name, const SightingsInput& s, SlamListener& listener) {
   if (!options_.landmarks.enabled) return;
   const auto n = static_cast<int64_t>(s.sightings.size());
   auto it = bodies_.find(name);
@@ -68,7 +84,7 @@ void SlamGraph::add_anchored_sightings(const std::string& name, Body& b, const S
                                        const TrackPoint& anchor, SlamListener& listener) {
   const size_t pending_before = pending_.sightings.size();
   SightingsInput accepted{s.utime, s.planar, s.sensor_in_body, {}};
-  bool added = add_landmark_sightings(b, s, anchor, &accepted);
+  bool added = add_landmark_sightings(b, s, anchor, &accepted, listener);
   if (!accepted.sightings.empty()) listener.contributed({name, SightingsContribution{anchor_of(b, anchor), accepted}});
   for (const LandmarkSighting& ob : s.sightings) {
     const auto marker = options_.fleet.markers.find(ob.id);
@@ -87,11 +103,20 @@ void SlamGraph::add_anchored_sightings(const std::string& name, Body& b, const S
 }
 
 bool SlamGraph::add_landmark_sightings(Body& b, const SightingsInput& s, const TrackPoint& anchor,
-                                       SightingsInput* accepted) {
+                                       SightingsInput* accepted, SlamListener& listener) {
+  auto& landmarks = root_of(b).landmarks;  // the map of the body's frame
+  // A landmark first seen since the last update has no marginal yet: the owed update runs now rather than the
+  // sighting pass ungated (the solve period holds an update back at most once per new landmark).
+  const auto unsolved = [&](const LandmarkSighting& ob) {
+    const auto lm = landmarks.find(ob.id);
+    return lm != landmarks.end() && gate_marginal(b, lm->second.variable).size() == 0;
+  };
+  if (accepted != nullptr && owes() && !deferred_.active &&
+      std::any_of(s.sightings.begin(), s.sightings.end(), unsolved))
+    run_deferred(listener, false);
   const TrackKeyframe& kf = b.track.keyframes()[anchor.keyframe];
   const SightingModel model(b.planar, estimate(b, kf.variable), anchor, s.sensor_in_body);
   const int kind = b.planar ? 1 : 0;
-  auto& landmarks = root_of(b).landmarks;  // the map of the body's frame
   bool added = false;
   Eigen::VectorXd z;
   Eigen::MatrixXd R;
@@ -115,8 +140,8 @@ bool SlamGraph::add_landmark_sightings(Body& b, const SightingsInput& s, const T
     if (known && accepted != nullptr) {
       const Eigen::MatrixXd p_landmark = gate_marginal(b, lm->second.variable);
       if (p_landmark.size() > 0) {  // determined: gate against the estimate
-        const double d2 =
-            model.mahalanobis(ev, R, options_.landmarks.gate_odometry_scale, p_landmark, gate_marginal(b, kf.variable));
+        const double d2 = model.mahalanobis(ev, R, options_.landmarks.gate_odometry_scale, p_landmark,
+                                            keyframe_gate_marginal(b, anchor.keyframe));
         if (!(d2 <= sighting_gate_[kind])) {
           ++counters_.sightings_rejected;
           continue;

@@ -9,6 +9,10 @@
 namespace sextant::slam {
 
 void SlamGraph::save(archive::ArchiveWriter& w) {
+  // The rebuild below solves what the solve period holds back (its reports are not made): both layers continue with
+  // nothing owed and the same clock.
+  deferred_ = Deferred{};
+  for (auto& [name, b] : bodies_) b.reported = b.clock;
   w(next_variable_id_)(keyframes_since_thinning_[0])(keyframes_since_thinning_[1]);
   SlamCounters::saved(w, counters_);
   for (int kind = 0; kind < 2; ++kind) {
@@ -27,7 +31,7 @@ void SlamGraph::save(archive::ArchiveWriter& w) {
   w(static_cast<uint64_t>(bodies_.size()));
   for (const auto& [name, b] : bodies_) {
     w(name)(b.planar)(b.frame)(b.selector)(b.track)(b.early_loops)(b.early_sightings)(b.remote)(b.early_halves)(
-        b.early_seen)(std::vector<int64_t>(b.owner_thinned.begin(), b.owner_thinned.end()));
+        b.early_seen)(std::vector<int64_t>(b.owner_thinned.begin(), b.owner_thinned.end()))(b.clock)(b.reported);
     w(static_cast<uint64_t>(b.landmarks.size()));
     for (const auto& [id, l] : b.landmarks) w(id)(l.variable)(l.sightings);
   }
@@ -80,6 +84,7 @@ void SlamGraph::load(archive::ArchiveReader& r) {
     r(b.selector)(b.track)(b.early_loops)(b.early_sightings)(b.remote)(b.early_halves)(b.early_seen);
     const auto thinned = r.get<std::vector<int64_t>>();
     b.owner_thinned = std::set<int64_t>(thinned.begin(), thinned.end());
+    r(b.clock)(b.reported);
     b.smoother = &smoother_for(b.planar);
     const int variables = static_cast<int>(b.smoother->graph().variables().size());
     const auto check_variable = [&](int v, bool pose) {

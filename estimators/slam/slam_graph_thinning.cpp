@@ -24,8 +24,8 @@ void SlamGraph::maybe_thin(bool planar, SlamListener& listener) {
   if (in_graph <= budget || since < std::max(1, budget / 4)) return;
   since = 0;
   // Which keyframes stay is read off the estimate, and the rebuilt smoother starts from it: solved first when
-  // apply_all has deferred the updates.
-  if (deferred_.active) run_deferred(listener);
+  // updates are owed (apply_all's batch, the solve period).
+  if (owes()) run_deferred(listener);
   thin(planar, listener);
 }
 

@@ -219,3 +219,60 @@ TEST_CASE("slam graph: a state saved and restored continues bit for bit, and sav
   archive::ArchiveReader damaged(cut.data(), cut.size(), "cut");
   CHECK_THROWS_AS(c.load(damaged), archive::ArchiveError);
 }
+
+TEST_CASE("slam graph: the solve period holds updates back in data time and solves them past it and at flush") {
+  // Odometry every 0.1 s, every message a keyframe; a period of 0.35 s solves at 0, 0.4 and 0.8 s.
+  SlamOptions held;
+  held.solve_period_s = 0.35;
+  SlamOptions every;
+  every.solve_period_s = 0;
+  SlamGraph a(held), b(every);
+  Recorder out_a, out_b;
+  for (int i = 0; i < 10; ++i) {
+    a.add_odometry("robot", odometry(i), out_a);
+    b.add_odometry("robot", odometry(i), out_b);
+  }
+  CHECK(out_b.updates == 10);
+  CHECK(out_a.updates == 3);
+  CHECK(a.counters().updates == 3);
+  CHECK(a.counters().keyframes == 10);
+  // Still owed (0.9 s, 0.1 s after the last solve): a loop that moves the last keyframes by centimetres waits too.
+  LoopInput l = loop(2, 9, 0.0, 0.03);
+  l.information = Matrix6d::Identity() * 1e4;
+  a.add_loop("robot", l, out_a);
+  b.add_loop("robot", l, out_b);
+  CHECK(out_a.updates == 3);
+  CHECK(a.counters().loops_accepted == 1);
+  const double moved_b = b.keyframes("robot")[9].pose.translation().y();
+  CHECK(std::abs(moved_b) > 0.01);                                         // the loop moved b's last keyframe
+  CHECK(std::abs(a.keyframes("robot")[9].pose.translation().y()) < 1e-9);  // not yet a's
+  MESSAGE("moved " << moved_b);
+
+  // A saved and restored layer owes nothing (the save refactorizes) and keeps the clock: both continue alike.
+  archive::ArchiveWriter w;
+  a.save(w);
+  SlamGraph c(held);
+  archive::ArchiveReader r(w.data().data(), w.data().size(), "test");
+  c.load(r);
+  Recorder out_c;
+  for (SlamGraph* g : {&a, &c}) {
+    Recorder& o = g == &a ? out_a : out_c;
+    g->add_odometry("robot", odometry(10), o);  // 1.0 s: within the period of the save's 0.9 s, held back
+    g->add_sightings("robot", sighting_of(10, 7, 6.0, 1.0), o);
+    g->flush(o);
+    g->flush(o);  // nothing owed: nothing more
+  }
+  CHECK(out_c.updates == 1);
+  b.add_odometry("robot", odometry(10), out_b);
+  b.add_sightings("robot", sighting_of(10, 7, 6.0, 1.0), out_b);
+  // Solved at the flush: the same answer as one update after every input (the same factors at their optimum).
+  const auto ka = a.keyframes("robot"), kb = b.keyframes("robot"), kc = c.keyframes("robot");
+  REQUIRE(ka.size() == kb.size());
+  REQUIRE(kc.size() == kb.size());
+  for (size_t k = 0; k < ka.size(); ++k) {
+    CHECK((ka[k].pose.translation() - kb[k].pose.translation()).norm() < 1e-4);
+    CHECK(ka[k].pose.translation() == kc[k].pose.translation());
+  }
+  REQUIRE(a.landmarks("robot").size() == 1);
+  CHECK((a.landmarks("robot")[0].position - b.landmarks("robot")[0].position).norm() < 1e-4);
+}
