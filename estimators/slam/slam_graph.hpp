@@ -30,7 +30,8 @@
 //    it needs.
 // One smoother per kind of body (planar, 3-D), created with the first such body (the robust kernel's width depends
 // on the loops' dimension).  Every smoother update is reported to the listener, in order, while its estimates are
-// current.
+// current.  The smoother updates after every input, or with SlamOptions::solve_period_s at most once per period of a
+// map frame's data time (what arrives between enters with the next update; flush() makes the one still owed).
 //
 // Fleet (slam_graph_fleet.cpp; FleetOptions): the bodies of one kind are one fleet.  Each body starts in a map
 // frame of its own (named by the body; its first keyframe fixed).  Landmarks belong to a frame: bodies in one frame

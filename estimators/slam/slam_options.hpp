@@ -86,8 +86,8 @@ struct SlamOptions {
   /// Solve cadence, in data time, per map frame: with a period > 0 a frame's updates are made at most once per period
   /// for the local inputs, and what arrives in between enters with the next one (fuse's optimization_frequency, an
   /// iSAM2 front end's update per keyframe).  A fleet of N bodies in one frame then costs one update per period, not
-  /// one per message of each body (8 simulated robots, 5 minutes: 63,793 updates and 46 s of replay at 0, 5,447
-  /// and 21 s at 0.05; bench/RESULTS.md, "A simulated fleet in lifelong mode").  The owed update runs with the frame's
+  /// one per message of each body (8 simulated robots, 5 minutes: 63,793 updates and 34 s of replay at 0, 5,461
+  /// and 20 s at 0.05; bench/RESULTS.md, "A simulated fleet in lifelong mode").  The owed update runs with the frame's
   /// first local input past the period, before a placement, a thinning or a gate reads an estimate that is not
   /// solved yet (a loop about a new keyframe, a landmark's second sighting), and at flush().  0 (the default): after
   /// every input, the freshest estimate; and bodies in separate frames that share a smoother never move each other's
