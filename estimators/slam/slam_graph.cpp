@@ -133,6 +133,10 @@ bool SlamGraph::frame_owes(const std::string& frame) const {
   return false;
 }
 
+void SlamGraph::solve_owed(SlamListener& listener) {
+  if (owes() && !deferred_.active) run_deferred(listener, false);
+}
+
 void SlamGraph::flush(SlamListener& listener) {
   if (owes() && !deferred_.active) run_deferred(listener);
 }
@@ -295,8 +299,7 @@ void SlamGraph::handle_loop(const std::string& name, const LoopInput& l, SlamLis
   // The gate reads the estimate of both ends: a keyframe added since the last update (the newest, which a matcher's
   // answer is usually about) is solved first, as it would be without the solve period.
   const auto solved = [&](size_t k) { return b.smoother->in_system(b.track.keyframes()[k].variable); };
-  if (owes() && !deferred_.active && (!solved(end_from->keyframe) || !solved(end_to->keyframe)))
-    run_deferred(listener, false);
+  if (!solved(end_from->keyframe) || !solved(end_to->keyframe)) solve_owed(listener);
   const KeyframeLoop loop = loop_on_keyframes(b.planar, l.relative, l.information, *end_from, *end_to);
   if (loop.widened) ++counters_.loops_on_thinned;
   const LoopContribution c{b.track.keyframes()[end_from->keyframe].id, b.track.keyframes()[end_to->keyframe].id, loop.z,

@@ -325,6 +325,9 @@ class SlamGraph {
   /// once.  Frames apart stay apart: another frame's inputs never move when this one's updates are reported.
   bool waits_for_period(const Body& b) const;
   bool owes() const { return deferred_.dirty[0] || deferred_.dirty[1]; }
+  /// A gate is about to read an estimate that an owed update has not solved yet: the update is made now (reported to
+  /// the frames whose period has passed; the others' reports stay owed).  Nothing during apply_all's batch.
+  void solve_owed(SlamListener& listener);
   /// Whether an update report is owed to a body of `frame`.
   bool frame_owes(const std::string& frame) const;
   /// A local input of `body` at `utime`, before it is handled: its frame's clock.

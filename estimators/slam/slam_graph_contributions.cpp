@@ -312,17 +312,19 @@ int SlamGraph::apply_all(const std::vector<GraphContribution>& contributions, Sl
 void SlamGraph::run_deferred(SlamListener& listener, bool all) {
   const Deferred owed = std::move(deferred_);
   deferred_ = Deferred{};  // inactive while the owed work runs: a join it makes updates at once
-  // Which frames report now: decided before any report moves a frame's clock.
+  // Which frames report now: decided before any report moves a frame's clock.  Without a period (or outside a
+  // local input) none waits.
+  const bool every_frame = all || !local_input_ || !(options_.solve_period_s > 0);
   std::set<std::string> due;
   for (const auto& [name, b] : bodies_)
-    if (b.frame == name && (all || !waits_for_period(b))) due.insert(name);
+    if (!every_frame && b.frame == name && !waits_for_period(b)) due.insert(name);
   graph::IncrementalStatus st[2];
   for (int kind = 0; kind < 2; ++kind)
     if (owed.dirty[kind] && smoothers_[kind]) st[kind] = solve(*smoothers_[kind]);
   const auto report = [&](const std::string& name, const Body& b, int64_t utime, bool as_frame) {
     const int kind = b.planar ? 1 : 0;
     if (!owed.dirty[kind] || !st[kind].ok) return;
-    if (!due.contains(b.frame)) {  // stays owed, and so does an update of its smoother to report with
+    if (!every_frame && !due.contains(b.frame)) {  // stays owed, and so does an update of its smoother to report with
       deferred_.dirty[kind] = true;
       as_frame ? void(deferred_.frames.insert(b.frame)) : void(deferred_.updated[name] = utime);
       return;

@@ -111,9 +111,8 @@ bool SlamGraph::add_landmark_sightings(Body& b, const SightingsInput& s, const T
     const auto lm = landmarks.find(ob.id);
     return lm != landmarks.end() && gate_marginal(b, lm->second.variable).size() == 0;
   };
-  if (accepted != nullptr && owes() && !deferred_.active &&
-      std::any_of(s.sightings.begin(), s.sightings.end(), unsolved))
-    run_deferred(listener, false);
+  if (accepted != nullptr && owes() && std::any_of(s.sightings.begin(), s.sightings.end(), unsolved))
+    solve_owed(listener);
   const TrackKeyframe& kf = b.track.keyframes()[anchor.keyframe];
   const SightingModel model(b.planar, estimate(b, kf.variable), anchor, s.sensor_in_body);
   const int kind = b.planar ? 1 : 0;

@@ -246,7 +246,6 @@ TEST_CASE("slam graph: the solve period holds updates back in data time and solv
   const double moved_b = b.keyframes("robot")[9].pose.translation().y();
   CHECK(std::abs(moved_b) > 0.01);                                         // the loop moved b's last keyframe
   CHECK(std::abs(a.keyframes("robot")[9].pose.translation().y()) < 1e-9);  // not yet a's
-  MESSAGE("moved " << moved_b);
 
   // A saved and restored layer owes nothing (the save refactorizes) and keeps the clock: both continue alike.
   archive::ArchiveWriter w;
