@@ -22,7 +22,7 @@ namespace {
 using namespace sextant;
 
 struct Options {
-  std::string log, config, tum_out, kitti_out, g2o_out, out_log, mcap_out, estimator, report;
+  std::string log, config, tum_out, kitti_out, g2o_out, out_log, mcap_out, estimator, body, report;
   bool json = false;
   bool realtime = false;
   bool tolerate_damage = false;
@@ -145,6 +145,8 @@ void add_options(CLI::App* cmd, Options& o) {
                   "write the log's inputs and everything published to an MCAP file for "
                   "Foxglove (the topics of `sextant foxglove`)");
   cmd->add_option("--estimator", o.estimator, "which estimator's poses to export (default: the primary)");
+  cmd->add_option("--body", o.body,
+                  "export only this body's poses (a log of several robots interleaves them; default: every body)");
   cmd->add_flag("--json", o.json, "print a JSON summary on stdout");
   cmd->add_option(
          "--segment-seconds", o.segment_seconds,
@@ -206,9 +208,10 @@ class StreamedOutputs {
     // The estimator to export is known once the engine is built (the primary one by default): its name is matched
     // against each pose's.
     export_estimator_ = o.estimator;
+    export_body_ = o.body;
     if (export_estimator_.empty()) export_estimator_ = engine::Engine(cfg.engine).primary_estimator();
     ro.on_fused_pose = [this](const engine::FusedPose& p) {
-      if (p.estimator != export_estimator_) return;
+      if (p.estimator != export_estimator_ || (!export_body_.empty() && p.source != export_body_)) return;
       for (auto& w : writers_) w->add({static_cast<double>(p.utime) * 1e-6, p.pose});
     };
   }
@@ -225,7 +228,7 @@ class StreamedOutputs {
   std::unique_ptr<runtime::LogWriter> out_log_;
   std::unique_ptr<viewer::ReplayMcapRecorder> mcap_;
   std::vector<std::unique_ptr<tools::TrajectoryWriter>> writers_;
-  std::string export_estimator_;
+  std::string export_estimator_, export_body_;
 };
 
 // The one line without --json: events, data time, wall time, poses exported, inputs rejected.

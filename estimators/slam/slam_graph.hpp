@@ -27,7 +27,7 @@
 //    LandmarkOptions::max_waiting messages) for the odometry message after them, where the anchor's covariance is
 //    exact (the covariance since the keyframe plus the interpolated part of the increment);
 //  - lifelong mode (slam_graph_thinning.cpp): over a kind of body's keyframe budget the graph is thinned to the places
-//    it needs.
+//    it needs; from the first thinning on, a map frame is held where the graph had it (not by its first keyframe).
 // One smoother per kind of body (planar, 3-D), created with the first such body (the robust kernel's width depends
 // on the loops' dimension).  Every smoother update is reported to the listener, in order, while its estimates are
 // current.  The smoother updates after every input, or with SlamOptions::solve_period_s at most once per period of a
@@ -398,7 +398,8 @@ class SlamGraph {
 
   /// Lifelong thinning (slam_graph_thinning.cpp): over the kind's budget, rebuild the smoother of that kind with the
   /// keyframes keyframes_to_keep() keeps (estimators/keyframe/keyframe_thinning.hpp): odometry composed across the
-  /// thinned ones, loops and sightings of thinned keyframes dropped, landmarks left without sightings dropped.
+  /// thinned ones, loops and sightings of thinned keyframes dropped, landmarks left without sightings dropped; each
+  /// map frame's gauge moves to its best-tied kept keyframe, fixed at its current estimate (choose_anchors).
   /// A local body's thinned keyframes are contributed (KeyframesThinned); a remote body's are its owner's.
   void maybe_thin(bool planar, SlamListener& listener);
   void thin(bool planar, SlamListener& listener);
@@ -408,6 +409,7 @@ class SlamGraph {
   struct ThinningPlan;
   bool choose_kept_keyframes(ThinningPlan& p);
   void choose_kept_factors(ThinningPlan& p);
+  void choose_anchors(ThinningPlan& p);
   void rebuild_smoother(ThinningPlan& p);
   void commit_thinning(ThinningPlan& p);
 

@@ -47,6 +47,7 @@ struct SlamGraph::ThinningPlan {
   std::vector<char> keep_var;                  // by old variable index
   std::map<Body*, std::vector<char>> keep_of;  // per body of this kind: by keyframe
   std::vector<char> keep_factor;               // loops and sightings that stay (odometry is recomposed)
+  std::vector<char> anchor;                    // by old variable index: the keyframes that hold a frame's gauge
   std::unique_ptr<graph::IncrementalSmoother> fresh;
   std::vector<FactorTag> fresh_tags;
   std::vector<int> remap;  // old variable index -> new, -1 when it leaves
@@ -67,6 +68,7 @@ void SlamGraph::thin(bool planar, SlamListener& listener) {
   if (p.tags.size() != p.factors.size()) return;  // cannot happen: every factor goes through add_factor
   if (!choose_kept_keyframes(p)) return;
   choose_kept_factors(p);
+  choose_anchors(p);
   try {
     rebuild_smoother(p);
   } catch (const std::invalid_argument&) {
@@ -150,15 +152,49 @@ void SlamGraph::choose_kept_factors(ThinningPlan& p) {
     if (is_landmark[v] && sightings_left[v] == 0) p.keep_var[v] = 0;
 }
 
-// 3.-5. The new smoother: the variables that stay at their current estimates, in the old order; per body the kept
+// 3. Which keyframe holds each frame's gauge in the thinned graph: of the keyframes that stay, the one with the most
+//    loops and sightings that stay (the newest of equals), fixed where the whole graph's estimate has it now, so that
+//    the frame stays where the whole graph put it.  Held at its root's first keyframe, the frame would be re-estimated
+//    from what thinning leaves of that keyframe's ties to the map (one composed odometry edge, when it saw nothing
+//    itself): on MRCLAM's five robots the first thinning turned the map 14 degrees about it, and every pose
+//    published after it with the map.  Held at the root's newest keyframe, a later thinning still turned it 11
+//    degrees.  The keyframe tied to the map by the most measurements is the one whose place in it the thinned graph
+//    knows best.
+void SlamGraph::choose_anchors(ThinningPlan& p) {
+  p.anchor.assign(p.vars.size(), 0);
+  std::vector<int> ties(p.vars.size(), 0);  // kept loops and sightings per variable
+  for (size_t f = 0; f < p.factors.size(); ++f)
+    if (p.keep_factor[f])
+      for (int v : p.factors[f]->variables()) ++ties[static_cast<size_t>(v)];
+  std::map<std::string, int> best;  // frame -> its keyframe with the most ties (the newest of equals)
+  for (auto& [name, b] : bodies_) {
+    if (b.planar != p.planar) continue;
+    const auto& kf = b.track.keyframes();
+    for (size_t i = 0; i < kf.size(); ++i) {
+      if (!p.keep_of.at(&b)[i]) continue;
+      const int v = kf[i].variable;
+      auto [it, fresh] = best.emplace(b.frame, v);
+      if (!fresh && (ties[static_cast<size_t>(v)] > ties[static_cast<size_t>(it->second)] ||
+                     (ties[static_cast<size_t>(v)] == ties[static_cast<size_t>(it->second)] && v > it->second)))
+        it->second = v;
+    }
+  }
+  for (const auto& [frame, v] : best) p.anchor[static_cast<size_t>(v)] = 1;
+}
+
+// 4.-6. The new smoother: the variables that stay at their current estimates, in the old order; per body the kept
 // keyframes with their odometry edges composed across the thinned ones (and the thinned records); the loops and
 // sightings that stay, in their old order, with their kernels.  Throws std::invalid_argument when a factor cannot
 // enter it.
 void SlamGraph::rebuild_smoother(ThinningPlan& p) {
   p.fresh = std::make_unique<graph::IncrementalSmoother>(p.old.options());
   p.remap.assign(p.vars.size(), -1);
-  for (size_t v = 0; v < p.vars.size(); ++v)
-    if (p.keep_var[v]) p.remap[v] = p.fresh->add_variable(p.vars[v]);
+  for (size_t v = 0; v < p.vars.size(); ++v) {
+    if (!p.keep_var[v]) continue;
+    graph::Variable x = p.vars[v];
+    if (x.is_pose()) x.fixed = p.anchor[v] != 0;
+    p.remap[v] = p.fresh->add_variable(x);
+  }
   for (auto& [b, keep] : p.keep_of) {
     ThinningPlan::BodyPlan plan{b, {}, {}};
     SE3 edge;
@@ -203,7 +239,7 @@ void SlamGraph::rebuild_smoother(ThinningPlan& p) {
   }
 }
 
-// 6. Commit: the counters, the bodies' tracks and landmarks on the new variables, the new smoother in place.
+// 7. Commit: the counters, the bodies' tracks and landmarks on the new variables, the new smoother in place.
 void SlamGraph::commit_thinning(ThinningPlan& p) {
   for (size_t f = 0; f < p.factors.size(); ++f) {
     if (p.keep_factor[f] || p.tags[f].role == FactorRole::kOdometry) continue;
