@@ -48,6 +48,7 @@ struct SlamGraph::ThinningPlan {
   std::map<Body*, std::vector<char>> keep_of;  // per body of this kind: by keyframe
   std::vector<char> keep_factor;               // loops and sightings that stay (odometry is recomposed)
   std::vector<char> anchor;                    // by old variable index: the keyframes that hold a frame's gauge
+  int window = 0;                              // each body's newest keyframes that stay whole
   std::unique_ptr<graph::IncrementalSmoother> fresh;
   std::vector<FactorTag> fresh_tags;
   std::vector<int> remap;  // old variable index -> new, -1 when it leaves
@@ -123,6 +124,7 @@ bool SlamGraph::choose_kept_keyframes(ThinningPlan& p) {
       candidates.push_back({k.id, p.vars[static_cast<size_t>(k.variable)].as_se3()});
     KeyframeThinningOptions thinning = options_.lifelong.thinning;
     thinning.window = std::max(1, options_.lifelong.budget(p.planar).window / std::max(bodies, 1));
+    p.window = thinning.window;
     auto keep = b.remote ? owner_kept(b) : keyframes_to_keep(candidates, p.planar, thinning);
     for (size_t i = 0; i < keep.size(); ++i)
       if (!keep[i]) p.keep_var[static_cast<size_t>(b.track.keyframes()[i].variable)] = 0, any = true;
@@ -152,34 +154,40 @@ void SlamGraph::choose_kept_factors(ThinningPlan& p) {
     if (is_landmark[v] && sightings_left[v] == 0) p.keep_var[v] = 0;
 }
 
-// 3. Which keyframe holds each frame's gauge in the thinned graph: of the keyframes that stay, the one with the most
-//    loops and sightings that stay (the newest of equals), fixed where the whole graph's estimate has it now, so that
-//    the frame stays where the whole graph put it.  Held at its root's first keyframe, the frame would be re-estimated
-//    from what thinning leaves of that keyframe's ties to the map (one composed odometry edge, when it saw nothing
-//    itself): on MRCLAM's five robots the first thinning turned the map 14 degrees about it, and every pose
-//    published after it with the map.  Held at the root's newest keyframe, a later thinning still turned it 11
-//    degrees.  The keyframe tied to the map by the most measurements is the one whose place in it the thinned graph
-//    knows best.
+// 3. Which keyframe holds each frame's gauge in the thinned graph.  Its root body's first keyframe, as before, when
+//    the loops and sightings that stay tie it to the map (residual rows at least twice its dimension: its own
+//    measurements determine it).  Else the settled keyframe (kept, older than its body's window) of the frame with
+//    the most such rows, fixed where the whole graph's estimate has it now.  A first keyframe that saw little is tied
+//    to the map, once its neighbours are thinned, by one composed odometry edge, and a frame held by it is
+//    re-estimated from that edge: on MRCLAM's five robots the first thinning turned the map 14 degrees about it,
+//    and every pose published after it with the map.  Held by a keyframe of the window instead, the frame follows
+//    that keyframe's estimate of the moment, and later loops that correct it move the old map (simulated 60-minute
+//    runs: 1-2 degrees and 0.2-0.4 m).
 void SlamGraph::choose_anchors(ThinningPlan& p) {
   p.anchor.assign(p.vars.size(), 0);
-  std::vector<int> ties(p.vars.size(), 0);  // kept loops and sightings per variable
+  std::vector<int> rows(p.vars.size(), 0);  // residual rows of the loops and sightings that stay, per variable
   for (size_t f = 0; f < p.factors.size(); ++f)
     if (p.keep_factor[f])
-      for (int v : p.factors[f]->variables()) ++ties[static_cast<size_t>(v)];
-  std::map<std::string, int> best;  // frame -> its keyframe with the most ties (the newest of equals)
-  for (auto& [name, b] : bodies_) {
-    if (b.planar != p.planar) continue;
-    const auto& kf = b.track.keyframes();
-    for (size_t i = 0; i < kf.size(); ++i) {
-      if (!p.keep_of.at(&b)[i]) continue;
-      const int v = kf[i].variable;
-      auto [it, fresh] = best.emplace(b.frame, v);
-      if (!fresh && (ties[static_cast<size_t>(v)] > ties[static_cast<size_t>(it->second)] ||
-                     (ties[static_cast<size_t>(v)] == ties[static_cast<size_t>(it->second)] && v > it->second)))
-        it->second = v;
+      for (int v : p.factors[f]->variables()) rows[static_cast<size_t>(v)] += p.factors[f]->residual_dim();
+  std::map<std::string, int> anchor;  // frame -> its anchor
+  for (auto& [name, b] : bodies_)
+    if (b.planar == p.planar && b.frame == name && !b.track.empty()) {
+      const int first = b.track.keyframes().front().variable;
+      anchor[name] = first;
+      if (rows[static_cast<size_t>(first)] >= 2 * p.vars[static_cast<size_t>(first)].dim()) continue;
+      for (auto& [other, o] : bodies_) {
+        if (o.frame != name || o.track.empty()) continue;
+        const auto& kf = o.track.keyframes();
+        const std::vector<char>& keep = p.keep_of.at(&o);
+        const size_t settled =
+            kf.size() > static_cast<size_t>(p.window) ? kf.size() - static_cast<size_t>(p.window) : 0;
+        for (size_t i = 0; i < settled; ++i) {
+          const auto v = static_cast<size_t>(kf[i].variable);
+          if (keep[i] && rows[v] > rows[static_cast<size_t>(anchor[name])]) anchor[name] = kf[i].variable;
+        }
+      }
     }
-  }
-  for (const auto& [frame, v] : best) p.anchor[static_cast<size_t>(v)] = 1;
+  for (const auto& [frame, v] : anchor) p.anchor[static_cast<size_t>(v)] = 1;
 }
 
 // 4.-6. The new smoother: the variables that stay at their current estimates, in the old order; per body the kept
