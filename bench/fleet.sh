@@ -68,16 +68,18 @@ err, seconds, robots = open(sys.argv[4]).read().strip(), sys.argv[5], sys.argv[6
 num = lambda x: "n/a" if x is None else "%.3f" % x
 print(f"# Fleet benchmark: MRCLAM Dataset 7, robots {robots}\n")
 print("| robot | (a) single-robot graph, online ATE [m] | (a) single-robot graphs, fleet-frame ATE [m] | "
-      "(b) fleet graph, online ATE [m] | (b) / (a) online | (b) online, since joined [m] | (b) fleet-frame ATE [m] | "
+      "(b) fleet graph, online ATE [m] | (b) / (a) online | (b) online, since joined [m] | since joined / (a) | (b) fleet-frame ATE [m] | "
       "(b) own-alignment ATE [m] | (b) map frame | (c) EKF localization, surveyed map [m] |")
-print("|---|---|---|---|---|---|---|---|---|---|")
+print("|---|---|---|---|---|---|---|---|---|---|---|")
 for body, (graph, ekf) in single.items():
     a = sf.get("robots", {}).get(body, {})
     b = fl.get("robots", {}).get(body, {})
     online = b.get("online_ate_rmse")
     ratio = "n/a" if online is None else "%.2f" % (online / float(graph))
+    joined = b.get("online_joined_ate_rmse")
+    joined_ratio = "n/a" if joined is None else "%.2f" % (joined / float(graph))
     print(f"| {body} | {graph} | {num(a.get('fleet_ate_rmse'))} | {num(online)} | {ratio} | "
-          f"{num(b.get('online_joined_ate_rmse'))} | "
+          f"{num(joined)} | {joined_ratio} | "
           f"{num(b.get('fleet_ate_rmse'))} | {num(b.get('own_ate_rmse'))} | {b.get('frame', 'n/a') or '(own)'} | {ekf} |")
 print()
 print(f"Landmarks under the one alignment: (a) {sf.get('landmarks_matched', 0)} of map frame "

@@ -399,7 +399,8 @@ class SlamGraph {
   /// Lifelong thinning (slam_graph_thinning.cpp): over the kind's budget, rebuild the smoother of that kind with the
   /// keyframes keyframes_to_keep() keeps (estimators/keyframe/keyframe_thinning.hpp): odometry composed across the
   /// thinned ones, loops and sightings of thinned keyframes dropped, landmarks left without sightings dropped; each
-  /// map frame's gauge moves to its best-tied kept keyframe, fixed at its current estimate (choose_anchors).
+  /// map frame's gauge stays on its root's first keyframe while kept measurements determine it, else moves to its
+  /// best-tied settled keyframe, fixed at its current estimate (choose_anchors).
   /// A local body's thinned keyframes are contributed (KeyframesThinned); a remote body's are its owner's.
   void maybe_thin(bool planar, SlamListener& listener);
   void thin(bool planar, SlamListener& listener);
