@@ -159,7 +159,7 @@ void SlamGraph::choose_kept_factors(ThinningPlan& p) {
 //    measurements determine it).  Else the settled keyframe (kept, older than its body's window) of the frame with
 //    the most such rows, fixed where the whole graph's estimate has it now.  A first keyframe that saw little is tied
 //    to the map, once its neighbours are thinned, by one composed odometry edge, and a frame held by it is
-//    re-estimated from that edge: on MRCLAM's five robots the first thinning turned the map 14 degrees about it,
+//    re-estimated from that edge: on MRCLAM's five robots the first thinning turned the map 15 degrees about it,
 //    and every pose published after it with the map.  Held by a keyframe of the window instead, the frame follows
 //    that keyframe's estimate of the moment, and later loops that correct it move the old map (simulated 60-minute
 //    runs: 1-2 degrees and 0.2-0.4 m).
