@@ -150,6 +150,9 @@ void read_fleet(Section& s, engine::GraphConfig& c) {
   p.get("max_evidence", o.placement.max_evidence, int_in_range(2, 256));
   p.reject_unknown_keys();
   read_exchange(f, c);
+  // Daemons that exchange contributions keep every frame's gauge on its root's first keyframe, the same on each
+  // (slam_options.hpp, LifelongOptions::hold_frame).
+  if (c.fleet_exchange.enabled) c.lifelong.hold_frame = false;
   f.reject_unknown_keys();
 }
 

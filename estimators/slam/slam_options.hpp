@@ -41,6 +41,13 @@ struct LifelongOptions {
   Budget planar{2000, 1000};
   Budget spatial{1000, 500};
   KeyframeThinningOptions thinning;  // cell_size and heading_sector; its window is the budget's of the kind
+  /// Where a thinning leaves each map frame's gauge (slam_graph_thinning.cpp, choose_anchors): true, on a settled
+  /// keyframe at its current estimate when the root's first keyframe is no longer tied to the map by what stays, so
+  /// the frame stays where the whole graph had it; false, always on the first keyframe, the frame re-estimated from
+  /// what stays.  Daemons of one fleet that exchange contributions thin at their own moments, and frames held at
+  /// each one's estimate of its moment differ by centimetres, so the fleet exchange sets it false
+  /// (graph_config_reader.cpp): every daemon's frame is then the same keyframe's.
+  bool hold_frame = true;
   const Budget& budget(bool planar_kind) const { return planar_kind ? planar : spatial; }
 };
 

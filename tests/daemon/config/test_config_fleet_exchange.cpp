@@ -28,6 +28,7 @@ TEST_CASE("config: fleet exchange off by default, on with its members and every 
   const auto d = parse_daemon_config("", "t.yaml");
   CHECK_FALSE(d.engine.graph.fleet_exchange.enabled);
   CHECK(d.engine.graph.fleet_exchange.self.empty());
+  CHECK(d.engine.graph.lifelong.hold_frame);  // one daemon: a thinning holds the frame where it was
   CHECK(d.channels.fleet == "FLEET");
   CHECK(d.channels.fleet_control == "FLEET_CONTROL");
   const auto c = parse_daemon_config(exchange("        enabled: true\n"
@@ -48,6 +49,7 @@ TEST_CASE("config: fleet exchange off by default, on with its members and every 
                                      "t.yaml");
   const auto& x = c.engine.graph.fleet_exchange;
   CHECK(x.enabled);
+  CHECK_FALSE(c.engine.graph.lifelong.hold_frame);  // every daemon's frame on the same first keyframe
   CHECK(x.self == "alpha");
   CHECK(x.members == std::vector<std::string>{"alpha", "beta"});
   CHECK(x.retain == 500);
