@@ -222,13 +222,21 @@ void SlamGraph::forget(const std::string& name) {
   const bool planar = it->second.planar;
   const int kind = planar ? 1 : 0;
   moved_frames_.erase(name);
+  const std::string frame = it->second.frame;
   const std::string next_root = hand_over_frame(name);
   std::vector<graph::Variable> vars = smoothers_[kind]->graph().variables();
   std::vector<int> merge_into(vars.size(), -1);
-  for (const auto& k : it->second.track.keyframes()) merge_into[static_cast<size_t>(k.variable)] = kDropVariable;
+  bool held_gauge = false;  // the frame's gauge was one of its keyframes: its root's first, or a thinning's anchor
+  for (const auto& k : it->second.track.keyframes()) {
+    merge_into[static_cast<size_t>(k.variable)] = kDropVariable;
+    held_gauge = held_gauge || vars[static_cast<size_t>(k.variable)].fixed;
+  }
   for (const auto& [id, l] : it->second.landmarks) merge_into[static_cast<size_t>(l.variable)] = kDropVariable;
-  if (!next_root.empty() && !bodies_.at(next_root).track.empty())  // the frame's gauge moves to its new root
-    vars[static_cast<size_t>(bodies_.at(next_root).track.keyframes().front().variable)].fixed = true;
+  // Then the gauge moves to the first keyframe of the frame's root (its new root when the body was it); a gauge on
+  // another body's keyframe (slam_graph_thinning.cpp, choose_anchors) stays.
+  const std::string root = frame == name ? next_root : frame;
+  if (held_gauge && !root.empty() && !bodies_.at(root).track.empty())
+    vars[static_cast<size_t>(bodies_.at(root).track.keyframes().front().variable)].fixed = true;
   drop_unseen_landmarks(kind, merge_into);
   Rebuilt fresh = rebuilt(kind, vars, merge_into);
   const auto involves = [&](const auto& x) {
