@@ -14,6 +14,9 @@ source "$here/node_env.bash"
 if [ "${1:-}" = --inside ]; then  # in the namespace: bridge, clients, daemon, player
   work=$2
   trap 'kill $(jobs -p) 2> /dev/null || true' EXIT  # whatever fails, nothing is left running
+  # TCP buffers of this namespace only, at most 256 KB each way: with the kernel's own (a 32 MB receive buffer here)
+  # the stalled client's socket took the whole run, the bridge's queue never filled, and the test failed 2 runs in 9.
+  sysctl -qw net.ipv4.tcp_rmem="4096 65536 262144" net.ipv4.tcp_wmem="4096 65536 262144"
   "$SEXTANT_BIN/sextant" foxglove --port 8765 --queue 1024 --stats-seconds 1 > "$work/bridge.log" 2>&1 &
   bridge=$!
   for _ in $(seq 100); do grep -q "serving on" "$work/bridge.log" && break; sleep 0.1; done
