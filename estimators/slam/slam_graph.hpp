@@ -27,7 +27,7 @@
 //    LandmarkOptions::max_waiting messages) for the odometry message after them, where the anchor's covariance is
 //    exact (the covariance since the keyframe plus the interpolated part of the increment);
 //  - lifelong mode (slam_graph_thinning.cpp): over a kind of body's keyframe budget the graph is thinned to the places
-//    it needs; from the first thinning on, a map frame is held where the graph had it (not by its first keyframe).
+//    it needs, each map frame held where the whole graph had it (choose_anchors; LifelongOptions::hold_frame).
 // One smoother per kind of body (planar, 3-D), created with the first such body (the robust kernel's width depends
 // on the loops' dimension).  Every smoother update is reported to the listener, in order, while its estimates are
 // current.  The smoother updates after every input, or with SlamOptions::solve_period_s at most once per period of a

@@ -172,10 +172,10 @@ void SlamGraph::choose_anchors(ThinningPlan& p) {
   std::map<std::string, int> anchor;  // frame -> its anchor
   for (auto& [name, b] : bodies_)
     if (b.planar == p.planar && b.frame == name && !b.track.empty()) {
-      const int first = b.track.keyframes().front().variable;
-      anchor[name] = first;
+      int& best = anchor[name];
+      best = b.track.keyframes().front().variable;
       if (!options_.lifelong.hold_frame ||
-          rows[static_cast<size_t>(first)] >= 2 * p.vars[static_cast<size_t>(first)].dim())
+          rows[static_cast<size_t>(best)] >= 2 * p.vars[static_cast<size_t>(best)].dim())
         continue;
       for (auto& [other, o] : bodies_) {
         if (o.frame != name || o.track.empty()) continue;
@@ -185,7 +185,7 @@ void SlamGraph::choose_anchors(ThinningPlan& p) {
             kf.size() > static_cast<size_t>(p.window) ? kf.size() - static_cast<size_t>(p.window) : 0;
         for (size_t i = 0; i < settled; ++i) {
           const auto v = static_cast<size_t>(kf[i].variable);
-          if (keep[i] && rows[v] > rows[static_cast<size_t>(anchor[name])]) anchor[name] = kf[i].variable;
+          if (keep[i] && rows[v] > rows[static_cast<size_t>(best)]) best = kf[i].variable;
         }
       }
     }

@@ -44,15 +44,16 @@ inline OdometryInput odometry_at(const Robot& r, double t) {
   return o;
 }
 
-/// Exact range/bearing sightings of every point within 5 m (ids: the map's keys).
-inline SightingsInput sightings_at(const Robot& r, double t, const std::map<int64_t, Eigen::Vector2d>& points) {
+/// Exact range/bearing sightings of every point within `max_range` metres (ids: the map's keys).
+inline SightingsInput sightings_at(const Robot& r, double t, const std::map<int64_t, Eigen::Vector2d>& points,
+                                   double max_range = 5) {
   SightingsInput s;
   s.utime = static_cast<int64_t>(std::llround(t * 1e6)) + 1000000;
   s.planar = true;
   const SE2 x = r.truth(t);
   for (const auto& [id, p] : points) {
     const Eigen::Vector2d l = x.inverse().act(p);
-    if (l.norm() > 5 || l.norm() < 0.1) continue;
+    if (l.norm() > max_range || l.norm() < 0.1) continue;
     LandmarkSighting o;
     o.id = id;
     o.range = l.norm();
