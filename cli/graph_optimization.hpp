@@ -47,7 +47,8 @@ struct GraphOptimizationOptions {
   double tolerance = 1e-6;                               // stop when chi2 decreases by less than this fraction
   bool incremental = false;                              // one pose per update through the incremental smoother
   double relin_translation = 0.1, relin_rotation = 0.1;  // incremental: relinearization thresholds (m, rad)
-  int relin_skip = 1;  // incremental: look for variables to relinearize every this many updates
+  int relin_skip = 1;      // incremental: look for variables to relinearize every this many updates
+  std::string step_trace;  // incremental: a CSV file of every update (write_step_trace's columns); empty: none
 };
 
 struct GraphOptimizationResult {

@@ -1,6 +1,6 @@
 // sextant optimize IN.g2o [-o OUT.g2o] [--solver gn|lm] [--init auto|file|odometry|chordal|sgd]
 //                         [--robust none|huber|cauchy|dcs] [--information reject|repair|diagonal] [--max-iters N]
-//                         [--incremental] [--json]
+//                         [--incremental [--step-trace CSV]] [--json]
 #include "cli/command.hpp"
 #include "cli/graph_optimization.hpp"
 
@@ -74,6 +74,9 @@ void add_options(CLI::App* cmd, Args& a) {
          "(iSAM2's relinearizeSkip, 10 by its default; 1, the default here, keeps every update's estimate at the "
          "batch optimum)")
       ->check(CLI::PositiveNumber);
+  cmd->add_option("--step-trace", o->step_trace,
+                  "incremental: write one CSV line per update (time, factors entered and relinearized, rebuilds, "
+                  "nnz of L) to this file");
 }
 
 // The graph, its bad information matrices refused (exit 2, with the options that would repair them) or repaired

@@ -51,6 +51,14 @@ IncrementalStatus building(const SmootherState& s) {
   return st;
 }
 
+// Rebuilds (reorderings, relinearization of everything) are spread over updates in a system this large.
+bool spreads_rebuilds(const SmootherState& s) {
+  const IncrementalOptions& o = s.options;
+  return o.reorder_spread > 0 && (static_cast<int>(s.graph.variables().size()) > o.reorder_spread_above ||
+                                  s.fx.nonzeros() > static_cast<size_t>(o.reorder_spread_nonzeros) ||
+                                  s.factors_in_system > static_cast<size_t>(o.reorder_spread_factors));
+}
+
 }  // namespace
 
 IncrementalSmoother::IncrementalSmoother(IncrementalOptions options)
@@ -123,10 +131,7 @@ IncrementalStatus IncrementalSmoother::update() {
   // 3. Fill-in: reorder now (small systems) or begin a reordering spread over the next updates.
   const bool filled =
       static_cast<double>(s.fx.nonzeros()) > s.options.refill_ratio * static_cast<double>(s.fx.ordered_nnz);
-  const bool spread =
-      s.options.reorder_spread > 0 && (static_cast<int>(s.graph.variables().size()) > s.options.reorder_spread_above ||
-                                       s.fx.nonzeros() > static_cast<size_t>(s.options.reorder_spread_nonzeros) ||
-                                       s.factors_in_system > static_cast<size_t>(s.options.reorder_spread_factors));
+  const bool spread = spreads_rebuilds(s);
   if (filled && !spread) return with_admission(rebuild_with(1), st);  // the new ordering is the point: one iteration
   bool began_reordering =
       !s.reorder.under_way() && spread && (filled || 4 * (s.fx.reserve_end - s.fx.used) < s.fx.reserve_at_order);
@@ -137,10 +142,11 @@ IncrementalStatus IncrementalSmoother::update() {
   ++st.solves;
   ++s.updates;
   const bool check = s.options.relinearize_skip <= 1 || s.updates % s.options.relinearize_skip == 0;
-  for (int pass = 0; check && pass < s.options.relinearization_passes; ++pass) {
+  // Not while a reordering begun for relinearization is under way (ReorderScheduler::relinearizing says why); while
+  // one begun for fill-in is, within the work budget until it lands.
+  for (int pass = 0; check && !s.reorder.relinearizing() && pass < s.options.relinearization_passes; ++pass) {
     const std::vector<int> moved = smoother::moved_variables(s);
     if (moved.empty()) break;
-    // While a rebuild is spread, relinearization goes on within its work budget until the rebuild lands.
     switch (smoother::relinearize(s, moved, st, !(spread && s.reorder.under_way()))) {
       case smoother::Relinearized::kDone:
         break;
@@ -148,7 +154,7 @@ IncrementalStatus IncrementalSmoother::update() {
       // the next updates as a reordering is (the current factor stays exact meanwhile, only linearized further away).
       case smoother::Relinearized::kTooMany:
         if (!spread) return with_admission(rebuild_with(1), st);
-        s.reorder.begin(s);
+        s.reorder.begin(s, true);
         began_reordering = true;
         continue;
       case smoother::Relinearized::kCholmodFailed:

@@ -32,7 +32,9 @@
 // filled in, or a relinearization round is too large for rank updates, the new ordering and factorization
 // (relinearized at the current estimates) are built a slice at a time at the end of the next `reorder_spread` updates
 // and replace the current system at a fixed update, so the estimates do not depend on the clock
-// (smoother/reorder_scheduler.hpp); relinearization by rank updates goes on meanwhile, within its work budget.
+// (smoother/reorder_scheduler.hpp); new variables and factors enter by rank updates meanwhile, and relinearization
+// goes on within its work budget, or, when the reordering was begun for relinearization, waits for it (the new
+// system brings every factor's linearization at the estimates of the update that began it).
 //
 // The steps, one file each under estimators/graph/smoother/: admission.hpp (which variables and factors enter, the
 // gauge), rank_update.hpp (rank updates and storage packing), linear_system.hpp (ordering, assembly, sliced

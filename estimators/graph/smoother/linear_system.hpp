@@ -39,6 +39,10 @@ struct System {
   DensePtr y;             // L^-1 (-g)
   size_t assembled = 0;   // factors linearized into H and g
   size_t factorized = 0;  // rows of L computed
+  // Sliced factorization (sliced_factorization.cpp): the work of rows [0, k) of L, and the work and time the
+  // sliced calls have taken so far (their rate sizes the next call).
+  std::vector<double> row_work;
+  double sliced_work = 0.0, sliced_ms = 0.0;
   bool done = false;
   std::string error;  // why it failed (when done)
   SmootherFailure failure = SmootherFailure::kNone;
@@ -53,10 +57,11 @@ std::unique_ptr<System> begin_system(SmootherState& s, const std::vector<char>& 
 bool assemble_pattern(SmootherState& s, System& sys);
 /// Linearizes the system's factors up to `end` into H and g (system_assembly.cpp).
 void assemble_values(const SmootherState& s, System& sys, size_t end);
-/// Works on `sys` until `out_of_time()` says so, or to the end when it is empty (no slicing then): assembly, symbolic
-/// analysis, factorization row by row, the forward solve.  Returns true when done (sys.error says whether it
-/// failed).  (sliced_factorization.cpp)
-bool advance(SmootherState& s, System& sys, const std::function<bool()>& out_of_time);
+/// Works on `sys` while `ms_left()` (the milliseconds left of this slice, read between chunks of about a
+/// millisecond) is positive, or to the end when it is empty (no slicing then): assembly, symbolic analysis,
+/// factorization row by row, the forward solve.  Returns true when done (sys.error says whether it failed).
+/// (sliced_factorization.cpp)
+bool advance(SmootherState& s, System& sys, const std::function<double()>& ms_left);
 /// Makes `sys` the current system; factors and variables that entered the current one after `sys` was begun become
 /// pending again.  Then solves (back_substitution.hpp).  False when CHOLMOD fails (the factorization is then dropped).
 bool install(SmootherState& s, System& sys);

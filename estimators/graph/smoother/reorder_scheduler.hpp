@@ -6,8 +6,9 @@
 // system of more than reorder_spread_above variables, reorder_spread_nonzeros entries of L or reorder_spread_factors
 // factors, the current factor is still exact, only slower to update (or linearized further away); so the new
 // ordering and factorization are built a slice at a time at the end of the next reorder_spread updates (each spends
-// on it what is left of reorder_slice_ms after its own work, and at least its share of the time the previous
-// reordering took), and the new system replaces the old one at the start of the update reorder_spread after the one
+// on it what is left of reorder_slice_ms after its own work, and at least an even share of the work left: the
+// factorization's remaining rows at the rate the last reordering's ran, remaining_ms), and the new system replaces
+// the old one at the start of the update reorder_spread after the one
 // that began it, whatever the clock said: the estimates after every update are the same on a fast or a slow machine
 // (deterministic replay), only the per-update latency depends on the slices.
 // The new system is linearized at the estimates of the update that began it; the factors and variables that arrived
@@ -27,8 +28,15 @@ class ReorderScheduler {
   bool under_way() const { return system_ != nullptr || first_build_requested_; }
   /// A reordering under way is due at update() call number `update_call`.
   bool due(int64_t update_call) const { return under_way() && update_call >= due_; }
-  /// Begins a reordering of everything in the system at the current estimates, due reorder_spread updates later.
-  void begin(SmootherState& s);
+  /// Begins a reordering of everything in the system at the current estimates, due reorder_spread updates later;
+  /// `relinearizes`: begun because relinearization by rank updates would change too many factors.
+  void begin(SmootherState& s, bool relinearizes = false);
+  /// A reordering begun for relinearization is under way: relinearization waits for it.  The new system is
+  /// linearized at the estimates of the update that began it and replaces every linearization point when it lands,
+  /// so rank updates of the old factor meanwhile would be thrown away (sphere2500: a third of those updates' time;
+  /// the estimates in between, solved at the older linearization, had a chi2 at most 1.6e-4 above, bench/RESULTS.md).
+  /// Not for one begun for fill-in: those can follow each other closely, and would starve relinearization.
+  bool relinearizing() const { return system_ != nullptr && relinearizes_; }
   /// The same for the free variables marked in `in` and the factors of weight > 0 (a first build: nothing is in the
   /// system yet).
   void begin(SmootherState& s, const std::vector<char>& in);
@@ -46,11 +54,17 @@ class ReorderScheduler {
   void cancel() { system_.reset(), first_build_requested_ = false; }
 
  private:
+  /// Milliseconds of work the reordering under way still needs, as far as can be told (reorder_scheduler.cpp).
+  double remaining_ms() const;
+  static constexpr double kRateAfterMs = 5.0;  // sliced factorization time after which its rate is trusted
+
   std::unique_ptr<System> system_;  // the reordering under way
   bool first_build_requested_ = false;
+  bool relinearizes_ = false;
   int64_t due_ = 0;        // the update() call at which it replaces the current system
   double spent_ms_ = 0.0;  // time its slices have taken so far
   double work_ms_ = 0.0;   // time the last reordering took from its first slice to its installation
+  double rate_ = 0.0;      // row work per millisecond of the last reordering's sliced factorization (row_work)
   std::chrono::steady_clock::time_point update_started_{};
 };
 
