@@ -42,18 +42,19 @@ struct IncrementalOptions {
   /// (incremental_smoother.hpp); 0: reorder within the update.
   int reorder_spread = 8;
   /// Spread reorderings (and rebuilds for relinearization) only in systems of more than this many variables, or
-  /// whose factor L has more than reorder_spread_nonzeros entries: below both, a rebuild takes a few ms, and holding
-  /// two factors at once would cost more memory than it saves time (M3500: +5 MB peak RSS, p99 unchanged).  3-D
-  /// graphs fill in: sphere2500's rebuilds took 150-350 ms with 0.8-1.6 million entries in L, at 1000-2500 poses.
+  /// whose factor L has more than reorder_spread_nonzeros entries: below both, a rebuild takes a few ms (intel, 95,000
+  /// entries at its end: spread or not, the same mean, p99 and max within 10 %), and spreading it would hold two
+  /// factors at once for little.  M3500 passes 50,000 entries early: spread, its p99 step is 0.47x and its max 0.66x
+  /// (median of 5 interleaved runs each), its mean 1.07x, and peak RSS +3 MB.  3-D graphs fill in: sphere2500's
+  /// rebuilds took 150-350 ms with 0.8-1.6 million entries in L, at 1000-2500 poses.
   int reorder_spread_above = 5000;
-  int reorder_spread_nonzeros = 500000;
+  int reorder_spread_nonzeros = 50000;
   /// ... or more factors: a rebuild relinearizes every factor, and a map of landmarks seen from every keyframe has
   /// many (a 5-minute simulated planar run: 1,800 keyframes, 15,000 factors, 5 Mflop of factorization, and its
-  /// fill-triggered rebuilds took 20-40 ms, most of it relinearizing the sightings).  M3500 (5,453 factors) and
-  /// sphere2500 (4,949) stay below: spread, their rebuilds cost more at installation than they save.
+  /// fill-triggered rebuilds took 20-40 ms, most of it relinearizing the sightings).
   int reorder_spread_factors = 6000;
-  /// ms: an update works on a spread reordering until this long after it began, and at least for its share of the
-  /// time the last one took (1.25 x that time / reorder_spread), so that the installing update is left little.
+  /// ms: an update works on a spread reordering until this long after it began, and at least for its even share of
+  /// the work left (ReorderScheduler::remaining_ms), so that the installing update is left little.
   double reorder_slice_ms = 4.0;
   /// Wildfire threshold of the back-substitution (as iSAM2's): a change of a step by less than this (m or rad) is not
   /// propagated to the variables that depend on it (they keep a value stale by less than it).  0: exact.
