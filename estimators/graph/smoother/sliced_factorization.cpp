@@ -35,7 +35,8 @@ std::vector<double> row_work_prefix(cholmod_sparse& H, cholmod_common& common) {
     double work = 1.0 + (end - Hp[k]);
     mark[k] = row;
     for (int p = Hp[k]; p < end; ++p)
-      for (int j = Hi[p]; j < row && mark[static_cast<size_t>(j)] != row; j = parent[static_cast<size_t>(j)]) {
+      for (int j = Hi[p]; j >= 0 && j < row && mark[static_cast<size_t>(j)] != row;
+           j = parent[static_cast<size_t>(j)]) {
         mark[static_cast<size_t>(j)] = row;
         work += above[static_cast<size_t>(j)]++;
       }
