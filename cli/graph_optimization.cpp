@@ -33,15 +33,15 @@ constexpr std::pair<graph::Ordering, const char*> kOrderings[] = {{graph::Orderi
 
 // One line per update: its time, what entered, what was relinearized, whether it rebuilt (or installed a spread
 // reordering) and whether a spread reordering is under way after it, nnz(L): where a slow step's time went.
-void write_step_trace(const std::string& path, const std::vector<graph::FeedStep>& steps) {
+void write_step_trace(const std::string& path, const graph::FeedResult& r) {
   std::FILE* f = std::fopen(path.c_str(), "w");
   if (f == nullptr) throw std::runtime_error("cannot write the step trace " + path);
   std::fprintf(f,
                "update,ms,new_factors,relinearized_variables,relinearized_factors,rebuilt,reordering,solves,"
                "factor_nonzeros\n");
-  for (size_t k = 0; k < steps.size(); ++k) {
-    const graph::FeedStep& s = steps[k];
-    std::fprintf(f, "%zu,%.4f,%d,%d,%d,%d,%d,%d,%zu\n", k + 1, s.ms, s.status.new_factors,
+  for (size_t k = 0; k < r.steps.size(); ++k) {
+    const graph::FeedStep& s = r.steps[k];
+    std::fprintf(f, "%zu,%.4f,%d,%d,%d,%d,%d,%d,%zu\n", k + 1, r.step_ms[k], s.status.new_factors,
                  s.status.relinearized_variables, s.status.relinearized_factors, s.status.rebuilt ? 1 : 0,
                  s.reordering ? 1 : 0, s.status.solves, s.factor_nonzeros);
   }
@@ -62,7 +62,7 @@ GraphOptimizationResult run_incremental(const graph::G2oGraph& g, const GraphOpt
   const auto t0 = std::chrono::steady_clock::now();
   graph::FeedResult r = graph::feed_in_order(g.graph, smoother);
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  if (!o.step_trace.empty()) write_step_trace(o.step_trace, r.steps);
+  if (!o.step_trace.empty()) write_step_trace(o.step_trace, r);
   rusage ru{};
   getrusage(RUSAGE_SELF, &ru);
   const double peak_mb = static_cast<double>(ru.ru_maxrss) / 1024.0;  // before the batch reference runs

@@ -15,9 +15,9 @@
 
 namespace sextant::graph {
 
-/// One update as the feed saw it: what the smoother did and what it cost (`sextant optimize --step-trace`).
+/// One update as the feed saw it: what the smoother did (its time is FeedResult::step_ms; `sextant optimize
+/// --step-trace`).
 struct FeedStep {
-  double ms = 0;  // wall time of update()
   IncrementalStatus status;
   size_t factor_nonzeros = 0;  // nnz(L) after the update
   bool reordering = false;     // a spread reordering is under way after it
@@ -25,7 +25,7 @@ struct FeedStep {
 
 struct FeedResult {
   std::vector<double> step_ms;  // wall time of each update()
-  std::vector<FeedStep> steps;  // the same updates with their statuses
+  std::vector<FeedStep> steps;  // the same updates, what the smoother did in each
   int rebuilds = 0, relinearized_factors = 0, deferred_at_end = 0;
   bool ok = true;
   std::string message;  // the first failed update's message
