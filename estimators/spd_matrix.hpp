@@ -21,6 +21,7 @@
 //  - Symmetrizing is `symmetrized(m)`, never `m = 0.5 * (m + m.transpose())`: Eigen evaluates that in place,
 //    coefficient by coefficient, so the upper triangle averages entries already averaged (aliasing) and the result
 //    is not symmetric.
+#include <Eigen/Cholesky>
 #include <Eigen/Core>
 #include <Eigen/Eigenvalues>
 
@@ -56,6 +57,33 @@ double smallest_eigenvalue(const Eigen::MatrixBase<Derived>& m) {
   return Eigen::SelfAdjointEigenSolver<Plain>(Plain(m), Eigen::EigenvaluesOnly).eigenvalues().minCoeff();
 }
 
+/// True when the Cholesky factorization of the symmetric m (lower triangle read) succeeds with every pivot above
+/// 1e-12 of m's largest diagonal entry: m is then positive definite (in floating point a successful Cholesky
+/// factorization certifies A + dA positive definite with |dA| <= c n u |A|: Higham, "Accuracy and Stability of
+/// Numerical Algorithms", 2nd ed., Thm. 10.5), at a tenth of the cost of an eigenvalue decomposition.  False says
+/// nothing: the matrix may still be positive definite but nearly singular (ask smallest_eigenvalue).  Sizes 2, 3 and
+/// 6 of a dynamic m are factored at fixed size.
+template <typename Derived>
+bool cholesky_certifies_positive_definite(const Eigen::MatrixBase<Derived>& m) {
+  using Plain = typename Derived::PlainObject;
+  if constexpr (Plain::RowsAtCompileTime == Eigen::Dynamic && std::is_same_v<typename Plain::Scalar, double>) {
+    if (m.rows() == m.cols()) switch (m.rows()) {
+        case 2:
+          return cholesky_certifies_positive_definite(Eigen::Matrix2d(m));
+        case 3:
+          return cholesky_certifies_positive_definite(Eigen::Matrix3d(m));
+        case 6:
+          return cholesky_certifies_positive_definite(Eigen::Matrix<double, 6, 6>(m));
+        default:
+          break;
+      }
+  }
+  const Eigen::LLT<Plain> llt{Plain(m)};
+  if (llt.info() != Eigen::Success) return false;
+  const double floor = 1e-12 * m.diagonal().cwiseAbs().maxCoeff();
+  return (llt.matrixLLT().diagonal().array().square() > floor).all();
+}
+
 /// m equals its transpose to 1e-9 of max(1, largest |entry|) (rounding of a symmetric computation passes).
 template <typename Derived>
 bool is_symmetric(const Eigen::MatrixBase<Derived>& m) {
@@ -68,12 +96,13 @@ bool is_symmetric(const Eigen::MatrixBase<Derived>& m) {
 struct DefinitenessCheck {
   enum class Problem { kNone, kNotFinite, kNotSymmetric, kNotPositiveDefinite };
   Problem problem = Problem::kNone;
-  double smallest_eigenvalue = 0;  ///< set when the matrix is finite and symmetric
+  double smallest_eigenvalue = 0;  ///< set when the matrix is finite and symmetric but not certified by Cholesky
   bool ok() const { return problem == Problem::kNone; }
 };
 
 /// The one positive-definiteness check of a stated covariance or information: finite, symmetric (is_symmetric), and
-/// its smallest eigenvalue > 0.
+/// its smallest eigenvalue > 0.  A Cholesky factorization with clear pivots certifies the common case; only a
+/// matrix it does not certify pays for the eigenvalues (whose smallest the caller's error message states).
 template <typename Derived>
 DefinitenessCheck check_positive_definite(const Eigen::MatrixBase<Derived>& m) {
   DefinitenessCheck c;
@@ -85,6 +114,7 @@ DefinitenessCheck check_positive_definite(const Eigen::MatrixBase<Derived>& m) {
     c.problem = DefinitenessCheck::Problem::kNotSymmetric;
     return c;
   }
+  if (m.size() > 0 && cholesky_certifies_positive_definite(m)) return c;
   c.smallest_eigenvalue = m.size() > 0 ? smallest_eigenvalue(m) : 0.0;
   if (!(c.smallest_eigenvalue > 0)) c.problem = DefinitenessCheck::Problem::kNotPositiveDefinite;
   return c;

@@ -4,8 +4,6 @@
 
 #include <algorithm>
 #include <chrono>
-#include <map>
-#include <set>
 #include <stdexcept>
 
 namespace sextant::graph {
@@ -17,14 +15,18 @@ double seconds_since(Clock::time_point t) { return std::chrono::duration<double>
 }  // namespace
 
 SparseNormalEquations::SparseNormalEquations(const FactorGraph& graph, Ordering ordering) : graph_(graph) {
+  cholmod_start(&common_);
   number_blocks();
-  const BlockPattern rows = block_pattern();
+  BlockPattern rows = block_pattern();
+  if (ordering == Ordering::kBlockAmd) {
+    renumber_blocks(block_amd_order(rows, common_));
+    rows = block_pattern();
+  }
   std::vector<int> colptr(static_cast<size_t>(n_) + 1, 0), rowind;
-  std::map<std::pair<int, int>, int> pair_index;
-  lay_out_columns(rows, colptr, rowind, pair_index);
-  map_factor_pairs(pair_index);
+  lay_out_columns(rows, colptr, rowind);
+  map_factor_pairs(rows);
   start_cholmod(ordering, colptr, rowind);
-  analyze(ordering, rows);
+  analyze(ordering);
 }
 
 // One block of unknowns per variable that is not fixed, in the variables' order: offsets and dimensions.
@@ -39,45 +41,68 @@ void SparseNormalEquations::number_blocks() {
     if (vars[i].fixed) continue;
     var_block_[i] = static_cast<int>(block_var_.size());
     block_var_.push_back(static_cast<int>(i));
-    offset_[i] = n_;
-    n_ += dim_[i];
+  }
+  renumber_blocks({});
+}
+
+// Blocks (and their unknowns) numbered in `order` (position -> block; empty: as they are), offsets consecutive.
+void SparseNormalEquations::renumber_blocks(const std::vector<int>& order) {
+  if (!order.empty()) {
+    std::vector<int> block_var(order.size());
+    for (size_t k = 0; k < order.size(); ++k) block_var[k] = block_var_[static_cast<size_t>(order[k])];
+    block_var_ = std::move(block_var);
+  }
+  n_ = 0;
+  for (size_t b = 0; b < block_var_.size(); ++b) {
+    const size_t v = static_cast<size_t>(block_var_[b]);
+    var_block_[v] = static_cast<int>(b);
+    offset_[v] = n_;
+    n_ += dim_[v];
   }
 }
 
-// Rows (block indices <= column block) present in each block column; every block has its diagonal.
+// Rows (block indices <= column block) present in each block column, sorted; every block has its diagonal.
 SparseNormalEquations::BlockPattern SparseNormalEquations::block_pattern() const {
-  const int nb = static_cast<int>(block_var_.size());
-  BlockPattern rows(static_cast<size_t>(nb));
-  for (int b = 0; b < nb; ++b) rows[static_cast<size_t>(b)].insert(b);
+  const size_t nb = block_var_.size();
+  BlockPattern rows(nb);
+  for (size_t b = 0; b < nb; ++b) rows[b].push_back(static_cast<int>(b));
   for (const auto& f : graph_.factors())
     for (int u : f->variables())
       for (int v : f->variables()) {
         const int bu = var_block_[static_cast<size_t>(u)], bv = var_block_[static_cast<size_t>(v)];
-        if (bu >= 0 && bv >= 0 && bu <= bv) rows[static_cast<size_t>(bv)].insert(bu);
+        if (bu >= 0 && bv >= 0 && bu < bv) rows[static_cast<size_t>(bv)].push_back(bu);
       }
+  for (auto& r : rows) {
+    std::sort(r.begin(), r.end());
+    r.erase(std::unique(r.begin(), r.end()), r.end());
+  }
   return rows;
 }
 
 // Compressed columns of the upper triangle (colptr, rowind), each block pair's column starts and the diagonal's
-// positions.
+// positions.  The pairs of block column b are numbered consecutively from first_pair_[b], in the order of rows[b].
 void SparseNormalEquations::lay_out_columns(const BlockPattern& rows, std::vector<int>& colptr,
-                                            std::vector<int>& rowind, std::map<std::pair<int, int>, int>& pair_index) {
-  const int nb = static_cast<int>(block_var_.size());
-  for (int b = 0; b < nb; ++b) {
-    const int db = dim_[static_cast<size_t>(block_var_[static_cast<size_t>(b)])];
-    const int ob = offset_[static_cast<size_t>(block_var_[static_cast<size_t>(b)])];
+                                            std::vector<int>& rowind) {
+  const size_t nb = block_var_.size();
+  first_pair_.assign(nb + 1, 0);
+  for (size_t b = 0; b < nb; ++b) first_pair_[b + 1] = first_pair_[b] + static_cast<int>(rows[b].size());
+  pair_col_start_.assign(static_cast<size_t>(first_pair_[nb]), {});
+  for (size_t b = 0; b < nb; ++b) {
+    const int db = dim_[static_cast<size_t>(block_var_[b])];
+    const int ob = offset_[static_cast<size_t>(block_var_[b])];
+    for (size_t q = 0; q < rows[b].size(); ++q)
+      pair_col_start_[static_cast<size_t>(first_pair_[b]) + q].resize(static_cast<size_t>(db));
     for (int k = 0; k < db; ++k) {
-      const int col = ob + k;
-      colptr[static_cast<size_t>(col)] = static_cast<int>(rowind.size());
-      for (int a : rows[static_cast<size_t>(b)]) {
+      colptr[static_cast<size_t>(ob + k)] = static_cast<int>(rowind.size());
+      for (size_t q = 0; q < rows[b].size(); ++q) {
+        const int a = rows[b][q];
         const int va = block_var_[static_cast<size_t>(a)];
         const int oa = offset_[static_cast<size_t>(va)], da = dim_[static_cast<size_t>(va)];
-        auto [it, inserted] = pair_index.try_emplace({a, b}, static_cast<int>(pair_col_start_.size()));
-        if (inserted) pair_col_start_.emplace_back(static_cast<size_t>(db), 0);
-        pair_col_start_[static_cast<size_t>(it->second)][static_cast<size_t>(k)] = static_cast<int>(rowind.size());
-        const int nrows = a == b ? k + 1 : da;
+        pair_col_start_[static_cast<size_t>(first_pair_[b]) + q][static_cast<size_t>(k)] =
+            static_cast<int>(rowind.size());
+        const int nrows = static_cast<size_t>(a) == b ? k + 1 : da;
         for (int r = 0; r < nrows; ++r) rowind.push_back(oa + r);
-        if (a == b) diag_pos_.push_back(static_cast<int>(rowind.size()) - 1);
+        if (static_cast<size_t>(a) == b) diag_pos_.push_back(static_cast<int>(rowind.size()) - 1);
       }
     }
   }
@@ -86,14 +111,20 @@ void SparseNormalEquations::lay_out_columns(const BlockPattern& rows, std::vecto
 }
 
 // Per factor, the block pair of each (u, v) of its variables (u <= v), or -1 when a variable is fixed.
-void SparseNormalEquations::map_factor_pairs(const std::map<std::pair<int, int>, int>& pair_index) {
+void SparseNormalEquations::map_factor_pairs(const BlockPattern& rows) {
   factor_pairs_.resize(graph_.factors().size());
   for (size_t fi = 0; fi < graph_.factors().size(); ++fi) {
     const auto& fv = graph_.factors()[fi]->variables();
     for (size_t i = 0; i < fv.size(); ++i)
       for (size_t j = 0; j < fv.size(); ++j) {
         const int bu = var_block_[static_cast<size_t>(fv[i])], bv = var_block_[static_cast<size_t>(fv[j])];
-        factor_pairs_[fi].push_back(bu >= 0 && bv >= 0 && bu <= bv ? pair_index.at({bu, bv}) : -1);
+        if (bu < 0 || bv < 0 || bu > bv) {
+          factor_pairs_[fi].push_back(-1);
+          continue;
+        }
+        const auto& r = rows[static_cast<size_t>(bv)];
+        factor_pairs_[fi].push_back(first_pair_[static_cast<size_t>(bv)] +
+                                    static_cast<int>(std::lower_bound(r.begin(), r.end(), bu) - r.begin()));
       }
   }
 }
@@ -101,7 +132,6 @@ void SparseNormalEquations::map_factor_pairs(const std::map<std::pair<int, int>,
 // CHOLMOD with the ordering asked for, H's pattern allocated (values zero), b zero.
 void SparseNormalEquations::start_cholmod(Ordering ordering, const std::vector<int>& colptr,
                                           const std::vector<int>& rowind) {
-  cholmod_start(&common_);
   // Supernodal (dense BLAS on supernodes) where the factor is dense enough to pay (3-D graphs, big 2-D ones),
   // simplicial otherwise: CHOLMOD's own choice (flops / nnz(L) >= 40).  A small planar graph's factor spent more in
   // BLAS calls on tiny supernodes (and in waking the BLAS threads) than in arithmetic.  Simplicial is LL' too
@@ -133,29 +163,18 @@ void SparseNormalEquations::start_cholmod(Ordering ordering, const std::vector<i
   b_ = Eigen::VectorXd::Zero(n_);
 }
 
-// The symbolic analysis: with kBlockAmd the block pattern (upper triangle, one entry per block pair) ordered by
-// AMD and expanded to components; else CHOLMOD's own choice.
-void SparseNormalEquations::analyze(Ordering ordering, const BlockPattern& rows) {
+// The symbolic analysis.  With kBlockAmd the unknowns are already numbered in the block AMD order (AMD's order is
+// a postorder of its assembly tree), so H is factored as numbered: CHOLMOD then factors H itself, where a permuted
+// simplicial factorization first builds two transposed copies of H (for every factorization).  Else CHOLMOD's own
+// ordering of the scalar pattern.
+void SparseNormalEquations::analyze(Ordering ordering) {
   if (n_ == 0) return;
   if (ordering == Ordering::kBlockAmd) {
-    const int nb = static_cast<int>(block_var_.size());
-    std::vector<std::vector<int>> upper(static_cast<size_t>(nb));
-    for (int b = 0; b < nb; ++b)
-      upper[static_cast<size_t>(b)].assign(rows[static_cast<size_t>(b)].begin(), rows[static_cast<size_t>(b)].end());
-    const std::vector<int> block_perm = block_amd_order(upper, common_);
-    std::vector<int> perm;
-    perm.reserve(static_cast<size_t>(n_));
-    for (int b : block_perm) {
-      const int v = block_var_[static_cast<size_t>(b)];
-      for (int k = 0; k < dim_[static_cast<size_t>(v)]; ++k) perm.push_back(offset_[static_cast<size_t>(v)] + k);
-    }
     common_.nmethods = 1;
-    common_.method[0].ordering = CHOLMOD_GIVEN;
-    common_.postorder = 1;
-    L_ = cholmod_analyze_p(H_, perm.data(), nullptr, 0, &common_);
-  } else {
-    L_ = cholmod_analyze(H_, &common_);
+    common_.method[0].ordering = CHOLMOD_NATURAL;
+    common_.postorder = 0;
   }
+  L_ = cholmod_analyze(H_, &common_);
   if (L_ == nullptr) throw std::runtime_error("CHOLMOD symbolic analysis failed");
 }
 
@@ -174,31 +193,57 @@ int SparseNormalEquations::position(int pair, int col, int row) const {
   return pair_col_start_[static_cast<size_t>(pair)][static_cast<size_t>(col)] + row;
 }
 
+template <typename Block>
+void SparseNormalEquations::scatter(int pair, bool same_block, const Eigen::MatrixBase<Block>& M) {
+  for (int k = 0; k < M.cols(); ++k) {
+    const int rows = same_block ? k + 1 : static_cast<int>(M.rows());
+    double* col = values_.data() + position(pair, k, 0);
+    for (int r = 0; r < rows; ++r) col[r] += M(r, k);
+  }
+}
+
 void SparseNormalEquations::add(int factor_index, const Factor& f, const Linearization& lin, double weight) {
+  // Fixed sizes for the common factors (two poses, or one: planar or 3-D): no heap allocation per factor.
   const auto& fv = f.variables();
+  const int r = f.residual_dim();
+  const bool square = fv.size() <= 2 && std::all_of(lin.jacobians.begin(), lin.jacobians.end(),
+                                                    [r](const Eigen::MatrixXd& J) { return J.cols() == r; });
+  if (square && r == 3) return add_fixed<3>(factor_index, f, lin, weight);
+  if (square && r == 6) return add_fixed<6>(factor_index, f, lin, weight);
   const Eigen::MatrixXd W = weight * f.information();
   const size_t nvars = fv.size();
   // J_u' W for each free variable u (a factor may have any number of variables: the IMU factor has six).
   std::vector<Eigen::MatrixXd> JtW(nvars);
   for (size_t i = 0; i < nvars; ++i) {
-    const int bu = var_block_[static_cast<size_t>(fv[i])];
-    if (bu < 0) continue;
+    if (var_block_[static_cast<size_t>(fv[i])] < 0) continue;
     JtW[i] = lin.jacobians[i].transpose() * W;
     b_.segment(offset_[static_cast<size_t>(fv[i])], dim_[static_cast<size_t>(fv[i])]) += JtW[i] * lin.error;
   }
   const auto& pairs = factor_pairs_[static_cast<size_t>(factor_index)];
   for (size_t i = 0; i < nvars; ++i)
-    for (size_t j = 0; j < nvars; ++j) {
-      const int pair = pairs[i * nvars + j];
-      if (pair < 0) continue;
-      const bool same = fv[i] == fv[j];
-      const Eigen::MatrixXd M = JtW[i] * lin.jacobians[j];  // rows: block of fv[i], columns: block of fv[j]
-      for (int k = 0; k < M.cols(); ++k) {
-        const int rows = same ? k + 1 : static_cast<int>(M.rows());
-        double* col = values_.data() + position(pair, k, 0);
-        for (int r = 0; r < rows; ++r) col[r] += M(r, k);
-      }
-    }
+    for (size_t j = 0; j < nvars; ++j)
+      if (const int pair = pairs[i * nvars + j]; pair >= 0)
+        scatter(pair, fv[i] == fv[j], JtW[i] * lin.jacobians[j]);  // rows: block of fv[i], columns: fv[j]
+}
+
+template <int N>
+void SparseNormalEquations::add_fixed(int factor_index, const Factor& f, const Linearization& lin, double weight) {
+  using Square = Eigen::Matrix<double, N, N>;
+  const auto& fv = f.variables();
+  const size_t nvars = fv.size();
+  const Square W = weight * Eigen::Map<const Square>(f.information().data());
+  const Eigen::Map<const Eigen::Matrix<double, N, 1>> e(lin.error.data());
+  Square JtW[2];
+  for (size_t i = 0; i < nvars; ++i) {
+    if (var_block_[static_cast<size_t>(fv[i])] < 0) continue;
+    JtW[i] = Eigen::Map<const Square>(lin.jacobians[i].data()).transpose() * W;
+    b_.segment<N>(offset_[static_cast<size_t>(fv[i])]) += JtW[i] * e;
+  }
+  const auto& pairs = factor_pairs_[static_cast<size_t>(factor_index)];
+  for (size_t i = 0; i < nvars; ++i)
+    for (size_t j = 0; j < nvars; ++j)
+      if (const int pair = pairs[i * nvars + j]; pair >= 0)
+        scatter(pair, fv[i] == fv[j], Square(JtW[i] * Eigen::Map<const Square>(lin.jacobians[j].data())));
 }
 
 Eigen::VectorXd SparseNormalEquations::diagonal() const {

@@ -1,7 +1,8 @@
 #pragma once
 // The Gauss-Newton normal equations H dx = -b of a factor graph, assembled block by block straight into CHOLMOD's
-// compressed-column format (upper triangle), with the sparsity pattern and CHOLMOD's symbolic analysis (the
-// fill-reducing ordering) computed once per graph structure and reused for every numeric factorization.
+// compressed-column format (upper triangle), with the sparsity pattern and CHOLMOD's symbolic analysis computed once
+// per graph structure and reused for every numeric factorization.  With the default block AMD ordering the unknowns
+// are numbered in that order (offset() says where each variable's block is), so H is factored as it is stored.
 //   H = sum_f J_f' W_f J_f,  b = sum_f J_f' W_f e_f,  W_f = w_f Omega_f (w_f: robust weight).
 // Fixed variables have no block: they are constants of the problem (the gauge).
 #include "estimators/graph/factor_graph.hpp"
@@ -9,8 +10,6 @@
 
 #include <cholmod.h>
 
-#include <map>
-#include <set>
 #include <string>
 #include <vector>
 
@@ -44,22 +43,28 @@ class SparseNormalEquations {
  private:
   int position(int pair, int col_in_block, int row_in_block) const;
   // The constructor's steps.
-  using BlockPattern = std::vector<std::set<int>>;  // per block column: the block rows (<= it) present
+  using BlockPattern = std::vector<std::vector<int>>;  // per block column: the block rows (<= it) present, sorted
   void number_blocks();
+  void renumber_blocks(const std::vector<int>& order);
   BlockPattern block_pattern() const;
-  void lay_out_columns(const BlockPattern& rows, std::vector<int>& colptr, std::vector<int>& rowind,
-                       std::map<std::pair<int, int>, int>& pair_index);
-  void map_factor_pairs(const std::map<std::pair<int, int>, int>& pair_index);
+  void lay_out_columns(const BlockPattern& rows, std::vector<int>& colptr, std::vector<int>& rowind);
+  void map_factor_pairs(const BlockPattern& rows);
   void start_cholmod(Ordering ordering, const std::vector<int>& colptr, const std::vector<int>& rowind);
-  void analyze(Ordering ordering, const BlockPattern& rows);
+  void analyze(Ordering ordering);
 
   const FactorGraph& graph_;
   int n_ = 0;
   std::vector<int> offset_, dim_;  // per variable
   std::vector<int> block_var_;     // per block: the variable index
   std::vector<int> var_block_;     // per variable: its block, or -1
+  template <int N>
+  void add_fixed(int factor_index, const Factor& f, const Linearization& lin, double weight);
+  template <typename Block>
+  void scatter(int pair, bool same_block, const Eigen::MatrixBase<Block>& M);
+
   // For each block pair (a <= b): the position in H's values of element (row 0 of a, column k of b), per k.
   std::vector<std::vector<int>> pair_col_start_;
+  std::vector<int> first_pair_;                 // per block column: the index of its first pair
   std::vector<std::vector<int>> factor_pairs_;  // per factor: pair index for each (u, v) of its variables, u <= v
   std::vector<int> diag_pos_;
   cholmod_common common_{};
