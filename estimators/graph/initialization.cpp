@@ -1,5 +1,7 @@
 #include "estimators/graph/initialization.hpp"
 
+#include "estimators/graph/block_ordering.hpp"
+
 #include <Eigen/SVD>
 #include <Eigen/SparseCholesky>
 
@@ -144,11 +146,13 @@ class ChordalRelaxation {
         for (int a = 0; a < D; ++a) trip.emplace_back(jj * D + a, jj * D + a, kappa);
         if (ii < 0) rhs.template block<D, D>(jj * D, 0) += kappa * Z.transpose() * rotation(e.i).transpose();
       }
-      if (ii >= 0 && jj >= 0)
+      if (ii >= 0 && jj >= 0)  // the lower triangle only: the block below the diagonal
         for (int a = 0; a < D; ++a)
           for (int b = 0; b < D; ++b) {
-            trip.emplace_back(ii * D + a, jj * D + b, -kappa * Z(a, b));
-            trip.emplace_back(jj * D + b, ii * D + a, -kappa * Z(a, b));
+            if (ii > jj)
+              trip.emplace_back(ii * D + a, jj * D + b, -kappa * Z(a, b));
+            else
+              trip.emplace_back(jj * D + b, ii * D + a, -kappa * Z(a, b));
           }
     }
     Eigen::MatrixXd x;
@@ -186,7 +190,7 @@ class ChordalRelaxation {
         trip.emplace_back(jj, jj, tau);
         rhs.row(jj) += tau * (ii >= 0 ? c : VecD(c + translation(e.i))).transpose();
       }
-      if (ii >= 0 && jj >= 0) trip.emplace_back(ii, jj, -tau), trip.emplace_back(jj, ii, -tau);
+      if (ii >= 0 && jj >= 0) trip.emplace_back(std::max(ii, jj), std::min(ii, jj), -tau);  // lower triangle
     }
     Eigen::MatrixXd t;
     if (!solve_sparse(n_, trip, rhs, t)) return false;
@@ -201,28 +205,38 @@ class ChordalRelaxation {
     return true;
   }
 
-  // Renumbers the unknown poses in an approximate minimum degree order of the pose graph (AMD on its Laplacian's
-  // pattern), so that both systems factor as they are numbered: the translations' is that Laplacian, the rotations'
-  // its block expansion.  One ordering for both, on the smaller pattern.
+  // Renumbers the unknown poses in an approximate minimum degree order of the pose graph (block_amd_order on its
+  // Laplacian's pattern), so that both systems factor as they are numbered: the translations' is that Laplacian, the
+  // rotations' its block expansion.  One ordering for both, on the smaller pattern.
   void order_unknown_poses() {
-    std::vector<Eigen::Triplet<double>> pattern;
-    for (int k = 0; k < n_; ++k) pattern.emplace_back(k, k, 1.0);
+    std::vector<std::vector<int>> upper(static_cast<size_t>(n_));
+    for (int k = 0; k < n_; ++k) upper[static_cast<size_t>(k)].push_back(k);
     for (const auto& e : edges_) {
       const int ii = index_[static_cast<size_t>(e.i)], jj = index_[static_cast<size_t>(e.j)];
-      if (ii >= 0 && jj >= 0) pattern.emplace_back(ii, jj, 1.0), pattern.emplace_back(jj, ii, 1.0);
+      if (ii >= 0 && jj >= 0 && ii != jj) upper[static_cast<size_t>(std::max(ii, jj))].push_back(std::min(ii, jj));
     }
-    Eigen::SparseMatrix<double> L(n_, n_);
-    L.setFromTriplets(pattern.begin(), pattern.end());
-    Eigen::PermutationMatrix<Eigen::Dynamic, Eigen::Dynamic, int> order;  // order.indices()[k]: the k-th eliminated
-    Eigen::AMDOrdering<int>()(L, order);
+    for (auto& r : upper) {
+      std::sort(r.begin(), r.end());
+      r.erase(std::unique(r.begin(), r.end()), r.end());
+    }
+    cholmod_common common;
+    cholmod_start(&common);
+    std::vector<int> order;  // order[k]: the k-th eliminated
+    try {
+      order = block_amd_order(upper, common);
+    } catch (const std::runtime_error&) {
+      order.clear();  // CHOLMOD out of memory: the numbering as it is (same answer, more fill)
+    }
+    cholmod_finish(&common);
+    if (order.size() != static_cast<size_t>(n_)) return;
     std::vector<int> position(static_cast<size_t>(n_));
-    for (int k = 0; k < n_; ++k) position[static_cast<size_t>(order.indices()[k])] = k;
+    for (int k = 0; k < n_; ++k) position[static_cast<size_t>(order[static_cast<size_t>(k)])] = k;
     for (int& i : index_)
       if (i >= 0) i = position[static_cast<size_t>(i)];
   }
 
-  // x = H^-1 rhs for the symmetric H of `trip` (size x size, duplicates summed), factored in its own numbering
-  // (order_unknown_poses chose it); false when H is singular.
+  // x = H^-1 rhs for the symmetric H given by the lower triangle in `trip` (size x size, duplicates summed), factored
+  // in its own numbering (order_unknown_poses chose it); false when H is singular.
   static bool solve_sparse(int size, const std::vector<Eigen::Triplet<double>>& trip, const Eigen::MatrixXd& rhs,
                            Eigen::MatrixXd& x) {
     Eigen::SparseMatrix<double> H(size, size);
