@@ -63,7 +63,8 @@ double urgency(const SmootherState& s, int v) {
 
 }  // namespace
 
-std::vector<int> within_work_budget(const SmootherState& s, std::vector<int> moved, std::vector<size_t>& factors) {
+std::vector<int> within_work_budget(const SmootherState& s, std::vector<int> moved, std::vector<size_t>& factors,
+                                    bool* too_heavy) {
   std::vector<double> how_far(s.lin.size(), 0.0);
   for (int v : moved) how_far[static_cast<size_t>(v)] = urgency(s, v);
   std::stable_sort(moved.begin(), moved.end(),
@@ -83,6 +84,10 @@ std::vector<int> within_work_budget(const SmootherState& s, std::vector<int> mov
         if (s.pos[static_cast<size_t>(u)] >= 0) first = std::min(first, s.pos[static_cast<size_t>(u)]);
       own += s.graph.factors()[f]->residual_dim() * path_work(s.fx, first, memo);
       fresh.push_back(f);
+    }
+    if (fresh.size() > kHubFactors && own > kHubRebuildAbove * s.options.relinearize_work) {
+      if (too_heavy) *too_heavy = true;
+      continue;  // a rebuild relinearizes it (the caller's choice), or the reordering under way will
     }
     if (!chosen.empty() && (work + own > s.options.relinearize_work || factors.size() + fresh.size() > limit))
       continue;  // waits for a later update
@@ -108,7 +113,9 @@ Relinearized relinearize(SmootherState& s, const std::vector<int>& all_moved, In
     if (touching > update_limit(s)) return Relinearized::kTooMany;
   }
   std::vector<size_t> factors;
-  const std::vector<int> moved = within_work_budget(s, all_moved, factors);
+  bool too_heavy = false;
+  const std::vector<int> moved = within_work_budget(s, all_moved, factors, &too_heavy);
+  if (too_heavy && rebuild_if_many) return Relinearized::kTooMany;
   std::vector<Contribution> before, after;
   before.reserve(factors.size());
   after.reserve(factors.size());

@@ -261,6 +261,58 @@ TEST_CASE("a long loop closed at once relinearizes, and a rebuild reorders witho
   CHECK(s.chi2() == doctest::Approx(before).epsilon(1e-3));
 }
 
+TEST_CASE("a hub too heavy for the rank-update budget is relinearized by a rebuild, not by rank updates") {
+  // Thirty poses on an arc (exact odometry), then a landmark seen from all of them, entered 2 m from where the
+  // sightings put it: the first solve moves it far past the thresholds, the poses stay.  With an unlimited budget
+  // its 30 sightings are relinearized by rank updates; with a budget this hub (30 factors) exceeds kHubRebuildAbove
+  // times (relinearize_work 1), none is, the system is rebuilt instead (at once: a small system), and the answer is
+  // the same.
+  const Eigen::Vector2d landmark(5.0, 3.0);
+  for (double budget : {1e12, 1.0}) {
+    CAPTURE(budget);
+    IncrementalOptions opt;
+    opt.min_update_factors = opt.max_update_factors = 128;
+    opt.relinearize_work = budget;
+    IncrementalSmoother s(opt);
+    std::vector<SE2> x;
+    std::vector<int> idx;
+    for (int k = 0; k < 30; ++k) {
+      x.push_back(SE2(0.3 * k, 0.02 * k * k, 0.05 * k));
+      idx.push_back(s.add_variable(pose_variable(true, k, x.back().to_se3())));
+      if (k > 0)
+        s.add_factor(std::make_unique<RelativePoseFactor>(idx[static_cast<size_t>(k - 1)], idx[static_cast<size_t>(k)],
+                                                          x[static_cast<size_t>(k - 1)].inverse() * x.back(),
+                                                          Eigen::Matrix3d::Identity() * 100));
+      REQUIRE(s.update().ok);
+    }
+    Variable point;
+    point.id = 100;
+    point.kind = VariableKind::kPoint2;
+    point.point = Eigen::Vector3d(landmark.x() + 2.0, landmark.y(), 0);
+    const int p = s.add_variable(point);
+    for (int k = 0; k < 30; ++k)
+      s.add_factor(std::make_unique<PointObservationFactor>(
+          idx[static_cast<size_t>(k)], p, PointObservationFactor::Model::kPosition,
+          Eigen::VectorXd(x[static_cast<size_t>(k)].inverse().act(landmark)), Eigen::MatrixXd::Identity(2, 2) * 100));
+    int most_by_rank_updates = 0, rebuilt = 0;
+    for (int k = 0; k < 4; ++k) {
+      const IncrementalStatus st = s.update();
+      REQUIRE(st.ok);
+      most_by_rank_updates = std::max(most_by_rank_updates, st.relinearized_factors);
+      rebuilt += st.rebuilt ? 1 : 0;
+    }
+    if (budget > 1) {
+      CHECK(most_by_rank_updates >= 30);
+    } else {
+      CHECK(most_by_rank_updates == 0);
+      CHECK(rebuilt > 0);
+    }
+    s.refresh_estimate();
+    CHECK(s.graph().variables()[static_cast<size_t>(p)].point.head<2>().isApprox(landmark, 1e-6));
+    CHECK(s.chi2() < 1e-12);
+  }
+}
+
 TEST_CASE("a rebuild for relinearization spread over updates ends at the batch solution of the same factors") {
   // The biased lap closed at once, as above: the correction moves every pose past the thresholds, more factors than
   // rank updates take (update limit 4), so the rebuild is begun and spread over the next updates; relinearization
