@@ -36,52 +36,49 @@ typename Derived::PlainObject symmetrized(const Eigen::MatrixBase<Derived>& m) {
   return (0.5 * (m + m.transpose())).eval();
 }
 
-/// The smallest eigenvalue of the symmetric matrix m (its lower triangle is read).  A dynamic-size m of a pose's
-/// size (2, 3 or 6: planar and 3-D edges, every factor's information) is solved at fixed size: the same algorithm
-/// without heap allocation, which is most of the cost at these sizes.
-template <typename Derived>
-double smallest_eigenvalue(const Eigen::MatrixBase<Derived>& m) {
+/// f applied to m, or, for a dynamic-size m of a pose's size (2, 3 or 6: planar and 3-D edges, every factor's
+/// information), to a fixed-size copy of it: the same algorithm without heap allocation, which is most of the cost
+/// at these sizes.  f takes any Eigen matrix type (a generic lambda).
+template <typename Derived, typename F>
+auto at_fixed_size(const Eigen::MatrixBase<Derived>& m, F&& f) {
   using Plain = typename Derived::PlainObject;
   if constexpr (Plain::RowsAtCompileTime == Eigen::Dynamic && std::is_same_v<typename Plain::Scalar, double>) {
     if (m.rows() == m.cols()) switch (m.rows()) {
         case 2:
-          return smallest_eigenvalue(Eigen::Matrix2d(m));
+          return f(Eigen::Matrix2d(m));
         case 3:
-          return smallest_eigenvalue(Eigen::Matrix3d(m));
+          return f(Eigen::Matrix3d(m));
         case 6:
-          return smallest_eigenvalue(Eigen::Matrix<double, 6, 6>(m));
+          return f(Eigen::Matrix<double, 6, 6>(m));
         default:
           break;
       }
   }
-  return Eigen::SelfAdjointEigenSolver<Plain>(Plain(m), Eigen::EigenvaluesOnly).eigenvalues().minCoeff();
+  return f(Plain(m));
+}
+
+/// The smallest eigenvalue of the symmetric matrix m (its lower triangle is read).
+template <typename Derived>
+double smallest_eigenvalue(const Eigen::MatrixBase<Derived>& m) {
+  return at_fixed_size(m, [](const auto& a) {
+    using Plain = std::decay_t<decltype(a)>;
+    return Eigen::SelfAdjointEigenSolver<Plain>(a, Eigen::EigenvaluesOnly).eigenvalues().minCoeff();
+  });
 }
 
 /// True when the Cholesky factorization of the symmetric m (lower triangle read) succeeds with every pivot above
 /// 1e-12 of m's largest diagonal entry: m is then positive definite (in floating point a successful Cholesky
 /// factorization certifies A + dA positive definite with |dA| <= c n u |A|: Higham, "Accuracy and Stability of
 /// Numerical Algorithms", 2nd ed., Thm. 10.5), at a tenth of the cost of an eigenvalue decomposition.  False says
-/// nothing: the matrix may still be positive definite but nearly singular (ask smallest_eigenvalue).  Sizes 2, 3 and
-/// 6 of a dynamic m are factored at fixed size.
+/// nothing: the matrix may still be positive definite but nearly singular (ask smallest_eigenvalue).
 template <typename Derived>
 bool cholesky_certifies_positive_definite(const Eigen::MatrixBase<Derived>& m) {
-  using Plain = typename Derived::PlainObject;
-  if constexpr (Plain::RowsAtCompileTime == Eigen::Dynamic && std::is_same_v<typename Plain::Scalar, double>) {
-    if (m.rows() == m.cols()) switch (m.rows()) {
-        case 2:
-          return cholesky_certifies_positive_definite(Eigen::Matrix2d(m));
-        case 3:
-          return cholesky_certifies_positive_definite(Eigen::Matrix3d(m));
-        case 6:
-          return cholesky_certifies_positive_definite(Eigen::Matrix<double, 6, 6>(m));
-        default:
-          break;
-      }
-  }
-  const Eigen::LLT<Plain> llt{Plain(m)};
-  if (llt.info() != Eigen::Success) return false;
-  const double floor = 1e-12 * m.diagonal().cwiseAbs().maxCoeff();
-  return (llt.matrixLLT().diagonal().array().square() > floor).all();
+  return at_fixed_size(m, [](const auto& a) {
+    const Eigen::LLT<std::decay_t<decltype(a)>> llt(a);
+    if (llt.info() != Eigen::Success) return false;
+    const double floor = 1e-12 * a.diagonal().cwiseAbs().maxCoeff();
+    return (llt.matrixLLT().diagonal().array().square() > floor).all();
+  });
 }
 
 /// m equals its transpose to 1e-9 of max(1, largest |entry|) (rounding of a symmetric computation passes).

@@ -51,17 +51,17 @@ class SparseNormalEquations {
   void map_factor_pairs(const BlockPattern& rows);
   void start_cholmod(Ordering ordering, const std::vector<int>& colptr, const std::vector<int>& rowind);
   void analyze(Ordering ordering);
+  // add() for square N x N factors on one or two variables, and the one scatter of a block into H's values.
+  template <int N>
+  void add_fixed(int factor_index, const Factor& f, const Linearization& lin, double weight);
+  template <typename Block>
+  void scatter(int pair, bool same_block, const Eigen::MatrixBase<Block>& M);
 
   const FactorGraph& graph_;
   int n_ = 0;
   std::vector<int> offset_, dim_;  // per variable
   std::vector<int> block_var_;     // per block: the variable index
   std::vector<int> var_block_;     // per variable: its block, or -1
-  template <int N>
-  void add_fixed(int factor_index, const Factor& f, const Linearization& lin, double weight);
-  template <typename Block>
-  void scatter(int pair, bool same_block, const Eigen::MatrixBase<Block>& M);
-
   // For each block pair (a <= b): the position in H's values of element (row 0 of a, column k of b), per k.
   std::vector<std::vector<int>> pair_col_start_;
   std::vector<int> first_pair_;                 // per block column: the index of its first pair
