@@ -186,8 +186,7 @@ void SlamGraph::handle_odometry(const std::string& name, const OdometryInput& o,
   if (!b.early_loops.empty()) {
     std::vector<LoopInput> due, later;
     for (auto& l : b.early_loops) {
-      const int64_t own = l.body_to.empty() || l.body_to == name ? std::max(l.utime_from, l.utime_to) : l.utime_from;
-      (own <= b.track.last_utime() ? due : later).push_back(std::move(l));
+      (own_time(name, l) <= b.track.last_utime() ? due : later).push_back(std::move(l));
     }
     b.early_loops = std::move(later);
     counters_.loops_waiting -= static_cast<int64_t>(due.size());
@@ -258,6 +257,17 @@ void SlamGraph::propose_loops(const std::string& name, const Body& b, int64_t ut
 void SlamGraph::drop_keyframe(Body& b) {
   ++counters_.odometry_edges_rejected;
   b.selector.reset_reference(b.track.empty() ? std::nullopt : std::optional<SE3>(b.track.newest().odom));
+}
+
+int64_t SlamGraph::own_time(const std::string& name, const LoopInput& l) {
+  return l.body_to.empty() || l.body_to == name ? std::max(l.utime_from, l.utime_to) : l.utime_from;
+}
+
+void SlamGraph::forget_handled_before_restart(const std::string& name, Body& b, int64_t utime) {
+  std::erase_if(b.early_sightings, [&](const SightingsInput& s) { return s.utime <= utime; });
+  const size_t loops = b.early_loops.size();
+  std::erase_if(b.early_loops, [&](const LoopInput& l) { return own_time(name, l) <= utime; });
+  counters_.loops_waiting -= static_cast<int64_t>(loops - b.early_loops.size());
 }
 
 void SlamGraph::wait_for_odometry(Body& b, const LoopInput& l) {

@@ -287,6 +287,12 @@ class SlamGraph {
   bool add_whole(const GraphContribution& c);
   /// Before the first keyframe of a loop's time: the loop waits for the odometry (bounded per body).
   void wait_for_odometry(Body& b, const LoopInput& l);
+  /// The time of body `name`'s own odometry a loop needs to have reached: both ends within the body, else its own end.
+  static int64_t own_time(const std::string& name, const LoopInput& l);
+  /// The inputs of body `name` that waited for its odometry in the saved state and are not newer than `utime`, the
+  /// time of a contribution taken back (adopt): the run before the restart handled them (its odometry had passed
+  /// that time), and what they made is in the tail taken back; they are forgotten, not handled twice.
+  void forget_handled_before_restart(const std::string& name, Body& b, int64_t utime);
   /// A whole robot sighting or loop whose other body's keyframe is not in the graph yet waits (bounded); retried
   /// after every keyframe.
   bool keyframes_present(const GraphContribution& c) const;

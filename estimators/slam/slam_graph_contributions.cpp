@@ -6,6 +6,7 @@
 #include "estimators/slam/slam_graph.hpp"
 
 #include <algorithm>
+#include <optional>
 
 namespace sextant::slam {
 namespace {
@@ -20,6 +21,16 @@ void push_bounded(std::vector<T>& list, T item, int max_pending, SlamCounters& c
   }
   list.push_back(std::move(item));
   ++counters.fleet_pending;
+}
+
+/// The time of the body's own odometry a contribution of the body was made at (its keyframe, its sightings, its end
+/// of a robot sighting or of an inter-robot loop); none for the others.
+std::optional<int64_t> odometry_time(const GraphContribution::What& what) {
+  if (const auto* k = std::get_if<KeyframeContribution>(&what)) return k->utime;
+  if (const auto* s = std::get_if<SightingsContribution>(&what)) return s->sightings.utime;
+  if (const auto* h = std::get_if<BodySightingHalf>(&what)) return h->utime;
+  if (const auto* l = std::get_if<BodyLoopHalf>(&what)) return l->loop.utime_from;
+  return std::nullopt;
 }
 
 }  // namespace
@@ -262,10 +273,11 @@ bool SlamGraph::adopt(const GraphContribution& c, SlamListener& listener) {
     ++counters_.fleet_contributions_refused;
     return false;
   }
+  Body& b = it != bodies_.end() ? it->second : body_for(c.body, k->planar);
+  if (const std::optional<int64_t> reached = odometry_time(c.what)) forget_handled_before_restart(c.body, b, *reached);
   if (std::holds_alternative<BodySightingHalf>(c.what) || std::holds_alternative<BodyLoopHalf>(c.what)) return true;
   if (std::holds_alternative<BodySighting>(c.what) || std::holds_alternative<BodyLoop>(c.what))
     adopted_wholes_.insert(whole_key(c));
-  Body& b = it != bodies_.end() ? it->second : body_for(c.body, k->planar);
   // The back end's remote path is the one that takes a contribution as it is: the body is remote while it runs.
   struct Local {
     Body& b;

@@ -36,7 +36,8 @@ GraphConfig fleet_config(const std::string& self) {
 }
 
 // Robot k's (0: a, 1: b of kThreeRobots) inputs at step i, 10 Hz odometry and 5 Hz sightings of the landmarks and
-// of the other robot's marker, as the graph stage's events.
+// of the other robot's marker, as the graph stage's events.  The sightings are stamped half-way to the next
+// odometry message, so each waits for it (SlamGraph's early sightings): a save after an even step holds one.
 std::vector<Event> inputs(int k, int i, const std::map<int64_t, Eigen::Vector2d>& world) {
   const Robot& r = kThreeRobots[k];
   const double t = 0.1 * i;
@@ -45,8 +46,8 @@ std::vector<Event> inputs(int k, int i, const std::map<int64_t, Eigen::Vector2d>
   out.push_back(Odometry{in.utime, r.name, true, to_pose(in.pose), in.covariance, in.increment_covariance, {}});
   if (i % 2 == 0) {
     auto points = world;
-    points[k == 0 ? 1000 : 1001] = kThreeRobots[1 - k].truth(t).translation();
-    const slam::SightingsInput s = sightings_at(r, t, points);
+    points[k == 0 ? 1000 : 1001] = kThreeRobots[1 - k].truth(t + 0.05).translation();
+    const slam::SightingsInput s = sightings_at(r, t + 0.05, points);
     LandmarkSightings e{s.utime, r.name, true, to_pose(SE3()), {}};
     for (const auto& o : s.sightings) e.observations.push_back({o.id, o.range, o.azimuth, o.elevation, o.covariance});
     out.push_back(std::move(e));
@@ -110,7 +111,8 @@ TEST_CASE(
     "graph stage: a fleet daemon killed after its last save and restarted from it ends with the same map as the "
     "other, and loses nothing of its robot's contributions") {
   const auto world = random_landmarks(3, 30);
-  constexpr int kSave = 100, kKill = 130, kRestart = 140, kEnd = 250;
+  // Saved after step 100, while its robot's sightings of 10.05 s wait for the odometry of 10.1 s.
+  constexpr int kSave = 101, kKill = 130, kRestart = 140, kEnd = 250;
   Fleet fleet, faultless;
   std::string saved;
   for (int i = 0; i <= kEnd + 100; ++i) {
@@ -146,6 +148,15 @@ TEST_CASE(
     if (const auto* w = std::get_if<slam::BodySighting>(&what))
       CHECK(wholes.emplace(w->observer, w->utime, w->sighting.id).second);
   CHECK(wholes.size() > 10);
+  // Each sightings message of a is contributed once, anchored with a covariance (the restarted daemon's sightings
+  // that waited for the odometry in its saved state were handled before the kill: they are in the tail it took back).
+  std::set<int64_t> sightings;
+  for (const auto& [seq, what] : fleet.sent_of_a)
+    if (const auto* s = std::get_if<slam::SightingsContribution>(&what)) {
+      CAPTURE(seq);
+      CHECK(sightings.insert(s->sightings.utime).second);
+      CHECK(s->anchor.covariance.diagonal().minCoeff() >= 0);
+    }
   CHECK(fleet.sent_of_a.rbegin()->first == static_cast<int64_t>(fleet.sent_of_a.size()));  // 1, 2, ... all sent
   for (const char* body : {"a", "b"}) {
     CAPTURE(body);
