@@ -32,18 +32,24 @@ constexpr std::pair<graph::Ordering, const char*> kOrderings[] = {{graph::Orderi
                                                                   {graph::Ordering::kAuto, "auto"}};
 
 // One line per update: its time, what entered, what was relinearized, whether it rebuilt (or installed a spread
-// reordering) and whether a spread reordering is under way after it, nnz(L): where a slow step's time went.
+// reordering) and whether a spread reordering is under way after it, nnz(L): where a slow step's time went; the
+// chi2 of the online estimate after it, and at sampled updates the batch optimum's of the same factors (empty
+// elsewhere): how far the online answer is from the best one.
 void write_step_trace(const std::string& path, const graph::FeedResult& r) {
   std::FILE* f = std::fopen(path.c_str(), "w");
   if (f == nullptr) throw std::runtime_error("cannot write the step trace " + path);
   std::fprintf(f,
                "update,ms,new_factors,relinearized_variables,relinearized_factors,rebuilt,reordering,solves,"
-               "factor_nonzeros\n");
+               "factor_nonzeros,chi2,batch_chi2\n");
   for (size_t k = 0; k < r.steps.size(); ++k) {
     const graph::FeedStep& s = r.steps[k];
-    std::fprintf(f, "%zu,%.4f,%d,%d,%d,%d,%d,%d,%zu\n", k + 1, r.step_ms[k], s.status.new_factors,
+    std::fprintf(f, "%zu,%.4f,%d,%d,%d,%d,%d,%d,%zu,%.10g,", k + 1, r.step_ms[k], s.status.new_factors,
                  s.status.relinearized_variables, s.status.relinearized_factors, s.status.rebuilt ? 1 : 0,
-                 s.reordering ? 1 : 0, s.status.solves, s.factor_nonzeros);
+                 s.reordering ? 1 : 0, s.status.solves, s.factor_nonzeros, s.chi2);
+    if (std::isnan(s.batch_chi2))
+      std::fprintf(f, "\n");
+    else
+      std::fprintf(f, "%.10g\n", s.batch_chi2);
   }
   if (std::fclose(f) != 0) throw std::runtime_error("cannot write the step trace " + path);
 }
@@ -60,7 +66,10 @@ GraphOptimizationResult run_incremental(const graph::G2oGraph& g, const GraphOpt
   io.relinearize_skip = o.relin_skip;
   graph::IncrementalSmoother smoother(io);
   const auto t0 = std::chrono::steady_clock::now();
-  graph::FeedResult r = graph::feed_in_order(g.graph, smoother);
+  graph::FeedOptions feed;
+  feed.chi2 = !o.step_trace.empty();
+  feed.reference_every = o.step_trace.empty() ? 0 : o.step_reference;
+  graph::FeedResult r = graph::feed_in_order(g.graph, smoother, feed);
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   if (!o.step_trace.empty()) write_step_trace(o.step_trace, r);
   rusage ru{};

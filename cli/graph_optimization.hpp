@@ -49,6 +49,7 @@ struct GraphOptimizationOptions {
   double relin_translation = 0.1, relin_rotation = 0.1;  // incremental: relinearization thresholds (m, rad)
   int relin_skip = 1;      // incremental: look for variables to relinearize every this many updates
   std::string step_trace;  // incremental: a CSV file of every update (write_step_trace's columns); empty: none
+  int step_reference = 0;  // incremental, with step_trace: the batch optimum's chi2 every this many updates (0: none)
 };
 
 struct GraphOptimizationResult {

@@ -1,6 +1,6 @@
 // sextant optimize IN.g2o [-o OUT.g2o] [--solver gn|lm] [--init auto|file|odometry|chordal|sgd]
 //                         [--robust none|huber|cauchy|dcs] [--information reject|repair|diagonal] [--max-iters N]
-//                         [--incremental [--step-trace CSV]] [--json]
+//                         [--incremental [--step-trace CSV [--step-reference N]]] [--json]
 #include "cli/command.hpp"
 #include "cli/graph_optimization.hpp"
 
@@ -76,7 +76,11 @@ void add_options(CLI::App* cmd, Args& a) {
       ->check(CLI::PositiveNumber);
   cmd->add_option("--step-trace", o->step_trace,
                   "incremental: write one CSV line per update (time, factors entered and relinearized, rebuilds, "
-                  "nnz of L) to this file");
+                  "nnz of L, chi2 of the online estimate) to this file");
+  cmd->add_option("--step-reference", o->step_reference,
+                  "incremental, with --step-trace: also solve the factors so far as a batch every this many updates "
+                  "(and at the last) and write that optimum's chi2 beside the online one")
+      ->check(CLI::NonNegativeNumber);
 }
 
 // The graph, its bad information matrices refused (exit 2, with the options that would repair them) or repaired

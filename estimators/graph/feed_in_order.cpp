@@ -1,11 +1,30 @@
 #include "estimators/graph/feed_in_order.hpp"
 
+#include "estimators/graph/optimizer.hpp"
+
 #include <algorithm>
 #include <chrono>
 
 namespace sextant::graph {
 
-FeedResult feed_in_order(const FactorGraph& graph, IncrementalSmoother& smoother) {
+namespace {
+
+// The batch optimum's chi2 of the smoother's factors so far, from its current estimate: what its online answer is
+// measured against.
+double batch_chi2(const IncrementalSmoother& smoother, RobustKernel kernel, double kernel_width) {
+  FactorGraph copy;
+  for (const Variable& v : smoother.graph().variables()) copy.add_variable(v);
+  for (const auto& f : smoother.graph().factors()) copy.add_factor(f->rebind(f->variables()));
+  OptimizerOptions o;
+  o.kernel = kernel;
+  o.kernel_width = kernel_width;
+  const OptimizerSummary summary = optimize(copy, o);
+  return summary.usable() ? summary.final_chi2 : std::numeric_limits<double>::quiet_NaN();
+}
+
+}  // namespace
+
+FeedResult feed_in_order(const FactorGraph& graph, IncrementalSmoother& smoother, const FeedOptions& options) {
   FeedResult r;
   const auto& vars = graph.variables();
   // The step of each factor: its latest pose (factors without a pose go with the first step).
@@ -17,6 +36,8 @@ FeedResult feed_in_order(const FactorGraph& graph, IncrementalSmoother& smoother
     steps[static_cast<size_t>(std::max(latest, 0))].push_back(fi);
   }
   std::vector<int> to_smoother(vars.size(), -1);
+  const auto last_step = std::find_if(steps.rbegin(), steps.rend(), [](const auto& s) { return !s.empty(); });
+  const std::vector<size_t>* last = last_step == steps.rend() ? nullptr : &*last_step;
   for (const auto& step : steps) {
     if (step.empty()) continue;
     for (size_t fi : step) {
@@ -49,6 +70,10 @@ FeedResult feed_in_order(const FactorGraph& graph, IncrementalSmoother& smoother
     const IncrementalStatus st = smoother.update();
     r.step_ms.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
     r.steps.push_back({st, smoother.factor_nonzeros(), smoother.reordering()});
+    if (options.chi2) r.steps.back().chi2 = smoother.chi2();
+    if (options.reference_every > 0 &&
+        (r.steps.size() % static_cast<size_t>(options.reference_every) == 0 || &step == last))
+      r.steps.back().batch_chi2 = batch_chi2(smoother, smoother.options().kernel, smoother.options().kernel_width);
     r.rebuilds += st.rebuilt ? 1 : 0;
     r.relinearized_factors += st.relinearized_factors;
     r.deferred_at_end = st.deferred_variables;

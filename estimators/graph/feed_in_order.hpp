@@ -10,6 +10,7 @@
 // update, its time being the update plus the new pose's estimate).
 #include "estimators/graph/incremental_smoother.hpp"
 
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -21,6 +22,17 @@ struct FeedStep {
   IncrementalStatus status;
   size_t factor_nonzeros = 0;  // nnz(L) after the update
   bool reordering = false;     // a spread reordering is under way after it
+  /// With FeedOptions::chi2: chi2 of the factors so far at the smoother's estimate after the update (its online
+  /// answer); at the updates FeedOptions::reference_every picks, the batch optimum's chi2 of the same factors
+  /// (Gauss-Newton to convergence from that estimate).  NaN otherwise.  Neither is in the update's time.
+  double chi2 = std::numeric_limits<double>::quiet_NaN();
+  double batch_chi2 = std::numeric_limits<double>::quiet_NaN();
+};
+
+/// What the feed measures beyond each update's time.
+struct FeedOptions {
+  bool chi2 = false;        // FeedStep::chi2 after every update
+  int reference_every = 0;  // FeedStep::batch_chi2 every this many updates and at the last (0: never)
 };
 
 struct FeedResult {
@@ -34,6 +46,6 @@ struct FeedResult {
 
 /// Feeds `graph` (variables and factors, e.g. from read_g2o) to `smoother`, which must be empty.  The variables'
 /// `fixed` flags are kept.  Stops at the first failed update.
-FeedResult feed_in_order(const FactorGraph& graph, IncrementalSmoother& smoother);
+FeedResult feed_in_order(const FactorGraph& graph, IncrementalSmoother& smoother, const FeedOptions& options = {});
 
 }  // namespace sextant::graph

@@ -103,12 +103,15 @@ TEST_CASE("the default options reach the chordal basin on torus3D, below the fil
   CHECK(g.graph.chi2() == doctest::Approx(14574.75).epsilon(1e-6));
 }
 
-TEST_CASE("the incremental run's step trace has one line per update that adds up to its summary") {
+TEST_CASE(
+    "the incremental run's step trace has one line per update that adds up to its summary, with the online chi2 "
+    "and the batch optimum's at sampled updates") {
   const std::string path = std::string(SEXTANT_SHARED_DIR) + "/data/posegraph/CSAIL.g2o";
   const std::string trace = "/tmp/sextant_step_trace_test.csv";
   GraphOptimizationOptions o;
   o.incremental = true;
   o.step_trace = trace;
+  o.step_reference = 300;
   graph::G2oGraph g = graph::read_g2o(path);
   const auto r = optimize_graph(g, o);
   REQUIRE(r.ok);
@@ -124,18 +127,31 @@ TEST_CASE("the incremental run's step trace has one line per update that adds up
   std::string line;
   REQUIRE(std::getline(in, line));
   CHECK(line ==
-        "update,ms,new_factors,relinearized_variables,relinearized_factors,rebuilt,reordering,solves,factor_nonzeros");
-  int lines = 0, rebuilt = 0, relinearized = 0, factors = 0;
-  double ms = 0;
+        "update,ms,new_factors,relinearized_variables,relinearized_factors,rebuilt,reordering,solves,factor_nonzeros,"
+        "chi2,batch_chi2");
+  int lines = 0, rebuilt = 0, relinearized = 0, factors = 0, references = 0;
+  double ms = 0, chi2 = 0, batch_chi2 = 0;
   while (std::getline(in, line)) {
     std::vector<double> f;
     std::stringstream row(line);
     for (std::string cell; std::getline(row, cell, ',');) f.push_back(std::stod(cell));
-    REQUIRE(f.size() == 9);
+    REQUIRE((f.size() == 10 || f.size() == 11));
     CHECK(f[0] == ++lines);
     ms += f[1], factors += static_cast<int>(f[2]), relinearized += static_cast<int>(f[4]);
     rebuilt += static_cast<int>(f[5]);
+    chi2 = f[9];
+    CHECK(chi2 >= 0);
+    if (f.size() == 11) {  // every 300th update and the last: the batch optimum is never above the online answer
+      CHECK((lines % 300 == 0 || in.peek() == EOF));
+      CHECK(f[10] <= chi2 * (1 + 1e-9));
+      CHECK(f[10] >= 0.99 * chi2);  // and the online answer is within 1 % of it on CSAIL
+      ++references, batch_chi2 = f[10];
+    }
   }
+  CHECK(references == lines / 300 + 1);
+  // The last line's online chi2 is before the final exact back-substitution, which only lowers it to the summary's.
+  CHECK(number("final_chi2") <= chi2 * (1 + 1e-9));
+  CHECK(batch_chi2 == doctest::Approx(number("batch_final_chi2")).epsilon(1e-6));
   CHECK(lines == number("updates"));
   CHECK(rebuilt == number("rebuilds"));
   CHECK(relinearized == number("relinearized_factors"));
