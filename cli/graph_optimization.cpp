@@ -64,6 +64,7 @@ GraphOptimizationResult run_incremental(const graph::G2oGraph& g, const GraphOpt
   io.relinearize_translation = o.relin_translation;
   io.relinearize_rotation = o.relin_rotation;
   io.relinearize_skip = o.relin_skip;
+  io.heavy_relinearize_every = o.relin_heavy_every;
   graph::IncrementalSmoother smoother(io);
   const auto t0 = std::chrono::steady_clock::now();
   graph::FeedOptions feed;
@@ -100,6 +101,7 @@ GraphOptimizationResult run_incremental(const graph::G2oGraph& g, const GraphOpt
       .add("step_ms_max", runtime::nearest_rank_percentile_of(r.step_ms, 1.0));
   s.add("final_chi2_batch_ratio", ratio).add("batch_final_chi2", batch.final_chi2);
   s.add("updates", r.step_ms.size()).add("rebuilds", r.rebuilds).add("relinearize_skip", o.relin_skip);
+  s.add("heavy_relinearize_every", o.relin_heavy_every);
   s.add("relinearized_factors", r.relinearized_factors);
   s.add("factor_nonzeros", static_cast<int64_t>(smoother.factor_nonzeros())).add("peak_rss_mb", peak_mb);
   s.add("robust", graph::robust_kernel_name(o.robust));
@@ -133,8 +135,9 @@ GraphOptimizationResult optimize_graph(graph::G2oGraph& g, const GraphOptimizati
     if (!file_start || o.solver != graph::Method::kGaussNewton)
       throw std::invalid_argument(
           "incremental initializes each pose from its first edge; init and solver do not apply");
-    if (!(o.relin_translation > 0) || !(o.relin_rotation > 0) || o.relin_skip < 1)
-      throw std::invalid_argument("relinearization thresholds must be > 0 and relin_skip at least 1");
+    if (!(o.relin_translation > 0) || !(o.relin_rotation > 0) || o.relin_skip < 1 || o.relin_heavy_every < 1)
+      throw std::invalid_argument(
+          "relinearization thresholds must be > 0 and relin_skip and relin_heavy_every at least 1");
     return run_incremental(g, o, output);
   }
 

@@ -5,6 +5,7 @@
 // (the keys scripts depend on: vertices, edges, dimension, iterations, initial_chi2, final_chi2, solve_seconds, converged; with
 // `incremental` also step_ms_mean/p50/p99/max and final_chi2_batch_ratio); chi2 is g2o's, the sum of eᵀΩe.
 #include "estimators/graph/g2o_io.hpp"
+#include "estimators/graph/incremental_options.hpp"
 #include "estimators/graph/optimizer.hpp"
 #include "estimators/graph/robust_kernel.hpp"
 #include "estimators/graph/ordering.hpp"
@@ -47,7 +48,9 @@ struct GraphOptimizationOptions {
   double tolerance = 1e-6;                               // stop when chi2 decreases by less than this fraction
   bool incremental = false;                              // one pose per update through the incremental smoother
   double relin_translation = 0.1, relin_rotation = 0.1;  // incremental: relinearization thresholds (m, rad)
-  int relin_skip = 1;      // incremental: look for variables to relinearize every this many updates
+  int relin_skip = 1;  // incremental: look for variables to relinearize every this many updates
+  int relin_heavy_every = graph::IncrementalOptions{}.heavy_relinearize_every;  // incremental: ... and those over the
+                                                                                // work budget alone every this many
   std::string step_trace;  // incremental: a CSV file of every update (write_step_trace's columns); empty: none
   int step_reference = 0;  // incremental, with step_trace: the batch optimum's chi2 every this many updates (0: none)
 };

@@ -74,6 +74,11 @@ void add_options(CLI::App* cmd, Args& a) {
          "(iSAM2's relinearizeSkip, 10 by its default; 1, the default here, keeps every update's estimate at the "
          "batch optimum)")
       ->check(CLI::PositiveNumber);
+  cmd->add_option("--relin-heavy-every", o->relin_heavy_every,
+                  "incremental: relinearize a variable whose rank updates alone exceed the work budget (3-D: a pose "
+                  "on long dense paths of the factor) only every this many updates")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
   cmd->add_option("--step-trace", o->step_trace,
                   "incremental: write one CSV line per update (time, factors entered and relinearized, rebuilds, "
                   "nnz of L, chi2 of the online estimate) to this file");

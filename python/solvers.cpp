@@ -176,7 +176,7 @@ void register_solvers(py::module_& m) {
       [](const py::object& graph, const std::optional<std::string>& output, const std::string& solver,
          const std::string& init, const std::string& robust, double kernel_width, int max_iters, double tolerance,
          const std::string& ordering, bool incremental, double relin_translation, double relin_rotation, int relin_skip,
-         const std::string& information) {
+         int relin_heavy_every, const std::string& information) {
         tools::GraphOptimizationOptions o;
         try {
           o.solver = tools::solver_from_name(solver), o.init = tools::initial_estimate_from_name(init);
@@ -186,12 +186,14 @@ void register_solvers(py::module_& m) {
         }
         o.kernel_width = kernel_width, o.max_iters = max_iters, o.tolerance = tolerance, o.incremental = incremental;
         o.relin_translation = relin_translation, o.relin_rotation = relin_rotation, o.relin_skip = relin_skip;
+        o.relin_heavy_every = relin_heavy_every;
         return optimize(graph, output, o, information);
       },
       py::arg("graph"), py::arg("output") = py::none(), py::arg("solver") = "gn", py::arg("init") = "auto",
       py::arg("robust") = "none", py::arg("kernel_width") = 1.0, py::arg("max_iters") = 100,
       py::arg("tolerance") = 1e-6, py::arg("ordering") = "block-amd", py::arg("incremental") = false,
       py::arg("relin_translation") = 0.1, py::arg("relin_rotation") = 0.1, py::arg("relin_skip") = 1,
+      py::arg("relin_heavy_every") = graph::IncrementalOptions{}.heavy_relinearize_every,
       py::arg("information") = "reject",
       "`sextant optimize`: graph is a g2o file's path or a list of g2o records such as ('VERTEX_SE2', 0, x, y, "
       "theta), ('EDGE_SE2', 0, 1, dx, dy, dtheta, *information_upper_triangle), ('FIX', 0).  Returns {'summary': "

@@ -170,6 +170,7 @@ void read_smoother(Section& s, engine::GraphConfig& c) {
   m.get("min_update_factors", o.min_update_factors, int_in_range(1, 1 << 20));
   m.get("max_update_factors", o.max_update_factors, int_in_range(1, 1 << 20));
   m.get("relinearize_work", o.relinearize_work, positive());
+  m.get("heavy_relinearize_every", o.heavy_relinearize_every, int_in_range(1, 1 << 20));
   m.get("rebuild_iterations", o.rebuild_iterations, int_in_range(1, 1 << 20));
   m.get("refill_ratio", o.refill_ratio, Check<double>([](const double& v) -> std::optional<std::string> {
           if (v > 1 && std::isfinite(v)) return std::nullopt;  // at 1 any fill-in would reorder at every update

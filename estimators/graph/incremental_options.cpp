@@ -32,6 +32,7 @@ std::string invalid_option(const IncrementalOptions& o) {
   if (o.max_update_factors < o.min_update_factors)
     return wrong("max_update_factors", o.max_update_factors, ">= min_update_factors");
   if (!positive(o.relinearize_work)) return wrong("relinearize_work", o.relinearize_work, "a positive number");
+  if (o.heavy_relinearize_every < 1) return wrong("heavy_relinearize_every", o.heavy_relinearize_every, ">= 1");
   if (o.rebuild_iterations < 1) return wrong("rebuild_iterations", o.rebuild_iterations, ">= 1");
   // At 1 any fill-in would reorder at every update.
   if (!(std::isfinite(o.refill_ratio) && o.refill_ratio > 1))

@@ -29,6 +29,13 @@ struct IncrementalOptions {
   /// steps are furthest past the thresholds go first; the others wait for the next updates, so that a correction
   /// spreads over several updates instead of spiking one (sphere2500: 40-80 factors at once took 130-370 ms).
   double relinearize_work = 4e6;
+  /// A variable whose relinearization alone costs more than relinearize_work (the budget takes the most-moved one
+  /// whatever it costs) is relinearized only at every this many-th update (iSAM2's relinearizeSkip, for these only);
+  /// cheaper ones at every update.  On 3-D graphs such variables (one pose's few factors on paths through the dense top
+  /// of L) took three quarters of the relinearization time, relinearized again and again as a correction moved them
+  /// (torus3D: 2,525 of 5,959 rounds).  Every 10th: torus3D's mean step 0.58 of every update's, the online answer as
+  /// close to the batch optimum; planar graphs have none (bench/results/incremental_isam2.md).
+  int heavy_relinearize_every = 10;
   int rebuild_iterations = 10;  // Gauss-Newton iterations of a rebuild for new factors that would cost more as
                                 // rank updates (until no variable moves past the thresholds); a rebuild for
                                 // relinearization or reordering takes one

@@ -89,6 +89,8 @@ std::vector<int> within_work_budget(const SmootherState& s, std::vector<int> mov
       if (too_heavy) *too_heavy = true;
       continue;  // a rebuild relinearizes it (the caller's choice), or the reordering under way will
     }
+    if (chosen.empty() && own > s.options.relinearize_work && s.updates % s.options.heavy_relinearize_every != 0)
+      continue;  // alone over the budget: waits for the next update whose turn it is (heavy_relinearize_every)
     if (!chosen.empty() && (work + own > s.options.relinearize_work || factors.size() + fresh.size() > limit))
       continue;  // waits for a later update
     work += own;

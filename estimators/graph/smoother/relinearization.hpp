@@ -29,8 +29,9 @@ inline constexpr double kHubRebuildAbove = 2.0;
 /// The variables of `moved` relinearized in this round: by how far their steps are past the thresholds, largest
 /// first, as long as the rank-update work of their factors (the sum, over the factors, of residual dimension x the
 /// column counts along the factor's path to the root) stays within IncrementalOptions::relinearize_work and their
-/// factors number at most update_limit(); the first is always taken, unless it is a hub whose work alone is above
-/// kHubRebuildAbove budgets: such a hub is left out and `too_heavy` set.  Appends their factors (each once) to `factors`.
+/// factors number at most update_limit(); the first is taken even above the budget, but only at every
+/// IncrementalOptions::heavy_relinearize_every-th update, and never a hub whose work alone is above kHubRebuildAbove
+/// budgets: such a hub is left out and `too_heavy` set.  Appends their factors (each once) to `factors`.
 std::vector<int> within_work_budget(const SmootherState& s, std::vector<int> moved, std::vector<size_t>& factors,
                                     bool* too_heavy = nullptr);
 

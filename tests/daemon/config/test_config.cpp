@@ -272,6 +272,7 @@ void check_smoother_options(const sextant::graph::IncrementalOptions& got,
   CHECK(got.reorder_slice_ms == want.reorder_slice_ms);
   CHECK(got.rebuild_iterations == want.rebuild_iterations);
   CHECK(got.relinearize_work == want.relinearize_work);
+  CHECK(got.heavy_relinearize_every == want.heavy_relinearize_every);
   // Not configurable here: it stays the smoother's own.
   CHECK(got.capacity_growth == want.capacity_growth);
 }
@@ -295,7 +296,7 @@ TEST_CASE("engine.graph.smoother: defaults are IncrementalOptions' own, every ke
           "      max_update_factors: 512\n      refill_ratio: 2.5\n      nested_dissection_above: 100\n"
           "      reorder_spread: 3\n      reorder_spread_above: 0\n      reorder_slice_ms: 1.5\n"
           "      rebuild_iterations: 4\n      relinearize_work: 1000\n      reorder_spread_nonzeros: 7\n"
-          "      reorder_spread_factors: 9\n",
+          "      reorder_spread_factors: 9\n      heavy_relinearize_every: 7\n",
           "t")
           .engine.graph;
   sextant::graph::IncrementalOptions want = defaults;
@@ -304,6 +305,7 @@ TEST_CASE("engine.graph.smoother: defaults are IncrementalOptions' own, every ke
   want.max_update_factors = 512, want.refill_ratio = 2.5, want.nested_dissection_above = 100;
   want.reorder_spread = 3, want.reorder_spread_above = 0, want.reorder_slice_ms = 1.5, want.rebuild_iterations = 4;
   want.relinearize_work = 1000, want.reorder_spread_nonzeros = 7, want.reorder_spread_factors = 9;
+  want.heavy_relinearize_every = 7;
   const sextant::graph::IncrementalOptions got = planar_smoother_options(set);
   check_smoother_options(got, want);
   // The kernel stays the loops' (DCS, auto width), whatever the smoother section says.
@@ -322,6 +324,7 @@ TEST_CASE("engine.graph.smoother: defaults are IncrementalOptions' own, every ke
   CHECK(defaults.relinearize_work != want.relinearize_work);
   CHECK(defaults.reorder_spread_nonzeros != want.reorder_spread_nonzeros);
   CHECK(defaults.reorder_spread_factors != want.reorder_spread_factors);
+  CHECK(defaults.heavy_relinearize_every != want.heavy_relinearize_every);
 }
 
 TEST_CASE("engine.graph.smoother: each bad value stops parsing with its line, column and key") {

@@ -32,6 +32,7 @@ TEST_CASE("incremental options: defaults are valid, an option out of range is na
       {"max_update_factors", [](IncrementalOptions& o) { o.max_update_factors = 10, o.min_update_factors = 20; }},
       {"relinearize_work", [](IncrementalOptions& o) { o.relinearize_work = 0; }},
       {"relinearize_work", [&](IncrementalOptions& o) { o.relinearize_work = nan; }},
+      {"heavy_relinearize_every", [](IncrementalOptions& o) { o.heavy_relinearize_every = 0; }},
       {"rebuild_iterations", [](IncrementalOptions& o) { o.rebuild_iterations = 0; }},
       {"refill_ratio", [](IncrementalOptions& o) { o.refill_ratio = 1.0; }},
       {"refill_ratio", [&](IncrementalOptions& o) { o.refill_ratio = inf; }},
