@@ -134,10 +134,10 @@ class SlamGraph {
   /// applied as apply() applies a remote body's (not gated again, not contributed again: the others have it), and
   /// the body's front end goes on from it (the track and the keyframe selector at its newest keyframe; the next
   /// keyframe id after it; its inputs that waited for the odometry in the saved state and are not newer than it
-  /// forgotten: the run that made it had handled them).  A half of a robot sighting or of an inter-robot loop adds nothing here: its whole is in
-  /// the other body's stream.  A whole it had completed from another body's half is not completed again when that
-  /// half is delivered again (this graph's state is older than it).  Refused (counted as apply() counts) for a remote body, or a new body's first
-  /// contribution that is not a keyframe.  True when applied.
+  /// forgotten: the run that made it had handled them).  A half of a robot sighting or of an inter-robot loop adds
+  /// nothing here: its whole is in the other body's stream.  A whole it had completed from another body's half is not
+  /// completed again when that half is delivered again (this graph's state is older than it).  Refused (counted as
+  /// apply() counts) for a remote body, or a new body's first contribution that is not a keyframe.  True when applied.
   bool adopt(const GraphContribution& contribution, SlamListener& listener);
   /// Whether a body's graph is built from contributions (another graph owns its inputs).
   bool remote(const std::string& body) const;
