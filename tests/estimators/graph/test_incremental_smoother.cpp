@@ -88,6 +88,35 @@ SE3 initial_pose(const IncrementalSmoother& s, const std::vector<int>& index, co
   return end == e.j ? known * e.z : known * e.z.inverse();
 }
 
+// make_graph's lap of 40 poses with a heading bias of 0.01 rad on every odometry edge: closed at once by a loop edge,
+// the correction moves every pose past the relinearization thresholds.
+SyntheticGraph biased_lap(bool planar) {
+  SyntheticGraph g = make_graph(planar, 1, 40, 3);
+  for (auto& e : g.edges) e.z = e.z * SE3::exp((Vector6d() << 0, 0, 0, 0, 0, 0.01).finished());
+  return g;
+}
+
+// Feeds the first `poses` poses of g's lap to `s`, one per update, each initialized by composing its odometry edge
+// (g.edges[k - 1], from pose k - 1 to k) with the previous pose's initial value; `batch` (empty), when given, gets the
+// same variables and factors.  Returns the poses' indices in `s`.
+std::vector<int> feed_odometry(const SyntheticGraph& g, int poses, IncrementalSmoother& s,
+                               FactorGraph* batch = nullptr) {
+  std::vector<int> idx;
+  SE3 x;
+  for (int k = 0; k < poses; ++k) {
+    if (k > 0) x = x * g.edges[static_cast<size_t>(k - 1)].z;
+    idx.push_back(s.add_variable(pose_variable(g.planar, k, x)));
+    if (batch != nullptr) batch->add_variable(pose_variable(g.planar, k, x));
+    if (k > 0) {
+      const Edge& e = g.edges[static_cast<size_t>(k - 1)];
+      s.add_factor(make_factor(g, e, idx[static_cast<size_t>(k - 1)], idx[static_cast<size_t>(k)]));
+      if (batch != nullptr) batch->add_factor(make_factor(g, e, k - 1, k));
+    }
+    REQUIRE(s.update().ok);
+  }
+  return idx;
+}
+
 // Feeds the edges in `order` (a pose enters when first referenced, initialized by composing the edge with the known
 // end), updating after each edge; every `check_every` updates compares with a batch solve of the same graph from the
 // same start.  Returns the number of comparisons made.
@@ -233,24 +262,14 @@ TEST_CASE("a reordering spread over updates equals batch, and gives the same est
 TEST_CASE("a long loop closed at once relinearizes, and a rebuild reorders without changing the estimate") {
   // One lap of 40 poses with a heading bias in the odometry, closed by one loop edge at the end: the correction
   // moves the poses by metres, far past the relinearization thresholds.
-  SyntheticGraph g = make_graph(true, 1, 40, 3);
-  for (auto& e : g.edges) e.z = e.z * SE3::exp((Vector6d() << 0, 0, 0, 0, 0, 0.01).finished());
+  SyntheticGraph g = biased_lap(true);
   g.edges.push_back({0, 39, g.truth[0].inverse() * g.truth[39]});
   std::vector<size_t> order(g.edges.size());
   std::iota(order.begin(), order.end(), 0);
   CHECK(run_and_compare(g, order, 1) == static_cast<int>(order.size()));
 
   IncrementalSmoother s;
-  std::vector<int> idx;
-  SE3 x;
-  for (int k = 0; k < 40; ++k) {
-    if (k > 0) x = x * g.edges[static_cast<size_t>(k - 1)].z;
-    idx.push_back(s.add_variable(pose_variable(true, k, x)));
-    if (k > 0)
-      s.add_factor(make_factor(g, g.edges[static_cast<size_t>(k - 1)], idx[static_cast<size_t>(k - 1)],
-                               idx[static_cast<size_t>(k)]));
-    REQUIRE(s.update().ok);
-  }
+  const std::vector<int> idx = feed_odometry(g, 40, s);
   s.add_factor(make_factor(g, g.edges.back(), idx[0], idx[39]));
   const IncrementalStatus st = s.update();
   REQUIRE(st.ok);
@@ -318,8 +337,7 @@ TEST_CASE("a variable over the relinearization budget alone waits for its turn, 
   // no single variable fits (relinearize_work 1), each is relinearized alone and only at every
   // heavy_relinearize_every-th update; with an unlimited one, at every update until none has moved.  Either way the
   // estimate ends at the batch solution of the same factors.
-  SyntheticGraph g = make_graph(true, 1, 40, 3);
-  for (auto& e : g.edges) e.z = e.z * SE3::exp((Vector6d() << 0, 0, 0, 0, 0, 0.01).finished());
+  SyntheticGraph g = biased_lap(true);
   g.edges.push_back({0, 39, g.truth[0].inverse() * g.truth[39]});
   for (const auto& [budget, every] : {std::pair{1.0, 3}, std::pair{1.0, 1}, std::pair{1e12, 3}}) {
     CAPTURE(budget);
@@ -330,19 +348,7 @@ TEST_CASE("a variable over the relinearization budget alone waits for its turn, 
     opt.heavy_relinearize_every = every;
     IncrementalSmoother s(opt);
     FactorGraph batch;
-    std::vector<int> idx;
-    SE3 x;
-    for (int k = 0; k < 40; ++k) {
-      if (k > 0) x = x * g.edges[static_cast<size_t>(k - 1)].z;
-      idx.push_back(s.add_variable(pose_variable(true, k, x)));
-      batch.add_variable(pose_variable(true, k, x));
-      if (k > 0) {
-        const auto& e = g.edges[static_cast<size_t>(k - 1)];
-        s.add_factor(make_factor(g, e, idx[static_cast<size_t>(k - 1)], idx[static_cast<size_t>(k)]));
-        batch.add_factor(make_factor(g, e, k - 1, k));
-      }
-      REQUIRE(s.update().ok);
-    }
+    const std::vector<int> idx = feed_odometry(g, 40, s, &batch);
     s.add_factor(make_factor(g, g.edges.back(), idx[0], idx[39]));
     batch.add_factor(make_factor(g, g.edges.back(), 0, 39));
     std::vector<int> relinearized;  // variables relinearized per update, from the one that closed the loop
@@ -377,8 +383,7 @@ TEST_CASE("a rebuild for relinearization spread over updates ends at the batch s
   // The biased lap closed at once, as above: the correction moves every pose past the thresholds, more factors than
   // rank updates take (update limit 4), so the rebuild is begun and spread over the next updates; relinearization
   // waits for it, and by rank updates is held to one variable per round (relinearize_work tiny) before and after.
-  SyntheticGraph g = make_graph(false, 1, 40, 3);
-  for (auto& e : g.edges) e.z = e.z * SE3::exp((Vector6d() << 0, 0, 0, 0, 0, 0.01).finished());
+  SyntheticGraph g = biased_lap(false);
   IncrementalOptions opt;
   opt.reorder_spread_above = 0;
   opt.reorder_spread = 3;
@@ -386,20 +391,10 @@ TEST_CASE("a rebuild for relinearization spread over updates ends at the batch s
   opt.relinearize_work = 1.0;
   IncrementalSmoother s(opt);
   FactorGraph batch;
-  std::vector<int> idx;
-  SE3 x;
-  auto add_edge = [&](const Edge& e) {
-    s.add_factor(make_factor(g, e, idx[static_cast<size_t>(e.i)], idx[static_cast<size_t>(e.j)]));
-    batch.add_factor(make_factor(g, e, idx[static_cast<size_t>(e.i)], idx[static_cast<size_t>(e.j)]));
-  };
-  for (int k = 0; k < 40; ++k) {
-    if (k > 0) x = x * g.edges[static_cast<size_t>(k - 1)].z;
-    idx.push_back(s.add_variable(pose_variable(false, k, x)));
-    batch.add_variable(pose_variable(false, k, x));
-    if (k > 0) add_edge(g.edges[static_cast<size_t>(k - 1)]);
-    REQUIRE(s.update().ok);
-  }
-  add_edge({0, 39, g.truth[0].inverse() * g.truth[39]});
+  const std::vector<int> idx = feed_odometry(g, 40, s, &batch);
+  const Edge loop{0, 39, g.truth[0].inverse() * g.truth[39]};
+  s.add_factor(make_factor(g, loop, idx[0], idx[39]));
+  batch.add_factor(make_factor(g, loop, 0, 39));
   const int rebuilds_before = s.rebuilds();
   IncrementalStatus st = s.update();
   REQUIRE(st.ok);
