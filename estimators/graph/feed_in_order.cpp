@@ -11,13 +11,13 @@ namespace {
 
 // The batch optimum's chi2 of the smoother's factors so far, from its current estimate: what its online answer is
 // measured against.
-double batch_chi2(const IncrementalSmoother& smoother, RobustKernel kernel, double kernel_width) {
+double batch_chi2(const IncrementalSmoother& smoother) {
   FactorGraph copy;
   for (const Variable& v : smoother.graph().variables()) copy.add_variable(v);
-  for (const auto& f : smoother.graph().factors()) copy.add_factor(f->rebind(f->variables()));
+  for (const auto& f : smoother.graph().factors()) copy.add_factor(f->clone());
   OptimizerOptions o;
-  o.kernel = kernel;
-  o.kernel_width = kernel_width;
+  o.kernel = smoother.options().kernel;
+  o.kernel_width = smoother.options().kernel_width;
   const OptimizerSummary summary = optimize(copy, o);
   return summary.usable() ? summary.final_chi2 : std::numeric_limits<double>::quiet_NaN();
 }
@@ -73,7 +73,7 @@ FeedResult feed_in_order(const FactorGraph& graph, IncrementalSmoother& smoother
     if (options.chi2) r.steps.back().chi2 = smoother.chi2();
     if (options.reference_every > 0 &&
         (r.steps.size() % static_cast<size_t>(options.reference_every) == 0 || &step == last))
-      r.steps.back().batch_chi2 = batch_chi2(smoother, smoother.options().kernel, smoother.options().kernel_width);
+      r.steps.back().batch_chi2 = batch_chi2(smoother);
     r.rebuilds += st.rebuilt ? 1 : 0;
     r.relinearized_factors += st.relinearized_factors;
     r.deferred_at_end = st.deferred_variables;
