@@ -5,6 +5,26 @@
 
 namespace sextant::graph::smoother {
 
+namespace {
+
+// sum over k in [first, end) of Lx[k] dx[Li[k]], in four independent partial sums: with one, each multiply-add
+// waits for the previous one, and the long columns of a 3-D graph's dense top made the back-substitution a fifth
+// of torus3D's time.
+double column_dot(const double* Lx, const int* Li, int first, int end, const Eigen::VectorXd& dx) {
+  double s0 = 0.0, s1 = 0.0, s2 = 0.0, s3 = 0.0;
+  int k = first;
+  for (; k + 4 <= end; k += 4) {
+    s0 += Lx[k] * dx[Li[k]];
+    s1 += Lx[k + 1] * dx[Li[k + 1]];
+    s2 += Lx[k + 2] * dx[Li[k + 2]];
+    s3 += Lx[k + 3] * dx[Li[k + 3]];
+  }
+  for (; k < end; ++k) s0 += Lx[k] * dx[Li[k]];
+  return (s0 + s1) + (s2 + s3);
+}
+
+}  // namespace
+
 void back_substitute(SmootherState& s, bool full) {
   Factorization& fx = s.fx;
   if (fx.L == nullptr || fx.capacity == 0) return;
@@ -27,8 +47,7 @@ void back_substitute(SmootherState& s, bool full) {
     bool need = full || fx.dirty[ju];
     for (int k = first; !need && k < end; ++k) need = fx.changed[static_cast<size_t>(Li[k])] != 0;
     if (!need) continue;
-    double x = y[j] / Lx[Lp[j]];
-    for (int k = first; k < end; ++k) x -= Lx[k] * fx.dx[Li[k]];
+    const double x = y[j] / Lx[Lp[j]] - column_dot(Lx, Li, first, end, fx.dx);
     fx.recomputed[ju] = 1;
     if (x != fx.dx[j] && fx.col_var[ju] >= 0) s.var_changed[static_cast<size_t>(fx.col_var[ju])] = 1;
     fx.dx[j] = x;
