@@ -7,9 +7,8 @@ namespace sextant::graph::smoother {
 
 namespace {
 
-// sum over k in [first, end) of Lx[k] dx[Li[k]], in four independent partial sums: with one, each multiply-add
-// waits for the previous one, and the long columns of a 3-D graph's dense top made the back-substitution a fifth
-// of torus3D's time.
+// sum over k in [first, end) of Lx[k] dx[Li[k]], in four independent partial sums, so that the multiply-adds of a
+// long column (a 3-D graph's factor has a dense top of a thousand columns and more) do not each wait for the last.
 double column_dot(const double* Lx, const int* Li, int first, int end, const Eigen::VectorXd& dx) {
   double s0 = 0.0, s1 = 0.0, s2 = 0.0, s3 = 0.0;
   int k = first;
