@@ -120,6 +120,7 @@ std::vector<std::pair<std::string, int64_t>> FleetExchange::counters() const {
           {"fleet_in_owner_rewound", i.owner_rewound},
           {"fleet_in_repairs_overheard", i.repairs_overheard},
           {"fleet_out_tail_requests", o.tail_requests},
+          {"fleet_out_refused", o.refused},
           {"fleet_tail_requests", t.requests},
           {"fleet_tail_adopted", t.adopted},
           {"fleet_tail_duplicates", t.duplicates},

@@ -55,6 +55,7 @@
 
 #include <cstdint>
 #include <deque>
+#include <functional>
 #include <map>
 #include <optional>
 #include <set>
@@ -127,6 +128,7 @@ struct OutboxCounters {
   int64_t repair_not_retained = 0;  // contributions asked for that are no longer retained
   int64_t tail_requests = 0;        // restarted members' requests for their own streams' tails, answered from the
                                     // copies of those streams held here
+  int64_t refused = 0;  // local contributions the wire's checks refuse, numbered as kNothing (Outbox::set_wire_check)
 };
 
 /// The sending side: numbers the contributions of the local bodies, keeps the last ones for repair, makes the FLEET
@@ -135,6 +137,13 @@ class Outbox {
  public:
   Outbox(std::string self, FleetExchangeOptions options);
 
+  /// Why a contribution would be refused by its receivers' decoder ("" when it would not): the daemon hands the
+  /// codec's own checks (daemon/runtime/codec.hpp, fleet_item_error) here.
+  using WireCheck = std::function<std::string(const What&)>;
+  /// From now on, a contribution `check` refuses is numbered as kNothing (which changes no graph) and counted
+  /// (`refused`), instead of going out as it is: every receiver's decoder would refuse the message that carries it,
+  /// and its stream would stop there at every receiver for good.  None (the default): nothing is checked.
+  void set_wire_check(WireCheck check) { wire_check_ = std::move(check); }
   /// Numbers a contribution of a local body (split as split_for_wire), keeps it and queues it for sending.
   void add(const slam::GraphContribution& c);
   /// Whether `body` is a local body (it contributed here).
@@ -196,6 +205,7 @@ class Outbox {
   std::map<std::string, Bucket> buckets_;  // per requester: members only
   std::optional<int64_t> last_heartbeat_;
   OutboxCounters counters_;
+  WireCheck wire_check_;
 };
 
 struct InboxCounters {
@@ -388,6 +398,7 @@ struct FleetExchange {
     std::vector<slam::GraphContribution> own;
   };
   Due due(int64_t now_utime);
+  void set_wire_check(Outbox::WireCheck check) { outbox.set_wire_check(std::move(check)); }
   void save(archive::ArchiveWriter& w) const {
     outbox.save(w);
     inbox.save(w);

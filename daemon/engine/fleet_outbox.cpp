@@ -44,6 +44,10 @@ int64_t Retained::evict(const FleetExchangeOptions& o, size_t keep) {
 void Outbox::add(const slam::GraphContribution& c) {
   Stream& s = streams_[c.body];
   for (What& what : split_for_wire(c.what)) {
+    if (wire_check_ && !wire_check_(what).empty()) {
+      what = kNothing;
+      ++counters_.refused;
+    }
     s.retained.push(Numbered{s.next_seq++, std::move(what)});
     ++s.pending;
     ++counters_.contributions;

@@ -354,8 +354,16 @@ void GraphStage::load(archive::ArchiveReader& r) {
   if (saved_exchange) {
     fleet::FleetExchange saved(config_.fleet_exchange);
     saved.load(r);
-    if (exchange_) *exchange_ = std::move(saved);
+    if (exchange_) {
+      *exchange_ = std::move(saved);
+      exchange_->set_wire_check(wire_check_);
+    }
   }
+}
+
+void GraphStage::set_fleet_wire_check(fleet::Outbox::WireCheck check) {
+  wire_check_ = std::move(check);
+  if (exchange_) exchange_->set_wire_check(wire_check_);
 }
 
 void GraphStage::forget(const std::string& source) {

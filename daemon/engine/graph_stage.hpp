@@ -63,6 +63,9 @@ class GraphStage final : public Stage {
   void load(archive::ArchiveReader& r) override;
   /// Drops the body with its map (SlamGraph::forget), its feed and correction.
   void forget(const std::string& source) override;
+  /// The fleet exchange checks each local contribution with `check` before numbering it (Outbox::set_wire_check),
+  /// now and after a load; nothing without the exchange.
+  void set_fleet_wire_check(fleet::Outbox::WireCheck check);
 
   /// The smoother of the planar bodies or of the 3-D ones (nullptr before the first such body).
   const graph::IncrementalSmoother* smoother(bool planar) const { return slam_.smoother(planar); }
@@ -106,6 +109,7 @@ class GraphStage final : public Stage {
   /// members' applied in their streams' order (fleet_exchange.hpp).  Its clock is the newest time the stage has seen:
   /// the data's and the fleet messages', and a live daemon's ticks (a FleetControl without a sender, see handle).
   std::unique_ptr<fleet::FleetExchange> exchange_;
+  fleet::Outbox::WireCheck wire_check_;  // set_fleet_wire_check's, handed again to an exchange a load replaces
   int64_t exchange_now_ = 0;
   /// A fleet event through the exchange: what it makes due applied to the graph and sent.
   void exchange(const Event& e, Outputs& out, const Emit& emit);

@@ -92,6 +92,10 @@ sextant::fleet_contribution_t to_message(const engine::FleetContributions& o, co
 sextant::fleet_control_t to_message(const engine::FleetControl& o, const std::string& sender, int64_t seq);
 /// One contribution as fleet_item_t (fleet_exchange.hpp's item_bytes is its encoded size).
 sextant::fleet_item_t to_item(const slam::GraphContribution::What& what);
+/// Empty when `what`, encoded as fleet_item_t (to_item), passes every check to_event makes of a received
+/// contribution; else the reason and the field ("covariance: fleet_item_t.anchors[0].covariance: not positive
+/// semi-definite (...)").  The owner's check before it numbers a contribution (Outbox::set_wire_check).
+std::string fleet_item_error(const slam::GraphContribution::What& what);
 
 /// Message -> output (for replay reports, tests and `sextant listen`); no validation beyond decoding.
 engine::FusedPose to_output(const sextant::fused_pose_t& m);

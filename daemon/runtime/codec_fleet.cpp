@@ -224,6 +224,15 @@ engine::fleet::What item_of(const sextant::fleet_item_t& it, const std::string& 
 
 }  // namespace
 
+std::string fleet_item_error(const engine::fleet::What& what) {
+  const Decoded d = guarded([&]() -> Decoded {
+    item_of(to_item(what), "fleet_item_t");
+    return engine::Event{};
+  });
+  const auto* r = std::get_if<Rejection>(&d);
+  return r == nullptr ? std::string() : r->reason + ": " + r->message;
+}
+
 Decoded to_event(const sextant::fleet_contribution_t& m) {
   return guarded([&]() -> Decoded {
     check_name(m.sender, "fleet_contribution_t.sender", false);

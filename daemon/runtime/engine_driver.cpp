@@ -1,5 +1,8 @@
 #include "daemon/runtime/engine_driver.hpp"
 
+#include "daemon/engine/graph_stage.hpp"
+#include "daemon/runtime/codec.hpp"
+
 #include <algorithm>
 
 namespace sextant::runtime {
@@ -43,6 +46,9 @@ EngineDriver::EngineDriver(const config::DaemonConfig& config, engine::Engine& e
     intake_.add_channel(ch.fleet_control, InputKind::kFleetControl);
     tick_channel_ = ch.fleet_control;
   }
+  // The fleet exchange numbers no local contribution that the other members' decoders would refuse.
+  for (auto& stage : engine_.stages())
+    if (auto* graph = dynamic_cast<engine::GraphStage*>(stage.get())) graph->set_fleet_wire_check(fleet_item_error);
   make_lanes(config);
 }
 

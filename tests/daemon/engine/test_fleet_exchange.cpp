@@ -423,6 +423,33 @@ TEST_CASE("fleet exchange: an owner restarted from an older state than it sent i
   CHECK(p.b.inbox.counters().owner_rewound == 1);
 }
 
+TEST_CASE(
+    "fleet exchange: a local contribution the wire's check refuses is numbered as nothing, and the stream goes on") {
+  FleetExchange a("a", options()), b("b", options());
+  a.set_wire_check([](const What& w) {
+    return std::holds_alternative<slam::SightingsContribution>(w) ? std::string("covariance: refused") : std::string();
+  });
+  CHECK(a.contributed(keyframe("r1", 0)));
+  CHECK(a.contributed(sightings("r1", 0, 3)));
+  CHECK(a.contributed(keyframe("r1", 1)));
+  CHECK(a.outbox.next_seq("r1") == 4);
+  CHECK(a.outbox.counters().refused == 1);
+  std::vector<slam::GraphContribution> applied;
+  for (const auto& m : a.due(1000000).contributions)
+    for (auto& c : b.received(m, 1000000).apply) applied.push_back(std::move(c));
+  REQUIRE(applied.size() == 3);  // the receiver's stream goes past the refused one
+  CHECK(key(applied[0].what) == "k0");
+  CHECK(std::get<slam::KeyframesThinned>(applied[1].what).keyframes ==
+        std::get<slam::KeyframesThinned>(kNothing).keyframes);
+  CHECK(key(applied[2].what) == "k1");
+  CHECK(b.inbox.next_expected("r1") == 4);
+  // Without a check, the same contribution goes out as it is.
+  FleetExchange c("c", options());
+  CHECK(c.contributed(sightings("r2", 0, 3)));
+  CHECK(c.outbox.counters().refused == 0);
+  REQUIRE(c.due(1000000).contributions.size() == 1);
+}
+
 TEST_CASE("fleet exchange: one call per fleet event gives what to apply and what to send, and names every counter") {
   FleetExchange a("a", options()), c("c", options());
   CHECK(a.contributed(keyframe("r1", 0)));
@@ -441,7 +468,7 @@ TEST_CASE("fleet exchange: one call per fleet event gives what to apply and what
   REQUIRE(answer.answers.size() == 1);
   CHECK(answer.answers[0].repair);
   const auto counters = c.counters();
-  CHECK(counters.size() == 34);
+  CHECK(counters.size() == 35);
   CHECK(std::find(counters.begin(), counters.end(), std::pair<std::string, int64_t>{"fleet_in_delivered", 2}) !=
         counters.end());
   CHECK(std::find(counters.begin(), counters.end(), std::pair<std::string, int64_t>{"fleet_in_claimed", 1}) !=

@@ -214,6 +214,28 @@ TEST_CASE("fleet codec: each bad value is refused naming its field") {
   CHECK(crefused([](auto& m) { m.kind = 3; }) == "invalid: fleet_control_t.kind: unknown (3)");
 }
 
+TEST_CASE("fleet codec: the owner's check of a contribution is the decoder's, naming the field") {
+  for (const auto& what : every_kind()) CHECK(runtime::fleet_item_error(what).empty());
+  // The stream-stopping value of a restart that anchored waiting sightings by a negative interpolation.
+  slam::SightingsContribution s;
+  s.anchor = anchor(3);
+  s.anchor.covariance(0, 0) = -2.3e-6;
+  s.sightings.utime = 21;
+  s.sightings.sightings.push_back(sighting(0));
+  const std::string why = runtime::fleet_item_error(s);
+  CHECK(why.find("fleet_item_t.anchors[0].covariance: not positive semi-definite") != std::string::npos);
+  CHECK(why.rfind("covariance: ", 0) == 0);  // the decoder's reason first
+  slam::KeyframeContribution k = std::get<slam::KeyframeContribution>(every_kind()[1]);
+  k.edge_covariance(2, 2) = std::numeric_limits<double>::quiet_NaN();
+  CHECK(runtime::fleet_item_error(k).rfind("non_finite: ", 0) == 0);
+  // The same contribution in a received message is refused for the same reason.
+  FleetContributions m = batch();
+  m.contributions = {s};
+  const std::string refused = rejection(decode(InputKind::kFleet, runtime::to_message(m, "a", 1)));
+  REQUIRE(refused.find("anchors[0]") != std::string::npos);
+  CHECK(refused.substr(refused.find("anchors[0]")) == why.substr(why.find("anchors[0]")));
+}
+
 TEST_CASE("fleet codec: bytes that do not fit are refused before anything is allocated, never thrown") {
   const auto bytes = encode(runtime::to_message(batch(), "alpha", 0));
   for (size_t n = 0; n < bytes.size(); n += 7) {
