@@ -135,6 +135,7 @@ class ArchiveReader {
 
   void raw(void* out, size_t n, const char* what) {
     need(n, what);
+    if (n == 0) return;  // an empty matrix's data() is null, which memcpy may not be given even for no bytes
     std::memcpy(out, p_ + at_, n);
     at_ += n;
   }
