@@ -1,5 +1,6 @@
 #include "estimators/graph/factor.hpp"
 
+#include <array>
 #include <cmath>
 
 namespace sextant::graph {
@@ -108,7 +109,11 @@ void PosePriorFactor::linearize(const std::vector<Variable>& vars, Linearization
 
 PointObservationFactor::PointObservationFactor(int pose, int point, Model model, Eigen::VectorXd z,
                                                Eigen::MatrixXd information, SE3 sensor_offset)
-    : Factor({pose, point}, std::move(information)), model_(model), z_(std::move(z)), offset_(sensor_offset) {}
+    : Factor({pose, point}, std::move(information)),
+      model_(model),
+      z_(std::move(z)),
+      offset_(sensor_offset),
+      offset2_(SE2::from_se3(offset_)) {}
 
 std::string PointObservationFactor::type() const {
   switch (model_) {
@@ -140,7 +145,7 @@ void PointObservationFactor::evaluate(const std::vector<Variable>& vars, Eigen::
   Eigen::Vector3d l;
   Eigen::MatrixXd dl_dx, dl_dp;
   if (planar) {
-    const SE2 s = SE2::from_se3(offset_);
+    const SE2& s = offset2_;
     const Eigen::Vector2d l0 = x.pose2.rotation().inverse() * (p.point.head<2>() - x.pose2.translation());
     const Eigen::Vector2d ls = s.inverse().act(l0);
     l << ls, 0;
@@ -165,7 +170,7 @@ void PointObservationFactor::evaluate(const std::vector<Variable>& vars, Eigen::
   Eigen::MatrixXd H;
   const double rxy2 = l.x() * l.x() + l.y() * l.y(), rxy = std::sqrt(rxy2);
   const double r = planar ? rxy : l.norm();
-  std::vector<bool> angle(static_cast<size_t>(residual_dim()), false);
+  std::array<bool, 3> angle{};  // which residual components are angles (at most 3 components)
   switch (model_) {
     case Model::kPosition:
       e = l.head(n) - z_;
@@ -205,7 +210,7 @@ void PointObservationFactor::evaluate(const std::vector<Variable>& vars, Eigen::
       break;
     }
   }
-  for (int k = 0; k < residual_dim(); ++k)
+  for (int k = 0; k < static_cast<int>(angle.size()) && k < residual_dim(); ++k)
     if (angle[static_cast<size_t>(k)]) e[k] = wrap_angle(e[k]);
   if (out) {
     out->jacobians[0] = H * dl_dx;

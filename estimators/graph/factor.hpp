@@ -128,6 +128,7 @@ class PointObservationFactor final : public Factor {
   Model model_;
   Eigen::VectorXd z_;
   SE3 offset_;
+  SE2 offset2_;  // offset_'s planar part, for planar poses
 };
 
 /// A pose observing a point fixed on another pose: one robot's sighting of another robot's marker.  The observed

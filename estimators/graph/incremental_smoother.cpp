@@ -250,8 +250,9 @@ double IncrementalSmoother::chi2() const {
   s.moved_since_chi2.clear();
   for (size_t f : s.pending_factors) s.factor_chi2[f] = unknown;
   double sum = 0;
+  Eigen::VectorXd e, weighted;  // scratch, reused across factors
   for (size_t f = 0; f < factors.size(); ++f) {
-    if (std::isnan(s.factor_chi2[f])) s.factor_chi2[f] = factors[f]->chi2(s.graph.variables());
+    if (std::isnan(s.factor_chi2[f])) s.factor_chi2[f] = factors[f]->chi2(s.graph.variables(), e, weighted);
     sum += s.factor_chi2[f];
   }
   return sum;

@@ -32,6 +32,11 @@ struct Variable {
   bool is_point() const { return kind == VariableKind::kPoint2 || kind == VariableKind::kPoint3; }
   /// The pose as SE(3) (planar poses embedded with z = 0).
   SE3 as_se3() const { return kind == VariableKind::kPose3 ? pose3 : pose2.to_se3(); }
+  /// The pose's position (planar poses with z = 0): as_se3().translation() without forming the rotation.
+  Eigen::Vector3d position() const {
+    return kind == VariableKind::kPose3 ? pose3.translation()
+                                        : Eigen::Vector3d(pose2.translation().x(), pose2.translation().y(), 0.0);
+  }
   /// False when any coordinate is NaN or infinite.
   bool finite() const;
 };

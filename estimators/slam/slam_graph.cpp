@@ -76,6 +76,10 @@ SE3 SlamGraph::estimate(const Body& b, int variable) const {
   return b.smoother->graph().variables()[static_cast<size_t>(variable)].as_se3();
 }
 
+Eigen::Vector3d SlamGraph::position(const Body& b, int variable) const {
+  return b.smoother->graph().variables()[static_cast<size_t>(variable)].position();
+}
+
 void SlamGraph::add_factor(Body& b, std::unique_ptr<graph::Factor> factor, FactorRole role, bool robust,
                            std::optional<double> width) {
   b.smoother->add_factor(std::move(factor), robust, width);

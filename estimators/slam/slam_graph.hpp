@@ -264,6 +264,8 @@ class SlamGraph {
   void add_factor(Body& b, std::unique_ptr<graph::Factor> factor, FactorRole role, bool robust,
                   std::optional<double> width);
   SE3 estimate(const Body& b, int variable) const;
+  /// estimate(b, variable).translation(), cheaper (no rotation formed).
+  Eigen::Vector3d position(const Body& b, int variable) const;
   void on_keyframe_candidate(const std::string& name, Body& b, const OdometryInput& o, SlamListener& listener);
   /// The sightings of body `b` that waited for its odometry (early_seen) and are now behind it: anchored.
   void complete_seen(Body& b, SlamListener& listener);

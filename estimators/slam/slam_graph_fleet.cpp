@@ -36,12 +36,13 @@ void SlamGraph::propose_fleet_loops(const std::string& name, const Body& b, int6
   if (!(options_.fleet.proposal_radius > 0)) return;
   const TrackKeyframe& k = b.track.newest();
   const SE3 here = estimate(b, k.variable);
+  const Eigen::Vector3d at = here.translation();
   for (const auto& [other, o] : bodies_) {
     if (other == name || o.frame != b.frame) continue;
     const TrackKeyframe* nearest = nullptr;
     double best = options_.fleet.proposal_radius;
     for (const TrackKeyframe& c : o.track.keyframes()) {
-      const double d = (estimate(o, c.variable).translation() - here.translation()).norm();
+      const double d = (position(o, c.variable) - at).norm();
       if (d <= best) best = d, nearest = &c;
     }
     if (nearest != nullptr)

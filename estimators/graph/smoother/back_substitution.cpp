@@ -44,7 +44,9 @@ void back_substitute(SmootherState& s, bool full) {
     const int first = Lp[j] + 1, end = Lp[j] + Lnz[j], parent = fx.parent_of(j);
     if (parent >= 0 && !fx.recomputed[static_cast<size_t>(parent)]) continue;
     bool need = full || fx.dirty[ju];
-    for (int k = first; !need && k < end; ++k) need = fx.changed[static_cast<size_t>(Li[k])] != 0;
+    // From the highest row down: the rows most likely to have changed (the hubs, ordered last, and the newest poses)
+    // are a column's last, so the scan usually stops at once.
+    for (int k = end - 1; !need && k >= first; --k) need = fx.changed[static_cast<size_t>(Li[k])] != 0;
     if (!need) continue;
     const double x = y[j] / Lx[Lp[j]] - column_dot(Lx, Li, first, end, fx.dx);
     fx.recomputed[ju] = 1;
