@@ -1,6 +1,6 @@
 // sextant simulate SCENARIO -o OUT.lcm [--seed N] [--duration S] [--tum-out GT.txt] [--unknown-ids]
 //                  [--clutter N] [--clutter-region XMIN YMIN ZMIN XMAX YMAX ZMAX] ...
-//                  [--robots N [--wrong-loops SHARE] [--gt-prefix PREFIX] [--config-out FLEET.yaml]]
+//                  [--robots N [--wrong-loops SHARE [--omit-wrong-loops]] [--gt-prefix PREFIX] [--config-out FLEET.yaml]]
 #include "cli/command.hpp"
 #include "sim/simulator.hpp"
 #include "eval/trajectory_io.hpp"
@@ -59,6 +59,8 @@ void add_fleet_options(CLI::App* cmd, sextant::tools::SimulationOptions& o, std:
       ->check(CLI::Range(1, 1000));
   cmd->add_option("--wrong-loops", o.wrong_loops, "fleet: share of the inter-robot loop closures that are wrong")
       ->check(CLI::Range(0.0, 1.0));
+  cmd->add_flag("--omit-wrong-loops", o.omit_wrong_loops,
+                "fleet: draw the wrong loops but do not write them (the same run without its wrong loops)");
   cmd->add_option("--gt-prefix", gt_prefix,
                   "fleet: ground truth in PREFIX robotN.txt (TUM) and PREFIX landmarks.txt (default: OUT with "
                   "_gt_)");

@@ -458,6 +458,11 @@ class Simulation {
       noise = noise * make_iso({distance * std::cos(a), distance * std::sin(a), 0},
                                Eigen::Quaterniond(Eigen::AngleAxisd(uniform(-kPi, kPi), Eigen::Vector3d::UnitZ())));
       ++summary_.wrong_loops;
+      if (o_.omit_wrong_loops) {  // as if written and lost: the next loops come at the same times and numbers
+        r.last_inter_loop = t;
+        ++seq_["LOOP_CLOSURES"];
+        return;
+      }
     }
     write_loop(t, robots_[best_robot].source, r.source, best->utime, best->pose.inverse() * T * noise, info);
     ++summary_.inter_robot_loops;

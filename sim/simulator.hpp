@@ -61,6 +61,11 @@ struct SimulationOptions {
   std::string source = "robot1";                // one robot's name (a fleet's are robot1..robotN)
   int robots = 1;                               // more than 1: a fleet (above)
   double wrong_loops = 0;                       // fleet: share of the inter-robot loop closures that are wrong, 0..1
+  /// fleet: the wrong loops are drawn as above but not written (their sequence numbers skipped, as if lost); every
+  /// other message is the same, byte for byte, as with them (the same draws are made): the run "without the wrong
+  /// loops" of the same realization, to which the run with them compares (a run with a share of 0 differs in every
+  /// noise draw after the first wrong loop).
+  bool omit_wrong_loops = false;
 
   // Robot and odometry.
   double speed = 2.0;  // m/s along the course
@@ -110,7 +115,8 @@ struct SimulationSummary {
   int64_t odometry = 0, landmark_messages = 0, landmark_observations = 0, bearing_scans = 0, detections = 0,
           false_alarms = 0, loop_closures = 0, truth = 0, imu = 0, gnss = 0, gnss_outliers = 0;
   int64_t robot_sightings = 0, inter_robot_loops = 0, wrong_loops = 0;  // a fleet's (landmark_observations
-                                                                        // counts the landmarks' only)
+                                                                        // counts the landmarks' only; wrong loops
+                                                                        // omitted count in wrong_loops only)
   std::vector<std::pair<int64_t, engine::Pose>> robot_truth;  // (utime, pose), at the odometry rate (the first robot)
   std::map<std::string, std::vector<std::pair<int64_t, engine::Pose>>> fleet_truth;  // every robot's, by source
   std::map<int64_t, std::string> markers;                                            // a fleet's marker ids -> sources

@@ -182,3 +182,40 @@ TEST_CASE("fleet simulation: deterministic by seed, no wrong loops unless asked,
   CHECK_THROWS_AS(run(o, b), std::invalid_argument);
   for (const auto& f : {a, b}) std::remove(f.c_str());
 }
+
+TEST_CASE("fleet simulation: omitting the wrong loops leaves every other message as it was, byte for byte") {
+  auto o = fleet_options(tools::Scenario::kPlanar);
+  o.duration_s = 120;
+  const auto with = temp("with.lcm"), without = temp("without.lcm");
+  const auto s_with = run(o, with);
+  o.omit_wrong_loops = true;
+  const auto s_without = run(o, without);
+  REQUIRE(s_with.wrong_loops > 5);
+  CHECK(s_without.wrong_loops == s_with.wrong_loops);
+  CHECK(s_without.inter_robot_loops == s_with.inter_robot_loops - s_with.wrong_loops);
+  const Truth truth = truth_of(s_with);
+  // Walk the two logs side by side: every record of the run without is the next record of the run with, and what the
+  // run with has in between is wrong inter-robot loops only (checked against the truth, independently of the flag).
+  const auto a = runtime::LogReader::read_all(with), b = runtime::LogReader::read_all(without);
+  size_t i = 0;
+  int64_t skipped = 0;
+  const auto skip_wrong_loop = [&] {  // a[i] is not in the run without: it must be a wrong inter-robot loop
+    REQUIRE(a[i].channel == "LOOP_CLOSURES");
+    sextant::loop_closure_t m;
+    REQUIRE(runtime::decode_message(a[i].data, m));
+    REQUIRE_FALSE(m.source_to.empty());
+    const Eigen::Isometry3d expected =
+        truth.at(m.source).at(m.utime_from).inverse() * truth.at(m.source_to).at(m.utime_to);
+    CHECK((expected.inverse() * iso(m.position, m.orientation)).translation().norm() > 2.5);
+    ++skipped, ++i;
+  };
+  for (const auto& r : b) {
+    while (i < a.size() && !(a[i].channel == r.channel && a[i].timestamp == r.timestamp && a[i].data == r.data))
+      skip_wrong_loop();
+    REQUIRE(i < a.size());
+    ++i;
+  }
+  while (i < a.size()) skip_wrong_loop();
+  CHECK(skipped == s_with.wrong_loops);
+  for (const auto& f : {with, without}) std::remove(f.c_str());
+}
