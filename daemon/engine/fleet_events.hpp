@@ -15,7 +15,8 @@ namespace sextant::engine {
 /// in the order the body's owner made them.
 struct FleetContributions {
   int64_t utime = 0;   // when it was sent (the sender's clock)
-  std::string sender;  // the daemon that owns `body` (daemon.name); the publisher stamps its own name on outputs
+  std::string sender;  // the daemon that owns `body` (daemon.name), or a member relaying from its copy (repair);
+                       // the publisher stamps its own name on outputs
   std::string body;
   bool repair = false;  // resent on a repair request
   int64_t first = 1;    // the stream number of contributions[0], >= 1

@@ -121,6 +121,8 @@ std::vector<std::pair<std::string, int64_t>> FleetExchange::counters() const {
           {"fleet_in_repairs_overheard", i.repairs_overheard},
           {"fleet_out_tail_requests", o.tail_requests},
           {"fleet_out_refused", o.refused},
+          {"fleet_out_relayed", o.relayed},
+          {"fleet_in_relays", i.relays},
           {"fleet_tail_requests", t.requests},
           {"fleet_tail_adopted", t.adopted},
           {"fleet_tail_duplicates", t.duplicates},
@@ -145,6 +147,7 @@ FleetExchange::Received FleetExchange::received(const FleetContributions& m, int
 FleetExchange::Received FleetExchange::received(const FleetControl& m, int64_t now_utime) {
   if (m.kind != FleetControl::Kind::kRepair) return {inbox.receive(m, now_utime), {}, {}};
   if (m.daemon == m.sender) return {{}, outbox.answer_tail(m, inbox, now_utime), {}};
+  if (m.daemon != outbox.self()) return {{}, outbox.relay(m, inbox, now_utime), {}};
   return {{}, outbox.answer(m, now_utime), {}};
 }
 

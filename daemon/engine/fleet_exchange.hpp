@@ -32,7 +32,15 @@
 // (all of them cut off, or more than `retain` behind) is not taken back: the owner's next numbers repeat those, and
 // a receiver that applied them counts it (`owner_rewound`, from a heartbeat that ends the stream before what it
 // heard).  The others' answers, heard by every daemon on the multicast, open no stream and change none
-// (`repairs_overheard`).
+// (`repairs_overheard`), but for a daemon stuck on a gap of that stream (below).
+//
+// Relays: a repair does not depend on one path.  A receiver that asks an owner kRelayAfterAsks times in a row for the
+// same number of a stream (its answers do not arrive, or its requests do not reach the owner) is heard asking by every
+// member, and each member that holds a copy of that stream (the one it keeps for restarts) answers from it, within the
+// same per-requester rate as its own repairs (`relayed`).  The receiver takes a repair of a stream from a member that
+// is not its owner only while it is so stuck (`relays`); otherwise such answers are overheard as before.  A copy holds
+// what its member applied of the owner's stream, the same contributions at the same numbers, so a relay is the
+// owner's answer by another path.
 //
 // The limit of `retain`: the owner keeps the last `retain` contributions of each body (and at most retain_mb of them)
 // to resend.  A receiver that misses older ones (cut off for longer, or a daemon that joins after the fleet made more
@@ -74,6 +82,9 @@ using What = slam::GraphContribution::What;
 inline constexpr size_t kMaxSightingsPerItem = 256;
 /// The keyframe ids of one KeyframesThinned contribution at most (fleet_item_t.num_keyframes): more are split likewise.
 inline constexpr size_t kMaxThinnedPerItem = 1024;
+/// The consecutive requests for the same number of a stream after which the other members answer from their copies
+/// ("Relays" above), and after which the receiver takes such answers.
+inline constexpr int kRelayAfterAsks = 3;
 /// The contributions of one FLEET message, and the ranges of one FLEET_CONTROL message, at most.
 inline constexpr size_t kMaxItemsPerMessage = 1024;
 inline constexpr size_t kMaxRangesPerMessage = 1024;
@@ -129,6 +140,7 @@ struct OutboxCounters {
   int64_t tail_requests = 0;        // restarted members' requests for their own streams' tails, answered from the
                                     // copies of those streams held here
   int64_t refused = 0;  // local contributions the wire's checks refuse, numbered as kNothing (Outbox::set_wire_check)
+  int64_t relayed = 0;  // contributions of other owners' streams sent from the copies held here (Outbox::relay)
 };
 
 /// The sending side: numbers the contributions of the local bodies, keeps the last ones for repair, makes the FLEET
@@ -148,6 +160,8 @@ class Outbox {
   void add(const slam::GraphContribution& c);
   /// Whether `body` is a local body (it contributed here).
   bool owns(const std::string& body) const { return streams_.contains(body); }
+  /// This daemon's name (daemon.name).
+  const std::string& self() const { return self_; }
   std::vector<std::string> bodies() const;
   /// The FLEET messages of what was added since the last call: per body, runs of consecutive contributions, each
   /// message at most max_message_bytes and kMaxItemsPerMessage contributions.
@@ -162,6 +176,10 @@ class Outbox {
   /// sender): what `copies` (this daemon's Inbox) applied of those streams and still holds, from the numbers asked,
   /// then what it holds ahead of a gap, within the same per-requester rate.  Nothing for a non-member (counted as refused) or this daemon itself.
   std::vector<FleetContributions> answer_tail(const FleetControl& request, const Inbox& copies, int64_t now_utime);
+  /// A repair request from one member to another, overheard ("Relays" above): once the requester has asked for the
+  /// same number of a stream kRelayAfterAsks times in a row, the answer from `copies` (this daemon's Inbox) for the
+  /// ranges of that stream, within the requester's rate; nothing before, nor for a stream without a copy here.
+  std::vector<FleetContributions> relay(const FleetControl& request, const Inbox& copies, int64_t now_utime);
   /// Takes back a contribution of a local body's stream that this daemon sent before it restarted from an older
   /// state (TailFetch): it must be numbered next_seq(body); it is retained as sent.  False (nothing changes) otherwise.
   bool adopt(const std::string& body, const Numbered& n);
@@ -194,15 +212,18 @@ class Outbox {
   Bucket& bucket(const std::string& requester, int64_t now);
   void evict(Stream& s);
   /// One range of a repair request answered from `log` (up to its number `last`) into `out`, within the requester's
-  /// bucket.
+  /// bucket; `sent` counts the contributions sent.
   void answer_range(const FleetRange& range, const Retained& log, int64_t last, Bucket& b, int64_t now,
-                    std::vector<FleetContributions>& out);
+                    std::vector<FleetContributions>& out, int64_t& sent);
 
   std::string self_;
   FleetExchangeOptions options_;
   std::set<std::string> members_;
   std::map<std::string, Stream> streams_;
   std::map<std::string, Bucket> buckets_;  // per requester: members only
+  /// Per (requester, body) overheard: the first number it asked for last and how many times in a row (relay); bodies
+  /// of the streams copied here only, so bounded like them.
+  std::map<std::pair<std::string, std::string>, std::pair<int64_t, int>> overheard_asks_;
   std::optional<int64_t> last_heartbeat_;
   OutboxCounters counters_;
   WireCheck wire_check_;
@@ -227,6 +248,8 @@ struct InboxCounters {
                                   // sent and did not take its tail back: its next numbers repeat ones applied here)
   int64_t repairs_overheard = 0;  // resent contributions of a stream not known here from its owner, of another
                                   // member's stream, or of a local body (another daemon's repair or restart; ignored)
+  int64_t relays = 0;             // repairs of a stream from a member that is not its owner, taken while stuck on a
+                                  // gap of it (Outbox::relay)
 };
 
 /// The receiving side: per (owner, body) stream, the contributions in order.
@@ -275,21 +298,32 @@ class Inbox {
     size_t held_bytes = 0;
     int64_t ask_at = 0;  // when the gap may be asked for (0: no gap seen)
     double backoff_s = 0;
-    int64_t sent_utime = 0;  // the owner's clock: its newest message (data or heartbeat) heard, for owner_rewound
-    int64_t beat_last = 0;   // ... and the stream's last number it stated then
-    int64_t heard_at = 0;    // this daemon's clock when the owner was last heard (not saved)
-    Retained copy;           // what was delivered, for the owner's restart (not saved)
+    int64_t sent_utime = 0;   // the owner's clock: its newest message (data or heartbeat) heard, for owner_rewound
+    int64_t beat_last = 0;    // ... and the stream's last number it stated then
+    int64_t heard_at = 0;     // this daemon's clock when the owner was last heard (not saved)
+    int64_t asked_first = 0;  // the first number of the last repair request (not saved) ...
+    int asks = 0;             // ... and how many requests in a row asked for it (0 once no gap is left)
+    Retained copy;            // what was delivered, for the owner's restart (not saved)
     void save(archive::ArchiveWriter& w) const;
     void load(archive::ArchiveReader& r);
   };
   /// A repair message about a stream not known here from its sender, or about a local body: counted, ignored.
   bool overheard(const FleetContributions& m);
+  /// A member's repair of another owner's stream while this daemon is stuck on a gap of it (its last kRelayAfterAsks
+  /// requests asked for the same number; every message of a relayed answer is taken until it asks again): the
+  /// stream; nullptr otherwise.
+  Stream* relayed_stream(const FleetContributions& m);
+  /// The contributions of `m` into `s`, and what is now next in it.  A repair that fills a hole, even one behind
+  /// the stream's first gap, is progress: the gaps left are asked for again after repair_backoff_s, not after a
+  /// back-off that grew while the first gap's answers were lost (the stream's next number may not move for a while
+  /// when its first gap is the one whose answers are lost).
+  std::vector<slam::GraphContribution> take(const FleetContributions& m, Stream& s, int64_t now);
   /// Whether `sender` may speak for `body` (counting why not); the stream when it may, opened if new.
   Stream* stream_for(const std::string& sender, const std::string& body);
   /// Delivers what is next in `s` into `out`, skipping (as lost) what is below the owner's first retained number.
   void deliver(const std::string& body, Stream& s, int64_t now, std::vector<slam::GraphContribution>& out);
-  /// Keeps one contribution arriving at `seq` (held, duplicate or beyond the window).
-  void hold(Stream& s, int64_t seq, What what);
+  /// Keeps one contribution arriving at `seq` (held, duplicate or beyond the window); true when it filled a hole.
+  bool hold(Stream& s, int64_t seq, What what);
   /// Schedules or clears `s`'s repair after the stream moved or learned of a gap.
   void schedule(Stream& s, int64_t now, bool moved);
   /// The owner of `s` spoke (data or heartbeat).  After a silence longer than the back-off (a link healed, the owner
@@ -374,8 +408,8 @@ struct FleetExchange {
     return true;
   }
   /// A fleet event heard on the bus: the contributions now next in their streams, to apply in this order
-  /// (SlamGraph::apply); for a repair request addressed to this daemon, or a restarted member's request for its
-  /// tails, the messages that answer it, to send; while this daemon fetches its own tails, what it took back of them
+  /// (SlamGraph::apply); for a repair request addressed to this daemon, a restarted member's request for its tails,
+  /// or a request between two other members that this daemon relays, the messages that answer it, to send; while this daemon fetches its own tails, what it took back of them
   /// (already in the outbox), to apply as its own in this order (SlamGraph::adopt).
   struct Received {
     std::vector<slam::GraphContribution> apply;

@@ -65,20 +65,22 @@ Inbox::Stream* Inbox::stream_for(const std::string& sender, const std::string& b
   return &s;
 }
 
-void Inbox::hold(Stream& s, int64_t seq, What what) {
+bool Inbox::hold(Stream& s, int64_t seq, What what) {
   if (seq < s.next || s.held.contains(seq)) {
     ++counters_.duplicates;
-    return;
+    return false;
   }
   const size_t bytes = item_bytes(what);
   if (seq - s.next >= options_.reorder_window ||
       (seq != s.next && s.held_bytes + bytes > static_cast<size_t>(std::max(options_.reorder_mb, 0)) * kMegabyte)) {
     ++counters_.out_of_window;
-    return;
+    return false;
   }
+  const bool hole = seq <= s.known_last;
   s.held_bytes += bytes;
   s.known_last = std::max(s.known_last, seq);
   s.held.emplace(seq, std::move(what));
+  return hole;
 }
 
 void Inbox::deliver(const std::string& body, Stream& s, int64_t now, std::vector<slam::GraphContribution>& out) {
@@ -110,6 +112,7 @@ void Inbox::schedule(Stream& s, int64_t now, bool moved) {
   if (s.known_last < s.next) {  // nothing known beyond what was delivered: no gap
     s.ask_at = 0;
     s.backoff_s = options_.repair_backoff_s;
+    s.asks = 0;
     return;
   }
   if (moved || s.ask_at == 0) {
@@ -139,21 +142,41 @@ bool Inbox::overheard(const FleetContributions& m) {
   return false;
 }
 
+Inbox::Stream* Inbox::relayed_stream(const FleetContributions& m) {
+  if (!m.repair || m.sender == self_ || !members_.contains(m.sender) || local_.contains(m.body)) return nullptr;
+  const auto it = streams_.find(m.body);
+  if (it == streams_.end() || it->second.owner == m.sender || it->second.asks < kRelayAfterAsks) return nullptr;
+  return &it->second;
+}
+
 std::vector<slam::GraphContribution> Inbox::receive(const FleetContributions& m, int64_t now_utime) {
+  if (Stream* s = relayed_stream(m)) {  // not the owner speaking: its silence is not ended by it
+    ++counters_.relays;
+    return take(m, *s, now_utime);
+  }
   if (overheard(m)) return {};
   Stream* s = stream_for(m.sender, m.body);
   if (s == nullptr) return {};
   heard(*s, now_utime);
   ++counters_.messages;
   if (!m.repair) s->sent_utime = std::max(s->sent_utime, m.utime);
+  return take(m, *s, now_utime);
+}
+
+std::vector<slam::GraphContribution> Inbox::take(const FleetContributions& m, Stream& s, int64_t now) {
   const auto n = static_cast<int64_t>(m.contributions.size());
   if (m.first < 1 || m.first > kMaxSeq - n) {
     counters_.out_of_window += n;
     return {};
   }
-  for (int64_t i = 0; i < n; ++i) hold(*s, m.first + i, m.contributions[static_cast<size_t>(i)]);
+  bool filled = false;
+  for (int64_t i = 0; i < n; ++i) filled = hold(s, m.first + i, m.contributions[static_cast<size_t>(i)]) || filled;
   std::vector<slam::GraphContribution> out;
-  deliver(m.body, *s, now_utime, out);
+  deliver(m.body, s, now, out);
+  if (m.repair && filled && s.ask_at != 0) {
+    s.backoff_s = options_.repair_backoff_s;
+    s.ask_at = std::min(s.ask_at, now + std::max<int64_t>(micros(s.backoff_s), 1));
+  }
   return out;
 }
 
@@ -213,8 +236,10 @@ std::vector<FleetControl> Inbox::repair_requests(int64_t now_utime) {
     FleetControl& request =
         by_owner.try_emplace(s.owner, FleetControl{now_utime, self_, FleetControl::Kind::kRepair, s.owner, {}})
             .first->second;
+    bool first = true;
     for (FleetRange& r : holes(body, s)) {
       if (request.streams.size() >= kMaxRangesPerMessage) break;  // the rest at this stream's next turn
+      if (first) s.asks = r.first == s.asked_first ? s.asks + 1 : 1, s.asked_first = r.first, first = false;
       counters_.repair_asked += r.last - r.first + 1;
       request.streams.push_back(std::move(r));
     }

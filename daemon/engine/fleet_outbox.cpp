@@ -144,7 +144,8 @@ std::vector<FleetContributions> Outbox::answer(const FleetControl& request, int6
       continue;
     }
     const Stream& s = it->second;
-    answer_range(range, s.retained, s.next_seq - 1 - static_cast<int64_t>(s.pending), b, now_utime, out);
+    answer_range(range, s.retained, s.next_seq - 1 - static_cast<int64_t>(s.pending), b, now_utime, out,
+                 counters_.repaired);
   }
   return out;
 }
@@ -162,7 +163,7 @@ std::vector<FleetContributions> Outbox::answer_tail(const FleetControl& request,
   std::vector<FleetContributions> out;
   for (const FleetRange& range : request.streams) {
     if (const Retained* copy = copies.copy_of(range.body, request.sender))
-      answer_range(range, *copy, copy->last(), b, now_utime, out);
+      answer_range(range, *copy, copy->last(), b, now_utime, out, counters_.repaired);
     // What is held ahead of a gap, run by run: the owner may have lost the gap too, and then numbers its next
     // contributions after these (TailFetch), as this daemon will apply them.
     const std::map<int64_t, What>* held = copies.held_of(range.body, request.sender);
@@ -172,15 +173,42 @@ std::vector<FleetContributions> Outbox::answer_tail(const FleetControl& request,
       run.push(Numbered{it->first, it->second});
       const auto next = std::next(it);
       if (next != held->end() && next->first == it->first + 1) continue;
-      answer_range(FleetRange{range.body, run.first(), range.last}, run, run.last(), b, now_utime, out);
+      answer_range(FleetRange{range.body, run.first(), range.last}, run, run.last(), b, now_utime, out,
+                   counters_.repaired);
       run.clear();
     }
   }
   return out;
 }
 
+std::vector<FleetContributions> Outbox::relay(const FleetControl& request, const Inbox& copies, int64_t now_utime) {
+  if (request.kind != FleetControl::Kind::kRepair || request.sender == self_ || request.daemon == self_ ||
+      request.daemon == request.sender || !members_.contains(request.sender))
+    return {};
+  // The bodies whose first range asks, for the kRelayAfterAsks-th time in a row or more, for the same number.
+  std::set<std::string> stuck, counted;
+  for (const FleetRange& range : request.streams) {
+    if (!counted.insert(range.body).second || copies.copy_of(range.body, request.daemon) == nullptr) continue;
+    auto& [first, times] = overheard_asks_[{request.sender, range.body}];
+    times = first == range.first ? times + 1 : 1;
+    first = range.first;
+    if (times >= kRelayAfterAsks) stuck.insert(range.body);
+  }
+  if (stuck.empty()) return {};
+  Bucket& b = bucket(request.sender, now_utime);
+  std::vector<FleetContributions> out;
+  for (const FleetRange& range : request.streams) {
+    if (!stuck.contains(range.body)) continue;
+    const Retained& copy = *copies.copy_of(range.body, request.daemon);
+    if (copy.items.empty() || range.last < copy.first()) continue;  // not held here: not this daemon's to count
+    const FleetRange held{range.body, std::max(range.first, copy.first()), range.last};
+    answer_range(held, copy, copy.last(), b, now_utime, out, counters_.relayed);
+  }
+  return out;
+}
+
 void Outbox::answer_range(const FleetRange& range, const Retained& log, int64_t last_held, Bucket& b, int64_t now,
-                          std::vector<FleetContributions>& out) {
+                          std::vector<FleetContributions>& out, int64_t& sent) {
   int64_t first = std::max<int64_t>(range.first, 1);
   const int64_t last = std::min({range.last, last_held, first + std::max(options_.max_repair_range, 1) - 1});
   if (last < first) return;
@@ -199,7 +227,7 @@ void Outbox::answer_range(const FleetRange& range, const Retained& log, int64_t 
     b.tokens -= bytes;
   }
   counters_.repair_limited += end - stop;
-  counters_.repaired += stop - begin;
+  sent += stop - begin;
   auto msgs = pack(range.body, begin, stop, true, now);
   b.tokens -= static_cast<double>(msgs.size() * message_overhead_bytes(self_, range.body));
   counters_.repair_messages += static_cast<int64_t>(msgs.size());

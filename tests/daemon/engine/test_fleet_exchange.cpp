@@ -468,7 +468,7 @@ TEST_CASE("fleet exchange: one call per fleet event gives what to apply and what
   REQUIRE(answer.answers.size() == 1);
   CHECK(answer.answers[0].repair);
   const auto counters = c.counters();
-  CHECK(counters.size() == 35);
+  CHECK(counters.size() == 37);
   CHECK(std::find(counters.begin(), counters.end(), std::pair<std::string, int64_t>{"fleet_in_delivered", 2}) !=
         counters.end());
   CHECK(std::find(counters.begin(), counters.end(), std::pair<std::string, int64_t>{"fleet_in_claimed", 1}) !=
@@ -704,4 +704,88 @@ TEST_CASE(
   CHECK(copy->items.size() == 8);
   CHECK(std::get<slam::KeyframesThinned>(copy->items[5].what).keyframes == std::vector<int64_t>{INT64_MAX});
   CHECK(b.inbox.counters().owner_rewound == 0);
+}
+
+TEST_CASE("fleet exchange: a repair whose answers never reach the requester comes from a member holding a copy") {
+  FleetExchange a("a", options()), b("b", options()), c("c", options());
+  constexpr int64_t kCount = 200;                                                    // more than one message holds
+  for (int64_t id = 0; id < kCount; ++id) CHECK(a.contributed(keyframe("r1", id)));  // numbers 1 to 200
+  int64_t now = 1000000;
+  size_t at_c = 0;
+  for (const auto& m : a.due(now).contributions) at_c += c.received(m, now).apply.size();
+  REQUIRE(at_c == kCount);
+  // b gets 1 and 200 only: 2 to 199 are a gap it asks a for, and a's answers never reach it.
+  std::vector<std::string> at_b, expected;
+  for (int64_t id = 0; id < kCount; ++id) expected.push_back("k" + std::to_string(id));
+  const auto to_b = [&](const FleetContributions& m) {
+    for (const auto& got : b.received(m, now).apply) at_b.push_back(key(got.what));
+  };
+  for (int64_t seq : {int64_t{1}, kCount})
+    to_b(FleetContributions{now, "a", "r1", false, seq, {keyframe("r1", seq - 1).what}});
+  REQUIRE(at_b == std::vector<std::string>{"k0"});
+  int asks = 0;
+  for (; now < 5000000 && at_b.size() < expected.size(); now += 100000) {
+    for (const auto& request : b.due(now).control) {
+      if (request.kind != FleetControl::Kind::kRepair) continue;
+      REQUIRE(request.daemon == "a");
+      ++asks;
+      CHECK_FALSE(a.received(request, now).answers.empty());  // the owner answers; the answers are lost
+      const auto relays = c.received(request, now).answers;
+      CHECK(relays.empty() == (asks < kRelayAfterAsks));  // c answers from its copy once b is seen stuck
+      if (!relays.empty()) CHECK(relays.size() > 1);
+      for (const auto& m : relays) {
+        CHECK(m.sender == "c");
+        CHECK(m.repair);
+        to_b(m);  // every message of the relayed answer is taken, not only the first
+      }
+    }
+  }
+  CHECK(asks == kRelayAfterAsks);
+  CHECK(at_b == expected);
+  CHECK(b.inbox.counters().relays > 1);
+  CHECK(c.outbox.counters().relayed == kCount - 2);
+  CHECK(b.inbox.next_expected("r1") == kCount + 1);
+  CHECK(b.inbox.owner("r1") == "a");  // the stream stays a's
+}
+
+TEST_CASE("fleet exchange: a member's repair of another's stream is taken only by a receiver stuck on that stream") {
+  FleetExchange a("a", options()), b("b", options());
+  for (int64_t id = 0; id < 3; ++id) CHECK(a.contributed(keyframe("r1", id)));
+  int64_t now = 1000000;
+  const auto from = [&](const std::string& sender, int64_t seq) {
+    return FleetContributions{now, sender, "r1", true, seq, {keyframe("r1", seq - 1).what}};
+  };
+  CHECK(b.received(FleetContributions{now, "a", "r1", false, 1, {keyframe("r1", 0).what}}, now).apply.size() == 1);
+  CHECK(b.received(FleetContributions{now, "a", "r1", false, 3, {keyframe("r1", 2).what}}, now).apply.empty());
+  CHECK(b.received(from("c", 2), now).apply.empty());  // not stuck yet: overheard
+  CHECK(b.inbox.counters().repairs_overheard == 1);
+  for (int asks = 0; asks < kRelayAfterAsks; now += 100000)
+    for (const auto& request : b.due(now).control) asks += request.kind == FleetControl::Kind::kRepair ? 1 : 0;
+  CHECK(b.received(from("x", 2), now).apply.empty());  // not a member: refused, stuck or not
+  CHECK(b.inbox.counters().not_member == 1);
+  CHECK(b.received(from("c", 2), now).apply.size() == 2);  // stuck: a member's copy fills the gap, and 3 follows
+  CHECK(b.inbox.counters().relays == 1);
+  CHECK(b.received(from("c", 2), now).apply.empty());  // no longer stuck: overheard again
+  CHECK(b.inbox.counters().repairs_overheard == 2);
+}
+
+TEST_CASE("fleet exchange: a repair that fills a later hole has the first gap asked for again without the back-off") {
+  FleetExchange a("a", options()), b("b", options());
+  for (int64_t id = 0; id < 6; ++id) CHECK(a.contributed(keyframe("r1", id)));  // numbers 1 to 6
+  const int64_t start = 1000000;
+  (void)a.due(start);  // sent, and lost on the way to b but for 1, 3, 4 and 6: holes at 2 and 5
+  for (int64_t seq : {1, 3, 4, 6})
+    (void)b.received(FleetContributions{start, "a", "r1", false, seq, {keyframe("r1", seq - 1).what}}, start);
+  std::vector<int64_t> asked;
+  for (int64_t t = start; t < start + 3000000 && asked.size() < 3; t += 10000)
+    for (const auto& request : b.due(t).control) {
+      if (request.kind != FleetControl::Kind::kRepair) continue;
+      asked.push_back(t);
+      for (const auto& answer : a.received(request, t).answers)  // the answer for 2 never arrives, 5's once
+        if (asked.size() == 1 && answer.first == 5) CHECK(b.received(answer, t).apply.empty());
+    }
+  REQUIRE(asked.size() == 3);
+  CHECK(asked[1] - asked[0] == 200000);  // a hole filled: the rest asked for again after repair_backoff_s
+  CHECK(asked[2] - asked[1] == 400000);  // nothing since: backing off again
+  CHECK(b.inbox.next_expected("r1") == 2);
 }
