@@ -13,7 +13,7 @@
 // drops what it already has, and finds gaps from a later contribution or from the owner's heartbeat (which names the
 // stream's last number, so a lost tail is found too).  A gap is asked for (a REPAIR request to the owner) after
 // repair_backoff_s, again after twice as long while nothing arrives (up to repair_backoff_max_s), from the start
-// when the stream moves.
+// when the stream moves or a repair fills one of its holes.
 //
 // A restart: an owner restarted from its state directory continues from what it saved (the state is written every
 // daemon.state_period_s).  What it sent after that save and before it stopped (killed, not stopped: SIGTERM saves
