@@ -326,6 +326,8 @@ class Inbox {
   bool hold(Stream& s, int64_t seq, What what);
   /// Schedules or clears `s`'s repair after the stream moved or learned of a gap.
   void schedule(Stream& s, int64_t now, bool moved);
+  /// The gap of `s` (if any) asked for again after repair_backoff_s at the latest, the back-off back to its start.
+  void ask_again_soon(Stream& s, int64_t now);
   /// The owner of `s` spoke (data or heartbeat).  After a silence longer than the back-off (a link healed, the owner
   /// restarted) a gap is asked for again at once, not at the end of a back-off that grew while nothing could arrive.
   void heard(Stream& s, int64_t now);
@@ -409,8 +411,9 @@ struct FleetExchange {
   }
   /// A fleet event heard on the bus: the contributions now next in their streams, to apply in this order
   /// (SlamGraph::apply); for a repair request addressed to this daemon, a restarted member's request for its tails,
-  /// or a request between two other members that this daemon relays, the messages that answer it, to send; while this daemon fetches its own tails, what it took back of them
-  /// (already in the outbox), to apply as its own in this order (SlamGraph::adopt).
+  /// or a request between two other members that this daemon relays, the messages that answer it, to send; while
+  /// this daemon fetches its own tails, what it took back of them (already in the outbox), to apply as its own in this
+  /// order (SlamGraph::adopt).
   struct Received {
     std::vector<slam::GraphContribution> apply;
     std::vector<FleetContributions> answers;

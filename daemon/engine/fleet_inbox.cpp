@@ -121,11 +121,14 @@ void Inbox::schedule(Stream& s, int64_t now, bool moved) {
   }
 }
 
+void Inbox::ask_again_soon(Stream& s, int64_t now) {
+  if (s.ask_at == 0) return;  // no gap
+  s.backoff_s = options_.repair_backoff_s;
+  s.ask_at = std::min(s.ask_at, now + std::max<int64_t>(micros(s.backoff_s), 1));
+}
+
 void Inbox::heard(Stream& s, int64_t now) {
-  if (s.ask_at != 0 && s.heard_at != 0 && now - s.heard_at > micros(s.backoff_s)) {
-    s.backoff_s = options_.repair_backoff_s;
-    s.ask_at = std::min(s.ask_at, now + std::max<int64_t>(micros(s.backoff_s), 1));
-  }
+  if (s.heard_at != 0 && now - s.heard_at > micros(s.backoff_s)) ask_again_soon(s, now);
   s.heard_at = now;
 }
 
@@ -173,10 +176,7 @@ std::vector<slam::GraphContribution> Inbox::take(const FleetContributions& m, St
   for (int64_t i = 0; i < n; ++i) filled = hold(s, m.first + i, m.contributions[static_cast<size_t>(i)]) || filled;
   std::vector<slam::GraphContribution> out;
   deliver(m.body, s, now, out);
-  if (m.repair && filled && s.ask_at != 0) {
-    s.backoff_s = options_.repair_backoff_s;
-    s.ask_at = std::min(s.ask_at, now + std::max<int64_t>(micros(s.backoff_s), 1));
-  }
+  if (m.repair && filled) ask_again_soon(s, now);
   return out;
 }
 
@@ -236,10 +236,13 @@ std::vector<FleetControl> Inbox::repair_requests(int64_t now_utime) {
     FleetControl& request =
         by_owner.try_emplace(s.owner, FleetControl{now_utime, self_, FleetControl::Kind::kRepair, s.owner, {}})
             .first->second;
-    bool first = true;
-    for (FleetRange& r : holes(body, s)) {
+    std::vector<FleetRange> asked = holes(body, s);
+    if (!asked.empty() && request.streams.size() < kMaxRangesPerMessage) {  // the requests in a row for one number
+      s.asks = asked.front().first == s.asked_first ? s.asks + 1 : 1;
+      s.asked_first = asked.front().first;
+    }
+    for (FleetRange& r : asked) {
       if (request.streams.size() >= kMaxRangesPerMessage) break;  // the rest at this stream's next turn
-      if (first) s.asks = r.first == s.asked_first ? s.asks + 1 : 1, s.asked_first = r.first, first = false;
       counters_.repair_asked += r.last - r.first + 1;
       request.streams.push_back(std::move(r));
     }

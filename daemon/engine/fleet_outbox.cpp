@@ -185,21 +185,25 @@ std::vector<FleetContributions> Outbox::relay(const FleetControl& request, const
   if (request.kind != FleetControl::Kind::kRepair || request.sender == self_ || request.daemon == self_ ||
       request.daemon == request.sender || !members_.contains(request.sender))
     return {};
-  // The bodies whose first range asks, for the kRelayAfterAsks-th time in a row or more, for the same number.
-  std::set<std::string> stuck, counted;
+  // The bodies whose first range asks, for the kRelayAfterAsks-th time in a row or more, for the same number, with
+  // this daemon's copy of their stream.
+  std::map<std::string, const Retained*> stuck;
+  std::set<std::string> counted;
   for (const FleetRange& range : request.streams) {
-    if (!counted.insert(range.body).second || copies.copy_of(range.body, request.daemon) == nullptr) continue;
+    const Retained* copy = copies.copy_of(range.body, request.daemon);
+    if (!counted.insert(range.body).second || copy == nullptr) continue;
     auto& [first, times] = overheard_asks_[{request.sender, range.body}];
     times = first == range.first ? times + 1 : 1;
     first = range.first;
-    if (times >= kRelayAfterAsks) stuck.insert(range.body);
+    if (times >= kRelayAfterAsks) stuck.emplace(range.body, copy);
   }
   if (stuck.empty()) return {};
   Bucket& b = bucket(request.sender, now_utime);
   std::vector<FleetContributions> out;
   for (const FleetRange& range : request.streams) {
-    if (!stuck.contains(range.body)) continue;
-    const Retained& copy = *copies.copy_of(range.body, request.daemon);
+    const auto it = stuck.find(range.body);
+    if (it == stuck.end()) continue;
+    const Retained& copy = *it->second;
     if (copy.items.empty() || range.last < copy.first()) continue;  // not held here: not this daemon's to count
     const FleetRange held{range.body, std::max(range.first, copy.first()), range.last};
     answer_range(held, copy, copy.last(), b, now_utime, out, counters_.relayed);
