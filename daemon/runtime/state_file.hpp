@@ -31,7 +31,8 @@ struct StateSection {
 /// counters and its per-body TRAJECTORY feeds.  Files of another version are refused.
 /// Version 4: every estimator also keeps the steps it refused as unhealthy (estimators/filter/estimate_health.hpp)
 /// and its association budget counters.
-inline constexpr uint32_t kStateFormatVersion = 8;
+/// Version 9: a lifelong graph's thinned-keyframe records carry their place (keyframe_track.hpp).
+inline constexpr uint32_t kStateFormatVersion = 9;
 /// The state file inside a state directory.
 inline constexpr const char* kStateFileName = "sextantd.state";
 

@@ -1,11 +1,21 @@
 #include "estimators/keyframe/keyframe_thinning.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <set>
 #include <stdexcept>
-#include <tuple>
 
 namespace sextant {
+
+KeyframePlace place_of(const SE3& x, bool planar, const KeyframeThinningOptions& o) {
+  const Eigen::Vector3d& t = x.translation();
+  const Eigen::Vector3d ahead = x.rotation().matrix().col(0);
+  const double heading = std::atan2(ahead.y(), ahead.x()) + M_PI;  // [0, 2 pi]
+  const auto sectors = std::max<int64_t>(1, static_cast<int64_t>(std::llround(2 * M_PI / o.heading_sector)));
+  auto cell = [&](double v) { return static_cast<int64_t>(std::floor(v / o.cell_size)); };
+  return {cell(t.x()), cell(t.y()), planar ? 0 : cell(t.z()),
+          static_cast<int64_t>(std::floor(heading / (2 * M_PI) * static_cast<double>(sectors))) % sectors};
+}
 
 std::vector<char> keyframes_to_keep(const std::vector<ThinningCandidate>& keyframes, bool planar,
                                     const KeyframeThinningOptions& o) {
@@ -17,20 +27,9 @@ std::vector<char> keyframes_to_keep(const std::vector<ThinningCandidate>& keyfra
   const size_t n = keyframes.size();
   std::vector<char> keep(n, 0);
   const size_t window_start = n > static_cast<size_t>(o.window) ? n - static_cast<size_t>(o.window) : 0;
-  using Place = std::tuple<int64_t, int64_t, int64_t, int64_t>;
-  std::set<Place> taken;
-  auto place_of = [&](const SE3& x) {
-    const Eigen::Vector3d& t = x.translation();
-    // Heading: the direction the body's x axis points to, in the map's horizontal plane.
-    const Eigen::Vector3d ahead = x.rotation().matrix().col(0);
-    const double heading = std::atan2(ahead.y(), ahead.x()) + M_PI;  // [0, 2 pi]
-    const auto sectors = std::max<int64_t>(1, static_cast<int64_t>(std::llround(2 * M_PI / o.heading_sector)));
-    auto cell = [&](double v) { return static_cast<int64_t>(std::floor(v / o.cell_size)); };
-    return Place{cell(t.x()), cell(t.y()), planar ? 0 : cell(t.z()),
-                 static_cast<int64_t>(std::floor(heading / (2 * M_PI) * static_cast<double>(sectors))) % sectors};
-  };
+  std::set<KeyframePlace> taken;
   for (size_t i = 0; i < n; ++i) {
-    const Place p = place_of(keyframes[i].pose);
+    const KeyframePlace p = place_of(keyframes[i].pose, planar, o);
     if (i == 0 || i >= window_start) {
       keep[i] = 1;
       if (i < window_start) taken.insert(p);

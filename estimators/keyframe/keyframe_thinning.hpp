@@ -10,6 +10,7 @@
 // The result depends only on the keyframes' ids, estimates and the options: the same input keeps the same set.
 #include "estimators/lie/se3.hpp"
 
+#include <array>
 #include <cstdint>
 #include <vector>
 
@@ -25,6 +26,11 @@ struct ThinningCandidate {
   int64_t id = 0;  // increasing along the list
   SE3 pose;        // current estimate in the map frame
 };
+
+/// A place: the cell (x, y, and z for 3-D bodies; 0 for planar ones) and the heading sector of a pose in the map
+/// frame.  The heading is the direction the body's x axis points to in the map's horizontal plane.
+using KeyframePlace = std::array<int64_t, 4>;
+KeyframePlace place_of(const SE3& pose, bool planar, const KeyframeThinningOptions& options);
 
 /// keep[i] for each keyframe of `keyframes` (oldest first).  Throws std::invalid_argument for bad options.
 std::vector<char> keyframes_to_keep(const std::vector<ThinningCandidate>& keyframes, bool planar,

@@ -34,16 +34,25 @@ void KeyframeTrack::replace_keyframes(std::vector<TrackKeyframe> keyframes,
   keyframes_ = std::move(keyframes);
   by_utime_.clear();
   for (size_t i = 0; i < keyframes_.size(); ++i) by_utime_[keyframes_[i].utime] = i;
-  // Thinned keyframes stay in time order (they were thinned from older to newer, and each thinning's are newer than
-  // the previous one's oldest survivors, so merge).
-  std::vector<ThinnedKeyframe> merged;
-  merged.reserve(thinned_.size() + thinned.size());
-  std::merge(thinned_.begin(), thinned_.end(), thinned.begin(), thinned.end(), std::back_inserter(merged),
-             [](const ThinnedKeyframe& x, const ThinnedKeyframe& y) { return x.utime < y.utime; });
-  thinned_ = std::move(merged);
-  // Bounded for unbounded time: the oldest records go first (a loop about such a time is then unmatched).
-  if (thinned_.size() > kMaxThinnedRecords)
-    thinned_.erase(thinned_.begin(), thinned_.end() - static_cast<std::ptrdiff_t>(kMaxThinnedRecords));
+  // Records stay in time order: a thinning's are newer than the previous one's oldest survivors, so usually they
+  // follow the records kept; a merge in place otherwise.
+  const auto middle = static_cast<std::ptrdiff_t>(thinned_.size());
+  thinned_.insert(thinned_.end(), thinned.begin(), thinned.end());
+  const auto by_time = [](const ThinnedKeyframe& x, const ThinnedKeyframe& y) { return x.utime < y.utime; };
+  if (!std::is_sorted(thinned.begin(), thinned.end(), by_time))
+    std::sort(thinned_.begin() + middle, thinned_.end(), by_time);
+  std::inplace_merge(thinned_.begin(), thinned_.begin() + middle, thinned_.end(), by_time);
+  forget_old_visits();
+}
+
+void KeyframeTrack::forget_old_visits() {
+  std::map<KeyframePlace, size_t> visits;
+  std::vector<char> keep(thinned_.size());
+  for (size_t i = thinned_.size(); i-- > 0;) keep[i] = ++visits[thinned_[i].place] <= kThinnedRecordsPerPlace;
+  size_t kept = 0;
+  for (size_t i = 0; i < thinned_.size(); ++i)
+    if (keep[i]) thinned_[kept++] = thinned_[i];
+  thinned_.resize(kept);
 }
 
 void KeyframeTrack::remap_variables(const std::vector<int>& remap) {
@@ -143,7 +152,7 @@ void KeyframeTrack::save(archive::ArchiveWriter& w) const {
   for (const TrackKeyframe& k : keyframes_)
     w(k.id)(k.utime)(k.variable)(k.odom)(k.odom_covariance)(k.edge_covariance)(k.edge);
   w(static_cast<uint64_t>(thinned_.size()));
-  for (const ThinnedKeyframe& k : thinned_) w(k.id)(k.utime)(k.odom);
+  for (const ThinnedKeyframe& k : thinned_) w(k.id)(k.utime)(k.odom)(k.place[0])(k.place[1])(k.place[2])(k.place[3]);
   w(next_keyframe_id_)(odometry_);
 }
 
@@ -162,7 +171,7 @@ void KeyframeTrack::load(archive::ArchiveReader& r) {
   const uint64_t thinned = r.count(1, "the thinned keyframes");
   for (uint64_t k = 0; k < thinned; ++k) {
     ThinnedKeyframe t;
-    r(t.id)(t.utime)(t.odom);
+    r(t.id)(t.utime)(t.odom)(t.place[0])(t.place[1])(t.place[2])(t.place[3]);
     thinned_.push_back(t);
   }
   r(next_keyframe_id_)(odometry_);

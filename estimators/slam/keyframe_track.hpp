@@ -16,6 +16,7 @@
 // and as D's covariance the odometry's from K to the next keyframe (or to the latest odometry): it contains the motion
 // to the sighting and a little more.
 #include "estimators/archive/binary_archive.hpp"
+#include "estimators/keyframe/keyframe_thinning.hpp"
 #include "estimators/lie/lie_archive.hpp"
 #include "estimators/lie/se3.hpp"
 
@@ -38,10 +39,12 @@ struct TrackKeyframe {
   SE3 edge;                                     // that odometry (composed across thinned keyframes)
 };
 
-/// A keyframe that lifelong thinning took out of the graph: what resolving a time to it needs.
+/// A keyframe that lifelong thinning took out of the graph: what resolving a time to it needs, and its place (at
+/// the estimate it had when it was thinned), by which the records are bounded.
 struct ThinnedKeyframe {
   int64_t id = 0, utime = 0;
   SE3 odom;
+  KeyframePlace place{};
 };
 
 /// Where a time of the body lands: a keyframe of the graph (its position in keyframes()), the odometry motion D from
@@ -54,9 +57,13 @@ struct TrackPoint {
 
 class KeyframeTrack {
  public:
-  /// Thinned records kept (72 bytes each, 7.2 MB): at the simulated runs' 6 keyframes per second, the last 4.6 hours
-  /// of thinned keyframe times stay resolvable; older ones are forgotten, so memory stays bounded.
-  static constexpr size_t kMaxThinnedRecords = 100000;
+  /// Thinned records kept per place (of the grid lifelong thinning keeps one keyframe per): the newest visits of each
+  /// place stay resolvable, older ones are forgotten, so the records follow the explored space, not the run's length.
+  /// A time resolved through a record lands on the graph keyframe before it with the covariance of the whole edge
+  /// composed across the thinned keyframes: for an old visit that edge spans the revisits since, and such a loop
+  /// carries little; the newest visits are the ones worth keeping.  Times within the odometry history resolve
+  /// without records.
+  static constexpr size_t kThinnedRecordsPerPlace = 4;
 
   const std::vector<TrackKeyframe>& keyframes() const { return keyframes_; }
   bool empty() const { return keyframes_.empty(); }
@@ -83,8 +90,8 @@ class KeyframeTrack {
   int64_t add_keyframe(TrackKeyframe keyframe);
   /// The id the next keyframe gets.
   int64_t next_id() const { return next_keyframe_id_; }
-  /// Replaces the keyframes of the graph after thinning (oldest first, variables renumbered) and appends the records
-  /// of the thinned ones (time order; the oldest records beyond kMaxThinnedRecords go).
+  /// Replaces the keyframes of the graph after thinning (oldest first, variables renumbered) and adds the records of
+  /// the thinned ones (kept in time order; per place the newest kThinnedRecordsPerPlace stay).
   void replace_keyframes(std::vector<TrackKeyframe> keyframes, const std::vector<ThinnedKeyframe>& thinned);
   /// Renumbers the keyframes' variables (remap[old] = new).
   void remap_variables(const std::vector<int>& remap);
@@ -111,14 +118,17 @@ class KeyframeTrack {
   void load(archive::ArchiveReader& r);
 
  private:
+  // Of each place's records, all but the newest kThinnedRecordsPerPlace go (the order of the rest stays).
+  void forget_old_visits();
+
   int64_t last_utime_ = 0;
   SE3 last_odom_;
   Matrix6d last_odom_covariance_ = Matrix6d::Zero();
   Matrix6d since_keyframe_ = Matrix6d::Zero();
   std::vector<TrackKeyframe> keyframes_;  // in the graph, by id (and time)
   std::map<int64_t, size_t> by_utime_;    // -> position in keyframes_
-  std::vector<ThinnedKeyframe> thinned_;  // taken out by lifelong thinning, by id (and time); the newest
-                                          // kMaxThinnedRecords
+  std::vector<ThinnedKeyframe> thinned_;  // taken out by lifelong thinning, in time order; the newest
+                                          // kThinnedRecordsPerPlace per place
   int64_t next_keyframe_id_ = 0;
   std::vector<std::pair<int64_t, SE3>> odometry_;  // recent odometry poses (bounded)
 };

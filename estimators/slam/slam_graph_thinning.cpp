@@ -218,7 +218,8 @@ void SlamGraph::rebuild_smoother(ThinningPlan& p) {
         edge = edge * k.edge;
       }
       if (!keep[i]) {
-        plan.thinned.push_back({k.id, k.utime, k.odom});
+        const SE3 at = p.vars[static_cast<size_t>(k.variable)].as_se3();
+        plan.thinned.push_back({k.id, k.utime, k.odom, place_of(at, p.planar, options_.lifelong.thinning)});
         spanning = true;
         continue;
       }

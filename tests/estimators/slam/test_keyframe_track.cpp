@@ -97,6 +97,32 @@ TEST_CASE(
   CHECK(p->covariance == diagonal(0.5, 0.6, 0.7));
 }
 
+TEST_CASE("keyframe track: of each place's thinned records the newest visits stay, in time order") {
+  KeyframeTrack track = straight_track();
+  std::vector<TrackKeyframe> kept = {track.keyframes()[0], track.keyframes()[2]};
+  kept[1].edge = planar_pose(2, 0, 0);
+  kept[1].edge_covariance = diagonal(0.5, 0.6, 0.7);
+  const KeyframePlace a{0, 0, 0, 3}, b{1, 0, 0, 3};
+  const auto record = [](int64_t id, int64_t utime, const KeyframePlace& place) {
+    return ThinnedKeyframe{id, utime, planar_pose(static_cast<double>(utime) / 200.0, 0, 0), place};
+  };
+  // Three thinnings; place a visited six times, b once; the second thinning's records come out of time order.
+  track.replace_keyframes(kept, {record(10, 110, a), record(11, 115, b), record(12, 120, a), record(13, 130, a)});
+  track.replace_keyframes(kept, {record(15, 150, a), record(14, 140, a)});
+  track.replace_keyframes(kept, {record(16, 160, a)});
+  std::vector<int64_t> times;
+  for (const ThinnedKeyframe& k : track.thinned()) times.push_back(k.utime);
+  CHECK(KeyframeTrack::kThinnedRecordsPerPlace == 4);
+  CHECK(times == std::vector<int64_t>{115, 130, 140, 150, 160});
+  // A forgotten visit no longer resolves (no odometry pose recorded at its time); a kept one lands on keyframe 0.
+  CHECK_FALSE(track.resolve(12, 120, 5));
+  const auto p = track.resolve(13, 130, 5);
+  REQUIRE(p);
+  CHECK(p->keyframe == 0);
+  CHECK(p->motion.translation().x() == doctest::Approx(0.65));
+  CHECK(p->covariance == diagonal(0.5, 0.6, 0.7));
+}
+
 TEST_CASE("keyframe track: a sighting between two odometry messages is anchored on the arc between them") {
   // A constant twist: v = 2 m/s forward, w = 0.8 rad/s, odometry at 0 and 1 s (keyframe at 0).  On SE(2) the motion
   // is the arc x = v/w sin(w s), y = v/w (1 - cos(w s)), heading w s; interpolation on the group at a follows it.
