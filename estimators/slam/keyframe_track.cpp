@@ -42,7 +42,9 @@ void KeyframeTrack::replace_keyframes(std::vector<TrackKeyframe> keyframes,
   if (!std::is_sorted(thinned.begin(), thinned.end(), by_time))
     std::sort(thinned_.begin() + middle, thinned_.end(), by_time);
   std::inplace_merge(thinned_.begin(), thinned_.begin() + middle, thinned_.end(), by_time);
-  forget_old_visits();
+  // Counting every place's visits at every thinning would cost the whole record set each time: only once it has
+  // grown by a quarter (so the cost per record stays constant).
+  if (thinned_.size() > thinned_bounded_ + thinned_bounded_ / 4 + kThinnedRecordsPerPlace) forget_old_visits();
 }
 
 void KeyframeTrack::forget_old_visits() {
@@ -53,6 +55,7 @@ void KeyframeTrack::forget_old_visits() {
   for (size_t i = 0; i < thinned_.size(); ++i)
     if (keep[i]) thinned_[kept++] = thinned_[i];
   thinned_.resize(kept);
+  thinned_bounded_ = kept;
 }
 
 void KeyframeTrack::remap_variables(const std::vector<int>& remap) {
@@ -174,6 +177,7 @@ void KeyframeTrack::load(archive::ArchiveReader& r) {
     r(t.id)(t.utime)(t.odom)(t.place[0])(t.place[1])(t.place[2])(t.place[3]);
     thinned_.push_back(t);
   }
+  thinned_bounded_ = thinned_.size();
   r(next_keyframe_id_)(odometry_);
 }
 

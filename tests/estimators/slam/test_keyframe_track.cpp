@@ -7,6 +7,7 @@
 
 #include <doctest/doctest.h>
 
+#include <algorithm>
 #include <cmath>
 
 using namespace sextant;
@@ -98,28 +99,48 @@ TEST_CASE(
 }
 
 TEST_CASE("keyframe track: of each place's thinned records the newest visits stay, in time order") {
-  KeyframeTrack track = straight_track();
-  std::vector<TrackKeyframe> kept = {track.keyframes()[0], track.keyframes()[2]};
-  kept[1].edge = planar_pose(2, 0, 0);
-  kept[1].edge_covariance = diagonal(0.5, 0.6, 0.7);
+  // Two keyframes 1 s apart (x = 0 and 5 m), odometry only at their times.
+  KeyframeTrack track;
+  for (const int64_t t : {int64_t{0}, int64_t{1000000}}) {
+    const SE3 pose = planar_pose(static_cast<double>(t) / 200000.0, 0, 0);
+    track.advance(t, pose, Matrix6d::Zero(), 100);
+    track.add_keyframe(keyframe_at(track, t, pose, diagonal(0.5, 0.6, 0.7)));
+  }
+  const std::vector<TrackKeyframe> kept = track.keyframes();
   const KeyframePlace a{0, 0, 0, 3}, b{1, 0, 0, 3};
-  const auto record = [](int64_t id, int64_t utime, const KeyframePlace& place) {
-    return ThinnedKeyframe{id, utime, planar_pose(static_cast<double>(utime) / 200.0, 0, 0), place};
+  constexpr auto per_place = static_cast<int64_t>(KeyframeTrack::kThinnedRecordsPerPlace);
+  const auto record = [](int64_t utime, const KeyframePlace& place) {
+    return ThinnedKeyframe{utime, utime, planar_pose(static_cast<double>(utime) / 200.0, 0, 0), place};
   };
-  // Three thinnings; place a visited six times, b once; the second thinning's records come out of time order.
-  track.replace_keyframes(kept, {record(10, 110, a), record(11, 115, b), record(12, 120, a), record(13, 130, a)});
-  track.replace_keyframes(kept, {record(15, 150, a), record(14, 140, a)});
-  track.replace_keyframes(kept, {record(16, 160, a)});
-  std::vector<int64_t> times;
-  for (const ThinnedKeyframe& k : track.thinned()) times.push_back(k.utime);
-  CHECK(KeyframeTrack::kThinnedRecordsPerPlace == 4);
-  CHECK(times == std::vector<int64_t>{115, 130, 140, 150, 160});
+  // Thinnings of ten records each (times 1, 2, ... us, between the keyframes), out of time order within each; place a
+  // visited five times as often as the whole bound, b once.
+  int64_t next = 1;
+  std::vector<ThinnedKeyframe> batch;
+  track.replace_keyframes(kept, {record(next++, b)});
+  while (next <= 5 * per_place) {
+    batch.push_back(record(next++, a));
+    if (batch.size() == 10) {
+      std::reverse(batch.begin(), batch.end());
+      track.replace_keyframes(kept, batch);
+      batch.clear();
+    }
+  }
+  track.replace_keyframes(kept, batch);
+  const auto& records = track.thinned();
+  CHECK(std::is_sorted(records.begin(), records.end(),
+                       [](const ThinnedKeyframe& x, const ThinnedKeyframe& y) { return x.utime < y.utime; }));
+  CHECK(records.front().utime == 1);  // b's only visit
+  const auto of_a = static_cast<int64_t>(records.size()) - 1;
+  CHECK(of_a >= per_place);
+  CHECK(of_a <= per_place + per_place / 4 + per_place + 10);  // the bound, and what came since it was enforced
+  CHECK(records.back().utime == next - 1);
+  CHECK(records[1].utime == next - of_a);  // a's newest visits, none missing
   // A forgotten visit no longer resolves (no odometry pose recorded at its time); a kept one lands on keyframe 0.
-  CHECK_FALSE(track.resolve(12, 120, 5));
-  const auto p = track.resolve(13, 130, 5);
+  CHECK_FALSE(track.resolve(-1, 2, 0));
+  const auto p = track.resolve(-1, records[1].utime, 0);
   REQUIRE(p);
   CHECK(p->keyframe == 0);
-  CHECK(p->motion.translation().x() == doctest::Approx(0.65));
+  CHECK(p->motion.translation().x() == doctest::Approx(static_cast<double>(records[1].utime) / 200.0));
   CHECK(p->covariance == diagonal(0.5, 0.6, 0.7));
 }
 
