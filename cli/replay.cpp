@@ -29,6 +29,7 @@ struct Options {
   double speed = 1.0;
   double max_gap_s = 10.0;
   double segment_seconds = 0;
+  bool single_thread = false;
   std::string lcm_url;
 };
 
@@ -152,6 +153,9 @@ void add_options(CLI::App* cmd, Options& o) {
          "--segment-seconds", o.segment_seconds,
          "with --json: report each stretch of this many seconds of data time (replay speed, stage times, memory)")
       ->check(CLI::NonNegativeNumber);
+  cmd->add_flag("--single-thread", o.single_thread,
+                "every stage on one thread (by default the graph's stages run on a second one beside the others; "
+                "the outputs are the same)");
   cmd->add_option("--report", o.report, "write an HTML report with plots (and report.json) into this folder");
   cmd->add_flag("--realtime", o.realtime, "republish the log to the live bus at the pace of message utimes");
   cmd->add_option("--speed", o.speed, "playback speed for --realtime (2 = twice as fast)")->check(CLI::PositiveNumber);
@@ -261,6 +265,7 @@ void run(const Options& o) {
   tools::ReplayOptions ro;
   ro.max_kept = 8192;
   ro.segment_seconds = o.segment_seconds;
+  ro.pipelined = !o.single_thread;
   StreamedOutputs outputs(o, cfg, ro);
   const auto result = tools::replay_log(
       o.log, cfg, [&bar](int64_t d, int64_t t) { bar(d, t); }, ro);

@@ -59,6 +59,8 @@ class ReplayCollector {
   void output(const engine::Output& o);
   void truth(const runtime::LogRecord& r);
   void handled(size_t stage, double ms);
+  /// The driver whose stages close_segment reads (after settle()).
+  void attach(runtime::EngineDriver& driver) { driver_ = &driver; }
   /// Before an event of `utime` goes to the stages: closes the segments it ends.
   void event_at(int64_t utime);
   void close_segment(int64_t end_utime);
@@ -68,6 +70,7 @@ class ReplayCollector {
   void fused_pose(const engine::FusedPose& x);
 
   ReplayResult& result_;
+  runtime::EngineDriver* driver_ = nullptr;
   const ReplayOptions& options_;
   const engine::Engine& engine_;
   const bool keep_all_;
@@ -156,6 +159,9 @@ void ReplayCollector::event_at(int64_t utime) {
 }
 
 void ReplayCollector::close_segment(int64_t end_utime) {
+  // Every event before is handled and its processing times are in (pipelined lanes deliver them a little later); the
+  // stages are idle, so the graph's counters can be read.
+  if (driver_) driver_->settle();
   SegmentReport seg;
   seg.start_s = static_cast<double>(segment_start_utime_ - result_.first_utime) * 1e-6;
   seg.data_s = static_cast<double>(end_utime - segment_start_utime_) * 1e-6;
@@ -210,7 +216,7 @@ ReplayResult replay_log(const std::string& log_path, const config::DaemonConfig&
   result.primary_estimator = engine.primary_estimator();
   ReplayCollector collector(result, options, engine);
   runtime::DriverOptions o;
-  o.lanes = runtime::StageLanes::kInline;
+  o.lanes = options.pipelined ? runtime::StageLanes::kPipelined : runtime::StageLanes::kInline;
   o.zero_solve_time = true;
   o.on_accepted = [&](const engine::Event& e) { collector.event_at(engine::event_utime(e)); };
   o.on_published = [&](const engine::Output& out) { collector.output(out); };
@@ -221,6 +227,7 @@ ReplayResult replay_log(const std::string& log_path, const config::DaemonConfig&
         collector.published(channel, bytes, utime);
       },
       std::move(o));
+  collector.attach(driver);
 
   int64_t done = 0;
   log.for_each([&](const runtime::LogRecord& r) {

@@ -66,6 +66,9 @@ struct ReplayOptions {
   std::function<void(const engine::Output&)> on_output;
   /// > 0: ReplayResult::segments reports each consecutive stretch of this many seconds of data time.
   double segment_seconds = 0;
+  /// The graph's stages on a second thread beside the others (runtime::StageLanes::kPipelined): the same outputs in
+  /// the same order as on one thread (false), sooner on two cores.
+  bool pipelined = true;
 };
 
 /// One stretch of a replay (ReplayOptions::segment_seconds of data time): how fast it replayed and how long the

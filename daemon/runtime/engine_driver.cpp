@@ -57,20 +57,56 @@ EngineDriver::~EngineDriver() {
 }
 
 void EngineDriver::make_lanes(const config::DaemonConfig& config) {
-  for (auto& stage : engine_.stages()) {
+  for (auto& stage : engine_.stages()) estimators_.emplace_back(stage->estimator());
+  if (options_.lanes == StageLanes::kPipelined && make_pipelined_lanes()) return;
+  for (size_t i = 0; i < engine_.stages().size(); ++i) {
+    engine::Stage& stage = *engine_.stages()[i];
     // A body the stage forgets is forgotten by the publisher for the stage's estimator too, after its earlier outputs.
     StageHost::ForgetHook forget_published;
-    if (const std::string estimator(stage->estimator()); !estimator.empty())
-      forget_published = [this, estimator](const std::string& body) { publisher_.forget(estimator, body); };
+    if (!estimators_[i].empty())
+      forget_published = [this, i](const std::string& body) { publisher_.forget(estimators_[i], body); };
     if (options_.lanes == StageLanes::kInline) {
-      hosts_.push_back(std::make_unique<StageHost>(*stage, emit_));
+      hosts_.push_back(std::make_unique<StageHost>(stage, emit_));
       hosts_.back()->on_forget(std::move(forget_published));
       processed_.push_back(0);
     } else {
-      runners_.push_back(std::make_unique<StageRunner>(*stage, static_cast<size_t>(config.queue_capacity), emit_,
-                                                       odometry_batching(*stage, config.engine)));
+      runners_.push_back(std::make_unique<StageRunner>(stage, static_cast<size_t>(config.queue_capacity), emit_,
+                                                       odometry_batching(stage, config.engine)));
       runners_.back()->on_forget(std::move(forget_published));
     }
+  }
+}
+
+bool EngineDriver::make_pipelined_lanes() {
+  // The graph pose stage reads the corrections the graph stage posts: the two share the worker.
+  std::vector<char> on_worker;
+  for (const auto& stage : engine_.stages())
+    on_worker.push_back(stage->kind() == engine::StageKind::kGraph || stage->kind() == engine::StageKind::kGraphPose);
+  const auto workers = std::count(on_worker.begin(), on_worker.end(), 1);
+  if (workers == 0 || workers == static_cast<std::ptrdiff_t>(on_worker.size())) {
+    options_.lanes = StageLanes::kInline;
+    return false;
+  }
+  pipelined_ = std::make_unique<PipelinedLanes>(on_worker, [this](StageCapture& c) { deliver(c); });
+  std::vector<StageHost*> hosts;
+  for (size_t i = 0; i < engine_.stages().size(); ++i) {
+    hosts_.push_back(std::make_unique<StageHost>(*engine_.stages()[i], pipelined_->emit_into(i)));
+    hosts_.back()->on_forget(pipelined_->forgot_into(i));
+    hosts.push_back(hosts_.back().get());
+    processed_.push_back(0);
+  }
+  pipelined_->attach(std::move(hosts));
+  return true;
+}
+
+void EngineDriver::deliver(StageCapture& c) {
+  if (auto* output = std::get_if<engine::Output>(&c.what)) {
+    publish(std::move(*output));
+  } else if (auto* forgot = std::get_if<StageCapture::Forgot>(&c.what)) {
+    if (!estimators_[c.stage].empty()) publisher_.forget(estimators_[c.stage], forgot->body);
+  } else {
+    ++processed_[c.stage];
+    if (options_.on_handled) options_.on_handled(c.stage, std::get<StageCapture::Handled>(c.what).ms);
   }
 }
 
@@ -82,12 +118,17 @@ void EngineDriver::publish(engine::Output output) {
 
 void EngineDriver::forget_expired() {
   for (const std::string& body : intake_.take_expired_bodies()) {
+    if (pipelined_) {
+      pipelined_->forget_before_next(body);
+      continue;
+    }
     for (auto& h : hosts_) h->forget(body);
     for (auto& r : runners_) r->forget(body);
   }
 }
 
-void EngineDriver::route(const std::string& channel, const QueuedEvent& queued) {
+void EngineDriver::route(const std::string& channel, QueuedEvent queued) {
+  if (pipelined_) return pipelined_->route(std::move(queued));
   for (size_t i = 0; i < hosts_.size(); ++i) {
     if (!hosts_[i]->stage().accepts(queued.event)) continue;
     const auto t0 = std::chrono::steady_clock::now();
@@ -120,8 +161,15 @@ void EngineDriver::start() {
   for (auto& r : runners_) r->start();
 }
 
+void EngineDriver::settle() {
+  if (pipelined_) pipelined_->settle();
+}
+
 int64_t EngineDriver::finish(std::chrono::steady_clock::time_point deadline) {
-  for (auto& h : hosts_) h->finish();
+  if (pipelined_)
+    pipelined_->finish();
+  else
+    for (auto& h : hosts_) h->finish();
   for (auto& r : runners_) r->stop_intake();
   int64_t discarded = 0;
   for (auto& r : runners_) discarded += r->drain_and_stop(deadline);
