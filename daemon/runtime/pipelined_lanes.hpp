@@ -10,7 +10,9 @@
 // published bytes are the same.
 //
 // Bounded: at most `capacity` events are in flight (routed, not yet delivered); route() waits for the worker when
-// they are.  Nothing is dropped: this is a replay's lane, not a live daemon's.
+// they are, until half of them are delivered.  Nothing is dropped: this is a replay's lane, not a live daemon's.
+// An event in flight holds its captures, a few KB: 4,096 of them added 20-30 MB to the 8-robot fleet replay's
+// resident memory; 512 keep the worker fed (the caller's side is a fifth of the work).
 #include "daemon/engine/outputs.hpp"
 #include "daemon/runtime/queued_event.hpp"
 #include "daemon/runtime/stage_host.hpp"
@@ -47,7 +49,7 @@ class PipelinedLanes {
   using Deliver = std::function<void(StageCapture&)>;
 
   /// `on_worker[i]`: stage i runs on the worker thread.  `deliver` is called on the caller's thread.
-  PipelinedLanes(std::vector<char> on_worker, Deliver deliver, size_t capacity = 4096);
+  PipelinedLanes(std::vector<char> on_worker, Deliver deliver, size_t capacity = 512);
   /// The stages' hosts in stage order, each made with emit_into(i) and on_forget(forgot_into(i)); starts the worker.
   void attach(std::vector<StageHost*> hosts);
   ~PipelinedLanes();
@@ -91,15 +93,15 @@ class PipelinedLanes {
   Deliver deliver_;
   const size_t capacity_;
   std::vector<std::string> forget_next_;
-  std::deque<std::unique_ptr<InFlight>> in_flight_;  // routed, not delivered (caller's thread only)
-  std::vector<InFlight*> batch_;                     // routed, not yet handed to the worker
+  std::deque<std::unique_ptr<InFlight>> in_flight_;            // routed, not delivered (caller's thread only)
+  std::vector<InFlight*> batch_;                               // routed, not yet handed to the worker
   std::vector<StageCapture>* target_[2] = {nullptr, nullptr};  // where each thread's hosts capture now
   bool forgetting_expired_[2] = {false, false};                // each thread: forgetting before its event
 
   std::mutex mutex_;
   std::condition_variable to_worker_, to_caller_;
-  std::deque<InFlight*> queue_;  // handed to the worker, not yet taken (under mutex_)
-  bool stop_ = false;            // under mutex_
+  std::deque<InFlight*> queue_;              // handed to the worker, not yet taken (under mutex_)
+  bool stop_ = false;                        // under mutex_
   std::atomic<InFlight*> awaited_{nullptr};  // the event the caller waits for (worker: notify when done)
   std::thread worker_;
 };

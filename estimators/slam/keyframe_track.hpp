@@ -61,7 +61,7 @@ class KeyframeTrack {
   /// place stay resolvable, older ones are forgotten, so the records follow the explored space, not the run's length.
   /// Loops to old visits matter: in the 8-robot simulated hour (bench/fleet_lifelong.sh), keeping only 4 per place
   /// left 3,800 more loops unmatched and two robots' fleet-frame ATE 0.013 -> 0.025 and 0.020 -> 0.024 m.  256 keep
-  /// that hour's records whole (88 bytes each: at most 22 KB per place and body).  The bound is enforced when the
+  /// that hour's records whole (112 bytes each: at most 28 KB per place and body).  The bound is enforced when the
   /// records have grown by a quarter since it last was, so a place may briefly hold up to a quarter more.
   static constexpr size_t kThinnedRecordsPerPlace = 256;
 
