@@ -33,9 +33,15 @@ void to_vector_3d(const SE3& E, double* e, Matrix6d* D) {
 
 Linearization Factor::make_linearization(const std::vector<Variable>& vars) const {
   Linearization l;
-  l.error.resize(residual_dim());
-  for (int v : variables_) l.jacobians.emplace_back(residual_dim(), vars[static_cast<size_t>(v)].dim());
+  shape(l, vars);
   return l;
+}
+
+void Factor::shape(Linearization& l, const std::vector<Variable>& vars) const {
+  l.error.resize(residual_dim());  // Eigen keeps the buffer when the size is the same
+  l.jacobians.resize(variables_.size());
+  for (size_t k = 0; k < variables_.size(); ++k)
+    l.jacobians[k].resize(residual_dim(), vars[static_cast<size_t>(variables_[k])].dim());
 }
 
 double Factor::chi2(const std::vector<Variable>& vars) const {
@@ -142,8 +148,10 @@ void PointObservationFactor::evaluate(const std::vector<Variable>& vars, Eigen::
   const auto& p = vars[static_cast<size_t>(variables()[1])];
   const bool planar = x.kind == VariableKind::kPose2;
   // l = S^-1 X^-1 p, and its derivatives with respect to X's right perturbation and to p.
+  // At most 3 x 6: no heap allocation per evaluation (a rebuild evaluates every sighting).
+  using Small = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::ColMajor, 3, 6>;
   Eigen::Vector3d l;
-  Eigen::MatrixXd dl_dx, dl_dp;
+  Small dl_dx, dl_dp;
   if (planar) {
     const SE2& s = offset2_;
     const Eigen::Vector2d l0 = x.pose2.rotation().inverse() * (p.point.head<2>() - x.pose2.translation());
@@ -167,14 +175,14 @@ void PointObservationFactor::evaluate(const std::vector<Variable>& vars, Eigen::
   }
   const int n = planar ? 2 : 3;
   // h(l) and dh/dl.
-  Eigen::MatrixXd H;
+  Small H;
   const double rxy2 = l.x() * l.x() + l.y() * l.y(), rxy = std::sqrt(rxy2);
   const double r = planar ? rxy : l.norm();
   std::array<bool, 3> angle{};  // which residual components are angles (at most 3 components)
   switch (model_) {
     case Model::kPosition:
       e = l.head(n) - z_;
-      if (out) H = Eigen::MatrixXd::Identity(n, n);
+      if (out) H = Small::Identity(n, n);
       break;
     case Model::kRangeBearing:
     case Model::kRangeAzimuthElevation: {
@@ -248,7 +256,7 @@ void PoseObservationFactor::linearize(const std::vector<Variable>& vars, Lineari
   Linearization point = point_.make_linearization(local);
   point_.linearize(local, point);
   const Variable& y = vars[static_cast<size_t>(variables()[1])];
-  Eigen::MatrixXd dp_dy;
+  Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::ColMajor, 3, 6> dp_dy;
   if (y.kind == VariableKind::kPose2) {
     const Eigen::Matrix2d r = y.pose2.rotation().matrix();
     dp_dy.resize(2, 3);

@@ -39,6 +39,10 @@ class Factor {
   virtual void linearize(const std::vector<Variable>& vars, Linearization& out) const = 0;
 
   Linearization make_linearization(const std::vector<Variable>& vars) const;
+  /// Gives `l` this factor's shape (the residual's size, one Jacobian per variable of its size), keeping the buffers
+  /// it already has when the shape is the same: linearizing many factors into one Linearization then allocates only
+  /// when the shape changes.
+  void shape(Linearization& l, const std::vector<Variable>& vars) const;
   double chi2(const std::vector<Variable>& vars) const;
   /// The same with the caller's scratch vectors (no allocation once they have the residual's size); `e` is left
   /// holding the residual.

@@ -27,6 +27,8 @@ void find_determined(const SmootherState& s, const std::vector<int>& new_vars, c
   std::vector<int> slot(vars.size(), -1);
   for (size_t k = 0; k < new_vars.size(); ++k) slot[static_cast<size_t>(new_vars[k])] = static_cast<int>(k);
   ready.assign(new_vars.size(), 1);
+  Linearization lin;    // reused from factor to factor: a rebuild after lifelong thinning admits every factor
+  Eigen::MatrixXd JtW;  // J' Omega
   bool changed = true;
   while (changed) {
     changed = false;
@@ -44,11 +46,13 @@ void find_determined(const SmootherState& s, const std::vector<int>& new_vars, c
         if (sl < 0 && s.pos[static_cast<size_t>(v)] < 0 && !vars[static_cast<size_t>(v)].fixed) ok = false;
       }
       if (!ok) continue;
-      Linearization lin = f.make_linearization(s.lin);
+      f.shape(lin, s.lin);
       f.linearize(s.lin, lin);
       for (size_t k = 0; k < f.variables().size(); ++k) {
         const int sl = slot[static_cast<size_t>(f.variables()[k])];
-        if (sl >= 0) info[static_cast<size_t>(sl)] += lin.jacobians[k].transpose() * f.information() * lin.jacobians[k];
+        if (sl < 0) continue;
+        JtW.noalias() = lin.jacobians[k].transpose() * f.information();
+        info[static_cast<size_t>(sl)].noalias() += JtW * lin.jacobians[k];
       }
     }
     for (size_t k = 0; k < new_vars.size(); ++k) {

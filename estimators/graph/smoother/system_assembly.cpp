@@ -98,10 +98,7 @@ void assemble_values(const SmootherState& s, System& sys, size_t end) {
     const size_t f = sys.factors[sys.assembled];
     const Factor& fac = *factors[f];
     const auto& fv = fac.variables();
-    bool same_shape = lin.error.size() == fac.residual_dim() && lin.jacobians.size() == fv.size();
-    for (size_t k = 0; same_shape && k < fv.size(); ++k)
-      same_shape = lin.jacobians[k].cols() == vars[static_cast<size_t>(fv[k])].dim();
-    if (!same_shape) lin = fac.make_linearization(sys.lin);
+    fac.shape(lin, sys.lin);
     fac.linearize(sys.lin, lin);
     const double w = s.kernel_weight(f, fac.weighted_square(lin.error, We));  // leaves We = Omega e
     We *= w;
