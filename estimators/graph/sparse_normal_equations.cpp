@@ -16,17 +16,22 @@ double seconds_since(Clock::time_point t) { return std::chrono::duration<double>
 
 SparseNormalEquations::SparseNormalEquations(const FactorGraph& graph, Ordering ordering) : graph_(graph) {
   cholmod_start(&common_);
-  number_blocks();
-  BlockPattern rows = block_pattern();
-  if (ordering == Ordering::kBlockAmd) {
-    renumber_blocks(block_amd_order(rows, common_));
-    rows = block_pattern();
+  try {  // a constructor that throws runs no destructor: what CHOLMOD holds so far is released here
+    number_blocks();
+    BlockPattern rows = block_pattern();
+    if (ordering == Ordering::kBlockAmd) {
+      renumber_blocks(block_amd_order(rows, common_));
+      rows = block_pattern();
+    }
+    std::vector<int> colptr(static_cast<size_t>(n_) + 1, 0), rowind;
+    lay_out_columns(rows, colptr, rowind);
+    map_factor_pairs(rows);
+    start_cholmod(ordering, colptr, rowind);
+    analyze(ordering);
+  } catch (...) {
+    release_cholmod();
+    throw;
   }
-  std::vector<int> colptr(static_cast<size_t>(n_) + 1, 0), rowind;
-  lay_out_columns(rows, colptr, rowind);
-  map_factor_pairs(rows);
-  start_cholmod(ordering, colptr, rowind);
-  analyze(ordering);
 }
 
 // One block of unknowns per variable that is not fixed, in the variables' order: offsets and dimensions.
@@ -178,7 +183,9 @@ void SparseNormalEquations::analyze(Ordering ordering) {
   if (L_ == nullptr) throw std::runtime_error("CHOLMOD symbolic analysis failed");
 }
 
-SparseNormalEquations::~SparseNormalEquations() {
+SparseNormalEquations::~SparseNormalEquations() { release_cholmod(); }
+
+void SparseNormalEquations::release_cholmod() {
   if (L_) cholmod_free_factor(&L_, &common_);
   if (H_) cholmod_free_sparse(&H_, &common_);
   cholmod_finish(&common_);

@@ -57,6 +57,9 @@ class SparseNormalEquations {
   template <typename Block>
   void scatter(int pair, bool same_block, const Eigen::MatrixBase<Block>& M);
 
+  // Frees L and H and finishes CHOLMOD's workspace (the destructor, or a constructor that throws).
+  void release_cholmod();
+
   const FactorGraph& graph_;
   int n_ = 0;
   std::vector<int> offset_, dim_;  // per variable

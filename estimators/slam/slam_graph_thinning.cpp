@@ -7,6 +7,7 @@
 #include "estimators/slam/pose_factors.hpp"
 
 #include <algorithm>
+#include <stdexcept>
 #include <chrono>
 
 namespace sextant::slam {
@@ -44,11 +45,19 @@ struct SlamGraph::ThinningPlan {
   const std::vector<graph::Variable>& vars;
   const std::vector<std::unique_ptr<graph::Factor>>& factors;
   const std::vector<FactorTag>& tags;
-  std::vector<char> keep_var;                  // by old variable index
-  std::map<Body*, std::vector<char>> keep_of;  // per body of this kind: by keyframe
-  std::vector<char> keep_factor;               // loops and sightings that stay (odometry is recomposed)
-  std::vector<char> anchor;                    // by old variable index: the keyframes that hold a frame's gauge
-  int window = 0;                              // each body's newest keyframes that stay whole
+  std::vector<char> keep_var;  // by old variable index
+  // Per body of this kind, in the bodies' (name) order, by keyframe.  Not a map keyed by the Body's address: the
+  // order in which the new smoother gets each body's factors would follow the addresses, and so would the last bits
+  // of its estimates and the order of a fleet's thinning contributions, from run to run.
+  std::vector<std::pair<Body*, std::vector<char>>> keep_of;
+  const std::vector<char>& keep_of_body(const Body* b) const {
+    const auto it = std::find_if(keep_of.begin(), keep_of.end(), [&](const auto& k) { return k.first == b; });
+    if (it == keep_of.end()) throw std::logic_error("thinning: a body of the frame has no keyframe plan");
+    return it->second;
+  }
+  std::vector<char> keep_factor;  // loops and sightings that stay (odometry is recomposed)
+  std::vector<char> anchor;       // by old variable index: the keyframes that hold a frame's gauge
+  int window = 0;                 // each body's newest keyframes that stay whole
   std::unique_ptr<graph::IncrementalSmoother> fresh;
   std::vector<FactorTag> fresh_tags;
   std::vector<int> remap;  // old variable index -> new, -1 when it leaves
@@ -128,7 +137,7 @@ bool SlamGraph::choose_kept_keyframes(ThinningPlan& p) {
     auto keep = b.remote ? owner_kept(b) : keyframes_to_keep(candidates, p.planar, thinning);
     for (size_t i = 0; i < keep.size(); ++i)
       if (!keep[i]) p.keep_var[static_cast<size_t>(b.track.keyframes()[i].variable)] = 0, any = true;
-    p.keep_of.emplace(&b, std::move(keep));
+    p.keep_of.emplace_back(&b, std::move(keep));
   }
   return any;
 }
@@ -180,7 +189,7 @@ void SlamGraph::choose_anchors(ThinningPlan& p) {
       for (auto& [other, o] : bodies_) {
         if (o.frame != name || o.track.empty()) continue;
         const auto& kf = o.track.keyframes();
-        const std::vector<char>& keep = p.keep_of.at(&o);
+        const std::vector<char>& keep = p.keep_of_body(&o);
         const size_t settled =
             kf.size() > static_cast<size_t>(p.window) ? kf.size() - static_cast<size_t>(p.window) : 0;
         for (size_t i = 0; i < settled; ++i) {
