@@ -106,6 +106,8 @@ void PipelinedLanes::worker_loop() {
         run_group(*item, true);
       } catch (const std::exception& e) {  // a capture that could not be stored: the event's outputs are lost
         spdlog::error("replay worker: {}", e.what());
+      } catch (...) {  // nothing leaves the thread
+        spdlog::error("replay worker: an exception that is not a std::exception");
       }
       item->done.store(true);
       if (awaited_.load() == item) {
