@@ -143,15 +143,18 @@ void PointObservationFactor::linearize(const std::vector<Variable>& vars, Linear
   evaluate(vars, out.error, &out);
 }
 
+namespace {
+/// A sighting's Jacobian scratch, at most 3 x 6: no heap allocation per evaluation (a rebuild evaluates every one).
+using SmallJacobian = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::ColMajor, 3, 6>;
+}  // namespace
+
 void PointObservationFactor::evaluate(const std::vector<Variable>& vars, Eigen::VectorXd& e, Linearization* out) const {
   const auto& x = vars[static_cast<size_t>(variables()[0])];
   const auto& p = vars[static_cast<size_t>(variables()[1])];
   const bool planar = x.kind == VariableKind::kPose2;
   // l = S^-1 X^-1 p, and its derivatives with respect to X's right perturbation and to p.
-  // At most 3 x 6: no heap allocation per evaluation (a rebuild evaluates every sighting).
-  using Small = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::ColMajor, 3, 6>;
   Eigen::Vector3d l;
-  Small dl_dx, dl_dp;
+  SmallJacobian dl_dx, dl_dp;
   if (planar) {
     const SE2& s = offset2_;
     const Eigen::Vector2d l0 = x.pose2.rotation().inverse() * (p.point.head<2>() - x.pose2.translation());
@@ -175,14 +178,14 @@ void PointObservationFactor::evaluate(const std::vector<Variable>& vars, Eigen::
   }
   const int n = planar ? 2 : 3;
   // h(l) and dh/dl.
-  Small H;
+  SmallJacobian H;
   const double rxy2 = l.x() * l.x() + l.y() * l.y(), rxy = std::sqrt(rxy2);
   const double r = planar ? rxy : l.norm();
   std::array<bool, 3> angle{};  // which residual components are angles (at most 3 components)
   switch (model_) {
     case Model::kPosition:
       e = l.head(n) - z_;
-      if (out) H = Small::Identity(n, n);
+      if (out) H = SmallJacobian::Identity(n, n);
       break;
     case Model::kRangeBearing:
     case Model::kRangeAzimuthElevation: {
@@ -256,7 +259,7 @@ void PoseObservationFactor::linearize(const std::vector<Variable>& vars, Lineari
   Linearization point = point_.make_linearization(local);
   point_.linearize(local, point);
   const Variable& y = vars[static_cast<size_t>(variables()[1])];
-  Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::ColMajor, 3, 6> dp_dy;
+  SmallJacobian dp_dy;
   if (y.kind == VariableKind::kPose2) {
     const Eigen::Matrix2d r = y.pose2.rotation().matrix();
     dp_dy.resize(2, 3);
