@@ -41,7 +41,9 @@ void KeyframeTrack::replace_keyframes(std::vector<TrackKeyframe> keyframes,
   const auto by_time = [](const ThinnedKeyframe& x, const ThinnedKeyframe& y) { return x.utime < y.utime; };
   if (!std::is_sorted(thinned.begin(), thinned.end(), by_time))
     std::sort(thinned_.begin() + middle, thinned_.end(), by_time);
-  std::inplace_merge(thinned_.begin(), thinned_.begin() + middle, thinned_.end(), by_time);
+  if (middle > 0 && middle < static_cast<std::ptrdiff_t>(thinned_.size()) &&
+      by_time(thinned_[middle], thinned_[middle - 1]))
+    std::inplace_merge(thinned_.begin(), thinned_.begin() + middle, thinned_.end(), by_time);
   // Counting every place's visits at every thinning would cost the whole record set each time: only once it has
   // grown by a quarter (so the cost per record stays constant).
   if (thinned_.size() > thinned_bounded_ + thinned_bounded_ / 4 + kThinnedRecordsPerPlace) forget_old_visits();
