@@ -58,26 +58,33 @@ EngineDriver::~EngineDriver() {
 
 void EngineDriver::make_lanes(const config::DaemonConfig& config) {
   for (auto& stage : engine_.stages()) estimators_.emplace_back(stage->estimator());
-  if (options_.lanes == StageLanes::kPipelined && make_pipelined_lanes()) return;
+  if (options_.lanes == StageLanes::kPipelined) make_pipelined_lanes();
   for (size_t i = 0; i < engine_.stages().size(); ++i) {
     engine::Stage& stage = *engine_.stages()[i];
-    // A body the stage forgets is forgotten by the publisher for the stage's estimator too, after its earlier outputs.
+    // A body the stage forgets is forgotten by the publisher for the stage's estimator too, after its earlier outputs
+    // (kPipelined: captured in order with the outputs, and done when they are delivered).
     StageHost::ForgetHook forget_published;
-    if (!estimators_[i].empty())
+    if (pipelined_)
+      forget_published = pipelined_->forgot_into(i);
+    else if (!estimators_[i].empty())
       forget_published = [this, i](const std::string& body) { publisher_.forget(estimators_[i], body); };
-    if (options_.lanes == StageLanes::kInline) {
-      hosts_.push_back(std::make_unique<StageHost>(stage, emit_));
-      hosts_.back()->on_forget(std::move(forget_published));
-      processed_.push_back(0);
-    } else {
+    if (options_.lanes == StageLanes::kStageThreads) {
       runners_.push_back(std::make_unique<StageRunner>(stage, static_cast<size_t>(config.queue_capacity), emit_,
                                                        odometry_batching(stage, config.engine)));
       runners_.back()->on_forget(std::move(forget_published));
+      continue;
     }
+    hosts_.push_back(std::make_unique<StageHost>(stage, pipelined_ ? pipelined_->emit_into(i) : emit_));
+    hosts_.back()->on_forget(std::move(forget_published));
+    processed_.push_back(0);
   }
+  if (!pipelined_) return;
+  std::vector<StageHost*> hosts;
+  for (auto& h : hosts_) hosts.push_back(h.get());
+  pipelined_->attach(std::move(hosts));
 }
 
-bool EngineDriver::make_pipelined_lanes() {
+void EngineDriver::make_pipelined_lanes() {
   // The graph pose stage reads the corrections the graph stage posts: the two share the worker.
   std::vector<char> on_worker;
   for (const auto& stage : engine_.stages())
@@ -85,18 +92,9 @@ bool EngineDriver::make_pipelined_lanes() {
   const auto workers = std::count(on_worker.begin(), on_worker.end(), 1);
   if (workers == 0 || workers == static_cast<std::ptrdiff_t>(on_worker.size())) {
     options_.lanes = StageLanes::kInline;
-    return false;
+    return;
   }
   pipelined_ = std::make_unique<PipelinedLanes>(on_worker, [this](StageCapture& c) { deliver(c); });
-  std::vector<StageHost*> hosts;
-  for (size_t i = 0; i < engine_.stages().size(); ++i) {
-    hosts_.push_back(std::make_unique<StageHost>(*engine_.stages()[i], pipelined_->emit_into(i)));
-    hosts_.back()->on_forget(pipelined_->forgot_into(i));
-    hosts.push_back(hosts_.back().get());
-    processed_.push_back(0);
-  }
-  pipelined_->attach(std::move(hosts));
-  return true;
 }
 
 void EngineDriver::deliver(StageCapture& c) {

@@ -109,8 +109,9 @@ class EngineDriver {
   // Hands an accepted event to every stage that accepts it.
   void route(const std::string& channel, QueuedEvent queued);
   void make_lanes(const config::DaemonConfig& config);
-  // kPipelined: the lanes on two threads; false (kInline then) when the engine has no stages for one of them.
-  bool make_pipelined_lanes();
+  // kPipelined: the lanes on two threads (their hosts attached by make_lanes); kInline instead when the engine has no
+  // stages for one of them.
+  void make_pipelined_lanes();
   // kPipelined: one captured thing a stage did, done now (published, forgotten by the publisher, counted).
   void deliver(StageCapture& capture);
 

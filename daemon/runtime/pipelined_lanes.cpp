@@ -27,7 +27,9 @@ void PipelinedLanes::attach(std::vector<StageHost*> hosts) {
   worker_ = std::thread([this] { worker_loop(); });
 }
 
-PipelinedLanes::~PipelinedLanes() {
+PipelinedLanes::~PipelinedLanes() { stop_worker(); }
+
+void PipelinedLanes::stop_worker() {
   {
     std::lock_guard lock(mutex_);
     stop_ = true;
@@ -151,12 +153,7 @@ void PipelinedLanes::settle() {
 
 void PipelinedLanes::finish() {
   settle();
-  {
-    std::lock_guard lock(mutex_);
-    stop_ = true;
-  }
-  to_worker_.notify_one();
-  if (worker_.joinable()) worker_.join();
+  stop_worker();
   // Both groups on this thread now, in stage order, into one list.
   InFlight last;
   last.forget = std::move(forget_next_);

@@ -80,6 +80,8 @@ class PipelinedLanes {
   // Runs group `worker` (true: the worker's) of one event, capturing into its list.
   void run_group(InFlight& item, bool worker);
   void worker_loop();
+  // The worker handles what it was handed, then ends (finish() and the destructor).
+  void stop_worker();
   // Hands the pending batch to the worker.
   void hand_over();
   // Waits until the worker's group has handled `item` (and so every event before it).

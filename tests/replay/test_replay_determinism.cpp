@@ -28,15 +28,19 @@ std::string file_bytes(const std::string& path) {
   return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
 }
 
+tools::SimulationSummary simulate_to(const std::string& path, const tools::SimulationOptions& o) {
+  runtime::LogWriter w(path);
+  auto s = tools::simulate(o, w);
+  w.flush();
+  return s;
+}
+
 tools::SimulationSummary simulate_to(const std::string& path, const std::string& scenario, uint64_t seed) {
   tools::SimulationOptions o;
   o.scenario = tools::scenario_from_name(scenario);
   o.seed = seed;
   o.duration_s = 12;
-  runtime::LogWriter w(path);
-  auto s = tools::simulate(o, w);
-  w.flush();
-  return s;
+  return simulate_to(path, o);
 }
 
 }  // namespace
@@ -145,12 +149,7 @@ TEST_CASE("the graph's stages on a second thread publish what one thread publish
   o.robots = 3;
   o.duration_s = 60;
   o.seed = 11;
-  tools::SimulationSummary sim;
-  {
-    runtime::LogWriter w(log);
-    sim = tools::simulate(o, w);
-    w.flush();
-  }
+  const tools::SimulationSummary sim = simulate_to(log, o);
   config::DaemonConfig cfg;
   cfg.engine.graph.fleet.markers = sim.markers;
   cfg.engine.graph.lifelong.planar = {120, 60};
