@@ -49,6 +49,7 @@ void read_loops(Section& s, engine::GraphConfig& c) {
     c.kernel_width = std::strtod(width.c_str(), nullptr);
   p.get("gate_probability", c.loop_gate_probability, in_range(0.5, 0.999999999));
   p.get("gate_odometry_scale", c.loop_gate_odometry_scale, positive());
+  p.get("max_landing_sigma", c.loop_max_landing_sigma, positive());
   p.get("time_tolerance_s", c.loop_time_tolerance_s, non_negative());
   p.reject_unknown_keys();
 }

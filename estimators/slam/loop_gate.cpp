@@ -5,7 +5,11 @@
 #include "estimators/spd_matrix.hpp"
 
 #include <Eigen/Cholesky>
+#include <Eigen/Eigenvalues>
 #include <Eigen/LU>
+
+#include <algorithm>
+#include <cmath>
 
 namespace sextant::slam {
 
@@ -24,6 +28,12 @@ KeyframeLoop loop_on_keyframes(bool planar, const SE3& relative, const Matrix6d&
   }
   out.z = from.motion * relative * to.motion.inverse();
   return out;
+}
+
+double landing_sigma(const TrackPoint& from, const TrackPoint& to) {
+  const Eigen::Matrix3d added = (from.covariance + to.covariance).topLeftCorner<3, 3>();
+  if (added.isZero()) return 0;
+  return std::sqrt(std::max(0.0, Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(added).eigenvalues().maxCoeff()));
 }
 
 double loop_mahalanobis(bool planar, const KeyframeLoop& loop, const SE3& predicted, const Matrix6d& path_covariance,

@@ -13,6 +13,12 @@
 // estimate's relative uncertainty, so a true loop passes with the gate's probability however far the odometry
 // drifted, as long as the odometry's covariance is honest; k (loop_gate_odometry_scale) covers the biases real
 // odometry does not report.  The loop is accepted when d2 <= chi2_d(p), d = 3 (planar) or 6.
+//
+// A loop whose ends land through thinned keyframes far from its times (with lifelong thinning the keyframe before a
+// thinned one can be minutes of odometry away) is uncertain by that odometry's drift: with a standard deviation of
+// sigma metres there, the gate passes any error up to sqrt(chi2_d(p)) sigma, so a match to another place passes
+// as easily as a true one, and the loop's information is small anyway.  landing_sigma measures it; a loop above
+// SlamOptions::loop_max_landing_sigma is refused before the gate.
 #include "estimators/lie/se3.hpp"
 #include "estimators/slam/keyframe_track.hpp"
 
@@ -28,6 +34,11 @@ struct KeyframeLoop {
 /// The loop `relative` (T_from^-1 T_to, information `information`) with its ends at `from` and `to`.
 KeyframeLoop loop_on_keyframes(bool planar, const SE3& relative, const Matrix6d& information, const TrackPoint& from,
                                const TrackPoint& to);
+
+/// How far off the loop's ends may be where they land: the largest standard deviation (m) of the translation that
+/// the ends' covariances add, sqrt(lambda_max) of the x, y, z block of Sigma_D_from + Sigma_D_to.  0 when both
+/// ends are keyframes' own times.
+double landing_sigma(const TrackPoint& from, const TrackPoint& to);
 
 /// d2 of the loop against the predicted relative pose X_from^-1 X_to, with the odometry path covariance scaled by
 /// odometry_scale^2 (see above).

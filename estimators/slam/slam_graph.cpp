@@ -316,6 +316,7 @@ void SlamGraph::handle_loop(const std::string& name, const LoopInput& l, SlamLis
   if (!solved(end_from->keyframe) || !solved(end_to->keyframe)) solve_owed(listener);
   const KeyframeLoop loop = loop_on_keyframes(b.planar, l.relative, l.information, *end_from, *end_to);
   if (loop.widened) ++counters_.loops_on_thinned;
+  if (!landing_checkable(*end_from, *end_to)) return;
   const LoopContribution c{b.track.keyframes()[end_from->keyframe].id, b.track.keyframes()[end_to->keyframe].id, loop.z,
                            loop.information, loop.widened};
   if (!add_loop_on_keyframes(b, c)) return;

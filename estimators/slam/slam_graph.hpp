@@ -281,6 +281,9 @@ class SlamGraph {
                               SlamListener& listener);
   /// The observed body's end of a robot sighting when that body is local: anchored, contributed and added.
   bool complete_body_sighting(const std::string& observer, const BodySightingHalf& h, SlamListener& listener);
+  /// Whether a loop's ends, landed at `from` and `to`, are known well enough for the gate to check it
+  /// (landing_sigma within loop_max_landing_sigma); a loop that is not is counted as rejected.
+  bool landing_checkable(const TrackPoint& from, const TrackPoint& to);
   /// A same-body loop on keyframes, gated when the body is local (its owner's gate otherwise).
   bool add_loop_on_keyframes(Body& b, const LoopContribution& l);
   /// The "to" body's end of an inter-robot loop when that body is local (it may wait for its odometry).

@@ -98,6 +98,12 @@ bool SlamGraph::add_keyframe_to_graph(const std::string& name, Body& b, const Ke
   return true;
 }
 
+bool SlamGraph::landing_checkable(const TrackPoint& from, const TrackPoint& to) {
+  if (landing_sigma(from, to) <= options_.loop_max_landing_sigma) return true;
+  ++counters_.loops_rejected;
+  return false;
+}
+
 bool SlamGraph::add_loop_on_keyframes(Body& b, const LoopContribution& l) {
   const auto from = b.track.position_of(l.from_keyframe), to = b.track.position_of(l.to_keyframe);
   if (!from || !to || *from == *to) {
@@ -170,8 +176,9 @@ bool SlamGraph::complete_body_loop(const std::string& from, const BodyLoopHalf& 
     }
     return false;
   }
-  const KeyframeLoop kl =
-      loop_on_keyframes(o.planar, h.loop.relative, h.loop.information, {0, h.from.motion, h.from.covariance}, *end_to);
+  const TrackPoint end_from{0, h.from.motion, h.from.covariance};
+  if (!landing_checkable(end_from, *end_to)) return false;
+  const KeyframeLoop kl = loop_on_keyframes(o.planar, h.loop.relative, h.loop.information, end_from, *end_to);
   const GraphContribution whole{
       h.loop.body_to, BodyLoop{from, h.from.keyframe, o.track.keyframes()[end_to->keyframe].id, kl.z, kl.information}};
   if (completed_before_restart(whole)) return false;

@@ -78,6 +78,9 @@ struct SlamOptions {
   double loop_gate_probability = 0.999;   // chi-square consistency gate of a loop against the current estimate
   double loop_gate_odometry_scale = 3.0;  // the odometry's standard deviations are taken this many times larger in the
                                           // gate (odometry covariances are optimistic: biases are not in them)
+  /// m: a loop whose ends land through thinned keyframes with a larger standard deviation than this (loop_gate.hpp,
+  /// landing_sigma) is refused (counted as rejected): the gate could not tell it from a match to another place.
+  double loop_max_landing_sigma = 1.0;
   double loop_time_tolerance_s =
       1.0;  // a loop's times must be this close to keyframes' times (odometry bridges the gap)
   /// Loops about times a body's odometry has not reached yet wait for it, at most this many per body; one beyond

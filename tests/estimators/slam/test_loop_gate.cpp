@@ -73,3 +73,20 @@ TEST_CASE("loop gate: a loop between two times is moved onto their keyframes, an
   CHECK(loop.information(5, 5) == doctest::Approx(2.5));
   CHECK(loop.information(2, 2) == doctest::Approx(10.0));
 }
+
+TEST_CASE("loop gate: the landing sigma is the largest translation standard deviation the thinned ends add") {
+  // From-end x, y block [[0.05, 0.02], [0.02, 0.05]], to-end x variance 0.02: the sum [[0.07, 0.02], [0.02, 0.05]]
+  // has eigenvalues 0.06 +- sqrt(0.01^2 + 0.02^2), so sigma = sqrt(0.06 + 0.0223607) = 0.286987.  The heading's
+  // variance (5 rad^2) is not a translation and does not count.
+  TrackPoint from{0, SE3(), Matrix6d::Zero()}, to{1, SE3(), Matrix6d::Zero()};
+  CHECK(landing_sigma(from, to) == 0.0);
+  from.covariance(0, 0) = from.covariance(1, 1) = 0.05;
+  from.covariance(0, 1) = from.covariance(1, 0) = 0.02;
+  from.covariance(5, 5) = 5;
+  to.covariance(0, 0) = 0.02;
+  CHECK(landing_sigma(from, to) == doctest::Approx(std::sqrt(0.06 + std::sqrt(0.0005))).epsilon(1e-12));
+  CHECK(landing_sigma(to, from) == doctest::Approx(landing_sigma(from, to)).epsilon(1e-15));
+  // A 3-D end: the vertical counts as well.
+  to.covariance(2, 2) = 0.5;
+  CHECK(landing_sigma(from, to) == doctest::Approx(std::sqrt(0.5)).epsilon(1e-12));
+}

@@ -9,6 +9,7 @@
 #include <doctest/doctest.h>
 
 #include <cmath>
+#include <memory>
 
 using namespace sextant;
 using namespace sextant::slam;
@@ -365,4 +366,39 @@ TEST_CASE("slam graph: a lifelong thinning holds the map frame where the whole g
   // Held by the settled keyframe with the most ties: 0.0054 degrees; held by the first keyframe: 0.46.
   CHECK(worst < 0.1 * M_PI / 180);
   CHECK(worst_first > 0.2 * M_PI / 180);
+}
+
+TEST_CASE("slam graph: a loop that lands through thinned keyframes too uncertain to check is rejected") {
+  // The circle run in a lifelong graph (budget 120 keyframes, 40 whole); a true loop from a time of its second lap,
+  // whose keyframe was thinned, to the newest: it lands on the graph's keyframe before that time (not on a nearby
+  // one through the time tolerance), uncertain by the composed odometry between them.  Accepted where that uncertainty is allowed; rejected, and counted, where it
+  // is not.
+  const auto run_with = [](double max_landing_sigma) {
+    SlamOptions options;
+    options.lifelong.enabled = true;
+    options.lifelong.planar = {120, 40};
+    options.loop_max_landing_sigma = max_landing_sigma;
+    options.loop_time_tolerance_s = 0;  // a time lands on a keyframe of the graph only when it is that keyframe's
+    auto slam = std::make_unique<SlamGraph>(options);
+    Recorder out;
+    CircleRun run;
+    for (int i = 0; i < 320; ++i) {
+      slam->add_odometry("robot", run.odometry(i), out);
+      if (i > 0) slam->add_sightings("robot", run.sightings(i), out);
+    }
+    REQUIRE(slam->counters().thinnings >= 1);
+    LoopInput l;
+    l.utime_from = test::odometry_at(run.robot, CircleRun::at(150)).utime;
+    l.utime_to = test::odometry_at(run.robot, CircleRun::at(319)).utime;
+    l.relative = (run.robot.truth(CircleRun::at(150)).inverse() * run.robot.truth(CircleRun::at(319))).to_se3();
+    l.information = Matrix6d::Identity() * 100;
+    slam->add_loop("robot", l, out);
+    REQUIRE(slam->counters().loops_on_thinned == 1);  // it did land through a thinned keyframe
+    return slam->counters();
+  };
+  const SlamCounters allowed = run_with(100.0), refused = run_with(1e-3);
+  CHECK(allowed.loops_accepted == 1);
+  CHECK(allowed.loops_rejected == 0);
+  CHECK(refused.loops_accepted == 0);
+  CHECK(refused.loops_rejected == 1);
 }
