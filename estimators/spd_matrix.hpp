@@ -36,34 +36,48 @@ typename Derived::PlainObject symmetrized(const Eigen::MatrixBase<Derived>& m) {
   return (0.5 * (m + m.transpose())).eval();
 }
 
-/// f applied to m, or, for a dynamic-size m of a pose's size (2, 3 or 6: planar and 3-D edges, every factor's
-/// information), to a fixed-size copy of it: the same algorithm without heap allocation, which is most of the cost
-/// at these sizes.  f takes any Eigen matrix type (a generic lambda).
-template <typename Derived, typename F>
-auto at_fixed_size(const Eigen::MatrixBase<Derived>& m, F&& f) {
+// The decompositions below run in spd_matrix.cpp, instantiated there once for each size they are used at: a
+// translation unit that checks or floors a matrix calls them and compiles none of Eigen's LLT or
+// SelfAdjointEigenSolver itself (each costs seconds of compile time per size and per file).  A dynamic-size matrix of
+// a pose's size (2, 3 or 6: planar and 3-D edges, every factor's information) is decomposed as a fixed-size copy: the
+// same algorithm without heap allocation, which is most of the cost at these sizes.
+namespace spd_detail {
+double smallest_eigenvalue(const Eigen::Ref<const Eigen::MatrixXd>& m);
+bool cholesky_certifies_positive_definite(const Eigen::Ref<const Eigen::MatrixXd>& m);
+Eigen::Matrix2d floor_eigenvalues(const Eigen::Matrix2d& m, double floor);
+Eigen::Matrix3d floor_eigenvalues(const Eigen::Matrix3d& m, double floor);
+Eigen::Matrix<double, 6, 6> floor_eigenvalues(const Eigen::Matrix<double, 6, 6>& m, double floor);
+Eigen::MatrixXd floor_eigenvalues(const Eigen::MatrixXd& m, double floor);
+
+/// True for the square matrix types the kernels take: double, and dynamic or of a pose's size.
+template <typename Plain>
+constexpr bool kernel_size = std::is_same_v<typename Plain::Scalar, double> &&
+                             (Plain::RowsAtCompileTime == Eigen::Dynamic || Plain::RowsAtCompileTime == 2 ||
+                              Plain::RowsAtCompileTime == 3 || Plain::RowsAtCompileTime == 6) &&
+                             Plain::RowsAtCompileTime == Plain::ColsAtCompileTime;
+
+/// m as the kernels' argument: a fixed-size m copied into its plain type (on the stack), a dynamic one as it is (a
+/// Ref binds a matrix or block without copying).
+template <typename Derived>
+decltype(auto) kernel_argument(const Eigen::MatrixBase<Derived>& m) {
   using Plain = typename Derived::PlainObject;
-  if constexpr (Plain::RowsAtCompileTime == Eigen::Dynamic && std::is_same_v<typename Plain::Scalar, double>) {
-    if (m.rows() == m.cols()) switch (m.rows()) {
-        case 2:
-          return f(Eigen::Matrix2d(m));
-        case 3:
-          return f(Eigen::Matrix3d(m));
-        case 6:
-          return f(Eigen::Matrix<double, 6, 6>(m));
-        default:
-          break;
-      }
+  if constexpr (Plain::RowsAtCompileTime == Eigen::Dynamic) {
+    return m.derived();
+  } else {
+    return Plain(m);
   }
-  return f(Plain(m));
 }
+}  // namespace spd_detail
 
 /// The smallest eigenvalue of the symmetric matrix m (its lower triangle is read).
 template <typename Derived>
 double smallest_eigenvalue(const Eigen::MatrixBase<Derived>& m) {
-  return at_fixed_size(m, [](const auto& a) {
-    using Plain = std::decay_t<decltype(a)>;
-    return Eigen::SelfAdjointEigenSolver<Plain>(a, Eigen::EigenvaluesOnly).eigenvalues().minCoeff();
-  });
+  using Plain = typename Derived::PlainObject;
+  if constexpr (spd_detail::kernel_size<Plain>) {
+    return spd_detail::smallest_eigenvalue(spd_detail::kernel_argument(m));
+  } else {
+    return Eigen::SelfAdjointEigenSolver<Plain>(Plain(m), Eigen::EigenvaluesOnly).eigenvalues().minCoeff();
+  }
 }
 
 /// True when the Cholesky factorization of the symmetric m (lower triangle read) succeeds with every pivot above
@@ -73,12 +87,15 @@ double smallest_eigenvalue(const Eigen::MatrixBase<Derived>& m) {
 /// nothing: the matrix may still be positive definite but nearly singular (ask smallest_eigenvalue).
 template <typename Derived>
 bool cholesky_certifies_positive_definite(const Eigen::MatrixBase<Derived>& m) {
-  return at_fixed_size(m, [](const auto& a) {
-    const Eigen::LLT<std::decay_t<decltype(a)>> llt(a);
+  using Plain = typename Derived::PlainObject;
+  if constexpr (spd_detail::kernel_size<Plain>) {
+    return spd_detail::cholesky_certifies_positive_definite(spd_detail::kernel_argument(m));
+  } else {
+    const Eigen::LLT<Plain> llt{Plain(m)};
     if (llt.info() != Eigen::Success) return false;
-    const double floor = 1e-12 * a.diagonal().cwiseAbs().maxCoeff();
+    const double floor = 1e-12 * m.diagonal().cwiseAbs().maxCoeff();
     return (llt.matrixLLT().diagonal().array().square() > floor).all();
-  });
+  }
 }
 
 /// m equals its transpose to 1e-9 of max(1, largest |entry|) (rounding of a symmetric computation passes).
@@ -130,9 +147,12 @@ bool is_positive_definite(const Eigen::MatrixBase<Derived>& m) {
 template <typename Derived>
 typename Derived::PlainObject floor_eigenvalues(const Eigen::MatrixBase<Derived>& m, double floor) {
   using Plain = typename Derived::PlainObject;
-  const Plain plain = m;
-  const Eigen::SelfAdjointEigenSolver<Plain> eig(symmetrized(plain));
-  return eig.eigenvectors() * eig.eigenvalues().cwiseMax(floor).asDiagonal() * eig.eigenvectors().transpose();
+  if constexpr (spd_detail::kernel_size<Plain>) {
+    return spd_detail::floor_eigenvalues(Plain(m), floor);
+  } else {
+    const Eigen::SelfAdjointEigenSolver<Plain> eig(symmetrized(Plain(m)));
+    return eig.eigenvectors() * eig.eigenvalues().cwiseMax(floor).asDiagonal() * eig.eigenvectors().transpose();
+  }
 }
 
 }  // namespace sextant

@@ -11,8 +11,8 @@
 // The whole of a large SLAM covariance is not eigen-decomposed on every step (O(n^3)); its landmark blocks are
 // checked through the diagonal, and the Joseph-form updates keep them positive semi-definite under rounding.
 #include <Eigen/Core>
-#include <Eigen/Eigenvalues>
 
+#include <algorithm>
 #include <cmath>
 
 namespace sextant::filter {
@@ -36,6 +36,10 @@ inline const char* health_name(Health h) {
   return "unknown";
 }
 
+/// The health of the symmetric pose block B: positive semi-definite to rounding (its smallest eigenvalue >= -1e-9 *
+/// its largest magnitude).  Out of line (estimate_health.cpp): Eigen's eigenvalue solver is compiled once.
+Health pose_block_health(const Eigen::MatrixXd& B);
+
 /// The health of a symmetric matrix used as a covariance (the checks above, with `block` its leading block).
 template <class M>
 Health covariance_health(const M& P, Eigen::Index block) {
@@ -46,11 +50,7 @@ Health covariance_health(const M& P, Eigen::Index block) {
   if ((P - P.transpose()).cwiseAbs().maxCoeff() > 1e-9 * std::max(scale, 1.0)) return Health::kIndefinite;
   if ((P.diagonal().array() < 0).any()) return Health::kIndefinite;
   const Eigen::Index k = std::min(block, P.rows());
-  const Eigen::MatrixXd B = P.topLeftCorner(k, k);
-  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(B, Eigen::EigenvaluesOnly);
-  if (eig.info() != Eigen::Success) return Health::kNonFinite;
-  if (eig.eigenvalues().minCoeff() < -1e-9 * std::max(B.cwiseAbs().maxCoeff(), 1e-300)) return Health::kIndefinite;
-  return Health::kHealthy;
+  return pose_block_health(P.topLeftCorner(k, k));
 }
 
 /// The health of an estimate x with covariance P (the robot's pose first, `block` components).
