@@ -19,28 +19,14 @@ auto at_fixed_size(const Eigen::Ref<const Eigen::MatrixXd>& m, F&& f) {
   return f(Eigen::MatrixXd(m));
 }
 
-template <typename Plain>
-Plain floored(const Plain& m, double floor) {
-  const Eigen::SelfAdjointEigenSolver<Plain> eig(symmetrized(m));
-  return eig.eigenvectors() * eig.eigenvalues().cwiseMax(floor).asDiagonal() * eig.eigenvectors().transpose();
-}
-
 }  // namespace
 
 double smallest_eigenvalue(const Eigen::Ref<const Eigen::MatrixXd>& m) {
-  return at_fixed_size(m, [](const auto& a) {
-    using Plain = std::decay_t<decltype(a)>;
-    return Eigen::SelfAdjointEigenSolver<Plain>(a, Eigen::EigenvaluesOnly).eigenvalues().minCoeff();
-  });
+  return at_fixed_size(m, [](const auto& a) { return smallest_eigenvalue_of(a); });
 }
 
 bool cholesky_certifies_positive_definite(const Eigen::Ref<const Eigen::MatrixXd>& m) {
-  return at_fixed_size(m, [](const auto& a) {
-    const Eigen::LLT<std::decay_t<decltype(a)>> llt(a);
-    if (llt.info() != Eigen::Success) return false;
-    const double floor = 1e-12 * a.diagonal().cwiseAbs().maxCoeff();
-    return (llt.matrixLLT().diagonal().array().square() > floor).all();
-  });
+  return at_fixed_size(m, [](const auto& a) { return cholesky_certifies(a); });
 }
 
 Eigen::Matrix2d floor_eigenvalues(const Eigen::Matrix2d& m, double floor) { return floored(m, floor); }

@@ -67,6 +67,27 @@ decltype(auto) kernel_argument(const Eigen::MatrixBase<Derived>& m) {
     return Plain(m);
   }
 }
+
+// The computations themselves, for a plain matrix type: called by spd_matrix.cpp at the kernels' sizes, and inline
+// below at any other size.
+template <typename Plain>
+double smallest_eigenvalue_of(const Plain& a) {
+  return Eigen::SelfAdjointEigenSolver<Plain>(a, Eigen::EigenvaluesOnly).eigenvalues().minCoeff();
+}
+
+template <typename Plain>
+bool cholesky_certifies(const Plain& a) {
+  const Eigen::LLT<Plain> llt(a);
+  if (llt.info() != Eigen::Success) return false;
+  const double floor = 1e-12 * a.diagonal().cwiseAbs().maxCoeff();
+  return (llt.matrixLLT().diagonal().array().square() > floor).all();
+}
+
+template <typename Plain>
+Plain floored(const Plain& a, double floor) {
+  const Eigen::SelfAdjointEigenSolver<Plain> eig(symmetrized(a));
+  return eig.eigenvectors() * eig.eigenvalues().cwiseMax(floor).asDiagonal() * eig.eigenvectors().transpose();
+}
 }  // namespace spd_detail
 
 /// The smallest eigenvalue of the symmetric matrix m (its lower triangle is read).
@@ -76,7 +97,7 @@ double smallest_eigenvalue(const Eigen::MatrixBase<Derived>& m) {
   if constexpr (spd_detail::kernel_size<Plain>) {
     return spd_detail::smallest_eigenvalue(spd_detail::kernel_argument(m));
   } else {
-    return Eigen::SelfAdjointEigenSolver<Plain>(Plain(m), Eigen::EigenvaluesOnly).eigenvalues().minCoeff();
+    return spd_detail::smallest_eigenvalue_of(Plain(m));
   }
 }
 
@@ -91,10 +112,7 @@ bool cholesky_certifies_positive_definite(const Eigen::MatrixBase<Derived>& m) {
   if constexpr (spd_detail::kernel_size<Plain>) {
     return spd_detail::cholesky_certifies_positive_definite(spd_detail::kernel_argument(m));
   } else {
-    const Eigen::LLT<Plain> llt{Plain(m)};
-    if (llt.info() != Eigen::Success) return false;
-    const double floor = 1e-12 * m.diagonal().cwiseAbs().maxCoeff();
-    return (llt.matrixLLT().diagonal().array().square() > floor).all();
+    return spd_detail::cholesky_certifies(Plain(m));
   }
 }
 
@@ -150,8 +168,7 @@ typename Derived::PlainObject floor_eigenvalues(const Eigen::MatrixBase<Derived>
   if constexpr (spd_detail::kernel_size<Plain>) {
     return spd_detail::floor_eigenvalues(Plain(m), floor);
   } else {
-    const Eigen::SelfAdjointEigenSolver<Plain> eig(symmetrized(Plain(m)));
-    return eig.eigenvectors() * eig.eigenvalues().cwiseMax(floor).asDiagonal() * eig.eigenvectors().transpose();
+    return spd_detail::floored(Plain(m), floor);
   }
 }
 
