@@ -171,9 +171,10 @@ IncrementalStatus IncrementalSmoother::update() {
 
 IncrementalStatus IncrementalSmoother::rebuild() { return rebuild_with(state_->options.rebuild_iterations); }
 
-bool IncrementalSmoother::begin_spread_build() {
+bool IncrementalSmoother::begin_spread_build(const IncrementalSmoother* like) {
   SmootherState& s = *state_;
   if (s.fx.L != nullptr || s.reorder.under_way() || s.options.reorder_spread <= 0) return false;
+  if (like != nullptr) s.reorder.pace_like(like->state_->reorder);
   s.reorder.request_first_build();  // begun by the next update: the caller has just built the whole graph
   return true;
 }

@@ -92,7 +92,9 @@ class IncrementalSmoother {
   /// that puts it in place, update() only works on it (status `building`): nothing is solved, the estimates stay,
   /// new variables and factors wait and enter in that update.  False (nothing begun) when the smoother is factorized
   /// already or reorder_spread is 0; the next update() then rebuilds as usual.
-  bool begin_spread_build();
+  /// `like`: a smoother of a system like this one (the graph this one thins), whose last reordering's pace sizes this
+  /// build's slices (ReorderScheduler::pace_like).
+  bool begin_spread_build(const IncrementalSmoother* like = nullptr);
 
   /// Recomputes every variable's step from the current factorization: update() leaves steps that would change by
   /// less than options().wildfire stale (as iSAM2's calculateEstimate), this is the exact solution of the current

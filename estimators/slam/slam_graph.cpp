@@ -310,13 +310,13 @@ void SlamGraph::handle_loop(const std::string& name, const LoopInput& l, SlamLis
     ++counters_.loops_unmatched;
     return;
   }
+  const KeyframeLoop loop = loop_on_keyframes(b.planar, l.relative, l.information, *end_from, *end_to);
+  if (loop.widened) ++counters_.loops_on_thinned;
+  if (!landing_checkable(*end_from, *end_to)) return;  // read off the track alone: no solve needed to refuse it
   // The gate reads the estimate of both ends: a keyframe added since the last update (the newest, which a matcher's
   // answer is usually about) is solved first, as it would be without the solve period.
   const auto solved = [&](size_t k) { return b.smoother->in_system(b.track.keyframes()[k].variable); };
   if (!solved(end_from->keyframe) || !solved(end_to->keyframe)) solve_owed(listener);
-  const KeyframeLoop loop = loop_on_keyframes(b.planar, l.relative, l.information, *end_from, *end_to);
-  if (loop.widened) ++counters_.loops_on_thinned;
-  if (!landing_checkable(*end_from, *end_to)) return;
   const LoopContribution c{b.track.keyframes()[end_from->keyframe].id, b.track.keyframes()[end_to->keyframe].id, loop.z,
                            loop.information, loop.widened};
   if (!add_loop_on_keyframes(b, c)) return;

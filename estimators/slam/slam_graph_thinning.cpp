@@ -89,7 +89,7 @@ void SlamGraph::thin(bool planar, SlamListener& listener) {
   // over: spread over the next updates (which only work on it meanwhile, the estimates standing), the thinning costs
   // an update, not a spike.  Without spreading, it is solved now, and a failure keeps the old graph.
   const auto solve_started = std::chrono::steady_clock::now();
-  const bool spread = p.fresh->begin_spread_build();
+  const bool spread = p.fresh->begin_spread_build(&old);
   const graph::IncrementalStatus st = spread ? graph::IncrementalStatus{} : p.fresh->update();
   counters_.thinning_solve_us_last =
       std::chrono::duration_cast<std::chrono::microseconds>(std::chrono::steady_clock::now() - solve_started).count();
