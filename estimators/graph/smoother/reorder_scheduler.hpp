@@ -54,9 +54,8 @@ class ReorderScheduler {
   void cancel() { system_.reset(), first_build_requested_ = false; }
   /// Paces the slices as `other`'s last reordering ran (its time and factorization rate, remaining_ms): for a system
   /// like the one `other` holds, such as a lifelong thinning's copy of it, which has no last reordering of its own.
-  /// Without, such a smoother's first build gave every slice only what its update left of reorder_slice_ms, and the
-  /// update that installed it factorized the rest itself: on 8 simulated robots (2,650 keyframes) 75-117 ms of rows,
-  /// once every ten seconds of data.
+  /// Without it, such a smoother's first build gives every slice only what its update leaves of reorder_slice_ms, and
+  /// the update that installs it factorizes the rest itself (a thinning of 8 robots' 2,650 keyframes: 75-117 ms).
   void pace_like(const ReorderScheduler& other) { work_ms_ = other.work_ms_, rate_ = other.rate_; }
 
  private:
